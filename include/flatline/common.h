@@ -1,0 +1,221 @@
+/*
+ * libflatline - conventions shared by every component.
+ *
+ * Read this header once; every other header follows it.
+ *
+ * Naming     Everything public starts with flt_ / FLT_. Handles are opaque
+ *            (typedef struct flt_x flt_x;): the library allocates them, the
+ *            caller never sees their layout, and they can grow without
+ *            breaking the ABI. Nothing in these headers is a struct the caller
+ *            could allocate.
+ *
+ * Lifetime   flt_x_create(..., flt_x **out) allocates; flt_x_destroy(flt_x *)
+ *            frees and is a no-op on NULL. On failure *out is set to NULL.
+ *
+ * Errors     Every fallible function returns an flt_status: FLT_OK (0) on
+ *            success, a negative code on failure. The code decides whether the
+ *            call failed. flt_last_error_message() then explains why, naming
+ *            the offending argument and its value. A failed call leaves the
+ *            handle exactly as usable as before the call. No C++ exception
+ *            ever leaves the library.
+ *
+ * Options    Settings go through one mechanism everywhere: an opaque
+ *            flt_options bag of key/value pairs (keys are flt_option values,
+ *            values are doubles, integer options must be whole numbers).
+ *            New keys are appended in later releases; an old binary never
+ *            sees a struct change. Pass NULL where a function takes options
+ *            to get every default. flt_option_info() reports each key's name,
+ *            bounds and default, so bindings can map keyword arguments.
+ *
+ * Threads    Functions on different handles may run concurrently. One handle
+ *            must not be used from two threads at once, unless its header
+ *            says it is immutable (a finished calibration is). The error
+ *            message is thread-local.
+ *
+ * Arrays     Two-dimensional arrays are row-major and contiguous: rows along
+ *            travel, fibers across the width, element [r * fibers + k].
+ *            Every array argument comes with the sizes the caller believes it
+ *            has; the library checks them against the handle.
+ *
+ * Units      Lengths in millimetres (mm), slopes in mm/mm, pixels in px,
+ *            unless a name says otherwise.
+ */
+#ifndef FLATLINE_COMMON_H
+#define FLATLINE_COMMON_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "flatline/version.h"
+
+/* FLT_API marks the exported functions; everything else in the library is
+ * hidden. FLT_CALL pins the calling convention on 32-bit Windows. */
+#if defined(_WIN32) || defined(__CYGWIN__)
+#  if defined(FLT_BUILDING_LIBRARY)
+#    define FLT_API __declspec(dllexport)
+#  elif defined(FLT_STATIC)
+#    define FLT_API
+#  else
+#    define FLT_API __declspec(dllimport)
+#  endif
+#  define FLT_CALL __cdecl
+#else
+#  if defined(__GNUC__) && __GNUC__ >= 4
+#    define FLT_API __attribute__((visibility("default")))
+#  else
+#    define FLT_API
+#  endif
+#  define FLT_CALL
+#endif
+
+/* Results that must not be ignored. */
+#if defined(__GNUC__) || defined(__clang__)
+#  define FLT_NODISCARD __attribute__((warn_unused_result))
+#else
+#  define FLT_NODISCARD
+#endif
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---------------------------------------------------------------------- */
+/* Status codes                                                            */
+/* ---------------------------------------------------------------------- */
+
+/* Codes are stable: new ones are only ever added. */
+typedef enum flt_status {
+    FLT_OK = 0,
+    /* An argument is NULL, out of range, NaN, or disagrees with the handle. */
+    FLT_ERR_INVALID_ARGUMENT = -1,
+    /* Memory could not be allocated. The handle is unchanged. */
+    FLT_ERR_OUT_OF_MEMORY = -2,
+    /* The call is not allowed in the handle's current state
+     * (for example pull before any push). */
+    FLT_ERR_STATE = -3,
+    /* A fixed-capacity buffer is full; the message says what to do. */
+    FLT_ERR_BUFFER_FULL = -4,
+    /* A file could not be opened, read or written. */
+    FLT_ERR_IO = -5,
+    /* A file or packet is malformed; the message names the field. */
+    FLT_ERR_FORMAT = -6,
+    /* A camera or transport failed. */
+    FLT_ERR_DEVICE = -7,
+    /* A device did not answer in time. */
+    FLT_ERR_TIMEOUT = -8,
+    /* Something named (a device, a feature, an option) does not exist. */
+    FLT_ERR_NOT_FOUND = -9,
+    /* A numerical problem: a singular system or a failed estimate. */
+    FLT_ERR_NUMERIC = -10,
+    /* A bug in libflatline. Please report it with the message. */
+    FLT_ERR_INTERNAL = -99
+} flt_status;
+
+/* The enumerator name of a status, e.g. "FLT_ERR_INVALID_ARGUMENT".
+ * Never NULL; an unknown code gives "FLT_ERR_UNKNOWN". Static storage. */
+FLT_API const char *FLT_CALL flt_status_string(flt_status status);
+
+/* The message of the last failed call on this thread, naming the offending
+ * argument and its value. Never NULL: "" when the last call succeeded.
+ * Each public call clears it on entry. The pointer stays valid until the next
+ * libflatline call on this thread. */
+FLT_API const char *FLT_CALL flt_last_error_message(void);
+
+/* The status of the last call on this thread (FLT_OK after a success). */
+FLT_API flt_status FLT_CALL flt_last_error_status(void);
+
+/* ---------------------------------------------------------------------- */
+/* Version                                                                 */
+/* ---------------------------------------------------------------------- */
+
+/* The library's FLT_VERSION_NUMBER, to compare with the headers' one. */
+FLT_API int FLT_CALL flt_version(void);
+/* "MAJOR.MINOR.PATCH" of the library. Static storage, never NULL. */
+FLT_API const char *FLT_CALL flt_version_string(void);
+
+/* ---------------------------------------------------------------------- */
+/* Options                                                                 */
+/* ---------------------------------------------------------------------- */
+
+/* Option keys. Values are fixed forever; new keys are appended.
+ * Each key has a name (the snake_case word in quotes, which the Python and C#
+ * bindings use as the keyword), bounds and a default; see flt_option_info().
+ * A component reads the keys it knows and ignores the others, so one bag can
+ * configure a whole pipeline. */
+typedef enum flt_option {
+    /* --- reconstructor (flatline/recon.h) --- */
+    /* "knot_spacing": distance L between spline knots along travel, mm.
+     * 0 (the default) means "equal to laser_spacing". */
+    FLT_OPT_KNOT_SPACING = 100,
+    /* "laser_spacing": distance between the two laser lines along travel,
+     * Delta-d, mm. Default 100. */
+    FLT_OPT_LASER_SPACING = 101,
+    /* "height_sigma": standard deviation of one measured height, mm.
+     * Default 2.5 (a vibrating strip: rigid bouncing moves both lines). */
+    FLT_OPT_HEIGHT_SIGMA = 102,
+    /* "slope_sigma": standard deviation of one measured slope, mm/mm.
+     * Default 0.001 (bouncing cancels between the lines; what is left is
+     * peak-detection noise divided by the laser spacing). */
+    FLT_OPT_SLOPE_SIGMA = 103,
+    /* "curvature_weight": weight of the smoothness prior, dimensionless,
+     * relative to one height sample: 1 means bending one knot interval by
+     * 1 mm costs as much as one height sample 1 mm off. It bridges stretches
+     * without data and keeps the system regular. Default 1e-3. */
+    FLT_OPT_CURVATURE_WEIGHT = 104,
+    /* "lag_knots": how many knots beyond a knot must be complete before the
+     * streaming reconstructor emits it (integer). Larger is closer to the
+     * whole-sheet solution and later. Default 64 (6.4 m of strip at the
+     * default spacing, 3.2 s at 120 m/min): under 2.5 mm of vibration the
+     * level of a fiber is an average of heights over about 25 knots, and a
+     * shorter lag leaves the streamed level measurably noisier than the
+     * whole-sheet one (tests/c/test_recon.c measures it). */
+    FLT_OPT_LAG_KNOTS = 105,
+    /* "max_gap": rows in a run of invalid samples whose valid neighbours are
+     * more than this far apart are flagged FLT_FLAG_GAP, mm. Default 200. */
+    FLT_OPT_MAX_GAP = 106,
+    /* "row_capacity": rows the streaming reconstructor can hold, pending
+     * and finished-but-not-pulled together (integer). It costs 9 bytes per
+     * row and fiber. Default 8192: enough for the default lag at 1.5 mm
+     * row spacing. */
+    FLT_OPT_ROW_CAPACITY = 107
+} flt_option;
+
+/* An opaque bag of option values. Keys not set keep their default. */
+typedef struct flt_options flt_options;
+
+/* Allocates a bag holding every default. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_options_create(flt_options **out);
+/* Frees a bag; NULL is a no-op. Handles created from it keep their own copy
+ * of the values, so the bag may be freed right after use. */
+FLT_API void FLT_CALL flt_options_destroy(flt_options *options);
+/* Sets one value. Fails with FLT_ERR_INVALID_ARGUMENT, leaving the bag
+ * unchanged, for an unknown key, a NaN, a value outside the key's bounds or a
+ * fraction for an integer key. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_options_set(flt_options *options, flt_option key, double value);
+/* Reads one value (the default if never set). */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_options_get(const flt_options *options, flt_option key, double *out);
+
+/* Looks a key up by its name (e.g. "knot_spacing"). FLT_ERR_NOT_FOUND if no
+ * key has that name. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_option_find(const char *name, flt_option *out);
+
+/* Describes a key: its name (static storage), inclusive bounds, default and
+ * whether it takes whole numbers only. Any output pointer may be NULL.
+ * FLT_ERR_NOT_FOUND for an unknown key. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_option_info(flt_option key, const char **name, double *min_value,
+                double *max_value, double *default_value, int *is_integer);
+
+/* Enumerates the keys: the index-th key for index 0, 1, ...;
+ * FLT_ERR_NOT_FOUND past the last one. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_option_at(size_t index, flt_option *out);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* FLATLINE_COMMON_H */

@@ -1,0 +1,12 @@
+/*
+ * libflatline - online flatness gauge for steel strip from a dual-line-laser
+ * and camera sensor. This umbrella header includes every public header.
+ */
+#ifndef FLATLINE_FLATLINE_H
+#define FLATLINE_FLATLINE_H
+
+#include "flatline/version.h"
+#include "flatline/common.h"
+#include "flatline/recon.h"
+
+#endif /* FLATLINE_FLATLINE_H */

@@ -1,0 +1,161 @@
+/*
+ * libflatline - the streaming Hermite reconstructor.
+ *
+ * What it does
+ *   Each fiber (a longitudinal line on the strip at a fixed x) is modelled as
+ *   a piecewise cubic Hermite spline z(s) with knots every L mm of travel
+ *   (option knot_spacing, default = laser_spacing). The unknowns are the
+ *   height and slope at each knot, so z is C0 and C1 by construction.
+ *
+ *   Every input row is one camera frame at material position s (mm, the
+ *   encoder position of the frame centre). Per fiber it carries what the two
+ *   lasers, Delta-d apart (option laser_spacing), really measure:
+ *     height = (z(s - Delta-d/2) + z(s + Delta-d/2)) / 2
+ *     slope  = (z(s + Delta-d/2) - z(s - Delta-d/2)) / Delta-d
+ *   The spline is fitted to exactly these operators by weighted least squares
+ *   (weights 1/height_sigma^2 and 1/slope_sigma^2), plus a weak curvature
+ *   prior (curvature_weight). The output is z at every input row.
+ *
+ * Coordinates
+ *   s along travel in mm, material coordinate (a point on the strip keeps its
+ *   s). z up, mm. Rows must arrive with strictly increasing s; any spacing is
+ *   allowed (use the true encoder positions, never an assumed grid).
+ *
+ * Validity
+ *   A sample is used when its mask entry is non-zero (or the mask is NULL)
+ *   and its value is finite. Height and slope are judged separately: a NaN
+ *   slope with a finite height uses the height only. Output rows carry flags
+ *   per fiber (FLT_FLAG_*): a value is never invented silently.
+ *
+ * Streaming
+ *   push() takes rows; pull() returns finished rows. A knot is complete once
+ *   no later row can touch it (rows are increasing, so this is known after
+ *   the row whose s - Delta-d/2 passes it). The estimate of knot j is emitted
+ *   once knot j + lag_knots is complete; it is the least-squares solution
+ *   given every row pushed so far (a fixed-lag smoother, not a truncated
+ *   window), so larger lags converge to the whole-sheet result. Knots are
+ *   emitted in groups of 1 + lag_knots/8 so that one back-substitution serves
+ *   several. Rows between two emitted knots are finished and can be pulled.
+ *   Latency is therefore between (lag_knots + 2) * L + Delta-d and
+ *   (lag_knots + lag_knots/8 + 3) * L + Delta-d of travel.
+ *
+ *   end_sheet() finishes every pushed row now, with all data so far, and
+ *   keeps the height and slope of the last emitted knot of every fiber as
+ *   hard boundary conditions of the next sheet: consecutive sheets join C0
+ *   and C1 exactly. The next sheet continues the same knot grid and must
+ *   continue with larger s. reset() starts a new strip with no carry-over.
+ *
+ * Memory
+ *   Everything is allocated by flt_recon_create(); push, pull, end_sheet
+ *   and reset allocate nothing.
+ *
+ * Threads
+ *   A flt_recon must not be used from two threads at once. Separate handles
+ *   are independent. flt_reconstruct() is reentrant.
+ */
+#ifndef FLATLINE_RECON_H
+#define FLATLINE_RECON_H
+
+#include "flatline/common.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Output flags, one byte per row and fiber; bits combine. */
+enum {
+    /* This row's own sample of this fiber was invalid (height and slope both
+     * missing); the value is bridged from the neighbouring samples. */
+    FLT_FLAG_INVALID_INPUT = 1,
+    /* The row lies in a run of invalid samples longer than max_gap: the value
+     * comes from the smoothness prior alone and is not a measurement. */
+    FLT_FLAG_GAP = 2,
+    /* The fiber has had no valid height since the strip began (and no
+     * carry-over): its level is unknown and the value is NaN. */
+    FLT_FLAG_NO_DATA = 4
+};
+
+typedef struct flt_recon flt_recon;
+
+/* Creates a streaming reconstructor for `fibers` fibers (>= 1).
+ * options: NULL for the defaults, else read for the FLT_OPT_* keys of the
+ * reconstructor (knot_spacing, laser_spacing, height_sigma, slope_sigma,
+ * curvature_weight, lag_knots, max_gap, row_capacity); copied, not kept.
+ * Fails with FLT_ERR_INVALID_ARGUMENT if fibers is 0 or the options are
+ * inconsistent, FLT_ERR_OUT_OF_MEMORY if the buffers do not fit. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_recon_create(size_t fibers, const flt_options *options, flt_recon **out);
+
+/* Frees everything. NULL is a no-op. */
+FLT_API void FLT_CALL flt_recon_destroy(flt_recon *recon);
+
+/* The number of fibers the handle was created with. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_recon_fibers(const flt_recon *recon, size_t *out);
+
+/* The effective value of an option (knot_spacing resolved to mm). */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_recon_get_option(const flt_recon *recon, flt_option key, double *out);
+
+/* Pushes `rows` rows (>= 1).
+ *   s       [rows]          material position of each row, mm, strictly
+ *                           increasing, also across calls and sheets.
+ *   height  [rows * fibers] measured heights, mm.
+ *   slope   [rows * fibers] measured slopes, mm/mm.
+ *   valid   [rows * fibers] or NULL: non-zero where the sample is valid.
+ * `fibers` must equal the handle's. The block is checked whole before any
+ * row is taken: on failure nothing was pushed. Fails with
+ * FLT_ERR_BUFFER_FULL when the rows do not fit in row_capacity: pull
+ * finished rows, push smaller blocks, or create with a larger capacity. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_recon_push(flt_recon *recon, size_t rows, size_t fibers, const double *s,
+               const double *height, const double *slope,
+               const uint8_t *valid);
+
+/* Pulls up to max_rows finished rows, oldest first.
+ *   s_out     [max_rows]          their positions, mm.
+ *   z_out     [max_rows * fibers] reconstructed heights, mm (NaN only where
+ *                                 FLT_FLAG_NO_DATA is set).
+ *   flags_out [max_rows * fibers] FLT_FLAG_* bits, or NULL if unwanted.
+ *   rows_out  the number of rows written (0 when none is finished yet).
+ * FLT_ERR_STATE if nothing was pushed since create or reset. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_recon_pull(flt_recon *recon, size_t max_rows, size_t fibers,
+               double *s_out, double *z_out, uint8_t *flags_out,
+               size_t *rows_out);
+
+/* The number of finished rows waiting to be pulled. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_recon_ready(const flt_recon *recon, size_t *out);
+
+/* Finishes the current sheet: every pushed row becomes ready to pull, solved
+ * with all data so far, and the last emitted knot becomes the hard boundary
+ * condition of the next sheet (carry-over). FLT_ERR_STATE if no row was
+ * pushed since the last end_sheet, create or reset. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_end_sheet(flt_recon *recon);
+
+/* Starts a new strip: drops every row not pulled yet and the carry-over. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_reset(flt_recon *recon);
+
+/* The boundary condition carried into the next sheet: the knot position
+ * (mm), and per fiber its height (mm) and slope (mm/mm). Any output may be
+ * NULL. FLT_ERR_STATE before the first end_sheet of a strip. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_recon_boundary(const flt_recon *recon, size_t fibers, double *s_out,
+                   double *height_out, double *slope_out);
+
+/* Reconstructs one whole sheet in one call: the least-squares spline of all
+ * rows at once (no lag, no carry-over). Arguments as in flt_recon_push;
+ * z_out [rows * fibers] and flags_out [rows * fibers] (or NULL) as in
+ * flt_recon_pull. Allocates its working memory for the duration of the call
+ * (about 100 doubles per fiber and knot); reentrant. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_reconstruct(const flt_options *options, size_t rows, size_t fibers,
+                const double *s, const double *height, const double *slope,
+                const uint8_t *valid, double *z_out, uint8_t *flags_out);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* FLATLINE_RECON_H */

@@ -1,0 +1,85 @@
+// Internal: the thread-local error state and the guard that keeps C++
+// exceptions from crossing the C boundary. Every extern "C" entry point of
+// the library is written as
+//
+//     flt_status flt_x_do(...) { return flt::guard("flt_x_do", [&] { ... }); }
+//
+// and reports bad input with `return flt::fail(FLT_ERR_..., "...", ...)`.
+#pragma once
+
+#include <cmath>
+#include <cstdarg>
+#include <new>
+#include <stdexcept>
+
+#include "flatline/common.h"
+
+namespace flt {
+
+// Records status and a printf-style message for this thread; returns status.
+flt_status fail(flt_status status, const char *format, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+// Clears the thread-local state (called on entry of every public function).
+void clear_error();
+
+// Records the outcome of a guarded call (so flt_last_error_status() is right).
+void set_status(flt_status status);
+
+// Thrown inside the library where unwinding is simpler than returning; the
+// guard turns it into its status. Never escapes the library.
+struct error : std::runtime_error {
+    flt_status status;
+    error(flt_status st, const char *msg) : std::runtime_error(msg), status(st) {}
+};
+
+void record_exception(const char *function, const std::exception &e,
+                      flt_status status);
+
+// The one guard. `body` returns flt_status.
+template <class Body>
+flt_status guard(const char *function, Body &&body) noexcept {
+    clear_error();
+    try {
+        flt_status st = body();
+        set_status(st);
+        return st;
+    } catch (const error &e) {
+        record_exception(function, e, e.status);
+        return e.status;
+    } catch (const std::bad_alloc &e) {
+        record_exception(function, e, FLT_ERR_OUT_OF_MEMORY);
+        return FLT_ERR_OUT_OF_MEMORY;
+    } catch (const std::exception &e) {
+        // cv::Exception derives from std::exception and lands here too.
+        record_exception(function, e, FLT_ERR_INTERNAL);
+        return FLT_ERR_INTERNAL;
+    } catch (...) {
+        fail(FLT_ERR_INTERNAL, "%s: unknown exception", function);
+        return FLT_ERR_INTERNAL;
+    }
+}
+
+// The same for functions with no status to return (destroy): swallows
+// everything, because a destructor must not fail.
+template <class Body>
+void guard_void(Body &&body) noexcept {
+    try {
+        body();
+    } catch (...) {
+    }
+}
+
+// Argument checks shared by every component. Each names the function and the
+// argument in the message.
+#define FLT_CHECK_NOT_NULL(fn, arg)                                           \
+    do {                                                                      \
+        if ((arg) == nullptr)                                                 \
+            return ::flt::fail(FLT_ERR_INVALID_ARGUMENT,                      \
+                               "%s: argument '%s' is NULL", fn, #arg);        \
+    } while (0)
+
+}  // namespace flt

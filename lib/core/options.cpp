@@ -1,0 +1,158 @@
+#include "core/options.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "core/error.hpp"
+
+namespace flt {
+namespace {
+
+constexpr double inf = std::numeric_limits<double>::infinity();
+
+// Append-only: the position in this table is the slot in flt_options::value.
+const option_spec k_options[] = {
+    // reconstructor
+    {FLT_OPT_KNOT_SPACING, "knot_spacing", 0.0, 1.0e5, 0.0, false},
+    {FLT_OPT_LASER_SPACING, "laser_spacing", 1.0e-3, 1.0e5, 100.0, false},
+    {FLT_OPT_HEIGHT_SIGMA, "height_sigma", 1.0e-9, 1.0e6, 2.5, false},
+    {FLT_OPT_SLOPE_SIGMA, "slope_sigma", 1.0e-12, 1.0e3, 1.0e-3, false},
+    {FLT_OPT_CURVATURE_WEIGHT, "curvature_weight", 1.0e-12, 1.0e12, 1.0e-3,
+     false},
+    {FLT_OPT_LAG_KNOTS, "lag_knots", 0.0, 100000.0, 64.0, true},
+    {FLT_OPT_MAX_GAP, "max_gap", 0.0, inf, 200.0, false},
+    {FLT_OPT_ROW_CAPACITY, "row_capacity", 16.0, 1.0e8, 8192.0, true},
+};
+constexpr std::size_t k_option_count = sizeof k_options / sizeof k_options[0];
+static_assert(k_option_count <= flt_options::max_keys,
+              "grow flt_options::max_keys (it is internal, not ABI)");
+
+std::size_t slot_of(flt_option key) {
+    for (std::size_t i = 0; i < k_option_count; ++i)
+        if (k_options[i].key == key) return i;
+    return k_option_count;
+}
+
+flt_status unknown_key(const char *fn, flt_option key) {
+    return fail(FLT_ERR_NOT_FOUND, "%s: unknown option key %d", fn, (int)key);
+}
+
+}  // namespace
+
+const option_spec *find_option(flt_option key) {
+    std::size_t i = slot_of(key);
+    return i < k_option_count ? &k_options[i] : nullptr;
+}
+
+double option_value(const flt_options *options, flt_option key) {
+    std::size_t i = slot_of(key);
+    if (i == k_option_count) throw error(FLT_ERR_INTERNAL, "unregistered option key");
+    return options ? options->value[i] : k_options[i].default_value;
+}
+
+}  // namespace flt
+
+using namespace flt;
+
+extern "C" {
+
+FLT_API flt_status FLT_CALL flt_options_create(flt_options **out) {
+    return guard("flt_options_create", [&] {
+        FLT_CHECK_NOT_NULL("flt_options_create", out);
+        *out = nullptr;
+        auto *bag = new flt_options;
+        for (std::size_t i = 0; i < k_option_count; ++i)
+            bag->value[i] = k_options[i].default_value;
+        *out = bag;
+        return FLT_OK;
+    });
+}
+
+FLT_API void FLT_CALL flt_options_destroy(flt_options *options) {
+    delete options;
+}
+
+FLT_API flt_status FLT_CALL flt_options_set(flt_options *options,
+                                            flt_option key, double value) {
+    const char *fn = "flt_options_set";
+    return guard(fn, [&] {
+        FLT_CHECK_NOT_NULL(fn, options);
+        const option_spec *spec = find_option(key);
+        if (!spec)
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: unknown option key %d",
+                        fn, (int)key);
+        if (std::isnan(value))
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: option '%s' is NaN", fn,
+                        spec->name);
+        if (value < spec->min_value || value > spec->max_value)
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: option '%s' = %g is outside [%g, %g]", fn,
+                        spec->name, value, spec->min_value, spec->max_value);
+        if (spec->is_integer && value != std::floor(value))
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: option '%s' = %g must be a whole number", fn,
+                        spec->name, value);
+        options->value[slot_of(key)] = value;
+        return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_options_get(const flt_options *options,
+                                            flt_option key, double *out) {
+    const char *fn = "flt_options_get";
+    return guard(fn, [&] {
+        FLT_CHECK_NOT_NULL(fn, options);
+        FLT_CHECK_NOT_NULL(fn, out);
+        if (!find_option(key)) return unknown_key(fn, key);
+        *out = options->value[slot_of(key)];
+        return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_option_find(const char *name, flt_option *out) {
+    const char *fn = "flt_option_find";
+    return guard(fn, [&] {
+        FLT_CHECK_NOT_NULL(fn, name);
+        FLT_CHECK_NOT_NULL(fn, out);
+        for (const option_spec &spec : k_options)
+            if (std::strcmp(spec.name, name) == 0) {
+                *out = spec.key;
+                return FLT_OK;
+            }
+        return fail(FLT_ERR_NOT_FOUND, "%s: no option is named '%.200s'", fn,
+                    name);
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_option_info(flt_option key, const char **name,
+                                            double *min_value,
+                                            double *max_value,
+                                            double *default_value,
+                                            int *is_integer) {
+    const char *fn = "flt_option_info";
+    return guard(fn, [&] {
+        const option_spec *spec = find_option(key);
+        if (!spec) return unknown_key(fn, key);
+        if (name) *name = spec->name;
+        if (min_value) *min_value = spec->min_value;
+        if (max_value) *max_value = spec->max_value;
+        if (default_value) *default_value = spec->default_value;
+        if (is_integer) *is_integer = spec->is_integer ? 1 : 0;
+        return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_option_at(size_t index, flt_option *out) {
+    const char *fn = "flt_option_at";
+    return guard(fn, [&] {
+        FLT_CHECK_NOT_NULL(fn, out);
+        if (index >= k_option_count)
+            return fail(FLT_ERR_NOT_FOUND, "%s: index %zu is past the last of %zu options",
+                        fn, index, k_option_count);
+        *out = k_options[index].key;
+        return FLT_OK;
+    });
+}
+
+}  // extern "C"

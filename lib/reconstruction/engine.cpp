@@ -1,0 +1,528 @@
+#include "reconstruction/engine.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "core/error.hpp"
+#include "flatline/recon.h"
+
+namespace flt {
+namespace {
+
+// L^3 * integral of z''(s)^2 over one knot interval, as a quadratic form in
+// (z_i, m_i, z_i+1, m_i+1) with m = L*z' (all mm): the cubic Hermite
+// stiffness matrix.
+constexpr double k_stiffness[4][4] = {
+    {12.0, 6.0, -12.0, 6.0},
+    {6.0, 4.0, -6.0, 2.0},
+    {-12.0, -6.0, 12.0, -6.0},
+    {6.0, 2.0, -6.0, 4.0},
+};
+
+// The ridge on every knot height, relative to one height sample. Only there
+// so that a fiber with no height at all still has a regular system; its
+// effect on measured fibers is below 1e-12 of the data.
+constexpr double k_ridge = 1e-12;
+
+// Largest knot span of one row we size scratch arrays for (D/L <= 64).
+constexpr int k_max_unknowns = 2 * 66;
+
+}  // namespace
+
+recon_engine::recon_engine(std::size_t fibers, const recon_params &params,
+                           std::size_t knot_capacity, double *z_store,
+                           std::uint8_t *flags_store)
+    : K_(fibers), p_(params) {
+    L_ = p_.knot_spacing;
+    D_ = p_.laser_spacing;
+    // A row touches the knots around s-D/2 and s+D/2: ceil(D/L) intervals
+    // apart, so ceil(D/L)+2 knots (the epsilon absorbs D/L = 1 +- rounding).
+    S_ = int(std::ceil(D_ / L_ - 1e-9)) + 2;
+    n_ = 2 * S_;
+    if (n_ > k_max_unknowns) throw error(FLT_ERR_INTERNAL, "knot span too large");
+    ntri_ = n_ * (n_ + 1) / 2;
+    nf_ = 5 + 2 * (n_ - 2);
+
+    w_h_ = 1.0 / (p_.height_sigma * p_.height_sigma);
+    const double slope_mm = D_ * p_.slope_sigma;  // sigma of D*slope, mm
+    w_g_ = 1.0 / (slope_mm * slope_mm);
+    w_curv_ = p_.curvature_weight * w_h_;
+    w_ridge_ = k_ridge * w_h_;
+
+    factor_cap_ = knot_capacity;
+    hist_cap_ = knot_capacity + 2 * std::size_t(S_) + 4;
+
+    R_.assign(std::size_t(n_) * n_, 0.0);
+    schur_.assign(std::size_t(ntri_) * K_, 0.0);
+    down_.assign(std::size_t(ntri_) * K_, 0.0);
+    rhs_.assign(std::size_t(n_) * K_, 0.0);
+    factor_.assign(factor_cap_ * nf_ * K_, 0.0);
+    hist_.assign(hist_cap_ * 2 * K_, 0.0);
+    work_.assign(std::size_t(ntri_) * K_, 0.0);
+    xwin_.assign(std::size_t(n_) * K_, 0.0);
+    hv_.assign(K_, 0.0);
+    gv_.assign(K_, 0.0);
+    hok_.assign(K_, 0);
+    gok_.assign(K_, 0);
+    bad_.reserve(K_);
+    last_valid_s_.assign(K_, 0.0);
+    height_count_.assign(K_, 0);
+    bc_z_.assign(K_, 0.0);
+    bc_m_.assign(K_, 0.0);
+
+    ring_s_.assign(p_.row_capacity, 0.0);
+    ring_any_invalid_.assign(p_.row_capacity, 0);
+    if (z_store) {
+        ring_z_ = z_store;
+    } else {
+        own_z_.assign(p_.row_capacity * K_, 0.0);
+        ring_z_ = own_z_.data();
+    }
+    if (flags_store) {
+        ring_flags_ = flags_store;
+    } else {
+        own_flags_.assign(p_.row_capacity * K_, 0);
+        ring_flags_ = own_flags_.data();
+    }
+}
+
+long recon_engine::interval_of(double p) const {
+    return long(std::floor((p - t0_) / L_));
+}
+
+void recon_engine::basis(double p, long i, double w[4]) const {
+    double t = (p - knot_pos(i)) / L_;
+    t = std::min(1.0, std::max(0.0, t));  // rounding at the interval ends
+    const double t2 = t * t, t3 = t2 * t;
+    w[0] = 2 * t3 - 3 * t2 + 1;  // h00 -> z_i
+    w[1] = t3 - 2 * t2 + t;      // h10 -> m_i = L z'_i
+    w[2] = -2 * t3 + 3 * t2;     // h01 -> z_i+1
+    w[3] = t3 - t2;              // h11 -> m_i+1
+}
+
+double *recon_engine::hist_at(long j) {
+    return hist_.data() + (std::size_t(j) % hist_cap_) * 2 * K_;
+}
+const double *recon_engine::hist_at(long j) const {
+    return hist_.data() + (std::size_t(j) % hist_cap_) * 2 * K_;
+}
+
+// ---------------------------------------------------------------------------
+// Window management
+// ---------------------------------------------------------------------------
+
+void recon_engine::start_window(long first_knot) {
+    w0_ = first_knot;
+    std::fill(R_.begin(), R_.end(), 0.0);
+    std::fill(schur_.begin(), schur_.end(), 0.0);
+    std::fill(down_.begin(), down_.end(), 0.0);
+    bad_fibers_seen_ = false;
+    std::fill(rhs_.begin(), rhs_.end(), 0.0);
+    for (long j = first_knot; j < first_knot + S_; ++j) add_priors_for_knot(j);
+}
+
+void recon_engine::add_priors_for_knot(long j) {
+    const int wj = 2 * int(j - w0_);
+    R_[std::size_t(wj) * n_ + wj] += w_ridge_;
+    if (j - 1 >= w0_) {
+        // Curvature of interval [j-1, j], both knots open.
+        const int base = wj - 2;
+        for (int a = 0; a < 4; ++a)
+            for (int b = 0; b < 4; ++b)
+                R_[std::size_t(base + a) * n_ + base + b] += w_curv_ * k_stiffness[a][b];
+    } else if (j - 1 <= fixed_upto_ && j - 1 >= 0) {
+        // Knot j-1 is a carried boundary condition: its part moves to the
+        // right-hand side of every fiber.
+        const double *left = hist_at(j - 1);
+        for (int a = 0; a < 2; ++a) {
+            for (int b = 0; b < 2; ++b)
+                R_[std::size_t(wj + a) * n_ + wj + b] += w_curv_ * k_stiffness[2 + a][2 + b];
+            const double cz = w_curv_ * k_stiffness[2 + a][0];
+            const double cm = w_curv_ * k_stiffness[2 + a][1];
+            double *rhs = rhs_.data() + std::size_t(wj + a) * K_;
+            for (std::size_t k = 0; k < K_; ++k)
+                rhs[k] -= cz * left[k] + cm * left[K_ + k];
+        }
+    }
+}
+
+// Eliminates the two unknowns of knot w0_ from W = schur + R - down, per fiber
+// (one step of a banded Cholesky), keeps the factor for back-substitution,
+// and shifts the window by one knot.
+void recon_engine::close_knot() {
+    if (std::size_t(w0_ - next_emit_) >= factor_cap_)
+        throw error(FLT_ERR_INTERNAL, "factor ring overflow");
+    double *f = factor_.data() + (std::size_t(w0_) % factor_cap_) * nf_ * K_;
+    double *il00 = f, *l10 = f + K_, *il11 = f + 2 * K_, *y0 = f + 3 * K_,
+           *y1 = f + 4 * K_;
+    double *L0 = f + 5 * K_;                  // [n-2][K]
+    double *L1 = L0 + std::size_t(n_ - 2) * K_;  // [n-2][K]
+
+    // work = schur + R - down (packed upper).
+    for (int r = 0; r < n_; ++r)
+        for (int c = r; c < n_; ++c) {
+            const std::size_t e = tri(r, c);
+            const double shared = R_[std::size_t(r) * n_ + c];
+            double *w = work_.data() + e * K_;
+            const double *sc = schur_.data() + e * K_;
+            const double *dn = down_.data() + e * K_;
+            for (std::size_t k = 0; k < K_; ++k) w[k] = sc[k] + shared - dn[k];
+        }
+
+    const double *a00 = work_.data() + tri(0, 0) * K_;
+    const double *a01 = work_.data() + tri(0, 1) * K_;
+    const double *a11 = work_.data() + tri(1, 1) * K_;
+    const double *b0 = rhs_.data(), *b1 = rhs_.data() + K_;
+    for (std::size_t k = 0; k < K_; ++k) {
+        const double l00 = std::sqrt(std::max(a00[k], 1e-300));
+        il00[k] = 1.0 / l00;
+        l10[k] = a01[k] * il00[k];
+        const double d11 = a11[k] - l10[k] * l10[k];
+        il11[k] = 1.0 / std::sqrt(std::max(d11, 1e-300));
+        y0[k] = b0[k] * il00[k];
+        y1[k] = (b1[k] - l10[k] * y0[k]) * il11[k];
+    }
+    for (int c = 2; c < n_; ++c) {
+        const double *w0c = work_.data() + tri(0, c) * K_;
+        const double *w1c = work_.data() + tri(1, c) * K_;
+        double *l0 = L0 + std::size_t(c - 2) * K_, *l1 = L1 + std::size_t(c - 2) * K_;
+        for (std::size_t k = 0; k < K_; ++k) {
+            l0[k] = w0c[k] * il00[k];
+            l1[k] = (w1c[k] - l0[k] * l10[k]) * il11[k];
+        }
+    }
+    // New Schur complement, shifted by one knot; the new last knot starts
+    // empty (its priors are added below).
+    for (int r = 2; r < n_; ++r)
+        for (int c = r; c < n_; ++c) {
+            const double *wrc = work_.data() + tri(r, c) * K_;
+            const double *l0r = L0 + std::size_t(r - 2) * K_, *l1r = L1 + std::size_t(r - 2) * K_;
+            const double *l0c = L0 + std::size_t(c - 2) * K_, *l1c = L1 + std::size_t(c - 2) * K_;
+            double *out = schur_.data() + tri(r - 2, c - 2) * K_;
+            for (std::size_t k = 0; k < K_; ++k)
+                out[k] = wrc[k] - l0r[k] * l0c[k] - l1r[k] * l1c[k];
+        }
+    for (int r = 0; r < n_; ++r)
+        for (int c = std::max(r, n_ - 2); c < n_; ++c)
+            std::fill_n(schur_.data() + tri(r, c) * K_, K_, 0.0);
+    // Right-hand side, forward-eliminated and shifted.
+    for (int c = 2; c < n_; ++c) {
+        const double *bc = rhs_.data() + std::size_t(c) * K_;
+        const double *l0 = L0 + std::size_t(c - 2) * K_, *l1 = L1 + std::size_t(c - 2) * K_;
+        double *out = rhs_.data() + std::size_t(c - 2) * K_;
+        for (std::size_t k = 0; k < K_; ++k)
+            out[k] = bc[k] - l0[k] * y0[k] - l1[k] * y1[k];
+    }
+    std::fill_n(rhs_.data() + std::size_t(n_ - 2) * K_, 2 * K_, 0.0);
+
+    std::fill(R_.begin(), R_.end(), 0.0);
+    if (!bad_fibers_seen_) {
+        // down_ is all zero: nothing to clear.
+    } else {
+        std::fill(down_.begin(), down_.end(), 0.0);
+            bad_fibers_seen_ = false;
+    }
+    ++w0_;
+    add_priors_for_knot(w0_ + S_ - 1);
+}
+
+void recon_engine::maybe_emit() {
+    if (p_.lag_knots == recon_params::no_lag) return;
+    const long last = w0_ - 1 - p_.lag_knots;
+    if (last - next_emit_ + 1 >= emit_group()) emit_upto(last);
+}
+
+// Solves for every knot from next_emit_ to the end of the window given all
+// rows so far, and emits knots up to `last`.
+void recon_engine::emit_upto(long last) {
+    // 1. The open window: W x = rhs, per fiber, dense Cholesky W = U^T U
+    //    on the packed upper triangle.
+    for (int r = 0; r < n_; ++r)
+        for (int c = r; c < n_; ++c) {
+            const std::size_t e = tri(r, c);
+            const double shared = R_[std::size_t(r) * n_ + c];
+            double *w = work_.data() + e * K_;
+            const double *sc = schur_.data() + e * K_;
+            const double *dn = down_.data() + e * K_;
+            for (std::size_t k = 0; k < K_; ++k) w[k] = sc[k] + shared - dn[k];
+        }
+    for (int j = 0; j < n_; ++j) {
+        double *ujj = work_.data() + tri(j, j) * K_;
+        for (int i = 0; i < j; ++i) {
+            const double *uij = work_.data() + tri(i, j) * K_;
+            for (std::size_t k = 0; k < K_; ++k) ujj[k] -= uij[k] * uij[k];
+        }
+        for (std::size_t k = 0; k < K_; ++k)
+            ujj[k] = 1.0 / std::sqrt(std::max(ujj[k], 1e-300));  // keep 1/U_jj
+        for (int c = j + 1; c < n_; ++c) {
+            double *ujc = work_.data() + tri(j, c) * K_;
+            for (int i = 0; i < j; ++i) {
+                const double *uij = work_.data() + tri(i, j) * K_;
+                const double *uic = work_.data() + tri(i, c) * K_;
+                for (std::size_t k = 0; k < K_; ++k) ujc[k] -= uij[k] * uic[k];
+            }
+            for (std::size_t k = 0; k < K_; ++k) ujc[k] *= ujj[k];
+        }
+    }
+    // U^T y = rhs
+    for (int j = 0; j < n_; ++j) {
+        double *y = xwin_.data() + std::size_t(j) * K_;
+        const double *b = rhs_.data() + std::size_t(j) * K_;
+        std::copy_n(b, K_, y);
+        for (int i = 0; i < j; ++i) {
+            const double *uij = work_.data() + tri(i, j) * K_;
+            const double *yi = xwin_.data() + std::size_t(i) * K_;
+            for (std::size_t k = 0; k < K_; ++k) y[k] -= uij[k] * yi[k];
+        }
+        const double *inv = work_.data() + tri(j, j) * K_;
+        for (std::size_t k = 0; k < K_; ++k) y[k] *= inv[k];
+    }
+    // U x = y
+    for (int j = n_ - 1; j >= 0; --j) {
+        double *x = xwin_.data() + std::size_t(j) * K_;
+        for (int c = j + 1; c < n_; ++c) {
+            const double *ujc = work_.data() + tri(j, c) * K_;
+            const double *xc = xwin_.data() + std::size_t(c) * K_;
+            for (std::size_t k = 0; k < K_; ++k) x[k] -= ujc[k] * xc[k];
+        }
+        const double *inv = work_.data() + tri(j, j) * K_;
+        for (std::size_t k = 0; k < K_; ++k) x[k] *= inv[k];
+    }
+    for (int j = 0; j < S_; ++j) {
+        double *h = hist_at(w0_ + j);
+        std::copy_n(xwin_.data() + std::size_t(2 * j) * K_, 2 * K_, h);
+    }
+
+    // 2. Back-substitution through the eliminated knots, newest first.
+    for (long j = w0_ - 1; j >= next_emit_; --j) {
+        const double *f = factor_.data() + (std::size_t(j) % factor_cap_) * nf_ * K_;
+        const double *il00 = f, *l10 = f + K_, *il11 = f + 2 * K_,
+                     *y0 = f + 3 * K_, *y1 = f + 4 * K_;
+        const double *L0 = f + 5 * K_;
+        const double *L1 = L0 + std::size_t(n_ - 2) * K_;
+        double *out = hist_at(j);
+        double *xz = out, *xm = out + K_;
+        std::copy_n(y0, K_, xz);
+        std::copy_n(y1, K_, xm);
+        for (int c = 2; c < n_; ++c) {
+            const long knot = j + c / 2;
+            const double *xc = hist_at(knot) + std::size_t(c % 2) * K_;
+            const double *l0 = L0 + std::size_t(c - 2) * K_, *l1 = L1 + std::size_t(c - 2) * K_;
+            for (std::size_t k = 0; k < K_; ++k) {
+                xz[k] -= l0[k] * xc[k];
+                xm[k] -= l1[k] * xc[k];
+            }
+        }
+        for (std::size_t k = 0; k < K_; ++k) {
+            xm[k] *= il11[k];
+            xz[k] = (xz[k] - l10[k] * xm[k]) * il00[k];
+        }
+    }
+    last_emitted_ = last;
+    next_emit_ = last + 1;
+    finish_rows();
+}
+
+// Evaluates every pending row whose knot interval is fully emitted.
+void recon_engine::finish_rows() {
+    const std::size_t cap = p_.row_capacity;
+    while (ready_ < tail_) {
+        const std::size_t r = ready_ % cap;
+        const double s = ring_s_[r];
+        const long i = interval_of(s);
+        if (i + 1 > last_emitted_) break;
+        double w[4];
+        basis(s, i, w);
+        const double *a = hist_at(i), *b = hist_at(i + 1);
+        double *z = ring_z_ + r * K_;
+        for (std::size_t k = 0; k < K_; ++k)
+            z[k] = w[0] * a[k] + w[1] * a[K_ + k] + w[2] * b[k] + w[3] * b[K_ + k];
+        std::uint8_t *fl = ring_flags_ + r * K_;
+        if (ring_any_invalid_[r] || no_height_fibers_ > 0) {
+            for (std::size_t k = 0; k < K_; ++k) {
+                if ((fl[k] & FLT_FLAG_INVALID_INPUT) && last_valid_s_[k] < s &&
+                    last_s_ - last_valid_s_[k] > p_.max_gap)
+                    fl[k] |= FLT_FLAG_GAP;  // the run is still open and long
+                if (height_count_[k] == 0) {
+                    z[k] = std::numeric_limits<double>::quiet_NaN();
+                    fl[k] |= FLT_FLAG_NO_DATA;
+                }
+            }
+        }
+        ++ready_;
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Rows
+// ---------------------------------------------------------------------------
+
+void recon_engine::push_row(double s, const double *height, const double *slope,
+                            const std::uint8_t *valid) {
+    if (!have_t0_) {
+        // A new strip: the knot grid starts at the first row's rear laser.
+        have_t0_ = true;
+        t0_ = s - 0.5 * D_;
+        fixed_upto_ = -1;
+        anchored_ = false;
+        next_emit_ = 0;
+        last_emitted_ = -1;
+        start_window(0);
+        const double before = std::nextafter(s, -std::numeric_limits<double>::infinity());
+        std::fill(last_valid_s_.begin(), last_valid_s_.end(), before);
+        std::fill(height_count_.begin(), height_count_.end(), 0);
+        no_height_fibers_ = K_;
+    }
+
+    const double p1 = s - 0.5 * D_, p2 = s + 0.5 * D_;
+    const long i1 = interval_of(p1);
+    while (w0_ < i1) {
+        close_knot();
+        maybe_emit();
+    }
+    const long i2 = std::min(interval_of(p2), i1 + S_ - 2);
+
+    // Coefficients over the 2S unknowns of knots i1 .. i1+S-1.
+    double ch[k_max_unknowns] = {0}, cg[k_max_unknowns] = {0};
+    double b1[4], b2[4];
+    basis(p1, i1, b1);
+    basis(p2, i2, b2);
+    const int o2 = 2 * int(i2 - i1);
+    for (int a = 0; a < 4; ++a) {
+        ch[a] += 0.5 * b1[a];
+        cg[a] -= b1[a];
+        ch[o2 + a] += 0.5 * b2[a];
+        cg[o2 + a] += b2[a];
+    }
+    // Knots before the window are carried boundary conditions (only right
+    // after end_sheet): their part of the prediction is subtracted per fiber.
+    const int off = 2 * int(w0_ - i1);
+    if (off > 0 && i1 + off / 2 - 1 > fixed_upto_)
+        throw error(FLT_ERR_INTERNAL, "row touches an eliminated knot");
+
+    bad_.clear();
+    for (std::size_t k = 0; k < K_; ++k) {
+        const bool mask = valid == nullptr || valid[k] != 0;
+        const bool hok = mask && std::isfinite(height[k]);
+        const bool gok = mask && std::isfinite(slope[k]);
+        hok_[k] = hok;
+        gok_[k] = gok;
+        hv_[k] = hok ? height[k] : 0.0;
+        gv_[k] = gok ? D_ * slope[k] : 0.0;
+        if (!(hok && gok)) bad_.push_back(int(k));
+    }
+    for (int u = 0; u < off; ++u) {
+        const double *x = hist_at(i1 + u / 2) + std::size_t(u % 2) * K_;
+        const double chu = ch[u], cgu = cg[u];
+        for (std::size_t k = 0; k < K_; ++k) {
+            hv_[k] -= hok_[k] ? chu * x[k] : 0.0;
+            gv_[k] -= gok_[k] ? cgu * x[k] : 0.0;
+        }
+    }
+    for (int u = off; u < n_; ++u) {
+        const int wi = u - off;
+        const double ah = w_h_ * ch[u], ag = w_g_ * cg[u];
+        double *rhs = rhs_.data() + std::size_t(wi) * K_;
+        for (std::size_t k = 0; k < K_; ++k) rhs[k] += ah * hv_[k] + ag * gv_[k];
+        for (int v = off; v < n_; ++v)
+            R_[std::size_t(wi) * n_ + (v - off)] += ah * ch[v] + ag * cg[v];
+    }
+    // Fibers missing a sample take its contribution back out.
+    for (int k : bad_) {
+        for (int u = off; u < n_; ++u)
+            for (int v = u; v < n_; ++v) {
+                const double d = (hok_[k] ? 0.0 : w_h_ * ch[u] * ch[v]) +
+                                 (gok_[k] ? 0.0 : w_g_ * cg[u] * cg[v]);
+                down_[tri(u - off, v - off) * K_ + k] += d;
+            }
+        bad_fibers_seen_ = true;
+    }
+
+    // The row joins the ring as pending.
+    const std::size_t cap = p_.row_capacity;
+    const std::size_t r = tail_ % cap;
+    ring_s_[r] = s;
+    std::uint8_t *fl = ring_flags_ + r * K_;
+    std::memset(fl, 0, K_);
+    bool any_invalid = false;
+    for (int k : bad_) {
+        if (!hok_[k] && !gok_[k]) {
+            fl[k] = FLT_FLAG_INVALID_INPUT;
+            any_invalid = true;
+        }
+    }
+    ring_any_invalid_[r] = any_invalid;
+    for (std::size_t k = 0; k < K_; ++k) {
+        if (!(hok_[k] || gok_[k])) continue;
+        if (s - last_valid_s_[k] > p_.max_gap) mark_gap(k, last_valid_s_[k]);
+        last_valid_s_[k] = s;
+        if (hok_[k] && height_count_[k]++ == 0) --no_height_fibers_;
+    }
+    ++tail_;
+    last_s_ = s;
+    ++rows_in_sheet_;
+
+    maybe_emit();
+    finish_rows();
+}
+
+// A run of invalid samples of fiber k after `from` has just closed and is
+// longer than max_gap: flags its rows that are still in the ring.
+void recon_engine::mark_gap(std::size_t k, double from) {
+    const std::size_t cap = p_.row_capacity;
+    for (std::size_t i = tail_; i > head_; --i) {
+        const std::size_t r = (i - 1) % cap;
+        if (ring_s_[r] <= from) break;
+        std::uint8_t &f = ring_flags_[r * K_ + k];
+        if (f & FLT_FLAG_INVALID_INPUT) f |= FLT_FLAG_GAP;
+    }
+}
+
+std::size_t recon_engine::pull(std::size_t max_rows, double *s_out,
+                               double *z_out, std::uint8_t *flags_out) {
+    const std::size_t cap = p_.row_capacity;
+    const std::size_t n = std::min(max_rows, ready_ - head_);
+    for (std::size_t i = 0; i < n; ++i) {
+        const std::size_t r = (head_ + i) % cap;
+        s_out[i] = ring_s_[r];
+        std::copy_n(ring_z_ + r * K_, K_, z_out + i * K_);
+        if (flags_out) std::copy_n(ring_flags_ + r * K_, K_, flags_out + i * K_);
+    }
+    head_ += n;
+    return n;
+}
+
+void recon_engine::end_sheet() {
+    const long e_end = interval_of(last_s_) + 1;
+    emit_upto(e_end);
+    // Carry-over: knots up to e_end are now hard boundary conditions.
+    fixed_upto_ = e_end;
+    anchored_ = true;
+    bc_s_ = knot_pos(e_end);
+    const double *h = hist_at(e_end);
+    std::copy_n(h, K_, bc_z_.data());
+    std::copy_n(h + K_, K_, bc_m_.data());
+    rows_in_sheet_ = 0;
+    next_emit_ = e_end + 1;
+    bad_fibers_seen_ = false;
+    start_window(e_end + 1);
+}
+
+void recon_engine::reset() {
+    have_t0_ = false;
+    head_ = ready_ = tail_ = 0;
+    rows_in_sheet_ = 0;
+    fixed_upto_ = -1;
+    anchored_ = false;
+}
+
+void recon_engine::boundary(double *s_out, double *height_out,
+                            double *slope_out) const {
+    if (s_out) *s_out = bc_s_;
+    if (height_out) std::copy_n(bc_z_.data(), K_, height_out);
+    if (slope_out)
+        for (std::size_t k = 0; k < K_; ++k) slope_out[k] = bc_m_[k] / L_;
+}
+
+}  // namespace flt

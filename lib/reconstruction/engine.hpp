@@ -1,0 +1,173 @@
+// Internal: the streaming Hermite reconstruction engine behind flt_recon and
+// flt_reconstruct().
+//
+// The math (DESIGN.md, "Hermite reconstruction"):
+//   Per fiber, unknowns are (z_j, m_j = L*z'_j) at knots t_j = t0 + j*L, all in
+//   mm so the normal matrix is well scaled. A row at s measures, per fiber,
+//     height: (z(s-D/2) + z(s+D/2))/2          weight 1/height_sigma^2
+//     slope*D: z(s+D/2) - z(s-D/2)             weight 1/(D*slope_sigma)^2
+//   Each row touches at most S = ceil(D/L)+2 consecutive knots, so the normal
+//   matrix is banded with half-bandwidth 2S-1. Priors: a curvature term per
+//   knot interval and a negligible ridge on z (1e-12 of one height sample)
+//   keep it positive definite where data is missing.
+//
+// Streaming solve (a fixed-lag smoother):
+//   Rows arrive with increasing s, so once s-D/2 of a row passes knot j, no
+//   later row touches j and j is eliminated (one Cholesky step on the window
+//   of the S open knots; the factor is kept in a ring). The estimate of any
+//   knot given all data so far is then a small window solve plus a
+//   back-substitution through the ring. Knot j is emitted when knot
+//   j+lag is eliminated; rows between emitted knots are evaluated from the
+//   emitted knot states (Hermite interpolation), so the output is C1.
+//
+// Layout and speed:
+//   All per-fiber arrays are structure-of-arrays, [entry][fiber], so the inner
+//   loops run over contiguous fibers and vectorise. The row contributions to
+//   the normal matrix are the same for every fiber that has the sample, so
+//   they are accumulated once (R) and each fiber subtracts only its invalid
+//   samples (down). Everything is allocated in the constructor.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+namespace flt {
+
+struct recon_params {
+    double knot_spacing = 100.0;   // L, mm (resolved, > 0)
+    double laser_spacing = 100.0;  // D, mm
+    double height_sigma = 2.5;     // mm
+    double slope_sigma = 1e-3;     // mm/mm
+    double curvature_weight = 1e-3;
+    double max_gap = 200.0;        // mm
+    long lag_knots = 40;           // batch: no_lag
+    std::size_t row_capacity = 4096;
+
+    // Knots are emitted in groups: one back-substitution through the lag
+    // then serves the whole group, so its cost per knot is (lag+group)/group
+    // instead of lag. Every emitted knot still has at least lag_knots
+    // complete knots after it.
+    long emit_group() const { return 1 + lag_knots / 8; }
+    // Eliminated knots that can wait for emission at once.
+    std::size_t knot_capacity() const { return std::size_t(lag_knots + emit_group()) + 2; }
+
+    static constexpr long no_lag = std::numeric_limits<long>::max();
+};
+
+class recon_engine {
+public:
+    // knot_capacity: the most knots that can be eliminated but not yet emitted;
+    // for streaming lag_knots + 2, for batch the sheet's knot count.
+    // z_store/flags_store: caller storage for the row ring (batch writes
+    // straight into the caller's output), or nullptr to own it.
+    recon_engine(std::size_t fibers, const recon_params &params,
+                 std::size_t knot_capacity, double *z_store = nullptr,
+                 std::uint8_t *flags_store = nullptr);
+
+    std::size_t fibers() const { return K_; }
+    const recon_params &params() const { return p_; }
+    int knots_per_row() const { return S_; }
+
+    // Rows that still fit in the ring.
+    std::size_t free_rows() const { return p_.row_capacity - (tail_ - head_); }
+    std::size_t ready_rows() const { return ready_ - head_; }
+    bool has_last_s() const { return have_t0_; }
+    double last_s() const { return last_s_; }
+    bool rows_since_sheet() const { return rows_in_sheet_ > 0; }
+    bool pushed_since_reset() const { return have_t0_; }
+    bool has_boundary() const { return fixed_upto_ >= 0 && anchored_; }
+
+    // One row; arguments already validated (s increasing, sizes right).
+    void push_row(double s, const double *height, const double *slope,
+                  const std::uint8_t *valid);
+    // Copies up to max_rows ready rows out; returns how many.
+    std::size_t pull(std::size_t max_rows, double *s_out, double *z_out,
+                     std::uint8_t *flags_out);
+    void end_sheet();
+    void reset();
+    // The carried boundary knot.
+    void boundary(double *s_out, double *height_out, double *slope_out) const;
+
+private:
+    // ---- geometry ----
+    long interval_of(double p) const;  // knot interval containing p
+    double knot_pos(long j) const { return t0_ + double(j) * L_; }
+    // Hermite basis at p on interval i: weights of (z_i, m_i, z_i+1, m_i+1).
+    void basis(double p, long i, double w[4]) const;
+
+    // ---- window management ----
+    void start_window(long first_knot);     // empty window at first_knot
+    void add_priors_for_knot(long j);       // ridge of j, curvature [j-1, j]
+    void close_knot();                      // eliminate knot w0_
+    void maybe_emit();                      // emit knots whose lag is reached
+    long emit_group() const { return p_.emit_group(); }
+    void emit_upto(long last);              // solve and emit knots <= last
+    void finish_rows();                     // evaluate rows now determined
+    void mark_gap(std::size_t fiber, double from);
+    double *hist_at(long j);                // state (z, m) of knot j, [2][K]
+    const double *hist_at(long j) const;
+
+    // Per-fiber symmetric window matrix W = schur + R - down, packed upper.
+    std::size_t tri(int r, int c) const { return std::size_t(r) * n_ - std::size_t(r) * (r - 1) / 2 + std::size_t(c - r); }
+    double *fiber_entry(std::vector<double> &v, std::size_t entry) { return v.data() + entry * K_; }
+
+    // ---- sizes ----
+    std::size_t K_;
+    recon_params p_;
+    double L_, D_;
+    int S_;     // knots touched by one row
+    int n_;     // unknowns in the window, 2*S_
+    int ntri_;  // packed entries of the window matrix
+    int nf_;    // doubles per fiber and eliminated knot in the factor ring
+    double w_h_, w_g_, w_curv_, w_ridge_;
+
+    // ---- knot state ----
+    bool have_t0_ = false;
+    double t0_ = 0.0;
+    long w0_ = 0;           // first open knot (window start)
+    long next_emit_ = 0;    // first knot not emitted yet
+    long last_emitted_ = -1;
+    long fixed_upto_ = -1;  // knots <= this are hard boundary conditions
+    bool anchored_ = false; // a boundary condition has been carried
+
+    std::vector<double> R_;      // shared row contributions, n x n dense
+    std::vector<double> schur_;  // [ntri][K]
+    std::vector<double> down_;   // [ntri][K]
+    std::vector<double> rhs_;    // [n][K]
+    bool bad_fibers_seen_ = false;        // down_ is non-zero
+
+    std::size_t factor_cap_;
+    std::vector<double> factor_;  // ring [factor_cap][nf][K]
+    std::size_t hist_cap_;
+    std::vector<double> hist_;    // ring of knot states [hist_cap][2][K]
+
+    // ---- scratch (allocated once) ----
+    std::vector<double> work_;    // [ntri][K]
+    std::vector<double> xwin_;    // [n][K]
+    std::vector<double> hv_, gv_; // per fiber masked measurements
+    std::vector<std::uint8_t> hok_, gok_;
+    std::vector<int> bad_;        // fibers with an invalid sample this row
+
+    // ---- per fiber bookkeeping ----
+    double bc_s_ = 0.0;           // carried boundary knot
+    std::vector<double> bc_z_, bc_m_;
+    std::vector<double> last_valid_s_;
+    std::vector<std::size_t> height_count_;
+    std::size_t no_height_fibers_ = 0;
+
+    // ---- row ring ----
+    std::vector<double> ring_s_;
+    std::vector<std::uint8_t> ring_any_invalid_;
+    std::vector<double> own_z_;
+    std::vector<std::uint8_t> own_flags_;
+    double *ring_z_;
+    std::uint8_t *ring_flags_;
+    std::size_t head_ = 0, ready_ = 0, tail_ = 0;  // monotonic counters
+    double last_s_ = 0.0;
+    std::size_t rows_in_sheet_ = 0;
+    double sheet_first_s_ = 0.0;
+};
+
+}  // namespace flt

@@ -1,0 +1,318 @@
+// The C entry points of the reconstructor: argument checks, then the engine.
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <vector>
+
+#include "core/error.hpp"
+#include "core/options.hpp"
+#include "flatline/recon.h"
+#include "reconstruction/engine.hpp"
+
+using namespace flt;
+
+namespace {
+constexpr std::uint32_t k_recon_magic = 0x464c5452u;  // "FLTR"
+// A larger jump in s between consecutive rows is taken as a new strip that
+// was not announced with reset(): bridging it would take minutes of work.
+constexpr double k_max_jump_mm = 1.0e6;
+// Knots per laser spacing we support (the window grows with it).
+constexpr double k_max_knots_per_laser_spacing = 64.0;
+}  // namespace
+
+struct flt_recon {
+    std::uint32_t magic = k_recon_magic;
+    std::unique_ptr<recon_engine> engine;
+};
+
+namespace {
+
+flt_status read_params(const char *fn, const flt_options *options,
+                       recon_params *out) {
+    recon_params p;
+    p.laser_spacing = option_value(options, FLT_OPT_LASER_SPACING);
+    const double knot = option_value(options, FLT_OPT_KNOT_SPACING);
+    p.knot_spacing = knot > 0.0 ? knot : p.laser_spacing;
+    p.height_sigma = option_value(options, FLT_OPT_HEIGHT_SIGMA);
+    p.slope_sigma = option_value(options, FLT_OPT_SLOPE_SIGMA);
+    p.curvature_weight = option_value(options, FLT_OPT_CURVATURE_WEIGHT);
+    p.lag_knots = long(option_value(options, FLT_OPT_LAG_KNOTS));
+    p.max_gap = option_value(options, FLT_OPT_MAX_GAP);
+    p.row_capacity = std::size_t(option_value(options, FLT_OPT_ROW_CAPACITY));
+    if (p.laser_spacing / p.knot_spacing > k_max_knots_per_laser_spacing)
+        return fail(FLT_ERR_INVALID_ARGUMENT,
+                    "%s: knot_spacing = %g mm is more than %g times finer than "
+                    "laser_spacing = %g mm",
+                    fn, p.knot_spacing, k_max_knots_per_laser_spacing,
+                    p.laser_spacing);
+    *out = p;
+    return FLT_OK;
+}
+
+flt_status check_handle(const char *fn, const flt_recon *recon) {
+    if (recon == nullptr)
+        return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'recon' is NULL", fn);
+    if (recon->magic != k_recon_magic || !recon->engine)
+        return fail(FLT_ERR_INVALID_ARGUMENT,
+                    "%s: argument 'recon' is not a live flt_recon handle", fn);
+    return FLT_OK;
+}
+
+flt_status check_fibers(const char *fn, std::size_t fibers, std::size_t expected) {
+    if (fibers != expected)
+        return fail(FLT_ERR_INVALID_ARGUMENT,
+                    "%s: argument 'fibers' = %zu but the reconstructor has %zu",
+                    fn, fibers, expected);
+    return FLT_OK;
+}
+
+// rows * fibers must be addressable as doubles.
+flt_status check_shape(const char *fn, std::size_t rows, std::size_t fibers) {
+    if (rows == 0)
+        return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'rows' is 0", fn);
+    if (fibers == 0)
+        return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'fibers' is 0", fn);
+    if (rows > std::numeric_limits<std::size_t>::max() / sizeof(double) / fibers)
+        return fail(FLT_ERR_INVALID_ARGUMENT,
+                    "%s: rows * fibers = %zu * %zu overflows the address space",
+                    fn, rows, fibers);
+    return FLT_OK;
+}
+
+// Positions finite, strictly increasing, and continuing after `previous`.
+flt_status check_positions(const char *fn, std::size_t rows, const double *s,
+                           bool has_previous, double previous) {
+    for (std::size_t r = 0; r < rows; ++r) {
+        if (!std::isfinite(s[r]))
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: s[%zu] = %g is not finite",
+                        fn, r, s[r]);
+        const bool has_prev = r > 0 || has_previous;
+        const double prev = r > 0 ? s[r - 1] : previous;
+        if (has_prev && !(s[r] > prev))
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: s[%zu] = %.17g does not increase (previous row at "
+                        "%.17g mm); positions must be strictly increasing",
+                        fn, r, s[r], prev);
+        if (has_prev && s[r] - prev > k_max_jump_mm)
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: s[%zu] = %g jumps %g mm past the previous row; call "
+                        "flt_recon_reset() to start a new strip",
+                        fn, r, s[r], s[r] - prev);
+    }
+    return FLT_OK;
+}
+
+flt_status check_push_arrays(const char *fn, const double *s, const double *height,
+                             const double *slope) {
+    FLT_CHECK_NOT_NULL(fn, s);
+    FLT_CHECK_NOT_NULL(fn, height);
+    FLT_CHECK_NOT_NULL(fn, slope);
+    return FLT_OK;
+}
+
+}  // namespace
+
+extern "C" {
+
+FLT_API flt_status FLT_CALL flt_recon_create(size_t fibers,
+                                             const flt_options *options,
+                                             flt_recon **out) {
+    const char *fn = "flt_recon_create";
+    return guard(fn, [&] {
+        FLT_CHECK_NOT_NULL(fn, out);
+        *out = nullptr;
+        if (fibers == 0)
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'fibers' is 0", fn);
+        recon_params p;
+        if (flt_status st = read_params(fn, options, &p)) return st;
+        if (check_shape(fn, p.row_capacity, fibers) != FLT_OK)
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: row_capacity * fibers = %zu * %zu is too large", fn,
+                        p.row_capacity, fibers);
+        auto handle = std::make_unique<flt_recon>();
+        handle->engine = std::make_unique<recon_engine>(
+            fibers, p, p.knot_capacity());
+        *out = handle.release();
+        return FLT_OK;
+    });
+}
+
+FLT_API void FLT_CALL flt_recon_destroy(flt_recon *recon) {
+    guard_void([&] {
+        if (recon && recon->magic == k_recon_magic) {
+            recon->magic = 0;
+            delete recon;
+        }
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_recon_fibers(const flt_recon *recon, size_t *out) {
+    const char *fn = "flt_recon_fibers";
+    return guard(fn, [&] {
+        if (flt_status st = check_handle(fn, recon)) return st;
+        FLT_CHECK_NOT_NULL(fn, out);
+        *out = recon->engine->fibers();
+        return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_recon_get_option(const flt_recon *recon,
+                                                 flt_option key, double *out) {
+    const char *fn = "flt_recon_get_option";
+    return guard(fn, [&] {
+        if (flt_status st = check_handle(fn, recon)) return st;
+        FLT_CHECK_NOT_NULL(fn, out);
+        const recon_params &p = recon->engine->params();
+        switch (key) {
+        case FLT_OPT_KNOT_SPACING: *out = p.knot_spacing; break;
+        case FLT_OPT_LASER_SPACING: *out = p.laser_spacing; break;
+        case FLT_OPT_HEIGHT_SIGMA: *out = p.height_sigma; break;
+        case FLT_OPT_SLOPE_SIGMA: *out = p.slope_sigma; break;
+        case FLT_OPT_CURVATURE_WEIGHT: *out = p.curvature_weight; break;
+        case FLT_OPT_LAG_KNOTS: *out = double(p.lag_knots); break;
+        case FLT_OPT_MAX_GAP: *out = p.max_gap; break;
+        case FLT_OPT_ROW_CAPACITY: *out = double(p.row_capacity); break;
+        default:
+            return fail(FLT_ERR_NOT_FOUND,
+                        "%s: option key %d is not a reconstructor option", fn,
+                        (int)key);
+        }
+        return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_recon_push(flt_recon *recon, size_t rows,
+                                           size_t fibers, const double *s,
+                                           const double *height,
+                                           const double *slope,
+                                           const uint8_t *valid) {
+    const char *fn = "flt_recon_push";
+    return guard(fn, [&] {
+        if (flt_status st = check_handle(fn, recon)) return st;
+        recon_engine &e = *recon->engine;
+        if (flt_status st = check_push_arrays(fn, s, height, slope)) return st;
+        if (flt_status st = check_shape(fn, rows, fibers)) return st;
+        if (flt_status st = check_fibers(fn, fibers, e.fibers())) return st;
+        if (flt_status st = check_positions(fn, rows, s, e.has_last_s(), e.last_s()))
+            return st;
+        if (rows > e.free_rows())
+            return fail(FLT_ERR_BUFFER_FULL,
+                        "%s: %zu rows do not fit: %zu of row_capacity = %zu are "
+                        "free (%zu finished rows wait to be pulled)",
+                        fn, rows, e.free_rows(), e.params().row_capacity,
+                        e.ready_rows());
+        for (std::size_t r = 0; r < rows; ++r)
+            e.push_row(s[r], height + r * fibers, slope + r * fibers,
+                       valid ? valid + r * fibers : nullptr);
+        return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_recon_pull(flt_recon *recon, size_t max_rows,
+                                           size_t fibers, double *s_out,
+                                           double *z_out, uint8_t *flags_out,
+                                           size_t *rows_out) {
+    const char *fn = "flt_recon_pull";
+    return guard(fn, [&] {
+        if (flt_status st = check_handle(fn, recon)) return st;
+        recon_engine &e = *recon->engine;
+        FLT_CHECK_NOT_NULL(fn, rows_out);
+        *rows_out = 0;
+        if (flt_status st = check_fibers(fn, fibers, e.fibers())) return st;
+        if (max_rows > 0) {
+            FLT_CHECK_NOT_NULL(fn, s_out);
+            FLT_CHECK_NOT_NULL(fn, z_out);
+            if (flt_status st = check_shape(fn, max_rows, fibers)) return st;
+        }
+        if (!e.pushed_since_reset())
+            return fail(FLT_ERR_STATE,
+                        "%s: nothing was pushed since the reconstructor was "
+                        "created or reset",
+                        fn);
+        *rows_out = e.pull(max_rows, s_out, z_out, flags_out);
+        return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_recon_ready(const flt_recon *recon, size_t *out) {
+    const char *fn = "flt_recon_ready";
+    return guard(fn, [&] {
+        if (flt_status st = check_handle(fn, recon)) return st;
+        FLT_CHECK_NOT_NULL(fn, out);
+        *out = recon->engine->ready_rows();
+        return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_recon_end_sheet(flt_recon *recon) {
+    const char *fn = "flt_recon_end_sheet";
+    return guard(fn, [&] {
+        if (flt_status st = check_handle(fn, recon)) return st;
+        if (!recon->engine->rows_since_sheet())
+            return fail(FLT_ERR_STATE,
+                        "%s: no row was pushed since the last end_sheet, create "
+                        "or reset",
+                        fn);
+        recon->engine->end_sheet();
+        return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_recon_reset(flt_recon *recon) {
+    const char *fn = "flt_recon_reset";
+    return guard(fn, [&] {
+        if (flt_status st = check_handle(fn, recon)) return st;
+        recon->engine->reset();
+        return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_recon_boundary(const flt_recon *recon,
+                                               size_t fibers, double *s_out,
+                                               double *height_out,
+                                               double *slope_out) {
+    const char *fn = "flt_recon_boundary";
+    return guard(fn, [&] {
+        if (flt_status st = check_handle(fn, recon)) return st;
+        const recon_engine &e = *recon->engine;
+        if (flt_status st = check_fibers(fn, fibers, e.fibers())) return st;
+        if (!e.has_boundary())
+            return fail(FLT_ERR_STATE,
+                        "%s: no sheet has ended since the strip began, so "
+                        "there is no boundary condition",
+                        fn);
+        e.boundary(s_out, height_out, slope_out);
+        return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_reconstruct(const flt_options *options,
+                                            size_t rows, size_t fibers,
+                                            const double *s, const double *height,
+                                            const double *slope,
+                                            const uint8_t *valid, double *z_out,
+                                            uint8_t *flags_out) {
+    const char *fn = "flt_reconstruct";
+    return guard(fn, [&] {
+        if (flt_status st = check_push_arrays(fn, s, height, slope)) return st;
+        FLT_CHECK_NOT_NULL(fn, z_out);
+        if (flt_status st = check_shape(fn, rows, fibers)) return st;
+        if (flt_status st = check_positions(fn, rows, s, false, 0.0)) return st;
+        recon_params p;
+        if (flt_status st = read_params(fn, options, &p)) return st;
+        p.lag_knots = recon_params::no_lag;  // one solve with every row
+        p.row_capacity = rows;
+        // Every knot of the sheet stays open until the end.
+        const double span = s[rows - 1] - s[0] + p.laser_spacing;
+        const std::size_t knots = std::size_t(span / p.knot_spacing) + 4;
+        recon_engine e(fibers, p, knots, z_out, flags_out);
+        for (std::size_t r = 0; r < rows; ++r)
+            e.push_row(s[r], height + r * fibers, slope + r * fibers,
+                       valid ? valid + r * fibers : nullptr);
+        e.end_sheet();
+        return FLT_OK;
+    });
+}
+
+}  // extern "C"
