@@ -28,6 +28,37 @@ constexpr double k_ridge = 1e-12;
 // Largest knot span of one row we size scratch arrays for (D/L <= 64).
 constexpr int k_max_unknowns = 2 * 66;
 
+// The hot loop of the default geometry (a row spans three knots, six
+// unknowns) without a validity mask: masks non-finite samples and adds one
+// row to the six right-hand sides, fiber by fiber. A free function with
+// restrict parameters so that GCC vectorises it across fibers (it gives up
+// on the aliasing checks otherwise). Returns the number of fibers with a
+// non-finite sample. bool temporaries are avoided for the same reason.
+std::size_t accumulate_row6(std::size_t K, const double *__restrict height,
+                            const double *__restrict slope, double D,
+                            const double *__restrict a, const double *__restrict b,
+                            double *__restrict r0, double *__restrict r1,
+                            double *__restrict r2, double *__restrict r3,
+                            double *__restrict r4, double *__restrict r5) {
+    const double big = std::numeric_limits<double>::max();
+    double good = 0.0;
+    for (std::size_t k = 0; k < K; ++k) {
+        const double h = height[k], g = slope[k];
+        const double hm = std::fabs(h) <= big ? 1.0 : 0.0;
+        const double gm = std::fabs(g) <= big ? 1.0 : 0.0;
+        const double hv = hm != 0.0 ? h : 0.0;
+        const double gv = gm != 0.0 ? D * g : 0.0;
+        good += hm * gm;
+        r0[k] += a[0] * hv + b[0] * gv;
+        r1[k] += a[1] * hv + b[1] * gv;
+        r2[k] += a[2] * hv + b[2] * gv;
+        r3[k] += a[3] * hv + b[3] * gv;
+        r4[k] += a[4] * hv + b[4] * gv;
+        r5[k] += a[5] * hv + b[5] * gv;
+    }
+    return K - std::size_t(good);
+}
+
 }  // namespace
 
 recon_engine::recon_engine(std::size_t fibers, const recon_params &params,
@@ -63,11 +94,9 @@ recon_engine::recon_engine(std::size_t fibers, const recon_params &params,
     xwin_.assign(std::size_t(n_) * K_, 0.0);
     hv_.assign(K_, 0.0);
     gv_.assign(K_, 0.0);
-    hok_.assign(K_, 0);
-    gok_.assign(K_, 0);
     bad_.reserve(K_);
     last_valid_s_.assign(K_, 0.0);
-    height_count_.assign(K_, 0);
+    has_height_.assign(K_, 0);
     bc_z_.assign(K_, 0.0);
     bc_m_.assign(K_, 0.0);
 
@@ -341,10 +370,11 @@ void recon_engine::finish_rows() {
         std::uint8_t *fl = ring_flags_ + r * K_;
         if (ring_any_invalid_[r] || no_height_fibers_ > 0) {
             for (std::size_t k = 0; k < K_; ++k) {
-                if ((fl[k] & FLT_FLAG_INVALID_INPUT) && last_valid_s_[k] < s &&
-                    last_s_ - last_valid_s_[k] > p_.max_gap)
+                const double last = std::max(last_valid_s_[k], all_valid_s_);
+                if ((fl[k] & FLT_FLAG_INVALID_INPUT) && last < s &&
+                    last_s_ - last > p_.max_gap)
                     fl[k] |= FLT_FLAG_GAP;  // the run is still open and long
-                if (height_count_[k] == 0) {
+                if (!has_height_[k]) {
                     z[k] = std::numeric_limits<double>::quiet_NaN();
                     fl[k] |= FLT_FLAG_NO_DATA;
                 }
@@ -371,7 +401,9 @@ void recon_engine::push_row(double s, const double *height, const double *slope,
         start_window(0);
         const double before = std::nextafter(s, -std::numeric_limits<double>::infinity());
         std::fill(last_valid_s_.begin(), last_valid_s_.end(), before);
-        std::fill(height_count_.begin(), height_count_.end(), 0);
+        all_valid_s_ = before;
+        prev_row_all_valid_ = false;
+        std::fill(has_height_.begin(), has_height_.end(), 0);
         no_height_fibers_ = K_;
     }
 
@@ -395,46 +427,78 @@ void recon_engine::push_row(double s, const double *height, const double *slope,
         ch[o2 + a] += 0.5 * b2[a];
         cg[o2 + a] += b2[a];
     }
-    // Knots before the window are carried boundary conditions (only right
-    // after end_sheet): their part of the prediction is subtracted per fiber.
+    // Knots before the window (off > 0) are carried boundary conditions.
     const int off = 2 * int(w0_ - i1);
     if (off > 0 && i1 + off / 2 - 1 > fixed_upto_)
         throw error(FLT_ERR_INTERNAL, "row touches an eliminated knot");
 
-    bad_.clear();
-    for (std::size_t k = 0; k < K_; ++k) {
-        const bool mask = valid == nullptr || valid[k] != 0;
-        const bool hok = mask && std::isfinite(height[k]);
-        const bool gok = mask && std::isfinite(slope[k]);
-        hok_[k] = hok;
-        gok_[k] = gok;
-        hv_[k] = hok ? height[k] : 0.0;
-        gv_[k] = gok ? D_ * slope[k] : 0.0;
-        if (!(hok && gok)) bad_.push_back(int(k));
-    }
-    for (int u = 0; u < off; ++u) {
-        const double *x = hist_at(i1 + u / 2) + std::size_t(u % 2) * K_;
-        const double chu = ch[u], cgu = cg[u];
+    // Masked measurements. The common row has every sample valid: this loop
+    // vectorises and the bookkeeping below is O(1) for it.
+    const double big = std::numeric_limits<double>::max();
+    auto h_ok = [&](std::size_t k) {
+        return (valid == nullptr || valid[k] != 0) && std::fabs(height[k]) <= big;
+    };
+    auto g_ok = [&](std::size_t k) {
+        return (valid == nullptr || valid[k] != 0) && std::fabs(slope[k]) <= big;
+    };
+    std::size_t nbad = 0;
+    if (off == 0 && n_ == 6 && valid == nullptr) {
+        // The default geometry (knot spacing = laser spacing, so a row spans
+        // three knots) without a mask: masking and all six right-hand-side
+        // updates in one pass over the fibers, which keeps each fiber's
+        // samples in registers. Same arithmetic as the general path below.
+        double a[6], b[6];
+        for (int u = 0; u < 6; ++u) {
+            a[u] = w_h_ * ch[u];
+            b[u] = w_g_ * cg[u];
+        }
+        double *r = rhs_.data();
+        nbad = accumulate_row6(K_, height, slope, D_, a, b, r, r + K_, r + 2 * K_,
+                               r + 3 * K_, r + 4 * K_, r + 5 * K_);
+        for (int u = 0; u < 6; ++u)
+            for (int v = 0; v < 6; ++v) R_[std::size_t(u) * 6 + v] += a[u] * ch[v] + b[u] * cg[v];
+    } else {
+        double *__restrict hv = hv_.data();
+        double *__restrict gv = gv_.data();
         for (std::size_t k = 0; k < K_; ++k) {
-            hv_[k] -= hok_[k] ? chu * x[k] : 0.0;
-            gv_[k] -= gok_[k] ? cgu * x[k] : 0.0;
+            const bool hok = h_ok(k), gok = g_ok(k);
+            hv[k] = hok ? height[k] : 0.0;
+            gv[k] = gok ? D_ * slope[k] : 0.0;
+            nbad += !(hok && gok);
+        }
+        // Knots before the window are carried boundary conditions (only
+        // right after end_sheet): their part of the prediction moves to the
+        // measurement, per fiber.
+        for (int u = 0; u < off; ++u) {
+            const double *x = hist_at(i1 + u / 2) + std::size_t(u % 2) * K_;
+            const double chu = ch[u], cgu = cg[u];
+            for (std::size_t k = 0; k < K_; ++k) {
+                hv[k] -= h_ok(k) ? chu * x[k] : 0.0;
+                gv[k] -= g_ok(k) ? cgu * x[k] : 0.0;
+            }
+        }
+        for (int u = off; u < n_; ++u) {
+            const int wi = u - off;
+            const double ah = w_h_ * ch[u], ag = w_g_ * cg[u];
+            double *__restrict rhs = rhs_.data() + std::size_t(wi) * K_;
+            for (std::size_t k = 0; k < K_; ++k) rhs[k] += ah * hv[k] + ag * gv[k];
+            for (int v = off; v < n_; ++v)
+                R_[std::size_t(wi) * n_ + (v - off)] += ah * ch[v] + ag * cg[v];
         }
     }
-    for (int u = off; u < n_; ++u) {
-        const int wi = u - off;
-        const double ah = w_h_ * ch[u], ag = w_g_ * cg[u];
-        double *rhs = rhs_.data() + std::size_t(wi) * K_;
-        for (std::size_t k = 0; k < K_; ++k) rhs[k] += ah * hv_[k] + ag * gv_[k];
-        for (int v = off; v < n_; ++v)
-            R_[std::size_t(wi) * n_ + (v - off)] += ah * ch[v] + ag * cg[v];
-    }
+    bad_.clear();
+    if (nbad > 0)
+        for (std::size_t k = 0; k < K_; ++k)
+            if (!(h_ok(k) && g_ok(k))) bad_.push_back(int(k));
+
     // Fibers missing a sample take its contribution back out.
     for (int k : bad_) {
+        const bool hok = h_ok(std::size_t(k)), gok = g_ok(std::size_t(k));
         for (int u = off; u < n_; ++u)
             for (int v = u; v < n_; ++v) {
-                const double d = (hok_[k] ? 0.0 : w_h_ * ch[u] * ch[v]) +
-                                 (gok_[k] ? 0.0 : w_g_ * cg[u] * cg[v]);
-                down_[tri(u - off, v - off) * K_ + k] += d;
+                const double d = (hok ? 0.0 : w_h_ * ch[u] * ch[v]) +
+                                 (gok ? 0.0 : w_g_ * cg[u] * cg[v]);
+                down_[tri(u - off, v - off) * K_ + std::size_t(k)] += d;
             }
         bad_fibers_seen_ = true;
     }
@@ -446,18 +510,41 @@ void recon_engine::push_row(double s, const double *height, const double *slope,
     std::uint8_t *fl = ring_flags_ + r * K_;
     std::memset(fl, 0, K_);
     bool any_invalid = false;
-    for (int k : bad_) {
-        if (!hok_[k] && !gok_[k]) {
+    for (int k : bad_)
+        if (!h_ok(std::size_t(k)) && !g_ok(std::size_t(k))) {
             fl[k] = FLT_FLAG_INVALID_INPUT;
             any_invalid = true;
         }
-    }
     ring_any_invalid_[r] = any_invalid;
-    for (std::size_t k = 0; k < K_; ++k) {
-        if (!(hok_[k] || gok_[k])) continue;
-        if (s - last_valid_s_[k] > p_.max_gap) mark_gap(k, last_valid_s_[k]);
-        last_valid_s_[k] = s;
-        if (hok_[k] && height_count_[k]++ == 0) --no_height_fibers_;
+
+    // Gap and level bookkeeping. last valid position of fiber k is
+    // max(last_valid_s_[k], all_valid_s_): a fully valid row only moves the
+    // scalar.
+    if (nbad == 0) {
+        if (!(prev_row_all_valid_ && s - all_valid_s_ <= p_.max_gap))
+            for (std::size_t k = 0; k < K_; ++k) {
+                const double last = std::max(last_valid_s_[k], all_valid_s_);
+                if (s - last > p_.max_gap) mark_gap(k, last);
+            }
+        all_valid_s_ = s;
+        prev_row_all_valid_ = true;
+        if (no_height_fibers_ > 0) {
+            std::fill(has_height_.begin(), has_height_.end(), 1);
+            no_height_fibers_ = 0;
+        }
+    } else {
+        for (std::size_t k = 0; k < K_; ++k) {
+            const bool hok = h_ok(k);
+            if (!(hok || g_ok(k))) continue;
+            const double last = std::max(last_valid_s_[k], all_valid_s_);
+            if (s - last > p_.max_gap) mark_gap(k, last);
+            last_valid_s_[k] = s;
+            if (hok && !has_height_[k]) {
+                has_height_[k] = 1;
+                --no_height_fibers_;
+            }
+        }
+        prev_row_all_valid_ = false;
     }
     ++tail_;
     last_s_ = s;

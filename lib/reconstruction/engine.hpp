@@ -147,14 +147,15 @@ private:
     std::vector<double> work_;    // [ntri][K]
     std::vector<double> xwin_;    // [n][K]
     std::vector<double> hv_, gv_; // per fiber masked measurements
-    std::vector<std::uint8_t> hok_, gok_;
     std::vector<int> bad_;        // fibers with an invalid sample this row
 
     // ---- per fiber bookkeeping ----
     double bc_s_ = 0.0;           // carried boundary knot
     std::vector<double> bc_z_, bc_m_;
-    std::vector<double> last_valid_s_;
-    std::vector<std::size_t> height_count_;
+    std::vector<double> last_valid_s_;   // see all_valid_s_
+    double all_valid_s_ = 0.0;           // last row with every fiber valid
+    bool prev_row_all_valid_ = false;
+    std::vector<std::uint8_t> has_height_;  // a valid height since reset
     std::size_t no_height_fibers_ = 0;
 
     // ---- row ring ----

@@ -1,0 +1,142 @@
+/*
+ * Benchmark of the Hermite reconstructor on the reference's production sheet:
+ * 6000 mm x 2300 mm at 3 mm x 2 mm, i.e. 2000 rows x 1150 fibers
+ * (DESIGN.md, "Reference numbers": the reference needed 350 ms).
+ *
+ * Prints, single-threaded:
+ *   - batch: milliseconds per sheet with flt_reconstruct (median of runs);
+ *   - streaming: microseconds per pushed row, amortised over a long strip
+ *     pushed one row at a time and pulled as rows finish (default options).
+ *
+ * Usage: bench_recon [runs]   (default 15)
+ */
+#define _POSIX_C_SOURCE 199309L
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include <flatline/flatline.h>
+
+#define ROWS 2000
+#define FIBERS 1150
+#define DX 3.0
+#define PITCH 2.0
+#define LASER 100.0
+
+static double now_s(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static int cmp_double(const void *a, const void *b) {
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* The reference surface: 12 mm waves, 1800 mm along, 1500 mm across. */
+static double surface(double x, double s) {
+    const double pi = 3.14159265358979323846;
+    return 12.0 * sin(2 * pi * s / 1800.0) * cos(2 * pi * x / 1500.0);
+}
+
+static void measure_rows(size_t r0, size_t rows, double *s, double *h, double *g) {
+    for (size_t r = 0; r < rows; ++r) {
+        s[r] = (double)(r0 + r) * DX;
+        for (size_t k = 0; k < FIBERS; ++k) {
+            double x = ((double)k - 0.5 * (FIBERS - 1)) * PITCH;
+            double a = surface(x, s[r] - 0.5 * LASER), b = surface(x, s[r] + 0.5 * LASER);
+            h[r * FIBERS + k] = 0.5 * (a + b);
+            g[r * FIBERS + k] = (b - a) / LASER;
+        }
+    }
+}
+
+static int check(flt_status st, const char *what) {
+    if (st != FLT_OK) {
+        fprintf(stderr, "bench_recon: %s failed: %s: %s\n", what,
+                flt_status_string(st), flt_last_error_message());
+        exit(1);
+    }
+    return 0;
+}
+
+int main(int argc, char **argv) {
+    int runs = argc > 1 ? atoi(argv[1]) : 15;
+    if (runs < 1) runs = 1;
+    size_t n = (size_t)ROWS * FIBERS;
+    double *s = malloc(ROWS * sizeof(double));
+    double *h = malloc(n * sizeof(double)), *g = malloc(n * sizeof(double));
+    double *z = malloc(n * sizeof(double));
+    uint8_t *flags = malloc(n);
+    if (!s || !h || !g || !z || !flags) return 1;
+    measure_rows(0, ROWS, s, h, g);
+
+    printf("libflatline %s reconstructor benchmark: %d rows x %d fibers "
+           "(%.0f mm x %.0f mm at %.0f mm x %.0f mm), one thread\n",
+           flt_version_string(), ROWS, FIBERS, ROWS * DX, FIBERS * PITCH, DX, PITCH);
+
+    /* Batch. */
+    double *t_batch = malloc((size_t)runs * sizeof(double));
+    for (int i = 0; i < runs; ++i) {
+        double t0 = now_s();
+        check(flt_reconstruct(NULL, ROWS, FIBERS, s, h, g, NULL, z, flags), "flt_reconstruct");
+        t_batch[i] = now_s() - t0;
+        fprintf(stderr, "\rbatch run %d/%d", i + 1, runs);
+    }
+    fprintf(stderr, "\n");
+    qsort(t_batch, (size_t)runs, sizeof(double), cmp_double);
+    double worst = 0;
+    for (size_t r = 0; r < ROWS; ++r)
+        for (size_t k = 0; k < FIBERS; ++k) {
+            double x = ((double)k - 0.5 * (FIBERS - 1)) * PITCH;
+            worst = fmax(worst, fabs(z[r * FIBERS + k] - surface(x, s[r])));
+        }
+    printf("batch:     %.2f ms per sheet (median of %d; min %.2f ms)   "
+           "[goal <= 10 ms; reference 350 ms]   max error %.2g um\n",
+           1e3 * t_batch[runs / 2], runs, 1e3 * t_batch[0], worst * 1e3);
+
+    /* Streaming: a 5-sheet strip (30 m), one row per push, pulled as it goes,
+     * end_sheet every 2000 rows. Row data is prepared up front. */
+    flt_recon *rc = NULL;
+    check(flt_recon_create(FIBERS, NULL, &rc), "flt_recon_create");
+    const int sheets = 5;
+    double *s_out = malloc(ROWS * sizeof(double));
+    double total = 0;
+    size_t pushed = 0, pulled = 0;
+    for (int sh = 0; sh < sheets; ++sh) {
+        measure_rows((size_t)sh * ROWS, ROWS, s, h, g);
+        double t0 = now_s();
+        for (size_t r = 0; r < ROWS; ++r) {
+            size_t got = 0;
+            check(flt_recon_push(rc, 1, FIBERS, &s[r], h + r * FIBERS, g + r * FIBERS, NULL),
+                  "flt_recon_push");
+            check(flt_recon_pull(rc, ROWS, FIBERS, s_out, z, flags, &got), "flt_recon_pull");
+            pulled += got;
+        }
+        check(flt_recon_end_sheet(rc), "flt_recon_end_sheet");
+        size_t got = 0;
+        check(flt_recon_pull(rc, ROWS, FIBERS, s_out, z, flags, &got), "flt_recon_pull");
+        pulled += got;
+        total += now_s() - t0;
+        pushed += ROWS;
+        fprintf(stderr, "\rstreaming sheet %d/%d", sh + 1, sheets);
+    }
+    fprintf(stderr, "\n");
+    printf("streaming: %.2f us per pushed row (%zu rows, %zu pulled, end_sheet every %d rows)   "
+           "[goal <= 10 us]\n",
+           1e6 * total / (double)pushed, pushed, pulled, ROWS);
+    printf("line speed: one row per %.0f us at 120 m/min with 3 mm rows\n",
+           1e6 * 0.003 / 2.0);
+    flt_recon_destroy(rc);
+    free(s);
+    free(h);
+    free(g);
+    free(z);
+    free(flags);
+    free(s_out);
+    free(t_batch);
+    return 0;
+}
