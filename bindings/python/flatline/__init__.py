@@ -1,0 +1,85 @@
+"""libflatline for Python: online flatness of steel strip from a
+dual-line-laser + camera sensor.
+
+Arrays are numpy float64, rows along travel x fibers across the width;
+lengths in mm, slopes in mm/mm. Errors raise subclasses of FlatlineError.
+
+    >>> import flatline
+    >>> z = flatline.reconstruct(s, height, slope, laser_spacing=100.0)
+
+Components bound so far: the reconstructor. Calibration, extraction,
+simulation and flatness follow as the C library gains them.
+"""
+
+from __future__ import annotations
+
+from . import capi as _capi
+from ._errors import (
+    BufferFullError,
+    DeviceError,
+    FileError,
+    FlatlineError,
+    FormatError,
+    InternalError,
+    InvalidArgumentError,
+    NotFoundError,
+    NumericError,
+    OutOfMemoryError,
+    StateError,
+    TimeoutError,
+)
+from ._options import OptionInfo, option_info, options
+from ._recon import (
+    FLAG_GAP,
+    FLAG_INVALID_INPUT,
+    FLAG_NO_DATA,
+    Reconstructor,
+    reconstruct,
+    reconstruct_with_flags,
+    reconstructor_options,
+)
+
+#: The version of the C headers this binding was built against.
+__version__: str = _capi.FLT_HEADER_VERSION
+
+
+def version() -> str:
+    """The version of the loaded C library, "MAJOR.MINOR.PATCH"."""
+    return _capi.flt_version_string()
+
+
+# SQLite's check: the loaded library must be the one the binding was built
+# for (same major version, and not older than the headers).
+if (_capi.flt_version() // 10000 != _capi.FLT_HEADER_VERSION_NUMBER // 10000
+        or _capi.flt_version() < _capi.FLT_HEADER_VERSION_NUMBER):
+    raise ImportError(
+        f"flatline {__version__} was built for libflatline "
+        f"{__version__} but loaded libflatline {version()}"
+    )
+
+__all__ = [
+    "__version__",
+    "version",
+    "FlatlineError",
+    "InvalidArgumentError",
+    "OutOfMemoryError",
+    "StateError",
+    "BufferFullError",
+    "FileError",
+    "FormatError",
+    "DeviceError",
+    "TimeoutError",
+    "NotFoundError",
+    "NumericError",
+    "InternalError",
+    "OptionInfo",
+    "option_info",
+    "options",
+    "FLAG_INVALID_INPUT",
+    "FLAG_GAP",
+    "FLAG_NO_DATA",
+    "Reconstructor",
+    "reconstruct",
+    "reconstruct_with_flags",
+    "reconstructor_options",
+]

@@ -1,0 +1,284 @@
+"""The streaming Hermite reconstructor (flatline/recon.h)."""
+
+from __future__ import annotations
+
+import threading
+from typing import Any, Dict, Optional, Tuple
+
+import numpy as np
+
+from . import capi as _capi
+from ._arrays import as_float64, block, check_shape
+from ._errors import NotFoundError, StateError
+from ._options import make_options, option_info, options
+
+__all__ = [
+    "FLAG_INVALID_INPUT",
+    "FLAG_GAP",
+    "FLAG_NO_DATA",
+    "Reconstructor",
+    "reconstruct",
+    "reconstructor_options",
+]
+
+#: This row's own sample of the fiber was invalid; the value is bridged.
+FLAG_INVALID_INPUT: int = _capi.FLT_FLAG_INVALID_INPUT
+#: The row lies in a run of invalid samples longer than max_gap: the value
+#: comes from the smoothness prior alone.
+FLAG_GAP: int = _capi.FLT_FLAG_GAP
+#: The fiber has had no valid height since the strip began: z is NaN.
+FLAG_NO_DATA: int = _capi.FLT_FLAG_NO_DATA
+
+
+def reconstructor_options() -> Dict[str, float]:
+    """The options the reconstructor reads, with their defaults (as resolved
+    by the library: knot_spacing 0 reads as laser_spacing). Asked of the
+    library, so options added to it appear here without a binding change."""
+    probe = _capi.flt_recon_create(1, None)
+    names: Dict[str, float] = {}
+    for info in options().values():
+        try:
+            names[info.name] = _capi.flt_recon_get_option(probe, info.key)
+        except NotFoundError:  # read by another component
+            pass
+    return names
+
+
+def reconstruct(s: Any, height: Any, slope: Any, valid: Any = None,
+                **options: float) -> np.ndarray:
+    """Reconstructs one whole sheet: the least-squares Hermite spline of every
+    fiber, fitted to all rows at once (no lag, no carry-over).
+
+    Args:
+        s: (N,) material position of each row along travel, mm, strictly
+            increasing (the true encoder positions; any spacing).
+        height: (N, K) measured heights, mm: per row and fiber, the mean of
+            the two lasers' heights, (z(s - d/2) + z(s + d/2)) / 2.
+        slope: (N, K) measured slopes, mm/mm: (z(s + d/2) - z(s - d/2)) / d,
+            d = laser_spacing.
+        valid: (N, K) bool mask (True = valid) or None. NaN heights or slopes
+            are treated as invalid too.
+        **options: reconstructor options by their C name (see below).
+
+    Returns:
+        z: (N, K) float64, reconstructed height at each row and fiber, mm;
+        NaN only where a fiber has no valid height at all.
+
+    Raises:
+        TypeError: an argument of a dtype that cannot be cast safely to
+            float64, or an unknown option name.
+        ValueError: a wrong number of dimensions or a wrong shape.
+        InvalidArgumentError (a ValueError): rejected by the library, e.g.
+            s not strictly increasing or an option out of range.
+
+    The GIL is released while the library computes.
+
+    Options:
+{options}
+    """
+    z, _flags = reconstruct_with_flags(s, height, slope, valid, **options)
+    return z
+
+
+def reconstruct_with_flags(s: Any, height: Any, slope: Any, valid: Any = None,
+                           **options: float) -> Tuple[np.ndarray, np.ndarray]:
+    """As :func:`reconstruct`, and also returns the (N, K) uint8 flags
+    (FLAG_* bits) of every output value."""
+    fn = "reconstruct"
+    s, height, slope, mask, masked = block(fn, s, height, slope, valid)
+    bag = make_options(fn, options)
+    z = np.empty(height.shape, dtype=np.float64)
+    flags = np.empty(height.shape, dtype=np.uint8)
+    _capi.flt_py_reconstruct(bag, s, height, slope, mask, masked, z, flags)
+    return z, flags
+
+
+class Reconstructor:
+    """A streaming reconstructor for a fixed number of fibers.
+
+    Rows (one camera frame each, at material position s along travel) go in
+    with :meth:`push`; finished rows come out with :meth:`pull`, about
+    lag_knots knots of travel later. :meth:`end_sheet` finishes every pushed
+    row and carries the last knot's height and slope into the next sheet, so
+    consecutive sheets join smoothly; :meth:`reset` starts a new strip.
+
+    Args:
+        fibers: number of fibers K (>= 1).
+        **options: reconstructor options by their C name (see below).
+
+    Use it as a context manager, or call :meth:`close`, to free the C
+    buffers (9 bytes per row and fiber of row_capacity) deterministically.
+    One instance may be used from several threads; its calls are then
+    serialised. Separate instances run in parallel (the GIL is released in
+    push, pull and end_sheet).
+
+    Options:
+{options}
+    """
+
+    def __init__(self, fibers: int, **options: float) -> None:
+        fn = "Reconstructor"
+        if isinstance(fibers, bool) or not isinstance(fibers, (int, np.integer)):
+            raise TypeError(
+                f"{fn}() argument 'fibers' must be an int, not {type(fibers).__name__}"
+            )
+        if fibers < 1:
+            raise ValueError(f"{fn}() argument 'fibers' must be >= 1, got {fibers}")
+        bag = make_options(fn, options)
+        self._lock = threading.Lock()
+        self._handle: Optional[_capi.flt_recon] = _capi.flt_recon_create(int(fibers), bag)
+        self._fibers = int(_capi.flt_recon_fibers(self._handle))
+
+    # -- lifetime ----------------------------------------------------------
+
+    def close(self) -> None:
+        """Frees the C reconstructor now. Idempotent; any later call other
+        than close raises StateError."""
+        with self._lock:
+            # The SWIG object owns the handle: dropping the only reference
+            # calls flt_recon_destroy immediately.
+            self._handle = None
+
+    @property
+    def closed(self) -> bool:
+        """True after :meth:`close`."""
+        return self._handle is None
+
+    def __enter__(self) -> "Reconstructor":
+        self._live()
+        return self
+
+    def __exit__(self, *exc_info: Any) -> None:
+        self.close()
+
+    def _live(self) -> _capi.flt_recon:
+        handle = self._handle
+        if handle is None:
+            raise StateError("the Reconstructor is closed")
+        return handle
+
+    def __repr__(self) -> str:
+        if self._handle is None:
+            return "<flatline.Reconstructor closed>"
+        return (f"<flatline.Reconstructor fibers={self._fibers} "
+                f"ready={self.ready}>")
+
+    # -- properties ----------------------------------------------------------
+
+    @property
+    def fibers(self) -> int:
+        """The number of fibers K."""
+        return self._fibers
+
+    @property
+    def ready(self) -> int:
+        """The number of finished rows waiting to be pulled."""
+        with self._lock:
+            return int(_capi.flt_recon_ready(self._live()))
+
+    def option(self, name: str) -> float:
+        """The effective value of option `name` (knot_spacing resolved to mm).
+        NotFoundError (a KeyError) if the library has no such option or the
+        reconstructor does not read it."""
+        key = option_info(name).key
+        with self._lock:
+            return float(_capi.flt_recon_get_option(self._live(), key))
+
+    # -- streaming -----------------------------------------------------------
+
+    def push(self, s: Any, height: Any, slope: Any, valid: Any = None) -> None:
+        """Pushes one row or a block of rows.
+
+        One row: s a scalar (mm), height and slope (K,), valid (K,) or None.
+        A block: s (n,), height and slope (n, K), valid (n, K) or None.
+
+        s is the material position along travel in mm, strictly increasing
+        across calls and sheets; height in mm and slope in mm/mm as measured
+        by the two lasers (see :func:`reconstruct`). valid is a bool mask
+        (True = valid); NaN samples are invalid too. On any error nothing is
+        pushed. BufferFullError when the rows do not fit in row_capacity:
+        pull first, or push smaller blocks.
+        """
+        fn = "push"
+        if np.ndim(height) == 1:  # one row
+            if np.ndim(s) != 0:
+                raise ValueError(
+                    f"{fn}() argument 's' must be a scalar when 'height' is one "
+                    f"row of shape (K,); got shape {np.shape(s)}"
+                )
+            s = np.reshape(as_float64(fn, "s", s, 0), (1,))
+            height = np.reshape(as_float64(fn, "height", height, 1), (1, -1))
+            slope = np.reshape(as_float64(fn, "slope", slope, 1), (1, -1))
+            if valid is not None:
+                valid = np.reshape(np.asarray(valid), (1, -1))
+        s, height, slope, mask, masked = block(fn, s, height, slope, valid)
+        check_shape(fn, "height", height, (height.shape[0], self._fibers),
+                    f"a Reconstructor of {self._fibers} fibers")
+        with self._lock:
+            self._live().push_block(s, height, slope, mask, masked)
+
+    def pull(self, max_rows: Optional[int] = None
+             ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Pulls the finished rows (at most max_rows), oldest first.
+
+        Returns:
+            (s, z, flags): s (n,) positions in mm; z (n, K) reconstructed
+            heights in mm (NaN only where FLAG_NO_DATA is set); flags (n, K)
+            uint8 FLAG_* bits. n may be 0.
+
+        Raises StateError if nothing was pushed since creation or reset.
+        """
+        with self._lock:
+            handle = self._live()
+            rows = int(_capi.flt_recon_ready(handle))
+            if max_rows is not None:
+                if max_rows < 0:
+                    raise ValueError(f"pull() argument 'max_rows' must be >= 0, got {max_rows}")
+                rows = min(rows, int(max_rows))
+            s = np.empty(rows, dtype=np.float64)
+            z = np.empty((rows, self._fibers), dtype=np.float64)
+            flags = np.empty((rows, self._fibers), dtype=np.uint8)
+            got = int(handle.pull_into(s, z, flags))
+        if got != rows:  # only if the library disagrees with its ready count
+            s, z, flags = s[:got], z[:got], flags[:got]
+        return s, z, flags
+
+    def end_sheet(self) -> None:
+        """Finishes the sheet: every pushed row becomes ready to pull, and the
+        last emitted knot is carried into the next sheet as a hard boundary
+        condition. StateError if no row was pushed since the last end_sheet,
+        creation or reset."""
+        with self._lock:
+            self._live().finish_sheet()
+
+    def reset(self) -> None:
+        """Starts a new strip: drops every row not pulled and the carry-over."""
+        with self._lock:
+            _capi.flt_recon_reset(self._live())
+
+    def boundary(self) -> Tuple[float, np.ndarray, np.ndarray]:
+        """The boundary condition carried into the next sheet.
+
+        Returns:
+            (s, height, slope): the knot position in mm, and per fiber (K,)
+            the height in mm and slope in mm/mm there.
+
+        StateError before the first end_sheet of a strip.
+        """
+        height = np.empty(self._fibers, dtype=np.float64)
+        slope = np.empty(self._fibers, dtype=np.float64)
+        with self._lock:
+            s = self._live().boundary_into(height, slope)
+        return float(s), height, slope
+
+
+def _document_options() -> None:
+    from ._options import options_doc
+
+    text = options_doc(reconstructor_options())
+    for target in (reconstruct, Reconstructor):
+        if target.__doc__:
+            target.__doc__ = target.__doc__.replace("{options}", text)
+
+
+_document_options()
