@@ -28,35 +28,56 @@ constexpr double k_ridge = 1e-12;
 // Largest knot span of one row we size scratch arrays for (D/L <= 64).
 constexpr int k_max_unknowns = 2 * 66;
 
+// The three per-row kernels below run once per fiber and row; they are built
+// twice, for baseline x86-64 (SSE2) and for AVX2, and the loader picks one
+// per machine (GCC function multiversioning). AVX2 without FMA keeps every
+// rounding identical, so results do not depend on the machine.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
+#define FLT_ROW_KERNEL __attribute__((target_clones("avx2", "default")))
+#else
+#define FLT_ROW_KERNEL
+#endif
+
+// True when every height and slope of the row is finite: x - x is 0 for a
+// finite x and NaN otherwise, and a sum of zeros stays 0 in any order.
+FLT_ROW_KERNEL bool row_is_finite(std::size_t K, const double *__restrict height,
+                   const double *__restrict slope) {
+    double acc = 0.0;
+    for (std::size_t k = 0; k < K; ++k)
+        acc += (height[k] - height[k]) + (slope[k] - slope[k]);
+    return acc == 0.0;
+}
+
 // The hot loop of the default geometry (a row spans three knots, six
-// unknowns) without a validity mask: masks non-finite samples and adds one
-// row to the six right-hand sides, fiber by fiber. A free function with
-// restrict parameters so that GCC vectorises it across fibers (it gives up
-// on the aliasing checks otherwise). Returns the number of fibers with a
-// non-finite sample. bool temporaries are avoided for the same reason.
-std::size_t accumulate_row6(std::size_t K, const double *__restrict height,
-                            const double *__restrict slope, double D,
-                            const double *__restrict a, const double *__restrict b,
-                            double *__restrict r0, double *__restrict r1,
-                            double *__restrict r2, double *__restrict r3,
-                            double *__restrict r4, double *__restrict r5) {
-    const double big = std::numeric_limits<double>::max();
-    double good = 0.0;
+// unknowns) for a row whose samples are all valid: adds the row to the six
+// right-hand sides, fiber by fiber. A free function with restrict parameters
+// so that GCC vectorises it across fibers (it gives up on the aliasing checks
+// otherwise). The slope row is D * slope, as in the general path, so both
+// give bit-identical sums.
+FLT_ROW_KERNEL void accumulate_row6(std::size_t K, const double *__restrict height,
+                     const double *__restrict slope, double D, const double *__restrict a,
+                     const double *__restrict b, double *__restrict r0,
+                     double *__restrict r1, double *__restrict r2,
+                     double *__restrict r3, double *__restrict r4,
+                     double *__restrict r5) {
     for (std::size_t k = 0; k < K; ++k) {
-        const double h = height[k], g = slope[k];
-        const double hm = std::fabs(h) <= big ? 1.0 : 0.0;
-        const double gm = std::fabs(g) <= big ? 1.0 : 0.0;
-        const double hv = hm != 0.0 ? h : 0.0;
-        const double gv = gm != 0.0 ? D * g : 0.0;
-        good += hm * gm;
-        r0[k] += a[0] * hv + b[0] * gv;
-        r1[k] += a[1] * hv + b[1] * gv;
-        r2[k] += a[2] * hv + b[2] * gv;
-        r3[k] += a[3] * hv + b[3] * gv;
-        r4[k] += a[4] * hv + b[4] * gv;
-        r5[k] += a[5] * hv + b[5] * gv;
+        const double h = height[k], g = D * slope[k];
+        r0[k] += a[0] * h + b[0] * g;
+        r1[k] += a[1] * h + b[1] * g;
+        r2[k] += a[2] * h + b[2] * g;
+        r3[k] += a[3] * h + b[3] * g;
+        r4[k] += a[4] * h + b[4] * g;
+        r5[k] += a[5] * h + b[5] * g;
     }
-    return K - std::size_t(good);
+}
+
+// z = Hermite combination of the emitted states of the row's two knots.
+FLT_ROW_KERNEL void evaluate_row(std::size_t K, const double *__restrict w,
+                                 const double *__restrict z0, const double *__restrict m0,
+                                 const double *__restrict z1, const double *__restrict m1,
+                                 double *__restrict z) {
+    for (std::size_t k = 0; k < K; ++k)
+        z[k] = w[0] * z0[k] + w[1] * m0[k] + w[2] * z1[k] + w[3] * m1[k];
 }
 
 }  // namespace
@@ -196,7 +217,10 @@ void recon_engine::close_knot() {
             double *w = work_.data() + e * K_;
             const double *sc = schur_.data() + e * K_;
             const double *dn = down_.data() + e * K_;
-            for (std::size_t k = 0; k < K_; ++k) w[k] = sc[k] + shared - dn[k];
+            if (bad_fibers_seen_)
+                for (std::size_t k = 0; k < K_; ++k) w[k] = sc[k] + shared - dn[k];
+            else
+                for (std::size_t k = 0; k < K_; ++k) w[k] = sc[k] + shared;
         }
 
     const double *a00 = work_.data() + tri(0, 0) * K_;
@@ -274,7 +298,10 @@ void recon_engine::emit_upto(long last) {
             double *w = work_.data() + e * K_;
             const double *sc = schur_.data() + e * K_;
             const double *dn = down_.data() + e * K_;
-            for (std::size_t k = 0; k < K_; ++k) w[k] = sc[k] + shared - dn[k];
+            if (bad_fibers_seen_)
+                for (std::size_t k = 0; k < K_; ++k) w[k] = sc[k] + shared - dn[k];
+            else
+                for (std::size_t k = 0; k < K_; ++k) w[k] = sc[k] + shared;
         }
     for (int j = 0; j < n_; ++j) {
         double *ujj = work_.data() + tri(j, j) * K_;
@@ -365,8 +392,7 @@ void recon_engine::finish_rows() {
         basis(s, i, w);
         const double *a = hist_at(i), *b = hist_at(i + 1);
         double *z = ring_z_ + r * K_;
-        for (std::size_t k = 0; k < K_; ++k)
-            z[k] = w[0] * a[k] + w[1] * a[K_ + k] + w[2] * b[k] + w[3] * b[K_ + k];
+        evaluate_row(K_, w, a, a + K_, b, b + K_, z);
         std::uint8_t *fl = ring_flags_ + r * K_;
         if (ring_any_invalid_[r] || no_height_fibers_ > 0) {
             for (std::size_t k = 0; k < K_; ++k) {
@@ -442,19 +468,18 @@ void recon_engine::push_row(double s, const double *height, const double *slope,
         return (valid == nullptr || valid[k] != 0) && std::fabs(slope[k]) <= big;
     };
     std::size_t nbad = 0;
-    if (off == 0 && n_ == 6 && valid == nullptr) {
-        // The default geometry (knot spacing = laser spacing, so a row spans
-        // three knots) without a mask: masking and all six right-hand-side
-        // updates in one pass over the fibers, which keeps each fiber's
-        // samples in registers. Same arithmetic as the general path below.
+    if (off == 0 && n_ == 6 && valid == nullptr && row_is_finite(K_, height, slope)) {
+        // The common case: the default geometry (knot spacing = laser
+        // spacing, so a row spans three knots), no mask, every sample
+        // finite. Same arithmetic as the general path below.
         double a[6], b[6];
         for (int u = 0; u < 6; ++u) {
             a[u] = w_h_ * ch[u];
             b[u] = w_g_ * cg[u];
         }
         double *r = rhs_.data();
-        nbad = accumulate_row6(K_, height, slope, D_, a, b, r, r + K_, r + 2 * K_,
-                               r + 3 * K_, r + 4 * K_, r + 5 * K_);
+        accumulate_row6(K_, height, slope, D_, a, b, r, r + K_, r + 2 * K_, r + 3 * K_,
+                        r + 4 * K_, r + 5 * K_);
         for (int u = 0; u < 6; ++u)
             for (int v = 0; v < 6; ++v) R_[std::size_t(u) * 6 + v] += a[u] * ch[v] + b[u] * cg[v];
     } else {
