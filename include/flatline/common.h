@@ -108,7 +108,10 @@ typedef enum flt_status {
     /* A numerical problem: a singular system or a failed estimate. */
     FLT_ERR_NUMERIC = -10,
     /* A bug in libflatline. Please report it with the message. */
-    FLT_ERR_INTERNAL = -99
+    FLT_ERR_INTERNAL = -99,
+    /* Not a status: makes every int a valid flt_status value, so a code from
+     * a newer library is safe to hold in an older program. */
+    FLT_STATUS_MAX_ENUM_ = 0x7FFFFFFF
 } flt_status;
 
 /* The enumerator name of a status, e.g. "FLT_ERR_INVALID_ARGUMENT".
@@ -177,7 +180,11 @@ typedef enum flt_option {
      * and finished-but-not-pulled together (integer). It costs 9 bytes per
      * row and fiber. Default 8192: enough for the default lag at 1.5 mm
      * row spacing. */
-    FLT_OPT_ROW_CAPACITY = 107
+    FLT_OPT_ROW_CAPACITY = 107,
+    /* Not an option: makes every int a valid flt_option value, so any key
+     * can be passed (and rejected with a message) without undefined
+     * behaviour. New keys go above this line. */
+    FLT_OPT_MAX_ENUM_ = 0x7FFFFFFF
 } flt_option;
 
 /* An opaque bag of option values. Keys not set keep their default. */
