@@ -58,6 +58,7 @@ FLT_API const char *FLT_CALL flt_status_string(flt_status status) {
     case FLT_ERR_NOT_FOUND: return "FLT_ERR_NOT_FOUND";
     case FLT_ERR_NUMERIC: return "FLT_ERR_NUMERIC";
     case FLT_ERR_INTERNAL: return "FLT_ERR_INTERNAL";
+    case FLT_STATUS_MAX_ENUM_: break;
     }
     return "FLT_ERR_UNKNOWN";
 }
