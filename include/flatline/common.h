@@ -181,6 +181,25 @@ typedef enum flt_option {
      * row and fiber. Default 8192: enough for the default lag at 1.5 mm
      * row spacing. */
     FLT_OPT_ROW_CAPACITY = 107,
+
+    /* --- calibration (flatline/calib.h) --- */
+    /* "calib_ransac": 1 to estimate laser homographies inside RANSAC
+     * (integer 0 or 1). Default 0. */
+    FLT_OPT_CALIB_RANSAC = 200,
+    /* "calib_ransac_threshold": a correspondence is an inlier when its
+     * reprojection error is below this, px. Default 1 (20 sigma of a 1/16 px
+     * peak detector, far below a mis-identified target point). */
+    FLT_OPT_CALIB_RANSAC_THRESHOLD = 201,
+    /* "calib_ransac_iterations": minimal samples drawn (integer). Default
+     * 1000: with 30% outliers a clean 4-point sample is missed with
+     * probability (1 - 0.7^4)^1000 < 1e-100. */
+    FLT_OPT_CALIB_RANSAC_ITERATIONS = 202,
+    /* "calib_ransac_seed": seed of RANSAC's random draws, so a calibration
+     * is reproducible (integer). Default 1. */
+    FLT_OPT_CALIB_RANSAC_SEED = 203,
+    /* "calib_rational_distortion": 1 to estimate the rational radial terms
+     * k4..k6 as well as k1, k2, k3, p1, p2 (integer 0 or 1). Default 0. */
+    FLT_OPT_CALIB_RATIONAL_DISTORTION = 204,
     /* Not an option: makes every int a valid flt_option value, so any key
      * can be passed (and rejected with a message) without undefined
      * behaviour. New keys go above this line. */

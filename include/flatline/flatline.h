@@ -8,5 +8,6 @@
 #include "flatline/version.h"
 #include "flatline/common.h"
 #include "flatline/recon.h"
+#include "flatline/calib.h"
 
 #endif /* FLATLINE_FLATLINE_H */

@@ -23,6 +23,16 @@ const option_spec k_options[] = {
     {FLT_OPT_LAG_KNOTS, "lag_knots", 0.0, 100000.0, 64.0, true},
     {FLT_OPT_MAX_GAP, "max_gap", 0.0, inf, 200.0, false},
     {FLT_OPT_ROW_CAPACITY, "row_capacity", 16.0, 1.0e8, 8192.0, true},
+    // calibration
+    {FLT_OPT_CALIB_RANSAC, "calib_ransac", 0.0, 1.0, 0.0, true},
+    {FLT_OPT_CALIB_RANSAC_THRESHOLD, "calib_ransac_threshold", 1.0e-6, 1.0e4,
+     1.0, false},
+    {FLT_OPT_CALIB_RANSAC_ITERATIONS, "calib_ransac_iterations", 1.0, 1.0e7,
+     1000.0, true},
+    {FLT_OPT_CALIB_RANSAC_SEED, "calib_ransac_seed", 0.0, 4294967295.0, 1.0,
+     true},
+    {FLT_OPT_CALIB_RATIONAL_DISTORTION, "calib_rational_distortion", 0.0, 1.0,
+     0.0, true},
 };
 constexpr std::size_t k_option_count = sizeof k_options / sizeof k_options[0];
 static_assert(k_option_count <= flt_options::max_keys,

@@ -1,0 +1,295 @@
+/*
+ * libflatline - the calibration model of a dual-line-laser sensor.
+ *
+ * What it holds
+ *   - Camera intrinsics and lens distortion in OpenCV's pinhole model:
+ *     fx, fy, cx, cy (px) and the distortion coefficients in OpenCV's order
+ *     k1, k2, p1, p2, k3, k4, k5, k6 (radial k, tangential p; the rational
+ *     terms k4..k6 are 0 unless estimated with calib_rational_distortion).
+ *     Estimated from images of a planar target (chessboard or circle grid)
+ *     or set directly.
+ *   - One homography per laser, H_L (3x3, row-major), mapping *undistorted*
+ *     image points (u, v, 1) in px to that laser plane's (x, z, 1) in mm.
+ *     Estimated from image/plane correspondences: normalised DLT (Hartley),
+ *     then Levenberg-Marquardt refinement of the image reprojection error
+ *     (the plane points are the known target geometry; the noise is in the
+ *     image), optionally inside RANSAC. Or set directly.
+ *   - Sensor geometry: the frame size (px), each laser's offset along travel
+ *     (mm), the encoder scale (mm per count) and the fiber grid (first x,
+ *     pitch, count).
+ *
+ * Frames and units
+ *   Image: u right, v down, px, origin at the centre of the top-left pixel
+ *   (OpenCV's convention). "Raw" image points are what the camera sees
+ *   (distorted); "undistorted" points are ideal pinhole points expressed in
+ *   the same pixel frame through fx, fy, cx, cy.
+ *   Laser plane: x across the width (mm), z up (mm). Laser L at encoder
+ *   reading e sees material s = e - offset_L (mm). The laser spacing
+ *   Delta-d = offset_1 - offset_0 (positive when laser 1 is further along
+ *   travel). There are FLT_CALIB_LASERS = 2 lasers, numbered 0 and 1.
+ *
+ * Life cycle
+ *   flt_calib_create() gives an empty, unfinished model. Fill it with the
+ *   set_/estimate_ functions in any order (except that a homography is
+ *   estimated through the intrinsics, so those come first), then
+ *   flt_calib_finish() checks that every part is present and freezes it.
+ *   Mapping and saving need a finished model; setters on a finished model
+ *   fail with FLT_ERR_STATE. flt_calib_load() returns a finished model.
+ *
+ * Threads
+ *   A finished flt_calib is immutable: any number of threads may map, query
+ *   and save through it at once (the mapping functions allocate nothing and
+ *   keep no cache). An unfinished one must not be used from two threads at
+ *   once. Destroying it while another thread uses it is, as always, a bug.
+ *
+ * File format (flt_calib_save / flt_calib_load)
+ *   JSON text, UTF-8, "\n" line ends, fixed field order, every double written
+ *   with "%.17g" so values round-trip exactly and save -> load -> save is
+ *   byte-identical. Version 1:
+ *
+ *   {
+ *     "format": "flatline-calibration",
+ *     "version": 1,
+ *     "frame": {"width": 2048, "height": 2048},                  px, integers
+ *     "camera": {"fx": .., "fy": .., "cx": .., "cy": ..,         px
+ *                "distortion": {"k1": .., "k2": .., "p1": .., "p2": ..,
+ *                               "k3": .., "k4": .., "k5": .., "k6": ..}},
+ *     "lasers": [                                                exactly 2
+ *       {"offset_mm": -50, "homography": [h11, h12, .., h33]},   row-major
+ *       {"offset_mm": 50, "homography": [..]}
+ *     ],
+ *     "encoder_mm_per_count": 0.01,
+ *     "fibers": {"first_x_mm": -1000, "pitch_mm": 2, "count": 1001}
+ *   }
+ *
+ *   Loading is strict: a truncated file, a missing, extra or duplicated
+ *   field, a wrong type (string for number, fraction for integer), a NaN or
+ *   infinity, a version other than 1, or a non-invertible homography fails
+ *   with FLT_ERR_FORMAT and a message naming the field (e.g.
+ *   "lasers[1].homography[4]"). A failed load never returns an object.
+ *   Newer versions of the format get a new "version" number.
+ */
+#ifndef FLATLINE_CALIB_H
+#define FLATLINE_CALIB_H
+
+#include "flatline/common.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Number of lasers (and homographies) of the sensor. */
+#define FLT_CALIB_LASERS 2
+/* Number of distortion coefficients, OpenCV order k1 k2 p1 p2 k3 k4 k5 k6. */
+#define FLT_CALIB_DISTORTION_COEFFS 8
+/* The version of the file format flt_calib_save() writes. */
+#define FLT_CALIB_FORMAT_VERSION 1
+
+typedef struct flt_calib flt_calib;
+
+/* Calibration target kinds for flt_calib_estimate_intrinsics(). */
+typedef enum flt_calib_target {
+    /* Chessboard; columns x rows counts the *inner* corners. */
+    FLT_TARGET_CHESSBOARD = 0,
+    /* Symmetric grid of dark circles on white; columns x rows circles. */
+    FLT_TARGET_CIRCLE_GRID = 1,
+    /* Asymmetric circle grid (OpenCV's layout); pitch is the distance
+     * between neighbouring circles of one row divided by two. */
+    FLT_TARGET_ASYMMETRIC_CIRCLE_GRID = 2
+} flt_calib_target;
+
+/* ---------------------------------------------------------------------- */
+/* Life cycle                                                              */
+/* ---------------------------------------------------------------------- */
+
+/* Allocates an empty, unfinished model. *out is NULL on failure. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_create(flt_calib **out);
+/* Frees a model; NULL is a no-op. */
+FLT_API void FLT_CALL flt_calib_destroy(flt_calib *calib);
+/* Checks that intrinsics, frame size, both homographies, both laser
+ * offsets (distinct), the encoder scale and the fiber grid are set, then
+ * freezes the model. FLT_ERR_STATE names the first missing part (the model
+ * stays unfinished and usable). Finishing twice is FLT_ERR_STATE. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_finish(flt_calib *calib);
+/* *out = 1 if finished, else 0. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_calib_is_finished(const flt_calib *calib, int *out);
+
+/* ---------------------------------------------------------------------- */
+/* Camera                                                                  */
+/* ---------------------------------------------------------------------- */
+
+/* Frame size in px (each 1 .. 65536). Needed before estimating intrinsics. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_calib_set_frame_size(flt_calib *calib, uint32_t width, uint32_t height);
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_calib_get_frame_size(const flt_calib *calib, uint32_t *width_out,
+                         uint32_t *height_out);
+
+/* Sets the intrinsics directly: camera = {fx, fy, cx, cy} (px, fx and fy
+ * > 0, all finite) and distortion = FLT_CALIB_DISTORTION_COEFFS finite
+ * coefficients (OpenCV order), or NULL for none. Both arrays are copied. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_calib_set_intrinsics(flt_calib *calib, const double camera[4],
+                         const double *distortion);
+/* Copies the intrinsics out: camera_out[4], distortion_out[8] (either may
+ * be NULL). FLT_ERR_STATE if none are set. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_calib_get_intrinsics(const flt_calib *calib, double *camera_out,
+                         double *distortion_out);
+
+/* Estimates the intrinsics from `views` images of a planar target, with
+ * OpenCV's detection, sub-pixel corner refinement and calibrateCamera, and
+ * stores them in the model (the frame size must be set; every image has that
+ * size).
+ *   images[i]   8-bit grey image i, rows of `stride` bytes (>= width),
+ *               frame-size height rows. Not retained.
+ *   target, columns, rows, pitch_mm   the target layout (columns, rows >= 3;
+ *               pitch = square side or circle spacing, mm).
+ *   options     calib_rational_distortion (NULL = defaults).
+ *   rms_px_out  overall RMS reprojection error, px (may be NULL).
+ *   view_rms_px_out  `views` doubles (may be NULL): each view's RMS
+ *               reprojection error in px, NaN where the target was not found.
+ * Views without a detected target are skipped; fewer than 3 usable views is
+ * FLT_ERR_NUMERIC and leaves the model unchanged. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_calib_estimate_intrinsics(flt_calib *calib, size_t views,
+                              const uint8_t *const *images, size_t stride,
+                              flt_calib_target target, uint32_t columns,
+                              uint32_t rows, double pitch_mm,
+                              const flt_options *options, double *rms_px_out,
+                              double *view_rms_px_out);
+
+/* ---------------------------------------------------------------------- */
+/* Laser planes                                                            */
+/* ---------------------------------------------------------------------- */
+
+/* Sets laser `laser`'s homography directly: h[9], row-major, maps
+ * undistorted (u, v, 1) px to (x, z, 1) mm. It must be finite and
+ * invertible (FLT_ERR_INVALID_ARGUMENT otherwise). Copied. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_calib_set_homography(flt_calib *calib, unsigned laser, const double h[9]);
+/* Copies laser `laser`'s homography into h_out[9]. FLT_ERR_STATE if unset. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_calib_get_homography(const flt_calib *calib, unsigned laser, double *h_out);
+
+/* Estimates laser `laser`'s homography from `count` correspondences and
+ * stores it (the intrinsics must be set: the image points are undistorted
+ * through them first).
+ *   image_px  count x 2 raw image points (u, v), px.
+ *   plane_mm  count x 2 laser-plane points (x, z), mm.
+ *   options   calib_ransac, calib_ransac_threshold, calib_ransac_iterations,
+ *             calib_ransac_seed (NULL = defaults: no RANSAC).
+ *   residual_px_out  count doubles (may be NULL): distance in px between
+ *             each undistorted image point and its plane point mapped into
+ *             the image through the estimate.
+ *   residual_mm_out  count doubles (may be NULL): distance in mm between
+ *             each image point mapped onto the plane and its plane point.
+ *   inlier_out  count bytes (may be NULL): 1 where the point was used in the
+ *             final fit (all 1 without RANSAC).
+ *   rms_px_out, rms_mm_out  RMS of the residuals over the inliers (may be
+ *             NULL).
+ * Needs count >= 4 with no three plane points collinear in practice;
+ * a degenerate set is FLT_ERR_NUMERIC and leaves the model unchanged.
+ * The estimation is deterministic (RANSAC draws from calib_ransac_seed). */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_calib_estimate_homography(flt_calib *calib, unsigned laser, size_t count,
+                              const double *image_px, const double *plane_mm,
+                              const flt_options *options,
+                              double *residual_px_out, double *residual_mm_out,
+                              uint8_t *inlier_out, double *rms_px_out,
+                              double *rms_mm_out);
+
+/* ---------------------------------------------------------------------- */
+/* Sensor geometry                                                         */
+/* ---------------------------------------------------------------------- */
+
+/* Laser `laser`'s offset along travel, mm (finite). */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_calib_set_laser_offset(flt_calib *calib, unsigned laser, double offset_mm);
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_calib_get_laser_offset(const flt_calib *calib, unsigned laser, double *out);
+/* Delta-d = offset_1 - offset_0, mm. FLT_ERR_STATE unless both are set. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_calib_laser_spacing(const flt_calib *calib, double *out);
+
+/* Encoder scale, mm of travel per count (finite, non-zero; negative when the
+ * encoder counts down as the strip moves forward). */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_calib_set_encoder_scale(flt_calib *calib, double encoder_mm_per_count);
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_calib_get_encoder_scale(const flt_calib *calib, double *out);
+
+/* Fiber grid: fiber k sits at x = first_x_mm + k * pitch_mm, k < count
+ * (pitch > 0, count >= 1, all finite). */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_calib_set_fiber_grid(flt_calib *calib, double first_x_mm, double pitch_mm,
+                         size_t count);
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_calib_get_fiber_grid(const flt_calib *calib, double *first_x_mm_out,
+                         double *pitch_mm_out, size_t *count_out);
+
+/* ---------------------------------------------------------------------- */
+/* Mapping (finished model only; thread-safe; no allocation)               */
+/* ---------------------------------------------------------------------- */
+
+/* Raw image points -> laser `laser`'s plane.
+ *   image_px   count x 2 (u, v), px.   plane_out  count x 2 (x, z), mm.
+ * A NaN input point gives a NaN output point (an invalid peak stays
+ * invalid); so does a point whose ray is parallel to the plane. count = 0 is
+ * allowed and does nothing. In-place (plane_out == image_px) is allowed. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_calib_image_to_plane(const flt_calib *calib, unsigned laser, size_t count,
+                         const double *image_px, double *plane_out);
+
+/* Laser `laser`'s plane -> raw image points (the inverse of the above; for
+ * the simulator and diagnostics).
+ *   plane_mm   count x 2 (x, z), mm.   image_out  count x 2 (u, v), px.
+ * A point behind the camera or at infinity gives NaN. In-place allowed. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_calib_plane_to_image(const flt_calib *calib, unsigned laser, size_t count,
+                         const double *plane_mm, double *image_out);
+
+/* Raw image points -> undistorted image points, both count x 2 px.
+ * The inverse of the distortion model is solved by damped Newton
+ * iteration to about 1e-9 px (tests/c/test_calib.c measures it); a point
+ * where it does not converge gives NaN. Needs only the
+ * intrinsics (works on an unfinished model too; then it is not
+ * thread-safe against concurrent setters). */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_calib_undistort(const flt_calib *calib, size_t count,
+                    const double *image_px, double *undistorted_out);
+
+/* ---------------------------------------------------------------------- */
+/* Save and load                                                           */
+/* ---------------------------------------------------------------------- */
+
+/* Writes a finished model to `path` (see "File format"), through a
+ * temporary file renamed into place, so a crash never leaves a half file.
+ * FLT_ERR_IO if it cannot be written. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_calib_save(const flt_calib *calib, const char *path);
+
+/* Writes the same text into text_out[capacity] with a terminating NUL.
+ * *length_out = the text's length without the NUL, also when the buffer is
+ * too small (then FLT_ERR_BUFFER_FULL; text_out may be NULL with capacity 0
+ * to ask for the size). */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_calib_save_text(const flt_calib *calib, char *text_out, size_t capacity,
+                    size_t *length_out);
+
+/* Reads a model from `path` and returns it finished in *out (NULL on any
+ * failure). FLT_ERR_IO if the file cannot be read, FLT_ERR_FORMAT if it is
+ * malformed. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_calib_load(const char *path, flt_calib **out);
+
+/* The same from `length` bytes of text (need not be NUL-terminated). */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_calib_load_text(const char *text, size_t length, flt_calib **out);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* FLATLINE_CALIB_H */

@@ -1,0 +1,108 @@
+// Internal: the calibration model behind flt_calib, and the numerical pieces
+// the C entry points (calib.cpp) and the file reader (calib_io.cpp) share.
+//
+// Plain arrays, not Eigen members: the model is copied by value when a file
+// is loaded and must not depend on alignment (see STYLE.md on
+// EIGEN_MAX_ALIGN_BYTES).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "flatline/calib.h"
+
+namespace flt {
+
+// OpenCV's pinhole camera: fx, fy, cx, cy in px, distortion in OpenCV order
+// k1 k2 p1 p2 k3 k4 k5 k6 (normalised image coordinates, dimensionless).
+struct camera_model {
+    double fx = 0, fy = 0, cx = 0, cy = 0;
+    double distortion[FLT_CALIB_DISTORTION_COEFFS] = {0, 0, 0, 0, 0, 0, 0, 0};
+};
+
+// Applies lens distortion to an ideal pixel (u, v) -> raw pixel.
+void distort_pixel(const camera_model &cam, double u, double v, double *u_out,
+                   double *v_out);
+// Inverts distort_pixel by damped Newton iteration; NaN where it fails.
+void undistort_pixel(const camera_model &cam, double u, double v,
+                     double *u_out, double *v_out);
+
+struct calib_model {
+    bool has_frame = false;
+    std::uint32_t width = 0, height = 0;  // px
+
+    bool has_camera = false;
+    camera_model camera;
+
+    // h: undistorted (u, v, 1) px -> (x, z, 1) mm; h_inv is its inverse,
+    // computed once from h, so a loaded model maps exactly as the saved one.
+    bool has_homography[FLT_CALIB_LASERS] = {false, false};
+    double h[FLT_CALIB_LASERS][9] = {};
+    double h_inv[FLT_CALIB_LASERS][9] = {};
+
+    bool has_offset[FLT_CALIB_LASERS] = {false, false};
+    double offset_mm[FLT_CALIB_LASERS] = {0, 0};
+
+    bool has_encoder = false;
+    double encoder_mm_per_count = 0;
+
+    bool has_fibers = false;
+    double first_x_mm = 0, pitch_mm = 0;
+    std::size_t fiber_count = 0;
+};
+
+// Homography helpers (homography.cpp). All 3x3 matrices are row-major.
+// True if h is finite and its reciprocal condition number is above the
+// threshold below which we call it non-invertible.
+bool homography_invertible(const double h[9]);
+// inv = h^-1, scaled to unit Frobenius norm.
+void homography_inverse(const double h[9], double inv[9]);
+// Applies a homography to (a, b, 1); NaN when the result is at infinity.
+void homography_apply(const double h[9], double a, double b, double *a_out,
+                      double *b_out);
+
+struct homography_fit {
+    double h[9];                      // undistorted px -> plane mm
+    std::vector<double> residual_px;  // per correspondence
+    std::vector<double> residual_mm;
+    std::vector<std::uint8_t> inlier;
+    double rms_px = 0, rms_mm = 0;    // over the inliers
+};
+
+struct ransac_params {
+    bool enabled = false;
+    double threshold_px = 1.0;
+    long iterations = 1000;
+    std::uint32_t seed = 1;
+};
+
+// Fits the homography from undistorted image points (n x 2, px) to plane
+// points (n x 2, mm). Throws flt::error(FLT_ERR_NUMERIC) if degenerate.
+homography_fit fit_homography(std::size_t n, const double *image_px,
+                              const double *plane_mm,
+                              const ransac_params &ransac);
+
+// Intrinsics from target images (intrinsics.cpp); throws flt::error.
+struct intrinsics_fit {
+    camera_model camera;
+    double rms_px = 0;
+    std::vector<double> view_rms_px;  // NaN where the target was not found
+};
+intrinsics_fit estimate_intrinsics(std::uint32_t width, std::uint32_t height,
+                                   std::size_t views,
+                                   const std::uint8_t *const *images,
+                                   std::size_t stride, flt_calib_target target,
+                                   std::uint32_t columns, std::uint32_t rows,
+                                   double pitch_mm, bool rational);
+
+// The file format (calib_io.cpp). write_model needs a complete model.
+std::string write_model(const calib_model &model);
+// Parses and validates; throws flt::error(FLT_ERR_FORMAT) naming the field.
+calib_model read_model(const char *text, std::size_t length);
+
+// Checks a model for completeness; returns nullptr or the missing part.
+const char *missing_part(const calib_model &model);
+
+}  // namespace flt

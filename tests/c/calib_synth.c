@@ -1,0 +1,172 @@
+#include "calib_synth.h"
+
+#include <math.h>
+#include <string.h>
+
+const double synth_camera[4] = {SYNTH_FOCAL_PX, SYNTH_FOCAL_PX, 1030.25, 1019.75};
+/* Barrel distortion of a 6 mm lens on an 11 mm sensor: about -10 % at the
+ * image corners, with a little decentring. */
+const double synth_distortion[8] = {-0.08, 0.012, 1.5e-4, -1.0e-4, -0.002, 0, 0, 0};
+const double synth_laser_offset[2] = {-50.0, 50.0};
+
+static void distort(double x, double y, double *xd, double *yd) {
+    const double *d = synth_distortion;
+    const double r2 = x * x + y * y;
+    const double radial = (1 + d[0] * r2 + d[1] * r2 * r2 + d[4] * r2 * r2 * r2) /
+                          (1 + d[5] * r2 + d[6] * r2 * r2 + d[7] * r2 * r2 * r2);
+    *xd = x * radial + 2 * d[2] * x * y + d[3] * (r2 + 2 * x * x);
+    *yd = y * radial + d[2] * (r2 + 2 * y * y) + 2 * d[3] * x * y;
+}
+
+int synth_project(double x, double s, double z, double *u, double *v) {
+    /* Camera at (0, -1140, 1140) looking at the origin: X_c = +x,
+     * Y_c = (0, -1, -1)/sqrt 2 (image down), Z_c = (0, 1, -1)/sqrt 2. */
+    const double h = SYNTH_CAMERA_HEIGHT_MM, r = 1 / sqrt(2.0);
+    const double px = x, ps = s + h, pz = z - h;
+    const double xc = px, yc = -r * ps - r * pz, zc = r * ps - r * pz;
+    if (zc <= 0) return 0;
+    double xd, yd;
+    distort(xc / zc, yc / zc, &xd, &yd);
+    *u = synth_camera[0] * xd + synth_camera[2];
+    *v = synth_camera[1] * yd + synth_camera[3];
+    return 1;
+}
+
+static uint64_t next(uint64_t *state) {
+    uint64_t x = *state;
+    x ^= x << 13, x ^= x >> 7, x ^= x << 17;
+    return *state = x;
+}
+
+double synth_uniform(uint64_t *state) {
+    return (double)(next(state) >> 11) * (1.0 / 9007199254740992.0);
+}
+
+double synth_gauss(uint64_t *state) {
+    const double a = synth_uniform(state), b = synth_uniform(state);
+    return sqrt(-2 * log(1 - a)) * cos(6.283185307179586 * b);
+}
+
+void synth_ray_map(double *ray_map) {
+    for (int v = 0; v < SYNTH_HEIGHT; ++v)
+        for (int u = 0; u < SYNTH_WIDTH; ++u) {
+            const double xd = (u - synth_camera[2]) / synth_camera[0];
+            const double yd = (v - synth_camera[3]) / synth_camera[1];
+            double x = xd, y = yd;
+            for (int it = 0; it < 50; ++it) {
+                /* Newton with a finite-difference Jacobian. */
+                double fx, fy, ax, ay, bx, by;
+                const double e = 1e-7;
+                distort(x, y, &fx, &fy);
+                distort(x + e, y, &ax, &ay);
+                distort(x, y + e, &bx, &by);
+                const double j00 = (ax - fx) / e, j10 = (ay - fy) / e;
+                const double j01 = (bx - fx) / e, j11 = (by - fy) / e;
+                const double rx = fx - xd, ry = fy - yd;
+                const double det = j00 * j11 - j01 * j10;
+                x -= (j11 * rx - j01 * ry) / det;
+                y -= (-j10 * rx + j00 * ry) / det;
+                if (fabs(rx) + fabs(ry) < 1e-15) break;
+            }
+            ray_map[2 * ((size_t)v * SYNTH_WIDTH + u)] = x;
+            ray_map[2 * ((size_t)v * SYNTH_WIDTH + u) + 1] = y;
+        }
+}
+
+static void rotation(double rx, double ry, double rz, double r[9]) {
+    const double cx = cos(rx), sx = sin(rx), cy = cos(ry), sy = sin(ry),
+                 cz = cos(rz), sz = sin(rz);
+    /* R = Rz * Ry * Rx */
+    r[0] = cz * cy, r[1] = cz * sy * sx - sz * cx, r[2] = cz * sy * cx + sz * sx;
+    r[3] = sz * cy, r[4] = sz * sy * sx + cz * cx, r[5] = sz * sy * cx - cz * sx;
+    r[6] = -sy, r[7] = cy * sx, r[8] = cy * cx;
+}
+
+/* Inverse of a 3x3 matrix (row-major). */
+static void inverse3(const double m[9], double out[9]) {
+    const double det = m[0] * (m[4] * m[8] - m[5] * m[7]) -
+                       m[1] * (m[3] * m[8] - m[5] * m[6]) +
+                       m[2] * (m[3] * m[7] - m[4] * m[6]);
+    out[0] = (m[4] * m[8] - m[5] * m[7]) / det;
+    out[1] = (m[2] * m[7] - m[1] * m[8]) / det;
+    out[2] = (m[1] * m[5] - m[2] * m[4]) / det;
+    out[3] = (m[5] * m[6] - m[3] * m[8]) / det;
+    out[4] = (m[0] * m[8] - m[2] * m[6]) / det;
+    out[5] = (m[2] * m[3] - m[0] * m[5]) / det;
+    out[6] = (m[3] * m[7] - m[4] * m[6]) / det;
+    out[7] = (m[1] * m[6] - m[0] * m[7]) / det;
+    out[8] = (m[0] * m[4] - m[1] * m[3]) / det;
+}
+
+int synth_render_chessboard(const double *ray_map, int squares_x, int squares_y,
+                            double square_mm, double rx, double ry, double rz,
+                            const double t_mm[3], uint8_t *image) {
+    double r[9], g[9], ginv[9];
+    rotation(rx, ry, rz, r);
+    /* Board (X, Y, 1) -> camera ray: G = [r1 r2 t]. */
+    g[0] = r[0], g[1] = r[1], g[2] = t_mm[0];
+    g[3] = r[3], g[4] = r[4], g[5] = t_mm[1];
+    g[6] = r[6], g[7] = r[7], g[8] = t_mm[2];
+    inverse3(g, ginv);
+    /* Every inner corner and the margin's corners must be in the image. */
+    const double w = squares_x * square_mm, hgt = squares_y * square_mm;
+    for (int k = 0; k < 4; ++k) {
+        const double X = (k & 1) ? w + square_mm : -square_mm;
+        const double Y = (k & 2) ? hgt + square_mm : -square_mm;
+        const double cxr = g[0] * X + g[1] * Y + g[2], cyr = g[3] * X + g[4] * Y + g[5],
+                     czr = g[6] * X + g[7] * Y + g[8];
+        if (czr <= 0) return 0;
+        double xd, yd;
+        distort(cxr / czr, cyr / czr, &xd, &yd);
+        const double u = synth_camera[0] * xd + synth_camera[2];
+        const double v = synth_camera[1] * yd + synth_camera[3];
+        if (u < 2 || v < 2 || u > SYNTH_WIDTH - 3 || v > SYNTH_HEIGHT - 3) return 0;
+    }
+    const size_t npx = (size_t)SYNTH_WIDTH * SYNTH_HEIGHT;
+    for (size_t i = 0; i < npx; ++i) {
+        const double *ray = ray_map + 2 * i;
+        const int u = (int)(i % SYNTH_WIDTH), v = (int)(i / SYNTH_WIDTH);
+        /* Board coordinates of the pixel centre and, from the neighbouring
+         * pixels' rays, their derivatives in u and v. */
+        double bx[3], by[3];
+        const double *rays[3] = {
+            ray, ray_map + 2 * (i + (u + 1 < SYNTH_WIDTH ? 1 : -1)),
+            ray_map + 2 * (i + (v + 1 < SYNTH_HEIGHT ? SYNTH_WIDTH : -SYNTH_WIDTH))};
+        int behind = 0;
+        for (int k = 0; k < 3; ++k) {
+            const double a = rays[k][0], b = rays[k][1];
+            const double X = ginv[0] * a + ginv[1] * b + ginv[2];
+            const double Y = ginv[3] * a + ginv[4] * b + ginv[5];
+            const double W = ginv[6] * a + ginv[7] * b + ginv[8];
+            if (W <= 0) behind = 1;
+            bx[k] = X / W, by[k] = Y / W;
+        }
+        if (behind) {
+            image[i] = 100;
+            continue;
+        }
+        const double su = u + 1 < SYNTH_WIDTH ? 1 : -1, sv = v + 1 < SYNTH_HEIGHT ? 1 : -1;
+        const double dxu = (bx[1] - bx[0]) * su, dyu = (by[1] - by[0]) * su;
+        const double dxv = (bx[2] - bx[0]) * sv, dyv = (by[2] - by[0]) * sv;
+        double sum = 0;
+        for (int a = 0; a < 4; ++a)
+            for (int b = 0; b < 4; ++b) {
+                const double ou = (a - 1.5) / 4, ov = (b - 1.5) / 4;
+                const double X = bx[0] + dxu * ou + dxv * ov;
+                const double Y = by[0] + dyu * ou + dyv * ov;
+                double level;
+                if (X < -square_mm || Y < -square_mm || X > w + square_mm ||
+                    Y > hgt + square_mm)
+                    level = 100; /* background beyond the board */
+                else if (X < 0 || Y < 0 || X >= w || Y >= hgt)
+                    level = 210; /* white margin */
+                else
+                    level = (((int)floor(X / square_mm) + (int)floor(Y / square_mm)) & 1)
+                                ? 210
+                                : 40;
+                sum += level;
+            }
+        image[i] = (uint8_t)lround(sum / 16);
+    }
+    return 1;
+}
