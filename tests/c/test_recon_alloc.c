@@ -1,0 +1,99 @@
+/* "No allocation in per-row hot paths": counts every malloc/calloc/realloc
+ * made by libflatline (and the C++ runtime under it) while a reconstructor
+ * streams rows, finishes sheets and resets. The counting allocator interposes
+ * the C library's through ELF symbol interposition, so it sees the shared
+ * library's calls too. Not built under sanitizers, which own malloc. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include <flatline/flatline.h>
+
+#include "sheet.h"
+
+extern void *__libc_malloc(size_t);
+extern void *__libc_calloc(size_t, size_t);
+extern void *__libc_realloc(void *, size_t);
+extern void __libc_free(void *);
+
+static int g_counting;
+static size_t g_allocations;
+
+void *malloc(size_t n) {
+    if (g_counting) ++g_allocations;
+    return __libc_malloc(n);
+}
+void *calloc(size_t n, size_t size) {
+    if (g_counting) ++g_allocations;
+    return __libc_calloc(n, size);
+}
+void *realloc(void *p, size_t n) {
+    if (g_counting) ++g_allocations;
+    return __libc_realloc(p, n);
+}
+void free(void *p) { __libc_free(p); }
+
+static void streaming_allocates_nothing_after_create(void **state) {
+    (void)state;
+    const size_t K = 64;
+    test_sheet *t = test_sheet_make(6000, K, 0.0, 3.0, 0.1, 20.0, 100.0, 1);
+    test_sheet_add_noise(t, 2.5, 0.05, 2);
+    /* Some invalid samples and a gap, so the slow paths run as well. */
+    uint8_t *valid = malloc(t->rows * K);
+    memset(valid, 1, t->rows * K);
+    for (size_t r = 1000; r < 1150; ++r) memset(valid + r * K, 0, K / 2);
+    for (size_t i = 7; i < t->rows * K; i += 13) valid[i] = 0;
+    double *s_out = malloc(8192 * sizeof(double)), *z_out = malloc(8192 * K * sizeof(double));
+    uint8_t *flags = malloc(8192 * K);
+    flt_recon *rc = NULL;
+    /* Control: the counter does see the library's allocations. */
+    g_allocations = 0;
+    g_counting = 1;
+    assert_int_equal(flt_recon_create(K, NULL, &rc), FLT_OK);
+    g_counting = 0;
+    assert_true(g_allocations >= 10);
+
+    g_allocations = 0;
+    g_counting = 1;
+    size_t pulled = 0, n = 0;
+    for (size_t r = 0; r < t->rows; ++r) {
+        const uint8_t *v = r < 3000 ? valid + r * K : NULL;
+        if (flt_recon_push(rc, 1, K, &t->s[r], t->height + r * K, t->slope + r * K, v) != FLT_OK) break;
+        if (flt_recon_pull(rc, 8192, K, s_out, z_out, flags, &n) != FLT_OK) break;
+        pulled += n;
+        if (r == 2999 || r == 4999) {
+            if (flt_recon_end_sheet(rc) != FLT_OK) break;
+        }
+    }
+    flt_status end = flt_recon_end_sheet(rc);
+    flt_status last_pull = flt_recon_pull(rc, 8192, K, s_out, z_out, flags, &n);
+    pulled += n;
+    flt_status reset = flt_recon_reset(rc);
+    flt_status again = flt_recon_push(rc, 1, K, &t->s[0], t->height, t->slope, NULL);
+    g_counting = 0;
+    assert_int_equal(end, FLT_OK);
+    assert_int_equal(last_pull, FLT_OK);
+    assert_int_equal(reset, FLT_OK);
+    assert_int_equal(again, FLT_OK);
+
+    print_message("%zu rows pushed and pulled, %zu allocations\n", pulled, g_allocations);
+    assert_int_equal(pulled, t->rows);
+    assert_int_equal(g_allocations, 0);
+    flt_recon_destroy(rc);
+    free(valid);
+    free(s_out);
+    free(z_out);
+    free(flags);
+    test_sheet_free(t);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(streaming_allocates_nothing_after_create),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
