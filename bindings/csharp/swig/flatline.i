@@ -1,0 +1,25 @@
+/*
+ * SWIG interface of the C# binding: the main module.
+ *
+ * SWIG generates an internal layer (namespace Flatline): the P/Invoke class
+ * FlatlineNativePINVOKE, the module class FlatlineNative with one static
+ * method per C function, and the C glue (flatline_wrap.c, built into
+ * libflatline_csharp). Nothing generated is public: the public classes
+ * (Reconstructor, FlatlineOptions, Library, ...) are hand-written in
+ * ../src/ over this layer.
+ *
+ * Conventions of the generated layer, set in common.i:
+ *   - a function returning flt_status returns void and throws the typed
+ *     FlatlineException that Errors.Check() maps from the status and
+ *     flt_last_error_message() (one place for every function);
+ *   - handles are SafeHandle subclasses (FLT_CS_HANDLE);
+ *   - arrays are raw pointers (double*, byte*) pinned by the caller with
+ *     `fixed`, so double[,] passes without a copy;
+ *   - size_t is ulong, strings are UTF-8 in both directions.
+ *
+ * One .i per component: add calib.i, extract.i, ... below as they land.
+ */
+%module FlatlineNative
+
+%include "common.i"
+%include "recon.i"

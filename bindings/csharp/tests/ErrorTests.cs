@@ -1,0 +1,134 @@
+using System;
+using System.Linq;
+using Xunit;
+
+namespace Flatline.Tests
+{
+    public class ErrorTests
+    {
+        [Fact]
+        public void PublicStatusMirrorsEveryCodeSwigGeneratedFromTheHeader()
+        {
+            var native = Enum.GetValues(typeof(NativeStatus)).Cast<NativeStatus>().ToArray();
+            Assert.Contains(NativeStatus.FLT_ERR_BUFFER_FULL, native);
+            foreach (var code in native)
+            {
+                Assert.True(Enum.IsDefined(typeof(Status), (int)code), $"Status lacks {code} = {(int)code}");
+                Assert.Equal(code.ToString(), Library.StatusName((Status)(int)code));
+            }
+            Assert.Equal(native.Length, Enum.GetValues(typeof(Status)).Length);
+        }
+
+        [Theory]
+        [InlineData(Status.InvalidArgument, typeof(InvalidArgumentException))]
+        [InlineData(Status.OutOfMemory, typeof(FlatlineOutOfMemoryException))]
+        [InlineData(Status.State, typeof(FlatlineStateException))]
+        [InlineData(Status.BufferFull, typeof(BufferFullException))]
+        [InlineData(Status.IO, typeof(FlatlineIOException))]
+        [InlineData(Status.Format, typeof(FlatlineFormatException))]
+        [InlineData(Status.Device, typeof(DeviceException))]
+        [InlineData(Status.Timeout, typeof(DeviceTimeoutException))]
+        [InlineData(Status.NotFound, typeof(NotFoundException))]
+        [InlineData(Status.Numeric, typeof(NumericException))]
+        [InlineData(Status.Internal, typeof(FlatlineInternalException))]
+        [InlineData((Status)(-77), typeof(FlatlineException))]
+        public void EachStatusMapsToItsExceptionType(Status status, Type expected)
+        {
+            FlatlineException e = Errors.Create(status, "the message");
+            Assert.Equal(expected, e.GetType());
+            Assert.Equal(status, e.Status);
+            Assert.Equal("the message", e.Message);
+        }
+
+        [Fact]
+        public void FamiliesCatchTogether()
+        {
+            Assert.IsAssignableFrom<FlatlineIOException>(Errors.Create(Status.Format, "x"));
+            Assert.IsAssignableFrom<DeviceException>(Errors.Create(Status.Timeout, "x"));
+            Assert.IsAssignableFrom<FlatlineException>(Errors.Create(Status.BufferFull, "x"));
+            // An empty C message still says what went wrong.
+            Assert.Equal("FLT_ERR_STATE", Errors.Create(Status.State, "").Message);
+            Assert.Equal("FLT_ERR_STATE", Errors.Create(Status.State, "").StatusName);
+        }
+
+        [Fact]
+        public void InvalidArgumentFromTheCLibraryCarriesItsStatusAndMessage()
+        {
+            var e = Assert.Throws<InvalidArgumentException>(() => new Reconstructor(0));
+            Assert.Equal(Status.InvalidArgument, e.Status);
+            Assert.Equal("flt_recon_create: argument 'fibers' is 0", e.Message);
+        }
+
+        [Fact]
+        public void NonIncreasingPositionsAreAnInvalidArgument()
+        {
+            using var recon = new Reconstructor(2);
+            var e = Assert.Throws<InvalidArgumentException>(() =>
+                recon.Push(new[] { 10.0, 10.0 }, new double[2, 2], new double[2, 2]));
+            Assert.Contains("s[1] = 10 does not increase", e.Message);
+            recon.Push(new[] { 10.0, 11.0 }, new double[2, 2], new double[2, 2]);
+            e = Assert.Throws<InvalidArgumentException>(() => recon.Push(11.0, new double[2], new double[2]));
+            Assert.Contains("s[0] = 11 does not increase", e.Message);
+        }
+
+        [Fact]
+        public void PullBeforePushIsAStateError()
+        {
+            using var recon = new Reconstructor(3);
+            var e = Assert.Throws<FlatlineStateException>(() => recon.Pull());
+            Assert.Equal(Status.State, e.Status);
+            Assert.Contains("nothing was pushed", e.Message);
+        }
+
+        [Fact]
+        public void EndSheetTwiceIsAStateError()
+        {
+            using var recon = new Reconstructor(1);
+            recon.Push(0.0, new[] { 1.0 }, new[] { 0.0 });
+            recon.EndSheet();
+            var e = Assert.Throws<FlatlineStateException>(() => recon.EndSheet());
+            Assert.Contains("no row was pushed since the last end_sheet", e.Message);
+        }
+
+        [Fact]
+        public void BoundaryBeforeTheFirstEndSheetIsAStateError()
+        {
+            using var recon = new Reconstructor(1);
+            Assert.Throws<FlatlineStateException>(() => recon.Boundary());
+        }
+
+        [Fact]
+        public void SmallRowCapacityFillsUp()
+        {
+            using var options = new FlatlineOptions { RowCapacity = 16 };
+            using var recon = new Reconstructor(2, options);
+            var sheet = Sheet.Measure(Sheet.Waves, 17, 2, 0.0, 5.0);
+            var e = Assert.Throws<BufferFullException>(() => recon.Push(sheet.S, sheet.Height, sheet.Slope));
+            Assert.Equal(Status.BufferFull, e.Status);
+            Assert.Contains("17 rows do not fit", e.Message);
+            // Nothing was pushed: 16 rows still fit, then one more does not.
+            recon.Push(Sheet.Slice(sheet.S, 0, 16), Sheet.Slice(sheet.Height, 0, 16), Sheet.Slice(sheet.Slope, 0, 16));
+            Assert.Throws<BufferFullException>(() => recon.Push(sheet.S[16], new double[2], new double[2]));
+        }
+
+        [Fact]
+        public void UnknownOptionNameIsNotFound()
+        {
+            using var options = new FlatlineOptions();
+            var e = Assert.Throws<NotFoundException>(() => options.Set("knot_spacingg", 50));
+            Assert.Equal(Status.NotFound, e.Status);
+            Assert.Contains("knot_spacingg", e.Message);
+            using var recon = new Reconstructor(1);
+            Assert.Throws<NotFoundException>(() => recon.GetOption("no_such_option"));
+        }
+
+        [Fact]
+        public void NonAsciiNamesTravelAsUtf8()
+        {
+            using var options = new FlatlineOptions();
+            var e = Assert.Throws<NotFoundException>(() => options.Get("höhe_σ"));
+            Assert.Contains("höhe_σ", e.Message);
+            Assert.Throws<ArgumentException>(() => options.Get("knot\0spacing"));
+        }
+    }
+}

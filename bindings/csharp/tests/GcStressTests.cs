@@ -1,0 +1,128 @@
+using System;
+using System.Collections.Generic;
+using System.Diagnostics;
+using System.Runtime.CompilerServices;
+using Xunit;
+using Xunit.Abstractions;
+
+namespace Flatline.Tests
+{
+    public class GcStressTests
+    {
+        private const int Count = 10_000;
+        private readonly ITestOutputHelper output;
+
+        public GcStressTests(ITestOutputHelper output) => this.output = output;
+
+        private static FlatlineOptions SmallOptions() =>
+            new FlatlineOptions { RowCapacity = 1024, LagKnots = 8 };
+
+        // Not inlined, so no reference survives in this frame's registers.
+        [MethodImpl(MethodImplOptions.NoInlining)]
+        private static void Abandon(int count, FlatlineOptions options, List<Reconstructor> keep)
+        {
+            var row = new double[4];
+            for (int i = 0; i < count; ++i)
+            {
+                var recon = new Reconstructor(4, options);
+                recon.Push(i, row, row);  // used, so the engine is really touched
+                keep?.Add(recon);
+            }
+        }
+
+        /// <summary>Creates 10,000 reconstructors held in a list, measures,
+        /// and drops the list with the frame (no JIT temporary outlives it).</summary>
+        [MethodImpl(MethodImplOptions.NoInlining)]
+        private static long KeepAliveThenDrop(FlatlineOptions options, long liveBefore)
+        {
+            var kept = new List<Reconstructor>(Count);
+            Abandon(Count, options, kept);
+            long rss = Resident();
+            Assert.Equal(liveBefore + Count, ReconHandle.Live);
+            return rss;
+        }
+
+        // glibc keeps freed heap pages for reuse; malloc_trim hands them back
+        // to the system, so the resident size shows what is really still held.
+        [System.Runtime.InteropServices.DllImport("libc", EntryPoint = "malloc_trim")]
+        private static extern int MallocTrim(UIntPtr pad);
+
+        private static void CollectEverything()
+        {
+            for (int i = 0; i < 3; ++i)
+            {
+                GC.Collect();
+                GC.WaitForPendingFinalizers();
+            }
+            GC.Collect();
+            if (OperatingSystem.IsLinux())
+                MallocTrim(UIntPtr.Zero);
+        }
+
+        private static long Resident()
+        {
+            using var self = Process.GetCurrentProcess();
+            self.Refresh();
+            return self.WorkingSet64;
+        }
+
+        [Fact]
+        public void TenThousandUndisposedReconstructorsAreFreedByTheFinalizer()
+        {
+            using var options = SmallOptions();
+            CollectEverything();
+            long liveBefore = ReconHandle.Live;
+            long rssBefore = Resident();
+
+            // What 10,000 live reconstructors hold: the leak we must not have.
+            long rssAlive = KeepAliveThenDrop(options, liveBefore);
+            CollectEverything();
+            long rssAfterFirst = Resident();
+            Assert.Equal(liveBefore, ReconHandle.Live);
+
+            // Now without keeping or disposing anything, twice: had the
+            // finalizer not freed them, each round would add what 10,000 hold.
+            Abandon(Count, options, null);
+            CollectEverything();
+            Abandon(Count, options, null);
+            CollectEverything();
+            long rssEnd = Resident();
+            Assert.Equal(liveBefore, ReconHandle.Live);
+
+            long held = rssAlive - rssBefore;
+            output.WriteLine($"resident: before {rssBefore >> 20} MiB, 10,000 alive {rssAlive >> 20} MiB " +
+                             $"(+{held >> 20} MiB), after collect {rssAfterFirst >> 20} MiB, " +
+                             $"after 20,000 more undisposed {rssEnd >> 20} MiB " +
+                             $"(+{(rssEnd - rssAfterFirst) >> 20} MiB)");
+            // 10,000 engines with 1024 rows x 4 fibers hold at least their row
+            // rings, 9 bytes per row and fiber (recon.h): 369 MB in all.
+            long rings = 9L * 1024 * 4 * Count;
+            Assert.True(held > rings, $"10,000 live reconstructors hold only {held >> 20} MiB");
+            // Memory returns: the two undisposed rounds reuse what was freed.
+            // A leak would add 2 x held; allow a tenth of one held for the
+            // allocator's and the GC's own slack.
+            Assert.True(rssEnd - rssAfterFirst < held / 10,
+                        $"memory grew by {(rssEnd - rssAfterFirst) >> 20} MiB over 20,000 undisposed objects");
+            // And most of it went back to the system after the first collect.
+            Assert.True(rssAfterFirst - rssBefore < held / 2,
+                        $"only {(rssAlive - rssAfterFirst) >> 20} of {held >> 20} MiB returned");
+        }
+
+        [Fact]
+        public void UndisposedOptionsAreFreedByTheFinalizer()
+        {
+            CollectEverything();
+            long before = OptionsHandle.Live;
+            MakeOptions();
+            CollectEverything();
+            Assert.Equal(before, OptionsHandle.Live);
+        }
+
+        [MethodImpl(MethodImplOptions.NoInlining)]
+        private static void MakeOptions()
+        {
+            for (int i = 0; i < Count; ++i)
+                new FlatlineOptions().MaxGap = 100 + i % 50;
+        }
+    }
+}

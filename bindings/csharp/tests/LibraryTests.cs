@@ -1,0 +1,86 @@
+using System;
+using System.IO;
+using System.Linq;
+using Xunit;
+
+namespace Flatline.Tests
+{
+    public class LibraryTests
+    {
+        [Fact]
+        public void VersionOfTheLibraryMatchesTheHeadersTheBindingWasGeneratedFrom()
+        {
+            Assert.Equal(Library.BindingVersion, Library.Version);
+            string[] parts = Library.VersionString.Split('.');
+            Assert.Equal(3, parts.Length);
+            int number = int.Parse(parts[0]) * 10000 + int.Parse(parts[1]) * 100 + int.Parse(parts[2]);
+            Assert.Equal(Library.Version, number);
+        }
+
+        [Fact]
+        public void StatusNamesComeFromTheCLibrary()
+        {
+            Assert.Equal("FLT_OK", Library.StatusName(Status.Ok));
+            Assert.Equal("FLT_ERR_INVALID_ARGUMENT", Library.StatusName(Status.InvalidArgument));
+            Assert.Equal("FLT_ERR_BUFFER_FULL", Library.StatusName(Status.BufferFull));
+            Assert.Equal("FLT_ERR_UNKNOWN", Library.StatusName((Status)(-1234)));
+        }
+
+        [Fact]
+        public void NativeLibraryPathCannotChangeOnceTheLibraryIsLoaded()
+        {
+            Assert.True(Library.Version > 0);  // loads the library
+            var error = Assert.Throws<InvalidOperationException>(() => Library.NativeLibraryPath = "/nowhere");
+            Assert.Contains("before the first call", error.Message);
+            Assert.Null(Library.NativeLibraryPath);
+        }
+
+        [Fact]
+        public void NativePathOverrideNamesAFolderOrTheFileItself()
+        {
+            string folder = AppContext.BaseDirectory;
+            string glue = NativeLoader.PlatformFileName("flatline_csharp");
+            Assert.Equal(OperatingSystem.IsWindows() ? "flatline_csharp.dll" : "libflatline_csharp.so", glue);
+            Assert.Equal(Path.Combine(Path.GetFullPath(folder), glue), NativeLoader.ResolveOverride(folder));
+            string file = Path.Combine(folder, glue);
+            Assert.True(File.Exists(file), "the glue is copied beside the tests, where .NET probes it");
+            Assert.Equal(file, NativeLoader.ResolveOverride(file));
+            Assert.Null(NativeLoader.ResolveOverride(null));
+            Assert.Null(NativeLoader.ResolveOverride(""));
+        }
+
+        [Fact]
+        public void BatchReconstructReturnsEveryRowWithItsPosition()
+        {
+            var sheet = Sheet.Measure(Sheet.Waves, 400, 3, 1000.0, 7.5);
+            var result = Library.Reconstruct(sheet.S, sheet.Height, sheet.Slope);
+            Assert.Equal(400, result.Rows);
+            Assert.Equal(3, result.Fibers);
+            Assert.Equal(sheet.S, result.S);
+            Assert.NotSame(sheet.S, result.S);
+            Assert.True(Sheet.MaxError(result.Z, sheet.TrueZ) < 0.01);
+            Assert.All(Enumerable.Range(0, 400), r => Assert.Equal(ReconFlags.None, result.FlagsAt(r, 1)));
+        }
+
+        [Fact]
+        public void BatchReconstructChecksShapesBeforeTheNativeCall()
+        {
+            var sheet = Sheet.Measure(Sheet.Waves, 20, 3, 0.0, 10.0);
+            var e = Assert.Throws<ArgumentException>(() =>
+                Library.Reconstruct(sheet.S, sheet.Height, new double[20, 2]));
+            Assert.Equal("slope", e.ParamName);
+            e = Assert.Throws<ArgumentException>(() =>
+                Library.Reconstruct(sheet.S, new double[19, 3], sheet.Slope));
+            Assert.Equal("height", e.ParamName);
+            e = Assert.Throws<ArgumentException>(() =>
+                Library.Reconstruct(sheet.S, sheet.Height, sheet.Slope, new bool[20, 4]));
+            Assert.Equal("valid", e.ParamName);
+            Assert.Throws<ArgumentNullException>(() => Library.Reconstruct(null, sheet.Height, sheet.Slope));
+            // Positions are the C library's business: a typed FlatlineException.
+            var s = (double[])sheet.S.Clone();
+            s[5] = s[4];
+            var invalid = Assert.Throws<InvalidArgumentException>(() => Library.Reconstruct(s, sheet.Height, sheet.Slope));
+            Assert.Contains("s[5]", invalid.Message);
+        }
+    }
+}

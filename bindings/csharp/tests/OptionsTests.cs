@@ -1,0 +1,108 @@
+using System;
+using System.Linq;
+using Xunit;
+
+namespace Flatline.Tests
+{
+    public class OptionsTests
+    {
+        private static readonly string[] ReconOptions =
+        {
+            "knot_spacing", "laser_spacing", "height_sigma", "slope_sigma",
+            "curvature_weight", "lag_knots", "max_gap", "row_capacity",
+        };
+
+        [Fact]
+        public void AvailableListsEveryKeyOfTheCLibraryWithItsBounds()
+        {
+            var keys = FlatlineOptions.Available;
+            foreach (string name in ReconOptions)
+                Assert.Contains(keys, k => k.Name == name);
+            Assert.Equal(keys.Count, keys.Select(k => k.Name).Distinct().Count());
+            var lag = keys.Single(k => k.Name == "lag_knots");
+            Assert.True(lag.IsInteger);
+            Assert.Equal(64.0, lag.Default);
+            var laser = FlatlineOptions.Describe("laser_spacing");
+            Assert.False(laser.IsInteger);
+            Assert.Equal(100.0, laser.Default);
+            Assert.True(laser.Min <= laser.Default && laser.Default <= laser.Max);
+        }
+
+        [Fact]
+        public void ANewBagHoldsTheDefaults()
+        {
+            using var options = new FlatlineOptions();
+            foreach (var key in FlatlineOptions.Available)
+                Assert.Equal(key.Default, options[key.Name]);
+            Assert.Equal(0.0, options.KnotSpacing);
+            Assert.Equal(100.0, options.LaserSpacing);
+            Assert.Equal(2.5, options.HeightSigma);
+            Assert.Equal(0.001, options.SlopeSigma);
+            Assert.Equal(1e-3, options.CurvatureWeight);
+            Assert.Equal(64, options.LagKnots);
+            Assert.Equal(200.0, options.MaxGap);
+            Assert.Equal(8192, options.RowCapacity);
+        }
+
+        [Fact]
+        public void TypedPropertiesAndNamesSetTheSameValues()
+        {
+            using var options = new FlatlineOptions
+            {
+                KnotSpacing = 50, LaserSpacing = 120, HeightSigma = 1.5, SlopeSigma = 0.002,
+                CurvatureWeight = 0.01, LagKnots = 16, MaxGap = 300, RowCapacity = 1000,
+            };
+            Assert.Equal(50.0, options["knot_spacing"]);
+            Assert.Equal(120.0, options.Get("laser_spacing"));
+            Assert.Equal(1.5, options["height_sigma"]);
+            Assert.Equal(0.002, options["slope_sigma"]);
+            Assert.Equal(0.01, options["curvature_weight"]);
+            Assert.Equal(16.0, options["lag_knots"]);
+            Assert.Equal(300.0, options["max_gap"]);
+            Assert.Equal(1000.0, options["row_capacity"]);
+            options["max_gap"] = 250;
+            Assert.Equal(250.0, options.MaxGap);
+            Assert.Same(options, options.Set("lag_knots", 8));
+            Assert.Equal(8, options.LagKnots);
+        }
+
+        [Fact]
+        public void RejectedValuesLeaveTheBagUnchanged()
+        {
+            using var options = new FlatlineOptions { HeightSigma = 2.0 };
+            Assert.Throws<InvalidArgumentException>(() => options.HeightSigma = double.NaN);
+            Assert.Throws<InvalidArgumentException>(() => options.Set("lag_knots", 2.5));
+            var info = FlatlineOptions.Describe("height_sigma");
+            Assert.Throws<InvalidArgumentException>(() => options.HeightSigma = info.Min - 1);
+            Assert.Equal(2.0, options.HeightSigma);
+            Assert.Equal(64, options.LagKnots);
+        }
+
+        [Fact]
+        public void AReconstructorCopiesTheOptionsAndReportsTheEffectiveValues()
+        {
+            var options = new FlatlineOptions { LaserSpacing = 80, LagKnots = 12 };
+            using var recon = new Reconstructor(2, options);
+            options.Dispose();  // the reconstructor kept its own copy
+            Assert.Equal(80.0, recon.GetOption("laser_spacing"));
+            Assert.Equal(80.0, recon.GetOption("knot_spacing"));  // 0 resolves to laser_spacing
+            Assert.Equal(12.0, recon.GetOption("lag_knots"));
+            Assert.Equal(8192.0, recon.GetOption("row_capacity"));
+        }
+
+        [Fact]
+        public void DisposeIsImmediateIdempotentAndFinal()
+        {
+            long before = OptionsHandle.Live;
+            var options = new FlatlineOptions();
+            Assert.Equal(before + 1, OptionsHandle.Live);
+            options.Dispose();
+            Assert.Equal(before, OptionsHandle.Live);
+            options.Dispose();
+            Assert.Equal(before, OptionsHandle.Live);
+            Assert.Throws<ObjectDisposedException>(() => options.Get("max_gap"));
+            Assert.Throws<ObjectDisposedException>(() => options.MaxGap = 10);
+            Assert.Throws<ObjectDisposedException>(() => new Reconstructor(1, options));
+        }
+    }
+}
