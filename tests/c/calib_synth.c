@@ -98,6 +98,10 @@ static void inverse3(const double m[9], double out[9]) {
     out[8] = (m[0] * m[4] - m[1] * m[3]) / det;
 }
 
+/* Sub-samples per pixel side: 8 x 8 = 64 coverage levels per pixel, so an
+ * edge's position is quantised to 1/64 px before 8-bit rounding. */
+#define SUB 8
+
 int synth_render_chessboard(const double *ray_map, int squares_x, int squares_y,
                             double square_mm, double rx, double ry, double rz,
                             const double t_mm[3], uint8_t *image) {
@@ -107,6 +111,11 @@ int synth_render_chessboard(const double *ray_map, int squares_x, int squares_y,
     g[0] = r[0], g[1] = r[1], g[2] = t_mm[0];
     g[3] = r[3], g[4] = r[4], g[5] = t_mm[1];
     g[6] = r[6], g[7] = r[7], g[8] = t_mm[2];
+    /* t_mm is the board's centre: its origin sits at t - R (w/2, h/2, 0). */
+    const double half_w = squares_x * square_mm / 2, half_h = squares_y * square_mm / 2;
+    g[2] -= r[0] * half_w + r[1] * half_h;
+    g[5] -= r[3] * half_w + r[4] * half_h;
+    g[8] -= r[6] * half_w + r[7] * half_h;
     inverse3(g, ginv);
     /* Every inner corner and the margin's corners must be in the image. */
     const double w = squares_x * square_mm, hgt = squares_y * square_mm;
@@ -149,9 +158,10 @@ int synth_render_chessboard(const double *ray_map, int squares_x, int squares_y,
         const double dxu = (bx[1] - bx[0]) * su, dyu = (by[1] - by[0]) * su;
         const double dxv = (bx[2] - bx[0]) * sv, dyv = (by[2] - by[0]) * sv;
         double sum = 0;
-        for (int a = 0; a < 4; ++a)
-            for (int b = 0; b < 4; ++b) {
-                const double ou = (a - 1.5) / 4, ov = (b - 1.5) / 4;
+        for (int a = 0; a < SUB; ++a)
+            for (int b = 0; b < SUB; ++b) {
+                const double ou = (a - (SUB - 1) / 2.0) / SUB;
+                const double ov = (b - (SUB - 1) / 2.0) / SUB;
                 const double X = bx[0] + dxu * ou + dxv * ov;
                 const double Y = by[0] + dyu * ou + dyv * ov;
                 double level;
@@ -166,7 +176,7 @@ int synth_render_chessboard(const double *ray_map, int squares_x, int squares_y,
                                 : 40;
                 sum += level;
             }
-        image[i] = (uint8_t)lround(sum / 16);
+        image[i] = (uint8_t)lround(sum / (SUB * SUB));
     }
     return 1;
 }

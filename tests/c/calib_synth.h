@@ -38,8 +38,8 @@ double synth_uniform(uint64_t *state);
  * (inner corners (squares_x - 1) x (squares_y - 1)), with a white margin of
  * one square, seen by the reference camera at pose (rotation rx, ry, rz in
  * radians about the board's own x, y, z axes applied in that order, then the
- * board origin at t_mm in the camera frame), into an 8-bit SYNTH_WIDTH x
- * SYNTH_HEIGHT image. Each pixel integrates 4 x 4 sub-samples so edges are
+ * board's centre at t_mm in the camera frame, mm), into an 8-bit SYNTH_WIDTH x
+ * SYNTH_HEIGHT image. Each pixel integrates 8 x 8 sub-samples so edges are
  * anti-aliased. ray_map: per pixel the undistorted normalised ray (x, y),
  * 2 doubles per pixel, from synth_ray_map(). Returns 0 if any corner of the
  * board falls outside the image. */
