@@ -47,6 +47,9 @@ static void flt_py_raise_last(flt_status status) {
   $result = SWIG_Py_Void();
 }
 
+/* ...except the accessor of the thread's last status, which reports one. */
+%typemap(out) flt_status flt_last_error_status { $result = PyLong_FromLong((long)$1); }
+
 /* Scalar `out` parameters become return values. */
 %typemap(in, numinputs=0) size_t *out (size_t temp = 0) { $1 = &temp; }
 %typemap(argout) size_t *out { %append_output(PyLong_FromSize_t(*$1)); }

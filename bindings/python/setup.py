@@ -1,0 +1,94 @@
+"""Builds the flatline package by driving CMake on the libflatline source tree.
+
+setuptools (Debian's python3-setuptools) is the build backend; the work is
+done by the project's own CMake build, so the wheel holds exactly what ctest
+tests: the extension flatline/_capi*.so, SWIG's proxy capi.py and
+libflatline.so.N beside them (the extension's rpath is $ORIGIN).
+
+Environment:
+    FLATLINE_SOURCE_DIR   the libflatline source tree (default: ../.. of this
+                          file, i.e. the repository this folder lives in)
+    FLATLINE_BUILD_DIR    CMake build directory (default: under setuptools'
+                          build_temp, i.e. bindings/python/build/, git-ignored)
+    FLATLINE_CMAKE_ARGS   extra arguments for the CMake configure step
+    CMAKE_BUILD_PARALLEL_LEVEL  parallel jobs (default 2)
+"""
+
+import os
+import re
+import shlex
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+from setuptools import Extension, setup
+from setuptools.command.build_ext import build_ext
+
+HERE = Path(__file__).resolve().parent
+SOURCE_DIR = Path(os.environ.get("FLATLINE_SOURCE_DIR", HERE.parent.parent)).resolve()
+
+
+def header_version() -> str:
+    """MAJOR.MINOR.PATCH from include/flatline/version.h, the single source."""
+    header = SOURCE_DIR / "include" / "flatline" / "version.h"
+    if not header.is_file():
+        sys.exit(
+            f"setup.py: {header} not found; build from a libflatline checkout "
+            f"or set FLATLINE_SOURCE_DIR to one"
+        )
+    text = header.read_text()
+    parts = [
+        re.search(rf"#define FLT_VERSION_{p} (\d+)", text).group(1)
+        for p in ("MAJOR", "MINOR", "PATCH")
+    ]
+    return ".".join(parts)
+
+
+class CMakeExtension(Extension):
+    """The SWIG extension; CMake builds it, so setuptools compiles nothing."""
+
+    def __init__(self, name: str) -> None:
+        super().__init__(name, sources=[])
+
+
+class CMakeBuild(build_ext):
+    def build_extension(self, ext: Extension) -> None:
+        build_dir = Path(
+            os.environ.get("FLATLINE_BUILD_DIR", Path(self.build_temp).resolve() / "cmake")
+        )
+        configure = [
+            "cmake",
+            "-S", str(SOURCE_DIR),
+            "-B", str(build_dir),
+            "-DCMAKE_BUILD_TYPE=Release",
+            "-DFLT_BUILD_PYTHON=ON",
+            "-DFLT_BUILD_CSHARP=OFF",
+            "-DFLT_BUILD_TESTS=OFF",
+            "-DFLT_BUILD_EXAMPLES=OFF",
+            f"-DPython3_EXECUTABLE={sys.executable}",
+        ] + shlex.split(os.environ.get("FLATLINE_CMAKE_ARGS", ""))
+        jobs = os.environ.get("CMAKE_BUILD_PARALLEL_LEVEL", "2")
+        build = ["cmake", "--build", str(build_dir), "--target", "flt_python_capi",
+                 "-j", jobs]
+        for command in (configure, build):
+            print("setup.py:", " ".join(shlex.quote(c) for c in command), flush=True)
+            subprocess.run(command, check=True)
+
+        built = build_dir / "bindings" / "python" / "package" / "flatline"
+        target = Path(self.get_ext_fullpath(ext.name))  # .../flatline/_capi.<abi>.so
+        target.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(built / "_capi.so", target)
+        shutil.copyfile(built / "capi.py", target.parent / "capi.py")
+        # libflatline.so.N is a real file in the package dir (copyfile would
+        # follow a symlink anyway): wheels cannot hold symlinks.
+        for library in built.glob("libflatline.so*"):
+            shutil.copyfile(library, target.parent / library.name)
+
+
+setup(
+    version=header_version(),
+    ext_modules=[CMakeExtension("flatline._capi")],
+    cmdclass={"build_ext": CMakeBuild},
+    zip_safe=False,
+)

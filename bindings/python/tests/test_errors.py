@@ -1,0 +1,150 @@
+"""Every C status maps to its exception class, and every status Python can
+trigger is raised by the real C path with the library's message."""
+
+import builtins
+
+import numpy as np
+import pytest
+
+import flatline
+from flatline import capi
+from flatline._errors import _from_status
+
+from conftest import sine_sheet
+
+MAPPING = [
+    (capi.FLT_ERR_INVALID_ARGUMENT, flatline.InvalidArgumentError, ValueError),
+    (capi.FLT_ERR_OUT_OF_MEMORY, flatline.OutOfMemoryError, MemoryError),
+    (capi.FLT_ERR_STATE, flatline.StateError, RuntimeError),
+    (capi.FLT_ERR_BUFFER_FULL, flatline.BufferFullError, RuntimeError),
+    (capi.FLT_ERR_IO, flatline.FileError, OSError),
+    (capi.FLT_ERR_FORMAT, flatline.FormatError, ValueError),
+    (capi.FLT_ERR_DEVICE, flatline.DeviceError, OSError),
+    (capi.FLT_ERR_TIMEOUT, flatline.TimeoutError, builtins.TimeoutError),
+    (capi.FLT_ERR_NOT_FOUND, flatline.NotFoundError, KeyError),
+    (capi.FLT_ERR_NUMERIC, flatline.NumericError, ArithmeticError),
+    (capi.FLT_ERR_INTERNAL, flatline.InternalError, RuntimeError),
+]
+
+
+@pytest.mark.parametrize("status, cls, builtin", MAPPING)
+def test_each_status_maps_to_its_class(status, cls, builtin):
+    exc = _from_status(status, "why it failed")
+    assert type(exc) is cls
+    assert isinstance(exc, flatline.FlatlineError) and isinstance(exc, builtin)
+    assert exc.status == status == cls.STATUS
+    assert exc.message == str(exc) == "why it failed"
+    # The C name of the status agrees with the class.
+    assert capi.flt_status_string(status).startswith("FLT_ERR_")
+
+
+def test_mapping_covers_every_status_of_the_header():
+    statuses = {v for k, v in vars(capi).items() if k.startswith("FLT_ERR_")}
+    assert statuses == {status for status, _, _ in MAPPING}
+
+
+def test_unknown_status_gives_the_base_class():
+    exc = _from_status(-1234, "future code")
+    assert type(exc) is flatline.FlatlineError and exc.status == -1234
+
+
+def test_errors_pickle_with_their_status():
+    import pickle
+    exc = pickle.loads(pickle.dumps(_from_status(-9, "gone")))
+    assert type(exc) is flatline.NotFoundError and exc.status == -9 and exc.message == "gone"
+
+
+# --- raised through the extension ------------------------------------------
+
+
+def test_invalid_argument_from_c_names_the_argument_and_value():
+    s, h, sl, _ = sine_sheet(fibers=2, length=600)
+    s = s.copy()
+    s[10] = s[9]  # not strictly increasing
+    with pytest.raises(flatline.InvalidArgumentError) as info:
+        flatline.reconstruct(s, h, sl)
+    assert info.value.status == -1
+    assert "s[10]" in info.value.message and "increasing" in info.value.message
+    assert isinstance(info.value, ValueError)
+    # The thread's C error state agrees with what was raised.
+    assert capi.flt_last_error_status() == -1
+
+
+def test_option_out_of_bounds_is_invalid_argument_naming_it():
+    with pytest.raises(flatline.InvalidArgumentError, match="row_capacity' = 4 is outside"):
+        flatline.Reconstructor(2, row_capacity=4)
+    with pytest.raises(ValueError, match="laser_spacing' is NaN"):
+        flatline.reconstruct([0.0, 1.0], np.zeros((2, 1)), np.zeros((2, 1)),
+                             laser_spacing=float("nan"))
+
+
+def test_state_errors_pull_before_push_and_end_sheet_twice():
+    with flatline.Reconstructor(3) as recon:
+        with pytest.raises(flatline.StateError, match="nothing was pushed") as info:
+            recon.pull()
+        assert info.value.status == -3
+        with pytest.raises(flatline.StateError):
+            recon.end_sheet()
+        with pytest.raises(flatline.StateError, match="no sheet has ended"):
+            recon.boundary()
+        s, h, sl, _ = sine_sheet(fibers=3, length=900)
+        recon.push(s, h, sl)
+        recon.end_sheet()
+        with pytest.raises(flatline.StateError, match="no row was pushed since the last end_sheet"):
+            recon.end_sheet()
+
+
+def test_buffer_full_with_small_row_capacity_pushes_nothing():
+    s, h, sl, _ = sine_sheet(fibers=2, length=300)  # 100 rows
+    with flatline.Reconstructor(2, row_capacity=16) as recon:
+        with pytest.raises(flatline.BufferFullError, match="row_capacity = 16") as info:
+            recon.push(s[:17], h[:17], sl[:17])
+        assert info.value.status == -4
+        recon.push(s[:16], h[:16], sl[:16])  # nothing of the failed block went in
+        assert recon.ready == 0
+
+
+def test_not_found_for_an_unknown_option_name():
+    with pytest.raises(flatline.NotFoundError, match="no option is named 'nope'") as info:
+        flatline.option_info("nope")
+    assert info.value.status == -9 and isinstance(info.value, LookupError)
+    with flatline.Reconstructor(1) as recon, pytest.raises(KeyError):
+        recon.option("nope")
+    with pytest.raises(flatline.NotFoundError):
+        capi.flt_option_at(10**6)
+
+
+def test_out_of_memory_for_an_impossible_reconstructor():
+    # 1e12 fibers: the first per-fiber buffer alone (~21 doubles per fiber)
+    # is 168 TB, beyond the 128 TB user address space of x86-64, so the very
+    # first allocation fails whatever the overcommit policy, touching nothing.
+    with pytest.raises(flatline.OutOfMemoryError) as info:
+        flatline.Reconstructor(10**12, row_capacity=16)
+    assert info.value.status == -2 and isinstance(info.value, MemoryError)
+
+
+def test_unknown_keyword_is_a_type_error_naming_it():
+    with pytest.raises(TypeError, match="unexpected keyword argument 'knot_spcing'"):
+        flatline.reconstruct([0.0, 3.0], np.zeros((2, 1)), np.zeros((2, 1)), knot_spcing=50)
+    with pytest.raises(TypeError, match="'robustt'"):
+        flatline.Reconstructor(1, robustt=1)
+
+
+def test_option_of_wrong_type_is_a_type_error():
+    with pytest.raises(TypeError, match="'lag_knots' must be a real number, not str"):
+        flatline.Reconstructor(1, lag_knots="8")
+    with pytest.raises(TypeError, match="not bool"):
+        flatline.Reconstructor(1, lag_knots=True)
+
+
+def test_a_failed_call_leaves_the_reconstructor_usable():
+    s, h, sl, _ = sine_sheet(fibers=2, length=900)
+    with flatline.Reconstructor(2, lag_knots=4) as recon:
+        recon.push(s[:100], h[:100], sl[:100])
+        with pytest.raises(flatline.InvalidArgumentError):
+            recon.push(s[:10], h[:10], sl[:10])  # goes backwards
+        recon.push(s[100:], h[100:], sl[100:])
+        recon.end_sheet()
+        out_s, z, flags = recon.pull()
+    np.testing.assert_array_equal(out_s, s)
+    assert not flags.any()

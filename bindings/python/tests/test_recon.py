@@ -1,0 +1,195 @@
+"""The reconstructor's behaviour through Python: accuracy, flags, streaming,
+carry-over, lifetime."""
+
+import numpy as np
+import pytest
+
+import flatline
+
+from conftest import bits, measure, noisy_sheet, sine_sheet
+
+
+def test_noise_free_sine_is_reconstructed_within_a_micrometre():
+    # The reference sheet along travel: z = 12 sin(2 pi s / 1800), 9000 mm
+    # at 3 mm, two lasers 100 mm apart. A cubic Hermite spline with 100 mm
+    # knots represents this sine to ~(pi L / P)^4 / 384 * A ~ 0.3 um, so
+    # 1e-3 mm is the bound the issue sets with margin.
+    s, h, sl, z_true = sine_sheet(fibers=4)
+    z = flatline.reconstruct(s, h, sl)
+    assert z.shape == h.shape and z.dtype == np.float64
+    assert np.abs(z - z_true).max() <= 1e-3
+
+
+def test_options_change_the_result_as_the_c_defaults_say():
+    s, h, sl, z_true = sine_sheet(fibers=1)
+    default = flatline.reconstruct(s, h, sl)
+    explicit = flatline.reconstruct(s, h, sl, laser_spacing=100.0, knot_spacing=0.0,
+                                    height_sigma=2.5, slope_sigma=1e-3)
+    np.testing.assert_array_equal(bits(default), bits(explicit))
+    # Telling it the wrong laser spacing (200 mm) models the wrong operator:
+    # the error grows to a visible fraction of the 12 mm amplitude.
+    wrong = flatline.reconstruct(s, h, sl, laser_spacing=200.0)
+    assert np.abs(wrong - z_true).max() > 0.1
+
+
+def test_invalid_and_nan_samples_are_flagged_and_bridged():
+    s, h, sl, z_true = sine_sheet(fibers=3)
+    valid = np.ones(h.shape, bool)
+    valid[1000:1010, 0] = False  # 30 mm hole: bridged, flagged invalid only
+    h = h.copy(); sl = sl.copy()
+    h[2000:2005, 1] = np.nan; sl[2000:2005, 1] = np.nan  # NaN counts as invalid
+    valid[:, 2] = False  # a fiber with no data at all
+    z, flags = flatline.reconstruct_with_flags(s, h, sl, valid)
+    assert (flags[1000:1010, 0] == flatline.FLAG_INVALID_INPUT).all()
+    assert (flags[2000:2005, 1] == flatline.FLAG_INVALID_INPUT).all()
+    assert flags[:, :2].sum() == 15 * flatline.FLAG_INVALID_INPUT
+    # The bridged values still follow the sheet (slopes around the hole pin it).
+    assert np.abs(z[1000:1010, 0] - z_true[1000:1010, 0]).max() < 1e-2
+    assert np.isnan(z[:, 2]).all() and (flags[:, 2] & flatline.FLAG_NO_DATA).all()
+    assert not np.isnan(z[:, :2]).any()
+
+
+def test_gap_longer_than_max_gap_is_flagged():
+    s, h, sl, _ = sine_sheet(fibers=1)
+    valid = np.ones(h.shape, bool)
+    valid[1000:1100] = False  # 300 mm > max_gap 200 mm
+    _, flags = flatline.reconstruct_with_flags(s, h, sl, valid)
+    assert (flags[1000:1100, 0] & flatline.FLAG_GAP).all()
+    _, flags = flatline.reconstruct_with_flags(s, h, sl, valid, max_gap=400.0)
+    assert not (flags[:, 0] & flatline.FLAG_GAP).any()
+
+
+def test_row_by_row_and_block_pushes_give_identical_bits():
+    s, h, sl, valid = noisy_sheet(seed=1, rows=800, fibers=3)
+    outputs = []
+    for by_row in (False, True):
+        with flatline.Reconstructor(3, lag_knots=8) as recon:
+            if by_row:
+                for r in range(len(s)):
+                    recon.push(s[r], h[r], sl[r], valid[r])
+            else:
+                recon.push(s, h, sl, valid)
+            recon.end_sheet()
+            outputs.append(recon.pull())
+    for a, b in zip(*outputs):
+        np.testing.assert_array_equal(a, b) if a.dtype == np.uint8 else \
+            np.testing.assert_array_equal(bits(a), bits(b))
+
+
+def test_streaming_converges_to_the_batch_solution_with_enough_lag():
+    s, h, sl, z_true = sine_sheet(fibers=2)
+    batch = flatline.reconstruct(s, h, sl)
+    with flatline.Reconstructor(2) as recon:  # default lag 64 knots
+        pulled = []
+        for start in range(0, len(s), 500):
+            recon.push(s[start:start + 500], h[start:start + 500], sl[start:start + 500])
+            pulled.append(recon.pull())
+        assert sum(len(p[0]) for p in pulled) > 0  # rows come out before the end
+        recon.end_sheet()
+        pulled.append(recon.pull())
+        assert recon.ready == 0
+    out_s = np.concatenate([p[0] for p in pulled])
+    z = np.concatenate([p[1] for p in pulled])
+    np.testing.assert_array_equal(out_s, s)  # every row, once, in order
+    # Noise-free data: both are the spline through the same sine; they agree
+    # to well under the 1 um accuracy of either.
+    assert np.abs(z - batch).max() < 1e-4
+    assert np.abs(z - z_true).max() <= 1e-3
+
+
+def test_pull_max_rows_and_ready():
+    s, h, sl, _ = sine_sheet(fibers=2, length=3000)
+    with flatline.Reconstructor(2, lag_knots=2) as recon:
+        recon.push(s, h, sl)
+        ready = recon.ready
+        assert ready > 100
+        first = recon.pull(max_rows=10)
+        assert first[0].shape == (10,) and first[1].shape == (10, 2) and first[2].shape == (10, 2)
+        assert first[2].dtype == np.uint8
+        assert recon.ready == ready - 10
+        rest = recon.pull()
+        assert len(rest[0]) == ready - 10 and recon.ready == 0
+        empty = recon.pull()
+        assert empty[0].shape == (0,) and empty[1].shape == (0, 2)
+        with pytest.raises(ValueError, match="max_rows"):
+            recon.pull(max_rows=-1)
+
+
+def test_end_sheet_carries_the_boundary_and_the_next_sheet_joins_c1():
+    s, h, sl, z_true = sine_sheet(fibers=2, length=9000)
+    half = len(s) // 2
+    with flatline.Reconstructor(2, lag_knots=8) as recon:
+        recon.push(s[:half], h[:half], sl[:half])
+        recon.end_sheet()
+        first = recon.pull()
+        knot_s, knot_h, knot_sl = recon.boundary()
+        assert knot_h.shape == (2,) and knot_sl.shape == (2,)
+        # The last knot of the sheet: the last row reaches s + 50 mm, so
+        # that knot lies within one knot spacing past it.
+        assert s[half - 1] < knot_s <= s[half - 1] + 50.0 + 100.0
+        # Height and slope there are the sine's, to the spline's accuracy.
+        # The end knot has data on one side only: its slope is allowed 5e-5
+        # mm/mm (0.1 % of the 0.042 mm/mm peak slope; over a 100 mm knot
+        # interval it is 5 um of height).
+        z = lambda pos: 12 * np.sin(2 * np.pi * (pos + 5.0 * np.arange(2)) / 1800)
+        dz = lambda pos: 12 * 2 * np.pi / 1800 * np.cos(2 * np.pi * (pos + 5.0 * np.arange(2)) / 1800)
+        assert np.abs(knot_h - z(knot_s)).max() < 1e-3
+        assert np.abs(knot_sl - dz(knot_s)).max() < 5e-5
+        recon.push(s[half:], h[half:], sl[half:])
+        recon.end_sheet()
+        second = recon.pull()
+    z_all = np.concatenate([first[1], second[1]])
+    assert len(z_all) == len(s)
+    assert np.abs(z_all - z_true).max() <= 1e-3
+
+
+def test_reset_drops_rows_and_carry_over():
+    s, h, sl, _ = sine_sheet(fibers=1, length=3000)
+    with flatline.Reconstructor(1, lag_knots=2) as recon:
+        recon.push(s, h, sl)
+        recon.end_sheet()
+        assert recon.ready == len(s)
+        recon.reset()
+        assert recon.ready == 0
+        with pytest.raises(flatline.StateError):
+            recon.boundary()
+        with pytest.raises(flatline.StateError):
+            recon.pull()
+        recon.push(s, h, sl)  # a new strip may start at any position again
+
+
+def test_fibers_option_and_repr():
+    with flatline.Reconstructor(5, laser_spacing=80.0, lag_knots=3) as recon:
+        assert recon.fibers == 5
+        assert recon.option("knot_spacing") == 80.0  # resolved from 0
+        assert recon.option("laser_spacing") == 80.0
+        assert recon.option("lag_knots") == 3.0
+        assert recon.option("row_capacity") == 8192.0
+        assert repr(recon) == "<flatline.Reconstructor fibers=5 ready=0>"
+    assert repr(recon) == "<flatline.Reconstructor closed>"
+
+
+def test_constructor_argument_checks():
+    with pytest.raises(ValueError, match="'fibers' must be >= 1"):
+        flatline.Reconstructor(0)
+    with pytest.raises(TypeError, match="'fibers' must be an int"):
+        flatline.Reconstructor(2.5)
+    assert flatline.Reconstructor(np.int64(2)).fibers == 2
+
+
+def test_close_is_deterministic_and_idempotent():
+    recon = flatline.Reconstructor(2)
+    handle = recon._handle
+    assert handle.thisown  # the SWIG object owns the C handle
+    del handle
+    recon.close()
+    assert recon.closed
+    recon.close()
+    for call in (lambda: recon.ready, recon.pull, recon.end_sheet, recon.reset,
+                 recon.boundary, lambda: recon.option("lag_knots"),
+                 lambda: recon.push(0.0, [0.0, 0.0], [0.0, 0.0])):
+        with pytest.raises(flatline.StateError, match="closed"):
+            call()
+    with pytest.raises(flatline.StateError):
+        with recon:
+            pass
