@@ -1,10 +1,14 @@
 using System;
 using Xunit;
+using Xunit.Abstractions;
 
 namespace Flatline.Tests
 {
     public class ReconstructorTests
     {
+        private readonly ITestOutputHelper output;
+        public ReconstructorTests(ITestOutputHelper output) => this.output = output;
+
         // 12 sin(2 pi s / 1800) seen by two lasers 100 mm apart, a row every 5 mm.
         private static Sheet SineSheet(int rows = 2400) => Sheet.Measure(Sheet.Sine, rows, 1, 0.0, 5.0);
 
@@ -14,6 +18,7 @@ namespace Flatline.Tests
             var sheet = SineSheet();
             var result = Library.Reconstruct(sheet.S, sheet.Height, sheet.Slope);
             double error = Sheet.MaxError(result.Z, sheet.TrueZ);
+            output.WriteLine($"batch sine: max error {error:E2} mm");
             // The cubic Hermite interpolation error at 100 mm knots is
             // h^4/384 max|z''''| = 4.6e-4 mm for this sine; the fit does no worse.
             Assert.True(error < 1e-3, $"max error {error} mm");
@@ -27,6 +32,7 @@ namespace Flatline.Tests
             var result = Sheet.Stream(recon, sheet, 37);
             Assert.Equal(sheet.S, result.S);
             double error = Sheet.MaxError(result.Z, sheet.TrueZ);
+            output.WriteLine($"streamed sine: max error {error:E2} mm");
             Assert.True(error < 1e-3, $"max error {error} mm");
         }
 
