@@ -112,7 +112,8 @@ mat3 refine(const mat3 &g0, const Eigen::MatrixX2d &plane,
     mat3 g = g0 / g0.norm();
     double cost = cost_of(g);
     double lambda = 1e-3;
-    for (int it = 0; it < 100 && cost > 0; ++it) {
+    bool converged = false;
+    for (int it = 0; it < 100 && cost > 0 && !converged; ++it) {
         Eigen::Matrix<double, 9, 9> jtj = Eigen::Matrix<double, 9, 9>::Zero();
         Eigen::Matrix<double, 9, 1> jtr = Eigen::Matrix<double, 9, 1>::Zero();
         for (Eigen::Index i = 0; i < n; ++i) {
@@ -142,7 +143,7 @@ mat3 refine(const mat3 &g0, const Eigen::MatrixX2d &plane,
                 g = gn, cost = cn;
                 lambda = std::max(lambda * 0.3, 1e-12);
                 accepted = true;
-                if (gain < 1e-14) it = 1000;  // converged to double precision
+                converged = gain < 1e-14;  // at double precision
                 break;
             }
             lambda *= 10;
