@@ -200,6 +200,80 @@ typedef enum flt_option {
     /* "calib_rational_distortion": 1 to estimate the rational radial terms
      * k4..k6 as well as k1, k2, k3, p1, p2 (integer 0 or 1). Default 0. */
     FLT_OPT_CALIB_RATIONAL_DISTORTION = 204,
+    /* --- simulated sensor (flatline/sim.h) --- */
+    /* "sim_seed": seed of every random draw (integer). Default 1. */
+    FLT_OPT_SIM_SEED = 300,
+    /* "sim_frame_spacing": encoder travel between frames, mm. Default 3. */
+    FLT_OPT_SIM_FRAME_SPACING = 301,
+    /* "sim_start": encoder position of frame 0, mm. Default 0. */
+    FLT_OPT_SIM_START = 302,
+    /* "sim_strip_width": strip width W for the defect shapes, mm (strip
+     * centred at x = 0). Default 2000. */
+    FLT_OPT_SIM_STRIP_WIDTH = 303,
+    /* "sim_heave_sigma": rigid vertical motion per frame, mm. Default 0. */
+    FLT_OPT_SIM_HEAVE_SIGMA = 304,
+    /* "sim_tilt_sigma": rigid roll per frame (rotation about the travel
+     * axis, z += tilt * x), mm/mm. Default 0. */
+    FLT_OPT_SIM_TILT_SIGMA = 305,
+    /* "sim_eccentricity_amplitude": leveler roll run-out, a sine of the
+     * encoder position, mm. Default 0 (reference 0.5). */
+    FLT_OPT_SIM_ECCENTRICITY_AMPLITUDE = 306,
+    /* "sim_eccentricity_period": its period along travel, mm. Default 50. */
+    FLT_OPT_SIM_ECCENTRICITY_PERIOD = 307,
+    /* "sim_shear_amplitude": initial envelope of the shear-station damped
+     * sine, mm. Default 0 (off; reference 50). */
+    FLT_OPT_SIM_SHEAR_AMPLITUDE = 308,
+    /* "sim_shear_decay": its envelope decay, 1/mm. Default 0.07. */
+    FLT_OPT_SIM_SHEAR_DECAY = 309,
+    /* "sim_shear_period": its period along the strip, mm. Default 10. */
+    FLT_OPT_SIM_SHEAR_PERIOD = 310,
+    /* "sim_shear_interval": distance between cuts, mm. Default 3000. */
+    FLT_OPT_SIM_SHEAR_INTERVAL = 311,
+    /* "sim_peak_sigma": laser peak-detection noise, px, independent per
+     * laser. Default 0 (reference 1/16). */
+    FLT_OPT_SIM_PEAK_SIGMA = 312,
+    /* "sim_bit_depth": bits per pixel of rendered frames, 8 (Mono8), 10, 12
+     * or 16 (16-bit words) (integer). Default 8. */
+    FLT_OPT_SIM_BIT_DEPTH = 313,
+    /* "sim_line_sigma": laser line profile across rows, Gaussian sigma, px.
+     * Default 2. */
+    FLT_OPT_SIM_LINE_SIGMA = 314,
+    /* "sim_line_peak": line peak intensity, fraction of full scale.
+     * Default 0.6. */
+    FLT_OPT_SIM_LINE_PEAK = 315,
+    /* "sim_background": background level, fraction of full scale.
+     * Default 0.03. */
+    FLT_OPT_SIM_BACKGROUND = 316,
+    /* "sim_speckle": speckle contrast, the standard deviation of the
+     * multiplicative per-pixel intensity factor. Default 0.1. */
+    FLT_OPT_SIM_SPECKLE = 317,
+    /* "sim_full_well": electrons at full scale (shot noise); 0 = none.
+     * Default 10000. */
+    FLT_OPT_SIM_FULL_WELL = 318,
+    /* "sim_reflections": mean number of spurious reflections per frame.
+     * Default 0. */
+    FLT_OPT_SIM_REFLECTIONS = 319,
+
+    /* --- frame-to-profile extractor (flatline/extractor.h) --- */
+    /* "extract_laser0_first_row", "extract_laser0_rows": laser 0's band of
+     * rows (integers); rows = 0 (default) = automatic from the first frame. */
+    FLT_OPT_EXTRACT_LASER0_FIRST_ROW = 400,
+    FLT_OPT_EXTRACT_LASER0_ROWS = 401,
+    /* "extract_laser1_first_row", "extract_laser1_rows": the same, laser 1. */
+    FLT_OPT_EXTRACT_LASER1_FIRST_ROW = 402,
+    FLT_OPT_EXTRACT_LASER1_ROWS = 403,
+    /* "extract_sg_window": Savitzky-Golay window, rows, odd (integer).
+     * Default 7. */
+    FLT_OPT_EXTRACT_SG_WINDOW = 404,
+    /* "extract_sg_order": Savitzky-Golay polynomial order (integer).
+     * Default 2. */
+    FLT_OPT_EXTRACT_SG_ORDER = 405,
+    /* "extract_min_peak": weakest accepted peak, fraction of full scale.
+     * Default 0.1. */
+    FLT_OPT_EXTRACT_MIN_PEAK = 406,
+    /* "extract_max_width": widest accepted line, rows at or above half the
+     * peak, px. Default 12. */
+    FLT_OPT_EXTRACT_MAX_WIDTH = 407,
     /* Not an option: makes every int a valid flt_option value, so any key
      * can be passed (and rejected with a message) without undefined
      * behaviour. New keys go above this line. */

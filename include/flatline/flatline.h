@@ -9,5 +9,7 @@
 #include "flatline/common.h"
 #include "flatline/recon.h"
 #include "flatline/calib.h"
+#include "flatline/extractor.h"
+#include "flatline/sim.h"
 
 #endif /* FLATLINE_FLATLINE_H */

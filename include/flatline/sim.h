@@ -1,0 +1,198 @@
+/*
+ * libflatline - the simulated sensor, the built-in default frame source.
+ *
+ * Vendors commission their HMI with it without a line; the tests measure
+ * everything against its ground truth.
+ *
+ * The sheet
+ *   z_sheet(x, s) in mm: the sum of parametric defects (flt_sim_add_defect)
+ *   and an optional user height map (flt_sim_set_height_map). x across the
+ *   width (mm, strip centred at x = 0, width sim_strip_width), s the material
+ *   coordinate along travel (mm). This is the ground truth: what a perfect
+ *   gauge would report. Motion and shear transients are disturbances, not
+ *   part of it.
+ *
+ * Frames and lasers
+ *   Frame f is taken at encoder position e_f = sim_start + f * sim_frame_spacing
+ *   (mm). Laser L reads the material at s_L = e_f - offset_L (offsets from the
+ *   calibration). At that instant it sees
+ *     z_L(x) = z_sheet(x, s_L) + shear(s_L)                 travels with strip
+ *            + heave_f + tilt_f * x + eccentricity(e_f)     rigid, same for
+ *                                                           both lasers
+ *   heave_f ~ N(0, sim_heave_sigma) mm and tilt_f ~ N(0, sim_tilt_sigma)
+ *   mm/mm (rotation about the travel axis) are drawn per frame;
+ *   eccentricity(e) = sim_eccentricity_amplitude * sin(2 pi e /
+ *   sim_eccentricity_period) is a leveler roll's run-out; shear(s) is a
+ *   damped sine starting at every cut position c = k * sim_shear_interval:
+ *   A exp(-decay (s - c)) sin(2 pi (s - c) / period) for s >= c, with
+ *   A = sim_shear_amplitude, decay = sim_shear_decay, period =
+ *   sim_shear_period (reference: 50 mm, 0.07 /mm, 10 mm).
+ *   Peak-detection noise, sim_peak_sigma px, is independent per laser and
+ *   fiber (profile rows) or per laser and column (frames).
+ *
+ * Two outputs, both with the encoder position and the ground truth
+ *   flt_sim_next_rows(): profile rows as the extractor would produce them,
+ *   without a camera, fast: per fiber k,
+ *     height = (z_behind + z_ahead) / 2,  slope = (z_ahead - z_behind) / Delta-d
+ *   at s = e - (offset_0 + offset_1) / 2, where the peak noise enters z_L as
+ *   sim_peak_sigma px times the calibration's local dz/dv (mm/px) there.
+ *   flt_sim_next_frame(): camera frames rendered through the calibration:
+ *   both lines as Gaussian profiles across rows (sigma sim_line_sigma px,
+ *   peak sim_line_peak of full scale) centred on the exact image of z_L(x),
+ *   multiplicative speckle (contrast sim_speckle), background
+ *   (sim_background of full scale), shot noise (sim_full_well electrons at
+ *   full scale), optional spurious reflections (sim_reflections per frame:
+ *   half dim secondary reflections of the line, 15-60% of its peak, half
+ *   saturating specular glints), quantised to sim_bit_depth bits.
+ *   Both advance the same frame counter, and frame f has the same motion in
+ *   either output.
+ *
+ * Determinism
+ *   Every random draw of frame f comes from generators seeded with
+ *   (sim_seed, f): the same seed and calls give the same bytes, on every
+ *   platform with IEEE doubles.
+ *
+ * Threads
+ *   An flt_sim must not be used from two threads at once.
+ */
+#ifndef FLATLINE_SIM_H
+#define FLATLINE_SIM_H
+
+#include "flatline/calib.h"
+#include "flatline/common.h"
+#include "flatline/extractor.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Parametric defects. Each is amplitude_mm * g(x) * w(s) with
+ * w(s) = sin(2 pi s / period_mm) (w = 1 when period_mm = 0) and, with
+ * W = sim_strip_width and x in [-W/2, W/2] (clamped outside):
+ *   FLAT                 g = 0
+ *   CENTRE_BUCKLE        g = cos^2(pi x / W)        long centre, flat edges
+ *   WAVY_EDGE_LEFT       g = (max(0, -2x/W))^4      x < 0 is the left edge
+ *   WAVY_EDGE_RIGHT      g = (max(0, 2x/W))^4
+ *   WAVY_EDGE_BOTH       g = (2x/W)^4
+ *   QUARTER_BUCKLE       g = exp(-((|x| - W/4) / (W/8))^2)
+ *   BOW                  g = 1          (coil set: the whole width together)
+ *   CROSSBOW             g = (2x/W)^2   (period 0: a constant transverse bow)
+ * Defects add up. */
+typedef enum flt_sim_defect {
+    FLT_SIM_FLAT = 0,
+    FLT_SIM_CENTRE_BUCKLE = 1,
+    FLT_SIM_WAVY_EDGE_LEFT = 2,
+    FLT_SIM_WAVY_EDGE_RIGHT = 3,
+    FLT_SIM_WAVY_EDGE_BOTH = 4,
+    FLT_SIM_QUARTER_BUCKLE = 5,
+    FLT_SIM_BOW = 6,
+    FLT_SIM_CROSSBOW = 7,
+    FLT_SIM_DEFECT_MAX_ENUM_ = 0x7FFFFFFF
+} flt_sim_defect;
+
+typedef struct flt_sim flt_sim;
+
+/* Creates a simulator of the sensor described by `calib` (finished; copied,
+ * so it may be destroyed right after), or of the reference sensor when calib
+ * is NULL (flt_calib_create_reference(0, 2048, -1000, 2, 1001)).
+ * options: NULL for the defaults, else read for the sim_* keys. The sheet
+ * starts flat. Allocates the frame scratch (4 bytes per pixel) here. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_sim_create(const flt_calib *calib, const flt_options *options,
+               flt_sim **out);
+
+/* Frees everything. NULL is a no-op. */
+FLT_API void FLT_CALL flt_sim_destroy(flt_sim *sim);
+
+/* Adds a defect (see flt_sim_defect): amplitude_mm finite, period_mm >= 0
+ * finite. At most 64 defects. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_sim_add_defect(flt_sim *sim, flt_sim_defect kind, double amplitude_mm,
+                   double period_mm);
+
+/* Removes every defect and the height map: the sheet is flat again. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_clear_sheet(flt_sim *sim);
+
+/* Adds a user height map to the sheet (replacing a previous map):
+ * heights [rows * cols] mm, row-major, row r at s = s0_mm + r * ds_mm, column
+ * c at x = x0_mm + c * dx_mm (rows, cols >= 2; ds, dx > 0; all finite).
+ * Interpolated bilinearly; clamped to the edge values outside. Copied. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_sim_set_height_map(flt_sim *sim, size_t rows, size_t cols, double s0_mm,
+                       double ds_mm, double x0_mm, double dx_mm,
+                       const double *heights);
+
+/* The ground truth z_sheet at count points (x[i], s[i]) (mm) into z_out. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_sim_surface(const flt_sim *sim, size_t count, const double *x,
+                const double *s, double *z_out);
+
+/* The fiber count (the calibration's grid) and the frame size, px. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_sim_fibers(const flt_sim *sim, size_t *out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_sim_frame_size(const flt_sim *sim, uint32_t *width_out,
+                   uint32_t *height_out);
+/* The pixel format of flt_sim_next_frame (from sim_bit_depth) and the bytes
+ * one frame needs at a given stride. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_sim_pixel_format(const flt_sim *sim, flt_pixel_format *out);
+
+/* Generates the next `rows` profile rows (frames f .. f + rows - 1).
+ *   fibers          must equal flt_sim_fibers().
+ *   encoder_mm_out  [rows] each frame's encoder position (may be NULL).
+ *   s_out           [rows] each row's material position, mm.
+ *   height_out, slope_out  [rows * fibers] mm and mm/mm.
+ *   valid_out       [rows * fibers] all 1 (may be NULL).
+ *   truth_out       [rows * fibers] z_sheet(x_k, s_row), mm (may be NULL).
+ * Allocates nothing. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_sim_next_rows(flt_sim *sim, size_t rows, size_t fibers,
+                  double *encoder_mm_out, double *s_out, double *height_out,
+                  double *slope_out, uint8_t *valid_out, double *truth_out);
+
+/* Renders the next frame.
+ *   frame_out       height rows of stride_bytes (>= width * bytes per
+ *                   pixel; 16-bit formats: even, 2-byte aligned buffer),
+ *                   capacity_bytes >= stride_bytes * height.
+ *   encoder_mm_out  the frame's encoder position (may be NULL).
+ *   fibers, truth_out  [fibers] z_sheet(x_k, s_row) (truth_out may be NULL,
+ *                   then fibers is ignored).
+ *   peak_rows_out   [2 * width] (may be NULL): the exact row of each laser's
+ *                   line centre per column, [laser * width + u], px, after
+ *                   the peak noise; NaN where the line is outside the frame.
+ * Allocates nothing. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_sim_next_frame(flt_sim *sim, void *frame_out, size_t capacity_bytes,
+                   size_t stride_bytes, double *encoder_mm_out, size_t fibers,
+                   double *truth_out, double *peak_rows_out);
+
+/* Back to frame 0: the following output repeats the first bytes exactly. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_rewind(flt_sim *sim);
+
+/* The reference sensor (DESIGN.md, "The sensor") as a finished calibration,
+ * for the simulator, tests and demos: a 2048 x 2048 camera, f = 6 mm lens,
+ * 5.5 um pixels (fx = fy = 1090.9 px), principal point (1030.25, 1019.75),
+ * the barrel distortion of a 6 mm lens (k1 = -0.08, k2 = 0.012, p1 = 1.5e-4,
+ * p2 = -1e-4, k3 = -0.002), mounted 1140 mm above the strip and 1140 mm
+ * behind the lasers, looking down at 45 degrees; vertical laser planes at
+ * offsets -50 and +50 mm (Delta-d = 100 mm); encoder 0.01 mm per count.
+ * The homographies are the exact pinhole maps (the same camera as
+ * tests/c/calib_synth.c). At z = 0 the lines lie near rows 996 (laser 1) and
+ * 1044 (laser 0); a height of +1 mm moves them about 0.48 px up.
+ *   first_row, rows  the rows read out (an ROI, as line-scan-rate cameras
+ *                    do): first_row + rows <= 2048; 0, 2048 for the whole
+ *                    sensor. The principal point moves with the ROI.
+ *   first_x_mm, pitch_mm, fibers  the fiber grid (pitch > 0, fibers >= 1).
+ * Declared here because the simulator is its user; it builds on the public
+ * calibration API only. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_calib_create_reference(uint32_t first_row, uint32_t rows,
+                           double first_x_mm, double pitch_mm, size_t fibers,
+                           flt_calib **out);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* FLATLINE_SIM_H */
