@@ -23,6 +23,9 @@ const option_spec k_options[] = {
     {FLT_OPT_LAG_KNOTS, "lag_knots", 0.0, 100000.0, 64.0, true},
     {FLT_OPT_MAX_GAP, "max_gap", 0.0, inf, 200.0, false},
     {FLT_OPT_ROW_CAPACITY, "row_capacity", 16.0, 1.0e8, 8192.0, true},
+    {FLT_OPT_RIGID_MOTION, "rigid_motion", 0.0, 1.0, 0.0, true},
+    {FLT_OPT_SHAPE_SIGMA, "shape_sigma", 1.0e-9, 1.0e6, 0.1, false},
+    {FLT_OPT_CURVATURE_JUMP_WEIGHT, "curvature_jump_weight", 0.0, 1.0e12, 10.0, false},
     // calibration
     {FLT_OPT_CALIB_RANSAC, "calib_ransac", 0.0, 1.0, 0.0, true},
     {FLT_OPT_CALIB_RANSAC_THRESHOLD, "calib_ransac_threshold", 1.0e-6, 1.0e4,

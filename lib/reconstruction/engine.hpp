@@ -41,6 +41,7 @@ struct recon_params {
     double height_sigma = 2.5;     // mm
     double slope_sigma = 1e-3;     // mm/mm
     double curvature_weight = 1e-3;
+    double curvature_jump_weight = 10.0;
     double max_gap = 200.0;        // mm
     long lag_knots = 40;           // batch: no_lag
     std::size_t row_capacity = 4096;
@@ -99,7 +100,9 @@ private:
 
     // ---- window management ----
     void start_window(long first_knot);     // empty window at first_knot
-    void add_priors_for_knot(long j);       // ridge of j, curvature [j-1, j]
+    void add_priors_for_knot(long j);       // priors that complete with knot j
+    void add_rank1_prior(const long *knot, const int *unit, const double *coef,
+                         int count, double weight);
     void close_knot();                      // eliminate knot w0_
     void maybe_emit();                      // emit knots whose lag is reached
     long emit_group() const { return p_.emit_group(); }
@@ -121,7 +124,7 @@ private:
     int n_;     // unknowns in the window, 2*S_
     int ntri_;  // packed entries of the window matrix
     int nf_;    // doubles per fiber and eliminated knot in the factor ring
-    double w_h_, w_g_, w_curv_, w_ridge_;
+    double w_h_, w_g_, w_curv_, w_ridge_, w_curv_jump_;
 
     // ---- knot state ----
     bool have_t0_ = false;

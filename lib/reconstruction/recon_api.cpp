@@ -8,7 +8,7 @@
 #include "core/error.hpp"
 #include "core/options.hpp"
 #include "flatline/recon.h"
-#include "reconstruction/engine.hpp"
+#include "reconstruction/pipeline.hpp"
 
 using namespace flt;
 
@@ -23,30 +23,34 @@ constexpr double k_max_knots_per_laser_spacing = 64.0;
 
 struct flt_recon {
     std::uint32_t magic = k_recon_magic;
-    std::unique_ptr<recon_engine> engine;
+    std::unique_ptr<recon_pipeline> engine;
 };
 
 namespace {
 
 flt_status read_params(const char *fn, const flt_options *options,
-                       recon_params *out) {
-    recon_params p;
+                       recon_config *out) {
+    recon_config config;
+    recon_params &p = config.params;
     p.laser_spacing = option_value(options, FLT_OPT_LASER_SPACING);
     const double knot = option_value(options, FLT_OPT_KNOT_SPACING);
     p.knot_spacing = knot > 0.0 ? knot : p.laser_spacing;
     p.height_sigma = option_value(options, FLT_OPT_HEIGHT_SIGMA);
     p.slope_sigma = option_value(options, FLT_OPT_SLOPE_SIGMA);
     p.curvature_weight = option_value(options, FLT_OPT_CURVATURE_WEIGHT);
+    p.curvature_jump_weight = option_value(options, FLT_OPT_CURVATURE_JUMP_WEIGHT);
     p.lag_knots = long(option_value(options, FLT_OPT_LAG_KNOTS));
     p.max_gap = option_value(options, FLT_OPT_MAX_GAP);
     p.row_capacity = std::size_t(option_value(options, FLT_OPT_ROW_CAPACITY));
+    config.rigid_motion = option_value(options, FLT_OPT_RIGID_MOTION) != 0.0;
+    config.shape_sigma = option_value(options, FLT_OPT_SHAPE_SIGMA);
     if (p.laser_spacing / p.knot_spacing > k_max_knots_per_laser_spacing)
         return fail(FLT_ERR_INVALID_ARGUMENT,
                     "%s: knot_spacing = %g mm is more than %g times finer than "
                     "laser_spacing = %g mm",
                     fn, p.knot_spacing, k_max_knots_per_laser_spacing,
                     p.laser_spacing);
-    *out = p;
+    *out = config;
     return FLT_OK;
 }
 
@@ -124,15 +128,16 @@ FLT_API flt_status FLT_CALL flt_recon_create(size_t fibers,
         *out = nullptr;
         if (fibers == 0)
             return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'fibers' is 0", fn);
-        recon_params p;
-        if (flt_status st = read_params(fn, options, &p)) return st;
+        recon_config config;
+        if (flt_status st = read_params(fn, options, &config)) return st;
+        const recon_params &p = config.params;
         if (check_shape(fn, p.row_capacity, fibers) != FLT_OK)
             return fail(FLT_ERR_INVALID_ARGUMENT,
                         "%s: row_capacity * fibers = %zu * %zu is too large", fn,
                         p.row_capacity, fibers);
         auto handle = std::make_unique<flt_recon>();
-        handle->engine = std::make_unique<recon_engine>(
-            fibers, p, p.knot_capacity());
+        handle->engine = std::make_unique<recon_pipeline>(
+            fibers, config, p.knot_capacity());
         *out = handle.release();
         return FLT_OK;
     });
@@ -163,16 +168,20 @@ FLT_API flt_status FLT_CALL flt_recon_get_option(const flt_recon *recon,
     return guard(fn, [&] {
         if (flt_status st = check_handle(fn, recon)) return st;
         FLT_CHECK_NOT_NULL(fn, out);
-        const recon_params &p = recon->engine->params();
+        const recon_config &c = recon->engine->config();
+        const recon_params &p = c.params;
         switch (key) {
         case FLT_OPT_KNOT_SPACING: *out = p.knot_spacing; break;
         case FLT_OPT_LASER_SPACING: *out = p.laser_spacing; break;
         case FLT_OPT_HEIGHT_SIGMA: *out = p.height_sigma; break;
         case FLT_OPT_SLOPE_SIGMA: *out = p.slope_sigma; break;
         case FLT_OPT_CURVATURE_WEIGHT: *out = p.curvature_weight; break;
+        case FLT_OPT_CURVATURE_JUMP_WEIGHT: *out = p.curvature_jump_weight; break;
         case FLT_OPT_LAG_KNOTS: *out = double(p.lag_knots); break;
         case FLT_OPT_MAX_GAP: *out = p.max_gap; break;
         case FLT_OPT_ROW_CAPACITY: *out = double(p.row_capacity); break;
+        case FLT_OPT_RIGID_MOTION: *out = c.rigid_motion ? 1.0 : 0.0; break;
+        case FLT_OPT_SHAPE_SIGMA: *out = c.shape_sigma; break;
         default:
             return fail(FLT_ERR_NOT_FOUND,
                         "%s: option key %d is not a reconstructor option", fn,
@@ -190,7 +199,7 @@ FLT_API flt_status FLT_CALL flt_recon_push(flt_recon *recon, size_t rows,
     const char *fn = "flt_recon_push";
     return guard(fn, [&] {
         if (flt_status st = check_handle(fn, recon)) return st;
-        recon_engine &e = *recon->engine;
+        recon_pipeline &e = *recon->engine;
         if (flt_status st = check_push_arrays(fn, s, height, slope)) return st;
         if (flt_status st = check_shape(fn, rows, fibers)) return st;
         if (flt_status st = check_fibers(fn, fibers, e.fibers())) return st;
@@ -200,7 +209,7 @@ FLT_API flt_status FLT_CALL flt_recon_push(flt_recon *recon, size_t rows,
             return fail(FLT_ERR_BUFFER_FULL,
                         "%s: %zu rows do not fit: %zu of row_capacity = %zu are "
                         "free (%zu finished rows wait to be pulled)",
-                        fn, rows, e.free_rows(), e.params().row_capacity,
+                        fn, rows, e.free_rows(), e.config().params.row_capacity,
                         e.ready_rows());
         for (std::size_t r = 0; r < rows; ++r)
             e.push_row(s[r], height + r * fibers, slope + r * fibers,
@@ -216,7 +225,7 @@ FLT_API flt_status FLT_CALL flt_recon_pull(flt_recon *recon, size_t max_rows,
     const char *fn = "flt_recon_pull";
     return guard(fn, [&] {
         if (flt_status st = check_handle(fn, recon)) return st;
-        recon_engine &e = *recon->engine;
+        recon_pipeline &e = *recon->engine;
         FLT_CHECK_NOT_NULL(fn, rows_out);
         *rows_out = 0;
         if (flt_status st = check_fibers(fn, fibers, e.fibers())) return st;
@@ -275,7 +284,7 @@ FLT_API flt_status FLT_CALL flt_recon_boundary(const flt_recon *recon,
     const char *fn = "flt_recon_boundary";
     return guard(fn, [&] {
         if (flt_status st = check_handle(fn, recon)) return st;
-        const recon_engine &e = *recon->engine;
+        const recon_pipeline &e = *recon->engine;
         if (flt_status st = check_fibers(fn, fibers, e.fibers())) return st;
         if (!e.has_boundary())
             return fail(FLT_ERR_STATE,
@@ -299,18 +308,20 @@ FLT_API flt_status FLT_CALL flt_reconstruct(const flt_options *options,
         FLT_CHECK_NOT_NULL(fn, z_out);
         if (flt_status st = check_shape(fn, rows, fibers)) return st;
         if (flt_status st = check_positions(fn, rows, s, false, 0.0)) return st;
-        recon_params p;
-        if (flt_status st = read_params(fn, options, &p)) return st;
+        recon_config config;
+        if (flt_status st = read_params(fn, options, &config)) return st;
+        recon_params &p = config.params;
         p.lag_knots = recon_params::no_lag;  // one solve with every row
         p.row_capacity = rows;
         // Every knot of the sheet stays open until the end.
         const double span = s[rows - 1] - s[0] + p.laser_spacing;
         const std::size_t knots = std::size_t(span / p.knot_spacing) + 4;
-        recon_engine e(fibers, p, knots, z_out, flags_out);
+        recon_pipeline e(fibers, config, knots, z_out, flags_out);
         for (std::size_t r = 0; r < rows; ++r)
             e.push_row(s[r], height + r * fibers, slope + r * fibers,
                        valid ? valid + r * fibers : nullptr);
         e.end_sheet();
+        e.finish_in_place(rows, z_out);
         return FLT_OK;
     });
 }

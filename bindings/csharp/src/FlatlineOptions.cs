@@ -110,6 +110,10 @@ namespace Flatline
         public double SlopeSigma { get => Get("slope_sigma"); set => Set("slope_sigma", value); }
         /// <summary>Weight of the smoothness prior relative to one height sample.</summary>
         public double CurvatureWeight { get => Get("curvature_weight"); set => Set("curvature_weight", value); }
+        /// <summary>Weight of the prior against jumps of the curvature at the
+        /// knots, relative to one height sample: it removes the wiggle the
+        /// secant slopes cannot see.</summary>
+        public double CurvatureJumpWeight { get => Get("curvature_jump_weight"); set => Set("curvature_jump_weight", value); }
         /// <summary>Knots beyond a knot that must be complete before the
         /// streaming reconstructor emits it.</summary>
         public int LagKnots { get => (int)Get("lag_knots"); set => Set("lag_knots", value); }
@@ -119,6 +123,13 @@ namespace Flatline
         /// <summary>Rows the streaming reconstructor can hold (9 bytes per
         /// row and fiber).</summary>
         public int RowCapacity { get => (int)Get("row_capacity"); set => Set("row_capacity", value); }
+        /// <summary>Model the vibration as a rigid heave and roll of each
+        /// frame (one line across the strip) and take it out of the fibers'
+        /// shape; see the C header for the trade-offs.</summary>
+        public bool RigidMotion { get => Get("rigid_motion") != 0; set => Set("rigid_motion", value ? 1 : 0); }
+        /// <summary>With RigidMotion, standard deviation of a height's
+        /// deviation from its frame's line across the strip, mm.</summary>
+        public double ShapeSigma { get => Get("shape_sigma"); set => Set("shape_sigma", value); }
 
         public void Dispose()
         {

@@ -39,9 +39,12 @@ namespace Flatline.Tests
             Assert.Equal(2.5, options.HeightSigma);
             Assert.Equal(0.001, options.SlopeSigma);
             Assert.Equal(1e-3, options.CurvatureWeight);
+            Assert.Equal(10.0, options.CurvatureJumpWeight);
             Assert.Equal(64, options.LagKnots);
             Assert.Equal(200.0, options.MaxGap);
             Assert.Equal(8192, options.RowCapacity);
+            Assert.False(options.RigidMotion);
+            Assert.Equal(0.1, options.ShapeSigma);
         }
 
         [Fact]

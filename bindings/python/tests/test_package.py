@@ -29,7 +29,8 @@ def test_options_table_lists_every_reconstructor_option_with_c_defaults():
     expected_defaults = {
         "knot_spacing": 0.0, "laser_spacing": 100.0, "height_sigma": 2.5,
         "slope_sigma": 1e-3, "curvature_weight": 1e-3, "lag_knots": 64.0,
-        "max_gap": 200.0, "row_capacity": 8192.0,
+        "max_gap": 200.0, "row_capacity": 8192.0, "rigid_motion": 0.0,
+        "shape_sigma": 0.1, "curvature_jump_weight": 10.0,
     }
     for name, default in expected_defaults.items():
         assert table[name].default == default
