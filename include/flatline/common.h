@@ -273,7 +273,9 @@ typedef enum flt_option {
      * Default 0.03. */
     FLT_OPT_SIM_BACKGROUND = 316,
     /* "sim_speckle": speckle contrast, the standard deviation of the
-     * multiplicative per-pixel intensity factor. Default 0.1. */
+     * multiplicative per-pixel intensity factor. Default 0.05: a blue laser
+     * (the reference's 450 nm, chosen against speckle) imaged so each pixel
+     * integrates several speckle grains. */
     FLT_OPT_SIM_SPECKLE = 317,
     /* "sim_full_well": electrons at full scale (shot noise); 0 = none.
      * Default 10000. */
@@ -291,7 +293,9 @@ typedef enum flt_option {
     FLT_OPT_EXTRACT_LASER1_FIRST_ROW = 402,
     FLT_OPT_EXTRACT_LASER1_ROWS = 403,
     /* "extract_sg_window": Savitzky-Golay window, rows, odd (integer).
-     * Default 7. */
+     * Default 11, about 5 line sigmas for a line of sigma 2 px: shorter
+     * windows use too few of the line's pixels and are noisier under speckle
+     * (tests/c/test_extractor.c uses 9, 11, 15 for sigma 1.5, 2, 3 px). */
     FLT_OPT_EXTRACT_SG_WINDOW = 404,
     /* "extract_sg_order": Savitzky-Golay polynomial order (integer).
      * Default 2. */

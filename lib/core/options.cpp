@@ -56,7 +56,7 @@ const option_spec k_options[] = {
     {FLT_OPT_SIM_LINE_SIGMA, "sim_line_sigma", 0.3, 50.0, 2.0, false},
     {FLT_OPT_SIM_LINE_PEAK, "sim_line_peak", 0.0, 10.0, 0.6, false},
     {FLT_OPT_SIM_BACKGROUND, "sim_background", 0.0, 1.0, 0.03, false},
-    {FLT_OPT_SIM_SPECKLE, "sim_speckle", 0.0, 1.0, 0.1, false},
+    {FLT_OPT_SIM_SPECKLE, "sim_speckle", 0.0, 1.0, 0.05, false},
     {FLT_OPT_SIM_FULL_WELL, "sim_full_well", 0.0, 1.0e9, 10000.0, false},
     {FLT_OPT_SIM_REFLECTIONS, "sim_reflections", 0.0, 1000.0, 0.0, false},
     // frame-to-profile extractor
@@ -66,7 +66,7 @@ const option_spec k_options[] = {
     {FLT_OPT_EXTRACT_LASER1_FIRST_ROW, "extract_laser1_first_row", 0.0, 65535.0, 0.0,
      true},
     {FLT_OPT_EXTRACT_LASER1_ROWS, "extract_laser1_rows", 0.0, 65536.0, 0.0, true},
-    {FLT_OPT_EXTRACT_SG_WINDOW, "extract_sg_window", 3.0, 31.0, 7.0, true},
+    {FLT_OPT_EXTRACT_SG_WINDOW, "extract_sg_window", 3.0, 31.0, 11.0, true},
     {FLT_OPT_EXTRACT_SG_ORDER, "extract_sg_order", 1.0, 6.0, 2.0, true},
     {FLT_OPT_EXTRACT_MIN_PEAK, "extract_min_peak", 0.0, 1.0, 0.1, false},
     {FLT_OPT_EXTRACT_MAX_WIDTH, "extract_max_width", 1.0, 1000.0, 12.0, false},

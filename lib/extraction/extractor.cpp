@@ -1,0 +1,618 @@
+// The frame-to-profile extractor (flatline/extractor.h): per column and laser
+// the strongest valid peak in the laser's band, its sub-pixel row from the
+// Savitzky-Golay derivative, the calibrated map to (x, z), and the resampling
+// onto the fiber grid.
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/error.hpp"
+#include "core/options.hpp"
+#include "extraction/peak_kernels.hpp"
+#include "flatline/extractor.h"
+
+using namespace flt;
+
+namespace {
+
+constexpr std::uint32_t k_extractor_magic = 0x464c5445u;  // "FLTE"
+constexpr double k_nan = std::numeric_limits<double>::quiet_NaN();
+// The column map (undistort + homography) as a polynomial of this degree in
+// the row, fitted at k_map_nodes Chebyshev nodes over the band. Degree 5
+// keeps the fit error below 1e-6 mm over a 128-row band of the reference
+// lens (checked at build time, see map_error_mm).
+constexpr int k_map_degree = 5;
+constexpr int k_map_terms = k_map_degree + 1;
+constexpr int k_map_nodes = 24;
+// Candidates tried per column and laser after rejections.
+constexpr int k_max_candidates = 3;
+
+void check(flt_status st) {
+    if (st != FLT_OK) throw error(st, flt_last_error_message());
+}
+
+flt_calib *copy_calib(const flt_calib *calib) {
+    std::size_t length = 0;
+    flt_status st = flt_calib_save_text(calib, nullptr, 0, &length);
+    if (st != FLT_OK && st != FLT_ERR_BUFFER_FULL) check(st);
+    std::string text(length + 1, '\0');
+    check(flt_calib_save_text(calib, &text[0], text.size(), &length));
+    flt_calib *copy = nullptr;
+    check(flt_calib_load_text(text.data(), length, &copy));
+    clear_error();  // the size query above left a BUFFER_FULL message
+    return copy;
+}
+
+struct band {
+    std::uint32_t first = 0, rows = 0;
+    bool automatic = false;
+};
+
+}  // namespace
+
+struct flt_extractor {
+    std::uint32_t magic = k_extractor_magic;
+    flt_calib *calib = nullptr;
+    std::uint32_t width = 0, height = 0;
+    double offset_mm[2] = {0, 0};
+    unsigned ahead = 0;             // the laser reading the larger s
+    double laser_spacing = 0;       // mm
+    double first_x = 0, pitch = 1;  // fiber grid, mm
+    std::size_t fibers = 0;
+
+    band bands[2];
+    bool maps_ready = false;
+    int sg_half = 3;
+    std::vector<float> sg_derivative;  // 2 * sg_half + 1 taps
+    double min_peak = 0.1, max_width = 12;
+
+    // Per laser: the map of column u is x(t), z(t), t = (v - v_mid) / v_half,
+    // coefficients poly[laser][(u * 2 + {0: x, 1: z}) * k_map_terms + k].
+    std::vector<double> poly[2];
+    double v_mid[2] = {0, 0}, v_half[2] = {1, 1};
+    double map_error_mm = 0;  // largest fit error at the build check points
+    std::vector<double> map_scratch;                          // 2 * nodes * width
+
+    // Per frame, reused.
+    std::vector<std::uint16_t> best_value, best_row;  // [width]
+    std::vector<double> peak_row[2];                   // [width], px
+    std::vector<double> column_x[2], column_z[2];      // [width], mm
+    std::vector<double> fiber_z[2];                    // [fibers], mm
+    std::vector<std::uint8_t> saturated_column, tainted_column, fringe_row;  // [width]
+    std::vector<double> fit_sums;                      // [5 * fibers]
+    std::vector<std::uint8_t> fit_flags;               // [fibers]
+    double support = 1;  // half-width of a fiber's resampling window, mm
+    std::vector<double> row_sum;                       // [height], auto band
+    bool has_frame = false;
+
+    ~flt_extractor() { flt_calib_destroy(calib); }
+
+    void build_maps();
+    void detect_bands(const unsigned char *frame, std::size_t stride, int bytes);
+    template <class Pixel>
+    void extract(const unsigned char *frame, std::size_t stride, std::uint32_t full_scale);
+    void resample(unsigned laser);
+    void reject_glint_fringes(double *rows);
+};
+
+namespace {
+
+// Savitzky-Golay derivative taps: fit a polynomial of `order` to 2h + 1
+// samples by least squares; the derivative at the centre is a fixed linear
+// combination of the samples.
+std::vector<float> sg_derivative_taps(int half, int order) {
+    const int n = 2 * half + 1;
+    Eigen::MatrixXd a(n, order + 1);
+    for (int j = -half; j <= half; ++j) {
+        const double t = double(j) / half;  // scaled for conditioning
+        double p = 1;
+        for (int k = 0; k <= order; ++k, p *= t) a(j + half, k) = p;
+    }
+    const Eigen::MatrixXd pinv = (a.transpose() * a).ldlt().solve(a.transpose());
+    std::vector<float> taps(n);
+    for (int j = 0; j < n; ++j) taps[j] = float(pinv(1, j) / half);  // d/dj = d/dt / h
+    return taps;
+}
+
+}  // namespace
+
+void flt_extractor::build_maps() {
+    // Chebyshev nodes over the rows the SG window may touch.
+    for (unsigned laser = 0; laser < 2; ++laser) {
+        const band &b = bands[laser];
+        const double lo = double(b.first) - sg_half - 1.0;
+        const double hi = double(b.first + b.rows - 1) + sg_half + 1.0;
+        v_mid[laser] = 0.5 * (lo + hi);
+        v_half[laser] = 0.5 * (hi - lo);
+    }
+    double node_t[k_map_nodes];
+    Eigen::Matrix<double, k_map_nodes, k_map_terms> vander;
+    for (int i = 0; i < k_map_nodes; ++i) {
+        node_t[i] = std::cos(M_PI * (i + 0.5) / k_map_nodes);
+        double p = 1;
+        for (int k = 0; k < k_map_terms; ++k, p *= node_t[i]) vander(i, k) = p;
+    }
+    const Eigen::Matrix<double, k_map_terms, k_map_nodes> map_fit =
+        (vander.transpose() * vander).ldlt().solve(vander.transpose());
+    map_error_mm = 0;
+    for (unsigned laser = 0; laser < 2; ++laser) {
+        double *pts = map_scratch.data();
+        for (std::uint32_t u = 0; u < width; ++u)
+            for (int i = 0; i < k_map_nodes; ++i) {
+                pts[2 * (std::size_t(u) * k_map_nodes + i)] = u;
+                pts[2 * (std::size_t(u) * k_map_nodes + i) + 1] =
+                    v_mid[laser] + v_half[laser] * node_t[i];
+            }
+        check(flt_calib_image_to_plane(calib, laser, std::size_t(width) * k_map_nodes, pts,
+                                       pts));
+        for (std::uint32_t u = 0; u < width; ++u) {
+            const double *col = pts + 2 * std::size_t(u) * k_map_nodes;
+            bool finite = true;
+            Eigen::Matrix<double, k_map_nodes, 1> xs, zs;
+            for (int i = 0; i < k_map_nodes; ++i) {
+                xs(i) = col[2 * i], zs(i) = col[2 * i + 1];
+                finite = finite && std::isfinite(xs(i)) && std::isfinite(zs(i));
+            }
+            double *cx = &poly[laser][(std::size_t(u) * 2 + 0) * k_map_terms];
+            double *cz = &poly[laser][(std::size_t(u) * 2 + 1) * k_map_terms];
+            if (!finite) {
+                std::fill(cx, cx + k_map_terms, k_nan);
+                std::fill(cz, cz + k_map_terms, k_nan);
+                continue;
+            }
+            const Eigen::Matrix<double, k_map_terms, 1> ax = map_fit * xs, az = map_fit * zs;
+            for (int k = 0; k < k_map_terms; ++k) cx[k] = ax(k), cz[k] = az(k);
+            for (int i = 0; i < k_map_nodes; ++i) {
+                double px = 0, pz = 0;
+                for (int k = k_map_degree; k >= 0; --k)
+                    px = px * node_t[i] + cx[k], pz = pz * node_t[i] + cz[k];
+                map_error_mm = std::max(
+                    map_error_mm, std::max(std::fabs(px - xs(i)), std::fabs(pz - zs(i))));
+            }
+        }
+    }
+    // The column spacing on the strip (mm per column) near the middle of the
+    // frame and band: a fiber's window spans at least one spacing each side.
+    const std::size_t mid_u = width / 2;
+    const double *c0 = &poly[0][(mid_u * 2) * k_map_terms];
+    const double *c1 = &poly[0][((mid_u + (width > 1 ? 1 : 0)) * 2) * k_map_terms];
+    const double spacing = std::fabs(c1[0] - c0[0]);
+    support = std::max(pitch, std::isfinite(spacing) ? 1.01 * spacing : pitch);
+    maps_ready = true;
+}
+
+// The two brightest rows of the frame's row sums (every 4th column) are the
+// lines; each band reaches halfway to the other line on both sides.
+void flt_extractor::detect_bands(const unsigned char *frame, std::size_t stride,
+                                 int bytes) {
+    for (std::uint32_t v = 0; v < height; ++v) {
+        const unsigned char *row = frame + std::size_t(v) * stride;
+        double sum = 0;
+        if (bytes == 1)
+            for (std::uint32_t u = 0; u < width; u += 4) sum += row[u];
+        else
+            for (std::uint32_t u = 0; u < width; u += 4)
+                sum += reinterpret_cast<const std::uint16_t *>(row)[u];
+        row_sum[v] = sum;
+    }
+    const double floor_level = *std::min_element(row_sum.begin(), row_sum.end());
+    const auto first = std::max_element(row_sum.begin(), row_sum.end());
+    const long r1 = long(first - row_sum.begin());
+    const long exclusion = long(std::ceil(2 * max_width));
+    long r2 = -1;
+    for (long v = 0; v < long(height); ++v)
+        if (std::labs(v - r1) > exclusion && (r2 < 0 || row_sum[v] > row_sum[r2])) r2 = v;
+    if (r2 < 0 || !(row_sum[r2] - floor_level > 0.25 * (row_sum[r1] - floor_level)))
+        throw error(FLT_ERR_NUMERIC,
+                    "the first frame does not show two laser lines (no second row "
+                    "brighter than a quarter of the brightest); set the bands with "
+                    "extract_laser0_first_row/_rows and extract_laser1_first_row/_rows");
+    // Which laser is the upper line: the calibration's prediction at z = 0
+    // under the middle of the fiber grid.
+    double predicted[2];
+    for (unsigned laser = 0; laser < 2; ++laser) {
+        double p[2] = {first_x + 0.5 * pitch * double(fibers - 1), 0.0}, img[2];
+        check(flt_calib_plane_to_image(calib, laser, 1, p, img));
+        predicted[laser] = img[1];
+    }
+    const long top = std::min(r1, r2), bottom = std::max(r1, r2);
+    const long mid = (top + bottom + 1) / 2, half = (bottom - top) / 2;
+    const unsigned upper = predicted[0] <= predicted[1] ? 0 : 1;
+    band b[2];
+    b[upper].first = std::uint32_t(std::max(0L, top - half));
+    b[upper].rows = std::uint32_t(mid - long(b[upper].first));
+    b[1 - upper].first = std::uint32_t(mid);
+    b[1 - upper].rows = std::uint32_t(std::min(long(height), bottom + half + 1) - mid);
+    for (unsigned laser = 0; laser < 2; ++laser)
+        if (long(b[laser].rows) < 2 * sg_half + 1)
+            throw error(FLT_ERR_NUMERIC,
+                        "the automatic band is shorter than the Savitzky-Golay window");
+    for (unsigned laser = 0; laser < 2; ++laser)
+        if (bands[laser].automatic) bands[laser].first = b[laser].first,
+                                    bands[laser].rows = b[laser].rows;
+    build_maps();
+    for (unsigned laser = 0; laser < 2; ++laser) bands[laser].automatic = false;
+}
+
+template <class Pixel>
+void flt_extractor::extract(const unsigned char *frame, std::size_t stride,
+                            std::uint32_t full_scale) {
+    const peak_params params{sg_half, sg_derivative.data(), std::uint32_t(std::ceil(
+                                 min_peak * full_scale)),
+                             full_scale, int(std::floor(max_width)), height};
+    for (unsigned laser = 0; laser < 2; ++laser) {
+        const band &b = bands[laser];
+        band_maximum<Pixel>(frame, stride, width, b.first, b.rows, best_value.data(),
+                            best_row.data());
+        double *rows_out = peak_row[laser].data();
+        const double *coeffs = poly[laser].data();
+        const double inv_half = 1.0 / v_half[laser], mid = v_mid[laser];
+        bool any_saturated = false;
+        for (std::uint32_t u = 0; u < width; ++u) {
+            bool saturated = false;
+            rows_out[u] = column_peak<Pixel>(frame, stride, u, b.first, b.rows, best_value[u],
+                                             best_row[u], params, &saturated);
+            saturated_column[u] = saturated;
+            any_saturated = any_saturated || saturated;
+        }
+        if (any_saturated) reject_glint_fringes(rows_out);
+        for (std::uint32_t u = 0; u < width; ++u) {
+            const double v = rows_out[u];
+            double x = k_nan, z = k_nan;
+            if (v == v) {
+                const double t = (v - mid) * inv_half;
+                const double *cx = coeffs + (std::size_t(u) * 2) * k_map_terms;
+                const double *cz = cx + k_map_terms;
+                x = cx[k_map_degree], z = cz[k_map_degree];
+                for (int k = k_map_degree - 1; k >= 0; --k) x = x * t + cx[k], z = z * t + cz[k];
+            }
+            column_x[laser][u] = x;
+            column_z[laser][u] = z;
+        }
+        resample(laser);
+    }
+}
+
+// A specular glint saturates in its core, which is rejected, but its fringe
+// columns are bright, unsaturated and narrow: there the brightest peak is the
+// glint, not the line. Near a saturated column, a peak more than
+// k_glint_tolerance_px off the median of the valid peaks around it is
+// rejected (the line is continuous across columns: the reference strip's
+// steepest cross slope moves it < 0.2 px over the window).
+void flt_extractor::reject_glint_fringes(double *rows) {
+    constexpr long reach = 10, window = 12;
+    constexpr double k_glint_tolerance_px = 0.5;
+    const long w = long(width);
+    long last_saturated = -(1L << 30);
+    // tainted[u]: a saturated column within +-reach (two sweeps).
+    for (long u = 0; u < w; ++u) {
+        if (saturated_column[u]) last_saturated = u;
+        tainted_column[u] = u - last_saturated <= reach;
+    }
+    last_saturated = 1L << 30;
+    for (long u = w - 1; u >= 0; --u) {
+        if (saturated_column[u]) last_saturated = u;
+        tainted_column[u] = tainted_column[u] || last_saturated - u <= reach;
+    }
+    for (long u = 0; u < w; ++u) {
+        if (!tainted_column[u] || !(rows[u] == rows[u])) continue;
+        double around[2 * window + 1];
+        int n = 0;
+        for (long j = std::max(0L, u - window); j <= std::min(w - 1, u + window); ++j)
+            if (rows[j] == rows[j]) around[n++] = rows[j];
+        std::nth_element(around, around + n / 2, around + n);
+        if (std::fabs(rows[u] - around[n / 2]) > k_glint_tolerance_px) fringe_row[u] = 1;
+        else fringe_row[u] = 0;
+    }
+    for (long u = 0; u < w; ++u)
+        if (tainted_column[u] && fringe_row[u]) rows[u] = k_nan, fringe_row[u] = 0;
+}
+
+// Resampling onto the fiber grid: a least-squares line z = a + b (x - x_k)
+// through the valid columns within +-support of fiber k, evaluated at x_k.
+// Unbiased where z is locally linear across the width, and it averages the
+// ~2 support / column-spacing columns' peak noise instead of keeping one.
+// Strict validity: the fiber needs a column on each side, and a run of
+// invalid columns anywhere within its support makes it invalid (nothing is
+// bridged across a missing peak).
+void flt_extractor::resample(unsigned laser) {
+    double *out = fiber_z[laser].data();
+    std::fill(out, out + fibers, k_nan);
+    std::fill(fit_sums.begin(), fit_sums.end(), 0.0);
+    std::fill(fit_flags.begin(), fit_flags.end(), std::uint8_t(0));
+    const double *xs = column_x[laser].data(), *zs = column_z[laser].data();
+    const double inv_pitch = 1.0 / pitch, last = double(fibers - 1);
+    const double half = support;
+    enum : std::uint8_t { left = 1, right = 2, poisoned = 4 };
+    auto fiber_range = [&](double lo, double hi, long *k0, long *k1) {
+        *k0 = long(std::max(0.0, std::ceil((lo - first_x) * inv_pitch)));
+        *k1 = long(std::min(last, std::floor((hi - first_x) * inv_pitch)));
+    };
+    double previous_x = k_nan;
+    bool gap = false;
+    for (std::uint32_t u = 0; u < width; ++u) {
+        const double x = xs[u];
+        if (!(x == x)) {
+            gap = true;
+            continue;
+        }
+        long k0, k1;
+        if (gap && previous_x == previous_x) {
+            fiber_range(std::min(previous_x, x) - half, std::max(previous_x, x) + half, &k0, &k1);
+            for (long k = k0; k <= k1; ++k) fit_flags[std::size_t(k)] |= poisoned;
+        }
+        gap = false;
+        previous_x = x;
+        const double z = zs[u];
+        fiber_range(x - half, x + half, &k0, &k1);
+        for (long k = k0; k <= k1; ++k) {
+            const double dx = x - (first_x + double(k) * pitch);
+            double *sums = &fit_sums[5 * std::size_t(k)];
+            sums[0] += 1, sums[1] += dx, sums[2] += dx * dx, sums[3] += z, sums[4] += z * dx;
+            fit_flags[std::size_t(k)] |= dx <= 0 ? left : 0;
+            fit_flags[std::size_t(k)] |= dx >= 0 ? right : 0;
+        }
+    }
+    for (std::size_t k = 0; k < fibers; ++k) {
+        if (fit_flags[k] != (left | right)) continue;
+        const double *sums = &fit_sums[5 * k];
+        const double det = sums[0] * sums[2] - sums[1] * sums[1];
+        if (sums[0] == 1)
+            out[k] = sums[3];  // a column exactly on the fiber
+        else if (det > 1e-12 * sums[0] * sums[2])
+            out[k] = (sums[3] * sums[2] - sums[1] * sums[4]) / det;
+    }
+}
+
+namespace {
+
+flt_status check_handle(const char *fn, const flt_extractor *ex) {
+    if (ex == nullptr)
+        return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'extractor' is NULL", fn);
+    if (ex->magic != k_extractor_magic)
+        return fail(FLT_ERR_INVALID_ARGUMENT,
+                    "%s: argument 'extractor' is not a live flt_extractor handle", fn);
+    return FLT_OK;
+}
+
+}  // namespace
+
+extern "C" {
+
+FLT_API flt_status FLT_CALL flt_extractor_create(const flt_calib *calib,
+                                                 const flt_options *options,
+                                                 flt_extractor **out) {
+    const char *fn = "flt_extractor_create";
+    return guard(fn, [&] {
+        FLT_CHECK_NOT_NULL(fn, out);
+        *out = nullptr;
+        FLT_CHECK_NOT_NULL(fn, calib);
+        int finished = 0;
+        if (flt_calib_is_finished(calib, &finished) != FLT_OK)
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'calib' is not a live flt_calib handle", fn);
+        if (!finished)
+            return fail(FLT_ERR_STATE, "%s: argument 'calib' is not finished", fn);
+        auto ex = std::make_unique<flt_extractor>();
+        ex->calib = copy_calib(calib);
+        check(flt_calib_get_frame_size(ex->calib, &ex->width, &ex->height));
+        for (unsigned laser = 0; laser < 2; ++laser)
+            check(flt_calib_get_laser_offset(ex->calib, laser, &ex->offset_mm[laser]));
+        ex->laser_spacing = std::fabs(ex->offset_mm[1] - ex->offset_mm[0]);
+        ex->ahead = ex->offset_mm[0] < ex->offset_mm[1] ? 0 : 1;
+        check(flt_calib_get_fiber_grid(ex->calib, &ex->first_x, &ex->pitch, &ex->fibers));
+
+        const int window = int(option_value(options, FLT_OPT_EXTRACT_SG_WINDOW));
+        const int order = int(option_value(options, FLT_OPT_EXTRACT_SG_ORDER));
+        if (window % 2 == 0)
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: option 'extract_sg_window' = %d must be odd", fn, window);
+        if (window < order + 2)
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: option 'extract_sg_window' = %d must be at least "
+                        "'extract_sg_order' + 2 = %d",
+                        fn, window, order + 2);
+        ex->sg_half = window / 2;
+        ex->sg_derivative = sg_derivative_taps(ex->sg_half, order);
+        ex->min_peak = option_value(options, FLT_OPT_EXTRACT_MIN_PEAK);
+        ex->max_width = option_value(options, FLT_OPT_EXTRACT_MAX_WIDTH);
+
+        const flt_option first_key[2] = {FLT_OPT_EXTRACT_LASER0_FIRST_ROW,
+                                         FLT_OPT_EXTRACT_LASER1_FIRST_ROW};
+        const flt_option rows_key[2] = {FLT_OPT_EXTRACT_LASER0_ROWS,
+                                        FLT_OPT_EXTRACT_LASER1_ROWS};
+        for (unsigned laser = 0; laser < 2; ++laser) {
+            band &b = ex->bands[laser];
+            b.first = std::uint32_t(option_value(options, first_key[laser]));
+            b.rows = std::uint32_t(option_value(options, rows_key[laser]));
+            b.automatic = b.rows == 0;
+            if (b.automatic) continue;
+            if (std::uint64_t(b.first) + b.rows > ex->height)
+                return fail(FLT_ERR_INVALID_ARGUMENT,
+                            "%s: option 'extract_laser%u_first_row' = %u + "
+                            "'extract_laser%u_rows' = %u exceeds the frame height %u",
+                            fn, laser, b.first, laser, b.rows, ex->height);
+            if (b.rows < std::uint32_t(window))
+                return fail(FLT_ERR_INVALID_ARGUMENT,
+                            "%s: option 'extract_laser%u_rows' = %u is shorter than the "
+                            "Savitzky-Golay window %d",
+                            fn, laser, b.rows, window);
+        }
+        if (ex->bands[0].automatic != ex->bands[1].automatic)
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: options 'extract_laser0_rows' = %u and "
+                        "'extract_laser1_rows' = %u: set both bands or neither",
+                        fn, ex->bands[0].rows, ex->bands[1].rows);
+
+        const std::size_t w = ex->width;
+        for (unsigned laser = 0; laser < 2; ++laser) {
+            ex->poly[laser].assign(w * 2 * k_map_terms, k_nan);
+            ex->peak_row[laser].assign(w, k_nan);
+            ex->column_x[laser].assign(w, k_nan);
+            ex->column_z[laser].assign(w, k_nan);
+            ex->fiber_z[laser].assign(ex->fibers, k_nan);
+        }
+        ex->saturated_column.assign(w, 0);
+        ex->tainted_column.assign(w, 0);
+        ex->fringe_row.assign(w, 0);
+        ex->fit_sums.assign(5 * ex->fibers, 0);
+        ex->fit_flags.assign(ex->fibers, 0);
+        ex->best_value.assign(w, 0);
+        ex->best_row.assign(w, 0);
+        ex->row_sum.assign(ex->height, 0);
+        ex->map_scratch.assign(2 * w * k_map_nodes, 0);
+        if (!ex->bands[0].automatic) ex->build_maps();
+        *out = ex.release();
+        return FLT_OK;
+    });
+}
+
+FLT_API void FLT_CALL flt_extractor_destroy(flt_extractor *extractor) {
+    guard_void([&] {
+        if (extractor && extractor->magic == k_extractor_magic) {
+            extractor->magic = 0;
+            delete extractor;
+        }
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_extractor_fibers(const flt_extractor *extractor,
+                                                 size_t *out) {
+    const char *fn = "flt_extractor_fibers";
+    return guard(fn, [&] {
+        if (flt_status st = check_handle(fn, extractor)) return st;
+        FLT_CHECK_NOT_NULL(fn, out);
+        *out = extractor->fibers;
+        return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_extractor_band(const flt_extractor *extractor,
+                                               unsigned laser, uint32_t *first_row_out,
+                                               uint32_t *rows_out) {
+    const char *fn = "flt_extractor_band";
+    return guard(fn, [&] {
+        if (flt_status st = check_handle(fn, extractor)) return st;
+        if (laser >= FLT_CALIB_LASERS)
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'laser' = %u is not 0 or 1", fn, laser);
+        FLT_CHECK_NOT_NULL(fn, first_row_out);
+        FLT_CHECK_NOT_NULL(fn, rows_out);
+        if (!extractor->maps_ready)
+            return fail(FLT_ERR_STATE,
+                        "%s: the band is automatic and no frame has been processed yet",
+                        fn);
+        *first_row_out = extractor->bands[laser].first;
+        *rows_out = extractor->bands[laser].rows;
+        return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_extractor_process(
+    flt_extractor *extractor, const void *frame, flt_pixel_format format, uint32_t width,
+    uint32_t height, size_t stride_bytes, double encoder_mm, size_t fibers, double *s_out,
+    double *height_out, double *slope_out, uint8_t *valid_out) {
+    const char *fn = "flt_extractor_process";
+    return guard(fn, [&] {
+        if (flt_status st = check_handle(fn, extractor)) return st;
+        flt_extractor &ex = *extractor;
+        FLT_CHECK_NOT_NULL(fn, frame);
+        FLT_CHECK_NOT_NULL(fn, height_out);
+        FLT_CHECK_NOT_NULL(fn, slope_out);
+        if (format != FLT_PIXEL_MONO8 && format != FLT_PIXEL_MONO10 &&
+            format != FLT_PIXEL_MONO12 && format != FLT_PIXEL_MONO16)
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'format' = %d is not a flt_pixel_format (8, 10, 12 "
+                        "or 16)",
+                        fn, int(format));
+        if (width != ex.width || height != ex.height)
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: arguments 'width' x 'height' = %u x %u but the calibration's "
+                        "frames are %u x %u px",
+                        fn, width, height, ex.width, ex.height);
+        const int bytes = format == FLT_PIXEL_MONO8 ? 1 : 2;
+        if (stride_bytes < std::size_t(width) * bytes)
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'stride_bytes' = %zu is less than width %u x %d "
+                        "bytes per pixel",
+                        fn, stride_bytes, width, bytes);
+        if (bytes == 2 && (stride_bytes % 2 != 0 ||
+                           reinterpret_cast<std::uintptr_t>(frame) % 2 != 0))
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: 16-bit frames need an even 'stride_bytes' (= %zu) and a "
+                        "2-byte aligned 'frame'",
+                        fn, stride_bytes);
+        if (!std::isfinite(encoder_mm))
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'encoder_mm' = %g is not finite", fn, encoder_mm);
+        if (fibers != ex.fibers)
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'fibers' = %zu but the calibration has %zu", fn,
+                        fibers, ex.fibers);
+        const auto *pixels = static_cast<const unsigned char *>(frame);
+        if (!ex.maps_ready) ex.detect_bands(pixels, stride_bytes, bytes);
+        const std::uint32_t full_scale = (1u << unsigned(format)) - 1u;
+        if (bytes == 1)
+            ex.extract<std::uint8_t>(pixels, stride_bytes, full_scale);
+        else
+            ex.extract<std::uint16_t>(pixels, stride_bytes, full_scale);
+        const unsigned ahead = ex.ahead, behind = 1 - ahead;
+        const double inv_spacing = 1.0 / ex.laser_spacing;
+        const double *za = ex.fiber_z[ahead].data(), *zb = ex.fiber_z[behind].data();
+        for (std::size_t k = 0; k < fibers; ++k) {
+            const bool valid = za[k] == za[k] && zb[k] == zb[k];
+            height_out[k] = valid ? 0.5 * (za[k] + zb[k]) : k_nan;
+            slope_out[k] = valid ? (za[k] - zb[k]) * inv_spacing : k_nan;
+            if (valid_out) valid_out[k] = valid ? 1 : 0;
+        }
+        if (s_out) *s_out = encoder_mm - 0.5 * (ex.offset_mm[0] + ex.offset_mm[1]);
+        ex.has_frame = true;
+        return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_extractor_peaks(const flt_extractor *extractor,
+                                                size_t width, double *rows_out) {
+    const char *fn = "flt_extractor_peaks";
+    return guard(fn, [&] {
+        if (flt_status st = check_handle(fn, extractor)) return st;
+        FLT_CHECK_NOT_NULL(fn, rows_out);
+        if (width != extractor->width)
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'width' = %zu but the frames are %u px wide", fn,
+                        width, extractor->width);
+        if (!extractor->has_frame)
+            return fail(FLT_ERR_STATE, "%s: no frame has been processed yet", fn);
+        for (unsigned laser = 0; laser < 2; ++laser)
+            std::memcpy(rows_out + laser * width, extractor->peak_row[laser].data(),
+                        width * sizeof(double));
+        return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_extractor_laser_profiles(const flt_extractor *extractor,
+                                                         size_t fibers, double *z_out) {
+    const char *fn = "flt_extractor_laser_profiles";
+    return guard(fn, [&] {
+        if (flt_status st = check_handle(fn, extractor)) return st;
+        FLT_CHECK_NOT_NULL(fn, z_out);
+        if (fibers != extractor->fibers)
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'fibers' = %zu but the calibration has %zu", fn,
+                        fibers, extractor->fibers);
+        if (!extractor->has_frame)
+            return fail(FLT_ERR_STATE, "%s: no frame has been processed yet", fn);
+        for (unsigned laser = 0; laser < 2; ++laser)
+            std::memcpy(z_out + laser * fibers, extractor->fiber_z[laser].data(),
+                        fibers * sizeof(double));
+        return FLT_OK;
+    });
+}
+
+}  // extern "C"

@@ -1,0 +1,155 @@
+// Internal: the extractor's per-frame kernels.
+//
+// band_maximum: a running maximum over the band's rows, row-major, so every
+// row is one contiguous sweep across the columns that the compiler turns into
+// SIMD compares and blends (AVX2 clone where the CPU has it). This is the only
+// pass over every pixel of the band.
+//
+// column_peak: per column, the checks and the Savitzky-Golay derivative are
+// evaluated only next to the maximum (a few rows), so their cost does not
+// grow with the band.
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+
+namespace flt {
+
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && \
+    !defined(__SANITIZE_ADDRESS__)
+#define FLT_PEAK_KERNEL __attribute__((target_clones("avx2", "default")))
+#else
+#define FLT_PEAK_KERNEL
+#endif
+
+template <class Pixel>
+inline void band_maximum_body(const unsigned char *frame, std::size_t stride,
+                              std::uint32_t width, std::uint32_t first, std::uint32_t rows,
+                              std::uint16_t *__restrict best_value,
+                              std::uint16_t *__restrict best_row) {
+    const Pixel *row = reinterpret_cast<const Pixel *>(frame + std::size_t(first) * stride);
+    for (std::uint32_t u = 0; u < width; ++u) {
+        best_value[u] = row[u];
+        best_row[u] = std::uint16_t(first);
+    }
+    for (std::uint32_t r = 1; r < rows; ++r) {
+        const std::uint16_t v = std::uint16_t(first + r);
+        const Pixel *__restrict p =
+            reinterpret_cast<const Pixel *>(frame + std::size_t(first + r) * stride);
+        for (std::uint32_t u = 0; u < width; ++u) {
+            const std::uint16_t value = p[u];
+            const bool brighter = value > best_value[u];  // first maximum wins ties
+            best_value[u] = brighter ? value : best_value[u];
+            best_row[u] = brighter ? v : best_row[u];
+        }
+    }
+}
+
+FLT_PEAK_KERNEL inline void band_maximum_u8(const unsigned char *frame, std::size_t stride,
+                                            std::uint32_t width, std::uint32_t first,
+                                            std::uint32_t rows, std::uint16_t *best_value,
+                                            std::uint16_t *best_row) {
+    band_maximum_body<std::uint8_t>(frame, stride, width, first, rows, best_value, best_row);
+}
+
+FLT_PEAK_KERNEL inline void band_maximum_u16(const unsigned char *frame, std::size_t stride,
+                                             std::uint32_t width, std::uint32_t first,
+                                             std::uint32_t rows, std::uint16_t *best_value,
+                                             std::uint16_t *best_row) {
+    band_maximum_body<std::uint16_t>(frame, stride, width, first, rows, best_value,
+                                     best_row);
+}
+
+template <class Pixel>
+inline void band_maximum(const unsigned char *frame, std::size_t stride, std::uint32_t width,
+                         std::uint32_t first, std::uint32_t rows, std::uint16_t *best_value,
+                         std::uint16_t *best_row) {
+    if (sizeof(Pixel) == 1)
+        band_maximum_u8(frame, stride, width, first, rows, best_value, best_row);
+    else
+        band_maximum_u16(frame, stride, width, first, rows, best_value, best_row);
+}
+
+struct peak_params {
+    int sg_half;               // window = 2 * sg_half + 1 rows
+    const float *sg_taps;      // derivative taps, [2 * sg_half + 1]
+    std::uint32_t min_value;   // weakest accepted maximum, counts
+    std::uint32_t full_scale;  // saturation, counts
+    int max_width;             // rows at or above half the maximum
+    std::uint32_t frame_height;
+};
+
+// The sub-pixel row of the strongest valid peak of column u in rows
+// [first, first + rows), NaN if there is none. `value` and `row` are the
+// column's maximum from band_maximum.
+template <class Pixel>
+inline double column_peak(const unsigned char *frame, std::size_t stride, std::uint32_t u,
+                          std::uint32_t first, std::uint32_t rows, std::uint32_t value,
+                          long row, const peak_params &p, bool *saturated_seen) {
+    constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+    auto px = [&](long v) -> std::uint32_t {
+        return reinterpret_cast<const Pixel *>(frame + std::size_t(v) * stride)[u];
+    };
+    const long band_lo = long(first), band_hi = long(first + rows) - 1;
+    const long h = p.sg_half;
+    // The Savitzky-Golay derivative at row i, or NaN where the window leaves
+    // the frame.
+    auto derivative = [&](long i) -> float {
+        if (i - h < 0 || i + h >= long(p.frame_height)) return std::numeric_limits<float>::quiet_NaN();
+        float d = 0;
+        for (long j = -h; j <= h; ++j) d += p.sg_taps[j + h] * float(px(i + j));
+        return d;
+    };
+    long excluded_lo[3], excluded_hi[3];
+    int excluded = 0;
+    for (int candidate = 0; candidate < 3; ++candidate) {
+        if (value < p.min_value || value == 0) return nan;  // the rest is weaker still
+        // Rows at or above half the maximum around it (the line's extent).
+        long lo = row, hi = row;
+        while (lo > band_lo && 2 * px(lo - 1) >= value && row - lo <= p.max_width) --lo;
+        while (hi < band_hi && 2 * px(hi + 1) >= value && hi - row <= p.max_width) ++hi;
+        const bool saturated = value >= p.full_scale;
+        *saturated_seen = *saturated_seen || saturated;
+        const bool too_wide = hi - lo + 1 > p.max_width;
+        if (!saturated && !too_wide) {
+            // Zero crossing (+ above, - below) of the derivative next to the
+            // maximum: at most 2 rows away, linearly interpolated.
+            long i = row;
+            float d0 = derivative(i);
+            double v = nan;
+            if (d0 > 0) {
+                float d1 = derivative(i + 1);
+                for (int step = 0; step < 2 && d1 > 0; ++step) d0 = d1, d1 = derivative(++i + 1);
+                if (d1 <= 0) v = double(i) + double(d0) / double(d0 - d1);
+            } else if (d0 <= 0) {
+                float dm = derivative(i - 1);
+                for (int step = 0; step < 2 && dm <= 0; ++step) d0 = dm, dm = derivative(--i - 1);
+                if (dm > 0) v = double(i - 1) + double(dm) / double(dm - d0);
+            }
+            if (v >= double(lo) - 1 && v <= double(hi) + 1) return v;
+        }
+        if (candidate == 2) break;
+        // Rejected: the next brightest local maximum outside the rejected
+        // peaks (a strided scan, only for the few rejected columns).
+        excluded_lo[excluded] = lo, excluded_hi[excluded] = hi, ++excluded;
+        std::uint32_t best = 0;
+        long best_row = -1;
+        for (long v = band_lo; v <= band_hi; ++v) {
+            bool skip = false;
+            for (int e = 0; e < excluded; ++e) skip |= v >= excluded_lo[e] && v <= excluded_hi[e];
+            if (skip) continue;
+            const std::uint32_t value_v = px(v);
+            if (value_v <= best) continue;
+            if ((v > band_lo && px(v - 1) > value_v) || (v < band_hi && px(v + 1) > value_v))
+                continue;  // not a local maximum (e.g. the tail of a rejected peak)
+            best = value_v, best_row = v;
+        }
+        if (best_row < 0) break;
+        value = best, row = best_row;
+    }
+    return nan;
+}
+
+}  // namespace flt
