@@ -49,8 +49,8 @@
  *
  * Determinism
  *   Every random draw of frame f comes from generators seeded with
- *   (sim_seed, f): the same seed and calls give the same bytes, on every
- *   platform with IEEE doubles.
+ *   (sim_seed, f): the same seed and calls give the same bytes with the same
+ *   build (another C library's exp/sin may differ in the last bit).
  *
  * Threads
  *   An flt_sim must not be used from two threads at once.
