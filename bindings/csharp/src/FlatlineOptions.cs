@@ -28,7 +28,8 @@ namespace Flatline
     /// A bag of option values (flt_options). Keys are set by their C name
     /// ("knot_spacing", ...) through flt_option_find, so an option added to
     /// the C library is usable here without a binding change; the typed
-    /// properties cover the options known when this binding was written.
+    /// properties cover the options known when this binding was written
+    /// (calibration and simulator keys carry a Calib / Sim prefix).
     /// Keys never set keep their default. Objects created from a bag keep
     /// their own copy of the values, so the bag may be disposed right after.
     /// </summary>
@@ -130,6 +131,60 @@ namespace Flatline
         /// <summary>With RigidMotion, standard deviation of a height's
         /// deviation from its frame's line across the strip, mm.</summary>
         public double ShapeSigma { get => Get("shape_sigma"); set => Set("shape_sigma", value); }
+
+        // ---- calibration (Calibration.EstimateIntrinsics / EstimateHomography)
+        /// <summary>Estimate the homographies inside RANSAC.</summary>
+        public bool CalibRansac { get => Get("calib_ransac") != 0; set => Set("calib_ransac", value ? 1 : 0); }
+        /// <summary>RANSAC inlier threshold: image reprojection distance, px.</summary>
+        public double CalibRansacThreshold { get => Get("calib_ransac_threshold"); set => Set("calib_ransac_threshold", value); }
+        /// <summary>RANSAC iterations.</summary>
+        public int CalibRansacIterations { get => (int)Get("calib_ransac_iterations"); set => Set("calib_ransac_iterations", value); }
+        /// <summary>Seed of RANSAC's draws (the estimate is deterministic).</summary>
+        public uint CalibRansacSeed { get => (uint)Get("calib_ransac_seed"); set => Set("calib_ransac_seed", value); }
+        /// <summary>Estimate the rational distortion terms k4..k6 too.</summary>
+        public bool CalibRationalDistortion { get => Get("calib_rational_distortion") != 0; set => Set("calib_rational_distortion", value ? 1 : 0); }
+
+        // ---- simulated sensor (SimulatedLine); flatline/sim.h has the model
+        /// <summary>Seed of every random draw: same seed, same output.</summary>
+        public uint SimSeed { get => (uint)Get("sim_seed"); set => Set("sim_seed", value); }
+        /// <summary>Travel between frames, mm.</summary>
+        public double SimFrameSpacing { get => Get("sim_frame_spacing"); set => Set("sim_frame_spacing", value); }
+        /// <summary>Encoder position of frame 0, mm.</summary>
+        public double SimStart { get => Get("sim_start"); set => Set("sim_start", value); }
+        /// <summary>Strip width W, mm (the defect shapes span [-W/2, W/2]).</summary>
+        public double SimStripWidth { get => Get("sim_strip_width"); set => Set("sim_strip_width", value); }
+        /// <summary>Standard deviation of the rigid heave per frame, mm.</summary>
+        public double SimHeaveSigma { get => Get("sim_heave_sigma"); set => Set("sim_heave_sigma", value); }
+        /// <summary>Standard deviation of the roll about the travel axis per frame, mm/mm.</summary>
+        public double SimTiltSigma { get => Get("sim_tilt_sigma"); set => Set("sim_tilt_sigma", value); }
+        /// <summary>Amplitude of a leveler roll's run-out, mm.</summary>
+        public double SimEccentricityAmplitude { get => Get("sim_eccentricity_amplitude"); set => Set("sim_eccentricity_amplitude", value); }
+        /// <summary>Period of the run-out along the encoder, mm.</summary>
+        public double SimEccentricityPeriod { get => Get("sim_eccentricity_period"); set => Set("sim_eccentricity_period", value); }
+        /// <summary>Amplitude of the shear transient at every cut, mm.</summary>
+        public double SimShearAmplitude { get => Get("sim_shear_amplitude"); set => Set("sim_shear_amplitude", value); }
+        /// <summary>Decay of the shear transient, 1/mm.</summary>
+        public double SimShearDecay { get => Get("sim_shear_decay"); set => Set("sim_shear_decay", value); }
+        /// <summary>Period of the shear transient, mm.</summary>
+        public double SimShearPeriod { get => Get("sim_shear_period"); set => Set("sim_shear_period", value); }
+        /// <summary>Distance between cuts, mm.</summary>
+        public double SimShearInterval { get => Get("sim_shear_interval"); set => Set("sim_shear_interval", value); }
+        /// <summary>Peak-detection noise, px, per laser and fiber (rows) or column (frames).</summary>
+        public double SimPeakSigma { get => Get("sim_peak_sigma"); set => Set("sim_peak_sigma", value); }
+        /// <summary>Bits per pixel of the rendered frames: 8, 10, 12 or 16.</summary>
+        public int SimBitDepth { get => (int)Get("sim_bit_depth"); set => Set("sim_bit_depth", value); }
+        /// <summary>Standard deviation of the line's profile across rows, px.</summary>
+        public double SimLineSigma { get => Get("sim_line_sigma"); set => Set("sim_line_sigma", value); }
+        /// <summary>Peak of the line, fraction of full scale.</summary>
+        public double SimLinePeak { get => Get("sim_line_peak"); set => Set("sim_line_peak", value); }
+        /// <summary>Background, fraction of full scale.</summary>
+        public double SimBackground { get => Get("sim_background"); set => Set("sim_background", value); }
+        /// <summary>Speckle contrast (multiplicative per pixel).</summary>
+        public double SimSpeckle { get => Get("sim_speckle"); set => Set("sim_speckle", value); }
+        /// <summary>Electrons at full scale (shot noise); 0 for none.</summary>
+        public double SimFullWell { get => Get("sim_full_well"); set => Set("sim_full_well", value); }
+        /// <summary>Spurious reflections per frame.</summary>
+        public double SimReflections { get => Get("sim_reflections"); set => Set("sim_reflections", value); }
 
         public void Dispose()
         {

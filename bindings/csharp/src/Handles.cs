@@ -64,4 +64,22 @@ namespace Flatline
         protected override void Destroy(IntPtr native) => FlatlineNative.flt_recon_destroy_handle(native);
         protected override void OnLive(int delta) => Interlocked.Add(ref live, delta);
     }
+
+    internal sealed class CalibHandle : FlatlineHandle
+    {
+        private static long live;
+        internal static long Live => Interlocked.Read(ref live);
+        public CalibHandle() { }
+        protected override void Destroy(IntPtr native) => FlatlineNative.flt_calib_destroy_handle(native);
+        protected override void OnLive(int delta) => Interlocked.Add(ref live, delta);
+    }
+
+    internal sealed class SimHandle : FlatlineHandle
+    {
+        private static long live;
+        internal static long Live => Interlocked.Read(ref live);
+        public SimHandle() { }
+        protected override void Destroy(IntPtr native) => FlatlineNative.flt_sim_destroy_handle(native);
+        protected override void OnLive(int delta) => Interlocked.Add(ref live, delta);
+    }
 }

@@ -41,5 +41,34 @@ namespace Flatline
                 throw new ArgumentException(
                     $"{name} has {array.Length} elements but must have {length} (one per fiber)", name);
         }
+    
+        /// <summary>The point count of a [count, 2] array of (u, v) px or
+        /// (x, z) mm points.</summary>
+        internal static int Points(double[,] points, string name)
+        {
+            if (points == null)
+                throw new ArgumentNullException(name);
+            if (points.GetLength(1) != 2)
+                throw new ArgumentException(
+                    $"{name} is [{points.GetLength(0)}, {points.GetLength(1)}] but must be " +
+                    "[count, 2]: one point per row, two coordinates", name);
+            return points.GetLength(0);
+        }
+
+        /// <summary>A laser number, 0 or 1, checked before the native call
+        /// (a negative int would reach C as a huge unsigned).</summary>
+        internal static uint Laser(int laser)
+        {
+            if (laser < 0 || laser >= Calibration.Lasers)
+                throw new ArgumentOutOfRangeException(nameof(laser), laser, "laser must be 0 or 1");
+            return (uint)laser;
+        }
+
+        /// <summary>A count or size that must be at least <paramref name="min"/>.</summary>
+        internal static void AtLeast(int value, int min, string name)
+        {
+            if (value < min)
+                throw new ArgumentOutOfRangeException(name, value, $"{name} must be at least {min}");
+        }
     }
 }

@@ -19,6 +19,9 @@
 #define FLT_CALL
 #define FLT_NODISCARD
 
+/* uint8_t, uint16_t, uint32_t are their C types to SWIG (uint32_t -> uint). */
+%include <stdint.i>
+
 /* ---- status codes: one place turns a failed status into an exception ---- */
 %typemap(ctype) flt_status "int"
 %typemap(imtype) flt_status "int"
@@ -59,11 +62,14 @@
   }
 /* size_t outputs: `out UIntPtr` marshals as a pointer to a pointer-sized
  * integer, which is exactly a size_t *. */
-%typemap(ctype) size_t *out, size_t *rows_out "size_t *"
-%typemap(imtype) size_t *out, size_t *rows_out "out global::System.UIntPtr"
-%typemap(cstype) size_t *out, size_t *rows_out "out global::System.UIntPtr"
-%typemap(in) size_t *out, size_t *rows_out %{ $1 = $input; %}
-%typemap(csin) size_t *out, size_t *rows_out "out $csinput"
+%define FLT_CS_OUT_SIZE(NAMES...)
+%typemap(ctype) NAMES "size_t *"
+%typemap(imtype) NAMES "out global::System.UIntPtr"
+%typemap(cstype) NAMES "out global::System.UIntPtr"
+%typemap(in) NAMES %{ $1 = $input; %}
+%typemap(csin) NAMES "out $csinput"
+%enddef
+FLT_CS_OUT_SIZE(size_t *out, size_t *rows_out, size_t *count_out, size_t *length_out)
 
 /* ---- scalar outputs ---- */
 %define FLT_CS_OUT_SCALAR(CTYPE, CSTYPE, NAMES...)
@@ -75,16 +81,20 @@
 %enddef
 FLT_CS_OUT_SCALAR(double, double, double *out, double *min_value,
                   double *max_value, double *default_value)
-FLT_CS_OUT_SCALAR(int, int, int *is_integer)
+FLT_CS_OUT_SCALAR(int, int, int *is_integer, int *out)
+FLT_CS_OUT_SCALAR(uint32_t, uint, uint32_t *width_out, uint32_t *height_out,
+                  uint32_t *first_row_out, uint32_t *rows_out)
 
 /* ---- arrays: raw pointers, pinned by the caller (`fixed` works for
- * double[] and double[,] alike, and gives NULL for a null array) ---- */
+ * double[] and double[,] alike, and gives NULL for a null array). Fixed-size
+ * parameters (const double h[9]) are pointers too; the caller checks the
+ * length. ---- */
 %define FLT_CS_ARRAY(CTYPE, CSTYPE)
-%typemap(ctype) CTYPE *, const CTYPE * "CTYPE *"
-%typemap(imtype) CTYPE *, const CTYPE * "CSTYPE*"
-%typemap(cstype) CTYPE *, const CTYPE * "CSTYPE*"
-%typemap(in) CTYPE *, const CTYPE * %{ $1 = ($1_ltype)$input; %}
-%typemap(csin) CTYPE *, const CTYPE * "$csinput"
+%typemap(ctype) CTYPE *, const CTYPE *, CTYPE [ANY], const CTYPE [ANY] "CTYPE *"
+%typemap(imtype) CTYPE *, const CTYPE *, CTYPE [ANY], const CTYPE [ANY] "CSTYPE*"
+%typemap(cstype) CTYPE *, const CTYPE *, CTYPE [ANY], const CTYPE [ANY] "CSTYPE*"
+%typemap(in) CTYPE *, const CTYPE *, CTYPE [ANY], const CTYPE [ANY] %{ $1 = ($1_ltype)$input; %}
+%typemap(csin) CTYPE *, const CTYPE *, CTYPE [ANY], const CTYPE [ANY] "$csinput"
 %enddef
 FLT_CS_ARRAY(double, double)
 FLT_CS_ARRAY(uint8_t, byte)
@@ -150,6 +160,20 @@ void CTYPE##_destroy_handle(void *handle) { CTYPE##_destroy((CTYPE *)handle); }
 %typemap(in) flt_option *out %{ $1 = (flt_option *)$input; %}
 %typemap(csin) flt_option *out "out $csinput"
 %rename(NativeOption) flt_option;
+
+/* ---- pixel formats (flt_pixel_format, extractor.h; used by the simulator
+ * and the extractor): plain ints, the number of significant bits; the public
+ * PixelFormat enum carries the same values ---- */
+%typemap(ctype) flt_pixel_format "int"
+%typemap(imtype) flt_pixel_format "int"
+%typemap(cstype) flt_pixel_format "int"
+%typemap(in) flt_pixel_format %{ $1 = (flt_pixel_format)$input; %}
+%typemap(csin) flt_pixel_format "$csinput"
+%typemap(ctype) flt_pixel_format *out "int *"
+%typemap(imtype) flt_pixel_format *out "out int"
+%typemap(cstype) flt_pixel_format *out "out int"
+%typemap(in) flt_pixel_format *out %{ $1 = (flt_pixel_format *)$input; %}
+%typemap(csin) flt_pixel_format *out "out $csinput"
 
 %{
 #include "flatline/common.h"

@@ -17,9 +17,11 @@
  *     `fixed`, so double[,] passes without a copy;
  *   - size_t is ulong, strings are UTF-8 in both directions.
  *
- * One .i per component: add calib.i, extract.i, ... below as they land.
+ * One .i per component, in dependency order (sim.h uses calib.h).
  */
 %module FlatlineNative
 
 %include "common.i"
 %include "recon.i"
+%include "calib.i"
+%include "sim.i"

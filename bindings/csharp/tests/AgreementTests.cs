@@ -12,7 +12,7 @@ namespace Flatline.Tests
     /// binding code), with flat row-major arrays indexed by hand
     /// (element [r * fibers + k], as flatline/common.h defines).
     /// </summary>
-    internal static unsafe class CReference
+    internal static unsafe partial class CReference
     {
         private const string Core = "flatline_core_reference";
 

@@ -124,5 +124,44 @@ namespace Flatline.Tests
             for (int i = 0; i < Count; ++i)
                 new FlatlineOptions().MaxGap = 100 + i % 50;
         }
+    
+        [MethodImpl(MethodImplOptions.NoInlining)]
+        private static void AbandonCalibrations(int count)
+        {
+            for (int i = 0; i < count; ++i)
+                Assert.True(Calibration.Reference(960, 128, -1000, 100, 21).IsFinished);
+        }
+
+        [MethodImpl(MethodImplOptions.NoInlining)]
+        private static void AbandonLines(int count, Calibration calib)
+        {
+            for (int i = 0; i < count; ++i)
+                Assert.Equal(1, new SimulatedLine(calib).NextRows(1).Rows);  // used, so it is really touched
+        }
+
+        [Fact]
+        public void UndisposedCalibrationsAndSimulatedLinesAreFreedByTheFinalizer()
+        {
+            using var calib = SimulatedLineTests.SmallSensor();
+            CollectEverything();
+            long calibsBefore = CalibHandle.Live, linesBefore = SimHandle.Live;
+            long rssBefore = Resident();
+            var clock = Stopwatch.StartNew();
+            AbandonCalibrations(Count);
+            // Each line holds a 4-byte-per-pixel frame scratch of 2048 x 128
+            // px, 1 MiB (sim.h): 1,000 of them leaked would be 1 GiB.
+            const int lines = 1000;
+            AbandonLines(lines, calib);
+            double seconds = clock.Elapsed.TotalSeconds;
+            CollectEverything();
+            long rssAfter = Resident();
+            output.WriteLine($"{Count} calibrations and {lines} simulated lines undisposed in {seconds:F1} s; " +
+                             $"resident before {rssBefore >> 20} MiB, after collect {rssAfter >> 20} MiB");
+            Assert.Equal(calibsBefore, CalibHandle.Live);
+            Assert.Equal(linesBefore, SimHandle.Live);
+            long scratch = 4L * 2048 * 128 * lines;
+            Assert.True(rssAfter - rssBefore < scratch / 4,
+                        $"memory grew by {(rssAfter - rssBefore) >> 20} MiB over {lines} undisposed lines");
+        }
     }
 }

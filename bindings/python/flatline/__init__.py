@@ -7,8 +7,15 @@ lengths in mm, slopes in mm/mm. Errors raise subclasses of FlatlineError.
     >>> import flatline
     >>> z = flatline.reconstruct(s, height, slope, laser_spacing=100.0)
 
-Components bound so far: the reconstructor. Calibration, extraction,
-simulation and flatness follow as the C library gains them.
+    >>> calib = flatline.Calibration.load("sensor.json")
+    >>> with flatline.SimulatedLine(calib, sim_seed=7) as sim:
+    ...     sim.add_defect("centre_buckle", 12.0, 1800.0)
+    ...     rows = sim.next_rows(3000)
+
+Components bound so far: the calibration model (Calibration), the simulated
+sensor (SimulatedLine), the frame-to-profile extractor (Extractor) and the
+reconstructor (reconstruct, Reconstructor). Flatness follows as the C
+library gains it.
 """
 
 from __future__ import annotations
@@ -28,6 +35,15 @@ from ._errors import (
     StateError,
     TimeoutError,
 )
+from ._calib import (
+    LASERS,
+    Calibration,
+    FiberGrid,
+    HomographyFit,
+    Intrinsics,
+    IntrinsicsFit,
+    Target,
+)
 from ._options import OptionInfo, option_info, options
 from ._recon import (
     FLAG_GAP,
@@ -37,6 +53,15 @@ from ._recon import (
     reconstruct,
     reconstruct_with_flags,
     reconstructor_options,
+)
+from ._extractor import ExtractedRow, Extractor, extractor_options
+from ._pixels import PixelFormat
+from ._sim import (
+    Defect,
+    SimFrame,
+    SimRows,
+    SimulatedLine,
+    simulator_options,
 )
 
 #: The version of the C headers this binding was built against.
@@ -82,4 +107,20 @@ __all__ = [
     "reconstruct",
     "reconstruct_with_flags",
     "reconstructor_options",
+    "LASERS",
+    "Target",
+    "Intrinsics",
+    "FiberGrid",
+    "IntrinsicsFit",
+    "HomographyFit",
+    "Calibration",
+    "Defect",
+    "PixelFormat",
+    "SimRows",
+    "SimFrame",
+    "SimulatedLine",
+    "simulator_options",
+    "ExtractedRow",
+    "Extractor",
+    "extractor_options",
 ]

@@ -10,6 +10,7 @@ names the argument.
 
 from __future__ import annotations
 
+import numbers
 from typing import Any, Optional, Tuple
 
 import numpy as np
@@ -101,3 +102,41 @@ def block(function: str, s: Any, height: Any, slope: Any,
     mask = as_mask(function, "valid", valid, 2)
     check_shape(function, "valid", mask, (rows, fibers), "height.shape")
     return s, height, slope, mask, 1
+
+
+def as_points(function: str, name: str, value: Any) -> np.ndarray:
+    """`value` as a C-contiguous float64 (N, 2) array of points: (u, v) px
+    or (x, z) mm per row."""
+    points = as_float64(function, name, value, 2)
+    if points.shape[1] != 2:
+        raise ValueError(
+            f"{function}() argument '{name}' must have shape (N, 2), got "
+            f"{points.shape}"
+        )
+    return points
+
+
+def as_index(function: str, name: str, value: Any, lowest: int = 0,
+             highest: Optional[int] = None) -> int:
+    """An integer argument (not a bool) in [lowest, highest] as a Python int:
+    TypeError for another type, ValueError outside the range."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise TypeError(
+            f"{function}() argument '{name}' must be an int, not {type(value).__name__}"
+        )
+    value = int(value)
+    if value < lowest or (highest is not None and value > highest):
+        bound = f">= {lowest}" if highest is None else f"in [{lowest}, {highest}]"
+        raise ValueError(f"{function}() argument '{name}' must be {bound}, got {value}")
+    return value
+
+
+def as_real(function: str, name: str, value: Any) -> float:
+    """A real-number argument (not a bool) as a float; NaN and infinities are
+    passed on for the library to judge."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise TypeError(
+            f"{function}() argument '{name}' must be a real number, not "
+            f"{type(value).__name__}"
+        )
+    return float(value)

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 import numbers
-from typing import Any, Dict, Mapping, NamedTuple, Optional
+from typing import Any, Dict, Mapping, NamedTuple, Optional, Tuple
 
 from . import capi as _capi
 from ._errors import NotFoundError
@@ -62,11 +62,16 @@ def _option_value(function: str, name: str, value: Any) -> float:
     return float(value)
 
 
-def make_options(function: str, kwargs: Mapping[str, Any]) -> Optional[_capi.flt_options]:
+def make_options(function: str, kwargs: Mapping[str, Any],
+                 prefixes: Optional[Tuple[str, ...]] = None
+                 ) -> Optional[_capi.flt_options]:
     """A C option bag holding `kwargs` (None when there are none, which the
     library reads as "every default"). An unknown name raises TypeError, as
-    Python does for any unexpected keyword argument; a value out of bounds
-    raises InvalidArgumentError (a ValueError) with the library's message."""
+    Python does for any unexpected keyword argument; so does, when `prefixes`
+    is given, an option of another component (one whose name starts with
+    none of them: the C component would silently ignore it). A value out of
+    bounds raises InvalidArgumentError (a ValueError) with the library's
+    message."""
     if not kwargs:
         return None
     bag = _capi.flt_options_create()
@@ -79,8 +84,20 @@ def make_options(function: str, kwargs: Mapping[str, Any]) -> Optional[_capi.flt
                 f"(libflatline has no option of that name; flatline.options() "
                 f"lists them)"
             ) from None
+        if prefixes is not None and not name.startswith(prefixes):
+            raise TypeError(
+                f"{function}() got an unexpected keyword argument '{name}' "
+                f"(an option of another component; {function}() reads "
+                f"{', '.join(p + '*' for p in prefixes)})"
+            )
         _capi.flt_options_set(bag, key, _option_value(function, name, value))
     return bag
+
+
+def prefixed_options(*prefixes: str) -> Dict[str, OptionInfo]:
+    """The options whose names start with one of `prefixes`, in key order."""
+    return {name: info for name, info in options().items()
+            if name.startswith(prefixes)}
 
 
 def options_doc(names) -> str:

@@ -29,6 +29,19 @@ static void flt_py_raise(int status, const char *message) {
     Py_DECREF(exc);
 }
 
+/* Raises InvalidArgumentError for inconsistent array shapes and returns the
+ * status, so the flt_status typemap fails the call (the helpers of every
+ * component use it as their last line of defence). */
+static flt_status flt_py_shape_error(const char *function, const char *what,
+                                     size_t got, size_t expected) {
+    char message[256];
+    PyOS_snprintf(message, sizeof message,
+                  "%s: %s is %zu but should be %zu", function, what, got,
+                  expected);
+    flt_py_raise((int)FLT_ERR_INVALID_ARGUMENT, message);
+    return FLT_ERR_INVALID_ARGUMENT;
+}
+
 /* Raises the last error of this thread (after a call returned a failure). */
 static void flt_py_raise_last(flt_status status) {
     /* Copy before anything else can call into the library. */
@@ -60,6 +73,28 @@ static void flt_py_raise_last(flt_status status) {
                           double *default_value (double temp = 0.0) { $1 = &temp; }
 %typemap(argout) double *out, double *min_value, double *max_value,
                  double *default_value { %append_output(PyFloat_FromDouble(*$1)); }
+
+/* ...and the named scalar outputs of the calibration and the simulator. */
+%typemap(in, numinputs=0) size_t *count_out (size_t temp = 0) { $1 = &temp; }
+%typemap(argout) size_t *count_out { %append_output(PyLong_FromSize_t(*$1)); }
+%typemap(in, numinputs=0) double *first_x_mm_out (double temp = 0.0),
+                          double *pitch_mm_out (double temp = 0.0),
+                          double *rms_px_out (double temp = 0.0),
+                          double *rms_mm_out (double temp = 0.0),
+                          double *encoder_mm_out (double temp = 0.0),
+                          double *s_mm_out (double temp = 0.0) { $1 = &temp; }
+%typemap(argout) double *first_x_mm_out, double *pitch_mm_out, double *rms_px_out,
+                 double *rms_mm_out, double *encoder_mm_out, double *s_mm_out {
+  %append_output(PyFloat_FromDouble(*$1));
+}
+%typemap(in, numinputs=0) uint32_t *width_out (uint32_t temp = 0),
+                          uint32_t *height_out (uint32_t temp = 0),
+                          uint32_t *first_row_out (uint32_t temp = 0),
+                          uint32_t *rows_out (uint32_t temp = 0) { $1 = &temp; }
+%typemap(argout) uint32_t *width_out, uint32_t *height_out, uint32_t *first_row_out,
+                 uint32_t *rows_out { %append_output(PyLong_FromUnsignedLong(*$1)); }
+%typemap(in, numinputs=0) int *out (int temp = 0) { $1 = &temp; }
+%typemap(argout) int *out { %append_output(PyLong_FromLong((long)*$1)); }
 
 %typemap(in, numinputs=0) int *is_integer (int temp = 0) { $1 = &temp; }
 %typemap(argout) int *is_integer { %append_output(PyBool_FromLong(*$1)); }

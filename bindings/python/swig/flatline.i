@@ -34,6 +34,13 @@
 /* 64-bit dimensions everywhere (numpy.i instantiates int only). */
 %numpy_typemaps(double, NPY_DOUBLE, size_t)
 %numpy_typemaps(unsigned char, NPY_UBYTE, size_t)
+%numpy_typemaps(unsigned short, NPY_USHORT, size_t)  /* 10..16-bit frames */
+
+/* uint32_t (frame sizes) as a checked unsigned int. */
+%include "stdint.i"
 
 %include "common.i"
 %include "recon.i"
+%include "calib.i"
+%include "extractor.i"
+%include "sim.i"

@@ -13,20 +13,6 @@
  * every helper checks that the arrays agree with each other.
  */
 
-%{
-/* Raises InvalidArgumentError for inconsistent array shapes and returns the
- * status, so the flt_status typemap fails the call. */
-static flt_status flt_py_shape_error(const char *function, const char *what,
-                                     size_t got, size_t expected) {
-    char message[256];
-    PyOS_snprintf(message, sizeof message,
-                  "%s: %s is %zu but should be %zu", function, what, got,
-                  expected);
-    flt_py_raise((int)FLT_ERR_INVALID_ARGUMENT, message);
-    return FLT_ERR_INVALID_ARGUMENT;
-}
-%}
-
 %ignore flt_recon_destroy;
 %ignore flt_recon_push;
 %ignore flt_recon_pull;
