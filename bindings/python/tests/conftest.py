@@ -79,6 +79,24 @@ class CLib:
         lib.flt_recon_ready.argtypes = [P, ctypes.POINTER(sz)]
         lib.flt_recon_end_sheet.argtypes = [P]
         lib.flt_last_error_message.restype = ctypes.c_char_p
+        u32 = ctypes.c_uint32
+        PP = ctypes.POINTER(P)
+        lib.flt_calib_load_text.argtypes = [ctypes.c_char_p, sz, PP]
+        lib.flt_calib_destroy.argtypes = [P]
+        lib.flt_calib_image_to_plane.argtypes = [P, ctypes.c_uint, sz, dp, dp]
+        lib.flt_calib_plane_to_image.argtypes = [P, ctypes.c_uint, sz, dp, dp]
+        lib.flt_calib_undistort.argtypes = [P, sz, dp, dp]
+        lib.flt_sim_create.argtypes = [P, P, PP]
+        lib.flt_sim_destroy.argtypes = [P]
+        lib.flt_sim_add_defect.argtypes = [P, ctypes.c_int, ctypes.c_double, ctypes.c_double]
+        lib.flt_sim_next_rows.argtypes = [P, sz, sz, dp, dp, dp, dp, up, dp]
+        lib.flt_sim_next_frame.argtypes = [P, P, sz, sz, dp, sz, dp, dp]
+        lib.flt_extractor_create.argtypes = [P, P, PP]
+        lib.flt_extractor_destroy.argtypes = [P]
+        lib.flt_sim_fibers.argtypes = [P, ctypes.POINTER(sz)]
+        lib.flt_extractor_fibers.argtypes = [P, ctypes.POINTER(sz)]
+        lib.flt_extractor_process.argtypes = [P, P, ctypes.c_int, u32, u32, sz,
+                                              ctypes.c_double, sz, dp, dp, dp, up]
 
     def _check(self, status):
         if status != 0:
@@ -155,6 +173,94 @@ class CLib:
         return np.concatenate(out_s), np.concatenate(out_z), np.concatenate(out_f)
 
 
+    # -- calibration, simulator, extractor: each call builds its handles from
+    # -- the saved text of a flatline.Calibration, so both sides use one model.
+
+    def _calib(self, text):
+        handle = ctypes.c_void_p()
+        raw = text.encode()
+        self._check(self.lib.flt_calib_load_text(raw, len(raw), ctypes.byref(handle)))
+        return handle
+
+    def map_points(self, text, which, laser, points):
+        """flt_calib_<which> over (N, 2) points; which is image_to_plane,
+        plane_to_image or undistort."""
+        calib = self._calib(text)
+        points = np.ascontiguousarray(points, np.float64)
+        out = np.empty_like(points)
+        try:
+            args = [self._ptr(points, ctypes.c_double), self._ptr(out, ctypes.c_double)]
+            if which == "undistort":
+                self._check(self.lib.flt_calib_undistort(calib, len(points), *args))
+            else:
+                function = getattr(self.lib, f"flt_calib_{which}")
+                self._check(function(calib, laser, len(points), *args))
+        finally:
+            self.lib.flt_calib_destroy(calib)
+        return out
+
+    def sim_rows(self, text, defects, blocks, **options):
+        """A simulator of that calibration with `defects` [(kind, amplitude,
+        period)]; next_rows for each block size in `blocks`, concatenated:
+        (encoder, s, height, slope, valid, truth)."""
+        calib = self._calib(text)
+        bag = self.options(**options)
+        sim = ctypes.c_void_p()
+        try:
+            self._check(self.lib.flt_sim_create(calib, bag, ctypes.byref(sim)))
+        finally:
+            self.lib.flt_options_destroy(bag)
+            self.lib.flt_calib_destroy(calib)
+        parts = []
+        try:
+            for kind, amplitude, period in defects:
+                self._check(self.lib.flt_sim_add_defect(sim, int(kind), amplitude, period))
+            fibers = ctypes.c_size_t()
+            self._check(self.lib.flt_sim_fibers(sim, ctypes.byref(fibers)))
+            k = fibers.value
+            for n in blocks:
+                arrays = (np.empty(n), np.empty(n), np.empty((n, k)), np.empty((n, k)),
+                          np.empty((n, k), np.uint8), np.empty((n, k)))
+                ptrs = [self._ptr(a, ctypes.c_uint8 if a.dtype == np.uint8 else ctypes.c_double)
+                        for a in arrays]
+                self._check(self.lib.flt_sim_next_rows(sim, n, k, *ptrs))
+                parts.append(arrays)
+        finally:
+            self.lib.flt_sim_destroy(sim)
+        return tuple(np.concatenate(p) for p in zip(*parts))
+
+    def extract(self, text, frames, encoders, pixel_format=8, **options):
+        """flt_extractor_process over C-contiguous frames: (heights, slopes,
+        valids, s) stacked."""
+        calib = self._calib(text)
+        bag = self.options(**options)
+        extractor = ctypes.c_void_p()
+        try:
+            self._check(self.lib.flt_extractor_create(calib, bag, ctypes.byref(extractor)))
+        finally:
+            self.lib.flt_options_destroy(bag)
+            self.lib.flt_calib_destroy(calib)
+        out = []
+        try:
+            count = ctypes.c_size_t()
+            self._check(self.lib.flt_extractor_fibers(extractor, ctypes.byref(count)))
+            fibers = count.value
+            for frame, encoder in zip(frames, encoders):
+                frame = np.ascontiguousarray(frame)
+                height, width = frame.shape
+                h, g, v, s = np.empty(fibers), np.empty(fibers), np.empty(fibers, np.uint8), \
+                    ctypes.c_double()
+                self._check(self.lib.flt_extractor_process(
+                    extractor, frame.ctypes.data, pixel_format, width, height,
+                    frame.strides[0], encoder, fibers, ctypes.byref(s),
+                    self._ptr(h, ctypes.c_double), self._ptr(g, ctypes.c_double),
+                    self._ptr(v, ctypes.c_uint8)))
+                out.append((h, g, v, s.value))
+        finally:
+            self.lib.flt_extractor_destroy(extractor)
+        return tuple(np.array(p) for p in zip(*out))
+
+
 @pytest.fixture(scope="session")
 def clib():
     path = loaded_library_path()
@@ -173,3 +279,39 @@ def rss_bytes():
     with open("/proc/self/statm") as statm:
         resident_pages = int(statm.read().split()[1])
     return resident_pages * os.sysconf("SC_PAGE_SIZE")
+
+
+REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
+CALIBRATION_DATA = os.path.join(REPO, "examples", "calibrate", "data")
+
+
+def read_png(path):
+    """An 8-bit grey PNG as written by examples/calibrate/make_dataset.py
+    (filter "Sub" on every row), without an imaging library."""
+    import struct
+    import zlib
+
+    with open(path, "rb") as f:
+        data = f.read()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n", path
+    pos, idat = 8, b""
+    while pos < len(data):
+        length, tag = struct.unpack(">I4s", data[pos:pos + 8])
+        body = data[pos + 8:pos + 8 + length]
+        pos += 12 + length
+        if tag == b"IHDR":
+            width, height, depth, colour = struct.unpack(">IIBB", body[:10])
+        elif tag == b"IDAT":
+            idat += body
+    assert depth == 8 and colour == 0, path
+    raw = np.frombuffer(zlib.decompress(idat), np.uint8).reshape(height, width + 1)
+    assert (raw[:, 0] == 1).all(), "only the Sub filter is decoded"
+    return np.cumsum(raw[:, 1:], axis=1, dtype=np.uint8)  # Sub: running sum mod 256
+
+
+def roi_reference(fibers=101, pitch=20.0):
+    """The reference sensor's rows 892..1147 (both lines and +-50 mm of
+    height fit; an eighth of the full frame to render), fibers centred on
+    x = 0: what tests/c/test_extractor.c uses."""
+    return flatline.Calibration.reference(892, 256, -0.5 * pitch * (fibers - 1), pitch,
+                                          fibers)

@@ -8,7 +8,7 @@ import numpy as np
 
 import flatline
 
-from conftest import noisy_sheet, rss_bytes
+from conftest import noisy_sheet, roi_reference, rss_bytes
 
 MB = 1 << 20
 
@@ -68,3 +68,98 @@ def test_repeated_large_calls_leave_rss_flat():
     growth = rss_bytes() - before
     print(f"RSS growth over 15 large calls: {growth / 1024:.0f} KiB")
     assert growth < 8 * MB
+
+
+def test_simulator_and_extractor_create_destroy_cycles_leave_rss_flat():
+    # A SimulatedLine of the 256-row ROI sensor holds its frame scratch (4
+    # bytes per pixel: 2 MB), a copy of the calibration and per-fiber
+    # tables; an Extractor holds its column maps (~0.5 MB). Leaking either
+    # once in 2,000 cycles would add > 1,000 MB; the bound, 4 MB, allows
+    # allocator noise only.
+    calib = roi_reference(fibers=101, pitch=20.0)
+
+    def cycle(i):
+        with flatline.SimulatedLine(calib, sim_seed=i) as sim:
+            sim.add_defect("bow", 1.0)
+            sim.next_rows(2)
+        extractor = flatline.Extractor(calib)
+        if i % 2:
+            extractor.close()
+        del extractor
+
+    for i in range(50):  # warm-up
+        cycle(i)
+    gc.collect()
+    before = rss_bytes()
+    for i in range(2_000):
+        cycle(i)
+    gc.collect()
+    growth = rss_bytes() - before
+    print(f"RSS growth over 2,000 simulator + extractor cycles: {growth / 1024:.0f} KiB")
+    assert growth < 4 * MB
+
+
+def test_calibration_create_destroy_cycles_leave_rss_flat():
+    # A C model holds the camera, two homographies and their inverses and the
+    # geometry: >= 50 doubles, so >= 400 bytes per leaked handle, 8 MB over
+    # 20,000 cycles (more with the saved text of the loads cycles). The
+    # bound, 2 MB, allows allocator noise only; the Python heap must not
+    # keep a proxy per cycle either (>= 48 bytes each: 960 KB).
+    calib = flatline.Calibration.reference(892, 256)
+    text = calib.dumps()
+
+    def cycle(i):
+        if i % 3 == 0:
+            loaded = flatline.Calibration.loads(text)
+            assert loaded.dumps() == text
+        elif i % 3 == 1:
+            with flatline.Calibration.reference(892, 256) as loaded:
+                loaded.intrinsics
+        else:
+            loaded = flatline.Calibration()
+            loaded.frame_size = (640, 480)
+            try:  # the error path must not leak either
+                loaded.finish()
+            except flatline.StateError:
+                pass
+
+    for i in range(300):  # warm-up
+        cycle(i)
+    gc.collect()
+    before = rss_bytes()
+    tracemalloc.start()
+    python_before = tracemalloc.get_traced_memory()[0]
+    for i in range(20_000):
+        cycle(i)
+    gc.collect()
+    python_growth = tracemalloc.get_traced_memory()[0] - python_before
+    tracemalloc.stop()
+    growth = rss_bytes() - before
+    print(f"RSS growth over 20,000 calibration cycles: {growth / 1024:.0f} KiB; "
+          f"Python heap growth {python_growth} B")
+    assert growth < 2 * MB
+    assert python_growth < 64 * 1024
+
+
+def test_repeated_large_simulator_calls_leave_rss_flat():
+    # 1500 rows x 1001 fibers: five (n, K) arrays of 12 MB each per call, and
+    # a full 2048 x 2048 frame (4 MB; 16 MB of scratch inside). Leaking one
+    # array per call over 5 calls would add > 60 MB; the bound is 12 MB.
+    with flatline.SimulatedLine() as sim:
+        sim.add_defect("centre_buckle", 12.0, 1800.0)
+
+        def calls():
+            rows = sim.next_rows(1500)
+            frame = sim.next_frame()
+            assert rows.height.shape == (1500, 1001) and frame.image.shape == (2048, 2048)
+
+        for _ in range(2):
+            calls()
+        gc.collect()
+        before = rss_bytes()
+        for _ in range(5):
+            calls()
+        gc.collect()
+    growth = rss_bytes() - before
+    print(f"RSS growth over 5 large simulator calls: {growth / 1024:.0f} KiB")
+    assert growth < 12 * MB

@@ -1,6 +1,7 @@
 """Package surface: versions, option table, constants, typing files."""
 
 import ast
+import dataclasses
 import math
 import os
 import re
@@ -85,11 +86,56 @@ def test_py_typed_and_stub_cover_the_public_api():
             names.update(a.asname or a.name for a in node.names)
     missing = set(flatline.__all__) - names
     assert not missing, f"stub lacks {sorted(missing)}"
-    # and the Reconstructor's public methods
-    cls = next(n for n in tree.body if isinstance(n, ast.ClassDef) and n.name == "Reconstructor")
-    stub_methods = {n.name for n in cls.body if isinstance(n, ast.FunctionDef)}
-    real = {m for m in dir(flatline.Reconstructor) if not m.startswith("_")}
-    assert real <= stub_methods
+    stub_classes = {n.name: n for n in tree.body if isinstance(n, ast.ClassDef)}
+
+    def stub_members(name, kind):
+        return {n.name if kind is ast.FunctionDef else n.target.id
+                for n in stub_classes[name].body if isinstance(n, kind)}
+
+    # Every public method and property of the classes over handles, and of
+    # Intrinsics and PixelFormat...
+    for name in ("Reconstructor", "Calibration", "SimulatedLine", "Extractor",
+                 "Intrinsics", "FiberGrid"):
+        real = {m for m in vars(getattr(flatline, name)) if not m.startswith("_")}
+        real -= {f for f in getattr(getattr(flatline, name), "_fields", ())}
+        real -= {"fx", "fy", "cx", "cy", "k1", "k2", "k3", "k4", "k5", "k6", "p1", "p2"}
+        lacking = real - stub_members(name, ast.FunctionDef)
+        assert not lacking, f"stub of {name} lacks {sorted(lacking)}"
+    # ...every field of the result tuples and the Intrinsics...
+    for name in ("FiberGrid", "IntrinsicsFit", "HomographyFit", "SimRows", "SimFrame",
+                 "ExtractedRow", "OptionInfo"):
+        assert stub_members(name, ast.AnnAssign) == set(getattr(flatline, name)._fields), name
+    assert stub_members("Intrinsics", ast.AnnAssign) == {
+        f.name for f in dataclasses.fields(flatline.Intrinsics)}
+    # ...and every member of the enums.
+    for name in ("Target", "Defect", "PixelFormat"):
+        assert stub_members(name, ast.AnnAssign) == set(getattr(flatline, name).__members__), name
+
+
+def test_component_option_tables_are_the_c_defaults():
+    sim = flatline.simulator_options()
+    assert sim["sim_seed"] == 1.0 and sim["sim_frame_spacing"] == 3.0
+    assert sim["sim_bit_depth"] == 8.0 and sim["sim_line_sigma"] == 2.0
+    assert all(name.startswith("sim_") for name in sim) and len(sim) == 20
+    extract = flatline.extractor_options()
+    assert extract["extract_sg_window"] == 11.0 and extract["extract_sg_order"] == 2.0
+    assert extract["extract_laser0_rows"] == 0.0  # automatic band
+    assert all(name.startswith("extract_") for name in extract) and len(extract) == 8
+    for doc in (flatline.SimulatedLine.__doc__, flatline.Extractor.__doc__):
+        assert "{options}" not in doc
+    assert "sim_heave_sigma (float): default 0" in flatline.SimulatedLine.__doc__
+    assert "extract_sg_window (int): default 11" in flatline.Extractor.__doc__
+
+
+def test_enums_are_the_c_values():
+    assert [int(d) for d in flatline.Defect] == list(range(8))
+    assert flatline.Defect.CROSSBOW == flatline.capi.FLT_SIM_CROSSBOW
+    assert [int(p) for p in flatline.PixelFormat] == [8, 10, 12, 16]
+    assert flatline.PixelFormat.MONO12.full_scale == 4095
+    assert flatline.PixelFormat.MONO8.dtype == np.uint8
+    assert flatline.PixelFormat.MONO10.dtype == np.uint16
+    assert [int(t) for t in flatline.Target] == [0, 1, 2]
+    assert flatline.LASERS == 2
 
 
 def test_all_names_exist():
