@@ -1,19 +1,22 @@
 #!/usr/bin/env python3
-"""Simulates the reference sheet, reconstructs it with libflatline, and plots
-raw against reconstructed heights to PNG files.
+"""Simulates the reference sheet with libflatline's simulated sensor,
+reconstructs it, and plots raw against reconstructed heights to PNG files.
 
 The sheet (DESIGN.md, after the seed article): centre buckles and wavy edges,
-    z(s, x) = 12 sin(2 pi s / 1800) cos(2 pi x / 1500)   [mm]
-9000 mm long, measured every 3 mm of travel, fibers every 10 mm across
-1500 mm. Two laser lines 100 mm apart each see the surface at s -+ 50 mm:
+sinusoidal along travel with period 1800 mm and 12 mm amplitude, 9000 mm
+long, measured every 3 mm of travel, fibers every 10 mm across 1500 mm. The
+sensor is the reference one (flatline.Calibration.reference(): two laser
+lines 100 mm apart, a 2048 x 2048 camera at 45 degrees). The simulator
+(flatline.SimulatedLine) gives what the two lasers measure, with the strip
+bouncing by N(0, 2.5 mm) per frame (both lasers, every fiber: it leaves the
+slope untouched) and 1/16 px of peak-detection noise per laser and fiber:
     height = (z(s - 50) + z(s + 50)) / 2,   slope = (z(s + 50) - z(s - 50)) / 100
-with the strip bouncing by N(0, 2.5 mm) per frame (both lasers, every fiber:
-it leaves the slope untouched) and N(0, 0.05 mm) of peak-detection noise per
-laser and fiber.
 
 It reconstructs twice: the whole sheet at once (flatline.reconstruct) and
 streaming, frame block by frame block, as the gauge runs on the line
-(flatline.Reconstructor), and prints the accuracy of both against the truth.
+(flatline.Reconstructor), and prints the accuracy of both against the
+simulator's ground truth. It also renders one camera frame and finds the
+two laser lines in it with flatline.Extractor, as the gauge does per frame.
 
 The I-Unit profile across the width comes with the flatness component of
 libflatline (flatline.i_units); this example will plot it once the binding
@@ -41,32 +44,32 @@ LENGTH = 9000.0  # mm of sheet along travel
 STEP = 3.0  # mm of travel between frames
 WIDTH = 1500.0  # mm across
 PITCH = 10.0  # mm between fibers
-LASER_SPACING = 100.0  # mm between the two laser lines
 VIBRATION = 2.5  # mm, sigma of the strip's bounce per frame
-PEAK_NOISE = 0.05  # mm, sigma of one laser's height per fiber
+PEAK_NOISE = 1 / 16  # px, sigma of one laser's peak per fiber
 
 
-def surface(s, x):
-    """The true sheet, z (mm) at travel s (mm, column) and width x (mm, row)."""
-    return 12.0 * np.sin(2 * np.pi * s[:, None] / 1800.0) * np.cos(2 * np.pi * x[None, :] / 1500.0)
+def simulate(seed):
+    """Rows (s, height, slope) and the truth from the simulated sensor, and
+    one rendered camera frame with the peaks the extractor finds in it."""
+    fibers = int(round(WIDTH / PITCH)) + 1
+    calib = flatline.Calibration.reference(first_x_mm=-WIDTH / 2, pitch_mm=PITCH,
+                                           fibers=fibers)
+    with flatline.SimulatedLine(calib, sim_seed=seed, sim_frame_spacing=STEP,
+                                sim_strip_width=WIDTH, sim_heave_sigma=VIBRATION,
+                                sim_peak_sigma=PEAK_NOISE) as sim, \
+            flatline.Extractor(calib) as extractor:
+        sim.add_defect(flatline.Defect.CENTRE_BUCKLE, 12.0, 1800.0)
+        sim.add_defect(flatline.Defect.WAVY_EDGE_BOTH, 12.0, 1800.0)
+        rows = sim.next_rows(int(LENGTH / STEP))
+        frame = sim.next_frame()
+        peaks = extractor.peaks(frame.image)
+    return calib, rows, frame, peaks
 
 
-def simulate(rng):
-    s = np.arange(0.0, LENGTH, STEP)
-    x = np.arange(0.0, WIDTH + PITCH / 2, PITCH)
-    rows, fibers = len(s), len(x)
-    bounce = rng.normal(0.0, VIBRATION, (rows, 1))  # one per frame, all fibers
-    behind = surface(s - LASER_SPACING / 2, x) + bounce + rng.normal(0, PEAK_NOISE, (rows, fibers))
-    ahead = surface(s + LASER_SPACING / 2, x) + bounce + rng.normal(0, PEAK_NOISE, (rows, fibers))
-    height = (behind + ahead) / 2
-    slope = (ahead - behind) / LASER_SPACING
-    return s, x, height, slope, surface(s, x)
-
-
-def stream(s, height, slope, block=100):
+def stream(s, height, slope, laser_spacing, block=100):
     """The on-line way: frames arrive in blocks, finished rows come out later."""
     parts = []
-    with flatline.Reconstructor(height.shape[1], laser_spacing=LASER_SPACING) as recon:
+    with flatline.Reconstructor(height.shape[1], laser_spacing=laser_spacing) as recon:
         for start in range(0, len(s), block):
             rows = slice(start, start + block)
             recon.push(s[rows], height[rows], slope[rows])
@@ -99,7 +102,7 @@ def plot(out_dir, s, x, height, z, z_true, fiber):
         fig.colorbar(im, ax=ax, shrink=0.8, label=label)
     axes[0].set_ylabel("s along travel [m]")
     fig.suptitle(f"Reference sheet {LENGTH / 1000:.0f} m x {WIDTH:.0f} mm, "
-                 f"vibration {VIBRATION} mm, peak noise {PEAK_NOISE} mm")
+                 f"vibration {VIBRATION} mm, peak noise {PEAK_NOISE:.4g} px")
     heights_png = os.path.join(out_dir, "heights.png")
     fig.savefig(heights_png, dpi=110)
     plt.close(fig)
@@ -124,6 +127,28 @@ def plot(out_dir, s, x, height, z, z_true, fiber):
     return heights_png, fiber_png
 
 
+def plot_frame(out_dir, frame, peaks):
+    """The rendered camera frame around the two lines, with the sub-pixel
+    peak rows the extractor found (every 8th column, to keep them visible)."""
+    centre = int(np.nanmedian(peaks))
+    top, bottom = max(centre - 60, 0), min(centre + 60, frame.image.shape[0])
+    columns = np.arange(frame.image.shape[1])
+    fig, ax = plt.subplots(figsize=(12, 4), constrained_layout=True)
+    ax.imshow(frame.image[top:bottom], cmap="gray", aspect="auto",
+              extent=[-0.5, columns[-1] + 0.5, bottom - 0.5, top - 0.5])
+    for laser, colour in ((0, "tab:red"), (1, "tab:cyan")):
+        ax.plot(columns[::8], peaks[laser, ::8], ".", ms=2, color=colour,
+                label=f"laser {laser} peaks (extractor)")
+    ax.set_xlabel("u [px]")
+    ax.set_ylabel("v [px]")
+    ax.set_title(f"camera frame at encoder {frame.encoder_mm:.0f} mm (reference sensor)")
+    ax.legend(loc="upper right")
+    frame_png = os.path.join(out_dir, "frame.png")
+    fig.savefig(frame_png, dpi=110)
+    plt.close(fig)
+    return frame_png
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--out", default="reconstruct_sheet_out", help="output directory for the PNGs")
@@ -132,22 +157,29 @@ def main():
     os.makedirs(args.out, exist_ok=True)
 
     print(f"flatline {flatline.__version__} (library {flatline.version()})")
-    s, x, height, slope, z_true = simulate(np.random.default_rng(args.seed))
-    print(f"sheet: {len(s)} rows x {len(x)} fibers")
+    start = time.perf_counter()
+    calib, rows, frame, peaks = simulate(args.seed)
+    s, x, height, slope, z_true = rows.s, calib.fiber_x, rows.height, rows.slope, rows.truth
+    print(f"sheet: {len(s)} rows x {len(x)} fibers, simulated in "
+          f"{time.perf_counter() - start:.2f} s")
 
     start = time.perf_counter()
-    z = flatline.reconstruct(s, height, slope, laser_spacing=LASER_SPACING)
+    z = flatline.reconstruct(s, height, slope, laser_spacing=calib.laser_spacing)
     print(f"whole sheet reconstructed in {time.perf_counter() - start:.2f} s")
     start = time.perf_counter()
-    z_stream = stream(s, height, slope)
+    z_stream = stream(s, height, slope, calib.laser_spacing)
     print(f"streamed in {time.perf_counter() - start:.2f} s")
 
     print(f"raw heights   vs true: {stats(height - z_true)}")
     print(f"reconstructed vs true: {stats(z - z_true)}")
     print(f"streamed      vs true: {stats(z_stream - z_true)}")
+    found = np.isfinite(peaks) & np.isfinite(frame.peak_rows)
+    peak_rms = np.sqrt(np.mean((peaks[found] - frame.peak_rows[found]) ** 2))
+    print(f"extractor peaks vs true line centres: RMS {peak_rms:.4f} px "
+          f"in {100 * found.mean():.1f} % of the columns")
 
-    fiber = int(np.argmin(np.abs(x - 0.0)))  # the edge: largest waves
-    for path in plot(args.out, s, x, height, z, z_true, fiber):
+    fiber = int(np.argmin(np.abs(x - 0.0)))  # the centre: largest waves
+    for path in plot(args.out, s, x, height, z, z_true, fiber) + (plot_frame(args.out, frame, peaks),):
         print(f"wrote {path}")
 
 
