@@ -306,6 +306,85 @@ typedef enum flt_option {
     /* "extract_max_width": widest accepted line, rows at or above half the
      * peak, px. Default 12. */
     FLT_OPT_EXTRACT_MAX_WIDTH = 407,
+
+    /* --- flatness metrics (flatline/flatness.h) --- */
+    /* "flat_window_length": streamed evaluation window, the last N mm of
+     * strip. 0 = no automatic windows (only flt_flatness_finish evaluates,
+     * one window per sheet). Default 3000: at least one period of the
+     * longest flatness waves (500-3000 mm). */
+    FLT_OPT_FLAT_WINDOW_LENGTH = 500,
+    /* "flat_update_interval": strip between two streamed evaluations, mm,
+     * at most flat_window_length; 0 = flat_window_length (windows side by
+     * side). Default 1000 (0.5 s at 120 m/min). */
+    FLT_OPT_FLAT_UPDATE_INTERVAL = 501,
+    /* "flat_zone_width": width of an I-Unit zone across the strip, mm.
+     * Default 50. */
+    FLT_OPT_FLAT_ZONE_WIDTH = 502,
+    /* "flat_reference": the I-Unit reference length, 0 = the shortest valid
+     * fiber (default), 1 = the mean of the valid fibers (integer). */
+    FLT_OPT_FLAT_REFERENCE = 503,
+    /* "flat_min_length": shortest window the metrics accept, mm: one
+     * flatness wave. Default 500 (the shortest defect waves, DESIGN.md). */
+    FLT_OPT_FLAT_MIN_LENGTH = 504,
+    /* "flat_min_coverage": the least share of a window a fiber's usable
+     * rows must cover for the fiber to count, 0..1. Default 0.8. */
+    FLT_OPT_FLAT_MIN_COVERAGE = 505,
+    /* "flat_wave_hysteresis": a crest or trough counts once the profile has
+     * retreated from it by this much, mm. Default 0.3: three times the
+     * reconstruction noise under the reference vibration (0.1 mm rms). */
+    FLT_OPT_FLAT_WAVE_HYSTERESIS = 506,
+    /* "flat_flat_limit": a window whose zone profile spans less than this
+     * is flat, I-Units. Default 5. */
+    FLT_OPT_FLAT_FLAT_LIMIT = 507,
+    /* "flat_bow_limit": |bow| from which FLT_SHAPE_HAS_BOW is set, mm of
+     * sagitta over the window. Default 2. */
+    FLT_OPT_FLAT_BOW_LIMIT = 508,
+    /* "flat_crossbow_limit": |crossbow| from which FLT_SHAPE_HAS_CROSSBOW
+     * is set, mm of sagitta over the width. Default 2. */
+    FLT_OPT_FLAT_CROSSBOW_LIMIT = 509,
+    /* "flat_row_capacity": rows one streamed window (or sheet) may hold
+     * (integer). It costs 9 bytes per row and fiber. Default 4096 (12 m of
+     * strip at 3 mm rows). */
+    FLT_OPT_FLAT_ROW_CAPACITY = 510,
+
+    /* --- frame sources (flatline/source.h) --- */
+    /* "source_encoder_mode": where a frame's encoder position comes from
+     * (integer): 0 auto, 1 fixed step, 2 host (flt_source_set_encoder),
+     * 3 camera chunk counter. Default 0; see flatline/source.h. */
+    FLT_OPT_SOURCE_ENCODER_MODE = 600,
+    /* "source_encoder_step": travel per frame (per block id) in fixed-step
+     * mode, mm. Default 3 (the reference sensor's frame spacing). */
+    FLT_OPT_SOURCE_ENCODER_STEP = 601,
+    /* "source_encoder_start": encoder position of the first frame (fixed
+     * step) or of count 0 (chunk counter), mm. Default 0. */
+    FLT_OPT_SOURCE_ENCODER_START = 602,
+    /* "source_encoder_mm_per_count": travel per encoder count of a chunk
+     * counter, mm. Default 0.01 (the reference sensor's encoder). */
+    FLT_OPT_SOURCE_ENCODER_MM_PER_COUNT = 603,
+    /* "source_encoder_chunk_id": the chunk id of the camera's encoder
+     * counter (integer; camera specific, see its XML's ChunkID). Default
+     * 0x4E434445, the simulated camera's. */
+    FLT_OPT_SOURCE_ENCODER_CHUNK_ID = 604,
+    /* "source_image_bits": significant bits of 16-bit image files: 0 (the
+     * default) = Mono16, or 10 or 12 (integer). */
+    FLT_OPT_SOURCE_IMAGE_BITS = 605,
+    /* "u3v_transfers": asynchronous bulk transfers kept in flight (integer).
+     * Default 8: 8 MiB at the default size, half of Linux's default 16 MB
+     * usbfs memory. */
+    FLT_OPT_U3V_TRANSFERS = 606,
+    /* "u3v_transfer_size": largest payload transfer, bytes (integer; rounded
+     * down to the camera's alignment). Default 1048576 (1 MiB). */
+    FLT_OPT_U3V_TRANSFER_SIZE = 607,
+    /* "u3v_control_timeout": floor of the control channel timeout, ms
+     * (integer); the camera's max device response time is used when
+     * larger. Default 200. */
+    FLT_OPT_U3V_CONTROL_TIMEOUT = 608,
+    /* "u3v_pending_ack_limit": pending acknowledges accepted for one command
+     * before giving up (integer). Default 5. */
+    FLT_OPT_U3V_PENDING_ACK_LIMIT = 609,
+    /* "u3v_command_attempts": times a command is sent when no acknowledge
+     * comes (integer). Default 3. */
+    FLT_OPT_U3V_COMMAND_ATTEMPTS = 610,
     /* Not an option: makes every int a valid flt_option value, so any key
      * can be passed (and rejected with a message) without undefined
      * behaviour. New keys go above this line. */

@@ -11,5 +11,6 @@
 #include "flatline/calib.h"
 #include "flatline/extractor.h"
 #include "flatline/sim.h"
+#include "flatline/flatness.h"
 
 #endif /* FLATLINE_FLATLINE_H */

@@ -1,0 +1,289 @@
+/*
+ * libflatline - flatness metrics: I-Units per fiber and per zone, the largest
+ * wave, the shape class, bow and crossbow.
+ *
+ * What it measures
+ *   Input is reconstructed rows (flt_recon_pull or flt_reconstruct output):
+ *   per row its material position s (mm) and per fiber the height z (mm) and
+ *   the reconstructor's FLT_FLAG_* bits. Fiber k lies at x[k] across the
+ *   width (mm), given at create time (or taken from a calibration's fiber
+ *   grid). One evaluation covers a window of rows (a sheet, or the last
+ *   flat_window_length mm of strip) and gives:
+ *
+ *   per fiber
+ *     arc length l_k (mm) of z(s) over the window, and its I-Units
+ *       I_k = (l_k - l_ref) / l_ref * 1e5        (ASTM A1030 practice)
+ *     with l_ref the shortest valid fiber (flat_reference = 0, default) or
+ *     the mean of the valid fibers (flat_reference = 1). For a sine of
+ *     peak-to-peak height H and period P, I = 2.467 (H/P)^2 1e5 for small
+ *     H/P.
+ *     the largest wave: peak-to-peak height H (mm), period P (mm) and
+ *     steepness 100 H / P (%). Waves are found from the alternating crests
+ *     and troughs of z(s) (an extremum counts once z has retreated from it
+ *     by flat_wave_hysteresis mm, which rejects reconstruction noise); each
+ *     crest-trough-crest or trough-crest-trough triple is one wave, with
+ *     H = |mean(outer two) - middle| (a level or a linear trend of the fiber
+ *     cancels) and P = the distance between the outer two. Extremum heights
+ *     and positions are refined with a parabola through three rows.
+ *   per zone
+ *     the mean I-Units of the valid fibers in the zone. Zones are
+ *     flat_zone_width mm wide, laid out symmetrically about the centre of
+ *     the fiber grid and covering it: n = ceil(width / flat_zone_width) with
+ *     width = x[last] - x[0] + the mean fiber pitch; the outer two zones may
+ *     hold fewer fibers. This is the profile a leveler operator reads.
+ *   per window
+ *     the shape class with a confidence in [0, 1] (see flt_shape), and
+ *     bow_mm: coil set, from the mean longitudinal curvature kappa (1/mm) of
+ *       the flattest quarter of the valid fibers (lowest I-Units: there the
+ *       buckles are smallest, and coil set is common to the whole width), by
+ *       a least-squares parabola in s; reported as the sagitta over the
+ *       window, kappa L^2 / 8 with L its length: > 0 when the window's ends
+ *       lie higher than its middle.
+ *     crossbow_mm: the transverse curvature of the fibers' mean heights over
+ *       the window, by a least-squares parabola in x, as the sagitta over the
+ *       width: > 0 when the edges lie higher than the centre.
+ *
+ * Arc length
+ *   Rows are about 3 mm apart and the reconstructed profile is a smooth
+ *   spline, so the arc length is the sum of the chords between consecutive
+ *   rows, summed as the excess over the travel, sqrt(ds^2 + dz^2) - ds =
+ *   dz^2 / (sqrt(ds^2 + dz^2) + ds), which keeps the 1e-5-level differences
+ *   free of cancellation. See lib/flatness/flatness.cpp for the error bound.
+ *
+ * Invalid data (FLT_FLAG_NO_DATA, FLT_FLAG_GAP, non-finite z)
+ *   A fiber's sample is usable when its z is finite and its flags carry
+ *   neither FLT_FLAG_NO_DATA nor FLT_FLAG_GAP (a value the reconstructor
+ *   bridged over a long run without measurements is not a measurement).
+ *   FLT_FLAG_INVALID_INPUT alone is usable: the spline bridged a short run.
+ *   Chords are summed only between two usable consecutive rows; the fiber's
+ *   arc length is then its covered excess per covered mm, scaled to the
+ *   window length (flag FLT_FIBER_PARTIAL). A fiber covering less than
+ *   flat_min_coverage of the window is flagged FLT_FIBER_NO_DATA and takes
+ *   no part in the reference, zones, shape, bow or crossbow. No wave spans an
+ *   unusable row.
+ *
+ * NaN policy
+ *   A result that cannot be computed is NaN AND flagged: NaN appears only
+ *   where the matching flag (FLT_FIBER_NO_DATA, FLT_FIBER_NO_WAVE,
+ *   FLT_ZONE_NO_DATA) or window flag says so. Every unflagged value is a
+ *   finite number.
+ *
+ * Two ways to use it
+ *   flt_flatness_evaluate(): one window from the caller's rows (a whole
+ *   sheet). Bad input (too short, no valid fiber) is an error and the
+ *   previous results stay.
+ *   flt_flatness_push() / flt_flatness_finish(): streaming. The window grid
+ *   starts at the first row pushed after create, finish or reset (s0):
+ *   windows end at s0 + flat_window_length + j * flat_update_interval and
+ *   hold the rows with s in [end - flat_window_length, end). A window is
+ *   evaluated when the first row at or past its end arrives; push stops
+ *   there (so no result is overwritten unseen) and tells how many rows it
+ *   took. finish() evaluates the rows since the last window's start as a
+ *   last window (the end of a sheet) and restarts the grid. A streamed
+ *   window that is too short or has no valid fiber is still reported, with
+ *   FLT_WINDOW_SHORT / FLT_WINDOW_NO_VALID_FIBER set and the affected
+ *   values NaN and flagged: the stream never stops on bad material.
+ *
+ * Memory
+ *   flt_flatness_create() allocates everything for windows of up to
+ *   flat_row_capacity rows; push, finish and the result getters allocate
+ *   nothing. flt_flatness_evaluate() grows its scratch when given more rows
+ *   than flat_row_capacity (once; later calls of that size reuse it).
+ *
+ * Threads
+ *   A flt_flatness must not be used from two threads at once. Separate
+ *   handles are independent.
+ */
+#ifndef FLATLINE_FLATNESS_H
+#define FLATLINE_FLATNESS_H
+
+#include "flatline/calib.h"
+#include "flatline/common.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Per-fiber result flags (bits combine). */
+enum {
+    /* Less than flat_min_coverage of the window usable: arc length, I-Units
+     * and the wave are NaN. */
+    FLT_FIBER_NO_DATA = 1,
+    /* No complete wave above flat_wave_hysteresis in the window (a flat
+     * fiber, or waves longer than the window): the wave height, period and
+     * steepness are NaN. */
+    FLT_FIBER_NO_WAVE = 2,
+    /* Some rows were unusable; the arc length is scaled from the covered
+     * part (still at least flat_min_coverage). */
+    FLT_FIBER_PARTIAL = 4
+};
+
+/* Per-zone result flag: no valid fiber in the zone, I-Units NaN. */
+enum { FLT_ZONE_NO_DATA = 1 };
+
+/* Per-window flags. */
+enum {
+    /* Shorter than flat_min_length (shorter than one flatness wave):
+     * I-Units are still the arc-length ratios of that material, but no wave
+     * is reported and the shape is FLT_SHAPE_UNDETERMINED. */
+    FLT_WINDOW_SHORT = 1,
+    /* No fiber is valid: every value is NaN and flagged. */
+    FLT_WINDOW_NO_VALID_FIBER = 2,
+    /* No valid fiber has 3 usable rows for a parabola: bow_mm is NaN. */
+    FLT_WINDOW_NO_BOW = 4,
+    /* Fewer than 3 valid fibers: crossbow_mm is NaN. */
+    FLT_WINDOW_NO_CROSSBOW = 8
+};
+
+/* The shape class of a window, from its zone I-Unit profile p (minus its
+ * minimum). Let peak = max p. Below flat_flat_limit I-Units the window is
+ * FLAT. Otherwise the "long" material is the part of p above peak / 2; its
+ * share in each band of u = (x - centre) / (width / 2) decides:
+ *   centre |u| < 0.3, quarters 0.3 <= |u| < 0.7, left edge u <= -0.7,
+ *   right edge u >= 0.7.
+ * A band holding at least 15% of the long material is a component of the
+ * shape (flt_shape_component bits). One component group (centre, quarters,
+ * edges) gives its class; the edges give LEFT, RIGHT or BOTH; two or more
+ * groups give MIX. Confidence: FLAT 1 - peak / (2 limit) (1 for a perfectly
+ * flat window, 0.5 at the limit); any other class a * e, with the amplitude
+ * margin a = min(1, peak / (2 limit)) (0.5 at the limit, 1 from twice the
+ * limit) and e the share of the long material in the named components. */
+typedef enum flt_shape {
+    FLT_SHAPE_FLAT = 0,
+    FLT_SHAPE_CENTRE_BUCKLE = 1,
+    FLT_SHAPE_WAVY_EDGE_LEFT = 2,  /* x < centre is left */
+    FLT_SHAPE_WAVY_EDGE_RIGHT = 3,
+    FLT_SHAPE_WAVY_EDGE_BOTH = 4,
+    FLT_SHAPE_QUARTER_BUCKLE = 5,
+    FLT_SHAPE_MIX = 6,             /* see the component bits */
+    /* Too short a window, no valid fiber, or fewer than 5 valid zones. */
+    FLT_SHAPE_UNDETERMINED = 7,
+    FLT_SHAPE_MAX_ENUM_ = 0x7FFFFFFF
+} flt_shape;
+
+/* Components of a shape (bits combine). BOW and CROSSBOW are set when
+ * |bow_mm| >= flat_bow_limit and |crossbow_mm| >= flat_crossbow_limit; they
+ * do not change the class, which is about fiber lengths only. */
+enum {
+    FLT_SHAPE_HAS_CENTRE = 1,
+    FLT_SHAPE_HAS_EDGE_LEFT = 2,
+    FLT_SHAPE_HAS_EDGE_RIGHT = 4,
+    FLT_SHAPE_HAS_QUARTER = 8,
+    FLT_SHAPE_HAS_BOW = 16,
+    FLT_SHAPE_HAS_CROSSBOW = 32
+};
+
+/* A lower-case English name of a shape, e.g. "centre buckle". Never NULL;
+ * "unknown" for a value outside the enum. Static storage. */
+FLT_API const char *FLT_CALL flt_shape_string(flt_shape shape);
+
+typedef struct flt_flatness flt_flatness;
+
+/* Creates the metrics for `fibers` fibers (>= 1) at fiber_x [fibers] (mm,
+ * finite, strictly increasing; copied).
+ * options: NULL for the defaults, else read for the flat_* keys; copied.
+ * Fails with FLT_ERR_INVALID_ARGUMENT for NULL, zero fibers, bad positions
+ * or inconsistent options (flat_update_interval > flat_window_length). */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_flatness_create(size_t fibers, const double *fiber_x,
+                    const flt_options *options, flt_flatness **out);
+
+/* The same with the fiber grid of a calibration (flt_calib_get_fiber_grid);
+ * calib is only read during the call. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_flatness_create_from_calib(const flt_calib *calib,
+                               const flt_options *options, flt_flatness **out);
+
+/* Frees everything. NULL is a no-op. */
+FLT_API void FLT_CALL flt_flatness_destroy(flt_flatness *flatness);
+
+/* The fiber and zone counts. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_flatness_fibers(const flt_flatness *flatness, size_t *out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_flatness_zones(const flt_flatness *flatness, size_t *out);
+
+/* The zone layout: zone j covers [left_x[j], left_x[j] + zone width) mm,
+ * centre_x[j] its middle, fiber_count[j] the fibers in it. `zones` must
+ * equal flt_flatness_zones(). Any output may be NULL. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_flatness_zone_layout(const flt_flatness *flatness, size_t zones,
+                         double *left_x_out, double *centre_x_out,
+                         size_t *fiber_count_out);
+
+/* Evaluates one window from the caller's rows (a whole sheet):
+ *   s      [rows]          material position, mm, finite, strictly
+ *                          increasing.
+ *   z      [rows * fibers] reconstructed heights, mm (NaN allowed where
+ *                          flagged or invalid).
+ *   flags  [rows * fibers] FLT_FLAG_* bits from the reconstructor, or NULL.
+ * `fibers` must equal the handle's. Independent of the streaming state.
+ * Fails with FLT_ERR_INVALID_ARGUMENT, keeping the previous results, for
+ * NULL arrays, rows < 2, non-increasing s, a window shorter than
+ * flat_min_length, or no fiber with flat_min_coverage of usable data. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_flatness_evaluate(flt_flatness *flatness, size_t rows, size_t fibers,
+                      const double *s, const double *z, const uint8_t *flags);
+
+/* Streaming: takes rows (arrays as in flt_flatness_evaluate; s continues to
+ * increase across calls) until a window completes. *consumed_out: the rows
+ * taken (all of them unless a window completed first); *evaluated_out: 1 if
+ * a window was evaluated (its results are now readable), else 0. Call again
+ * with the rest. Fails with FLT_ERR_BUFFER_FULL when a window would hold
+ * more than flat_row_capacity rows (create with a larger capacity); the
+ * rows taken before are kept and counted in *consumed_out. Any other failure
+ * takes no row. flat_window_length = 0 means no automatic windows: only
+ * finish() evaluates, and a sheet must fit in flat_row_capacity rows. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_flatness_push(flt_flatness *flatness, size_t rows, size_t fibers,
+                  const double *s, const double *z, const uint8_t *flags,
+                  size_t *consumed_out, int *evaluated_out);
+
+/* Ends the current sheet: evaluates the rows since the current window's
+ * start as one window (*evaluated_out = 1; flagged FLT_WINDOW_SHORT if
+ * shorter than flat_min_length), or does nothing (*evaluated_out = 0) when
+ * fewer than 2 rows are pending. The next row pushed starts a new grid. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_flatness_finish(flt_flatness *flatness, int *evaluated_out);
+
+/* Drops the pending rows and restarts the window grid; results stay. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_reset(flt_flatness *flatness);
+
+/* The last evaluated window: its first and last row's s (mm), its row
+ * count, FLT_WINDOW_* flags and its sequence number (1 for the first window
+ * since create). Any output may be NULL. FLT_ERR_STATE before the first
+ * window. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_flatness_window(const flt_flatness *flatness, double *s_first_out,
+                    double *s_last_out, size_t *rows_out,
+                    unsigned *window_flags_out, size_t *index_out);
+
+/* Per-fiber results of the last window, [fibers] each (mm, I-Units, mm, mm,
+ * %, FLT_FIBER_* bits). Any output may be NULL. FLT_ERR_STATE before the
+ * first window. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_flatness_fiber_results(const flt_flatness *flatness, size_t fibers,
+                           double *arc_length_out, double *i_units_out,
+                           double *wave_height_out, double *wave_period_out,
+                           double *steepness_percent_out, uint8_t *flags_out);
+
+/* The zone profile of the last window, [zones] I-Units and FLT_ZONE_* bits.
+ * Either output may be NULL. FLT_ERR_STATE before the first window. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_flatness_zone_results(const flt_flatness *flatness, size_t zones,
+                          double *i_units_out, uint8_t *flags_out);
+
+/* The shape of the last window: class, confidence in [0, 1],
+ * FLT_SHAPE_HAS_* bits, bow and crossbow sagittas (mm; NaN only with
+ * FLT_WINDOW_NO_BOW / FLT_WINDOW_NO_CROSSBOW). Any output may be NULL. FLT_ERR_STATE before
+ * the first window. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_flatness_shape(const flt_flatness *flatness, flt_shape *shape_out,
+                   double *confidence_out, unsigned *components_out,
+                   double *bow_mm_out, double *crossbow_mm_out);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* FLATLINE_FLATNESS_H */
