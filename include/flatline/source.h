@@ -1,0 +1,477 @@
+/*
+ * libflatline - frame sources: a USB3 Vision camera (over libusb-1.0, no
+ * camera SDK), recorded image sequences and the simulator, behind one handle.
+ *
+ * A sensor is a camera plus an encoder. Every frame a source delivers carries
+ * its pixels, pixel format, size, stride, block id, timestamp and the encoder
+ * position of the strip when it was taken, so the same acquisition loop runs
+ * on a line, on recorded images and on the simulator:
+ *
+ *     flt_source *src;  const flt_frame *frame;
+ *     flt_source_open_u3v(NULL, NULL, options, &src);   (or _create_sim/_images)
+ *     flt_source_start(src);
+ *     while (flt_source_next(src, 1000, &frame) == FLT_OK && frame) {
+ *         const void *pixels; uint32_t w, h; size_t stride; ...
+ *         flt_frame_info(frame, &pixels, &w, &h, &stride, &format,
+ *                        &block_id, &timestamp_ns, &encoder_mm);
+ *         flt_extractor_process(ex, pixels, format, w, h, stride, encoder_mm, ...);
+ *     }
+ *     flt_source_destroy(src);          (stops the camera cleanly)
+ *
+ * Frame memory and lifetime
+ *   Frames live in buffers the source allocates when it is created or
+ *   started; nothing is allocated per frame (except inside OpenCV's image
+ *   decoder for image sequences, an offline path). The frame returned by
+ *   flt_source_next() is borrowed: it stays valid and unchanged until the
+ *   next call of flt_source_next(), flt_source_stop() or
+ *   flt_source_destroy() on the same source. Copy it out (the pixels are
+ *   `height` rows of `stride_bytes`) to keep it longer.
+ *
+ * Encoder positions (encoder_mm, mm of strip travel; see lib/sources/README.md
+ * for how to wire a real encoder). The option "source_encoder_mode" picks:
+ *   0 auto        simulator: its own encoder position; images: the CSV file
+ *                 when one is given, else fixed step; camera: fixed step.
+ *   1 fixed step  encoder_mm = source_encoder_start + source_encoder_step *
+ *                 (block_id - first block id). Block ids count every frame
+ *                 the camera took, so frames lost on the way keep their
+ *                 travel (a triggered camera takes one frame per step).
+ *   2 host        the host reads its encoder itself and calls
+ *                 flt_source_set_encoder(); each frame carries the value
+ *                 set last before flt_source_next() returned it (NaN before
+ *                 the first call).
+ *   3 chunk       a USB3 Vision camera counting encoder pulses appends the
+ *                 count as a chunk (id source_encoder_chunk_id, a 32- or
+ *                 64-bit little-endian counter); encoder_mm =
+ *                 source_encoder_start + source_encoder_mm_per_count *
+ *                 count, with 32-bit wraps unrolled.
+ *
+ * Frame accounting (USB3 Vision)
+ *   A frame that arrives damaged is dropped and counted, and the next good
+ *   frame is delivered by the same flt_source_next() call when it arrives
+ *   in time; the reason of the last drop is flt_source_stream_error().
+ *   The outcome of each failure mode seen in the field:
+ *     short frame     (payload sum != trailer's valid size or < image size,
+ *                     or a non-zero trailer status)  DROPPED, SHORT
+ *     new leader while a frame is open               DROPPED, INCOMPLETE
+ *     overflow (a transfer bigger than its buffer, or more payload than
+ *                     the stream was set up for)     DROPPED, OVERFLOW
+ *     skipped block ids                 LOST += the ids missing (the frame
+ *                                       after the gap is delivered)
+ *     bulk submit refused (usbfs memory) SUBMIT_REFUSED; the open frame, or
+ *                                       the next one if none is open, is
+ *                                       DROPPED (SUBMIT_DROPPED: the camera
+ *                                       may have sent data nobody was waiting
+ *                                       for); the transfer is submitted again
+ *                                       on the next completion or call;
+ *                                       FLT_ERR_DEVICE if none can be submitted
+ *   The rest of a dropped frame (its payload, its trailer) is discarded
+ *   silently until the next leader; data outside any frame is BAD_PACKETS.
+ *     no data within the timeout        TIMEOUTS; flt_source_next() returns
+ *                                       FLT_ERR_TIMEOUT; a partial frame is
+ *                                       DROPPED
+ *     camera unplugged                  DISCONNECTS; FLT_ERR_DEVICE now and on
+ *                                       every later call; destroy still works
+ *     garbage transfers                 BAD_PACKETS
+ *   The control channel counts PENDING_ACKS, STALE_ACKS and COMMAND_RETRIES.
+ *
+ * GenICam features (USB3 Vision)
+ *   Opening a camera reads its bootstrap registers, its manifest and its
+ *   GenICam XML (zipped or not). Features are resolved by name when used, for
+ *   the simple node kinds: IntReg, MaskedIntReg, Integer (Value or pValue),
+ *   Float (Value or pValue), FloatReg, Enumeration/EnumEntry, Command,
+ *   Boolean, with constant addresses. A feature behind a formula (SwissKnife,
+ *   Converter) or a computed address fails with FLT_ERR_NOT_FOUND naming the
+ *   feature and the node kind that stopped it; flt_source_map_feature() then
+ *   gives its register by address instead. Streaming needs Width, Height,
+ *   PixelFormat, AcquisitionMode, AcquisitionStart and AcquisitionStop; a
+ *   laser-line sensor typically also sets OffsetY, Height, ExposureTime and
+ *   TriggerSelector/TriggerMode/TriggerSource before flt_source_start().
+ *
+ * Threads
+ *   A source must not be used from two threads at once. Different sources
+ *   are independent. flt_u3v_sim must not be used from two threads at once
+ *   either, nor while a source opened on it is used from another thread.
+ */
+#ifndef FLATLINE_SOURCE_H
+#define FLATLINE_SOURCE_H
+
+#include "flatline/common.h"
+#include "flatline/extractor.h"
+#include "flatline/sim.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct flt_source flt_source;
+/* A frame borrowed from its source (see "Frame memory and lifetime"). */
+typedef struct flt_frame flt_frame;
+/* A snapshot of the cameras present. */
+typedef struct flt_camera_list flt_camera_list;
+/* A simulated USB bus with simulated USB3 Vision cameras (see below). */
+typedef struct flt_u3v_sim flt_u3v_sim;
+
+typedef enum flt_source_kind {
+    FLT_SOURCE_SIMULATOR = 1,
+    FLT_SOURCE_IMAGES = 2,
+    FLT_SOURCE_U3V = 3,
+    FLT_SOURCE_KIND_MAX_ENUM_ = 0x7FFFFFFF
+} flt_source_kind;
+
+/* ---------------------------------------------------------------------- */
+/* Creating a source                                                       */
+/* ---------------------------------------------------------------------- */
+
+/* A source of rendered frames from a simulator (flt_sim_next_frame), each
+ * with the simulator's own encoder position (encoder mode 0), or the mode's
+ * value for modes 1 and 2; mode 3 is refused. `sim` is borrowed: it must
+ * outlive the source, and the caller may still change its sheet between
+ * frames. Block ids count from 0; timestamps are the host's monotonic clock,
+ * ns. Allocates one frame buffer. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_source_create_sim(flt_sim *sim, const flt_options *options, flt_source **out);
+
+/* A source reading `count` image files (PNG, TIFF or anything OpenCV's
+ * imread reads), in the given order. Every file must be single-channel, 8 or
+ * 16 bits, and the size of the first. 8-bit files give Mono8; 16-bit files
+ * give Mono16, or Mono10/Mono12 when the option source_image_bits says so.
+ *   paths        [count] file names, copied (count >= 1).
+ *   encoder_csv  NULL, or a CSV file of the encoder positions, mm, one row
+ *                per image in order: either "encoder_mm" or
+ *                "file name,encoder_mm" (then the name must match the
+ *                image's name without its folder). Lines starting with '#'
+ *                and a first line whose last field is not a number (a
+ *                header) are skipped. Read and checked here: a wrong row
+ *                count or a bad number fails with FLT_ERR_FORMAT naming the
+ *                line.
+ * Without a CSV the positions follow the fixed step. Block id = index of the
+ * file. Timestamps are the host's monotonic clock, ns. The first file is read
+ * here to learn the size. After the last image flt_source_next() gives
+ * FLT_OK with *out = NULL. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_source_create_images(const char *const *paths, size_t count,
+                         const char *encoder_csv, const flt_options *options,
+                         flt_source **out);
+
+/* The same for every *.png, *.tif and *.tiff file of `directory` (not its
+ * sub-folders), sorted by name (byte order). FLT_ERR_NOT_FOUND if there is
+ * none. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_source_create_image_dir(const char *directory, const char *encoder_csv,
+                            const flt_options *options, flt_source **out);
+
+/* Lists the USB3 Vision cameras present: on the USB bus through libusb when
+ * `bus` is NULL, else on a simulated bus. Devices that are not USB3 Vision are
+ * skipped; cameras that cannot be opened to read their strings (no udev rule,
+ * no WinUSB driver) are listed with vendor "?" and the reason as their
+ * model. FLT_ERR_DEVICE if libusb cannot start. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_camera_list_create(flt_u3v_sim *bus, flt_camera_list **out);
+FLT_API void FLT_CALL flt_camera_list_destroy(flt_camera_list *list);
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_camera_list_count(const flt_camera_list *list, size_t *out);
+/* Camera `index`: its strings (owned by the list, valid until it is
+ * destroyed) and its link speed, Mbit/s (480 high speed, 5000 super speed,
+ * 10000 super speed plus; 0 unknown). Any output may be NULL. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_camera_list_get(const flt_camera_list *list, size_t index,
+                    const char **vendor, const char **model,
+                    const char **serial, uint32_t *speed_mbps);
+
+/* Opens a USB3 Vision camera: on the USB bus when `bus` is NULL, else on a
+ * simulated bus (which must outlive the source). `serial` picks the camera
+ * with that serial number; NULL takes the first one. Reads the bootstrap
+ * registers and the GenICam XML, and leaves a camera that a killed process
+ * left streaming stopped (AcquisitionStop, SI control = 0, stream endpoint
+ * halt cleared). FLT_ERR_NOT_FOUND names a serial that is not present;
+ * FLT_ERR_DEVICE says why a camera cannot be opened (permissions: see
+ * lib/sources/deploy/). The stream buffers are allocated by
+ * flt_source_start(). */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_source_open_u3v(flt_u3v_sim *bus, const char *serial,
+                    const flt_options *options, flt_source **out);
+
+/* Stops a streaming camera, releases it and frees everything. NULL is a
+ * no-op. */
+FLT_API void FLT_CALL flt_source_destroy(flt_source *source);
+
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_source_kind_of(const flt_source *source, flt_source_kind *out);
+
+/* ---------------------------------------------------------------------- */
+/* Acquisition                                                             */
+/* ---------------------------------------------------------------------- */
+
+/* Starts acquisition. Camera: reads Width, Height, PixelFormat, sets
+ * AcquisitionMode = Continuous, sets up the stream interface (SIRM: payload
+ * transfer size a multiple of the alignment, at most u3v_transfer_size),
+ * allocates the pool of u3v_transfers bulk transfers and the frame buffer,
+ * and executes AcquisitionStart. Simulator and images: resets the block ids
+ * (a started source starts again from its first frame only for images).
+ * FLT_ERR_STATE if already started. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_start(flt_source *source);
+
+/* Stops acquisition: camera AcquisitionStop, SI control = 0, transfers
+ * cancelled. Stopping a stopped source is a no-op. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_stop(flt_source *source);
+
+/* Waits up to timeout_ms for the next good frame (see "Frame accounting").
+ * *out is the borrowed frame; NULL (with FLT_OK) at the end of an image
+ * sequence. FLT_ERR_TIMEOUT when no good frame came in time,
+ * FLT_ERR_DEVICE when the camera is gone, FLT_ERR_STATE before start. The
+ * simulator and images never wait. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_source_next(flt_source *source, uint32_t timeout_ms, const flt_frame **out);
+
+/* Everything about a frame; any output may be NULL.
+ *   pixels        height rows of stride_bytes, `format` pixels (16-bit
+ *                 formats: host-order words, data in the low bits).
+ *   width, height px; stride_bytes >= width * bytes per pixel.
+ *   block_id      the camera's frame counter (simulator and images: the
+ *                 frame index).
+ *   timestamp_ns  camera: the leader's timestamp (device clock, ns);
+ *                 otherwise the host's monotonic clock at delivery, ns.
+ *   encoder_mm    the strip position, mm (see "Encoder positions"). */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_frame_info(const flt_frame *frame, const void **pixels, uint32_t *width,
+               uint32_t *height, size_t *stride_bytes, flt_pixel_format *format,
+               uint64_t *block_id, uint64_t *timestamp_ns, double *encoder_mm);
+
+/* Encoder mode 2: the position the next frames carry, mm (finite).
+ * FLT_ERR_STATE in any other mode. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_source_set_encoder(flt_source *source, double encoder_mm);
+
+/* Frame and channel counters, since the source was created. */
+typedef enum flt_source_counter {
+    FLT_COUNT_FRAMES = 0,          /* good frames delivered */
+    FLT_COUNT_DROPPED = 1,         /* frames that arrived damaged (sum of the
+                                      next five and BAD_LEADERS) */
+    FLT_COUNT_SHORT = 2,
+    FLT_COUNT_INCOMPLETE = 3,      /* a new leader arrived mid-frame */
+    FLT_COUNT_OVERFLOW = 4,
+    FLT_COUNT_SUBMIT_DROPPED = 5,  /* frames dropped after a refused submit */
+    FLT_COUNT_TIMEOUT_DROPPED = 6, /* partial frames dropped at a timeout */
+    FLT_COUNT_LOST = 7,            /* block ids skipped (frames never seen) */
+    FLT_COUNT_SUBMIT_REFUSED = 8,  /* bulk submissions refused */
+    FLT_COUNT_TIMEOUTS = 9,        /* flt_source_next() calls that timed out */
+    FLT_COUNT_DISCONNECTS = 10,
+    FLT_COUNT_BAD_PACKETS = 11,    /* transfers that are no leader, payload
+                                      of an open frame, or trailer */
+    FLT_COUNT_BAD_LEADERS = 12,    /* leaders with an unusable format/size */
+    FLT_COUNT_PENDING_ACKS = 13,
+    FLT_COUNT_STALE_ACKS = 14,
+    FLT_COUNT_COMMAND_RETRIES = 15,
+    FLT_COUNT_STREAM_RECOVERIES = 16, /* cameras found streaming on open */
+    FLT_COUNT_MAX_ENUM_ = 0x7FFFFFFF
+} flt_source_counter;
+
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_source_count(const flt_source *source, flt_source_counter counter,
+                 uint64_t *out);
+
+/* Why the last frame was dropped or lost ("" if none was). Owned by the
+ * source, valid until its next call. Never NULL (for a NULL source too). */
+FLT_API const char *FLT_CALL flt_source_stream_error(const flt_source *source);
+
+/* ---------------------------------------------------------------------- */
+/* USB3 Vision cameras                                                     */
+/* ---------------------------------------------------------------------- */
+
+/* Camera strings from the bootstrap registers (ABRM). */
+typedef enum flt_camera_string {
+    FLT_CAMERA_VENDOR = 0,
+    FLT_CAMERA_MODEL = 1,
+    FLT_CAMERA_FAMILY = 2,
+    FLT_CAMERA_DEVICE_VERSION = 3,
+    FLT_CAMERA_MANUFACTURER_INFO = 4,
+    FLT_CAMERA_SERIAL = 5,
+    FLT_CAMERA_USER_NAME = 6,
+    FLT_CAMERA_STRING_MAX_ENUM_ = 0x7FFFFFFF
+} flt_camera_string;
+
+/* The string (owned by the source, valid until it is destroyed).
+ * FLT_ERR_STATE for a source that is not a camera. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_source_camera_string(const flt_source *source, flt_camera_string which,
+                         const char **out);
+
+/* Camera values read from the registers or chosen for the stream. */
+typedef enum flt_camera_value {
+    FLT_CAMERA_GENCP_VERSION = 0,      /* ABRM 0x000 (major << 16 | minor) */
+    FLT_CAMERA_U3V_VERSION = 1,        /* SBRM 0x00 */
+    FLT_CAMERA_RESPONSE_TIME_MS = 2,   /* ABRM max device response time */
+    FLT_CAMERA_CONTROL_TIMEOUT_MS = 3, /* max(u3v_control_timeout, above) */
+    FLT_CAMERA_MAX_COMMAND_BYTES = 4,  /* SBRM max command transfer */
+    FLT_CAMERA_MAX_ACK_BYTES = 5,      /* SBRM max ack transfer */
+    FLT_CAMERA_SIRM_ADDRESS = 6,
+    FLT_CAMERA_MANIFEST_ADDRESS = 7,
+    FLT_CAMERA_XML_BYTES = 8,          /* the XML file as stored (zipped size) */
+    FLT_CAMERA_XML_ZIPPED = 9,         /* 1 when it was a ZIP */
+    FLT_CAMERA_SPEED_MBPS = 10,
+    FLT_CAMERA_ALIGNMENT = 11,         /* SIRM, bytes (after start) */
+    FLT_CAMERA_PAYLOAD_BYTES = 12,     /* SIRM required payload size */
+    FLT_CAMERA_TRANSFER_BYTES = 13,    /* payload transfer size written */
+    FLT_CAMERA_TRANSFER_COUNT = 14,
+    FLT_CAMERA_FINAL_TRANSFER_BYTES = 15,
+    FLT_CAMERA_MAX_LEADER_BYTES = 16,
+    FLT_CAMERA_MAX_TRAILER_BYTES = 17,
+    FLT_CAMERA_VALUE_MAX_ENUM_ = 0x7FFFFFFF
+} flt_camera_value;
+
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_source_camera_value(const flt_source *source, flt_camera_value which,
+                        uint64_t *out);
+
+/* GenICam features by name (e.g. "Width", "ExposureTime", "TriggerMode").
+ * Integers: IntReg, MaskedIntReg, Integer, Boolean, and Enumeration (its
+ * value); floats: Float, FloatReg (and integers, converted); enumerations by
+ * entry name ("Continuous"); commands write their command value. A value is
+ * written as is: the camera checks its range and answers a GenCP status,
+ * which the error message names. FLT_ERR_STATE for a source that is not a
+ * camera. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_source_get_int(flt_source *source, const char *feature, int64_t *out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_source_set_int(flt_source *source, const char *feature, int64_t value);
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_source_get_float(flt_source *source, const char *feature, double *out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_source_set_float(flt_source *source, const char *feature, double value);
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_source_set_enum(flt_source *source, const char *feature, const char *entry);
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_source_execute(flt_source *source, const char *feature);
+
+/* Gives feature `feature` a register instead of its XML node (for features
+ * the client cannot resolve, or to override one): `length` bytes (1, 2, 4 or
+ * 8) at `address`, little-endian; an unsigned integer, or an IEEE float
+ * (length 4 or 8) when is_float is non-zero. Commands write 1 to it.
+ * Enumerations mapped this way take their integer values (set_int). */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_source_map_feature(flt_source *source, const char *feature,
+                       uint64_t address, uint32_t length, int is_float);
+
+/* Raw register access through GenCP (chunked to the camera's limits). */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_source_read_memory(flt_source *source, uint64_t address, void *out,
+                       size_t bytes);
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_source_write_memory(flt_source *source, uint64_t address,
+                        const void *bytes_in, size_t bytes);
+
+/* ---------------------------------------------------------------------- */
+/* Simulated USB3 Vision cameras (testing without hardware)                */
+/* ---------------------------------------------------------------------- */
+/*
+ * A simulated USB bus behind the same transport interface as libusb: the
+ * real client code talks to it. Each camera has the U3V descriptors, a
+ * register map answering GenCP (ABRM, SBRM, SIRM, the feature registers),
+ * a manifest with its GenICam XML (zipped or not) and a stream of leader,
+ * payload and trailer transfers with USB packet semantics (512-byte packets,
+ * a short packet ends a transfer, a packet larger than the space left
+ * overflows). The bus also holds one device that is not a camera. Time is
+ * virtual: a simulated timeout returns at once.
+ *
+ * Feature registers (Width at 0x10000, Height 0x10004, PixelFormat 0x10008,
+ * OffsetY 0x1000C, AcquisitionMode 0x10010, AcquisitionStart 0x10014,
+ * AcquisitionStop 0x10018, ExposureTimeRaw 0x1001C (us, integer),
+ * TriggerSelector 0x10020, TriggerMode 0x10024, TriggerSource 0x10028,
+ * Gain 0x1002C (float32)). The XML describes ExposureTime through a
+ * Converter of ExposureTimeRaw, which the client does not evaluate: it is
+ * the "feature the client cannot resolve" of the tests.
+ *
+ * Frames: without a simulator, byte i of the payload of block b is
+ * (uint8_t)(b * 131 + i * 7 + (i >> 9)) (test pattern; 16-bit formats hold
+ * the same bytes). With flt_u3v_sim_set_frames() the payload is the
+ * simulator's rendered frame. With the encoder chunk on, the payload ends
+ * with a chunk: the 64-bit little-endian encoder count, then the chunk id and
+ * length (u32, little-endian each): count = round(encoder_mm /
+ * encoder_mm_per_count), the simulator's position (else block * 300).
+ */
+
+typedef enum flt_u3v_sim_param {
+    /* settable before a camera is opened */
+    FLT_U3V_SIM_RESPONSE_TIME_MS = 0,   /* ABRM; default 200 */
+    FLT_U3V_SIM_MAX_COMMAND_BYTES = 1,  /* SBRM; default 1024 */
+    FLT_U3V_SIM_MAX_ACK_BYTES = 2,      /* SBRM; default 1024 */
+    FLT_U3V_SIM_ALIGNMENT_LOG2 = 3,     /* SIRM info; default 9 (512 B) */
+    FLT_U3V_SIM_XML_ZIPPED = 4,         /* default 1 */
+    FLT_U3V_SIM_ENCODER_CHUNK = 5,      /* 1: append the encoder chunk */
+    FLT_U3V_SIM_ENCODER_CHUNK_ID = 6,   /* default 0x4E434445 */
+    FLT_U3V_SIM_ENCODER_MM_PER_COUNT_UM = 7, /* um per count; default 10 */
+    FLT_U3V_SIM_SPEED_MBPS = 8,         /* default 5000 */
+    /* 1: the camera was left streaming by a process that died: SI control 1,
+     * acquisition running, a half-sent frame in its FIFO; SIRM writes are
+     * refused (access denied) until SI control is cleared. */
+    FLT_U3V_SIM_LEFT_STREAMING = 9,
+    /* read-only */
+    FLT_U3V_SIM_SI_CONTROL = 20,        /* SIRM SI control register */
+    FLT_U3V_SIM_ACQUIRING = 21,         /* 1 between AcquisitionStart/Stop */
+    FLT_U3V_SIM_COMMANDS = 22,          /* GenCP commands received */
+    FLT_U3V_SIM_LAST_READ_TIMEOUT_MS = 23, /* timeout of the last control read */
+    FLT_U3V_SIM_FRAMES_SENT = 24,       /* leaders sent */
+    FLT_U3V_SIM_OPEN = 25,              /* 1 while a host holds it open */
+    FLT_U3V_SIM_PARAM_MAX_ENUM_ = 0x7FFFFFFF
+} flt_u3v_sim_param;
+
+typedef enum flt_u3v_fault {
+    /* stream faults, applied to the frame with block id `at` */
+    FLT_U3V_FAULT_SHORT_FRAME = 0,      /* last payload transfer not sent */
+    FLT_U3V_FAULT_LEADER_MID_FRAME = 1, /* no trailer: next leader mid-frame */
+    FLT_U3V_FAULT_OVERFLOW = 2,         /* last transfer 1 packet too long */
+    FLT_U3V_FAULT_SKIP_BLOCK_IDS = 3,   /* `count` block ids from `at` are
+                                           never sent */
+    FLT_U3V_FAULT_STREAM_TIMEOUT = 4,   /* the camera stalls after the leader */
+    FLT_U3V_FAULT_UNPLUG = 5,           /* unplugged after the leader */
+    FLT_U3V_FAULT_GARBAGE = 6,          /* 100 random bytes before the leader */
+    FLT_U3V_FAULT_TRAILER_STATUS = 7,   /* trailer status 0xA101 (overrun) */
+    /* host faults, `at` ignored: the next `count` operations */
+    FLT_U3V_FAULT_SUBMIT_REFUSED = 10,  /* bulk submits refused (no memory) */
+    FLT_U3V_FAULT_PENDING_ACK = 11,     /* each of the next commands first
+                                           gets `count` pending acks */
+    FLT_U3V_FAULT_CONTROL_TIMEOUT = 12, /* `count` commands get no answer */
+    FLT_U3V_FAULT_LATE_ACK = 13,        /* the next command's ack comes only
+                                           after the following command */
+    FLT_U3V_FAULT_MAX_ENUM_ = 0x7FFFFFFF
+} flt_u3v_fault;
+
+/* An empty simulated bus (plus one device that is not a camera). */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_u3v_sim_create(flt_u3v_sim **out);
+/* NULL is a no-op. Sources opened on the bus must be destroyed first. */
+FLT_API void FLT_CALL flt_u3v_sim_destroy(flt_u3v_sim *bus);
+
+/* Adds a camera (at most 8): strings copied (at most 63 bytes each), a
+ * width x height sensor (16..8192 px each) of format Mono8, 10, 12 or 16. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_u3v_sim_add_camera(flt_u3v_sim *bus, const char *vendor, const char *model,
+                       const char *serial, uint32_t width, uint32_t height,
+                       flt_pixel_format format, size_t *index_out);
+
+/* Renders the camera's frames with `sim` (borrowed; NULL: test pattern). The
+ * camera takes the simulator's frame size and format. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_u3v_sim_set_frames(flt_u3v_sim *bus, size_t camera, flt_sim *sim);
+
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_u3v_sim_set(flt_u3v_sim *bus, size_t camera, flt_u3v_sim_param param,
+                uint64_t value);
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_u3v_sim_get(const flt_u3v_sim *bus, size_t camera, flt_u3v_sim_param param,
+                uint64_t *out);
+
+/* Schedules a fault (see flt_u3v_fault); faults add up. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_u3v_sim_inject(flt_u3v_sim *bus, size_t camera, flt_u3v_fault fault,
+                   uint64_t at, uint32_t count);
+
+/* Reads a 32-bit register of the camera's map directly (no GenCP). */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_u3v_sim_peek(const flt_u3v_sim *bus, size_t camera, uint64_t address,
+                 uint32_t *out);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* FLATLINE_SOURCE_H */
