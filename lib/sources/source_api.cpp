@@ -168,6 +168,10 @@ flt_pixel_format format_of_bits(int bits) { return flt_pixel_format(bits); }
 // Reads one image file into source.image and checks it.
 flt_status load_image(const char *fn, flt_source &s, std::size_t index) {
     const std::string &path = s.paths[index];
+    // Checked first so that OpenCV does not print its own warning.
+    if (!std::ifstream(path).good())
+        return fail(FLT_ERR_IO, "%s: image %zu '%.200s' cannot be read (missing or not "
+                                "readable)", fn, index, path.c_str());
     s.image = cv::imread(path, cv::IMREAD_UNCHANGED);
     if (s.image.empty())
         return fail(FLT_ERR_IO, "%s: image %zu '%.200s' cannot be read (missing, or not an "
