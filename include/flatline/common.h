@@ -209,6 +209,17 @@ typedef enum flt_option {
      * vibration it cuts the error about 2.8-fold and costs 0.02 um on the
      * noise-free reference sheet. Default 10. */
     FLT_OPT_CURVATURE_JUMP_WEIGHT = 110,
+    /* "robust": 0 (the default) for least squares; 1 for Huber and 2 for
+     * Tukey reweighting, an iteratively reweighted least squares that takes
+     * outliers such as the shear station's ringing out. Its noise levels are
+     * estimated from the data, per fiber and per measurement kind (a running
+     * median of absolute residuals), so height_sigma and slope_sigma only
+     * seed the first pass. See flatline/recon.h for the streaming form.
+     * (integer 0..2) */
+    FLT_OPT_ROBUST = 111,
+    /* "robust_iterations": reweighted passes after the plain one (integer
+     * 1..10). Each adds 8 knots of streaming latency. Default 2. */
+    FLT_OPT_ROBUST_ITERATIONS = 112,
 
     /* --- calibration (flatline/calib.h) --- */
     /* "calib_ransac": 1 to estimate laser homographies inside RANSAC

@@ -50,24 +50,106 @@ FLT_ROW_KERNEL bool row_is_finite(std::size_t K, const double *__restrict height
 
 // The hot loop of the default geometry (a row spans three knots, six
 // unknowns) for a row whose samples are all valid: adds the row to the six
-// right-hand sides, fiber by fiber. A free function with restrict parameters
-// so that GCC vectorises it across fibers (it gives up on the aliasing checks
-// otherwise). The slope row is D * slope, as in the general path, so both
-// give bit-identical sums.
+// right-hand sides, fiber by fiber, each with its own weights. A free
+// function with restrict parameters so that GCC vectorises it across fibers
+// (it gives up on the aliasing checks otherwise). The slope row is D * slope,
+// as in the general path, so both give bit-identical sums.
 FLT_ROW_KERNEL void accumulate_row6(std::size_t K, const double *__restrict height,
-                     const double *__restrict slope, double D, const double *__restrict a,
-                     const double *__restrict b, double *__restrict r0,
-                     double *__restrict r1, double *__restrict r2,
-                     double *__restrict r3, double *__restrict r4,
-                     double *__restrict r5) {
+                                    const double *__restrict slope, double D,
+                                    const double *__restrict wh, const double *__restrict wg,
+                                    const double *__restrict a, const double *__restrict b,
+                                    double *__restrict r0, double *__restrict r1,
+                                    double *__restrict r2, double *__restrict r3,
+                                    double *__restrict r4, double *__restrict r5) {
     for (std::size_t k = 0; k < K; ++k) {
-        const double h = height[k], g = D * slope[k];
+        const double h = wh[k] * height[k], g = wg[k] * (D * slope[k]);
         r0[k] += a[0] * h + b[0] * g;
         r1[k] += a[1] * h + b[1] * g;
         r2[k] += a[2] * h + b[2] * g;
         r3[k] += a[3] * h + b[3] * g;
         r4[k] += a[4] * h + b[4] * g;
         r5[k] += a[5] * h + b[5] * g;
+    }
+}
+
+// Masks one row without a validity array: a non-finite height or slope is
+// invalid (multiplier 0, value 0). Returns the fibers with an invalid sample.
+FLT_ROW_KERNEL std::size_t mask_row(std::size_t K, double D, const double *__restrict height,
+                                    const double *__restrict slope,
+                                    const double *__restrict mult_h,
+                                    const double *__restrict mult_g, double *__restrict hm,
+                                    double *__restrict gm, double *__restrict hv,
+                                    double *__restrict gv) {
+    const double big = std::numeric_limits<double>::max();
+    double bad = 0.0;  // a double keeps the loop in one vector width
+    for (std::size_t k = 0; k < K; ++k) {
+        const double h = height[k], g = slope[k];
+        const double hok = std::fabs(h) <= big ? 1.0 : 0.0;
+        const double gok = std::fabs(g) <= big ? 1.0 : 0.0;
+        hm[k] = hok != 0.0 ? mult_h[k] : 0.0;
+        gm[k] = gok != 0.0 ? mult_g[k] : 0.0;
+        hv[k] = hok != 0.0 ? h : 0.0;
+        gv[k] = gok != 0.0 ? D * g : 0.0;
+        bad += 1.0 - hok * gok;
+    }
+    return std::size_t(bad);
+}
+
+// Per fiber, the weight a sample loses: (1 - multiplier) * fiber weight.
+// Returns how many fibers lose any.
+FLT_ROW_KERNEL std::size_t downdate_weights(std::size_t K, const double *__restrict hm,
+                                            const double *__restrict gm,
+                                            const double *__restrict wh,
+                                            const double *__restrict wg, double *__restrict dh,
+                                            double *__restrict dg) {
+    double n = 0.0;
+    for (std::size_t k = 0; k < K; ++k) {
+        dh[k] = (1.0 - hm[k]) * wh[k];
+        dg[k] = (1.0 - gm[k]) * wg[k];
+        n += (hm[k] != 1.0 || gm[k] != 1.0) ? 1.0 : 0.0;
+    }
+    return std::size_t(n);
+}
+
+// One packed entry of every fiber's downdate: down += dh * chh + dg * cgg.
+FLT_ROW_KERNEL void downdate_entry(std::size_t K, double chh, double cgg,
+                                   const double *__restrict dh, const double *__restrict dg,
+                                   double *__restrict down) {
+    for (std::size_t k = 0; k < K; ++k) down[k] += dh[k] * chh + dg[k] * cgg;
+}
+
+// hv, gv (the masked height and Delta-d * slope) times each fiber's weight and
+// the sample's multiplier.
+FLT_ROW_KERNEL void weigh_row(std::size_t K, const double *__restrict hm,
+                              const double *__restrict gm, const double *__restrict wh,
+                              const double *__restrict wg, double *__restrict hv,
+                              double *__restrict gv) {
+    for (std::size_t k = 0; k < K; ++k) {
+        hv[k] *= wh[k] * hm[k];
+        gv[k] *= wg[k] * gm[k];
+    }
+}
+
+// One unknown's right-hand side: rhs += ch * hv + cg * gv, over the fibers.
+FLT_ROW_KERNEL void add_row_rhs(std::size_t K, double ch, double cg,
+                                const double *__restrict hv, const double *__restrict gv,
+                                double *__restrict rhs) {
+    for (std::size_t k = 0; k < K; ++k) rhs[k] += ch * hv[k] + cg * gv[k];
+}
+
+// The two lasers' view of the spline at one row, per fiber: heights z1, z2
+// at s -+ Delta-d/2 from the Hermite weights b1, b2 on their intervals'
+// knot states (z, m) a1, c1 and a2, c2.
+FLT_ROW_KERNEL void predict_row(std::size_t K, const double *__restrict b1,
+                                const double *__restrict b2, const double *__restrict a1,
+                                const double *__restrict c1, const double *__restrict a2,
+                                const double *__restrict c2, double *__restrict height,
+                                double *__restrict dslope) {
+    for (std::size_t k = 0; k < K; ++k) {
+        const double z1 = b1[0] * a1[k] + b1[1] * a1[K + k] + b1[2] * c1[k] + b1[3] * c1[K + k];
+        const double z2 = b2[0] * a2[k] + b2[1] * a2[K + k] + b2[2] * c2[k] + b2[3] * c2[K + k];
+        height[k] = 0.5 * (z1 + z2);
+        dslope[k] = z2 - z1;
     }
 }
 
@@ -84,8 +166,9 @@ FLT_ROW_KERNEL void evaluate_row(std::size_t K, const double *__restrict w,
 
 recon_engine::recon_engine(std::size_t fibers, const recon_params &params,
                            std::size_t knot_capacity, double *z_store,
-                           std::uint8_t *flags_store)
-    : K_(fibers), p_(params) {
+                           std::uint8_t *flags_store, bool keep_rows)
+    : K_(fibers), p_(params), keep_rows_(keep_rows) {
+    if (!keep_rows_) p_.row_capacity = 1;  // no row ring
     L_ = p_.knot_spacing;
     D_ = p_.laser_spacing;
     // A row touches the knots around s-D/2 and s+D/2: ceil(D/L) intervals
@@ -99,14 +182,22 @@ recon_engine::recon_engine(std::size_t fibers, const recon_params &params,
     w_h_ = 1.0 / (p_.height_sigma * p_.height_sigma);
     const double slope_mm = D_ * p_.slope_sigma;  // sigma of D*slope, mm
     w_g_ = 1.0 / (slope_mm * slope_mm);
-    w_curv_ = p_.curvature_weight * w_h_;
-    w_ridge_ = k_ridge * w_h_;
-    w_curv_jump_ = p_.curvature_jump_weight * w_h_;
+    // Priors are relative to one height sample: they live in Rp_ unweighted
+    // and are scaled by each fiber's height weight.
+    w_curv_ = p_.curvature_weight;
+    w_ridge_ = k_ridge;
+    w_curv_jump_ = p_.curvature_jump_weight;
 
     factor_cap_ = knot_capacity;
     hist_cap_ = knot_capacity + 2 * std::size_t(S_) + 4;
 
-    R_.assign(std::size_t(n_) * n_, 0.0);
+    Rh_.assign(std::size_t(n_) * n_, 0.0);
+    Rg_.assign(std::size_t(n_) * n_, 0.0);
+    Rp_.assign(std::size_t(n_) * n_, 0.0);
+    wh_.assign(K_, w_h_);
+    wg_.assign(K_, w_g_);
+    next_wh_.assign(K_, w_h_);
+    next_wg_.assign(K_, w_g_);
     schur_.assign(std::size_t(ntri_) * K_, 0.0);
     down_.assign(std::size_t(ntri_) * K_, 0.0);
     rhs_.assign(std::size_t(n_) * K_, 0.0);
@@ -116,6 +207,9 @@ recon_engine::recon_engine(std::size_t fibers, const recon_params &params,
     xwin_.assign(std::size_t(n_) * K_, 0.0);
     hv_.assign(K_, 0.0);
     gv_.assign(K_, 0.0);
+    hm_.assign(K_, 0.0);
+    gm_.assign(K_, 0.0);
+    ones_.assign(K_, 1.0);
     bad_.reserve(K_);
     last_valid_s_.assign(K_, 0.0);
     has_height_.assign(K_, 0);
@@ -163,9 +257,58 @@ const double *recon_engine::hist_at(long j) const {
 // Window management
 // ---------------------------------------------------------------------------
 
+void recon_engine::clear_shared() {
+    std::fill(Rh_.begin(), Rh_.end(), 0.0);
+    std::fill(Rg_.begin(), Rg_.end(), 0.0);
+    std::fill(Rp_.begin(), Rp_.end(), 0.0);
+}
+
+void recon_engine::set_fiber_weights(const double *wh, const double *wg) {
+    std::copy_n(wh, K_, next_wh_.data());
+    std::copy_n(wg, K_, next_wg_.data());
+    weights_pending_ = true;
+}
+
+// New weights take effect when the shared matrices are empty (right after a
+// knot is eliminated), so every row in them carries one weight per fiber.
+void recon_engine::apply_pending_weights() {
+    if (!weights_pending_) return;
+    wh_.swap(next_wh_);
+    wg_.swap(next_wg_);
+    std::copy_n(wh_.data(), K_, next_wh_.data());
+    std::copy_n(wg_.data(), K_, next_wg_.data());
+    weights_pending_ = false;
+}
+
+// One entry of every fiber's window matrix:
+//   W = schur + wh * (Rh + Rp) + wg * Rg - down.
+void recon_engine::assemble_entry(int r, int c) {
+    const std::size_t e = tri(r, c), rc = std::size_t(r) * n_ + c;
+    const double hp = Rh_[rc] + Rp_[rc], g = Rg_[rc];
+    double *__restrict w = work_.data() + e * K_;
+    const double *__restrict sc = schur_.data() + e * K_;
+    const double *__restrict dn = down_.data() + e * K_;
+    const double *__restrict wh = wh_.data(), *__restrict wg = wg_.data();
+    if (bad_fibers_seen_)
+        for (std::size_t k = 0; k < K_; ++k) w[k] = sc[k] + wh[k] * hp + wg[k] * g - dn[k];
+    else
+        for (std::size_t k = 0; k < K_; ++k) w[k] = sc[k] + wh[k] * hp + wg[k] * g;
+}
+
+// The row's unweighted outer products over the window unknowns.
+void recon_engine::add_row_geometry(const double *ch, const double *cg, int off) {
+    for (int u = off; u < n_; ++u)
+        for (int v = off; v < n_; ++v) {
+            const std::size_t rc = std::size_t(u - off) * n_ + (v - off);
+            Rh_[rc] += ch[u] * ch[v];
+            Rg_[rc] += cg[u] * cg[v];
+        }
+}
+
 void recon_engine::start_window(long first_knot) {
     w0_ = first_knot;
-    std::fill(R_.begin(), R_.end(), 0.0);
+    clear_shared();
+    apply_pending_weights();
     std::fill(schur_.begin(), schur_.end(), 0.0);
     std::fill(down_.begin(), down_.end(), 0.0);
     bad_fibers_seen_ = false;
@@ -195,12 +338,12 @@ void recon_engine::add_rank1_prior(const long *knot, const int *unit,
         for (int q = 0; q < count; ++q) {
             if (knot[q] >= w0_) {
                 const int wq = 2 * int(knot[q] - w0_) + unit[q];
-                R_[std::size_t(wi) * n_ + wq] += w * coef[i] * coef[q];
+                Rp_[std::size_t(wi) * n_ + wq] += w * coef[i] * coef[q];
             } else {
                 const double *x = hist_at(knot[q]) + std::size_t(unit[q]) * K_;
                 double *rhs = rhs_.data() + std::size_t(wi) * K_;
                 const double c = w * coef[i] * coef[q];
-                for (std::size_t k = 0; k < K_; ++k) rhs[k] -= c * x[k];
+                for (std::size_t k = 0; k < K_; ++k) rhs[k] -= c * wh_[k] * x[k];
             }
         }
     }
@@ -208,7 +351,7 @@ void recon_engine::add_rank1_prior(const long *knot, const int *unit,
 
 void recon_engine::add_priors_for_knot(long j) {
     const int wj = 2 * int(j - w0_);
-    R_[std::size_t(wj) * n_ + wj] += w_ridge_;
+    Rp_[std::size_t(wj) * n_ + wj] += w_ridge_;
     {
         // The curvature-jump prior at knot j-1: z'' continuous there, which
         // for cubic Hermite pieces reads
@@ -231,19 +374,19 @@ void recon_engine::add_priors_for_knot(long j) {
         const int base = wj - 2;
         for (int a = 0; a < 4; ++a)
             for (int b = 0; b < 4; ++b)
-                R_[std::size_t(base + a) * n_ + base + b] += w_curv_ * k_stiffness[a][b];
+                Rp_[std::size_t(base + a) * n_ + base + b] += w_curv_ * k_stiffness[a][b];
     } else if (j - 1 <= fixed_upto_ && j - 1 >= 0) {
         // Knot j-1 is a carried boundary condition: its part moves to the
         // right-hand side of every fiber.
         const double *left = hist_at(j - 1);
         for (int a = 0; a < 2; ++a) {
             for (int b = 0; b < 2; ++b)
-                R_[std::size_t(wj + a) * n_ + wj + b] += w_curv_ * k_stiffness[2 + a][2 + b];
+                Rp_[std::size_t(wj + a) * n_ + wj + b] += w_curv_ * k_stiffness[2 + a][2 + b];
             const double cz = w_curv_ * k_stiffness[2 + a][0];
             const double cm = w_curv_ * k_stiffness[2 + a][1];
             double *rhs = rhs_.data() + std::size_t(wj + a) * K_;
             for (std::size_t k = 0; k < K_; ++k)
-                rhs[k] -= cz * left[k] + cm * left[K_ + k];
+                rhs[k] -= wh_[k] * (cz * left[k] + cm * left[K_ + k]);
         }
     }
 }
@@ -263,15 +406,7 @@ void recon_engine::close_knot() {
     // work = schur + R - down (packed upper).
     for (int r = 0; r < n_; ++r)
         for (int c = r; c < n_; ++c) {
-            const std::size_t e = tri(r, c);
-            const double shared = R_[std::size_t(r) * n_ + c];
-            double *w = work_.data() + e * K_;
-            const double *sc = schur_.data() + e * K_;
-            const double *dn = down_.data() + e * K_;
-            if (bad_fibers_seen_)
-                for (std::size_t k = 0; k < K_; ++k) w[k] = sc[k] + shared - dn[k];
-            else
-                for (std::size_t k = 0; k < K_; ++k) w[k] = sc[k] + shared;
+            assemble_entry(r, c);
         }
 
     const double *a00 = work_.data() + tri(0, 0) * K_;
@@ -320,7 +455,8 @@ void recon_engine::close_knot() {
     }
     std::fill_n(rhs_.data() + std::size_t(n_ - 2) * K_, 2 * K_, 0.0);
 
-    std::fill(R_.begin(), R_.end(), 0.0);
+    clear_shared();
+    apply_pending_weights();
     if (!bad_fibers_seen_) {
         // down_ is all zero: nothing to clear.
     } else {
@@ -344,15 +480,7 @@ void recon_engine::emit_upto(long last) {
     //    on the packed upper triangle.
     for (int r = 0; r < n_; ++r)
         for (int c = r; c < n_; ++c) {
-            const std::size_t e = tri(r, c);
-            const double shared = R_[std::size_t(r) * n_ + c];
-            double *w = work_.data() + e * K_;
-            const double *sc = schur_.data() + e * K_;
-            const double *dn = down_.data() + e * K_;
-            if (bad_fibers_seen_)
-                for (std::size_t k = 0; k < K_; ++k) w[k] = sc[k] + shared - dn[k];
-            else
-                for (std::size_t k = 0; k < K_; ++k) w[k] = sc[k] + shared;
+            assemble_entry(r, c);
         }
     for (int j = 0; j < n_; ++j) {
         double *ujj = work_.data() + tri(j, j) * K_;
@@ -428,11 +556,14 @@ void recon_engine::emit_upto(long last) {
     }
     last_emitted_ = last;
     next_emit_ = last + 1;
+    solved_upto_ = w0_ + S_ - 1;
+    solved_fresh_ = true;
     finish_rows();
 }
 
 // Evaluates every pending row whose knot interval is fully emitted.
 void recon_engine::finish_rows() {
+    if (!keep_rows_) return;
     const std::size_t cap = p_.row_capacity;
     while (ready_ < tail_) {
         const std::size_t r = ready_ % cap;
@@ -466,7 +597,8 @@ void recon_engine::finish_rows() {
 // ---------------------------------------------------------------------------
 
 void recon_engine::push_row(double s, const double *height, const double *slope,
-                            const std::uint8_t *valid) {
+                            const std::uint8_t *valid, const double *mult_h,
+                            const double *mult_g) {
     if (!have_t0_) {
         // A new strip: the knot grid starts at the first row's rear laser.
         have_t0_ = true;
@@ -519,28 +651,30 @@ void recon_engine::push_row(double s, const double *height, const double *slope,
         return (valid == nullptr || valid[k] != 0) && std::fabs(slope[k]) <= big;
     };
     std::size_t nbad = 0;
-    if (off == 0 && n_ == 6 && valid == nullptr && row_is_finite(K_, height, slope)) {
+    if (off == 0 && n_ == 6 && valid == nullptr && !mult_h && !mult_g &&
+        row_is_finite(K_, height, slope)) {
         // The common case: the default geometry (knot spacing = laser
         // spacing, so a row spans three knots), no mask, every sample
         // finite. Same arithmetic as the general path below.
-        double a[6], b[6];
-        for (int u = 0; u < 6; ++u) {
-            a[u] = w_h_ * ch[u];
-            b[u] = w_g_ * cg[u];
-        }
         double *r = rhs_.data();
-        accumulate_row6(K_, height, slope, D_, a, b, r, r + K_, r + 2 * K_, r + 3 * K_,
-                        r + 4 * K_, r + 5 * K_);
-        for (int u = 0; u < 6; ++u)
-            for (int v = 0; v < 6; ++v) R_[std::size_t(u) * 6 + v] += a[u] * ch[v] + b[u] * cg[v];
+        accumulate_row6(K_, height, slope, D_, wh_.data(), wg_.data(), ch, cg, r, r + K_,
+                        r + 2 * K_, r + 3 * K_, r + 4 * K_, r + 5 * K_);
+        add_row_geometry(ch, cg, 0);
     } else {
-        double *__restrict hv = hv_.data();
-        double *__restrict gv = gv_.data();
-        for (std::size_t k = 0; k < K_; ++k) {
-            const bool hok = h_ok(k), gok = g_ok(k);
-            hv[k] = hok ? height[k] : 0.0;
-            gv[k] = gok ? D_ * slope[k] : 0.0;
-            nbad += !(hok && gok);
+        // Effective multipliers: 0 where the sample is invalid.
+        double *hm = hm_.data(), *gm = gm_.data();
+        if (valid == nullptr) {
+            nbad = mask_row(K_, D_, height, slope, mult_h ? mult_h : ones_.data(),
+                            mult_g ? mult_g : ones_.data(), hm, gm, hv_.data(), gv_.data());
+        } else {
+            for (std::size_t k = 0; k < K_; ++k) {
+                const bool hok = h_ok(k), gok = g_ok(k);
+                hm[k] = hok ? (mult_h ? mult_h[k] : 1.0) : 0.0;
+                gm[k] = gok ? (mult_g ? mult_g[k] : 1.0) : 0.0;
+                hv_[k] = hok ? height[k] : 0.0;
+                gv_[k] = gok ? D_ * slope[k] : 0.0;
+                nbad += !(hok && gok);
+            }
         }
         // Knots before the window are carried boundary conditions (only
         // right after end_sheet): their part of the prediction moves to the
@@ -549,34 +683,61 @@ void recon_engine::push_row(double s, const double *height, const double *slope,
             const double *x = hist_at(i1 + u / 2) + std::size_t(u % 2) * K_;
             const double chu = ch[u], cgu = cg[u];
             for (std::size_t k = 0; k < K_; ++k) {
-                hv[k] -= h_ok(k) ? chu * x[k] : 0.0;
-                gv[k] -= g_ok(k) ? cgu * x[k] : 0.0;
+                hv_[k] -= hm[k] != 0.0 ? chu * x[k] : 0.0;
+                gv_[k] -= gm[k] != 0.0 ? cgu * x[k] : 0.0;
             }
         }
-        for (int u = off; u < n_; ++u) {
-            const int wi = u - off;
-            const double ah = w_h_ * ch[u], ag = w_g_ * cg[u];
-            double *__restrict rhs = rhs_.data() + std::size_t(wi) * K_;
-            for (std::size_t k = 0; k < K_; ++k) rhs[k] += ah * hv[k] + ag * gv[k];
-            for (int v = off; v < n_; ++v)
-                R_[std::size_t(wi) * n_ + (v - off)] += ah * ch[v] + ag * cg[v];
-        }
-    }
-    bad_.clear();
-    if (nbad > 0)
-        for (std::size_t k = 0; k < K_; ++k)
-            if (!(h_ok(k) && g_ok(k))) bad_.push_back(int(k));
-
-    // Fibers missing a sample take its contribution back out.
-    for (int k : bad_) {
-        const bool hok = h_ok(std::size_t(k)), gok = g_ok(std::size_t(k));
+        weigh_row(K_, hm, gm, wh_.data(), wg_.data(), hv_.data(), gv_.data());
         for (int u = off; u < n_; ++u)
-            for (int v = u; v < n_; ++v) {
-                const double d = (hok ? 0.0 : w_h_ * ch[u] * ch[v]) +
-                                 (gok ? 0.0 : w_g_ * cg[u] * cg[v]);
-                down_[tri(u - off, v - off) * K_ + std::size_t(k)] += d;
+            add_row_rhs(K_, ch[u], cg[u], hv_.data(), gv_.data(),
+                        rhs_.data() + std::size_t(u - off) * K_);
+        add_row_geometry(ch, cg, off);
+    }
+    // Fibers whose sample is missing or down-weighted take (that part of)
+    // its contribution back out of the shared matrices.
+    bad_.clear();
+    if (nbad > 0 || mult_h || mult_g) {
+        // (the fast path above only runs with every multiplier 1)
+        const int m = n_ - off;
+        // The row's unknowns off..n-1 are window unknowns 0..m-1; their
+        // packed entries in the n-wide window triangle:
+        double chh[k_max_unknowns * (k_max_unknowns + 1) / 2];
+        double cgg[k_max_unknowns * (k_max_unknowns + 1) / 2];
+        std::size_t entry[k_max_unknowns * (k_max_unknowns + 1) / 2];
+        int entries = 0;
+        for (int u = 0; u < m; ++u)
+            for (int v = u; v < m; ++v, ++entries) {
+                chh[entries] = ch[off + u] * ch[off + v];
+                cgg[entries] = cg[off + u] * cg[off + v];
+                entry[entries] = tri(u, v);
             }
-        bad_fibers_seen_ = true;
+        // How much of each fiber's sample comes back out: dh, dg (0 for a
+        // full-weight sample). Many affected fibers (robust reweighting):
+        // one dense, vectorised pass; few (an occasional dropout): per fiber.
+        double *dh = hv_.data(), *dg = gv_.data();  // the rhs is done with them
+        const std::size_t affected =
+            downdate_weights(K_, hm_.data(), gm_.data(), wh_.data(), wg_.data(), dh, dg);
+        if (affected * 8 > K_) {
+            for (int e = 0; e < entries; ++e)
+                downdate_entry(K_, chh[e], cgg[e], dh, dg, down_.data() + entry[e] * K_);
+            bad_.push_back(-1);  // marks "some fiber": only emptiness is read
+        } else if (affected > 0) {
+            for (std::size_t k = 0; k < K_; ++k) {
+                if (dh[k] == 0.0 && dg[k] == 0.0) continue;
+                bad_.push_back(int(k));
+                for (int e = 0; e < entries; ++e)
+                    down_[entry[e] * K_ + k] += dh[k] * chh[e] + dg[k] * cgg[e];
+            }
+        }
+        if (!bad_.empty()) bad_fibers_seen_ = true;
+    }
+
+    if (!keep_rows_) {
+        last_s_ = s;
+        ++rows_in_sheet_;
+        solved_fresh_ = false;
+        maybe_emit();
+        return;
     }
 
     // The row joins the ring as pending.
@@ -586,11 +747,12 @@ void recon_engine::push_row(double s, const double *height, const double *slope,
     std::uint8_t *fl = ring_flags_ + r * K_;
     std::memset(fl, 0, K_);
     bool any_invalid = false;
-    for (int k : bad_)
-        if (!h_ok(std::size_t(k)) && !g_ok(std::size_t(k))) {
-            fl[k] = FLT_FLAG_INVALID_INPUT;
-            any_invalid = true;
-        }
+    if (nbad > 0)
+        for (std::size_t k = 0; k < K_; ++k)
+            if (!h_ok(k) && !g_ok(k)) {
+                fl[k] = FLT_FLAG_INVALID_INPUT;
+                any_invalid = true;
+            }
     ring_any_invalid_[r] = any_invalid;
 
     // Gap and level bookkeeping. last valid position of fiber k is
@@ -625,6 +787,7 @@ void recon_engine::push_row(double s, const double *height, const double *slope,
     ++tail_;
     last_s_ = s;
     ++rows_in_sheet_;
+    solved_fresh_ = false;
 
     maybe_emit();
     finish_rows();
@@ -678,6 +841,22 @@ void recon_engine::reset() {
     rows_in_sheet_ = 0;
     fixed_upto_ = -1;
     anchored_ = false;
+}
+
+bool recon_engine::predict(double s, double *height_out, double *dslope_out) const {
+    if (!have_t0_) return false;
+    const double p1 = s - 0.5 * D_, p2 = s + 0.5 * D_;
+    const long i1 = interval_of(p1);
+    const long i2 = std::min(interval_of(p2), i1 + S_ - 2);
+    const long needed = i2 + 1;
+    if (needed > last_emitted_ && !(solved_fresh_ && needed <= solved_upto_)) return false;
+    if (i1 <= w0_ + S_ - 1 - long(hist_cap_)) return false;  // overwritten in the ring
+    double b1[4], b2[4];
+    basis(p1, i1, b1);
+    basis(p2, i2, b2);
+    predict_row(K_, b1, b2, hist_at(i1), hist_at(i1 + 1), hist_at(i2), hist_at(i2 + 1),
+                height_out, dslope_out);
+    return true;
 }
 
 void recon_engine::boundary(double *s_out, double *height_out,

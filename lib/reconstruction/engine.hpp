@@ -63,9 +63,11 @@ public:
     // for streaming lag_knots + 2, for batch the sheet's knot count.
     // z_store/flags_store: caller storage for the row ring (batch writes
     // straight into the caller's output), or nullptr to own it.
+    // keep_rows = false: an intermediate stage of a robust chain, whose
+    // rows are never pulled; it keeps no row ring at all.
     recon_engine(std::size_t fibers, const recon_params &params,
                  std::size_t knot_capacity, double *z_store = nullptr,
-                 std::uint8_t *flags_store = nullptr);
+                 std::uint8_t *flags_store = nullptr, bool keep_rows = true);
 
     std::size_t fibers() const { return K_; }
     const recon_params &params() const { return p_; }
@@ -81,8 +83,16 @@ public:
     bool has_boundary() const { return fixed_upto_ >= 0 && anchored_; }
 
     // One row; arguments already validated (s increasing, sizes right).
+    // mult_h, mult_g: per-fiber multipliers of this row's height and slope
+    // weights in [0, 1] (robust down-weighting), or nullptr for 1.
     void push_row(double s, const double *height, const double *slope,
-                  const std::uint8_t *valid);
+                  const std::uint8_t *valid, const double *mult_h = nullptr,
+                  const double *mult_g = nullptr);
+    // Per-fiber weights 1/sigma^2 of heights (mm^-2) and of Delta-d * slope;
+    // they take effect at the next knot elimination.
+    void set_fiber_weights(const double *wh, const double *wg);
+    double default_height_weight() const { return w_h_; }
+    double default_slope_weight() const { return w_g_; }
     // Copies up to max_rows ready rows out; returns how many.
     std::size_t pull(std::size_t max_rows, double *s_out, double *z_out,
                      std::uint8_t *flags_out);
@@ -90,6 +100,11 @@ public:
     void reset();
     // The carried boundary knot.
     void boundary(double *s_out, double *height_out, double *slope_out) const;
+    // What the two lasers would measure at row position s on the current
+    // estimate: height (mm) and Delta-d * slope (mm), per fiber. Possible
+    // once every knot under s +- Delta-d/2 is emitted, or, right after
+    // end_sheet(), solved; returns false otherwise.
+    bool predict(double s, double *height_out, double *dslope_out) const;
 
 private:
     // ---- geometry ----
@@ -101,6 +116,10 @@ private:
     // ---- window management ----
     void start_window(long first_knot);     // empty window at first_knot
     void add_priors_for_knot(long j);       // priors that complete with knot j
+    void clear_shared();
+    void apply_pending_weights();
+    void assemble_entry(int r, int c);      // work = W(r, c) for every fiber
+    void add_row_geometry(const double *ch, const double *cg, int off);
     void add_rank1_prior(const long *knot, const int *unit, const double *coef,
                          int count, double weight);
     void close_knot();                      // eliminate knot w0_
@@ -135,7 +154,13 @@ private:
     long fixed_upto_ = -1;  // knots <= this are hard boundary conditions
     bool anchored_ = false; // a boundary condition has been carried
 
-    std::vector<double> R_;      // shared row contributions, n x n dense
+    // Shared, unweighted contributions since the last elimination, n x n
+    // dense: the rows' height and slope outer products, and the priors (in
+    // units of one height sample). Each fiber weighs them with its own
+    // wh_, wg_ when its window matrix is assembled.
+    std::vector<double> Rh_, Rg_, Rp_;
+    std::vector<double> wh_, wg_, next_wh_, next_wg_;
+    bool weights_pending_ = false;
     std::vector<double> schur_;  // [ntri][K]
     std::vector<double> down_;   // [ntri][K]
     std::vector<double> rhs_;    // [n][K]
@@ -150,6 +175,8 @@ private:
     std::vector<double> work_;    // [ntri][K]
     std::vector<double> xwin_;    // [n][K]
     std::vector<double> hv_, gv_; // per fiber masked measurements
+    std::vector<double> hm_, gm_; // per fiber effective weight multipliers
+    std::vector<double> ones_;
     std::vector<int> bad_;        // fibers with an invalid sample this row
 
     // ---- per fiber bookkeeping ----
@@ -169,6 +196,9 @@ private:
     double *ring_z_;
     std::uint8_t *ring_flags_;
     std::size_t head_ = 0, ready_ = 0, tail_ = 0;  // monotonic counters
+    bool keep_rows_ = true;
+    long solved_upto_ = -1;       // knots in hist_ solved at the last solve
+    bool solved_fresh_ = false;   // no row pushed since that solve
     double last_s_ = 0.0;
     std::size_t rows_in_sheet_ = 0;
     double sheet_first_s_ = 0.0;

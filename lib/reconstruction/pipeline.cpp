@@ -21,8 +21,8 @@ recon_pipeline::recon_pipeline(std::size_t fibers, const recon_config &config,
                                std::uint8_t *flags_store)
     : K_(fibers), config_(config) {
     if (!config_.rigid_motion) {
-        main_ = std::make_unique<recon_engine>(K_, config_.params, knot_capacity,
-                                               z_store, flags_store);
+        main_ = std::make_unique<recon_chain>(K_, config_.params, config_.robust,
+                                              knot_capacity, z_store, flags_store);
         return;
     }
     recon_params dev = config_.params;
@@ -34,7 +34,8 @@ recon_pipeline::recon_pipeline(std::size_t fibers, const recon_config &config,
     const double ratio = config_.shape_sigma / config_.params.height_sigma;
     dev.curvature_weight = config_.params.curvature_weight * ratio * ratio;
     dev.curvature_jump_weight = config_.params.curvature_jump_weight * ratio * ratio;
-    main_ = std::make_unique<recon_engine>(K_, dev, knot_capacity, z_store, flags_store);
+    main_ = std::make_unique<recon_chain>(K_, dev, config_.robust, knot_capacity, z_store,
+                                          flags_store);
 
     // The offset a is the mean height of the frame: it carries the heave
     // (height_sigma); its slope averages K slopes.
@@ -49,8 +50,8 @@ recon_pipeline::recon_pipeline(std::size_t fibers, const recon_config &config,
     const double sum_xi2 = std::max(1.0, K * (K * K - 1.0) / 12.0);
     tilt.height_sigma = config_.params.height_sigma / half;
     tilt.slope_sigma = config_.params.slope_sigma / std::sqrt(sum_xi2);
-    offset_ = std::make_unique<recon_engine>(1, offset, knot_capacity);
-    tilt_ = std::make_unique<recon_engine>(1, tilt, knot_capacity);
+    offset_ = std::make_unique<recon_chain>(1, offset, config_.robust, knot_capacity);
+    tilt_ = std::make_unique<recon_chain>(1, tilt, config_.robust, knot_capacity);
 
     dev_h_.assign(K_, 0.0);
     dev_g_.assign(K_, 0.0);

@@ -31,12 +31,13 @@
 
 #include <memory>
 
-#include "reconstruction/engine.hpp"
+#include "reconstruction/robust.hpp"
 
 namespace flt {
 
 struct recon_config {
     recon_params params;       // the main (or only) engine's parameters
+    robust_params robust;      // robust reweighting of every channel
     bool rigid_motion = true;
     double shape_sigma = 0.1;  // mm, sigma of a height's deviation from the frame's line
 };
@@ -78,7 +79,7 @@ private:
 
     std::size_t K_;
     recon_config config_;
-    std::unique_ptr<recon_engine> main_, offset_, tilt_;
+    std::unique_ptr<recon_chain> main_, offset_, tilt_;
     // Scratch, allocated once: one detrended row, and line channels of
     // pulled rows.
     std::vector<double> dev_h_, dev_g_, line_a_, line_b_, line_s_;

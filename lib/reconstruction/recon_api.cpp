@@ -44,6 +44,8 @@ flt_status read_params(const char *fn, const flt_options *options,
     p.row_capacity = std::size_t(option_value(options, FLT_OPT_ROW_CAPACITY));
     config.rigid_motion = option_value(options, FLT_OPT_RIGID_MOTION) != 0.0;
     config.shape_sigma = option_value(options, FLT_OPT_SHAPE_SIGMA);
+    config.robust.kind = robust_kind(int(option_value(options, FLT_OPT_ROBUST)));
+    config.robust.iterations = int(option_value(options, FLT_OPT_ROBUST_ITERATIONS));
     if (p.laser_spacing / p.knot_spacing > k_max_knots_per_laser_spacing)
         return fail(FLT_ERR_INVALID_ARGUMENT,
                     "%s: knot_spacing = %g mm is more than %g times finer than "
@@ -182,6 +184,8 @@ FLT_API flt_status FLT_CALL flt_recon_get_option(const flt_recon *recon,
         case FLT_OPT_ROW_CAPACITY: *out = double(p.row_capacity); break;
         case FLT_OPT_RIGID_MOTION: *out = c.rigid_motion ? 1.0 : 0.0; break;
         case FLT_OPT_SHAPE_SIGMA: *out = c.shape_sigma; break;
+        case FLT_OPT_ROBUST: *out = double(int(c.robust.kind)); break;
+        case FLT_OPT_ROBUST_ITERATIONS: *out = double(c.robust.iterations); break;
         default:
             return fail(FLT_ERR_NOT_FOUND,
                         "%s: option key %d is not a reconstructor option", fn,

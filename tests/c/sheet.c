@@ -78,6 +78,34 @@ void test_sheet_add_noise(test_sheet *t, double vib_sigma, double peak_sigma,
     }
 }
 
+static double shear_wave(double p, double amplitude, double decay, double period,
+                         double interval) {
+    double cut = floor(p / interval) * interval;
+    if (cut <= 0.0) return 0.0;
+    double u = p - cut;
+    return amplitude * exp(-decay * u) * sin(2.0 * k_pi * u / period);
+}
+
+void test_sheet_add_shear(test_sheet *t, double amplitude, double decay, double period,
+                          double interval) {
+    const double h = 0.5 * t->laser_spacing;
+    for (size_t r = 0; r < t->rows; ++r) {
+        double behind = shear_wave(t->s[r] - h, amplitude, decay, period, interval);
+        double ahead = shear_wave(t->s[r] + h, amplitude, decay, period, interval);
+        for (size_t k = 0; k < t->fibers; ++k) {
+            t->height[r * t->fibers + k] += 0.5 * (behind + ahead);
+            t->slope[r * t->fibers + k] += (ahead - behind) / t->laser_spacing;
+        }
+    }
+}
+
+void test_sheet_add_eccentricity(test_sheet *t, double amplitude, double period) {
+    for (size_t r = 0; r < t->rows; ++r) {
+        double e = amplitude * sin(2.0 * k_pi * t->s[r] / period);
+        for (size_t k = 0; k < t->fibers; ++k) t->height[r * t->fibers + k] += e;
+    }
+}
+
 void test_sheet_free(test_sheet *t) {
     if (!t) return;
     free(t->s);

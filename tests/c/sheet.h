@@ -40,6 +40,19 @@ test_sheet *test_sheet_make(size_t rows, size_t fibers, double s0, double dx,
 void test_sheet_add_noise(test_sheet *sheet, double vib_sigma,
                           double peak_sigma, unsigned seed);
 
+/* The reference's hard case, as physics has it (issue 7's model b): after
+ * every cut (at multiples of `interval` mm of material) the strip rings with
+ * a damped sine, amplitude * exp(-decay * u) * sin(2 pi u / period) at u mm
+ * past the cut. It travels with the material, so each laser reads it at its
+ * own position s -+ Delta-d/2: the height gets the mean, the slope the
+ * difference over Delta-d. Adds it to every fiber. */
+void test_sheet_add_shear(test_sheet *sheet, double amplitude, double decay,
+                          double period, double interval);
+
+/* Roll eccentricity: a rigid offset amplitude * sin(2 pi s / period) of the
+ * whole frame at s (both lasers alike, so only the heights see it). */
+void test_sheet_add_eccentricity(test_sheet *sheet, double amplitude, double period);
+
 void test_sheet_free(test_sheet *sheet);
 
 /* Max and RMS of |z - truth| over the valid rows [r0, r1) and all fibers. */

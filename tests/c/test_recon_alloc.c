@@ -37,8 +37,24 @@ void *realloc(void *p, size_t n) {
 }
 void free(void *p) { __libc_free(p); }
 
+static void stream_and_count(const flt_options *options);
+
 static void streaming_allocates_nothing_after_create(void **state) {
     (void)state;
+    stream_and_count(NULL);
+}
+
+static void robust_rigid_streaming_allocates_nothing_after_create(void **state) {
+    (void)state;
+    flt_options *o = NULL;
+    assert_int_equal(flt_options_create(&o), FLT_OK);
+    assert_int_equal(flt_options_set(o, FLT_OPT_ROBUST, 1), FLT_OK);
+    assert_int_equal(flt_options_set(o, FLT_OPT_RIGID_MOTION, 1), FLT_OK);
+    stream_and_count(o);
+    flt_options_destroy(o);
+}
+
+static void stream_and_count(const flt_options *options) {
     const size_t K = 64;
     test_sheet *t = test_sheet_make(6000, K, 0.0, 3.0, 0.1, 20.0, 100.0, 1);
     test_sheet_add_noise(t, 2.5, 0.05, 2);
@@ -53,7 +69,7 @@ static void streaming_allocates_nothing_after_create(void **state) {
     /* Control: the counter does see the library's allocations. */
     g_allocations = 0;
     g_counting = 1;
-    assert_int_equal(flt_recon_create(K, NULL, &rc), FLT_OK);
+    assert_int_equal(flt_recon_create(K, options, &rc), FLT_OK);
     g_counting = 0;
     assert_true(g_allocations >= 10);
 
@@ -94,6 +110,7 @@ static void streaming_allocates_nothing_after_create(void **state) {
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(streaming_allocates_nothing_after_create),
+        cmocka_unit_test(robust_rigid_streaming_allocates_nothing_after_create),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

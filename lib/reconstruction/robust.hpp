@@ -1,0 +1,116 @@
+// Internal: robust reconstruction, a streaming IRLS.
+//
+// Iteratively reweighted least squares, arranged as a pipeline of stages so
+// that it streams: stage 0 is the plain fit (the options' noise levels);
+// stage i refits the same raw rows with weights from stage i-1: each sample's
+// residual against stage i-1's estimate (what the two lasers would have
+// measured on it) gives
+//   - per fiber and measurement kind, a running robust scale: 1.4826 times
+//     the median of the medians of |residual| over the last blocks of rows
+//     (no noise level needs to be given), which sets the fiber's weight
+//     1/scale^2, and
+//   - per sample, the Huber or Tukey multiplier of residual/scale, which
+//     takes outliers (shear-station ringing, spurious peaks) out.
+// A row enters stage i once stage i-1 has emitted every knot under it, so
+// each stage adds its lag to the latency; intermediate stages use a short
+// lag (robust_lag_knots), the last one the reconstructor's lag_knots. Every
+// stage carries its own boundary across sheets, and the output, from the
+// last stage, is C1 like the plain one. Deterministic: no randomness, a fixed
+// number of stages.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "reconstruction/engine.hpp"
+
+namespace flt {
+
+enum class robust_kind { none = 0, huber = 1, tukey = 2 };
+
+struct robust_params {
+    robust_kind kind = robust_kind::none;
+    int iterations = 2;              // reweighted stages after the plain one
+    long stage_lag_knots = 8;        // lag of the intermediate stages
+    std::size_t block_rows = 32;     // rows per scale block
+    std::size_t scale_blocks = 9;    // blocks whose medians make the scale
+};
+
+// Running robust scale of one measurement kind, per fiber: per block of
+// rows, the mean of |residual| clipped at 3 times the current scale (O(1) per
+// sample; the clip bounds what an outlier can add), converted to a Gaussian
+// sigma; the scale is the median of the last blocks' values, so a burst of
+// outliers spoils at most a block or two.
+class robust_scale {
+public:
+    robust_scale(std::size_t fibers, std::size_t block_rows, std::size_t blocks,
+                 double initial_sigma);
+    // Adds one row of residuals (NaN where the sample is invalid). Returns
+    // true when a block completed and the scales changed.
+    bool add(const double *residual);
+    const double *sigma() const { return sigma_.data(); }
+    void reset();
+
+private:
+    std::size_t K_, block_rows_, blocks_;
+    double initial_;
+    std::vector<double> sum_, count_;  // per fiber, this block
+    std::size_t rows_ = 0;
+    std::vector<double> estimates_;    // ring [blocks][K], NaN when empty
+    std::size_t next_ = 0;
+    std::vector<double> sigma_;        // per fiber
+};
+
+// One channel (a set of fibers) reconstructed robustly, or plainly when
+// robust.kind is none (a single stage). Same interface as recon_engine.
+class recon_chain {
+public:
+    recon_chain(std::size_t fibers, const recon_params &params,
+                const robust_params &robust, std::size_t knot_capacity,
+                double *z_store = nullptr, std::uint8_t *flags_store = nullptr);
+
+    std::size_t fibers() const { return K_; }
+    std::size_t free_rows() const;
+    std::size_t ready_rows() const { return last().ready_rows(); }
+    bool has_last_s() const { return first().has_last_s(); }
+    double last_s() const { return first().last_s(); }
+    bool rows_since_sheet() const { return first().rows_since_sheet(); }
+    bool pushed_since_reset() const { return first().pushed_since_reset(); }
+    bool has_boundary() const { return last().has_boundary(); }
+
+    void push_row(double s, const double *height, const double *slope,
+                  const std::uint8_t *valid);
+    std::size_t pull(std::size_t max_rows, double *s_out, double *z_out,
+                     std::uint8_t *flags_out) {
+        return last().pull(max_rows, s_out, z_out, flags_out);
+    }
+    void end_sheet();
+    void reset();
+    void boundary(double *s_out, double *height_out, double *slope_out) const {
+        last().boundary(s_out, height_out, slope_out);
+    }
+
+private:
+    recon_engine &first() const { return *stages_.front(); }
+    recon_engine &last() const { return *stages_.back(); }
+    // Raw rows waiting for stage i (1..iterations) to be able to take them.
+    struct pending {
+        std::vector<double> s, height, slope;  // ring [capacity][K], NaN = invalid
+        std::size_t head = 0, tail = 0;
+    };
+    void enqueue(std::size_t stage, double s, const double *height,
+                 const double *slope, const std::uint8_t *valid);
+    void advance(std::size_t stage);  // feed stage every row it can take
+
+    std::size_t K_;
+    robust_params robust_;
+    double D_;
+    std::vector<std::unique_ptr<recon_engine>> stages_;
+    std::vector<pending> queues_;            // [stage], 0 unused
+    std::vector<std::unique_ptr<robust_scale>> h_scale_, g_scale_;  // [stage]
+    std::size_t queue_capacity_ = 0;
+    // Scratch, one row each.
+    std::vector<double> pred_h_, pred_g_, res_h_, res_g_, mult_h_, mult_g_, wh_, wg_;
+};
+
+}  // namespace flt
