@@ -29,7 +29,8 @@ namespace Flatline
     /// ("knot_spacing", ...) through flt_option_find, so an option added to
     /// the C library is usable here without a binding change; the typed
     /// properties cover the options known when this binding was written
-    /// (calibration and simulator keys carry a Calib / Sim prefix).
+    /// (calibration, simulator and extractor keys carry a Calib / Sim /
+    /// Extract prefix).
     /// Keys never set keep their default. Objects created from a bag keep
     /// their own copy of the values, so the bag may be disposed right after.
     /// </summary>
@@ -185,6 +186,25 @@ namespace Flatline
         public double SimFullWell { get => Get("sim_full_well"); set => Set("sim_full_well", value); }
         /// <summary>Spurious reflections per frame.</summary>
         public double SimReflections { get => Get("sim_reflections"); set => Set("sim_reflections", value); }
+
+        // ---- frame-to-profile extractor (Extractor); flatline/extractor.h
+        /// <summary>First frame row of laser 0's band, px.</summary>
+        public int ExtractLaser0FirstRow { get => (int)Get("extract_laser0_first_row"); set => Set("extract_laser0_first_row", value); }
+        /// <summary>Rows of laser 0's band; 0 (with laser 1's also 0) for
+        /// automatic bands found in the first frame.</summary>
+        public int ExtractLaser0Rows { get => (int)Get("extract_laser0_rows"); set => Set("extract_laser0_rows", value); }
+        /// <summary>First frame row of laser 1's band, px.</summary>
+        public int ExtractLaser1FirstRow { get => (int)Get("extract_laser1_first_row"); set => Set("extract_laser1_first_row", value); }
+        /// <summary>Rows of laser 1's band (0: automatic).</summary>
+        public int ExtractLaser1Rows { get => (int)Get("extract_laser1_rows"); set => Set("extract_laser1_rows", value); }
+        /// <summary>Savitzky-Golay window, rows, odd.</summary>
+        public int ExtractSgWindow { get => (int)Get("extract_sg_window"); set => Set("extract_sg_window", value); }
+        /// <summary>Savitzky-Golay polynomial order.</summary>
+        public int ExtractSgOrder { get => (int)Get("extract_sg_order"); set => Set("extract_sg_order", value); }
+        /// <summary>Weakest accepted peak, fraction of full scale.</summary>
+        public double ExtractMinPeak { get => Get("extract_min_peak"); set => Set("extract_min_peak", value); }
+        /// <summary>Widest accepted line: rows at or above half its maximum.</summary>
+        public double ExtractMaxWidth { get => Get("extract_max_width"); set => Set("extract_max_width", value); }
 
         public void Dispose()
         {

@@ -82,4 +82,13 @@ namespace Flatline
         protected override void Destroy(IntPtr native) => FlatlineNative.flt_sim_destroy_handle(native);
         protected override void OnLive(int delta) => Interlocked.Add(ref live, delta);
     }
+
+    internal sealed class ExtractorHandle : FlatlineHandle
+    {
+        private static long live;
+        internal static long Live => Interlocked.Read(ref live);
+        public ExtractorHandle() { }
+        protected override void Destroy(IntPtr native) => FlatlineNative.flt_extractor_destroy_handle(native);
+        protected override void OnLive(int delta) => Interlocked.Add(ref live, delta);
+    }
 }

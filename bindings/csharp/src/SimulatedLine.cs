@@ -28,18 +28,6 @@ namespace Flatline
         Crossbow = NativeDefect.FLT_SIM_CROSSBOW,
     }
 
-    /// <summary>Pixel formats of a frame (flt_pixel_format); the value is
-    /// the number of significant bits. Mono8 frames are <c>byte[rows,
-    /// columns]</c>; Mono10, Mono12 and Mono16 frames are <c>ushort[rows,
-    /// columns]</c> with the data in the low bits (GenICam unpacked formats).</summary>
-    public enum PixelFormat
-    {
-        Mono8 = 8,
-        Mono10 = 10,
-        Mono12 = 12,
-        Mono16 = 16,
-    }
-
     /// <summary>
     /// Profile rows from <see cref="SimulatedLine.NextRows"/>: what the
     /// extractor would produce, with the ground truth. Arrays per row are

@@ -17,11 +17,13 @@
  *     `fixed`, so double[,] passes without a copy;
  *   - size_t is ulong, strings are UTF-8 in both directions.
  *
- * One .i per component, in dependency order (sim.h uses calib.h).
+ * One .i per component, in dependency order (extractor.h uses calib.h,
+ * sim.h both).
  */
 %module FlatlineNative
 
 %include "common.i"
 %include "recon.i"
 %include "calib.i"
+%include "extractor.i"
 %include "sim.i"

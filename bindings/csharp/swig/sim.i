@@ -16,10 +16,7 @@ FLT_CS_HANDLE(flt_sim, SimHandle)
 %typemap(in) void *frame_out %{ $1 = $input; %}
 %typemap(csin) void *frame_out "$csinput"
 
-/* sim.h includes extractor.h for flt_pixel_format only: %import gives SWIG
- * the type without wrapping the extractor's functions (that is
- * extractor.i's business). The format travels as its int value; the public
- * PixelFormat enum carries the same values (8, 10, 12, 16 bits). */
-%import "flatline/extractor.h"
-
+/* flt_pixel_format (extractor.h, wrapped by extractor.i before this file)
+ * travels as its int value; the public PixelFormat enum carries the same
+ * values (8, 10, 12, 16 bits). */
 %include "flatline/sim.h"

@@ -139,12 +139,19 @@ namespace Flatline.Tests
                 Assert.Equal(1, new SimulatedLine(calib).NextRows(1).Rows);  // used, so it is really touched
         }
 
+        [MethodImpl(MethodImplOptions.NoInlining)]
+        private static void AbandonExtractors(int count, Calibration calib)
+        {
+            for (int i = 0; i < count; ++i)
+                Assert.Equal(21, new Extractor(calib).Fibers);
+        }
+
         [Fact]
-        public void UndisposedCalibrationsAndSimulatedLinesAreFreedByTheFinalizer()
+        public void UndisposedCalibrationsSimulatedLinesAndExtractorsAreFreedByTheFinalizer()
         {
             using var calib = SimulatedLineTests.SmallSensor();
             CollectEverything();
-            long calibsBefore = CalibHandle.Live, linesBefore = SimHandle.Live;
+            long calibsBefore = CalibHandle.Live, linesBefore = SimHandle.Live, extractorsBefore = ExtractorHandle.Live;
             long rssBefore = Resident();
             var clock = Stopwatch.StartNew();
             AbandonCalibrations(Count);
@@ -152,13 +159,15 @@ namespace Flatline.Tests
             // px, 1 MiB (sim.h): 1,000 of them leaked would be 1 GiB.
             const int lines = 1000;
             AbandonLines(lines, calib);
+            AbandonExtractors(Count, calib);
             double seconds = clock.Elapsed.TotalSeconds;
             CollectEverything();
             long rssAfter = Resident();
-            output.WriteLine($"{Count} calibrations and {lines} simulated lines undisposed in {seconds:F1} s; " +
+            output.WriteLine($"{Count} calibrations, {lines} simulated lines and {Count} extractors undisposed in {seconds:F1} s; " +
                              $"resident before {rssBefore >> 20} MiB, after collect {rssAfter >> 20} MiB");
             Assert.Equal(calibsBefore, CalibHandle.Live);
             Assert.Equal(linesBefore, SimHandle.Live);
+            Assert.Equal(extractorsBefore, ExtractorHandle.Live);
             long scratch = 4L * 2048 * 128 * lines;
             Assert.True(rssAfter - rssBefore < scratch / 4,
                         $"memory grew by {(rssAfter - rssBefore) >> 20} MiB over {lines} undisposed lines");

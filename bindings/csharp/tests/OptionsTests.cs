@@ -70,6 +70,27 @@ namespace Flatline.Tests
         }
 
         [Fact]
+        public void EveryTypedPropertyNamesAKeyOfTheCLibraryAndReadsItsDefault()
+        {
+            // A typo in a property's C name would throw NotFoundException here.
+            using var options = new FlatlineOptions();
+            var properties = typeof(FlatlineOptions).GetProperties()
+                .Where(p => p.CanRead && p.CanWrite && p.GetIndexParameters().Length == 0).ToArray();
+            Assert.True(properties.Length >= 44, $"{properties.Length} typed properties");
+            foreach (var property in properties)
+            {
+                object value = property.GetValue(options);
+                property.SetValue(options, value);  // the default round-trips through the setter
+                Assert.Equal(value, property.GetValue(options));
+            }
+            Assert.Equal(8, options.SimBitDepth);
+            Assert.Equal(1u, options.SimSeed);
+            Assert.Equal(11, options.ExtractSgWindow);
+            Assert.False(options.CalibRansac);
+            Assert.Equal(1000, options.CalibRansacIterations);
+        }
+
+        [Fact]
         public void RejectedValuesLeaveTheBagUnchanged()
         {
             using var options = new FlatlineOptions { HeightSigma = 2.0 };
