@@ -12,5 +12,6 @@
 #include "flatline/extractor.h"
 #include "flatline/sim.h"
 #include "flatline/flatness.h"
+#include "flatline/source.h"
 
 #endif /* FLATLINE_FLATLINE_H */
