@@ -1,0 +1,712 @@
+/*
+ * The simulated line, end to end: camera frames -> extractor -> streaming
+ * reconstructor with carry-over across sheets -> flatness per sheet.
+ *
+ * A strip with a centre buckle and wavy edges (the reference's defects)
+ * passes under the reference sensor (two lasers 100 mm apart, a 2048-column
+ * camera read out over rows 892..1147, a frame every 3 mm). The strip bounces
+ * (rigid heave), a leveler roll's eccentricity adds a 50 mm ripple, the
+ * shear station rings after every cut (every 3000 mm), and the peak detector
+ * adds 1/16 px per laser. The simulator renders every camera frame; the
+ * library turns frames into profile rows (flt_extractor), rows into the
+ * strip's shape (flt_recon, streamed, carry-over between sheets), and each
+ * sheet's shape into I-Units, a shape class, bow and crossbow (flt_flatness).
+ *
+ * It prints progress, then a summary: sheets, real-time factor at the line
+ * speed (library time only: rendering frames is the simulator's work, a real
+ * line gets them from the camera), accuracy against the ground truth, and per
+ * sheet its class and zone profile. The report directory gets PNG height
+ * maps (raw and reconstructed, with a colour scale), one fiber's profile, the
+ * zone profiles as bar charts, and CSV and JSON files.
+ *
+ * Run with --help for the options.
+ */
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include <sys/stat.h>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <flatline/flatline.h>
+
+namespace {
+
+constexpr uint32_t k_roi_first = 892, k_roi_rows = 256;  // both lines, +-50 mm
+constexpr uint32_t k_camera_width = 2048;
+
+struct settings {
+    int sheets = 3;
+    double sheet_length = 3000.0;  // mm
+    double width = 1500.0;         // mm, strip width (fibers cover it)
+    double pitch = 2.0;            // mm between fibers
+    double speed = 120.0;          // m/min
+    double centre_buckle = 6.0;    // mm amplitude (half peak to peak)
+    double wavy_edges = 6.0;       // mm amplitude
+    double quarter_buckle = 0.0;   // mm amplitude
+    double period = 1800.0;        // mm along travel
+    double vibration = 2.5;        // mm rigid heave sigma
+    double eccentricity = 0.5;     // mm
+    double shear = 5.0;            // mm initial envelope
+    double peak_noise = 1.0 / 16;  // px
+    unsigned seed = 1;
+    std::string out = "flatline_report";
+};
+
+void usage() {
+    std::printf(
+        "flatline_demo: the simulated line end to end (frames -> extractor -> streaming\n"
+        "reconstructor -> flatness), with a report directory of pictures, CSV and JSON.\n\n"
+        "  --sheets N            sheets to run (default 3)\n"
+        "  --sheet-length MM     sheet length along travel (default 3000; sheets are cut\n"
+        "                        where the shear station cuts, every 3000 mm)\n"
+        "  --width MM            strip width, covered by fibers (default 1500)\n"
+        "  --pitch MM            fiber pitch across the width (default 2)\n"
+        "  --speed M_PER_MIN     line speed for the real-time factor (default 120)\n"
+        "  --centre-buckle MM    centre buckle amplitude, half peak to peak (default 6)\n"
+        "  --wavy-edges MM       wavy edges amplitude, both edges (default 6)\n"
+        "  --quarter-buckle MM   quarter buckle amplitude (default 0)\n"
+        "  --period MM           defect period along travel (default 1800)\n"
+        "  --vibration MM        rigid heave of the strip per frame, sigma (default 2.5)\n"
+        "  --eccentricity MM     roll eccentricity amplitude at 50 mm period (default 0.5)\n"
+        "  --shear MM            shear-station ringing, initial envelope (default 5; the\n"
+        "                        reference's 50 mm moves a line by 24 px, past the 48 px\n"
+        "                        between the two lines of this sensor geometry)\n"
+        "  --peak-noise PX       laser peak detection noise (default 0.0625 = 1/16 px)\n"
+        "  --seed N              random seed (default 1)\n"
+        "  --out DIR             report directory (default flatline_report)\n"
+        "  --help                this text\n");
+}
+
+[[noreturn]] void die(const char *what) {
+    std::fprintf(stderr, "flatline_demo: %s failed: %s (%s)\n", what, flt_last_error_message(),
+                 flt_status_string(flt_last_error_status()));
+    std::exit(1);
+}
+#define CHECK(call) \
+    do { if ((call) != FLT_OK) die(#call); } while (0)
+
+double now_s() {
+    using clock = std::chrono::steady_clock;
+    return std::chrono::duration<double>(clock::now().time_since_epoch()).count();
+}
+
+// One sheet's rows: positions, extractor heights (raw), reconstruction,
+// ground truth, [rows * fibers].
+struct sheet_data {
+    std::vector<double> s, raw, z, truth;
+    std::vector<uint8_t> flags;
+    void clear() { s.clear(); raw.clear(); z.clear(); truth.clear(); flags.clear(); }
+};
+
+struct sheet_result {
+    int index;
+    double s_first, s_last;
+    flt_shape shape;
+    double confidence, bow, crossbow;
+    unsigned components;
+    double rms_error, max_error;  // mm, after removing the sheet's mean level
+    double zone_error;            // largest |I - I_true| over the zones
+    std::vector<double> zone_i, zone_true;
+};
+
+// ---------------------------------------------------------------- pictures
+
+const cv::Scalar k_black(0, 0, 0), k_grey(150, 150, 150), k_white(255, 255, 255);
+
+void text(cv::Mat &img, const std::string &s, cv::Point at, double scale = 0.5,
+          cv::Scalar colour = k_black, int thickness = 1) {
+    cv::putText(img, s, at, cv::FONT_HERSHEY_SIMPLEX, scale, colour, thickness, cv::LINE_AA);
+}
+
+int text_width(const std::string &s, double scale = 0.5) {
+    int base = 0;
+    return cv::getTextSize(s, cv::FONT_HERSHEY_SIMPLEX, scale, 1, &base).width;
+}
+
+std::string fmt(const char *f, double v) {
+    char b[64];
+    std::snprintf(b, sizeof b, f, v);
+    return b;
+}
+
+// A "nice" tick step for a span (1, 2 or 5 times a power of ten).
+double tick_step(double span, int target) {
+    const double raw = span / target, p = std::pow(10.0, std::floor(std::log10(raw)));
+    for (double m : {1.0, 2.0, 5.0, 10.0})
+        if (m * p >= raw) return m * p;
+    return 10 * p;
+}
+
+// Height map: x across the width to the right, s along travel downwards,
+// colour = height (mm) on a symmetric scale, with axes and a colour bar.
+void height_map_png(const std::string &path, const std::string &title, const sheet_data &d,
+                    const std::vector<double> &values, const std::vector<double> &x,
+                    double scale_mm) {
+    const int fibers = int(x.size()), rows = int(d.s.size());
+    const int left = 90, top = 50, right = 150, bottom = 70;
+    // One pixel per fiber across, rows resampled so the picture keeps the
+    // sheet's proportions (mm per pixel equal on both axes).
+    const double mm_per_px = (x.back() - x.front()) / (fibers - 1);
+    const int h = int((d.s.back() - d.s.front()) / mm_per_px) + 1;
+    cv::Mat map(h, fibers, CV_8UC1), valid(h, fibers, CV_8UC1);
+    int r = 0;
+    for (int py = 0; py < h; ++py) {
+        const double s = d.s.front() + py * mm_per_px;
+        while (r + 1 < rows && d.s[r + 1] <= s) ++r;
+        for (int k = 0; k < fibers; ++k) {
+            const double v = values[size_t(r) * fibers + k];
+            valid.at<uint8_t>(py, k) = std::isfinite(v);
+            const double t = std::isfinite(v) ? (v + scale_mm) / (2 * scale_mm) : 0.5;
+            map.at<uint8_t>(py, k) = uint8_t(std::lround(255 * std::clamp(t, 0.0, 1.0)));
+        }
+    }
+    cv::Mat coloured;
+    cv::applyColorMap(map, coloured, cv::COLORMAP_VIRIDIS);
+    coloured.setTo(cv::Scalar(255, 255, 255), valid == 0);  // invalid: white
+    cv::Mat img(h + top + bottom, fibers + left + right, CV_8UC3, k_white);
+    coloured.copyTo(img(cv::Rect(left, top, fibers, h)));
+    cv::rectangle(img, cv::Rect(left - 1, top - 1, fibers + 2, h + 2), k_black);
+    text(img, title, {left, 30}, 0.6);
+    // x ticks (mm)
+    const double xs = tick_step(x.back() - x.front(), 6);
+    for (double v = std::ceil(x.front() / xs) * xs; v <= x.back(); v += xs) {
+        const int px = left + int(std::lround((v - x.front()) / mm_per_px));
+        cv::line(img, {px, top + h}, {px, top + h + 5}, k_black);
+        const std::string l = fmt("%.0f", v);
+        text(img, l, {px - text_width(l) / 2, top + h + 22});
+    }
+    text(img, "x across the width (mm)", {left + fibers / 2 - 90, top + h + 50});
+    // s ticks (m)
+    const double ss = tick_step(d.s.back() - d.s.front(), 6);
+    for (double v = std::ceil(d.s.front() / ss) * ss; v <= d.s.back(); v += ss) {
+        const int py = top + int(std::lround((v - d.s.front()) / mm_per_px));
+        cv::line(img, {left - 5, py}, {left, py}, k_black);
+        const std::string l = fmt("%.1f", v / 1000);
+        text(img, l, {left - 10 - text_width(l), py + 5});
+    }
+    cv::Mat label(20, 200, CV_8UC3, k_white);
+    text(label, "s along travel (m)", {5, 15});
+    cv::rotate(label, label, cv::ROTATE_90_COUNTERCLOCKWISE);
+    if (h > 200) label.copyTo(img(cv::Rect(15, top + h / 2 - 100, 20, 200)));
+    // colour bar
+    const int bx = left + fibers + 30, bw = 25;
+    for (int py = 0; py < h; ++py) {
+        cv::Mat px(1, 1, CV_8UC1, cv::Scalar(255 - 255 * py / std::max(1, h - 1)));
+        cv::Mat c;
+        cv::applyColorMap(px, c, cv::COLORMAP_VIRIDIS);
+        cv::line(img, {bx, top + py}, {bx + bw, top + py}, c.at<cv::Vec3b>(0, 0));
+    }
+    cv::rectangle(img, cv::Rect(bx, top, bw, h), k_black);
+    const double zs = tick_step(2 * scale_mm, 8);
+    for (double v = std::ceil(-scale_mm / zs) * zs; v <= scale_mm + 1e-9; v += zs) {
+        const int py = top + int(std::lround((scale_mm - v) / (2 * scale_mm) * (h - 1)));
+        cv::line(img, {bx + bw, py}, {bx + bw + 5, py}, k_black);
+        text(img, fmt("%+.0f", v), {bx + bw + 8, py + 5});
+    }
+    text(img, "z (mm)", {bx - 5, top - 10});
+    if (!cv::imwrite(path, img)) std::fprintf(stderr, "could not write %s\n", path.c_str());
+}
+
+struct series {
+    std::string name;
+    std::vector<double> x, y;
+    cv::Scalar colour;
+    int thickness;
+};
+
+// A line plot with axes, ticks, grid and a legend.
+void line_plot_png(const std::string &path, const std::string &title, const std::string &xlabel,
+                   const std::string &ylabel, const std::vector<series> &all) {
+    const int W = 1100, H = 520, left = 80, right = 20, top = 50, bottom = 60;
+    const int pw = W - left - right, ph = H - top - bottom;
+    double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
+    for (const series &s : all)
+        for (size_t i = 0; i < s.x.size(); ++i) {
+            if (!std::isfinite(s.y[i])) continue;
+            x0 = std::min(x0, s.x[i]); x1 = std::max(x1, s.x[i]);
+            y0 = std::min(y0, s.y[i]); y1 = std::max(y1, s.y[i]);
+        }
+    const double pad = 0.05 * (y1 - y0 + 1e-9);
+    y0 -= pad; y1 += pad;
+    cv::Mat img(H, W, CV_8UC3, k_white);
+    auto X = [&](double v) { return left + int(std::lround((v - x0) / (x1 - x0) * pw)); };
+    auto Y = [&](double v) { return top + int(std::lround((y1 - v) / (y1 - y0) * ph)); };
+    const double xs = tick_step(x1 - x0, 8), ys = tick_step(y1 - y0, 8);
+    for (double v = std::ceil(x0 / xs) * xs; v <= x1; v += xs) {
+        cv::line(img, {X(v), top}, {X(v), top + ph}, cv::Scalar(230, 230, 230));
+        const std::string l = fmt(xs < 1 ? "%.1f" : "%.0f", v);
+        text(img, l, {X(v) - text_width(l) / 2, top + ph + 20});
+    }
+    for (double v = std::ceil(y0 / ys) * ys; v <= y1; v += ys) {
+        cv::line(img, {left, Y(v)}, {left + pw, Y(v)}, cv::Scalar(230, 230, 230));
+        const std::string l = fmt(ys < 1 ? "%.1f" : "%.0f", v);
+        text(img, l, {left - 8 - text_width(l), Y(v) + 5});
+    }
+    cv::rectangle(img, cv::Rect(left, top, pw, ph), k_black);
+    for (const series &s : all) {
+        std::vector<cv::Point> pts;
+        for (size_t i = 0; i < s.x.size(); ++i) {
+            if (!std::isfinite(s.y[i])) {
+                if (pts.size() > 1) cv::polylines(img, pts, false, s.colour, s.thickness, cv::LINE_AA);
+                pts.clear();
+                continue;
+            }
+            pts.emplace_back(X(s.x[i]), Y(s.y[i]));
+        }
+        if (pts.size() > 1) cv::polylines(img, pts, false, s.colour, s.thickness, cv::LINE_AA);
+    }
+    text(img, title, {left, 30}, 0.6);
+    text(img, xlabel, {left + pw / 2 - text_width(xlabel) / 2, H - 15});
+    cv::Mat label(20, 260, CV_8UC3, k_white);
+    text(label, ylabel, {5, 15});
+    cv::rotate(label, label, cv::ROTATE_90_COUNTERCLOCKWISE);
+    label.copyTo(img(cv::Rect(10, top + ph / 2 - 130, 20, 260)));
+    int ly = top + 20;
+    for (const series &s : all) {
+        cv::line(img, {left + pw - 260, ly - 5}, {left + pw - 225, ly - 5}, s.colour, 3, cv::LINE_AA);
+        text(img, s.name, {left + pw - 215, ly});
+        ly += 22;
+    }
+    if (!cv::imwrite(path, img)) std::fprintf(stderr, "could not write %s\n", path.c_str());
+}
+
+// " (centre + edges + ...)" for a mix's components, else "".
+std::string components_text(unsigned c) {
+    std::string s;
+    auto add = [&](unsigned bit, const char *name) {
+        if (c & bit) s += (s.empty() ? " (" : " + ") + std::string(name);
+    };
+    add(FLT_SHAPE_HAS_CENTRE, "centre");
+    add(FLT_SHAPE_HAS_QUARTER, "quarters");
+    add(FLT_SHAPE_HAS_EDGE_LEFT, "left edge");
+    add(FLT_SHAPE_HAS_EDGE_RIGHT, "right edge");
+    add(FLT_SHAPE_HAS_BOW, "bow");
+    add(FLT_SHAPE_HAS_CROSSBOW, "crossbow");
+    return s.empty() ? s : s + ")";
+}
+
+// The zone profiles as bar charts, one panel per sheet, with the true
+// profile as black ticks and the flat limit as a dashed line.
+void zone_chart_png(const std::string &path, const std::vector<sheet_result> &sheets,
+                    const std::vector<double> &zone_x, double zone_width, double flat_limit) {
+    const int W = 1100, panel = 260, left = 80, right = 20, top = 50;
+    const int H = top + int(sheets.size()) * panel + 30, pw = W - left - right, ph = panel - 70;
+    double ymax = flat_limit;
+    for (const sheet_result &r : sheets)
+        for (size_t j = 0; j < r.zone_i.size(); ++j)
+            ymax = std::max({ymax, std::isfinite(r.zone_i[j]) ? r.zone_i[j] : 0.0, r.zone_true[j]});
+    ymax *= 1.1;
+    cv::Mat img(H, W, CV_8UC3, k_white);
+    text(img, "I-Unit profile across the width, per sheet (bars: measured, black ticks: true)",
+         {left, 30}, 0.6);
+    const double x0 = zone_x.front() - zone_width / 2, x1 = zone_x.back() + zone_width / 2;
+    auto X = [&](double v) { return left + int(std::lround((v - x0) / (x1 - x0) * pw)); };
+    for (size_t p = 0; p < sheets.size(); ++p) {
+        const sheet_result &r = sheets[p];
+        const int py = top + int(p) * panel + 20;
+        auto Y = [&](double v) { return py + ph - int(std::lround(v / ymax * ph)); };
+        const double ys = tick_step(ymax, 5);
+        for (double v = 0; v <= ymax; v += ys) {
+            cv::line(img, {left, Y(v)}, {left + pw, Y(v)}, cv::Scalar(230, 230, 230));
+            const std::string l = fmt("%.0f", v);
+            text(img, l, {left - 8 - text_width(l), Y(v) + 5});
+        }
+        for (size_t j = 0; j < zone_x.size(); ++j) {
+            const int a = X(zone_x[j] - 0.42 * zone_width), b = X(zone_x[j] + 0.42 * zone_width);
+            if (std::isfinite(r.zone_i[j]))
+                cv::rectangle(img, cv::Point(a, Y(std::max(0.0, r.zone_i[j]))), cv::Point(b, Y(0)),
+                              cv::Scalar(180, 120, 40), cv::FILLED);
+            cv::line(img, {a, Y(r.zone_true[j])}, {b, Y(r.zone_true[j])}, k_black, 2);
+        }
+        for (int xx = left; xx < left + pw; xx += 12)
+            cv::line(img, {xx, Y(flat_limit)}, {xx + 6, Y(flat_limit)}, cv::Scalar(0, 0, 200), 1);
+        cv::rectangle(img, cv::Rect(left, py, pw, ph), k_black);
+        char head[200];
+        std::snprintf(head, sizeof head, "sheet %d (%.1f-%.1f m): %s%s, confidence %.2f",
+                      r.index, r.s_first / 1000, r.s_last / 1000, flt_shape_string(r.shape),
+                      components_text(r.components).c_str(), r.confidence);
+        text(img, head, {left + 5, py - 5});
+        const double xs = tick_step(x1 - x0, 8);
+        for (double v = std::ceil(x0 / xs) * xs; v <= x1; v += xs) {
+            const std::string l = fmt("%.0f", v);
+            text(img, l, {X(v) - text_width(l) / 2, py + ph + 18}, 0.45);
+        }
+        text(img, "I-Units", {10, py + ph / 2});
+    }
+    text(img, "zone centre x across the width (mm); red dashes: flat limit", {left + pw / 2 - 220, H - 12});
+    if (!cv::imwrite(path, img)) std::fprintf(stderr, "could not write %s\n", path.c_str());
+}
+
+// ---------------------------------------------------------------- the line
+
+bool parse(int argc, char **argv, settings &st) {
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (a == "--help" || a == "-h") { usage(); std::exit(0); }
+        if (i + 1 >= argc) return false;
+        const char *v = argv[++i];
+        char *end = nullptr;
+        const double d = std::strtod(v, &end);
+        const bool number = end && *end == '\0' && std::isfinite(d);
+        if (a == "--out") { st.out = v; continue; }
+        if (!number) return false;
+        if (a == "--sheets") st.sheets = int(d);
+        else if (a == "--sheet-length") st.sheet_length = d;
+        else if (a == "--width") st.width = d;
+        else if (a == "--pitch") st.pitch = d;
+        else if (a == "--speed") st.speed = d;
+        else if (a == "--centre-buckle") st.centre_buckle = d;
+        else if (a == "--wavy-edges") st.wavy_edges = d;
+        else if (a == "--quarter-buckle") st.quarter_buckle = d;
+        else if (a == "--period") st.period = d;
+        else if (a == "--vibration") st.vibration = d;
+        else if (a == "--eccentricity") st.eccentricity = d;
+        else if (a == "--shear") st.shear = d;
+        else if (a == "--peak-noise") st.peak_noise = d;
+        else if (a == "--seed") st.seed = unsigned(d);
+        else return false;
+    }
+    return st.sheets >= 1 && st.sheet_length >= 600 && st.width >= 100 && st.width <= 2000 &&
+           st.pitch > 0 && st.width / st.pitch <= 4000 && st.speed > 0 && st.period > 0 &&
+           st.vibration >= 0 && st.eccentricity >= 0 && st.shear >= 0 && st.peak_noise >= 0;
+}
+
+flt_options *make_options(std::initializer_list<std::pair<flt_option, double>> kv) {
+    flt_options *o = nullptr;
+    CHECK(flt_options_create(&o));
+    for (auto &p : kv) CHECK(flt_options_set(o, p.first, p.second));
+    return o;
+}
+
+}  // namespace
+
+int main(int argc, char **argv) {
+    settings st;
+    if (!parse(argc, argv, st)) {
+        usage();
+        std::fprintf(stderr, "\nflatline_demo: bad or missing option value (sheets >= 1, "
+                             "sheet length >= 600 mm, width 100..2000 mm)\n");
+        return 2;
+    }
+    const size_t fibers = size_t(st.width / st.pitch) + 1;
+    const double first_x = -0.5 * st.pitch * double(fibers - 1);
+    std::vector<double> x(fibers);
+    for (size_t k = 0; k < fibers; ++k) x[k] = first_x + st.pitch * double(k);
+
+    flt_calib *calib = nullptr;
+    CHECK(flt_calib_create_reference(k_roi_first, k_roi_rows, first_x, st.pitch, fibers, &calib));
+    flt_options *sim_opt = make_options({{FLT_OPT_SIM_SEED, st.seed},
+                                         {FLT_OPT_SIM_STRIP_WIDTH, st.width},
+                                         {FLT_OPT_SIM_HEAVE_SIGMA, st.vibration},
+                                         {FLT_OPT_SIM_ECCENTRICITY_AMPLITUDE, st.eccentricity},
+                                         {FLT_OPT_SIM_SHEAR_AMPLITUDE, st.shear},
+                                         {FLT_OPT_SIM_PEAK_SIGMA, st.peak_noise}});
+    flt_sim *sim = nullptr;
+    CHECK(flt_sim_create(calib, sim_opt, &sim));
+    if (st.centre_buckle != 0)
+        CHECK(flt_sim_add_defect(sim, FLT_SIM_CENTRE_BUCKLE, st.centre_buckle, st.period));
+    // Opposite phase to the centre: the edges are long where the centre is
+    // short, as on the reference's sheet.
+    if (st.wavy_edges != 0)
+        CHECK(flt_sim_add_defect(sim, FLT_SIM_WAVY_EDGE_BOTH, -st.wavy_edges, st.period));
+    if (st.quarter_buckle != 0)
+        CHECK(flt_sim_add_defect(sim, FLT_SIM_QUARTER_BUCKLE, st.quarter_buckle, st.period));
+    flt_extractor *extractor = nullptr;
+    CHECK(flt_extractor_create(calib, nullptr, &extractor));
+    // rigid_motion: the heave moves every fiber of a frame together; the
+    // reconstructor takes it out of the shape (tests/c/test_recon.c).
+    flt_options *recon_opt = make_options({{FLT_OPT_RIGID_MOTION, 1}});
+    flt_recon *recon = nullptr;
+    CHECK(flt_recon_create(fibers, recon_opt, &recon));
+    // One window per sheet: the sheet is what the operator judges.
+    flt_options *flat_opt = make_options({{FLT_OPT_FLAT_WINDOW_LENGTH, 0},
+                                          {FLT_OPT_FLAT_ROW_CAPACITY, st.sheet_length / 3 + 64}});
+    flt_flatness *flatness = nullptr, *truth_flatness = nullptr;
+    CHECK(flt_flatness_create(fibers, x.data(), flat_opt, &flatness));
+    CHECK(flt_flatness_create(fibers, x.data(), flat_opt, &truth_flatness));
+    double flat_limit = 0;
+    CHECK(flt_options_get(flat_opt, FLT_OPT_FLAT_FLAT_LIMIT, &flat_limit));
+    size_t zones = 0;
+    CHECK(flt_flatness_zones(flatness, &zones));
+    std::vector<double> zone_x(zones);
+    CHECK(flt_flatness_zone_layout(flatness, zones, nullptr, zone_x.data(), nullptr));
+    double zone_width = 0;
+    CHECK(flt_options_get(flat_opt, FLT_OPT_FLAT_ZONE_WIDTH, &zone_width));
+
+    std::printf("libflatline %s demo: %d sheets of %.0f mm x %.0f mm, %zu fibers every %.1f mm\n"
+                "defects: centre buckle %.1f mm, wavy edges %.1f mm, quarter buckle %.1f mm, "
+                "period %.0f mm\nnoise: heave %.2f mm, eccentricity %.2f mm, shear ringing %.1f mm, "
+                "peak noise %.3f px\n",
+                flt_version_string(), st.sheets, st.sheet_length, st.width, fibers, st.pitch,
+                st.centre_buckle, st.wavy_edges, st.quarter_buckle, st.period, st.vibration,
+                st.eccentricity, st.shear, st.peak_noise);
+    std::fflush(stdout);
+    ::mkdir(st.out.c_str(), 0755);
+
+    const size_t frame_bytes = size_t(k_camera_width) * k_roi_rows;
+    std::vector<uint8_t> frame(frame_bytes);
+    std::vector<double> height(fibers), slope(fibers), truth(fibers);
+    std::vector<uint8_t> valid(fibers);
+    const size_t pull_capacity = 4096;
+    std::vector<double> s_out(pull_capacity), z_out(pull_capacity * fibers);
+    std::vector<uint8_t> flags_out(pull_capacity * fibers);
+    // Rows pushed but not pulled yet (raw heights and truth, for the report).
+    sheet_data pending, sheet;
+    std::vector<sheet_result> results;
+    std::vector<double> fiber_plot_raw, fiber_plot_z, fiber_plot_truth, fiber_plot_s;
+    const size_t plot_fiber = fibers / 2;  // the centre, where the buckle is
+    double busy = 0.0, render = 0.0;
+    size_t frames = 0, rows_done = 0, invalid_samples = 0;
+    double max_error_all = 0, sq_all = 0;
+    size_t n_all = 0;
+
+    auto finish_sheet = [&]() {
+        int evaluated = 0;
+        double t0 = now_s();
+        CHECK(flt_flatness_finish(flatness, &evaluated));
+        busy += now_s() - t0;
+        if (!evaluated) return;
+        sheet_result r{};
+        r.index = int(results.size()) + 1;
+        CHECK(flt_flatness_window(flatness, &r.s_first, &r.s_last, nullptr, nullptr, nullptr));
+        CHECK(flt_flatness_shape(flatness, &r.shape, &r.confidence, &r.components, &r.bow,
+                                 &r.crossbow));
+        r.zone_i.resize(zones);
+        r.zone_true.resize(zones);
+        CHECK(flt_flatness_zone_results(flatness, zones, r.zone_i.data(), nullptr));
+        CHECK(flt_flatness_evaluate(truth_flatness, sheet.s.size(), fibers, sheet.s.data(),
+                                    sheet.truth.data(), nullptr));
+        CHECK(flt_flatness_zone_results(truth_flatness, zones, r.zone_true.data(), nullptr));
+        for (size_t j = 0; j < zones; ++j)
+            if (std::isfinite(r.zone_i[j]))
+                r.zone_error = std::max(r.zone_error, std::fabs(r.zone_i[j] - r.zone_true[j]));
+        // Shape error: the absolute level of a bouncing strip is only known as
+        // an average and flatness does not depend on it, so the sheet's mean
+        // offset is removed first.
+        double sum = 0;
+        size_t n = 0;
+        for (size_t i = 0; i < sheet.z.size(); ++i)
+            if (std::isfinite(sheet.z[i])) { sum += sheet.z[i] - sheet.truth[i]; ++n; }
+        const double mean = n ? sum / double(n) : 0.0;
+        double sq = 0;
+        for (size_t i = 0; i < sheet.z.size(); ++i) {
+            if (!std::isfinite(sheet.z[i])) continue;
+            const double e = sheet.z[i] - sheet.truth[i] - mean;
+            sq += e * e;
+            r.max_error = std::max(r.max_error, std::fabs(e));
+        }
+        r.rms_error = n ? std::sqrt(sq / double(n)) : NAN;
+        sq_all += sq;
+        n_all += n;
+        max_error_all = std::max(max_error_all, r.max_error);
+        results.push_back(r);
+        std::fprintf(stderr, "\r%78s\r", "");
+        std::printf("sheet %d  %5.1f-%5.1f m  %-15s conf %.2f  peak %6.1f I-Units  "
+                    "error rms %.3f max %.3f mm\n",
+                    r.index, r.s_first / 1000, r.s_last / 1000, flt_shape_string(r.shape),
+                    r.confidence, *std::max_element(r.zone_i.begin(), r.zone_i.end()),
+                    r.rms_error, r.max_error);
+        std::fflush(stdout);
+        const std::string base = st.out + "/sheet" + std::to_string(r.index);
+        // Colour scale: the true surface's range plus a fifth, so the true
+        // and reconstructed maps use most of it (raw heights, which carry
+        // the heave, may clip at its ends).
+        double true_max = 0;
+        for (double v : sheet.truth) true_max = std::max(true_max, std::fabs(v));
+        const double scale = std::max(1.0, std::ceil(1.2 * true_max));
+        char title[160];
+        std::snprintf(title, sizeof title, "Sheet %d: raw heights from the extractor (mm)", r.index);
+        height_map_png(base + "_raw.png", title, sheet, sheet.raw, x, scale);
+        std::snprintf(title, sizeof title, "Sheet %d: reconstructed heights (mm)", r.index);
+        height_map_png(base + "_reconstructed.png", title, sheet, sheet.z, x, scale);
+        std::snprintf(title, sizeof title, "Sheet %d: true heights (mm)", r.index);
+        height_map_png(base + "_true.png", title, sheet, sheet.truth, x, scale);
+        if (r.index == 1) {
+            for (size_t i = 0; i < sheet.s.size(); ++i) {
+                fiber_plot_s.push_back(sheet.s[i]);
+                fiber_plot_raw.push_back(sheet.raw[i * fibers + plot_fiber]);
+                fiber_plot_z.push_back(sheet.z[i * fibers + plot_fiber]);
+                fiber_plot_truth.push_back(sheet.truth[i * fibers + plot_fiber]);
+            }
+        }
+        sheet.clear();
+    };
+
+    // Moves finished rows from the reconstructor to the flatness metrics.
+    auto pull_rows = [&]() {
+        for (;;) {
+            size_t got = 0;
+            double t0 = now_s();
+            CHECK(flt_recon_pull(recon, pull_capacity, fibers, s_out.data(), z_out.data(),
+                                 flags_out.data(), &got));
+            busy += now_s() - t0;
+            if (got == 0) return;
+            size_t fed = 0;
+            while (fed < got) {
+                size_t used = 0;
+                int evaluated = 0;
+                t0 = now_s();
+                CHECK(flt_flatness_push(flatness, got - fed, fibers, &s_out[fed], &z_out[fed * fibers],
+                                        &flags_out[fed * fibers], &used, &evaluated));
+                busy += now_s() - t0;
+                fed += used;
+            }
+            for (size_t i = 0; i < got; ++i) {
+                sheet.s.push_back(s_out[i]);
+                sheet.z.insert(sheet.z.end(), &z_out[i * fibers], &z_out[(i + 1) * fibers]);
+                sheet.raw.insert(sheet.raw.end(), &pending.raw[i * fibers], &pending.raw[(i + 1) * fibers]);
+                sheet.truth.insert(sheet.truth.end(), &pending.truth[i * fibers],
+                                   &pending.truth[(i + 1) * fibers]);
+            }
+            pending.raw.erase(pending.raw.begin(), pending.raw.begin() + got * fibers);
+            pending.truth.erase(pending.truth.begin(), pending.truth.begin() + got * fibers);
+            rows_done += got;
+        }
+    };
+
+    const double total_length = st.sheets * st.sheet_length;
+    double next_cut = st.sheet_length;
+    for (;;) {
+        double e = 0;
+        double t0 = now_s();
+        CHECK(flt_sim_next_frame(sim, frame.data(), frame_bytes, k_camera_width, &e, fibers,
+                                 truth.data(), nullptr));
+        render += now_s() - t0;
+        double s = 0;
+        t0 = now_s();
+        CHECK(flt_extractor_process(extractor, frame.data(), FLT_PIXEL_MONO8, k_camera_width,
+                                    k_roi_rows, k_camera_width, e, fibers, &s, height.data(),
+                                    slope.data(), valid.data()));
+        busy += now_s() - t0;
+        ++frames;
+        if (s >= total_length) break;
+        if (s < 0) continue;  // the strip's head has not reached both lasers
+        if (s >= next_cut) {
+            // The cut: end the sheet in the reconstructor (its last knot
+            // carries over into the next sheet) and in the metrics.
+            t0 = now_s();
+            CHECK(flt_recon_end_sheet(recon));
+            busy += now_s() - t0;
+            pull_rows();
+            finish_sheet();
+            next_cut += st.sheet_length;
+        }
+        for (size_t k = 0; k < fibers; ++k) invalid_samples += !valid[k];
+        pending.raw.insert(pending.raw.end(), height.begin(), height.end());
+        pending.truth.insert(pending.truth.end(), truth.begin(), truth.end());
+        t0 = now_s();
+        CHECK(flt_recon_push(recon, 1, fibers, &s, height.data(), slope.data(), valid.data()));
+        busy += now_s() - t0;
+        pull_rows();
+        if (frames % 50 == 0)
+            std::fprintf(stderr, "\r  frame %6zu  s = %7.1f m  %5.1f%% of the strip", frames,
+                         s / 1000, 100 * s / total_length);
+    }
+    CHECK(flt_recon_end_sheet(recon));
+    pull_rows();
+    finish_sheet();
+    std::fprintf(stderr, "\r%78s\r", "");
+
+    // ---------------------------------------------------------- summary
+    const double strip_s = total_length / 1000.0 / (st.speed / 60.0);
+    std::printf("\nSummary\n");
+    std::printf("  sheets processed      %zu (%zu frames, %zu rows; %.2f%% of samples invalid)\n",
+                results.size(), frames, rows_done,
+                100.0 * double(invalid_samples) / double(std::max<size_t>(1, rows_done * fibers)));
+    std::printf("  real-time factor      %.1fx at %.0f m/min (library %.2f s for %.1f s of strip;\n"
+                "                        rendering the frames took another %.1f s)\n",
+                strip_s / busy, st.speed, busy, strip_s, render);
+    std::printf("  shape accuracy        rms %.3f mm, max %.3f mm against the true surface\n",
+                std::sqrt(sq_all / double(std::max<size_t>(1, n_all))), max_error_all);
+    for (const sheet_result &r : results) {
+        std::printf("  sheet %d: %s%s (confidence %.2f)  bow %+.2f mm  crossbow %+.2f mm  "
+                    "zones within %.2f I-Units of the truth\n    I-Units:",
+                    r.index, flt_shape_string(r.shape), components_text(r.components).c_str(),
+                    r.confidence, r.bow, r.crossbow, r.zone_error);
+        const size_t step = std::max<size_t>(1, zones / 15);
+        for (size_t j = 0; j < zones; j += step) std::printf(" %5.1f", r.zone_i[j]);
+        std::printf("  (zones of %.0f mm across, every %zu shown)\n", zone_width, step);
+    }
+
+    // ---------------------------------------------------------- report
+    zone_chart_png(st.out + "/zones.png", results, zone_x, zone_width, flat_limit);
+    {
+        char title[160];
+        std::snprintf(title, sizeof title, "Sheet 1, fiber at x = %.0f mm: one longitudinal profile",
+                      x[plot_fiber]);
+        std::vector<double> s_m(fiber_plot_s.size());
+        for (size_t i = 0; i < s_m.size(); ++i) s_m[i] = fiber_plot_s[i] / 1000;
+        line_plot_png(st.out + "/fiber_profile.png", title, "s along travel (m)", "height z (mm)",
+                      {{"raw (extractor heights)", s_m, fiber_plot_raw, cv::Scalar(170, 170, 170), 1},
+                       {"true surface", s_m, fiber_plot_truth, cv::Scalar(40, 40, 220), 3},
+                       {"reconstructed", s_m, fiber_plot_z, cv::Scalar(180, 100, 20), 2}});
+    }
+    FILE *csv = std::fopen((st.out + "/sheets.csv").c_str(), "w");
+    FILE *zcsv = std::fopen((st.out + "/zones.csv").c_str(), "w");
+    FILE *json = std::fopen((st.out + "/report.json").c_str(), "w");
+    if (!csv || !zcsv || !json) {
+        std::fprintf(stderr, "flatline_demo: cannot write to %s\n", st.out.c_str());
+        return 1;
+    }
+    std::fprintf(csv, "sheet,s_first_mm,s_last_mm,shape,confidence,bow_mm,crossbow_mm,"
+                      "rms_error_mm,max_error_mm,max_zone_error_iu\n");
+    std::fprintf(zcsv, "sheet,zone,x_centre_mm,i_units,true_i_units\n");
+    std::fprintf(json, "{\n  \"version\": \"%s\",\n  \"fibers\": %zu,\n  \"pitch_mm\": %g,\n"
+                       "  \"zone_width_mm\": %g,\n  \"real_time_factor\": %.3f,\n"
+                       "  \"line_speed_m_per_min\": %g,\n  \"rms_error_mm\": %.4f,\n"
+                       "  \"max_error_mm\": %.4f,\n  \"sheets\": [\n",
+                 flt_version_string(), fibers, st.pitch, zone_width, strip_s / busy, st.speed,
+                 std::sqrt(sq_all / double(std::max<size_t>(1, n_all))), max_error_all);
+    for (size_t p = 0; p < results.size(); ++p) {
+        const sheet_result &r = results[p];
+        std::fprintf(csv, "%d,%.1f,%.1f,%s,%.3f,%.3f,%.3f,%.4f,%.4f,%.3f\n", r.index, r.s_first,
+                     r.s_last, flt_shape_string(r.shape), r.confidence, r.bow, r.crossbow,
+                     r.rms_error, r.max_error, r.zone_error);
+        std::fprintf(json, "    {\"sheet\": %d, \"s_first_mm\": %.1f, \"s_last_mm\": %.1f, "
+                           "\"shape\": \"%s\", \"confidence\": %.3f, \"bow_mm\": %.3f, "
+                           "\"crossbow_mm\": %.3f, \"rms_error_mm\": %.4f, \"max_error_mm\": %.4f,\n"
+                           "     \"zones\": [",
+                     r.index, r.s_first, r.s_last, flt_shape_string(r.shape), r.confidence, r.bow,
+                     r.crossbow, r.rms_error, r.max_error);
+        for (size_t j = 0; j < zones; ++j) {
+            // JSON has no NaN: a zone without data is null.
+            if (std::isfinite(r.zone_i[j]))
+                std::fprintf(json, "%s{\"x_mm\": %.1f, \"i_units\": %.3f, \"true\": %.3f}",
+                             j ? ", " : "", zone_x[j], r.zone_i[j], r.zone_true[j]);
+            else
+                std::fprintf(json, "%s{\"x_mm\": %.1f, \"i_units\": null, \"true\": %.3f}",
+                             j ? ", " : "", zone_x[j], r.zone_true[j]);
+            std::fprintf(zcsv, "%d,%zu,%.1f,%s,%.3f\n", r.index, j, zone_x[j],
+                         std::isfinite(r.zone_i[j]) ? fmt("%.3f", r.zone_i[j]).c_str() : "",
+                         r.zone_true[j]);
+        }
+        std::fprintf(json, "]}%s\n", p + 1 < results.size() ? "," : "");
+    }
+    std::fprintf(json, "  ]\n}\n");
+    std::fclose(csv);
+    std::fclose(zcsv);
+    std::fclose(json);
+    std::printf("\nreport written to %s/: sheet<N>_raw.png, sheet<N>_reconstructed.png, "
+                "sheet<N>_true.png,\n  fiber_profile.png, zones.png, sheets.csv, zones.csv, "
+                "report.json\n", st.out.c_str());
+
+    flt_flatness_destroy(flatness);
+    flt_flatness_destroy(truth_flatness);
+    flt_recon_destroy(recon);
+    flt_extractor_destroy(extractor);
+    flt_sim_destroy(sim);
+    flt_calib_destroy(calib);
+    flt_options_destroy(sim_opt);
+    flt_options_destroy(recon_opt);
+    flt_options_destroy(flat_opt);
+    return results.size() == size_t(st.sheets) ? 0 : 1;
+}
