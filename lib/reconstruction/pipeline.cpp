@@ -18,11 +18,12 @@ constexpr double k_max_prediction_mm = 10.0;
 
 recon_pipeline::recon_pipeline(std::size_t fibers, const recon_config &config,
                                std::size_t knot_capacity, double *z_store,
-                               std::uint8_t *flags_store)
+                               std::uint8_t *flags_store, double rows_per_knot_hint)
     : K_(fibers), config_(config) {
     if (!config_.rigid_motion) {
         main_ = std::make_unique<recon_chain>(K_, config_.params, config_.robust,
-                                              knot_capacity, z_store, flags_store);
+                                              knot_capacity, z_store, flags_store,
+                                              rows_per_knot_hint);
         return;
     }
     recon_params dev = config_.params;
@@ -35,7 +36,7 @@ recon_pipeline::recon_pipeline(std::size_t fibers, const recon_config &config,
     dev.curvature_weight = config_.params.curvature_weight * ratio * ratio;
     dev.curvature_jump_weight = config_.params.curvature_jump_weight * ratio * ratio;
     main_ = std::make_unique<recon_chain>(K_, dev, config_.robust, knot_capacity, z_store,
-                                          flags_store);
+                                          flags_store, rows_per_knot_hint);
 
     // The offset a is the mean height of the frame: it carries the heave
     // (height_sigma); its slope averages K slopes.
@@ -50,8 +51,10 @@ recon_pipeline::recon_pipeline(std::size_t fibers, const recon_config &config,
     const double sum_xi2 = std::max(1.0, K * (K * K - 1.0) / 12.0);
     tilt.height_sigma = config_.params.height_sigma / half;
     tilt.slope_sigma = config_.params.slope_sigma / std::sqrt(sum_xi2);
-    offset_ = std::make_unique<recon_chain>(1, offset, config_.robust, knot_capacity);
-    tilt_ = std::make_unique<recon_chain>(1, tilt, config_.robust, knot_capacity);
+    offset_ = std::make_unique<recon_chain>(1, offset, config_.robust, knot_capacity, nullptr,
+                                            nullptr, rows_per_knot_hint);
+    tilt_ = std::make_unique<recon_chain>(1, tilt, config_.robust, knot_capacity, nullptr,
+                                          nullptr, rows_per_knot_hint);
 
     dev_h_.assign(K_, 0.0);
     dev_g_.assign(K_, 0.0);

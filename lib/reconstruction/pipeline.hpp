@@ -44,9 +44,11 @@ struct recon_config {
 
 class recon_pipeline {
 public:
+    // rows_per_knot_hint: rows per knot interval when known (batch use),
+    // which sizes the robust stages' queues; 0 in streaming use.
     recon_pipeline(std::size_t fibers, const recon_config &config,
                    std::size_t knot_capacity, double *z_store = nullptr,
-                   std::uint8_t *flags_store = nullptr);
+                   std::uint8_t *flags_store = nullptr, double rows_per_knot_hint = 0.0);
 
     std::size_t fibers() const { return K_; }
     const recon_config &config() const { return config_; }

@@ -1,4 +1,5 @@
 // The C entry points of the reconstructor: argument checks, then the engine.
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -320,7 +321,8 @@ FLT_API flt_status FLT_CALL flt_reconstruct(const flt_options *options,
         // Every knot of the sheet stays open until the end.
         const double span = s[rows - 1] - s[0] + p.laser_spacing;
         const std::size_t knots = std::size_t(span / p.knot_spacing) + 4;
-        recon_pipeline e(fibers, config, knots, z_out, flags_out);
+        const double rows_per_knot = double(rows) / std::max(1.0, span / p.knot_spacing);
+        recon_pipeline e(fibers, config, knots, z_out, flags_out, rows_per_knot);
         for (std::size_t r = 0; r < rows; ++r)
             e.push_row(s[r], height + r * fibers, slope + r * fibers,
                        valid ? valid + r * fibers : nullptr);

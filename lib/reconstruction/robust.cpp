@@ -66,6 +66,13 @@ FLT_ROBUST_KERNEL void tukey_multipliers(std::size_t K, const double *__restrict
     }
 }
 
+// out = in where finite, NaN elsewhere (the queues' mark of an invalid sample).
+FLT_ROBUST_KERNEL void copy_finite(std::size_t K, const double *__restrict in,
+                                   double *__restrict out) {
+    const double big = std::numeric_limits<double>::max();
+    for (std::size_t k = 0; k < K; ++k) out[k] = std::fabs(in[k]) <= big ? in[k] : k_nan;
+}
+
 // Per fiber: sum += min(|r|, 3 sigma), count += 1, over finite residuals.
 FLT_ROBUST_KERNEL void accumulate_clipped(std::size_t K, const double *__restrict residual,
                                           const double *__restrict sigma,
@@ -129,34 +136,42 @@ bool robust_scale::add(const double *residual) {
 
 recon_chain::recon_chain(std::size_t fibers, const recon_params &params,
                          const robust_params &robust, std::size_t knot_capacity,
-                         double *z_store, std::uint8_t *flags_store)
+                         double *z_store, std::uint8_t *flags_store,
+                         double rows_per_knot_hint)
     : K_(fibers), robust_(robust), D_(params.laser_spacing) {
     const std::size_t n_stages =
         robust_.kind == robust_kind::none ? 1 : 1 + std::size_t(robust_.iterations);
-    const bool batch = params.lag_knots == recon_params::no_lag;
+    // The reweighting stages stream with a short lag, in batch use too: the
+    // weights need only local context, and rows then move through short
+    // queues instead of whole-sheet buffers.
     for (std::size_t i = 0; i + 1 < n_stages; ++i) {
         recon_params stage = params;
-        if (!batch) stage.lag_knots = robust_.stage_lag_knots;
-        stages_.push_back(std::make_unique<recon_engine>(
-            K_, stage, batch ? knot_capacity : stage.knot_capacity(), nullptr,
-            nullptr, false));
+        stage.lag_knots = robust_.stage_lag_knots;
+        stages_.push_back(std::make_unique<recon_engine>(K_, stage, stage.knot_capacity(),
+                                                         nullptr, nullptr, false));
     }
     stages_.push_back(std::make_unique<recon_engine>(K_, params, knot_capacity,
                                                      z_store, flags_store, true));
     if (n_stages == 1) return;
 
-    // Rows in flight between stages: a whole sheet in batch use, else a
-    // quarter of the row capacity (the stages' short lag needs far less).
-    queue_capacity_ = batch ? params.row_capacity
-                            : std::max<std::size_t>(256, params.row_capacity / 4);
+    // A row waits in queue i until stage i-1 has emitted the knots under it:
+    // its lag and emission group plus the row's own span, a few knots more
+    // for the group's phase. Streaming use does not know the row spacing,
+    // so it takes a quarter of the row capacity.
+    const double knots_in_flight =
+        double(robust_.stage_lag_knots + 1 + robust_.stage_lag_knots / 8) +
+        2.0 * stages_[0]->knots_per_row() + 8.0;
+    queue_capacity_ = rows_per_knot_hint > 0.0
+                          ? std::size_t(std::ceil(1.5 * rows_per_knot_hint * knots_in_flight)) + 16
+                          : std::max<std::size_t>(256, params.row_capacity / 4);
     queues_.resize(n_stages);
     h_scale_.resize(n_stages);
     g_scale_.resize(n_stages);
     for (std::size_t i = 1; i < n_stages; ++i) {
         pending &q = queues_[i];
-        q.s.assign(queue_capacity_, 0.0);
-        q.height.assign(queue_capacity_ * K_, 0.0);
-        q.slope.assign(queue_capacity_ * K_, 0.0);
+        q.s.reset(new double[queue_capacity_]);
+        q.height.reset(new double[queue_capacity_ * K_]);
+        q.slope.reset(new double[queue_capacity_ * K_]);
         h_scale_[i] = std::make_unique<robust_scale>(K_, robust_.block_rows,
                                                      robust_.scale_blocks,
                                                      params.height_sigma);
@@ -184,12 +199,12 @@ void recon_chain::enqueue(std::size_t stage, double s, const double *height,
     q.s[r] = s;
     // Invalid samples (masked, NaN or infinite) are stored as NaN: the
     // stages and the scale estimate then need no mask.
-    double *qh = q.height.data() + r * K_, *qg = q.slope.data() + r * K_;
-    for (std::size_t k = 0; k < K_; ++k) {
-        const bool ok = valid == nullptr || valid[k] != 0;
-        qh[k] = ok && std::isfinite(height[k]) ? height[k] : k_nan;
-        qg[k] = ok && std::isfinite(slope[k]) ? slope[k] : k_nan;
-    }
+    double *qh = q.height.get() + r * K_, *qg = q.slope.get() + r * K_;
+    copy_finite(K_, height, qh);
+    copy_finite(K_, slope, qg);
+    if (valid)
+        for (std::size_t k = 0; k < K_; ++k)
+            if (!valid[k]) qh[k] = qg[k] = k_nan;
     ++q.tail;
 }
 
@@ -200,7 +215,7 @@ void recon_chain::advance(std::size_t stage) {
         const std::size_t r = q.head % queue_capacity_;
         const double s = q.s[r];
         if (!prev.predict(s, pred_h_.data(), pred_g_.data())) break;
-        const double *h = q.height.data() + r * K_, *g = q.slope.data() + r * K_;
+        const double *h = q.height.get() + r * K_, *g = q.slope.get() + r * K_;
         row_residuals(K_, D_, h, g, pred_h_.data(), pred_g_.data(), res_h_.data(),
                       res_g_.data());
         const bool new_h = h_scale_[stage]->add(res_h_.data());

@@ -32,7 +32,7 @@ struct robust_params {
     robust_kind kind = robust_kind::none;
     int iterations = 2;              // reweighted stages after the plain one
     long stage_lag_knots = 8;        // lag of the intermediate stages
-    std::size_t block_rows = 32;     // rows per scale block
+    std::size_t block_rows = 64;     // rows per scale block (192 mm at 3 mm)
     std::size_t scale_blocks = 9;    // blocks whose medians make the scale
 };
 
@@ -67,7 +67,8 @@ class recon_chain {
 public:
     recon_chain(std::size_t fibers, const recon_params &params,
                 const robust_params &robust, std::size_t knot_capacity,
-                double *z_store = nullptr, std::uint8_t *flags_store = nullptr);
+                double *z_store = nullptr, std::uint8_t *flags_store = nullptr,
+                double rows_per_knot_hint = 0.0);
 
     std::size_t fibers() const { return K_; }
     std::size_t free_rows() const;
@@ -95,7 +96,9 @@ private:
     recon_engine &last() const { return *stages_.back(); }
     // Raw rows waiting for stage i (1..iterations) to be able to take them.
     struct pending {
-        std::vector<double> s, height, slope;  // ring [capacity][K], NaN = invalid
+        // ring [capacity][K], NaN = invalid; not zero-filled: a slot is
+        // written before it is read, and untouched pages cost nothing.
+        std::unique_ptr<double[]> s, height, slope;
         std::size_t head = 0, tail = 0;
     };
     void enqueue(std::size_t stage, double s, const double *height,
