@@ -423,8 +423,10 @@ int main(int argc, char **argv) {
     flt_extractor *extractor = nullptr;
     CHECK(flt_extractor_create(calib, nullptr, &extractor));
     // rigid_motion: the heave moves every fiber of a frame together; the
-    // reconstructor takes it out of the shape (tests/c/test_recon.c).
-    flt_options *recon_opt = make_options({{FLT_OPT_RIGID_MOTION, 1}});
+    // reconstructor takes it out of the shape. robust (Huber): the shear
+    // station's ringing after each cut is an outlier, not shape
+    // (tests/c/test_recon.c; examples/python/compare_filters.py).
+    flt_options *recon_opt = make_options({{FLT_OPT_RIGID_MOTION, 1}, {FLT_OPT_ROBUST, 1}});
     flt_recon *recon = nullptr;
     CHECK(flt_recon_create(fibers, recon_opt, &recon));
     // One window per sheet: the sheet is what the operator judges.
