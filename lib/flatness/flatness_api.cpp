@@ -204,6 +204,9 @@ FLT_API flt_status FLT_CALL flt_flatness_create(size_t fibers, const double *fib
         *out = nullptr;
         if (fibers == 0)
             return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'fibers' is 0", fn);
+        if (fibers > std::numeric_limits<std::size_t>::max() / sizeof(double))  // before reading
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'fibers' = %zu overflows the address space", fn, fibers);
         FLT_CHECK_NOT_NULL(fn, fiber_x);
         for (std::size_t k = 0; k < fibers; ++k) {
             if (!std::isfinite(fiber_x[k]))

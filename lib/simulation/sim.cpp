@@ -570,6 +570,9 @@ FLT_API flt_status FLT_CALL flt_sim_surface(const flt_sim *sim, size_t count,
         FLT_CHECK_NOT_NULL(fn, x);
         FLT_CHECK_NOT_NULL(fn, s);
         FLT_CHECK_NOT_NULL(fn, z_out);
+        if (count > std::numeric_limits<std::size_t>::max() / sizeof(double))
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'count' = %zu overflows the address space", fn, count);
         for (std::size_t i = 0; i < count; ++i) z_out[i] = sim->sheet(x[i], s[i]);
         return FLT_OK;
     });

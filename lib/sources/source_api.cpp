@@ -727,6 +727,10 @@ FLT_API flt_status FLT_CALL flt_source_read_memory(flt_source *source, uint64_t 
         if (bytes == 0 || bytes > (64u << 20))
             return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'bytes' = %zu is outside "
                                                   "[1, 64 MiB]", fn, bytes);
+        if (address > UINT64_MAX - (bytes - 1))  // the range must not wrap past 2^64
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'address' = 0x%llx + %zu "
+                        "bytes passes the end of the address space", fn,
+                        (unsigned long long)address, bytes);
         source->camera->read_memory(address, static_cast<std::uint8_t *>(out), bytes);
         return FLT_OK;
     });
@@ -741,6 +745,10 @@ FLT_API flt_status FLT_CALL flt_source_write_memory(flt_source *source, uint64_t
         if (bytes == 0 || bytes > (64u << 20))
             return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'bytes' = %zu is outside "
                                                   "[1, 64 MiB]", fn, bytes);
+        if (address > UINT64_MAX - (bytes - 1))  // the range must not wrap past 2^64
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'address' = 0x%llx + %zu "
+                        "bytes passes the end of the address space", fn,
+                        (unsigned long long)address, bytes);
         source->camera->write_memory(address, static_cast<const std::uint8_t *>(bytes_in),
                                      bytes);
         return FLT_OK;

@@ -44,5 +44,3 @@
 %include "calib.i"
 %include "extractor.i"
 %include "sim.i"
-%include "flatness.i"
-%include "source.i"

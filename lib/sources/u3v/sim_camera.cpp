@@ -912,7 +912,7 @@ void sim_inject(sim_camera &cam, flt_u3v_fault fault, std::uint64_t at, std::uin
 }
 
 bool sim_peek(const sim_camera &cam, std::uint64_t address, std::uint32_t &out) {
-    if (address + 4 > cam.regs.size()) return false;
+    if (address > cam.regs.size() || cam.regs.size() - address < 4) return false;  // no wrap
     out = cam.reg32(address);
     return true;
 }
