@@ -12,10 +12,11 @@ lengths in mm, slopes in mm/mm. Errors raise subclasses of FlatlineError.
     ...     sim.add_defect("centre_buckle", 12.0, 1800.0)
     ...     rows = sim.next_rows(3000)
 
-Components bound so far: the calibration model (Calibration), the simulated
-sensor (SimulatedLine), the frame-to-profile extractor (Extractor) and the
-reconstructor (reconstruct, Reconstructor). Flatness follows as the C
-library gains it.
+Components: the calibration model (Calibration), the simulated sensor
+(SimulatedLine), frame sources (Source: simulator, image sequences, USB3
+Vision cameras; U3VSimBus for simulated cameras), the frame-to-profile
+extractor (Extractor), the reconstructor (reconstruct, Reconstructor) and
+the flatness metrics (Flatness, i_units).
 """
 
 from __future__ import annotations
@@ -62,6 +63,37 @@ from ._sim import (
     SimRows,
     SimulatedLine,
     simulator_options,
+)
+from ._flatness import (
+    FIBER_NO_DATA,
+    FIBER_NO_WAVE,
+    FIBER_PARTIAL,
+    WINDOW_NO_BOW,
+    WINDOW_NO_CROSSBOW,
+    WINDOW_NO_VALID_FIBER,
+    WINDOW_SHORT,
+    ZONE_NO_DATA,
+    FiberResults,
+    Flatness,
+    FlatnessResult,
+    Shape,
+    ShapeComponent,
+    ShapeResult,
+    WindowInfo,
+    ZoneResults,
+    flatness_options,
+    i_units,
+)
+from ._source import (
+    CameraInfo,
+    Frame,
+    Source,
+    SourceKind,
+    U3VFault,
+    U3VSimBus,
+    U3VSimParam,
+    list_cameras,
+    source_options,
 )
 
 #: The version of the C headers this binding was built against.
@@ -123,4 +155,31 @@ __all__ = [
     "ExtractedRow",
     "Extractor",
     "extractor_options",
+    "FIBER_NO_DATA",
+    "FIBER_NO_WAVE",
+    "FIBER_PARTIAL",
+    "ZONE_NO_DATA",
+    "WINDOW_SHORT",
+    "WINDOW_NO_VALID_FIBER",
+    "WINDOW_NO_BOW",
+    "WINDOW_NO_CROSSBOW",
+    "Shape",
+    "ShapeComponent",
+    "FiberResults",
+    "ZoneResults",
+    "ShapeResult",
+    "WindowInfo",
+    "FlatnessResult",
+    "Flatness",
+    "flatness_options",
+    "i_units",
+    "SourceKind",
+    "Frame",
+    "CameraInfo",
+    "Source",
+    "U3VFault",
+    "U3VSimParam",
+    "U3VSimBus",
+    "list_cameras",
+    "source_options",
 ]

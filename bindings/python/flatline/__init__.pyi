@@ -4,7 +4,7 @@
 import builtins
 import enum
 import os
-from typing import Any, Dict, Mapping, NamedTuple, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, Iterator, List, Mapping, NamedTuple, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -324,3 +324,237 @@ class SimulatedLine:
     def next_rows(self, n: int) -> SimRows: ...
     def next_frame(self, out: Optional[npt.NDArray[Any]] = ...) -> SimFrame: ...
     def rewind(self) -> None: ...
+
+# --- flatness metrics (flatline/flatness.h) ------------------------------------------
+
+FIBER_NO_DATA: int
+FIBER_NO_WAVE: int
+FIBER_PARTIAL: int
+ZONE_NO_DATA: int
+WINDOW_SHORT: int
+WINDOW_NO_VALID_FIBER: int
+WINDOW_NO_BOW: int
+WINDOW_NO_CROSSBOW: int
+
+class Shape(enum.IntEnum):
+    FLAT: int
+    CENTRE_BUCKLE: int
+    WAVY_EDGE_LEFT: int
+    WAVY_EDGE_RIGHT: int
+    WAVY_EDGE_BOTH: int
+    QUARTER_BUCKLE: int
+    MIX: int
+    UNDETERMINED: int
+    @property
+    def label(self) -> str: ...
+
+class ShapeComponent(enum.IntFlag):
+    NONE: int
+    CENTRE: int
+    EDGE_LEFT: int
+    EDGE_RIGHT: int
+    QUARTER: int
+    BOW: int
+    CROSSBOW: int
+
+class FiberResults:
+    x: npt.NDArray[np.float64]
+    arc_length: npt.NDArray[np.float64]
+    i_units: npt.NDArray[np.float64]
+    wave_height: npt.NDArray[np.float64]
+    wave_period: npt.NDArray[np.float64]
+    steepness_percent: npt.NDArray[np.float64]
+    flags: npt.NDArray[np.uint8]
+
+class ZoneResults:
+    left_x: npt.NDArray[np.float64]
+    centre_x: npt.NDArray[np.float64]
+    fiber_count: npt.NDArray[np.int64]
+    i_units: npt.NDArray[np.float64]
+    flags: npt.NDArray[np.uint8]
+
+class ShapeResult:
+    shape: Shape
+    name: str
+    confidence: float
+    components: ShapeComponent
+    bow_mm: float
+    crossbow_mm: float
+
+class WindowInfo:
+    s_first: float
+    s_last: float
+    rows: int
+    flags: int
+    index: int
+    def __init__(self, s_first: float, s_last: float, rows: int, flags: int, index: int) -> None: ...
+
+class FlatnessResult:
+    window: WindowInfo
+    fibers: FiberResults
+    zones: ZoneResults
+    shape: ShapeResult
+
+def flatness_options() -> Dict[str, float]: ...
+
+class Flatness:
+    def __init__(self, fiber_x: Union[npt.ArrayLike, Calibration], **options: float) -> None: ...
+    def close(self) -> None: ...
+    @property
+    def closed(self) -> bool: ...
+    def __enter__(self) -> Flatness: ...
+    def __exit__(self, *exc_info: Any) -> None: ...
+    @property
+    def fibers(self) -> int: ...
+    @property
+    def zones(self) -> int: ...
+    @property
+    def fiber_x(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def zone_left_x(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def zone_centre_x(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def zone_fiber_count(self) -> npt.NDArray[np.int64]: ...
+    def evaluate(
+        self, s: npt.ArrayLike, z: npt.ArrayLike, flags: Optional[npt.ArrayLike] = ...
+    ) -> FlatnessResult: ...
+    def push(
+        self, s: npt.ArrayLike, z: npt.ArrayLike, flags: Optional[npt.ArrayLike] = ...
+    ) -> Tuple[int, bool]: ...
+    def windows(
+        self, s: npt.ArrayLike, z: npt.ArrayLike, flags: Optional[npt.ArrayLike] = ...
+    ) -> Iterator[FlatnessResult]: ...
+    def finish(self) -> Optional[FlatnessResult]: ...
+    def reset(self) -> None: ...
+    def result(self) -> FlatnessResult: ...
+
+def i_units(
+    z: npt.ArrayLike,
+    s: npt.ArrayLike,
+    fiber_x: Optional[npt.ArrayLike] = ...,
+    flags: Optional[npt.ArrayLike] = ...,
+    **options: float,
+) -> FlatnessResult: ...
+
+# --- frame sources (flatline/source.h) -----------------------------------------------
+
+class SourceKind(enum.IntEnum):
+    SIMULATOR: int
+    IMAGES: int
+    U3V: int
+
+class Frame(NamedTuple):
+    pixels: npt.NDArray[Any]
+    pixel_format: PixelFormat
+    block_id: int
+    timestamp_ns: int
+    encoder_mm: float
+
+class CameraInfo(NamedTuple):
+    vendor: str
+    model: str
+    serial: str
+    speed_mbps: int
+
+class U3VFault(enum.IntEnum):
+    SHORT_FRAME: int
+    LEADER_MID_FRAME: int
+    OVERFLOW: int
+    SKIP_BLOCK_IDS: int
+    STREAM_TIMEOUT: int
+    UNPLUG: int
+    GARBAGE: int
+    TRAILER_STATUS: int
+    SUBMIT_REFUSED: int
+    PENDING_ACK: int
+    CONTROL_TIMEOUT: int
+    LATE_ACK: int
+
+class U3VSimParam(enum.IntEnum):
+    RESPONSE_TIME_MS: int
+    MAX_COMMAND_BYTES: int
+    MAX_ACK_BYTES: int
+    ALIGNMENT_LOG2: int
+    XML_ZIPPED: int
+    ENCODER_CHUNK: int
+    ENCODER_CHUNK_ID: int
+    ENCODER_MM_PER_COUNT_UM: int
+    SPEED_MBPS: int
+    LEFT_STREAMING: int
+    SI_CONTROL: int
+    ACQUIRING: int
+    COMMANDS: int
+    LAST_READ_TIMEOUT_MS: int
+    FRAMES_SENT: int
+    OPEN: int
+
+def source_options() -> Dict[str, float]: ...
+
+class U3VSimBus:
+    def __init__(self) -> None: ...
+    def close(self) -> None: ...
+    @property
+    def closed(self) -> bool: ...
+    def __enter__(self) -> U3VSimBus: ...
+    def __exit__(self, *exc_info: Any) -> None: ...
+    def add_camera(
+        self, vendor: str, model: str, serial: str, width: int, height: int,
+        pixel_format: Union[PixelFormat, str, int] = ...,
+    ) -> int: ...
+    def set_frames(self, camera: int, sim: Optional[SimulatedLine]) -> None: ...
+    def set(self, camera: int, param: Union[U3VSimParam, str, int], value: int) -> None: ...
+    def get(self, camera: int, param: Union[U3VSimParam, str, int]) -> int: ...
+    def inject(
+        self, camera: int, fault: Union[U3VFault, str, int], at: int = ..., count: int = ...
+    ) -> None: ...
+    def peek(self, camera: int, address: int) -> int: ...
+    def cameras(self) -> List[CameraInfo]: ...
+
+def list_cameras(bus: Optional[U3VSimBus] = ...) -> List[CameraInfo]: ...
+
+class Source:
+    @classmethod
+    def simulator(cls, sim: SimulatedLine, **options: float) -> Source: ...
+    @classmethod
+    def images(
+        cls,
+        paths: Union[str, os.PathLike[str], Sequence[Union[str, os.PathLike[str]]]],
+        encoder_csv: Union[str, os.PathLike[str], None] = ...,
+        step: Optional[float] = ...,
+        **options: float,
+    ) -> Source: ...
+    @classmethod
+    def u3v(
+        cls, serial: Optional[str] = ..., bus: Optional[U3VSimBus] = ..., **options: float
+    ) -> Source: ...
+    @staticmethod
+    def list_cameras(bus: Optional[U3VSimBus] = ...) -> List[CameraInfo]: ...
+    def close(self) -> None: ...
+    @property
+    def closed(self) -> bool: ...
+    def __enter__(self) -> Source: ...
+    def __exit__(self, *exc_info: Any) -> None: ...
+    def __iter__(self) -> Iterator[Frame]: ...
+    @property
+    def kind(self) -> SourceKind: ...
+    def start(self) -> None: ...
+    def stop(self) -> None: ...
+    def next(
+        self, timeout_ms: int = ..., out: Optional[npt.NDArray[Any]] = ...
+    ) -> Optional[Frame]: ...
+    def set_encoder(self, encoder_mm: float) -> None: ...
+    def counters(self) -> Dict[str, int]: ...
+    @property
+    def stream_error(self) -> str: ...
+    def camera_string(self, which: str) -> str: ...
+    def camera_value(self, which: str) -> int: ...
+    def get_int(self, feature: str) -> int: ...
+    def set_int(self, feature: str, value: int) -> None: ...
+    def get_float(self, feature: str) -> float: ...
+    def set_float(self, feature: str, value: float) -> None: ...
+    def set_enum(self, feature: str, entry: str) -> None: ...
+    def execute(self, feature: str) -> None: ...
+    def map_feature(self, feature: str, address: int, length: int, is_float: bool = ...) -> None: ...
+    def read_memory(self, address: int, size: int) -> bytes: ...
+    def write_memory(self, address: int, data: bytes) -> None: ...

@@ -44,3 +44,5 @@
 %include "calib.i"
 %include "extractor.i"
 %include "sim.i"
+%include "flatness.i"
+%include "source.i"

@@ -95,7 +95,7 @@ def test_py_typed_and_stub_cover_the_public_api():
     # Every public method and property of the classes over handles, and of
     # Intrinsics and PixelFormat...
     for name in ("Reconstructor", "Calibration", "SimulatedLine", "Extractor",
-                 "Intrinsics", "FiberGrid"):
+                 "Intrinsics", "FiberGrid", "Flatness", "Source", "U3VSimBus"):
         real = {m for m in vars(getattr(flatline, name)) if not m.startswith("_")}
         real -= {f for f in getattr(getattr(flatline, name), "_fields", ())}
         real -= {"fx", "fy", "cx", "cy", "k1", "k2", "k3", "k4", "k5", "k6", "p1", "p2"}
@@ -103,12 +103,15 @@ def test_py_typed_and_stub_cover_the_public_api():
         assert not lacking, f"stub of {name} lacks {sorted(lacking)}"
     # ...every field of the result tuples and the Intrinsics...
     for name in ("FiberGrid", "IntrinsicsFit", "HomographyFit", "SimRows", "SimFrame",
-                 "ExtractedRow", "OptionInfo"):
+                 "ExtractedRow", "OptionInfo", "Frame", "CameraInfo"):
         assert stub_members(name, ast.AnnAssign) == set(getattr(flatline, name)._fields), name
-    assert stub_members("Intrinsics", ast.AnnAssign) == {
-        f.name for f in dataclasses.fields(flatline.Intrinsics)}
+    for name in ("Intrinsics", "FiberResults", "ZoneResults", "ShapeResult", "WindowInfo",
+                 "FlatnessResult"):
+        assert stub_members(name, ast.AnnAssign) == {
+            f.name for f in dataclasses.fields(getattr(flatline, name))}, name
     # ...and every member of the enums.
-    for name in ("Target", "Defect", "PixelFormat"):
+    for name in ("Target", "Defect", "PixelFormat", "Shape", "ShapeComponent", "SourceKind",
+                 "U3VFault", "U3VSimParam"):
         assert stub_members(name, ast.AnnAssign) == set(getattr(flatline, name).__members__), name
 
 
@@ -121,7 +124,12 @@ def test_component_option_tables_are_the_c_defaults():
     assert extract["extract_sg_window"] == 11.0 and extract["extract_sg_order"] == 2.0
     assert extract["extract_laser0_rows"] == 0.0  # automatic band
     assert all(name.startswith("extract_") for name in extract) and len(extract) == 8
-    for doc in (flatline.SimulatedLine.__doc__, flatline.Extractor.__doc__):
+    source = flatline.source_options()
+    assert source["source_encoder_step"] == 3.0 and source["u3v_transfers"] == 8.0
+    assert all(name.startswith(("source_", "u3v_")) for name in source) and len(source) == 11
+    assert "u3v_transfers (int): default 8" in flatline.Source.__doc__
+    for doc in (flatline.SimulatedLine.__doc__, flatline.Extractor.__doc__,
+                flatline.Source.__doc__, flatline.Flatness.__doc__):
         assert "{options}" not in doc
     assert "sim_heave_sigma (float): default 0" in flatline.SimulatedLine.__doc__
     assert "extract_sg_window (int): default 11" in flatline.Extractor.__doc__
@@ -136,6 +144,13 @@ def test_enums_are_the_c_values():
     assert flatline.PixelFormat.MONO10.dtype == np.uint16
     assert [int(t) for t in flatline.Target] == [0, 1, 2]
     assert flatline.LASERS == 2
+    assert [int(s) for s in flatline.Shape] == list(range(8))
+    assert int(flatline.ShapeComponent.CROSSBOW) == 32
+    assert [int(k) for k in flatline.SourceKind] == [1, 2, 3]
+    assert flatline.U3VFault.LATE_ACK == 13 and flatline.U3VSimParam.OPEN == 25
+    assert (flatline.FIBER_NO_DATA, flatline.FIBER_NO_WAVE, flatline.FIBER_PARTIAL) == (1, 2, 4)
+    assert (flatline.WINDOW_SHORT, flatline.WINDOW_NO_VALID_FIBER, flatline.WINDOW_NO_BOW,
+            flatline.WINDOW_NO_CROSSBOW, flatline.ZONE_NO_DATA) == (1, 2, 4, 8, 1)
 
 
 def test_all_names_exist():
