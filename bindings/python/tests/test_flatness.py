@@ -270,3 +270,72 @@ def test_bad_input_raises_clear_errors_and_leaves_the_handle_usable():
     with pytest.raises(flatline.StateError, match="closed"):
         flat.evaluate(s, z)
     assert repr(flat) == "<flatline.Flatness closed>"
+
+
+def test_streaming_equals_the_c_push_loop_bit_for_bit(clib):
+    # The same rows pushed through ctypes flt_flatness_push in the same
+    # blocks: every window's I-Units and zone profile agree bit for bit.
+    lib, P, sz = clib.lib, ctypes.c_void_p, ctypes.c_size_t
+    dp, up = ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_uint8)
+    lib.flt_flatness_push.argtypes = [P, sz, sz, dp, dp, up, ctypes.POINTER(sz),
+                                      ctypes.POINTER(ctypes.c_int)]
+    lib.flt_flatness_create.argtypes = [sz, dp, P, ctypes.POINTER(P)]
+    lib.flt_flatness_destroy.argtypes = [P]
+    lib.flt_flatness_fiber_results.argtypes = [P, sz, dp, dp, dp, dp, dp, up]
+    s, height, slope, valid = noisy_sheet(23, rows=2500, fibers=8)
+    z, flags = flatline.reconstruct_with_flags(s, height, slope, valid)
+    x = np.linspace(-700.0, 700.0, 8)
+    options = dict(flat_window_length=2000.0, flat_update_interval=500.0)
+    ours = [w.fibers.i_units for w in flatline.Flatness(x, **options).windows(s, z, flags)]
+    bag = clib.options(**options)
+    handle = P()
+    clib._check(lib.flt_flatness_create(8, clib._ptr(x, ctypes.c_double), bag,
+                                        ctypes.byref(handle)))
+    lib.flt_options_destroy(bag)
+    theirs, start = [], 0
+    try:
+        while start < len(s):
+            consumed, evaluated = sz(), ctypes.c_int()
+            clib._check(lib.flt_flatness_push(
+                handle, len(s) - start, 8, clib._ptr(s[start:], ctypes.c_double),
+                clib._ptr(z[start:], ctypes.c_double), clib._ptr(flags[start:], ctypes.c_uint8),
+                ctypes.byref(consumed), ctypes.byref(evaluated)))
+            start += consumed.value
+            if evaluated.value:
+                iu = np.empty(8)
+                clib._check(lib.flt_flatness_fiber_results(
+                    handle, 8, None, clib._ptr(iu, ctypes.c_double), None, None, None, None))
+                theirs.append(iu)
+    finally:
+        lib.flt_flatness_destroy(handle)
+    # s runs from 3.2 to 7508 mm: windows end at s0 + 2000 + 500 j <= 7508,
+    # j = 0..11.
+    assert len(ours) == len(theirs) == 12
+    for mine, c in zip(ours, theirs):
+        assert np.array_equal(bits(mine), bits(c))
+
+
+def test_two_threads_with_their_own_flatness_equal_serial_runs():
+    import threading
+
+    s, height, slope, valid = noisy_sheet(29, rows=3000, fibers=40)
+    z, flags = flatline.reconstruct_with_flags(s, height, slope, valid)
+    x = np.linspace(-1000.0, 1000.0, 40)
+
+    def run():
+        flat = flatline.Flatness(x, flat_window_length=1500.0, flat_update_interval=300.0)
+        return np.array([w.fibers.i_units for w in flat.windows(s, z, flags)])
+
+    serial = run()
+    results = [None, None]
+
+    def worker(i):
+        results[i] = run()
+
+    threads = [threading.Thread(target=worker, args=(i,)) for i in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for r in results:
+        assert np.array_equal(bits(r), bits(serial))

@@ -403,3 +403,34 @@ def test_host_encoder_positions_and_reprs(calib):
     assert bus.closed and repr(bus) == "<flatline.U3VSimBus closed>"
     with pytest.raises(flatline.StateError, match="closed"):
         bus.add_camera("V", "M", "S2", WIDTH, HEIGHT)
+
+
+@pytest.mark.parametrize("fault, at, ids, counted", [
+    # A new leader mid-frame drops block 2 (INCOMPLETE).
+    ("leader_mid_frame", 2, [1, 3, 4], {"dropped": 1, "incomplete": 1}),
+    # 100 bytes outside any frame are discarded; no frame is lost.
+    ("garbage", 2, [1, 2, 3], {"bad_packets": 1}),
+    # A refused bulk submit drops the frame that was streaming (block 1).
+    ("submit_refused", 0, [2, 3, 4], {"dropped": 1, "submit_dropped": 1,
+                                      "submit_refused": 1}),
+])
+def test_more_stream_faults_drop_and_count(bus, fault, at, ids, counted):
+    with flatline.Source.u3v("S1", bus=bus) as cam:
+        cam.start()
+        bus.inject(0, fault, at=at, count=1)
+        got = [cam.next() for _ in range(3)]
+        assert [f.block_id for f in got] == ids
+        assert all(np.array_equal(f.pixels, pattern(f.block_id)) for f in got)
+        nonzero = {k: v for k, v in cam.counters().items() if v and k != "frames"}
+        assert nonzero == counted
+
+
+def test_control_channel_timeouts_retry_then_raise_timeout_error(bus):
+    with flatline.Source.u3v("S1", bus=bus, u3v_command_attempts=3) as cam:
+        bus.inject(0, "control_timeout", count=1)  # one lost command: retried
+        assert cam.get_int("Width") == WIDTH
+        assert cam.counters()["command_retries"] == 1
+        bus.inject(0, "control_timeout", count=3)  # every attempt lost
+        with pytest.raises(flatline.TimeoutError, match="3 attempts"):
+            cam.get_int("Width")
+        assert cam.get_int("Width") == WIDTH  # the channel still works
