@@ -372,12 +372,14 @@ class Source:
                         "Source.u3v()")
 
     @classmethod
-    def _wrap(cls, handle: Any, keep: tuple, locks: tuple) -> "Source":
+    def _wrap(cls, handle: Any, keep: tuple, locks: tuple,
+              bus: Optional[U3VSimBus] = None) -> "Source":
         self = cls.__new__(cls)
         self._lock = threading.RLock()
         self._handle = handle
         self._keep = keep  # the objects the C source borrows
         self._locks = locks  # their locks, taken around every call
+        self._bus = bus  # its simulators render frames in next(): locked too
         self._kind = SourceKind(int(_capi.flt_source_kind_of(handle)))
         return self
 
@@ -459,8 +461,7 @@ class Source:
         with bus._lock:
             bus_handle = bus._live()
             handle = _capi.flt_source_open_u3v(bus_handle, serial, bag)
-            sims = tuple(bus._frames.values())
-        return cls._wrap(handle, (bus, bus_handle), (bus._lock,) + tuple(s._lock for s in sims))
+        return cls._wrap(handle, (bus, bus_handle), (bus._lock,), bus)
 
     list_cameras = staticmethod(list_cameras)
 
@@ -473,6 +474,7 @@ class Source:
         with self._lock:
             self._handle = None  # destroys the C source first...
             self._keep = ()  # ...then releases the simulator / bus it borrowed
+            self._bus = None
 
     def __del__(self) -> None:
         # The C source must go before what it borrows, whatever order the
@@ -503,6 +505,11 @@ class Source:
         stack.enter_context(self._lock)
         for lock in self._locks:
             stack.enter_context(lock)
+        if self._bus is not None:
+            # The simulators the bus renders now (set_frames may have changed
+            # them since the source was opened), in a fixed order.
+            for sim in sorted(set(self._bus._frames.values()), key=id):
+                stack.enter_context(sim._lock)
         return stack
 
     def __repr__(self) -> str:

@@ -434,3 +434,28 @@ def test_control_channel_timeouts_retry_then_raise_timeout_error(bus):
         with pytest.raises(flatline.TimeoutError, match="3 attempts"):
             cam.get_int("Width")
         assert cam.get_int("Width") == WIDTH  # the channel still works
+
+
+def test_a_camera_source_serialises_with_the_simulator_it_renders(calib):
+    # next() takes the lock of the SimulatedLine the bus renders: while
+    # another thread holds it, next() waits. The frame is the simulator's.
+    import threading
+
+    with flatline.SimulatedLine(calib, sim_seed=4) as direct:
+        want = direct.next_frame()
+    with flatline.U3VSimBus() as bus, flatline.SimulatedLine(calib, sim_seed=4) as sim:
+        bus.add_camera("V", "M", "S1", WIDTH, HEIGHT)
+        bus.set_frames(0, sim)
+        with flatline.Source.u3v(bus=bus) as cam:
+            with pytest.raises(flatline.StateError, match="open"):
+                bus.set_frames(0, None)  # the C bus refuses while the camera is open
+            cam.start()
+            done = threading.Event()
+            box = []
+            worker = threading.Thread(target=lambda: (box.append(cam.next()), done.set()))
+            with sim._lock:  # held elsewhere: next() must wait for it
+                worker.start()
+                assert not done.wait(0.2)
+            worker.join(5.0)
+            assert done.is_set()
+            assert np.array_equal(box[0].pixels, want.image)
