@@ -29,8 +29,8 @@ namespace Flatline
     /// ("knot_spacing", ...) through flt_option_find, so an option added to
     /// the C library is usable here without a binding change; the typed
     /// properties cover the options known when this binding was written
-    /// (calibration, simulator and extractor keys carry a Calib / Sim /
-    /// Extract prefix).
+    /// (calibration, simulator, extractor, flatness and frame-source keys
+    /// carry a Calib / Sim / Extract / Flat / Source or U3v prefix).
     /// Keys never set keep their default. Objects created from a bag keep
     /// their own copy of the values, so the bag may be disposed right after.
     /// </summary>
@@ -205,6 +205,59 @@ namespace Flatline
         public double ExtractMinPeak { get => Get("extract_min_peak"); set => Set("extract_min_peak", value); }
         /// <summary>Widest accepted line: rows at or above half its maximum.</summary>
         public double ExtractMaxWidth { get => Get("extract_max_width"); set => Set("extract_max_width", value); }
+
+        // ---- flatness metrics (Flatness); flatline/flatness.h
+        /// <summary>Streamed evaluation window: the last N mm of strip; 0 for
+        /// no automatic windows (only Finish evaluates, one window per sheet).</summary>
+        public double FlatWindowLength { get => Get("flat_window_length"); set => Set("flat_window_length", value); }
+        /// <summary>Strip between two streamed evaluations, mm, at most
+        /// FlatWindowLength; 0 = FlatWindowLength (windows side by side).</summary>
+        public double FlatUpdateInterval { get => Get("flat_update_interval"); set => Set("flat_update_interval", value); }
+        /// <summary>Width of an I-Unit zone across the strip, mm.</summary>
+        public double FlatZoneWidth { get => Get("flat_zone_width"); set => Set("flat_zone_width", value); }
+        /// <summary>The I-Unit reference length: the shortest valid fiber
+        /// (false, the default) or the mean of the valid fibers (true).</summary>
+        public bool FlatReferenceMean { get => Get("flat_reference") != 0; set => Set("flat_reference", value ? 1 : 0); }
+        /// <summary>Shortest window the metrics accept, mm (one flatness wave).</summary>
+        public double FlatMinLength { get => Get("flat_min_length"); set => Set("flat_min_length", value); }
+        /// <summary>Least share of a window (0..1) a fiber's usable rows must cover.</summary>
+        public double FlatMinCoverage { get => Get("flat_min_coverage"); set => Set("flat_min_coverage", value); }
+        /// <summary>A crest or trough counts once the profile has retreated
+        /// from it by this much, mm.</summary>
+        public double FlatWaveHysteresis { get => Get("flat_wave_hysteresis"); set => Set("flat_wave_hysteresis", value); }
+        /// <summary>A window whose zone profile spans less than this is flat, I-Units.</summary>
+        public double FlatFlatLimit { get => Get("flat_flat_limit"); set => Set("flat_flat_limit", value); }
+        /// <summary>|Bow| from which ShapeComponents.Bow is set, mm of sagitta over the window.</summary>
+        public double FlatBowLimit { get => Get("flat_bow_limit"); set => Set("flat_bow_limit", value); }
+        /// <summary>|Crossbow| from which ShapeComponents.Crossbow is set, mm of sagitta over the width.</summary>
+        public double FlatCrossbowLimit { get => Get("flat_crossbow_limit"); set => Set("flat_crossbow_limit", value); }
+        /// <summary>Rows one streamed window (or sheet) may hold (9 bytes per row and fiber).</summary>
+        public int FlatRowCapacity { get => (int)Get("flat_row_capacity"); set => Set("flat_row_capacity", value); }
+
+        // ---- frame sources (FrameSource); flatline/source.h
+        /// <summary>Where a frame's encoder position comes from.</summary>
+        public EncoderMode SourceEncoderMode { get => (EncoderMode)(int)Get("source_encoder_mode"); set => Set("source_encoder_mode", (int)value); }
+        /// <summary>Travel per frame (per block id) in fixed-step mode, mm.</summary>
+        public double SourceEncoderStep { get => Get("source_encoder_step"); set => Set("source_encoder_step", value); }
+        /// <summary>Encoder position of the first frame (fixed step) or of
+        /// count 0 (chunk counter), mm.</summary>
+        public double SourceEncoderStart { get => Get("source_encoder_start"); set => Set("source_encoder_start", value); }
+        /// <summary>Travel per encoder count of a chunk counter, mm.</summary>
+        public double SourceEncoderMmPerCount { get => Get("source_encoder_mm_per_count"); set => Set("source_encoder_mm_per_count", value); }
+        /// <summary>The chunk id of the camera's encoder counter (see its XML's ChunkID).</summary>
+        public uint SourceEncoderChunkId { get => (uint)Get("source_encoder_chunk_id"); set => Set("source_encoder_chunk_id", value); }
+        /// <summary>Significant bits of 16-bit image files: 0 = Mono16, or 10 or 12.</summary>
+        public int SourceImageBits { get => (int)Get("source_image_bits"); set => Set("source_image_bits", value); }
+        /// <summary>Asynchronous USB bulk transfers kept in flight.</summary>
+        public int U3vTransfers { get => (int)Get("u3v_transfers"); set => Set("u3v_transfers", value); }
+        /// <summary>Largest payload transfer, bytes (rounded down to the camera's alignment).</summary>
+        public int U3vTransferSize { get => (int)Get("u3v_transfer_size"); set => Set("u3v_transfer_size", value); }
+        /// <summary>Floor of the control channel timeout, ms.</summary>
+        public int U3vControlTimeout { get => (int)Get("u3v_control_timeout"); set => Set("u3v_control_timeout", value); }
+        /// <summary>Pending acknowledges accepted for one command before giving up.</summary>
+        public int U3vPendingAckLimit { get => (int)Get("u3v_pending_ack_limit"); set => Set("u3v_pending_ack_limit", value); }
+        /// <summary>Times a command is sent when no acknowledge comes.</summary>
+        public int U3vCommandAttempts { get => (int)Get("u3v_command_attempts"); set => Set("u3v_command_attempts", value); }
 
         public void Dispose()
         {

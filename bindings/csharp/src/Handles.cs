@@ -16,10 +16,24 @@ namespace Flatline
     {
         private long pressure;
         private bool tracked;
+        private SafeHandle[] held = Array.Empty<SafeHandle>();
 
         protected FlatlineHandle() : base(IntPtr.Zero, ownsHandle: true) { }
 
         public override bool IsInvalid => handle == IntPtr.Zero;
+
+        private volatile bool disposed;
+
+        /// <summary>Disposed by its owner. A handle another handle holds
+        /// (see <see cref="Hold"/>) stays open until released, but its owner
+        /// must refuse further calls from the moment it is disposed.</summary>
+        internal bool IsDisposed => disposed || IsClosed;
+
+        protected override void Dispose(bool disposing)
+        {
+            disposed = true;
+            base.Dispose(disposing);
+        }
 
         /// <summary>Called once the native create succeeded: counts the handle
         /// and tells the GC about the native memory it holds, so that objects
@@ -33,12 +47,36 @@ namespace Flatline
             OnLive(+1);
         }
 
+        /// <summary>Keeps <paramref name="parent"/>'s native object alive
+        /// for as long as this handle's: the C object borrows it (a frame
+        /// source its simulator or simulated bus, a simulated camera its
+        /// simulator). The parent's reference count is raised now and
+        /// lowered after this handle's destroy, so disposing or finalizing
+        /// the parent first only defers its destroy, in either order.</summary>
+        internal void Hold(SafeHandle parent)
+        {
+            if (parent == null || parent.IsInvalid)
+                return;
+            bool added = false;
+            parent.DangerousAddRef(ref added);
+            lock (this)
+            {
+                var grown = new SafeHandle[held.Length + 1];
+                held.CopyTo(grown, 0);
+                grown[held.Length] = parent;
+                held = grown;
+            }
+        }
+
         protected abstract void Destroy(IntPtr native);
         protected abstract void OnLive(int delta);
 
         protected override bool ReleaseHandle()
         {
             Destroy(handle);
+            foreach (var parent in held)
+                parent.DangerousRelease();
+            held = Array.Empty<SafeHandle>();
             if (pressure > 0)
                 GC.RemoveMemoryPressure(pressure);
             if (tracked)
@@ -89,6 +127,42 @@ namespace Flatline
         internal static long Live => Interlocked.Read(ref live);
         public ExtractorHandle() { }
         protected override void Destroy(IntPtr native) => FlatlineNative.flt_extractor_destroy_handle(native);
+        protected override void OnLive(int delta) => Interlocked.Add(ref live, delta);
+    }
+
+    internal sealed class FlatnessHandle : FlatlineHandle
+    {
+        private static long live;
+        internal static long Live => Interlocked.Read(ref live);
+        public FlatnessHandle() { }
+        protected override void Destroy(IntPtr native) => FlatlineNative.flt_flatness_destroy_handle(native);
+        protected override void OnLive(int delta) => Interlocked.Add(ref live, delta);
+    }
+
+    internal sealed class SourceHandle : FlatlineHandle
+    {
+        private static long live;
+        internal static long Live => Interlocked.Read(ref live);
+        public SourceHandle() { }
+        protected override void Destroy(IntPtr native) => FlatlineNative.flt_source_destroy_handle(native);
+        protected override void OnLive(int delta) => Interlocked.Add(ref live, delta);
+    }
+
+    internal sealed class CameraListHandle : FlatlineHandle
+    {
+        private static long live;
+        internal static long Live => Interlocked.Read(ref live);
+        public CameraListHandle() { }
+        protected override void Destroy(IntPtr native) => FlatlineNative.flt_camera_list_destroy_handle(native);
+        protected override void OnLive(int delta) => Interlocked.Add(ref live, delta);
+    }
+
+    internal sealed class U3VSimHandle : FlatlineHandle
+    {
+        private static long live;
+        internal static long Live => Interlocked.Read(ref live);
+        public U3VSimHandle() { }
+        protected override void Destroy(IntPtr native) => FlatlineNative.flt_u3v_sim_destroy_handle(native);
         protected override void OnLive(int delta) => Interlocked.Add(ref live, delta);
     }
 }

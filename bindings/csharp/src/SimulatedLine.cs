@@ -314,11 +314,11 @@ namespace Flatline
             GC.SuppressFinalize(this);
         }
 
-        private SimHandle LiveHandle
+        internal SimHandle LiveHandle
         {
             get
             {
-                if (handle.IsClosed)
+                if (handle.IsDisposed)
                     throw new ObjectDisposedException(nameof(SimulatedLine));
                 return handle;
             }

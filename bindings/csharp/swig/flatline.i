@@ -18,7 +18,8 @@
  *   - size_t is ulong, strings are UTF-8 in both directions.
  *
  * One .i per component, in dependency order (extractor.h uses calib.h,
- * sim.h both).
+ * sim.h both; flatness.h calib.h; source.h extractor.h and sim.h, and
+ * flatness.i defines FLT_CS_OUT_POINTER, which source.i uses).
  */
 %module FlatlineNative
 
@@ -27,3 +28,5 @@
 %include "calib.i"
 %include "extractor.i"
 %include "sim.i"
+%include "flatness.i"
+%include "source.i"

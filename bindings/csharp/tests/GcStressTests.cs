@@ -172,5 +172,65 @@ namespace Flatline.Tests
             Assert.True(rssAfter - rssBefore < scratch / 4,
                         $"memory grew by {(rssAfter - rssBefore) >> 20} MiB over {lines} undisposed lines");
         }
+
+        [MethodImpl(MethodImplOptions.NoInlining)]
+        private static void AbandonFlatness(int count, FlatlineOptions options)
+        {
+            double[] x = { 0, 100, 200, 300, 400 };
+            for (int i = 0; i < count; ++i)
+                Assert.Equal(5, new Flatness(x, options).Fibers);
+        }
+
+        [MethodImpl(MethodImplOptions.NoInlining)]
+        private static void AbandonSources(int count, SimulatedLine line)
+        {
+            for (int i = 0; i < count; ++i)
+            {
+                var source = FrameSource.Simulator(line);
+                source.Start();
+                Assert.NotNull(source.Next());   // used: its frame buffer is touched
+            }
+        }
+
+        [MethodImpl(MethodImplOptions.NoInlining)]
+        private static void AbandonBuses(int count)
+        {
+            for (int i = 0; i < count; ++i)
+                Assert.Equal(0, new U3VSimBus().AddCamera("Flatline", "Gc", "G", 64, 16));
+        }
+
+        [Fact]
+        public void UndisposedFlatnessSourcesAndSimulatedBusesAreFreedByTheFinalizer()
+        {
+            using var calib = SimulatedLineTests.SmallSensor();
+            using var line = new SimulatedLine(calib);
+            using var options = new FlatlineOptions { FlatRowCapacity = 64 };
+            CollectEverything();
+            long flatBefore = FlatnessHandle.Live, sourcesBefore = SourceHandle.Live, busesBefore = U3VSimHandle.Live;
+            long linesBefore = SimHandle.Live;
+            long rssBefore = Resident();
+            var clock = Stopwatch.StartNew();
+            AbandonFlatness(Count, options);
+            // Each source holds one 2048 x 128 px Mono8 frame buffer, 256 KiB
+            // (source.h): 1,000 of them leaked would be 250 MiB.
+            const int sources = 1000;
+            AbandonSources(sources, line);
+            AbandonBuses(sources);
+            double seconds = clock.Elapsed.TotalSeconds;
+            CollectEverything();
+            long rssAfter = Resident();
+            output.WriteLine($"{Count} flatness objects, {sources} frame sources and {sources} simulated buses " +
+                             $"undisposed in {seconds:F1} s; resident before {rssBefore >> 20} MiB, after collect " +
+                             $"{rssAfter >> 20} MiB");
+            Assert.Equal(flatBefore, FlatnessHandle.Live);
+            Assert.Equal(sourcesBefore, SourceHandle.Live);
+            Assert.Equal(busesBefore, U3VSimHandle.Live);
+            // The sources held the line's handle; released, it is the test's again.
+            Assert.Equal(linesBefore, SimHandle.Live);
+            Assert.Equal(1, line.NextRows(1).Rows);
+            long frames = 2048L * 128 * sources;
+            Assert.True(rssAfter - rssBefore < frames / 4,
+                        $"memory grew by {(rssAfter - rssBefore) >> 20} MiB over {sources} undisposed sources");
+        }
     }
 }

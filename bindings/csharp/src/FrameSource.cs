@@ -1,0 +1,670 @@
+using System;
+using System.Collections.Generic;
+using System.Runtime.InteropServices;
+
+namespace Flatline
+{
+    /// <summary>What a <see cref="FrameSource"/> reads (flt_source_kind).</summary>
+    public enum SourceKind
+    {
+        Simulator = NativeSourceKind.FLT_SOURCE_SIMULATOR,
+        Images = NativeSourceKind.FLT_SOURCE_IMAGES,
+        U3V = NativeSourceKind.FLT_SOURCE_U3V,
+    }
+
+    /// <summary>Where a frame's encoder position comes from (the option
+    /// source_encoder_mode; see include/flatline/source.h).</summary>
+    public enum EncoderMode
+    {
+        /// <summary>Simulator: its own; images: the CSV when given, else fixed step; camera: fixed step.</summary>
+        Auto = 0,
+        /// <summary>SourceEncoderStart + SourceEncoderStep * (block id - first block id).</summary>
+        FixedStep = 1,
+        /// <summary>The value last given to <see cref="FrameSource.SetEncoder"/>.</summary>
+        Host = 2,
+        /// <summary>A USB3 Vision camera's encoder counter chunk.</summary>
+        Chunk = 3,
+    }
+
+    /// <summary>Frame and channel counters of a source (flt_source_counter).</summary>
+    public enum SourceCounter
+    {
+        Frames = NativeCounter.FLT_COUNT_FRAMES,
+        Dropped = NativeCounter.FLT_COUNT_DROPPED,
+        Short = NativeCounter.FLT_COUNT_SHORT,
+        Incomplete = NativeCounter.FLT_COUNT_INCOMPLETE,
+        Overflow = NativeCounter.FLT_COUNT_OVERFLOW,
+        SubmitDropped = NativeCounter.FLT_COUNT_SUBMIT_DROPPED,
+        TimeoutDropped = NativeCounter.FLT_COUNT_TIMEOUT_DROPPED,
+        Lost = NativeCounter.FLT_COUNT_LOST,
+        SubmitRefused = NativeCounter.FLT_COUNT_SUBMIT_REFUSED,
+        Timeouts = NativeCounter.FLT_COUNT_TIMEOUTS,
+        Disconnects = NativeCounter.FLT_COUNT_DISCONNECTS,
+        BadPackets = NativeCounter.FLT_COUNT_BAD_PACKETS,
+        BadLeaders = NativeCounter.FLT_COUNT_BAD_LEADERS,
+        PendingAcks = NativeCounter.FLT_COUNT_PENDING_ACKS,
+        StaleAcks = NativeCounter.FLT_COUNT_STALE_ACKS,
+        CommandRetries = NativeCounter.FLT_COUNT_COMMAND_RETRIES,
+        StreamRecoveries = NativeCounter.FLT_COUNT_STREAM_RECOVERIES,
+    }
+
+    /// <summary>Camera strings from the bootstrap registers (flt_camera_string).</summary>
+    public enum CameraString
+    {
+        Vendor = NativeCameraString.FLT_CAMERA_VENDOR,
+        Model = NativeCameraString.FLT_CAMERA_MODEL,
+        Family = NativeCameraString.FLT_CAMERA_FAMILY,
+        DeviceVersion = NativeCameraString.FLT_CAMERA_DEVICE_VERSION,
+        ManufacturerInfo = NativeCameraString.FLT_CAMERA_MANUFACTURER_INFO,
+        Serial = NativeCameraString.FLT_CAMERA_SERIAL,
+        UserName = NativeCameraString.FLT_CAMERA_USER_NAME,
+    }
+
+    /// <summary>Camera values read from the registers or chosen for the
+    /// stream (flt_camera_value; see include/flatline/source.h).</summary>
+    public enum CameraValue
+    {
+        GenCPVersion = NativeCameraValue.FLT_CAMERA_GENCP_VERSION,
+        U3VVersion = NativeCameraValue.FLT_CAMERA_U3V_VERSION,
+        ResponseTimeMs = NativeCameraValue.FLT_CAMERA_RESPONSE_TIME_MS,
+        ControlTimeoutMs = NativeCameraValue.FLT_CAMERA_CONTROL_TIMEOUT_MS,
+        MaxCommandBytes = NativeCameraValue.FLT_CAMERA_MAX_COMMAND_BYTES,
+        MaxAckBytes = NativeCameraValue.FLT_CAMERA_MAX_ACK_BYTES,
+        SirmAddress = NativeCameraValue.FLT_CAMERA_SIRM_ADDRESS,
+        ManifestAddress = NativeCameraValue.FLT_CAMERA_MANIFEST_ADDRESS,
+        XmlBytes = NativeCameraValue.FLT_CAMERA_XML_BYTES,
+        XmlZipped = NativeCameraValue.FLT_CAMERA_XML_ZIPPED,
+        SpeedMbps = NativeCameraValue.FLT_CAMERA_SPEED_MBPS,
+        Alignment = NativeCameraValue.FLT_CAMERA_ALIGNMENT,
+        PayloadBytes = NativeCameraValue.FLT_CAMERA_PAYLOAD_BYTES,
+        TransferBytes = NativeCameraValue.FLT_CAMERA_TRANSFER_BYTES,
+        TransferCount = NativeCameraValue.FLT_CAMERA_TRANSFER_COUNT,
+        FinalTransferBytes = NativeCameraValue.FLT_CAMERA_FINAL_TRANSFER_BYTES,
+        MaxLeaderBytes = NativeCameraValue.FLT_CAMERA_MAX_LEADER_BYTES,
+        MaxTrailerBytes = NativeCameraValue.FLT_CAMERA_MAX_TRAILER_BYTES,
+    }
+
+    /// <summary>A USB3 Vision camera found by <see cref="FrameSource.Cameras"/>:
+    /// its strings and link speed (Mbit/s; 0 unknown). A camera that cannot
+    /// be opened to read its strings is listed with vendor "?" and the
+    /// reason as its model.</summary>
+    public sealed class CameraInfo
+    {
+        internal CameraInfo(string vendor, string model, string serial, int speedMbps)
+        {
+            Vendor = vendor;
+            Model = model;
+            Serial = serial;
+            SpeedMbps = speedMbps;
+        }
+
+        public string Vendor { get; }
+        public string Model { get; }
+        public string Serial { get; }
+        public int SpeedMbps { get; }
+        public override string ToString() => $"{Vendor} {Model} ({Serial}), {SpeedMbps} Mbit/s";
+    }
+
+    /// <summary>
+    /// A frame from <see cref="FrameSource.Next"/>, copied out of the
+    /// source's buffer (the C frame lives only until the next call), so it
+    /// stays valid. Exactly one of <see cref="Pixels8"/> (Mono8) and
+    /// <see cref="Pixels16"/> (Mono10/12/16, data in the low bits) is set,
+    /// [height, width] (rows, columns) without the source's row padding.
+    /// </summary>
+    public sealed class Frame
+    {
+        internal Frame(PixelFormat format, int width, int height)
+        {
+            Format = format;
+            if (format == PixelFormat.Mono8)
+                Pixels8 = new byte[height, width];
+            else
+                Pixels16 = new ushort[height, width];
+        }
+
+        public PixelFormat Format { get; }
+        public byte[,] Pixels8 { get; }
+        public ushort[,] Pixels16 { get; }
+        /// <summary>The pixels whatever the format: a byte[,] or a ushort[,].</summary>
+        public Array Pixels => (Array)Pixels8 ?? Pixels16;
+        public int Width => Pixels.GetLength(1);
+        public int Height => Pixels.GetLength(0);
+        /// <summary>The row pitch of the source's buffer, bytes (&gt;= width *
+        /// bytes per pixel; the managed copy is packed).</summary>
+        public long StrideBytes { get; internal set; }
+        /// <summary>The camera's frame counter (simulator and images: the frame index).</summary>
+        public ulong BlockId { get; internal set; }
+        /// <summary>Camera: the leader's timestamp (device clock, ns);
+        /// otherwise the host's monotonic clock at delivery, ns.</summary>
+        public ulong TimestampNs { get; internal set; }
+        /// <summary>The strip position, mm (see <see cref="EncoderMode"/>).</summary>
+        public double EncoderMm { get; internal set; }
+
+        internal bool Fits(PixelFormat format, int width, int height) =>
+            Format == format && Width == width && Height == height;
+    }
+
+    /// <summary>
+    /// A source of camera frames (flt_source): a USB3 Vision camera (over
+    /// libusb, no camera SDK; or a camera of a <see cref="U3VSimBus"/>),
+    /// recorded image files, or a <see cref="SimulatedLine"/>, behind one
+    /// loop: <see cref="Start"/>, then <see cref="Next"/> until it returns
+    /// null (end of images) or throws. Every frame carries its encoder
+    /// position. See include/flatline/source.h for the encoder modes, the
+    /// frame accounting and the GenICam features.
+    /// </summary>
+    /// <remarks>
+    /// A source keeps what it borrows alive: the <see cref="SimulatedLine"/>
+    /// of <see cref="Simulator"/> and the <see cref="U3VSimBus"/> of
+    /// <see cref="U3V"/> (disposing them first only defers their native
+    /// destroy until the source is gone). Not thread-safe: one thread at a
+    /// time, and a simulated bus not from another thread while a source on
+    /// it is used. Errors: <see cref="DeviceTimeoutException"/> when no good
+    /// frame came in time, <see cref="DeviceException"/> when the camera is
+    /// gone (then on every later call; Dispose still works),
+    /// <see cref="NotFoundException"/> for an unknown serial or feature.
+    /// </remarks>
+    public sealed class FrameSource : IDisposable
+    {
+        private readonly SourceHandle handle;
+
+        static FrameSource() => NativeLoader.EnsureLoaded();
+
+        private FrameSource(SourceHandle handle, object parent, long nativeBytes = 0)
+        {
+            this.handle = handle;
+            Parent = parent;
+            unsafe
+            {
+                int kind;
+                FlatlineNative.flt_source_kind_of(handle, &kind);
+                Kind = (SourceKind)kind;
+            }
+            handle.Track(nativeBytes);
+        }
+
+        /// <summary>Frames rendered by <paramref name="line"/> (which may still
+        /// change its sheet between frames), each with the line's encoder
+        /// position (or fixed step / host mode; Chunk is refused).</summary>
+        public static FrameSource Simulator(SimulatedLine line, FlatlineOptions options = null)
+        {
+            if (line == null)
+                throw new ArgumentNullException(nameof(line));
+            NativeLoader.EnsureLoaded();
+            SourceHandle handle;
+            var sim = line.LiveHandle;
+            using (var scope = FlatlineOptions.Borrow(options))
+            {
+                FlatlineNative.flt_source_create_sim(sim, scope.Handle, out handle);
+            }
+            handle.Hold(sim);
+            // Its one frame buffer (source.h), as memory pressure.
+            long frameBytes = (long)line.FrameWidth * line.FrameHeight * (line.PixelFormat == PixelFormat.Mono8 ? 1 : 2);
+            return new FrameSource(handle, line, frameBytes);
+        }
+
+        /// <summary>Image files (PNG, TIFF, ...; single channel, 8 or 16 bits,
+        /// all of the first one's size) in the given order.
+        /// <paramref name="encoderCsv"/>: null (fixed step), or a CSV of the
+        /// positions, mm, one row per image ("encoder_mm" or
+        /// "file name,encoder_mm"). <see cref="FlatlineFormatException"/>
+        /// names a bad CSV line; <see cref="FlatlineIOException"/> an
+        /// unreadable image.</summary>
+        public static unsafe FrameSource Images(IReadOnlyList<string> paths, string encoderCsv = null,
+                                                FlatlineOptions options = null)
+        {
+            if (paths == null)
+                throw new ArgumentNullException(nameof(paths));
+            if (paths.Count == 0)
+                throw new ArgumentException("paths is empty: at least one image", nameof(paths));
+            NativeLoader.EnsureLoaded();
+            var pins = new GCHandle[paths.Count];
+            var pointers = new IntPtr[paths.Count];
+            SourceHandle handle;
+            try
+            {
+                for (int i = 0; i < paths.Count; ++i)
+                {
+                    if (paths[i] == null)
+                        throw new ArgumentNullException($"{nameof(paths)}[{i}]");
+                    pins[i] = GCHandle.Alloc(Utf8.Encode(paths[i]), GCHandleType.Pinned);
+                    pointers[i] = pins[i].AddrOfPinnedObject();
+                }
+                using (var scope = FlatlineOptions.Borrow(options))
+                fixed (IntPtr* pp = pointers)
+                {
+                    FlatlineNative.flt_source_create_images(pp, (ulong)paths.Count, encoderCsv, scope.Handle,
+                                                            out handle);
+                }
+            }
+            finally
+            {
+                foreach (var pin in pins)
+                    if (pin.IsAllocated)
+                        pin.Free();
+            }
+            return new FrameSource(handle, null);
+        }
+
+        /// <summary>Every *.png, *.tif and *.tiff file of
+        /// <paramref name="directory"/> (not its sub-folders), sorted by name.
+        /// <see cref="NotFoundException"/> if there is none.</summary>
+        public static FrameSource ImageDirectory(string directory, string encoderCsv = null,
+                                                 FlatlineOptions options = null)
+        {
+            if (directory == null)
+                throw new ArgumentNullException(nameof(directory));
+            NativeLoader.EnsureLoaded();
+            SourceHandle handle;
+            using (var scope = FlatlineOptions.Borrow(options))
+            {
+                FlatlineNative.flt_source_create_image_dir(directory, encoderCsv, scope.Handle, out handle);
+            }
+            return new FrameSource(handle, null);
+        }
+
+        /// <summary>Opens a USB3 Vision camera: the one with
+        /// <paramref name="serial"/>, or the first when null; on the USB bus,
+        /// or on <paramref name="bus"/> when given (which the source holds).
+        /// <see cref="NotFoundException"/> names a serial that is not present;
+        /// <see cref="DeviceException"/> says why a camera cannot be opened.</summary>
+        public static FrameSource U3V(string serial = null, FlatlineOptions options = null, U3VSimBus bus = null)
+        {
+            NativeLoader.EnsureLoaded();
+            var busHandle = bus != null ? bus.LiveHandle : new U3VSimHandle();
+            SourceHandle handle;
+            using (var scope = FlatlineOptions.Borrow(options))
+            {
+                FlatlineNative.flt_source_open_u3v(busHandle, serial, scope.Handle, out handle);
+            }
+            handle.Hold(busHandle);
+            return new FrameSource(handle, bus);
+        }
+
+        /// <summary>The USB3 Vision cameras present on the USB bus, or on
+        /// <paramref name="bus"/>. <see cref="DeviceException"/> if libusb
+        /// cannot start.</summary>
+        public static unsafe IReadOnlyList<CameraInfo> Cameras(U3VSimBus bus = null)
+        {
+            NativeLoader.EnsureLoaded();
+            var busHandle = bus != null ? bus.LiveHandle : new U3VSimHandle();
+            var cameras = new List<CameraInfo>();
+            FlatlineNative.flt_camera_list_create(busHandle, out CameraListHandle list);
+            using (list)
+            {
+                FlatlineNative.flt_camera_list_count(list, out UIntPtr count);
+                for (ulong i = 0; i < count.ToUInt64(); ++i)
+                {
+                    IntPtr vendor, model, serial;
+                    uint speed;
+                    FlatlineNative.flt_camera_list_get(list, i, &vendor, &model, &serial, &speed);
+                    cameras.Add(new CameraInfo(Utf8.Decode(vendor), Utf8.Decode(model), Utf8.Decode(serial),
+                                               (int)speed));
+                }
+            }
+            GC.KeepAlive(bus);
+            return cameras;
+        }
+
+        public SourceKind Kind { get; }
+        /// <summary>What the source borrows: its SimulatedLine or U3VSimBus, else null.</summary>
+        public object Parent { get; }
+
+        /// <summary>Starts acquisition (a camera: stream set-up, buffers,
+        /// AcquisitionStart; images start again from the first).
+        /// <see cref="FlatlineStateException"/> if already started.</summary>
+        public void Start() => FlatlineNative.flt_source_start(LiveHandle);
+
+        /// <summary>Stops acquisition; stopping a stopped source does nothing.</summary>
+        public void Stop() => FlatlineNative.flt_source_stop(LiveHandle);
+
+        /// <summary>Waits up to <paramref name="timeoutMs"/> for the next good
+        /// frame and copies it out: into <paramref name="reuse"/> when it has
+        /// the frame's format and size (a loop allocates nothing then), else
+        /// into a new <see cref="Frame"/>. Null at the end of an image
+        /// sequence. <see cref="DeviceTimeoutException"/>,
+        /// <see cref="DeviceException"/>, <see cref="FlatlineStateException"/>
+        /// before <see cref="Start"/>.</summary>
+        public unsafe Frame Next(int timeoutMs = 1000, Frame reuse = null)
+        {
+            var live = LiveHandle;
+            if (timeoutMs < 0)
+                throw new ArgumentOutOfRangeException(nameof(timeoutMs), timeoutMs, "timeoutMs must be >= 0");
+            IntPtr native;
+            FlatlineNative.flt_source_next(live, (uint)timeoutMs, &native);
+            if (native == IntPtr.Zero)
+                return null;
+            IntPtr pixels;
+            uint width, height;
+            ulong stride, blockId, timestamp;
+            int format;
+            double encoder;
+            FlatlineNative.flt_frame_info(native, &pixels, &width, &height, &stride, &format, &blockId, &timestamp,
+                                          &encoder);
+            var pixelFormat = (PixelFormat)format;
+            var frame = reuse != null && reuse.Fits(pixelFormat, (int)width, (int)height)
+                ? reuse
+                : new Frame(pixelFormat, (int)width, (int)height);
+            int rowBytes = (int)width * (pixelFormat == PixelFormat.Mono8 ? 1 : 2);
+            byte* source = (byte*)pixels;
+            if (frame.Pixels8 != null)
+            {
+                fixed (byte* target = frame.Pixels8)
+                    CopyRows(source, (long)stride, target, rowBytes, (int)height);
+            }
+            else
+            {
+                fixed (ushort* target = frame.Pixels16)
+                    CopyRows(source, (long)stride, (byte*)target, rowBytes, (int)height);
+            }
+            frame.StrideBytes = (long)stride;
+            frame.BlockId = blockId;
+            frame.TimestampNs = timestamp;
+            frame.EncoderMm = encoder;
+            return frame;
+        }
+
+        /// <summary>Encoder mode Host: the position (mm, finite) the next
+        /// frames carry. <see cref="FlatlineStateException"/> in any other mode.</summary>
+        public void SetEncoder(double encoderMm) => FlatlineNative.flt_source_set_encoder(LiveHandle, encoderMm);
+
+        /// <summary>One counter, since the source was created.</summary>
+        public unsafe ulong Count(SourceCounter counter)
+        {
+            ulong value;
+            FlatlineNative.flt_source_count(LiveHandle, (int)counter, &value);
+            return value;
+        }
+
+        /// <summary>Every counter, since the source was created.</summary>
+        public IReadOnlyDictionary<SourceCounter, ulong> Counters
+        {
+            get
+            {
+                var counters = new Dictionary<SourceCounter, ulong>();
+                foreach (SourceCounter counter in Enum.GetValues(typeof(SourceCounter)))
+                    counters[counter] = Count(counter);
+                return counters;
+            }
+        }
+
+        /// <summary>Why the last frame was dropped or lost ("" if none was).</summary>
+        public string StreamError => FlatlineNative.flt_source_stream_error(LiveHandle);
+
+        /// <summary>A camera string. <see cref="FlatlineStateException"/> for a
+        /// source that is not a camera.</summary>
+        public unsafe string GetCameraString(CameraString which)
+        {
+            IntPtr text;
+            FlatlineNative.flt_source_camera_string(LiveHandle, (int)which, &text);
+            return Utf8.Decode(text);
+        }
+
+        /// <summary>A camera value. <see cref="FlatlineStateException"/> for a
+        /// source that is not a camera.</summary>
+        public unsafe ulong GetCameraValue(CameraValue which)
+        {
+            ulong value;
+            FlatlineNative.flt_source_camera_value(LiveHandle, (int)which, &value);
+            return value;
+        }
+
+        /// <summary>A GenICam integer (IntReg, MaskedIntReg, Integer, Boolean,
+        /// Enumeration's value). <see cref="NotFoundException"/> names a
+        /// feature the camera lacks or the client cannot resolve.</summary>
+        public unsafe long GetInt(string feature)
+        {
+            long value;
+            FlatlineNative.flt_source_get_int(LiveHandle, Feature(feature), &value);
+            return value;
+        }
+
+        /// <summary>Writes a GenICam integer as is (the camera checks its range).</summary>
+        public void SetInt(string feature, long value) =>
+            FlatlineNative.flt_source_set_int(LiveHandle, Feature(feature), value);
+
+        /// <summary>A GenICam float (Float, FloatReg, or an integer converted).</summary>
+        public double GetFloat(string feature)
+        {
+            FlatlineNative.flt_source_get_float(LiveHandle, Feature(feature), out double value);
+            return value;
+        }
+
+        public void SetFloat(string feature, double value) =>
+            FlatlineNative.flt_source_set_float(LiveHandle, Feature(feature), value);
+
+        /// <summary>Sets an enumeration by entry name ("Continuous").</summary>
+        public void SetEnum(string feature, string entry)
+        {
+            if (entry == null)
+                throw new ArgumentNullException(nameof(entry));
+            FlatlineNative.flt_source_set_enum(LiveHandle, Feature(feature), entry);
+        }
+
+        /// <summary>Executes a command feature ("AcquisitionStart" ...).</summary>
+        public void Execute(string feature) => FlatlineNative.flt_source_execute(LiveHandle, Feature(feature));
+
+        /// <summary>Gives <paramref name="feature"/> a register instead of its
+        /// XML node: <paramref name="length"/> bytes (1, 2, 4, 8) at
+        /// <paramref name="address"/>, little-endian, unsigned or an IEEE float.</summary>
+        public void MapFeature(string feature, ulong address, int length, bool isFloat = false)
+        {
+            if (length != 1 && length != 2 && length != 4 && length != 8)
+                throw new ArgumentOutOfRangeException(nameof(length), length, "length must be 1, 2, 4 or 8 bytes");
+            FlatlineNative.flt_source_map_feature(LiveHandle, Feature(feature), address, (uint)length, isFloat ? 1 : 0);
+        }
+
+        /// <summary>Reads <paramref name="bytes"/> bytes of camera memory through GenCP.</summary>
+        public unsafe byte[] ReadMemory(ulong address, int bytes)
+        {
+            var live = LiveHandle;
+            Shapes.AtLeast(bytes, 1, nameof(bytes));
+            var data = new byte[bytes];
+            fixed (byte* pd = data)
+            {
+                FlatlineNative.flt_source_read_memory(live, address, pd, (ulong)bytes);
+            }
+            return data;
+        }
+
+        /// <summary>Writes camera memory through GenCP.</summary>
+        public unsafe void WriteMemory(ulong address, byte[] data)
+        {
+            var live = LiveHandle;
+            if (data == null)
+                throw new ArgumentNullException(nameof(data));
+            if (data.Length == 0)
+                throw new ArgumentException("data is empty", nameof(data));
+            fixed (byte* pd = data)
+            {
+                FlatlineNative.flt_source_write_memory(live, address, pd, (ulong)data.Length);
+            }
+        }
+
+        /// <summary>Stops a streaming camera, releases it and frees the native
+        /// source now (then what it borrowed may go). Further calls throw
+        /// <see cref="ObjectDisposedException"/>; a second Dispose does nothing.</summary>
+        public void Dispose()
+        {
+            handle.Dispose();
+            GC.SuppressFinalize(this);
+        }
+
+        private SourceHandle LiveHandle
+        {
+            get
+            {
+                if (handle.IsClosed)
+                    throw new ObjectDisposedException(nameof(FrameSource));
+                return handle;
+            }
+        }
+
+        private static string Feature(string feature) =>
+            feature ?? throw new ArgumentNullException(nameof(feature));
+
+        private static unsafe void CopyRows(byte* source, long stride, byte* target, int rowBytes, int rows)
+        {
+            for (int r = 0; r < rows; ++r)
+                Buffer.MemoryCopy(source + r * stride, target + (long)r * rowBytes, rowBytes, rowBytes);
+        }
+    }
+
+    /// <summary>Settings and read-outs of a simulated camera (flt_u3v_sim_param).</summary>
+    public enum U3VSimParam
+    {
+        ResponseTimeMs = NativeU3VSimParam.FLT_U3V_SIM_RESPONSE_TIME_MS,
+        MaxCommandBytes = NativeU3VSimParam.FLT_U3V_SIM_MAX_COMMAND_BYTES,
+        MaxAckBytes = NativeU3VSimParam.FLT_U3V_SIM_MAX_ACK_BYTES,
+        AlignmentLog2 = NativeU3VSimParam.FLT_U3V_SIM_ALIGNMENT_LOG2,
+        XmlZipped = NativeU3VSimParam.FLT_U3V_SIM_XML_ZIPPED,
+        /// <summary>1: append the encoder count as a chunk.</summary>
+        EncoderChunk = NativeU3VSimParam.FLT_U3V_SIM_ENCODER_CHUNK,
+        EncoderChunkId = NativeU3VSimParam.FLT_U3V_SIM_ENCODER_CHUNK_ID,
+        /// <summary>Micrometres of travel per encoder count.</summary>
+        EncoderMmPerCountUm = NativeU3VSimParam.FLT_U3V_SIM_ENCODER_MM_PER_COUNT_UM,
+        SpeedMbps = NativeU3VSimParam.FLT_U3V_SIM_SPEED_MBPS,
+        /// <summary>1: the camera was left streaming by a process that died.</summary>
+        LeftStreaming = NativeU3VSimParam.FLT_U3V_SIM_LEFT_STREAMING,
+        // read-only
+        SiControl = NativeU3VSimParam.FLT_U3V_SIM_SI_CONTROL,
+        Acquiring = NativeU3VSimParam.FLT_U3V_SIM_ACQUIRING,
+        Commands = NativeU3VSimParam.FLT_U3V_SIM_COMMANDS,
+        LastReadTimeoutMs = NativeU3VSimParam.FLT_U3V_SIM_LAST_READ_TIMEOUT_MS,
+        FramesSent = NativeU3VSimParam.FLT_U3V_SIM_FRAMES_SENT,
+        Open = NativeU3VSimParam.FLT_U3V_SIM_OPEN,
+    }
+
+    /// <summary>Faults a simulated camera can inject (flt_u3v_fault); see
+    /// include/flatline/source.h for what each does to the stream.</summary>
+    public enum U3VFault
+    {
+        ShortFrame = NativeU3VFault.FLT_U3V_FAULT_SHORT_FRAME,
+        LeaderMidFrame = NativeU3VFault.FLT_U3V_FAULT_LEADER_MID_FRAME,
+        Overflow = NativeU3VFault.FLT_U3V_FAULT_OVERFLOW,
+        SkipBlockIds = NativeU3VFault.FLT_U3V_FAULT_SKIP_BLOCK_IDS,
+        StreamTimeout = NativeU3VFault.FLT_U3V_FAULT_STREAM_TIMEOUT,
+        Unplug = NativeU3VFault.FLT_U3V_FAULT_UNPLUG,
+        Garbage = NativeU3VFault.FLT_U3V_FAULT_GARBAGE,
+        TrailerStatus = NativeU3VFault.FLT_U3V_FAULT_TRAILER_STATUS,
+        SubmitRefused = NativeU3VFault.FLT_U3V_FAULT_SUBMIT_REFUSED,
+        PendingAck = NativeU3VFault.FLT_U3V_FAULT_PENDING_ACK,
+        ControlTimeout = NativeU3VFault.FLT_U3V_FAULT_CONTROL_TIMEOUT,
+        LateAck = NativeU3VFault.FLT_U3V_FAULT_LATE_ACK,
+    }
+
+    /// <summary>
+    /// A simulated USB bus with simulated USB3 Vision cameras (flt_u3v_sim):
+    /// the real client code of <see cref="FrameSource.U3V"/> talks to it
+    /// through the same transport interface as libusb, so tests and
+    /// integrators run the whole camera path without hardware. Cameras answer
+    /// GenCP, describe themselves in a GenICam XML and stream leader, payload
+    /// and trailer transfers: a test pattern, or the frames of a
+    /// <see cref="SimulatedLine"/> (<see cref="SetFrames"/>), optionally with
+    /// an encoder chunk and injected faults. Time is virtual: a simulated
+    /// timeout returns at once.
+    /// </summary>
+    /// <remarks>
+    /// Sources opened on the bus hold it, and the bus holds the lines it
+    /// renders, so any dispose order is safe. Not thread-safe, nor to be used
+    /// while a source on it runs on another thread.
+    /// </remarks>
+    public sealed class U3VSimBus : IDisposable
+    {
+        private readonly U3VSimHandle handle;
+
+        static U3VSimBus() => NativeLoader.EnsureLoaded();
+
+        /// <summary>An empty bus (plus one device that is not a camera).</summary>
+        public U3VSimBus()
+        {
+            FlatlineNative.flt_u3v_sim_create(out handle);
+            handle.Track(0);
+        }
+
+        /// <summary>Adds a camera (at most 8) and returns its index: strings of
+        /// at most 63 bytes, a <paramref name="width"/> x <paramref name="height"/>
+        /// sensor (16..8192 px each).</summary>
+        public unsafe int AddCamera(string vendor, string model, string serial, int width, int height,
+                                    PixelFormat format = PixelFormat.Mono8)
+        {
+            var live = LiveHandle;
+            if (vendor == null)
+                throw new ArgumentNullException(nameof(vendor));
+            if (model == null)
+                throw new ArgumentNullException(nameof(model));
+            if (serial == null)
+                throw new ArgumentNullException(nameof(serial));
+            Shapes.AtLeast(width, 0, nameof(width));
+            Shapes.AtLeast(height, 0, nameof(height));
+            ulong index;
+            FlatlineNative.flt_u3v_sim_add_camera(live, vendor, model, serial, (uint)width, (uint)height, (int)format,
+                                                  &index);
+            return (int)index;
+        }
+
+        /// <summary>Renders camera <paramref name="camera"/>'s frames with
+        /// <paramref name="line"/> (held by the bus), or the test pattern for
+        /// null. The camera takes the line's frame size and format.</summary>
+        public void SetFrames(int camera, SimulatedLine line)
+        {
+            var live = LiveHandle;
+            var sim = line != null ? line.LiveHandle : new SimHandle();
+            FlatlineNative.flt_u3v_sim_set_frames(live, Camera(camera), sim);
+            live.Hold(sim);
+        }
+
+        /// <summary>Sets a parameter of a camera (before it is opened).</summary>
+        public void Set(int camera, U3VSimParam param, ulong value) =>
+            FlatlineNative.flt_u3v_sim_set(LiveHandle, Camera(camera), (int)param, value);
+
+        /// <summary>Reads a parameter or read-out of a camera.</summary>
+        public unsafe ulong Get(int camera, U3VSimParam param)
+        {
+            ulong value;
+            FlatlineNative.flt_u3v_sim_get(LiveHandle, Camera(camera), (int)param, &value);
+            return value;
+        }
+
+        /// <summary>Schedules a fault: stream faults on the frame with block id
+        /// <paramref name="at"/>; host faults on the next <paramref name="count"/>
+        /// operations. Faults add up.</summary>
+        public void Inject(int camera, U3VFault fault, ulong at = 0, uint count = 1) =>
+            FlatlineNative.flt_u3v_sim_inject(LiveHandle, Camera(camera), (int)fault, at, count);
+
+        /// <summary>A 32-bit register of the camera's map, read directly (no GenCP).</summary>
+        public unsafe uint Peek(int camera, ulong address)
+        {
+            uint value;
+            FlatlineNative.flt_u3v_sim_peek(LiveHandle, Camera(camera), address, &value);
+            return value;
+        }
+
+        /// <summary>Frees the bus now, or as soon as the last source opened on
+        /// it is disposed. Further calls throw <see cref="ObjectDisposedException"/>;
+        /// a second Dispose does nothing.</summary>
+        public void Dispose()
+        {
+            handle.Dispose();
+            GC.SuppressFinalize(this);
+        }
+
+        internal U3VSimHandle LiveHandle
+        {
+            get
+            {
+                if (handle.IsDisposed)
+                    throw new ObjectDisposedException(nameof(U3VSimBus));
+                return handle;
+            }
+        }
+
+        private static ulong Camera(int camera)
+        {
+            if (camera < 0)
+                throw new ArgumentOutOfRangeException(nameof(camera), camera, "camera must be >= 0");
+            return (ulong)camera;
+        }
+    }
+}

@@ -1,0 +1,70 @@
+/* Frame sources and the simulated USB3 Vision bus
+ * (include/flatline/source.h). */
+%{
+#include "flatline/source.h"
+%}
+
+FLT_CS_HANDLE(flt_source, SourceHandle)
+FLT_CS_HANDLE(flt_camera_list, CameraListHandle)
+FLT_CS_HANDLE(flt_u3v_sim, U3VSimHandle)
+/* A NULL bus (the real USB bus) or NULL simulator (the test pattern) is
+ * passed as a handle object that holds no native pointer: the marshaller
+ * refuses a null SafeHandle reference, not a zero one. */
+
+/* The enums travel as their int values; the public enums take their values
+ * from the generated Native* enums. */
+%define FLT_CS_INT_ENUM(CTYPE, CSNAME)
+%rename(CSNAME) CTYPE;
+%typemap(ctype) CTYPE "int"
+%typemap(imtype) CTYPE "int"
+%typemap(cstype) CTYPE "int"
+%typemap(in) CTYPE %{ $1 = (CTYPE)$input; %}
+%typemap(csin) CTYPE "$csinput"
+%enddef
+FLT_CS_INT_ENUM(flt_source_kind, NativeSourceKind)
+FLT_CS_INT_ENUM(flt_source_counter, NativeCounter)
+FLT_CS_INT_ENUM(flt_camera_string, NativeCameraString)
+FLT_CS_INT_ENUM(flt_camera_value, NativeCameraValue)
+FLT_CS_INT_ENUM(flt_u3v_sim_param, NativeU3VSimParam)
+FLT_CS_INT_ENUM(flt_u3v_fault, NativeU3VFault)
+%ignore FLT_SOURCE_KIND_MAX_ENUM_;
+%ignore FLT_COUNT_MAX_ENUM_;
+%ignore FLT_CAMERA_STRING_MAX_ENUM_;
+%ignore FLT_CAMERA_VALUE_MAX_ENUM_;
+%ignore FLT_U3V_SIM_PARAM_MAX_ENUM_;
+%ignore FLT_U3V_FAULT_MAX_ENUM_;
+
+/* Outputs are raw pointers (&local in the public classes). */
+FLT_CS_OUT_POINTER(int, int, flt_source_kind *out)
+FLT_CS_OUT_POINTER(uint64_t, ulong, uint64_t *out, uint64_t *block_id, uint64_t *timestamp_ns)
+FLT_CS_OUT_POINTER(int64_t, long, int64_t *out)
+FLT_CS_OUT_POINTER(uint32_t, uint, uint32_t *speed_mbps, uint32_t *width, uint32_t *height,
+                   uint32_t *out)
+FLT_CS_OUT_POINTER(size_t, ulong, size_t *stride_bytes, size_t *index_out)
+FLT_CS_OUT_POINTER(int, int, flt_pixel_format *format)
+/* Library-owned strings and the borrowed frame and its pixels: IntPtrs. */
+FLT_CS_OUT_POINTER(void, global::System.IntPtr,
+                   const char **vendor, const char **model, const char **serial,
+                   const char **out, const void **pixels, const flt_frame **out)
+%typemap(ctype) const flt_frame *frame "const flt_frame *"
+%typemap(imtype) const flt_frame *frame "global::System.IntPtr"
+%typemap(cstype) const flt_frame *frame "global::System.IntPtr"
+%typemap(in) const flt_frame *frame %{ $1 = ($1_ltype)$input; %}
+%typemap(csin) const flt_frame *frame "$csinput"
+
+/* Image paths: one pointer per NUL-terminated UTF-8 path, pinned by the
+ * caller (src/FrameSource.cs). */
+%typemap(ctype) const char *const *paths "const char *const *"
+%typemap(imtype) const char *const *paths "global::System.IntPtr*"
+%typemap(cstype) const char *const *paths "global::System.IntPtr*"
+%typemap(in) const char *const *paths %{ $1 = ($1_ltype)$input; %}
+%typemap(csin) const char *const *paths "$csinput"
+
+/* Raw register access: caller byte buffers, pinned. */
+%typemap(ctype) void *out, const void *bytes_in "void *"
+%typemap(imtype) void *out, const void *bytes_in "byte*"
+%typemap(cstype) void *out, const void *bytes_in "byte*"
+%typemap(in) void *out, const void *bytes_in %{ $1 = ($1_ltype)$input; %}
+%typemap(csin) void *out, const void *bytes_in "$csinput"
+
+%include "flatline/source.h"
