@@ -172,6 +172,43 @@ namespace Flatline.Tests
         }
 
         [Fact]
+        public void HostEncoderPositionsTravelWithTheFrames()
+        {
+            using var calib = SmallSensor();
+            using var line = Line(calib);
+            using var auto = FrameSource.Simulator(line);
+            // Only encoder mode Host takes positions from the host.
+            Assert.Throws<FlatlineStateException>(() => auto.SetEncoder(1.0));
+            using var options = new FlatlineOptions { SourceEncoderMode = EncoderMode.Host };
+            using var source = FrameSource.Simulator(line, options);
+            source.Start();
+            Assert.True(double.IsNaN(source.Next().EncoderMm));   // before the first SetEncoder
+            source.SetEncoder(12.5);
+            Assert.Equal(12.5, source.Next().EncoderMm);
+            Assert.Equal(12.5, source.Next().EncoderMm);           // the value set last
+            source.SetEncoder(20.0);
+            Assert.Equal(20.0, source.Next().EncoderMm);
+            Assert.Throws<InvalidArgumentException>(() => source.SetEncoder(double.NaN));
+            Assert.Equal(20.0, source.Next().EncoderMm);           // unchanged by the refused call
+        }
+
+        [Fact]
+        public void ACameraLeftStreamingByADeadProcessIsRecoveredOnOpen()
+        {
+            using var bus = new U3VSimBus();
+            bus.AddCamera("Flatline", "Orphan", "O", 64, 16);
+            bus.Set(0, U3VSimParam.LeftStreaming, 1);
+            Assert.Equal(1UL, bus.Get(0, U3VSimParam.Acquiring));
+            using var camera = FrameSource.U3V("O", null, bus);
+            Assert.Equal(0UL, bus.Get(0, U3VSimParam.Acquiring));  // stopped on open
+            Assert.Equal(0UL, bus.Get(0, U3VSimParam.SiControl));
+            Assert.Equal(1UL, camera.Count(SourceCounter.StreamRecoveries));
+            camera.Start();
+            Assert.Equal(64, camera.Next(1000).Width);
+            Assert.Equal(0UL, camera.Count(SourceCounter.Dropped));  // the half-sent frame is not delivered
+        }
+
+        [Fact]
         public void ImageErrorsMapToTheirExceptions()
         {
             var image = new byte[8, 8];
