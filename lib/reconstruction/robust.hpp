@@ -30,7 +30,7 @@ enum class robust_kind { none = 0, huber = 1, tukey = 2 };
 
 struct robust_params {
     robust_kind kind = robust_kind::none;
-    int iterations = 2;              // reweighted stages after the plain one
+    int iterations = 3;              // reweighted stages after the plain one
     long stage_lag_knots = 8;        // lag of the intermediate stages
     std::size_t block_rows = 64;     // rows per scale block (192 mm at 3 mm)
     std::size_t scale_blocks = 9;    // blocks whose medians make the scale
