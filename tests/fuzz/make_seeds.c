@@ -1,0 +1,136 @@
+/* Writes the seed corpus of the fuzzing harnesses into tests/fuzz/corpus/
+ * (committed; rerun only to regenerate it):
+ *   cc -std=c99 -Iinclude tests/fuzz/make_seeds.c -Lbuild/dev/lib -lflatline \
+ *      -Wl,-rpath,build/dev/lib -o /tmp/make_seeds && /tmp/make_seeds tests/fuzz/corpus
+ * Seeds are valid inputs the harnesses parse deeply (a real calibration
+ * file, the simulated camera's GenICam XML plain and zipped, a well-formed
+ * frame on the U3V stream), plus small structured ones. */
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "flatline/flatline.h"
+
+static const char *g_root;
+
+static void put(const char *harness, const char *name, const void *bytes, size_t n) {
+    char path[1024];
+    snprintf(path, sizeof path, "%s/%s", g_root, harness);
+    mkdir(path, 0755);
+    snprintf(path, sizeof path, "%s/%s/%s", g_root, harness, name);
+    FILE *f = fopen(path, "wb");
+    if (!f || fwrite(bytes, 1, n, f) != n || fclose(f) != 0) {
+        fprintf(stderr, "cannot write %s\n", path);
+        exit(1);
+    }
+}
+
+static void check(flt_status st) {
+    if (st != FLT_OK) {
+        fprintf(stderr, "%s\n", flt_last_error_message());
+        exit(1);
+    }
+}
+
+static void le16(uint8_t *p, unsigned v) { p[0] = (uint8_t)v; p[1] = (uint8_t)(v >> 8); }
+
+int main(int argc, char **argv) {
+    if (argc != 2) {
+        fprintf(stderr, "usage: make_seeds CORPUS_DIR\n");
+        return 2;
+    }
+    g_root = argv[1];
+    mkdir(g_root, 0755);
+
+    /* calib_load: the reference sensor's file, one with a small ROI and
+     * grid, and its first half. */
+    static char text[8192];
+    size_t n = 0;
+    flt_calib *c = NULL;
+    check(flt_calib_create_reference(0, 2048, -1000, 2, 1001, &c));
+    check(flt_calib_save_text(c, text, sizeof text, &n));
+    put("calib_load", "reference.json", text, n);
+    put("calib_load", "truncated.json", text, n / 2);
+    flt_calib_destroy(c);
+    check(flt_calib_create_reference(900, 240, -500, 10, 101, &c));
+    check(flt_calib_save_text(c, text, sizeof text, &n));
+    put("calib_load", "roi.json", text, n);
+    flt_calib_destroy(c);
+
+    /* genicam: the simulated camera's XML, as stored (zipped) and plain;
+     * byte 0 picks the form (odd: ZIP). */
+    for (int zipped = 0; zipped < 2; ++zipped) {
+        flt_u3v_sim *bus = NULL;
+        flt_source *src = NULL;
+        size_t idx;
+        uint64_t bytes = 0, address = 0;
+        check(flt_u3v_sim_create(&bus));
+        check(flt_u3v_sim_add_camera(bus, "V", "M", "S1", 64, 32, FLT_PIXEL_MONO8, &idx));
+        check(flt_u3v_sim_set(bus, idx, FLT_U3V_SIM_XML_ZIPPED, (uint64_t)zipped));
+        check(flt_source_open_u3v(bus, "S1", NULL, &src));
+        check(flt_source_camera_value(src, FLT_CAMERA_XML_BYTES, &bytes));
+        /* The manifest's first entry holds the file's address (U3V). */
+        uint8_t entry[16];
+        check(flt_source_camera_value(src, FLT_CAMERA_MANIFEST_ADDRESS, &address));
+        check(flt_source_read_memory(src, address + 8 + 8, entry, 8));
+        uint64_t file_address = 0;
+        for (int i = 7; i >= 0; --i) file_address = file_address << 8 | entry[i];
+        uint8_t *buf = malloc(bytes + 1);
+        buf[0] = (uint8_t)zipped;
+        check(flt_source_read_memory(src, file_address, buf + 1, bytes));
+        put("genicam", zipped ? "camera.zip" : "camera.xml", buf, bytes + 1);
+        free(buf);
+        flt_source_destroy(src);
+        flt_u3v_sim_destroy(bus);
+    }
+
+    /* u3v: mode 0 (stream), then transfers as the harness reads them:
+     * kind, u16 length, fields. A leader (kind 1), the 2048-byte payload
+     * of a 64 x 32 Mono8 frame in 512-byte transfers of a pattern (kind 0:
+     * fill byte), and a trailer (kind 2); twice. */
+    uint8_t s[64];
+    size_t k = 0;
+    uint8_t stream[256];
+    s[k++] = 0;  /* mode: stream, no chunk, 512-byte transfers, 2 slots */
+    memcpy(stream, s, k);
+    n = k;
+    for (int frame = 0; frame < 2; ++frame) {
+        stream[n++] = 1;  le16(stream + n, 52); n += 2;      /* leader */
+        memset(stream + n, 0, 8 + 4 + 1); n += 13;          /* timestamp, (pfnc), pad */
+        for (int t = 0; t < 4; ++t) {
+            stream[n++] = 0; le16(stream + n, 512); n += 2; /* payload */
+            stream[n++] = (uint8_t)(17 * t + frame);
+        }
+        stream[n++] = 2; le16(stream + n, 32); n += 2;      /* trailer */
+        memset(stream + n, 0, 4); n += 4;                  /* size y */
+    }
+    put("u3v", "two_frames", stream, n);
+    /* mode 1: control acks; get_int("Width") answered by a well-formed ack
+     * with a 4-byte body. */
+    uint8_t ctl[] = {1, 0, 1, 16, 0, 64, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
+    put("u3v", "control_ack", ctl, sizeof ctl);
+    const uint8_t garbage[] = {0, 3, 0x40, 0, 0xFF};
+    put("u3v", "garbage_then_unplug", garbage, sizeof garbage);
+
+    /* recon: fibers, options, then operations (push with increasing rows,
+     * pull, end_sheet, boundary, reset). */
+    const uint8_t recon1[] = {3, 0, 1, 40, 1, 6, 0, 9, 5, 1, 2, 3, 4, 5, 6, 7, 8, 9, 3, 20,
+                              4, 6, 0, 9, 5, 9, 8, 7, 6, 5, 4, 3, 2, 1, 3, 40, 5, 7};
+    put("recon", "push_pull_sheet", recon1, sizeof recon1);
+    const uint8_t recon2[] = {5, 2, 7, 1, 0x40, 11, 1, 2, 0, 39, 0, 0, 1, 2, 3, 4, 0, 0, 0, 0};
+    put("recon", "options_nan", recon2, sizeof recon2);
+
+    /* extractor: no options, one Mono8 frame with two patches; a Mono12
+     * frame; a 16-bit frame with a NaN encoder. */
+    const uint8_t ex1[] = {0, 0, 2, 2, 0x10, 0x20, 0x30, 0, 40, 2, 1, 255,
+                           0x00, 0x90, 0x01, 0, 10, 1, 0, 0};
+    put("extractor", "mono8_patches", ex1, sizeof ex1);
+    const uint8_t ex2[] = {2, 4, 9, 5, 2, 0, 0};
+    put("extractor", "mono12_window9", ex2, sizeof ex2);
+    const uint8_t ex3[] = {0, 0, 5, 0, 0};
+    put("extractor", "mono16_nan_encoder", ex3, sizeof ex3);
+    printf("seeds written to %s\n", g_root);
+    return 0;
+}
