@@ -10,7 +10,17 @@
  *        (below extract_min_peak of full scale) or too wide (more than
  *        extract_max_width rows at or above half its maximum); after a
  *        rejection the next brightest peak outside the rejected one is tried
- *        (at most 3 candidates per column and laser);
+ *        (at most 3 candidates per column and laser). Once the row of
+ *        columns is known, a peak is also rejected when its shape departs
+ *        from the line's in the other columns of its 256-column block
+ *        (wider at half maximum, more light within 1.5 Savitzky-Golay
+ *        half-windows, or skewed, beyond 5-7 times the frame's own
+ *        column-to-column scatter: a spurious reflection overlapping the
+ *        line), and, next to a saturated column or one whose brightest peak
+ *        was rejected, when it is more than 0.5 px off the median of its
+ *        +-12 neighbours or has fewer than 4 valid ones (a glint's fringe, a
+ *        reflection away from the line). lib/extraction/README.md gives
+ *        the measured rates;
  *     2. refines its row to sub-pixel accuracy at the zero crossing of the
  *        Savitzky-Golay derivative (window extract_sg_window rows, polynomial
  *        order extract_sg_order) next to the maximum;

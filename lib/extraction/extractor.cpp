@@ -32,6 +32,30 @@ constexpr int k_map_terms = k_map_degree + 1;
 constexpr int k_map_nodes = 24;
 // Candidates tried per column and laser after rejections.
 constexpr int k_max_candidates = 3;
+// The shape check (flt_extractor::reject_misshapen): a peak is compared
+// with the clean line's shape in its block of k_shape_block columns, which
+// the quantiles of the block's peaks give even when a reflection lies along
+// the line over half the block.
+constexpr std::uint32_t k_shape_block = 256;    // columns
+// The quantiles come from every k_shape_sampling-th column of the block (32
+// peaks: the quartiles to about a quarter of the scatter), which keeps their
+// cost small.
+constexpr std::uint32_t k_shape_sampling = 8;
+constexpr std::size_t k_shape_min_peaks = 8;    // sampled per block, else a neighbour's
+// Tolerances in robust standard deviations of the column-to-column scatter
+// (from the blocks' quartiles), which the noise sets: with the reference
+// speckle (5 % per pixel) and shot noise the scatter is about 4 % for the
+// width, 2 % for the area and 0.8 % of the width for the skew, so the limits
+// are about 1.2, 1.15 and 0.055 (set on the simulator: no wrong column
+// beyond 0.7 px was kept, and no clean column rejected in 330,000).
+constexpr double k_width_tolerance = 5;
+constexpr double k_area_tolerance = 7;
+constexpr double k_skew_tolerance = 7;
+// The scatters never count as less than these (relative to the width or
+// area): noise-free frames must not turn the small shape changes with the
+// line's sub-pixel phase into rejections.
+constexpr double k_min_scatter = 0.01;
+constexpr double k_min_skew_scatter = 0.002;
 
 void check(flt_status st) {
     if (st != FLT_OK) throw error(st, flt_last_error_message());
@@ -84,7 +108,13 @@ struct flt_extractor {
     std::vector<double> peak_row[2];                   // [width], px
     std::vector<double> column_x[2], column_z[2];      // [width], mm
     std::vector<double> fiber_z[2];                    // [fibers], mm
-    std::vector<std::uint8_t> saturated_column, tainted_column, fringe_row;  // [width]
+    // suspect: saturated, or a brighter peak rejected (column_peak).
+    std::vector<std::uint8_t> suspect_column, tainted_column, fringe_row;  // [width]
+    std::vector<peak_shape> shape;                     // [width]
+    std::vector<double> shape_scratch;                 // [width]
+    // Per block of k_shape_block columns: the lower quartile of the widths
+    // (px) and of the areas (counts x rows) and the relative scatters.
+    std::vector<double> block_width, block_area, block_scatter;  // [blocks], [3 * blocks]
     std::vector<double> fit_sums;                      // [5 * fibers]
     std::vector<std::uint8_t> fit_flags;               // [fibers]
     double support = 1;  // half-width of a fiber's resampling window, mm
@@ -99,6 +129,7 @@ struct flt_extractor {
     void extract(const unsigned char *frame, std::size_t stride, std::uint32_t full_scale);
     void resample(unsigned laser);
     void reject_glint_fringes(double *rows);
+    void reject_misshapen(double *rows);
 };
 
 namespace {
@@ -117,6 +148,12 @@ std::vector<float> sg_derivative_taps(int half, int order) {
     const Eigen::MatrixXd pinv = (a.transpose() * a).ldlt().solve(a.transpose());
     std::vector<float> taps(n);
     for (int j = 0; j < n; ++j) taps[j] = float(pinv(1, j) / half);  // d/dj = d/dt / h
+    // Odd by symmetry; exactly so, since the peak kernel relies on it.
+    for (int j = 1; j <= half; ++j) {
+        const float odd = 0.5f * (taps[half + j] - taps[half - j]);
+        taps[half + j] = odd, taps[half - j] = -odd;
+    }
+    taps[half] = 0;
     return taps;
 }
 
@@ -245,7 +282,8 @@ void flt_extractor::extract(const unsigned char *frame, std::size_t stride,
                             std::uint32_t full_scale) {
     const peak_params params{sg_half, sg_derivative.data(), std::uint32_t(std::ceil(
                                  min_peak * full_scale)),
-                             full_scale, int(std::floor(max_width)), height};
+                             full_scale, int(std::floor(max_width)), height,
+                             long(3 * sg_half / 2), long(std::max(3 * sg_half / 2, sg_half + 3))};
     for (unsigned laser = 0; laser < 2; ++laser) {
         const band &b = bands[laser];
         band_maximum<Pixel>(frame, stride, width, b.first, b.rows, best_value.data(),
@@ -253,15 +291,18 @@ void flt_extractor::extract(const unsigned char *frame, std::size_t stride,
         double *rows_out = peak_row[laser].data();
         const double *coeffs = poly[laser].data();
         const double inv_half = 1.0 / v_half[laser], mid = v_mid[laser];
-        bool any_saturated = false;
+        bool any_suspect = false;
         for (std::uint32_t u = 0; u < width; ++u) {
-            bool saturated = false;
+            bool suspect = false;
             rows_out[u] = column_peak<Pixel>(frame, stride, u, b.first, b.rows, best_value[u],
-                                             best_row[u], params, &saturated);
-            saturated_column[u] = saturated;
-            any_saturated = any_saturated || saturated;
+                                             best_row[u], params, &suspect, &shape[u]);
+            suspect_column[u] = suspect;
+            any_suspect = any_suspect || suspect;
         }
-        if (any_saturated) reject_glint_fringes(rows_out);
+        // Shape first, so that the continuity check's medians see only
+        // well-formed peaks.
+        reject_misshapen(rows_out);
+        if (any_suspect) reject_glint_fringes(rows_out);
         for (std::uint32_t u = 0; u < width; ++u) {
             const double v = rows_out[u];
             double x = k_nan, z = k_nan;
@@ -279,26 +320,156 @@ void flt_extractor::extract(const unsigned char *frame, std::size_t stride,
     }
 }
 
+// A dim secondary reflection that overlaps the line (within a few line
+// widths) passes the peak search: the sum is one unsaturated peak narrower
+// than extract_max_width. But the Savitzky-Golay derivative over its window
+// acts much like a centroid, and the reflection drags it by up to 1.5 px
+// (3 mm of z on the reference sensor). The same reflection adds light next
+// to the line (area), widens it at half maximum (width) and pulls its
+// half-maximum crossings off-centre (skew), while a clean line keeps the
+// shape of its neighbours. So a peak is rejected when
+//   width > W (1 + (0.6745 + k_width_tolerance) sigma_w),
+//   area  > A (1 + (0.6745 + k_area_tolerance) sigma_a),
+//   |skew| > k_skew_tolerance sigma_s W,
+// or when its shape cannot be measured. W and A are the lower quartiles of
+// the widths and areas of the peaks in the column's block, interpolated
+// linearly between block centres (a line whose width or brightness changes
+// slowly across the frame is followed), the 0.6745 steps from the quartile
+// to the median, and sigma_w, sigma_a, sigma_s are the relative scatters
+// (interquartile half-range / 0.6745 / median, and the median |skew| /
+// 0.6745 / median width), the median over the blocks so that a block full
+// of reflections does not loosen its own limits. Noisier frames get wider
+// limits by themselves. A reflection that coincides with the line to within
+// a fraction of its width adds little area and moves the centre by little.
+void flt_extractor::reject_misshapen(double *rows) {
+    const std::size_t blocks = block_width.size();
+    double *values = shape_scratch.data();
+    // values[0, end) partially sorted so that the q-quantile of the first n
+    // is in place (end = n, or the place of a larger quantile found before).
+    auto quantile = [&](std::size_t n, double q, std::size_t end) {
+        const std::size_t i = std::size_t(q * double(n - 1) + 0.5);
+        std::nth_element(values, values + i, values + end);
+        return values[i];
+    };
+    auto quantile_place = [](std::size_t n, double q) {
+        return std::size_t(q * double(n - 1) + 0.5);
+    };
+    // Per block: quartiles of width and area, median |skew|.
+    double *scatter = block_scatter.data();  // [3 * blocks]: width, area, skew
+    std::size_t measured_blocks = 0;
+    for (std::size_t b = 0; b < blocks; ++b) {
+        const std::uint32_t u0 = std::uint32_t(b) * k_shape_block;
+        const std::uint32_t u1 = std::min(width, u0 + k_shape_block);
+        block_width[b] = block_area[b] = k_nan;
+        std::size_t n = 0;
+        for (std::uint32_t u = u0; u < u1; u += k_shape_sampling)
+            if (rows[u] == rows[u] && shape[u].width == shape[u].width &&
+                shape[u].area == shape[u].area)
+                ++n;
+        if (n < k_shape_min_peaks) continue;
+        double median[2];
+        for (int which = 0; which < 3; ++which) {
+            std::size_t m = 0;
+            for (std::uint32_t u = u0; u < u1; u += k_shape_sampling)
+                if (rows[u] == rows[u] && shape[u].width == shape[u].width &&
+                    shape[u].area == shape[u].area)
+                    values[m++] = which == 0   ? shape[u].width
+                                  : which == 1 ? shape[u].area
+                                               : std::fabs(shape[u].skew);
+            if (which < 2) {
+                const double upper = quantile(m, 0.5, m);
+                // The lower quartile is among the values before the median.
+                const double lower = quantile(m, 0.25, quantile_place(m, 0.5));
+                median[which] = upper;
+                (which == 0 ? block_width : block_area)[b] = lower;
+                scatter[measured_blocks * 3 + std::size_t(which)] =
+                    (upper - lower) / (0.6745 * upper);
+            } else {
+                scatter[measured_blocks * 3 + 2] = quantile(m, 0.5, m) / (0.6745 * median[0]);
+            }
+        }
+        ++measured_blocks;
+    }
+    if (measured_blocks == 0) {
+        // Too few peaks to know the line's shape: reject nothing here.
+        return;
+    }
+    double sigma[3];
+    for (int which = 0; which < 3; ++which) {
+        for (std::size_t i = 0; i < measured_blocks; ++i) values[i] = scatter[i * 3 + which];
+        sigma[which] = std::max(which == 2 ? k_min_skew_scatter : k_min_scatter,
+                                quantile(measured_blocks, 0.5, measured_blocks));
+    }
+    // A block with too few peaks takes its nearest measured neighbour's
+    // quartiles.
+    for (std::size_t b = 0; b < blocks; ++b) {
+        if (block_width[b] == block_width[b]) continue;
+        for (std::size_t step = 1; step < blocks; ++step) {
+            std::size_t near = b >= step && block_width[b - step] == block_width[b - step]
+                                   ? b - step
+                                   : b + step;
+            if (near < blocks && block_width[near] == block_width[near]) {
+                block_width[b] = block_width[near], block_area[b] = block_area[near];
+                break;
+            }
+        }
+    }
+    const double width_limit = 1 + (0.6745 + k_width_tolerance) * sigma[0];
+    const double area_limit = 1 + (0.6745 + k_area_tolerance) * sigma[1];
+    const double skew_limit = k_skew_tolerance * sigma[2];
+    // Between block centres c_b = (b + 1/2) k_shape_block - 1/2 the
+    // references are linear in u; before the first and after the last centre
+    // they are constant.
+    const double half_block = 0.5 * double(k_shape_block) - 0.5;
+    for (std::size_t segment = 0; segment <= blocks; ++segment) {
+        const std::size_t b0 = segment == 0 ? 0 : segment - 1;
+        const std::size_t b1 = std::min(blocks - 1, segment);
+        const double c0 = double(b0) * k_shape_block + half_block;
+        const long u_first = segment == 0 ? 0 : long(std::floor(c0)) + 1;
+        const long u_last = segment == blocks ? long(width) - 1
+                                              : long(std::floor(double(b1) * k_shape_block +
+                                                                half_block));
+        const double width_step =
+            b1 == b0 ? 0 : (block_width[b1] - block_width[b0]) / double(k_shape_block);
+        const double area_step =
+            b1 == b0 ? 0 : (block_area[b1] - block_area[b0]) / double(k_shape_block);
+        for (long u = u_first; u <= std::min(u_last, long(width) - 1); ++u) {
+            if (!(rows[u] == rows[u])) continue;
+            const double offset = segment == 0 ? 0 : double(u) - c0;
+            const double ref_width = block_width[b0] + offset * width_step;
+            const double ref_area = block_area[b0] + offset * area_step;
+            const peak_shape &sh = shape[std::size_t(u)];
+            const bool well_formed = sh.width <= width_limit * ref_width &&
+                                     sh.area <= area_limit * ref_area &&
+                                     std::fabs(sh.skew) <= skew_limit * ref_width;
+            if (!well_formed) rows[u] = k_nan;  // also when the shape is NaN
+        }
+    }
+}
+
 // A specular glint saturates in its core, which is rejected, but its fringe
 // columns are bright, unsaturated and narrow: there the brightest peak is the
-// glint, not the line. Near a saturated column, a peak more than
-// k_glint_tolerance_px off the median of the valid peaks around it is
-// rejected (the line is continuous across columns: the reference strip's
+// glint, not the line. Likewise, where the brightest peak was rejected (a
+// glint, or the line with a reflection too wide to pass), the next candidate
+// may be a reflection away from the line. Near such a suspect column, a peak
+// more than k_glint_tolerance_px off the median of the valid peaks around it
+// is rejected (the line is continuous across columns: the reference strip's
 // steepest cross slope moves it < 0.2 px over the window).
 void flt_extractor::reject_glint_fringes(double *rows) {
     constexpr long reach = 10, window = 12;
     constexpr double k_glint_tolerance_px = 0.5;
+    constexpr int k_min_neighbours = 4;  // valid peaks in the window besides u
     const long w = long(width);
-    long last_saturated = -(1L << 30);
-    // tainted[u]: a saturated column within +-reach (two sweeps).
+    long last_suspect = -(1L << 30);
+    // tainted[u]: a suspect column within +-reach (two sweeps).
     for (long u = 0; u < w; ++u) {
-        if (saturated_column[u]) last_saturated = u;
-        tainted_column[u] = u - last_saturated <= reach;
+        if (suspect_column[u]) last_suspect = u;
+        tainted_column[u] = u - last_suspect <= reach;
     }
-    last_saturated = 1L << 30;
+    last_suspect = 1L << 30;
     for (long u = w - 1; u >= 0; --u) {
-        if (saturated_column[u]) last_saturated = u;
-        tainted_column[u] = tainted_column[u] || last_saturated - u <= reach;
+        if (suspect_column[u]) last_suspect = u;
+        tainted_column[u] = tainted_column[u] || last_suspect - u <= reach;
     }
     for (long u = 0; u < w; ++u) {
         if (!tainted_column[u] || !(rows[u] == rows[u])) continue;
@@ -306,6 +477,12 @@ void flt_extractor::reject_glint_fringes(double *rows) {
         int n = 0;
         for (long j = std::max(0L, u - window); j <= std::min(w - 1, u + window); ++j)
             if (rows[j] == rows[j]) around[n++] = rows[j];
+        // Too few neighbours to confirm the peak (itself among the n): a
+        // glint's fringe column amid rejected ones looks just like that.
+        if (n <= k_min_neighbours) {
+            fringe_row[u] = 1;
+            continue;
+        }
         std::nth_element(around, around + n / 2, around + n);
         if (std::fabs(rows[u] - around[n / 2]) > k_glint_tolerance_px) fringe_row[u] = 1;
         else fringe_row[u] = 0;
@@ -419,6 +596,11 @@ FLT_API flt_status FLT_CALL flt_extractor_create(const flt_calib *calib,
                         "'extract_sg_order' + 2 = %d",
                         fn, window, order + 2);
         ex->sg_half = window / 2;
+        if (std::max(3 * ex->sg_half / 2, ex->sg_half + 3) > k_max_gather_reach)
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: option 'extract_sg_window' = %d is too large for the peak "
+                        "kernel (at most %ld)",
+                        fn, window, 2 * (2 * k_max_gather_reach / 3) + 1);
         ex->sg_derivative = sg_derivative_taps(ex->sg_half, order);
         ex->min_peak = option_value(options, FLT_OPT_EXTRACT_MIN_PEAK);
         ex->max_width = option_value(options, FLT_OPT_EXTRACT_MAX_WIDTH);
@@ -458,9 +640,15 @@ FLT_API flt_status FLT_CALL flt_extractor_create(const flt_calib *calib,
             ex->column_z[laser].assign(w, k_nan);
             ex->fiber_z[laser].assign(ex->fibers, k_nan);
         }
-        ex->saturated_column.assign(w, 0);
+        ex->suspect_column.assign(w, 0);
         ex->tainted_column.assign(w, 0);
         ex->fringe_row.assign(w, 0);
+        ex->shape.assign(w, peak_shape{k_nan, k_nan, k_nan});
+        ex->shape_scratch.assign(w, 0);
+        const std::size_t blocks = (w + k_shape_block - 1) / k_shape_block;
+        ex->block_width.assign(blocks, k_nan);
+        ex->block_area.assign(blocks, k_nan);
+        ex->block_scatter.assign(3 * blocks, k_nan);
         ex->fit_sums.assign(5 * ex->fibers, 0);
         ex->fit_flags.assign(ex->fibers, 0);
         ex->best_value.assign(w, 0);

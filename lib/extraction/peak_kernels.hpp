@@ -7,7 +7,9 @@
 //
 // column_peak: per column, the checks and the Savitzky-Golay derivative are
 // evaluated only next to the maximum (a few rows), so their cost does not
-// grow with the band.
+// grow with the band. It also measures the accepted peak's shape
+// (peak_shape) for the extractor's shape check, which compares it with the
+// other columns' and so runs once the whole row is known.
 #pragma once
 
 #include <cmath>
@@ -72,6 +74,18 @@ inline void band_maximum(const unsigned char *frame, std::size_t stride, std::ui
         band_maximum_u16(frame, stride, width, first, rows, best_value, best_row);
 }
 
+// The shape of an accepted peak, which a reflection overlapping the line
+// changes while a clean line keeps its neighbours' shape:
+//   width  px, between the two crossings of half the maximum pixel, each
+//          interpolated linearly between the pixels either side;
+//   skew   px, the crossings' midpoint minus the sub-pixel row;
+//   area   counts x rows, the sum over rows maximum +- shape_reach of the
+//          pixels minus the lowest of them (the local background).
+// All NaN when the rows they need leave the frame.
+struct peak_shape {
+    double width, skew, area;
+};
+
 struct peak_params {
     int sg_half;               // window = 2 * sg_half + 1 rows
     const float *sg_taps;      // derivative taps, [2 * sg_half + 1]
@@ -79,27 +93,42 @@ struct peak_params {
     std::uint32_t full_scale;  // saturation, counts
     int max_width;             // rows at or above half the maximum
     std::uint32_t frame_height;
+    long shape_reach;          // rows either side of the maximum for the area
+    long gather_reach;         // max(shape_reach, sg_half + 3) <= k_max_gather_reach
 };
+
+// The rows column_peak copies around a maximum: the area's and those of the
+// Savitzky-Golay windows of the zero-crossing search (up to 3 rows away).
+constexpr long k_max_gather_reach = 31;
 
 // The sub-pixel row of the strongest valid peak of column u in rows
 // [first, first + rows), NaN if there is none. `value` and `row` are the
-// column's maximum from band_maximum.
+// column's maximum from band_maximum. *suspect is set when the column's
+// maximum is saturated or a brighter peak had to be rejected: the extractor
+// then checks the peak's continuity with its neighbours.
 template <class Pixel>
 inline double column_peak(const unsigned char *frame, std::size_t stride, std::uint32_t u,
                           std::uint32_t first, std::uint32_t rows, std::uint32_t value,
-                          long row, const peak_params &p, bool *saturated_seen) {
+                          long row, const peak_params &p, bool *suspect,
+                          peak_shape *shape) {
     constexpr double nan = std::numeric_limits<double>::quiet_NaN();
     auto px = [&](long v) -> std::uint32_t {
         return reinterpret_cast<const Pixel *>(frame + std::size_t(v) * stride)[u];
     };
     const long band_lo = long(first), band_hi = long(first + rows) - 1;
-    const long h = p.sg_half;
-    // The Savitzky-Golay derivative at row i, or NaN where the window leaves
+    const long last = long(p.frame_height) - 1;
+    const long h = p.sg_half, reach = p.gather_reach;
+    // The column's pixels in rows row +- reach, copied once (contiguous, so
+    // the derivatives and the area below read them cheaply); NaN outside
     // the frame.
+    float gathered[2 * k_max_gather_reach + 1];
+    // The Savitzky-Golay derivative at row i (|i - row| <= 3), NaN where the
+    // window leaves the frame. The taps are odd (tap[-j] = -tap[j], tap[0] =
+    // 0, made exact at create time): half the products.
     auto derivative = [&](long i) -> float {
-        if (i - h < 0 || i + h >= long(p.frame_height)) return std::numeric_limits<float>::quiet_NaN();
+        const float *centre = gathered + (i - row + reach);
         float d = 0;
-        for (long j = -h; j <= h; ++j) d += p.sg_taps[j + h] * float(px(i + j));
+        for (long j = 1; j <= h; ++j) d += p.sg_taps[h + j] * (centre[j] - centre[-j]);
         return d;
     };
     long excluded_lo[3], excluded_hi[3];
@@ -111,9 +140,31 @@ inline double column_peak(const unsigned char *frame, std::size_t stride, std::u
         while (lo > band_lo && 2 * px(lo - 1) >= value && row - lo <= p.max_width) --lo;
         while (hi < band_hi && 2 * px(hi + 1) >= value && hi - row <= p.max_width) ++hi;
         const bool saturated = value >= p.full_scale;
-        *saturated_seen = *saturated_seen || saturated;
+        *suspect = *suspect || saturated;
         const bool too_wide = hi - lo + 1 > p.max_width;
         if (!saturated && !too_wide) {
+            // The area's sums on the way (whole counts, exact).
+            const long r = p.shape_reach;
+            std::uint32_t floor_value = value, sum = 0;
+            const bool inside = row - reach >= 0 && row + reach <= last;
+            if (inside) {
+                const unsigned char *pixel = frame + std::size_t(row - reach) * stride;
+                for (long j = -reach; j < -r; ++j, pixel += stride)
+                    gathered[j + reach] = float(reinterpret_cast<const Pixel *>(pixel)[u]);
+                for (long j = -r; j <= r; ++j, pixel += stride) {
+                    const std::uint32_t count = reinterpret_cast<const Pixel *>(pixel)[u];
+                    floor_value = std::min(floor_value, count);
+                    sum += count;
+                    gathered[j + reach] = float(count);
+                }
+                for (long j = r + 1; j <= reach; ++j, pixel += stride)
+                    gathered[j + reach] = float(reinterpret_cast<const Pixel *>(pixel)[u]);
+            } else {
+                for (long j = -reach; j <= reach; ++j)
+                    gathered[j + reach] = row + j >= 0 && row + j <= last
+                                              ? float(px(row + j))
+                                              : std::numeric_limits<float>::quiet_NaN();
+            }
             // Zero crossing (+ above, - below) of the derivative next to the
             // maximum: at most 2 rows away, linearly interpolated.
             long i = row;
@@ -128,7 +179,35 @@ inline double column_peak(const unsigned char *frame, std::size_t stride, std::u
                 for (int step = 0; step < 2 && dm <= 0; ++step) d0 = dm, dm = derivative(--i - 1);
                 if (dm > 0) v = double(i - 1) + double(dm) / double(dm - d0);
             }
-            if (v >= double(lo) - 1 && v <= double(hi) + 1) return v;
+            if (v >= double(lo) - 1 && v <= double(hi) + 1) {
+                shape->width = shape->skew = shape->area = nan;
+                // Half-maximum crossings, searched past the band if need be
+                // (the frame's rows are there): 2 px < value is below half.
+                const long most = p.max_width + 1;
+                long left = lo, right = hi;  // lo, hi stopped at half or at the band
+                if (left == band_lo)
+                    while (left > 0 && 2 * px(left - 1) >= value && row - left <= most) --left;
+                if (right == band_hi)
+                    while (right < last && 2 * px(right + 1) >= value && right - row <= most)
+                        ++right;
+                if (left > 0 && right < last && 2 * px(left - 1) < value &&
+                    2 * px(right + 1) < value) {
+                    const double half = 0.5 * double(value);
+                    const double in_l = double(px(left)), out_l = double(px(left - 1));
+                    const double in_r = double(px(right)), out_r = double(px(right + 1));
+                    const double cross_l = double(left) - (in_l - half) / (in_l - out_l);
+                    const double cross_r = double(right) + (in_r - half) / (in_r - out_r);
+                    shape->width = cross_r - cross_l;
+                    shape->skew = 0.5 * (cross_l + cross_r) - v;
+                }
+                // (Near the frame's edge the area is left NaN: the shape
+                // check then rejects the peak.)
+                if (inside)
+                    shape->area = double(sum) - double(2 * r + 1) * double(floor_value);
+                // A brighter peak was rejected: this one may be a reflection.
+                *suspect = *suspect || candidate > 0;
+                return v;
+            }
         }
         if (candidate == 2) break;
         // Rejected: the next brightest local maximum outside the rejected

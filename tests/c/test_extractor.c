@@ -227,34 +227,43 @@ static void mono12_frames_give_the_same_accuracy(void **state) {
     flt_calib_destroy(calib);
 }
 
-/* Spurious reflections, 20 per frame (half dim secondary lines, half
- * saturating glints), over 40 frames: a fiber's height may be rejected but
- * must not be wrong. KNOWN GAP: the issue asks for <= 0.1 % of fibers off by
- * more than 1 mm; the extractor reaches 0.55 % (glint fringes are rejected by
- * the continuity check; what remains are dim secondary reflections lying
- * within the Savitzky-Golay window of the line, which bias it without
- * widening it). This test holds the measured level (<= 0.7 %) so it cannot
- * silently regress; tighten it to total / 1000 when that is fixed. */
-static void spurious_reflections_are_rejected_not_measured(void **state) {
-    (void)state;
+/* Spurious reflections, 20 per frame (half dim secondary reflections of the
+ * line, 15-60 % of its peak, half saturating glints), over 40 frames: a
+ * fiber may be rejected but must not be wrong. The issue's bound: <= 0.1 %
+ * of fibers off by more than 1 mm. Run with the default line (sigma 2 px,
+ * Savitzky-Golay window 11) and with the widest line of the peak test
+ * (sigma 3 px, window 15), where the window reaches furthest into a
+ * reflection beside the line. Harsher than the issue: no kept column peak
+ * may be off by more than 1 px (2.1 mm of z on the reference sensor), so a
+ * wrong peak cannot hide in a fiber whose neighbours were rejected. And it
+ * still measures: < 10 % of fibers rejected (measured 7.7 % and 8.7 %). */
+static void reflections_run(double line_sigma, double sg_window) {
     enum { N = 501, FRAMES = 40 };
     flt_calib *calib = reference(N, 4.0);
-    const flt_option keys[] = {FLT_OPT_SIM_REFLECTIONS, FLT_OPT_SIM_SEED};
-    const double values[] = {20, 11};
-    flt_sim *sim = make_sim(calib, 2, keys, values);
+    const flt_option keys[] = {FLT_OPT_SIM_REFLECTIONS, FLT_OPT_SIM_SEED, FLT_OPT_SIM_LINE_SIGMA,
+                               FLT_OPT_EXTRACT_SG_WINDOW};
+    const double values[] = {20, 11, line_sigma, sg_window};
+    flt_sim *sim = make_sim(calib, 3, keys, values);
     assert_int_equal(flt_sim_add_defect(sim, FLT_SIM_CENTRE_BUCKLE, 12, 1800), FLT_OK);
-    flt_extractor *ex = make_extractor(calib, 0, NULL, NULL);
+    flt_extractor *ex = make_extractor(calib, 1, keys + 3, values + 3);
     uint8_t *frame = malloc((size_t)W * ROI_ROWS);
+    double *truth_rows = malloc(sizeof(double) * 2 * W), *rows = malloc(sizeof(double) * 2 * W);
     size_t wrong = 0, invalid = 0, total = 0;
+    double worst_peak = 0;
     for (int f = 0; f < FRAMES; ++f) {
         double e, s, h[N], g[N], truth[N];
         uint8_t valid[N];
         assert_int_equal(flt_sim_next_frame(sim, frame, (size_t)W * ROI_ROWS, W, &e, 0, NULL,
-                                            NULL),
+                                            truth_rows),
                          FLT_OK);
         assert_int_equal(flt_extractor_process(ex, frame, FLT_PIXEL_MONO8, W, ROI_ROWS, W, e,
                                                N, &s, h, g, valid),
                          FLT_OK);
+        assert_int_equal(flt_extractor_peaks(ex, W, rows), FLT_OK);
+        for (size_t i = 0; i < 2 * W; ++i) {
+            const double d = fabs(rows[i] - truth_rows[i]);
+            if (d > worst_peak) worst_peak = d; /* NaN (rejected) compares false */
+        }
         for (size_t k = 0; k < N; ++k) {
             const double x = -1000 + 4.0 * (double)k;
             truth[k] = 0.5 * (sheet_at(sim, x, s + 50) + sheet_at(sim, x, s - 50));
@@ -266,14 +275,22 @@ static void spurious_reflections_are_rejected_not_measured(void **state) {
             if (fabs(h[k] - truth[k]) > 1.0) ++wrong;
         }
     }
-    print_message("reflections: %.3f%% of fibers wrong by > 1 mm, %.2f%% rejected\n",
-                  100.0 * wrong / total, 100.0 * invalid / total);
-    assert_true(wrong <= 7 * total / 1000);
+    print_message("reflections, line sigma %.0f px: %.3f%% of fibers wrong by > 1 mm (bound "
+                  "0.1%%), %.2f%% rejected; worst kept peak off by %.2f px\n",
+                  line_sigma, 100.0 * wrong / total, 100.0 * invalid / total, worst_peak);
+    assert_true(wrong <= total / 1000);
+    assert_true(worst_peak <= 1.0);
     assert_true(invalid < total / 10); /* it still measures */
-    free(frame);
+    free(frame), free(truth_rows), free(rows);
     flt_extractor_destroy(ex);
     flt_sim_destroy(sim);
     flt_calib_destroy(calib);
+}
+
+static void spurious_reflections_are_rejected_not_measured(void **state) {
+    (void)state;
+    reflections_run(2.0, 11);
+    reflections_run(3.0, 15);
 }
 
 /* End to end on the reference sheet (tests/c/sheet.h: 12 mm, 1800 mm along,
