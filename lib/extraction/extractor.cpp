@@ -730,6 +730,13 @@ FLT_API flt_status FLT_CALL flt_extractor_process(
                         "%s: argument 'stride_bytes' = %zu is less than width %u x %d "
                         "bytes per pixel",
                         fn, stride_bytes, width, bytes);
+        // The caller vouches for height rows of stride_bytes; a product that
+        // overflows the address space cannot describe any buffer.
+        if (height > 0 && stride_bytes > std::numeric_limits<std::size_t>::max() / height)
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'stride_bytes' = %zu times height %u overflows the "
+                        "address space",
+                        fn, stride_bytes, height);
         if (bytes == 2 && (stride_bytes % 2 != 0 ||
                            reinterpret_cast<std::uintptr_t>(frame) % 2 != 0))
             return fail(FLT_ERR_INVALID_ARGUMENT,

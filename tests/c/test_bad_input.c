@@ -1275,11 +1275,8 @@ static void row_extractor_process(void) {
     /* A stride whose height * stride overflows size_t cannot describe any
      * buffer and must be refused (the caller vouches for a buffer of
      * height * stride bytes; only an overflow is detectable). */
-    KNOWN_CRASH("lib/extraction/extractor.cpp flt_extractor_process: no check that "
-                "stride_bytes * height fits size_t; stride_bytes = SIZE_MAX / 2 reads "
-                "wild memory in detect_bands (SIGSEGV)",
-                FLT_ERR_INVALID_ARGUMENT, "'stride_bytes'",
-                PROC(f, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, SIZE_MAX / 2, 0, FIBERS, h, k));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'stride_bytes'",
+        PROC(f, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, SIZE_MAX / 2, 0, FIBERS, h, k));
     /* Encoder position: NaN, infinities. */
     BAD(FLT_ERR_INVALID_ARGUMENT, "'encoder_mm'", PROC(f, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, NaN_, FIBERS, h, k));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'encoder_mm'", PROC(f, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, Inf_, FIBERS, h, k));
