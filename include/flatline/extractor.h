@@ -28,10 +28,13 @@
  *        (x, z) on the laser plane. The exact map is tabulated at create time
  *        (or at the first frame for an automatic band) as a polynomial in v
  *        per column, so the per-frame cost is a few multiplications;
- *     4. resamples z onto the calibration's fiber grid by linear
- *        interpolation between two *adjacent* columns whose peaks are both
- *        valid. A fiber between a valid and an invalid column is invalid:
- *        nothing is interpolated across a missing peak.
+ *     4. resamples z onto the calibration's fiber grid: a least-squares
+ *        line through the columns within +-max(fiber pitch, column spacing)
+ *        of the fiber, evaluated at the fiber's x. It needs a valid column
+ *        on each side, and any missing peak inside that window makes the
+ *        fiber invalid: nothing is interpolated across a missing peak. The
+ *        line averages over that width, so a kink in the surface across the
+ *        width is smoothed over about one pitch.
  *   Then per fiber, with laser L reading material s_L = e - offset_L
  *   (e = encoder_mm of the frame):
  *     height = (z_0 + z_1) / 2                       mm
