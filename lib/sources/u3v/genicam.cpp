@@ -204,6 +204,9 @@ void XMLCALL on_text(void *user, const XML_Char *text, int length) {
 
 }  // namespace
 
+// The largest inflated GenICam XML accepted, bytes.
+constexpr std::size_t k_max_xml_bytes = std::size_t(64) << 20;
+
 std::string unzip_single(const std::uint8_t *zip, std::size_t bytes) {
     // Local file header: signature, version, flags, method, time, date,
     // crc-32, compressed size, size, name length, extra length (30 bytes).
@@ -222,6 +225,12 @@ std::string unzip_single(const std::uint8_t *zip, std::size_t bytes) {
     if (packed > bytes - header)
         raise(FLT_ERR_FORMAT, "the GenICam ZIP entry's compressed size " + std::to_string(packed) +
                                   " runs past the file (" + std::to_string(bytes) + " bytes)");
+    // A GenICam description is a few megabytes; a header declaring more is
+    // refused before anything is allocated for it (a fuzzed 2 GB size did).
+    if (sizes_known && size > k_max_xml_bytes)
+        raise(FLT_ERR_FORMAT, "the GenICam ZIP entry declares " + std::to_string(size) +
+                                  " bytes, more than the " + std::to_string(k_max_xml_bytes) +
+                                  " a GenICam file may have");
     std::string out;
     if (method == 0) {
         if (!sizes_known) raise(FLT_ERR_FORMAT, "a stored ZIP entry without sizes");
@@ -238,7 +247,7 @@ std::string unzip_single(const std::uint8_t *zip, std::size_t bytes) {
             z.avail_out = uInt(out.size() - z.total_out);
             rc = inflate(&z, Z_FINISH);
             if (rc == Z_STREAM_END) break;
-            if ((rc == Z_BUF_ERROR || rc == Z_OK) && z.avail_out == 0 && out.size() < (64u << 20)) {
+            if ((rc == Z_BUF_ERROR || rc == Z_OK) && z.avail_out == 0 && out.size() < k_max_xml_bytes) {
                 out.resize(out.size() * 2);
                 continue;
             }
