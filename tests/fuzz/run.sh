@@ -5,6 +5,9 @@
 # (2 GB). See tests/fuzz/README.md.
 #   tests/fuzz/run.sh [harness...]     (default: all five)
 #   FUZZ_SECONDS=20   seconds per harness
+#   FUZZ_SEED=1       libFuzzer's seed: fixed, so CI explores the same inputs
+#                     each run (a red CI is reproducible); 0 = random, for
+#                     exploratory runs
 #   FUZZ_BUILD=build/fuzz   build directory
 #   FUZZ_JOBS=2       build parallelism
 # New inputs libFuzzer finds go to $FUZZ_BUILD/corpus/<harness> (not the
@@ -14,6 +17,7 @@ set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 cd "$root"
 seconds=${FUZZ_SECONDS:-20}
+seed=${FUZZ_SEED:-1}
 build=${FUZZ_BUILD:-build/fuzz}
 jobs=${FUZZ_JOBS:-2}
 harnesses=("$@")
@@ -38,7 +42,7 @@ for h in "${harnesses[@]}"; do
   mkdir -p "$build/corpus/$h"
   echo "== fuzz_$h: ${seconds} s =="
   log="$build/fuzz_$h.log"
-  if "$build/tests/fuzz/fuzz_$h" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
+  if "$build/tests/fuzz/fuzz_$h" -max_total_time="$seconds" -seed="$seed" -timeout=10 -rss_limit_mb=2048 \
        -print_final_stats=1 -artifact_prefix="$build/artifacts/$h-" \
        "$build/corpus/$h" "tests/fuzz/corpus/$h" >"$log" 2>&1; then
     grep -E "stat::number_of_executed_units|stat::peak_rss_mb|cov:" "$log" | tail -3
