@@ -219,9 +219,20 @@ typedef enum flt_option {
     FLT_OPT_ROBUST = 111,
     /* "robust_iterations": reweighted passes after the plain one (integer
      * 1..10). Each adds about 13 knots of streaming latency. Default 3:
-     * with 2, a shear cut at the very start of a strip leaves 0.3 mm of
-     * ringing in the first rows (examples/python/compare_filters.py). */
+     * without rigid_motion, 2 leave 0.34 mm and 3 leave 0.18 mm of the
+     * shear station's ringing (examples/python/compare_filters.py). With
+     * rigid_motion this counts the passes over the fibers' deviations,
+     * which carry no ringing (it hits every fiber alike, so it lives in the
+     * line across the strip); see robust_line_iterations. */
     FLT_OPT_ROBUST_ITERATIONS = 112,
+    /* "robust_line_iterations": with rigid_motion and robust, the reweighted
+     * passes over the line across the strip (its offset and tilt), which
+     * carries the shear station's ringing (integer 1..32). The line is one
+     * value per row, so a pass costs next to nothing, but each adds about
+     * 13 knots of streaming latency. Default 8: 3 passes leave 0.18 mm of
+     * ringing on the reference's sheet, 6 leave 0.11 mm, 8 leave 0.10 mm,
+     * more do not help (examples/python/compare_filters.py). */
+    FLT_OPT_ROBUST_LINE_ITERATIONS = 113,
 
     /* --- calibration (flatline/calib.h) --- */
     /* "calib_ransac": 1 to estimate laser homographies inside RANSAC

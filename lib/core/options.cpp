@@ -98,6 +98,8 @@ const option_spec k_options[] = {
     {FLT_OPT_U3V_CONTROL_TIMEOUT, "u3v_control_timeout", 1.0, 60000.0, 200.0, true},
     {FLT_OPT_U3V_PENDING_ACK_LIMIT, "u3v_pending_ack_limit", 0.0, 100.0, 5.0, true},
     {FLT_OPT_U3V_COMMAND_ATTEMPTS, "u3v_command_attempts", 1.0, 10.0, 3.0, true},
+    // reconstructor (appended: a key's slot is its position in this table)
+    {FLT_OPT_ROBUST_LINE_ITERATIONS, "robust_line_iterations", 1.0, 32.0, 8.0, true},
 };
 constexpr std::size_t k_option_count = sizeof k_options / sizeof k_options[0];
 static_assert(k_option_count <= flt_options::max_keys,

@@ -38,14 +38,20 @@ constexpr int k_max_unknowns = 2 * 66;
 #define FLT_ROW_KERNEL
 #endif
 
-// True when every height and slope of the row is finite: x - x is 0 for a
-// finite x and NaN otherwise, and a sum of zeros stays 0 in any order.
+// True when every height and slope of the row is finite. Integer tests (an
+// all-ones exponent is inf or NaN): an OR reduction vectorises, where a
+// floating-point sum would be one serial chain of additions.
 FLT_ROW_KERNEL bool row_is_finite(std::size_t K, const double *__restrict height,
                    const double *__restrict slope) {
-    double acc = 0.0;
-    for (std::size_t k = 0; k < K; ++k)
-        acc += (height[k] - height[k]) + (slope[k] - slope[k]);
-    return acc == 0.0;
+    constexpr std::uint64_t exponent = 0x7ff0000000000000ull;
+    std::uint64_t bad = 0;
+    for (std::size_t k = 0; k < K; ++k) {
+        std::uint64_t h, g;
+        std::memcpy(&h, height + k, sizeof h);
+        std::memcpy(&g, slope + k, sizeof g);
+        bad |= ((h & exponent) == exponent ? 1u : 0u) | ((g & exponent) == exponent ? 1u : 0u);
+    }
+    return bad == 0;
 }
 
 // The hot loop of the default geometry (a row spans three knots, six
@@ -71,6 +77,58 @@ FLT_ROW_KERNEL void accumulate_row6(std::size_t K, const double *__restrict heig
         r5[k] += a[5] * h + b[5] * g;
     }
 }
+
+// The default geometry's row with a mask or multipliers (every robust
+// stage's row), in one pass over the fibers: each sample's effective
+// multiplier (0 where invalid: not finite, or masked out by valid when
+// given; mult when given, else 1), the row added to the six right-hand
+// sides with each fiber's weights, and the weight each fiber's sample
+// loses against a full-weight one (dh, dg), which the caller takes back out
+// of the shared matrices. Returns the fibers with an invalid sample in
+// counts[0] and those that lose weight in counts[1] (integer sums, so the
+// loop vectorises). Same arithmetic as mask_row + weigh_row + add_row_rhs
+// + downdate_weights.
+#define FLT_ROW6_PARAMS                                                                   \
+    std::size_t K, double D, const double *__restrict height,                            \
+        const double *__restrict slope, const std::uint8_t *__restrict valid,            \
+        const double *__restrict mult_h, const double *__restrict mult_g,                \
+        const double *__restrict wh, const double *__restrict wg,                        \
+        const double *__restrict a, const double *__restrict b, double *__restrict r0,   \
+        double *__restrict r1, double *__restrict r2, double *__restrict r3,             \
+        double *__restrict r4, double *__restrict r5, double *__restrict dh,             \
+        double *__restrict dg, std::size_t counts[2]
+// Flags are 1.0 / 0.0 and multiply, so that the only selects are the two
+// that keep a non-finite value out of the sums.
+#define FLT_ROW6_BODY(masked)                                                           \
+    const double big = std::numeric_limits<double>::max();                              \
+    std::size_t nbad = 0, affected = 0;                                                 \
+    for (std::size_t k = 0; k < K; ++k) {                                               \
+        const bool hfin = std::fabs(height[k]) <= big, gfin = std::fabs(slope[k]) <= big; \
+        double hok = hfin ? 1.0 : 0.0, gok = gfin ? 1.0 : 0.0;                          \
+        if (masked) {                                                                   \
+            const double m = valid[k] != 0 ? 1.0 : 0.0;                                 \
+            hok *= m;                                                                   \
+            gok *= m;                                                                   \
+        }                                                                               \
+        const double hm = hok * mult_h[k], gm = gok * mult_g[k];                        \
+        const double hv = (hfin ? height[k] : 0.0) * (wh[k] * hm);                      \
+        const double gv = (gfin ? D * slope[k] : 0.0) * (wg[k] * gm);                   \
+        r0[k] += a[0] * hv + b[0] * gv;                                                 \
+        r1[k] += a[1] * hv + b[1] * gv;                                                 \
+        r2[k] += a[2] * hv + b[2] * gv;                                                 \
+        r3[k] += a[3] * hv + b[3] * gv;                                                 \
+        r4[k] += a[4] * hv + b[4] * gv;                                                 \
+        r5[k] += a[5] * hv + b[5] * gv;                                                 \
+        dh[k] = (1.0 - hm) * wh[k];                                                     \
+        dg[k] = (1.0 - gm) * wg[k];                                                     \
+        nbad += std::size_t(hok * gok == 0.0);                                          \
+        affected += std::size_t(hm * gm != 1.0); /* both in [0, 1] */                 \
+    }                                                                                   \
+    counts[0] = nbad;                                                                   \
+    counts[1] = affected;
+
+FLT_ROW_KERNEL void weighted_row6(FLT_ROW6_PARAMS) { FLT_ROW6_BODY(false) }
+FLT_ROW_KERNEL void weighted_row6_masked(FLT_ROW6_PARAMS) { FLT_ROW6_BODY(true) }
 
 // Masks one row without a validity array: a non-finite height or slope is
 // invalid (multiplier 0, value 0). Returns the fibers with an invalid sample.
@@ -162,13 +220,40 @@ FLT_ROW_KERNEL void evaluate_row(std::size_t K, const double *__restrict w,
         z[k] = w[0] * z0[k] + w[1] * m0[k] + w[2] * z1[k] + w[3] * m1[k];
 }
 
+// Cubic Hermite basis at t in [0, 1] of a knot interval: the weights of
+// (z_i, m_i, z_i+1, m_i+1), m = L z'.
+void hermite_weights(double t, double w[4]) {
+    t = std::min(1.0, std::max(0.0, t));  // rounding at the interval ends
+    const double t2 = t * t, t3 = t2 * t;
+    w[0] = 2 * t3 - 3 * t2 + 1;  // h00 -> z_i
+    w[1] = t3 - 2 * t2 + t;      // h10 -> m_i = L z'_i
+    w[2] = -2 * t3 + 3 * t2;     // h01 -> z_i+1
+    w[3] = t3 - t2;              // h11 -> m_i+1
+}
+
 }  // namespace
 
 recon_engine::recon_engine(std::size_t fibers, const recon_params &params,
                            std::size_t knot_capacity, double *z_store,
                            std::uint8_t *flags_store, bool keep_rows)
-    : K_(fibers), p_(params), keep_rows_(keep_rows) {
+    : K_(fibers), p_(params), keep_rows_(keep_rows), has_row_ring_(keep_rows) {
     if (!keep_rows_) p_.row_capacity = 1;  // no row ring
+    // The row ring first: the largest buffer, so an impossible size fails
+    // before anything else is touched.
+    if (z_store) {
+        ring_z_ = z_store;
+    } else {
+        own_z_.assign(p_.row_capacity * K_, 0.0);
+        ring_z_ = own_z_.data();
+    }
+    if (flags_store) {
+        ring_flags_ = flags_store;
+    } else {
+        own_flags_.assign(p_.row_capacity * K_, 0);
+        ring_flags_ = own_flags_.data();
+    }
+    ring_s_.assign(p_.row_capacity, 0.0);
+    ring_any_invalid_.assign(p_.row_capacity, 0);
     L_ = p_.knot_spacing;
     D_ = p_.laser_spacing;
     // A row touches the knots around s-D/2 and s+D/2: ceil(D/L) intervals
@@ -216,20 +301,6 @@ recon_engine::recon_engine(std::size_t fibers, const recon_params &params,
     bc_z_.assign(K_, 0.0);
     bc_m_.assign(K_, 0.0);
 
-    ring_s_.assign(p_.row_capacity, 0.0);
-    ring_any_invalid_.assign(p_.row_capacity, 0);
-    if (z_store) {
-        ring_z_ = z_store;
-    } else {
-        own_z_.assign(p_.row_capacity * K_, 0.0);
-        ring_z_ = own_z_.data();
-    }
-    if (flags_store) {
-        ring_flags_ = flags_store;
-    } else {
-        own_flags_.assign(p_.row_capacity * K_, 0);
-        ring_flags_ = own_flags_.data();
-    }
 }
 
 long recon_engine::interval_of(double p) const {
@@ -237,13 +308,7 @@ long recon_engine::interval_of(double p) const {
 }
 
 void recon_engine::basis(double p, long i, double w[4]) const {
-    double t = (p - knot_pos(i)) / L_;
-    t = std::min(1.0, std::max(0.0, t));  // rounding at the interval ends
-    const double t2 = t * t, t3 = t2 * t;
-    w[0] = 2 * t3 - 3 * t2 + 1;  // h00 -> z_i
-    w[1] = t3 - 2 * t2 + t;      // h10 -> m_i = L z'_i
-    w[2] = -2 * t3 + 3 * t2;     // h01 -> z_i+1
-    w[3] = t3 - t2;              // h11 -> m_i+1
+    hermite_weights((p - knot_pos(i)) / L_, w);
 }
 
 double *recon_engine::hist_at(long j) {
@@ -596,142 +661,8 @@ void recon_engine::finish_rows() {
 // Rows
 // ---------------------------------------------------------------------------
 
-void recon_engine::push_row(double s, const double *height, const double *slope,
-                            const std::uint8_t *valid, const double *mult_h,
-                            const double *mult_g) {
-    if (!have_t0_) {
-        // A new strip: the knot grid starts at the first row's rear laser.
-        have_t0_ = true;
-        t0_ = s - 0.5 * D_;
-        fixed_upto_ = -1;
-        anchored_ = false;
-        next_emit_ = 0;
-        last_emitted_ = -1;
-        start_window(0);
-        const double before = std::nextafter(s, -std::numeric_limits<double>::infinity());
-        std::fill(last_valid_s_.begin(), last_valid_s_.end(), before);
-        all_valid_s_ = before;
-        prev_row_all_valid_ = false;
-        std::fill(has_height_.begin(), has_height_.end(), 0);
-        no_height_fibers_ = K_;
-    }
-
-    const double p1 = s - 0.5 * D_, p2 = s + 0.5 * D_;
-    const long i1 = interval_of(p1);
-    while (w0_ < i1) {
-        close_knot();
-        maybe_emit();
-    }
-    const long i2 = std::min(interval_of(p2), i1 + S_ - 2);
-
-    // Coefficients over the 2S unknowns of knots i1 .. i1+S-1.
-    double ch[k_max_unknowns] = {0}, cg[k_max_unknowns] = {0};
-    double b1[4], b2[4];
-    basis(p1, i1, b1);
-    basis(p2, i2, b2);
-    const int o2 = 2 * int(i2 - i1);
-    for (int a = 0; a < 4; ++a) {
-        ch[a] += 0.5 * b1[a];
-        cg[a] -= b1[a];
-        ch[o2 + a] += 0.5 * b2[a];
-        cg[o2 + a] += b2[a];
-    }
-    // Knots before the window (off > 0) are carried boundary conditions.
-    const int off = 2 * int(w0_ - i1);
-    if (off > 0 && i1 + off / 2 - 1 > fixed_upto_)
-        throw error(FLT_ERR_INTERNAL, "row touches an eliminated knot");
-
-    // Masked measurements. The common row has every sample valid: this loop
-    // vectorises and the bookkeeping below is O(1) for it.
-    const double big = std::numeric_limits<double>::max();
-    auto h_ok = [&](std::size_t k) {
-        return (valid == nullptr || valid[k] != 0) && std::fabs(height[k]) <= big;
-    };
-    auto g_ok = [&](std::size_t k) {
-        return (valid == nullptr || valid[k] != 0) && std::fabs(slope[k]) <= big;
-    };
-    std::size_t nbad = 0;
-    if (off == 0 && n_ == 6 && valid == nullptr && !mult_h && !mult_g &&
-        row_is_finite(K_, height, slope)) {
-        // The common case: the default geometry (knot spacing = laser
-        // spacing, so a row spans three knots), no mask, every sample
-        // finite. Same arithmetic as the general path below.
-        double *r = rhs_.data();
-        accumulate_row6(K_, height, slope, D_, wh_.data(), wg_.data(), ch, cg, r, r + K_,
-                        r + 2 * K_, r + 3 * K_, r + 4 * K_, r + 5 * K_);
-        add_row_geometry(ch, cg, 0);
-    } else {
-        // Effective multipliers: 0 where the sample is invalid.
-        double *hm = hm_.data(), *gm = gm_.data();
-        if (valid == nullptr) {
-            nbad = mask_row(K_, D_, height, slope, mult_h ? mult_h : ones_.data(),
-                            mult_g ? mult_g : ones_.data(), hm, gm, hv_.data(), gv_.data());
-        } else {
-            for (std::size_t k = 0; k < K_; ++k) {
-                const bool hok = h_ok(k), gok = g_ok(k);
-                hm[k] = hok ? (mult_h ? mult_h[k] : 1.0) : 0.0;
-                gm[k] = gok ? (mult_g ? mult_g[k] : 1.0) : 0.0;
-                hv_[k] = hok ? height[k] : 0.0;
-                gv_[k] = gok ? D_ * slope[k] : 0.0;
-                nbad += !(hok && gok);
-            }
-        }
-        // Knots before the window are carried boundary conditions (only
-        // right after end_sheet): their part of the prediction moves to the
-        // measurement, per fiber.
-        for (int u = 0; u < off; ++u) {
-            const double *x = hist_at(i1 + u / 2) + std::size_t(u % 2) * K_;
-            const double chu = ch[u], cgu = cg[u];
-            for (std::size_t k = 0; k < K_; ++k) {
-                hv_[k] -= hm[k] != 0.0 ? chu * x[k] : 0.0;
-                gv_[k] -= gm[k] != 0.0 ? cgu * x[k] : 0.0;
-            }
-        }
-        weigh_row(K_, hm, gm, wh_.data(), wg_.data(), hv_.data(), gv_.data());
-        for (int u = off; u < n_; ++u)
-            add_row_rhs(K_, ch[u], cg[u], hv_.data(), gv_.data(),
-                        rhs_.data() + std::size_t(u - off) * K_);
-        add_row_geometry(ch, cg, off);
-    }
-    // Fibers whose sample is missing or down-weighted take (that part of)
-    // its contribution back out of the shared matrices.
-    bad_.clear();
-    if (nbad > 0 || mult_h || mult_g) {
-        // (the fast path above only runs with every multiplier 1)
-        const int m = n_ - off;
-        // The row's unknowns off..n-1 are window unknowns 0..m-1; their
-        // packed entries in the n-wide window triangle:
-        double chh[k_max_unknowns * (k_max_unknowns + 1) / 2];
-        double cgg[k_max_unknowns * (k_max_unknowns + 1) / 2];
-        std::size_t entry[k_max_unknowns * (k_max_unknowns + 1) / 2];
-        int entries = 0;
-        for (int u = 0; u < m; ++u)
-            for (int v = u; v < m; ++v, ++entries) {
-                chh[entries] = ch[off + u] * ch[off + v];
-                cgg[entries] = cg[off + u] * cg[off + v];
-                entry[entries] = tri(u, v);
-            }
-        // How much of each fiber's sample comes back out: dh, dg (0 for a
-        // full-weight sample). Many affected fibers (robust reweighting):
-        // one dense, vectorised pass; few (an occasional dropout): per fiber.
-        double *dh = hv_.data(), *dg = gv_.data();  // the rhs is done with them
-        const std::size_t affected =
-            downdate_weights(K_, hm_.data(), gm_.data(), wh_.data(), wg_.data(), dh, dg);
-        if (affected * 8 > K_) {
-            for (int e = 0; e < entries; ++e)
-                downdate_entry(K_, chh[e], cgg[e], dh, dg, down_.data() + entry[e] * K_);
-            bad_.push_back(-1);  // marks "some fiber": only emptiness is read
-        } else if (affected > 0) {
-            for (std::size_t k = 0; k < K_; ++k) {
-                if (dh[k] == 0.0 && dg[k] == 0.0) continue;
-                bad_.push_back(int(k));
-                for (int e = 0; e < entries; ++e)
-                    down_[entry[e] * K_ + k] += dh[k] * chh[e] + dg[k] * cgg[e];
-            }
-        }
-        if (!bad_.empty()) bad_fibers_seen_ = true;
-    }
-
+template <class HeightOk, class SlopeOk>
+void recon_engine::finish_row(double s, std::size_t nbad, HeightOk h_ok, SlopeOk g_ok) {
     if (!keep_rows_) {
         last_s_ = s;
         ++rows_in_sheet_;
@@ -791,6 +722,171 @@ void recon_engine::push_row(double s, const double *height, const double *slope,
 
     maybe_emit();
     finish_rows();
+}
+
+void recon_engine::begin_strip(double s) {
+    // A new strip: the knot grid starts at the first row's rear laser.
+    have_t0_ = true;
+    t0_ = s - 0.5 * D_;
+    fixed_upto_ = -1;
+    anchored_ = false;
+    next_emit_ = 0;
+    last_emitted_ = -1;
+    start_window(0);
+    const double before = std::nextafter(s, -std::numeric_limits<double>::infinity());
+    std::fill(last_valid_s_.begin(), last_valid_s_.end(), before);
+    all_valid_s_ = before;
+    prev_row_all_valid_ = false;
+    std::fill(has_height_.begin(), has_height_.end(), 0);
+    no_height_fibers_ = K_;
+}
+
+void recon_engine::row_coefficients(double s, long i1, double *ch, double *cg) const {
+    const double p1 = s - 0.5 * D_, p2 = s + 0.5 * D_;
+    const long i2 = std::min(interval_of(p2), i1 + S_ - 2);
+    std::fill_n(ch, n_, 0.0);
+    std::fill_n(cg, n_, 0.0);
+    double b1[4], b2[4];
+    basis(p1, i1, b1);
+    basis(p2, i2, b2);
+    const int o2 = 2 * int(i2 - i1);
+    for (int a = 0; a < 4; ++a) {
+        ch[a] += 0.5 * b1[a];
+        cg[a] -= b1[a];
+        ch[o2 + a] += 0.5 * b2[a];
+        cg[o2 + a] += b2[a];
+    }
+}
+
+void recon_engine::push_row(double s, const double *height, const double *slope,
+                            const std::uint8_t *valid, const double *mult_h,
+                            const double *mult_g) {
+    if (!have_t0_) begin_strip(s);
+
+    const double p1 = s - 0.5 * D_;
+    const long i1 = interval_of(p1);
+    while (w0_ < i1) {
+        close_knot();
+        maybe_emit();
+    }
+
+    // Coefficients over the 2S unknowns of knots i1 .. i1+S-1.
+    double ch[k_max_unknowns], cg[k_max_unknowns];
+    row_coefficients(s, i1, ch, cg);
+    // Knots before the window (off > 0) are carried boundary conditions.
+    const int off = 2 * int(w0_ - i1);
+    if (off > 0 && i1 + off / 2 - 1 > fixed_upto_)
+        throw error(FLT_ERR_INTERNAL, "row touches an eliminated knot");
+
+    // Masked measurements. The common row has every sample valid: this loop
+    // vectorises and the bookkeeping below is O(1) for it.
+    const double big = std::numeric_limits<double>::max();
+    auto h_ok = [&](std::size_t k) {
+        return (valid == nullptr || valid[k] != 0) && std::fabs(height[k]) <= big;
+    };
+    auto g_ok = [&](std::size_t k) {
+        return (valid == nullptr || valid[k] != 0) && std::fabs(slope[k]) <= big;
+    };
+    std::size_t nbad = 0;
+    // The default geometry with a mask or multipliers: one fused pass; its
+    // downdate weights are left in dh6, dg6 (affected6 fibers lose weight).
+    bool fused6 = false;
+    std::size_t affected6 = 0;
+    double *dh6 = hv_.data(), *dg6 = gv_.data();
+    if (off == 0 && n_ == 6 && valid == nullptr && !mult_h && !mult_g &&
+        row_is_finite(K_, height, slope)) {
+        // The common case: the default geometry (knot spacing = laser
+        // spacing, so a row spans three knots), no mask, every sample
+        // finite. Same arithmetic as the general path below.
+        double *r = rhs_.data();
+        accumulate_row6(K_, height, slope, D_, wh_.data(), wg_.data(), ch, cg, r, r + K_,
+                        r + 2 * K_, r + 3 * K_, r + 4 * K_, r + 5 * K_);
+        add_row_geometry(ch, cg, 0);
+    } else if (off == 0 && n_ == 6) {
+        double *r = rhs_.data();
+        std::size_t counts[2];
+        (valid ? weighted_row6_masked : weighted_row6)(
+            K_, D_, height, slope, valid, mult_h ? mult_h : ones_.data(),
+            mult_g ? mult_g : ones_.data(), wh_.data(), wg_.data(), ch, cg, r, r + K_,
+            r + 2 * K_, r + 3 * K_, r + 4 * K_, r + 5 * K_, dh6, dg6, counts);
+        nbad = counts[0];
+        affected6 = counts[1];
+        fused6 = true;
+        add_row_geometry(ch, cg, 0);
+    } else {
+        // Effective multipliers: 0 where the sample is invalid.
+        double *hm = hm_.data(), *gm = gm_.data();
+        if (valid == nullptr) {
+            nbad = mask_row(K_, D_, height, slope, mult_h ? mult_h : ones_.data(),
+                            mult_g ? mult_g : ones_.data(), hm, gm, hv_.data(), gv_.data());
+        } else {
+            for (std::size_t k = 0; k < K_; ++k) {
+                const bool hok = h_ok(k), gok = g_ok(k);
+                hm[k] = hok ? (mult_h ? mult_h[k] : 1.0) : 0.0;
+                gm[k] = gok ? (mult_g ? mult_g[k] : 1.0) : 0.0;
+                hv_[k] = hok ? height[k] : 0.0;
+                gv_[k] = gok ? D_ * slope[k] : 0.0;
+                nbad += !(hok && gok);
+            }
+        }
+        // Knots before the window are carried boundary conditions (only
+        // right after end_sheet): their part of the prediction moves to the
+        // measurement, per fiber.
+        for (int u = 0; u < off; ++u) {
+            const double *x = hist_at(i1 + u / 2) + std::size_t(u % 2) * K_;
+            const double chu = ch[u], cgu = cg[u];
+            for (std::size_t k = 0; k < K_; ++k) {
+                hv_[k] -= hm[k] != 0.0 ? chu * x[k] : 0.0;
+                gv_[k] -= gm[k] != 0.0 ? cgu * x[k] : 0.0;
+            }
+        }
+        weigh_row(K_, hm, gm, wh_.data(), wg_.data(), hv_.data(), gv_.data());
+        for (int u = off; u < n_; ++u)
+            add_row_rhs(K_, ch[u], cg[u], hv_.data(), gv_.data(),
+                        rhs_.data() + std::size_t(u - off) * K_);
+        add_row_geometry(ch, cg, off);
+    }
+    // Fibers whose sample is missing or down-weighted take (that part of)
+    // its contribution back out of the shared matrices.
+    bad_.clear();
+    if (nbad > 0 || mult_h || mult_g) {
+        // (the fast path above only runs with every multiplier 1)
+        const int m = n_ - off;
+        // The row's unknowns off..n-1 are window unknowns 0..m-1; their
+        // packed entries in the n-wide window triangle:
+        double chh[k_max_unknowns * (k_max_unknowns + 1) / 2];
+        double cgg[k_max_unknowns * (k_max_unknowns + 1) / 2];
+        std::size_t entry[k_max_unknowns * (k_max_unknowns + 1) / 2];
+        int entries = 0;
+        for (int u = 0; u < m; ++u)
+            for (int v = u; v < m; ++v, ++entries) {
+                chh[entries] = ch[off + u] * ch[off + v];
+                cgg[entries] = cg[off + u] * cg[off + v];
+                entry[entries] = tri(u, v);
+            }
+        // How much of each fiber's sample comes back out: dh, dg (0 for a
+        // full-weight sample). Many affected fibers (robust reweighting):
+        // one dense, vectorised pass; few (an occasional dropout): per fiber.
+        double *dh = hv_.data(), *dg = gv_.data();  // the rhs is done with them
+        const std::size_t affected =
+            fused6 ? affected6
+                   : downdate_weights(K_, hm_.data(), gm_.data(), wh_.data(), wg_.data(), dh, dg);
+        if (affected * 8 > K_) {
+            for (int e = 0; e < entries; ++e)
+                downdate_entry(K_, chh[e], cgg[e], dh, dg, down_.data() + entry[e] * K_);
+            bad_.push_back(-1);  // marks "some fiber": only emptiness is read
+        } else if (affected > 0) {
+            for (std::size_t k = 0; k < K_; ++k) {
+                if (dh[k] == 0.0 && dg[k] == 0.0) continue;
+                bad_.push_back(int(k));
+                for (int e = 0; e < entries; ++e)
+                    down_[entry[e] * K_ + k] += dh[k] * chh[e] + dg[k] * cgg[e];
+            }
+        }
+        if (!bad_.empty()) bad_fibers_seen_ = true;
+    }
+
+    finish_row(s, nbad, h_ok, g_ok);
 }
 
 // A run of invalid samples of fiber k after `from` has just closed and is
@@ -857,6 +953,36 @@ bool recon_engine::predict(double s, double *height_out, double *dslope_out) con
     predict_row(K_, b1, b2, hist_at(i1), hist_at(i1 + 1), hist_at(i2), hist_at(i2 + 1),
                 height_out, dslope_out);
     return true;
+}
+
+void recon_engine::save_solution(double *out, double *t0_out) const {
+    std::copy(hist_.begin(), hist_.end(), out);
+    *t0_out = t0_;
+}
+
+void recon_engine::predict_saved(const double *saved, double saved_t0, double s,
+                                 double *height_out, double *dslope_out) const {
+    // The saved sheet's knot grid: the same as predict() on it, without the
+    // checks (every knot under a row of that sheet was solved at its end).
+    auto interval = [&](double p) { return long(std::floor((p - saved_t0) / L_)); };
+    auto basis_at = [&](double p, long i, double w[4]) {
+        hermite_weights((p - (saved_t0 + double(i) * L_)) / L_, w);
+    };
+    const double p1 = s - 0.5 * D_, p2 = s + 0.5 * D_;
+    const long i1 = interval(p1);
+    const long i2 = std::min(interval(p2), i1 + S_ - 2);
+    if (i1 < 0) throw error(FLT_ERR_INTERNAL, "predict_saved before the saved sheet");
+    double b1[4], b2[4];
+    basis_at(p1, i1, b1);
+    basis_at(p2, i2, b2);
+    auto at = [&](long j) { return saved + (std::size_t(j) % hist_cap_) * 2 * K_; };
+    predict_row(K_, b1, b2, at(i1), at(i1 + 1), at(i2), at(i2 + 1), height_out, dslope_out);
+}
+
+void recon_engine::set_keep_rows(bool keep) {
+    if (have_t0_ || (keep && !has_row_ring_))
+        throw error(FLT_ERR_INTERNAL, "set_keep_rows needs a reset engine with a row ring");
+    keep_rows_ = keep;
 }
 
 void recon_engine::boundary(double *s_out, double *height_out,

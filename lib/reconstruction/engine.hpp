@@ -106,12 +106,36 @@ public:
     // end_sheet(), solved; returns false otherwise.
     bool predict(double s, double *height_out, double *dslope_out) const;
 
+    // Batch robust passes (recon_chain::batch) run one after the other in
+    // one engine, each predicting from the previous pass's solution:
+    // the solved knot states, saved right after end_sheet() (solution_size()
+    // doubles), then predict_saved() at any row of that sheet. Keeping rows
+    // (evaluating them into the row ring) is only needed in the last pass;
+    // set_keep_rows() may be called right after reset().
+    std::size_t solution_size() const { return hist_.size(); }
+    void save_solution(double *out, double *t0_out) const;
+    void predict_saved(const double *saved, double saved_t0, double s, double *height_out,
+                       double *dslope_out) const;
+    void set_keep_rows(bool keep);
+
+
 private:
     // ---- geometry ----
     long interval_of(double p) const;  // knot interval containing p
     double knot_pos(long j) const { return t0_ + double(j) * L_; }
     // Hermite basis at p on interval i: weights of (z_i, m_i, z_i+1, m_i+1).
     void basis(double p, long i, double w[4]) const;
+
+    // ---- rows ----
+    void begin_strip(double s);  // the first row of a strip is at s
+    // The row's coefficients over the window's unknowns (its knots i1 ..
+    // i1+S-1): height ch and Delta-d * slope cg.
+    void row_coefficients(double s, long i1, double *ch, double *cg) const;
+    // Everything after the row's samples are in the window: the row ring,
+    // flags, gaps and emission. hok(k) / gok(k): fiber k's height / slope
+    // sample is valid (asked only when nbad > 0).
+    template <class HeightOk, class SlopeOk>
+    void finish_row(double s, std::size_t nbad, HeightOk hok, SlopeOk gok);
 
     // ---- window management ----
     void start_window(long first_knot);     // empty window at first_knot
@@ -197,6 +221,7 @@ private:
     std::uint8_t *ring_flags_;
     std::size_t head_ = 0, ready_ = 0, tail_ = 0;  // monotonic counters
     bool keep_rows_ = true;
+    bool has_row_ring_ = true;    // constructed with keep_rows
     long solved_upto_ = -1;       // knots in hist_ solved at the last solve
     bool solved_fresh_ = false;   // no row pushed since that solve
     double last_s_ = 0.0;

@@ -1,6 +1,9 @@
 #include "reconstruction/pipeline.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 
 #include "core/error.hpp"
@@ -14,16 +17,115 @@ constexpr double k_nan = std::numeric_limits<double>::quiet_NaN();
 // missing for longer leaves the fit (one step in the split, of its deviation
 // divided by the number of fibers).
 constexpr double k_max_prediction_mm = 10.0;
+
+// A fiber index as a double, through a 32-bit integer: AVX2 converts those
+// in one vector instruction, 64-bit ones not at all (the loops would stay
+// scalar). The constructor refuses more fibers than that.
+inline double fiber_index(std::size_t k) { return double(static_cast<std::int32_t>(k)); }
+
+// The per-row kernels of the split are built for baseline x86-64 and for
+// AVX2 (no FMA, so every rounding is the same on every machine), as in
+// engine.cpp.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
+#define FLT_SPLIT_KERNEL __attribute__((target_clones("avx2", "default")))
+#else
+#define FLT_SPLIT_KERNEL
+#endif
+
+// True when every value is finite and (valid == nullptr or) every valid
+// byte is set: the common row, which takes the vectorised path. Integer
+// tests (an all-ones exponent is inf or NaN) so that the loop vectorises.
+FLT_SPLIT_KERNEL bool row_complete(std::size_t K, const double *__restrict value,
+                                   const std::uint8_t *__restrict valid) {
+    constexpr std::uint64_t exponent = 0x7ff0000000000000ull;
+    std::uint64_t bad = 0;
+    for (std::size_t k = 0; k < K; ++k) {
+        std::uint64_t u;
+        std::memcpy(&u, value + k, sizeof u);
+        bad |= (u & exponent) == exponent ? 1u : 0u;
+    }
+    if (valid) {
+        unsigned missing = 0;
+        for (std::size_t k = 0; k < K; ++k) missing |= valid[k] == 0 ? 1u : 0u;
+        bad |= missing;
+    }
+    return bad == 0;
 }
+
+// The least-squares line's sums over the fibers: n, sum xi, sum xi^2,
+// sum v, sum xi v, with xi = k - centre and weight ok[k] (0 or 1; nullptr:
+// every fiber, whose n, sum xi = 0 and sum xi^2 = K(K^2-1)/12 are exact).
+// Eight interleaved partial sums in two 4-wide vectors (fiber k in lane
+// k % 8), added in a fixed order at the end: independent chains that keep
+// the adders busy, and a result that does not depend on the vector width
+// the machine has (GCC's vector extension fixes the lanes).
+typedef double v4d __attribute__((vector_size(32)));
+
+inline void load4(v4d &v, const double *p) { std::memcpy(&v, p, sizeof v); }
+
+FLT_SPLIT_KERNEL void line_sums(std::size_t K, double centre, const double *__restrict v,
+                                const double *__restrict ok, double out[5]) {
+    v4d sv[2] = {}, sxv[2] = {}, n[2] = {}, sx[2] = {}, sxx[2] = {};
+    const v4d step = {0.0, 1.0, 2.0, 3.0};
+    std::size_t k = 0;
+    for (; k + 8 <= K; k += 8)
+        for (int h = 0; h < 2; ++h) {
+            const std::size_t i = k + 4 * std::size_t(h);
+            const v4d x = (fiber_index(i) - centre) + step;
+            v4d val;
+            load4(val, v + i);
+            sv[h] += val;
+            sxv[h] += x * val;
+            if (ok) {
+                v4d w;
+                load4(w, ok + i);
+                n[h] += w;
+                sx[h] += w * x;
+                sxx[h] += w * x * x;
+            }
+        }
+    double tail[5] = {0, 0, 0, 0, 0};
+    for (; k < K; ++k) {
+        const double x = fiber_index(k) - centre, w = ok ? ok[k] : 1.0;
+        tail[0] += w;
+        tail[1] += w * x;
+        tail[2] += w * x * x;
+        tail[3] += v[k];
+        tail[4] += x * v[k];
+    }
+    auto reduce = [](const v4d *a) {
+        return ((a[0][0] + a[0][1]) + (a[0][2] + a[0][3])) +
+               ((a[1][0] + a[1][1]) + (a[1][2] + a[1][3]));
+    };
+    out[3] = reduce(sv) + tail[3];
+    out[4] = reduce(sxv) + tail[4];
+    if (ok) {
+        out[0] = reduce(n) + tail[0];
+        out[1] = reduce(sx) + tail[1];
+        out[2] = reduce(sxx) + tail[2];
+    } else {
+        const double Kd = double(K);
+        out[0] = Kd;
+        out[1] = 0.0;
+        out[2] = Kd * (Kd * Kd - 1.0) / 12.0;
+    }
+}
+
+// Deviations of a row from the line a + b * xi, every fiber.
+FLT_SPLIT_KERNEL void line_deviations(std::size_t K, double centre, double a, double b,
+                                      const double *__restrict value, double *__restrict dev) {
+    for (std::size_t k = 0; k < K; ++k) dev[k] = value[k] - (a + b * (fiber_index(k) - centre));
+}
+}  // namespace
 
 recon_pipeline::recon_pipeline(std::size_t fibers, const recon_config &config,
                                std::size_t knot_capacity, double *z_store,
-                               std::uint8_t *flags_store, double rows_per_knot_hint)
+                               std::uint8_t *flags_store, bool batch)
     : K_(fibers), config_(config) {
     if (!config_.rigid_motion) {
         main_ = std::make_unique<recon_chain>(K_, config_.params, config_.robust,
                                               knot_capacity, z_store, flags_store,
-                                              rows_per_knot_hint);
+                                              batch);
         return;
     }
     recon_params dev = config_.params;
@@ -36,7 +138,7 @@ recon_pipeline::recon_pipeline(std::size_t fibers, const recon_config &config,
     dev.curvature_weight = config_.params.curvature_weight * ratio * ratio;
     dev.curvature_jump_weight = config_.params.curvature_jump_weight * ratio * ratio;
     main_ = std::make_unique<recon_chain>(K_, dev, config_.robust, knot_capacity, z_store,
-                                          flags_store, rows_per_knot_hint);
+                                          flags_store, batch);
 
     // The offset a is the mean height of the frame: it carries the heave
     // (height_sigma); its slope averages K slopes.
@@ -51,10 +153,12 @@ recon_pipeline::recon_pipeline(std::size_t fibers, const recon_config &config,
     const double sum_xi2 = std::max(1.0, K * (K * K - 1.0) / 12.0);
     tilt.height_sigma = config_.params.height_sigma / half;
     tilt.slope_sigma = config_.params.slope_sigma / std::sqrt(sum_xi2);
-    offset_ = std::make_unique<recon_chain>(1, offset, config_.robust, knot_capacity, nullptr,
-                                            nullptr, rows_per_knot_hint);
-    tilt_ = std::make_unique<recon_chain>(1, tilt, config_.robust, knot_capacity, nullptr,
-                                          nullptr, rows_per_knot_hint);
+    robust_params line_robust = config_.robust;
+    line_robust.iterations = config_.line_iterations;
+    offset_ = std::make_unique<recon_chain>(1, offset, line_robust, knot_capacity, nullptr,
+                                            nullptr, batch);
+    tilt_ = std::make_unique<recon_chain>(1, tilt, line_robust, knot_capacity, nullptr,
+                                          nullptr, batch);
 
     dev_h_.assign(K_, 0.0);
     dev_g_.assign(K_, 0.0);
@@ -63,6 +167,8 @@ recon_pipeline::recon_pipeline(std::size_t fibers, const recon_config &config,
     last_dev_s_.assign(K_, 0.0);
     has_dev_h_.assign(K_, 0);
     has_dev_g_.assign(K_, 0);
+    ok_.assign(K_, 0.0);
+    fill_.assign(K_, 0.0);
     line_a_.assign(config_.params.row_capacity, 0.0);
     line_b_.assign(config_.params.row_capacity, 0.0);
     line_s_.assign(config_.params.row_capacity, 0.0);
@@ -72,6 +178,7 @@ void recon_pipeline::split(double s, const double *value, const std::uint8_t *va
                            bool is_height, double *a, double *b, double *dev) {
     std::vector<double> &last = is_height ? last_dev_h_ : last_dev_g_;
     std::vector<std::uint8_t> &has = is_height ? has_dev_h_ : has_dev_g_;
+    const double centre = 0.5 * double(K_ - 1);
     // The line L = a + b*xi is defined as the least-squares line of the
     // completed row: the valid values, and for each missing fiber that has
     // been seen, L plus its predicted deviation. Setting the residual's
@@ -79,23 +186,26 @@ void recon_pipeline::split(double s, const double *value, const std::uint8_t *va
     // predicted deviations of the missing ones added to the right-hand side.
     // A complete row is an ordinary fit; the completed deviations never have
     // a line component, so nothing drifts from row to row.
-    double n = 0, sx = 0, sxx = 0, sv = 0, sxv = 0;
-    for (std::size_t k = 0; k < K_; ++k) {
-        const double x = xi(k);
-        const bool ok = (valid == nullptr || valid[k] != 0) && std::isfinite(value[k]);
-        if (ok) {
-            n += 1;
-            sx += x;
-            sxx += x * x;
-            sv += value[k];
-            sxv += x * value[k];
-        } else if (has[k] && s - last_dev_s_[k] <= k_max_prediction_mm) {
-            double d = last[k];  // moved on by its slope deviation
-            if (is_height && has_dev_g_[k]) d += last_dev_g_[k] * (s - last_dev_s_[k]);
-            sv += d;
-            sxv += x * d;
+    const bool complete = row_complete(K_, value, valid);
+    double sums[5];
+    if (complete) {
+        line_sums(K_, centre, value, nullptr, sums);
+    } else {
+        for (std::size_t k = 0; k < K_; ++k) {
+            const bool ok = (valid == nullptr || valid[k] != 0) && std::isfinite(value[k]);
+            double v = 0.0;
+            if (ok) {
+                v = value[k];
+            } else if (has[k] && s - last_dev_s_[k] <= k_max_prediction_mm) {
+                v = last[k];  // moved on by its slope deviation
+                if (is_height && has_dev_g_[k]) v += last_dev_g_[k] * (s - last_dev_s_[k]);
+            }
+            ok_[k] = ok ? 1.0 : 0.0;
+            fill_[k] = v;
         }
+        line_sums(K_, centre, fill_.data(), ok_.data(), sums);
     }
+    const double n = sums[0], sx = sums[1], sxx = sums[2], sv = sums[3], sxv = sums[4];
     const double det = n * sxx - sx * sx;
     if (n == 0) {
         *a = *b = k_nan;
@@ -109,9 +219,19 @@ void recon_pipeline::split(double s, const double *value, const std::uint8_t *va
     // A row whose tilt is unseen keeps the tilt in the deviations: b = 0
     // there, and the tilt channel gets no sample.
     const double a0 = std::isnan(*a) ? 0.0 : *a, b0 = std::isnan(*b) ? 0.0 : *b;
+    if (complete) {
+        line_deviations(K_, centre, a0, b0, value, dev);
+        std::copy_n(dev, K_, last.data());
+        if (!has_all_[is_height ? 0 : 1]) {
+            std::fill(has.begin(), has.end(), 1);
+            has_all_[is_height ? 0 : 1] = true;
+        }
+        if (is_height) std::fill(last_dev_s_.begin(), last_dev_s_.end(), s);
+        return;
+    }
     for (std::size_t k = 0; k < K_; ++k) {
-        const bool ok = (valid == nullptr || valid[k] != 0) && std::isfinite(value[k]);
-        dev[k] = ok ? value[k] - (a0 + b0 * xi(k)) : k_nan;
+        const bool ok = ok_[k] != 0.0;
+        dev[k] = ok ? value[k] - (a0 + b0 * (fiber_index(k) - centre)) : k_nan;
         if (ok) {
             last[k] = dev[k];
             has[k] = 1;
@@ -129,6 +249,7 @@ void recon_pipeline::push_row(double s, const double *height, const double *slop
     if (new_strip_) {
         std::fill(has_dev_h_.begin(), has_dev_h_.end(), 0);
         std::fill(has_dev_g_.begin(), has_dev_g_.end(), 0);
+        has_all_[0] = has_all_[1] = false;
         new_strip_ = false;
     }
     double ha, hb, ga, gb;
@@ -153,24 +274,121 @@ void recon_pipeline::add_lines(std::size_t rows, const double *a, const double *
     }
 }
 
+void recon_pipeline::batch(std::size_t rows, const double *s, const double *height,
+                           const double *slope, const std::uint8_t *valid, double *z_store) {
+    const std::size_t K = K_;
+    if (!config_.rigid_motion) {
+        struct raw_rows final : row_source {
+            const double *h, *g;
+            const std::uint8_t *v;
+            std::size_t K;
+            void row(int, std::size_t r, const double **ho, const double **go,
+                     const std::uint8_t **vo, double *) override {
+                *ho = h + r * K;
+                *go = g + r * K;
+                *vo = v ? v + r * K : nullptr;
+            }
+        } source;
+        source.h = height;
+        source.g = slope;
+        source.v = valid;
+        source.K = K;
+        main_->batch(rows, s, source);
+        return;
+    }
+    // The fibers' passes: the first splits each row (in order: split()
+    // keeps the state its predictions of missing fibers need) and keeps its
+    // lines; the later ones read the caller's rows and take the lines off
+    // as they weigh them (cheaper than keeping a whole sheet of deviations,
+    // or recomputing them in a pass of their own). Then the line channels
+    // take the lines.
+    for (auto *v : {&batch_ha_, &batch_hb_, &batch_ga_, &batch_gb_}) v->assign(rows, 0.0);
+    has_all_[0] = has_all_[1] = false;
+    std::fill(has_dev_h_.begin(), has_dev_h_.end(), 0);
+    std::fill(has_dev_g_.begin(), has_dev_g_.end(), 0);
+    struct deviation_rows final : row_source {
+        recon_pipeline *self;
+        const double *h, *g;
+        const std::uint8_t *v;
+        const double *s;
+        void row(int pass, std::size_t r, const double **ho, const double **go,
+                 const std::uint8_t **vo, double *line) override {
+            recon_pipeline &p = *self;
+            const std::size_t K = p.K_;
+            const std::uint8_t *vr = v ? v + r * K : nullptr;
+            if (pass == 0) {
+                p.split(s[r], h + r * K, vr, true, &p.batch_ha_[r], &p.batch_hb_[r],
+                        p.dev_h_.data());
+                p.split(s[r], g + r * K, vr, false, &p.batch_ga_[r], &p.batch_gb_[r],
+                        p.dev_g_.data());
+                *ho = p.dev_h_.data();
+                *go = p.dev_g_.data();
+                *vo = nullptr;  // invalid samples are NaN
+                return;
+            }
+            // The caller's row, and its line to take off (NaN: unseen, 0).
+            auto or0 = [](double x) { return std::isnan(x) ? 0.0 : x; };
+            line[0] = or0(p.batch_ha_[r]);
+            line[1] = or0(p.batch_hb_[r]);
+            line[2] = or0(p.batch_ga_[r]);
+            line[3] = or0(p.batch_gb_[r]);
+            line[4] = 0.5 * double(K - 1);
+            *ho = h + r * K;
+            *go = g + r * K;
+            *vo = vr;
+        }
+    } fiber_rows;
+    fiber_rows.self = this;
+    fiber_rows.h = height;
+    fiber_rows.g = slope;
+    fiber_rows.v = valid;
+    fiber_rows.s = s;
+    main_->batch(rows, s, fiber_rows);
+
+    struct line_rows final : row_source {
+        const double *h, *g;
+        void row(int, std::size_t r, const double **ho, const double **go,
+                 const std::uint8_t **vo, double *) override {
+            *ho = h + r;  // one fiber; NaN where the line is unseen
+            *go = g + r;
+            *vo = nullptr;
+        }
+    } offset_rows, tilt_rows;
+    offset_rows.h = batch_ha_.data();
+    offset_rows.g = batch_ga_.data();
+    tilt_rows.h = batch_hb_.data();
+    tilt_rows.g = batch_gb_.data();
+    offset_->batch(rows, s, offset_rows);
+    tilt_->batch(rows, s, tilt_rows);
+
+    if (offset_->pull(rows, line_s_.data(), line_a_.data(), nullptr) != rows ||
+        tilt_->pull(rows, line_s_.data(), line_b_.data(), nullptr) != rows)
+        throw error(FLT_ERR_INTERNAL, "line channels out of step with the fibers");
+    add_lines(rows, line_a_.data(), line_b_.data(), z_store);
+}
+
+std::size_t recon_pipeline::free_rows() const {
+    std::size_t n = main_->free_rows();
+    if (offset_) n = std::min({n, offset_->free_rows(), tilt_->free_rows()});
+    return n;
+}
+
+std::size_t recon_pipeline::ready_rows() const {
+    std::size_t n = main_->ready_rows();
+    if (offset_) n = std::min({n, offset_->ready_rows(), tilt_->ready_rows()});
+    return n;
+}
+
 std::size_t recon_pipeline::pull(std::size_t max_rows, double *s_out, double *z_out,
                                  std::uint8_t *flags_out) {
-    const std::size_t n = main_->pull(max_rows, s_out, z_out, flags_out);
+    const std::size_t n = main_->pull(std::min(max_rows, ready_rows()), s_out, z_out, flags_out);
     if (!config_.rigid_motion || n == 0) return n;
-    // The line engines finished exactly the same rows.
+    // The line engines have finished these rows too (ready_rows).
     if (offset_->pull(n, line_s_.data(), line_a_.data(), nullptr) != n ||
         tilt_->pull(n, line_s_.data(), line_b_.data(), nullptr) != n)
         throw error(FLT_ERR_INTERNAL, "line channels out of step with the fibers");
     add_lines(n, line_a_.data(), line_b_.data(), z_out);
     return n;
-}
-
-void recon_pipeline::finish_in_place(std::size_t rows, double *z_store) {
-    if (!config_.rigid_motion) return;
-    if (offset_->pull(rows, line_s_.data(), line_a_.data(), nullptr) != rows ||
-        tilt_->pull(rows, line_s_.data(), line_b_.data(), nullptr) != rows)
-        throw error(FLT_ERR_INTERNAL, "line channels out of step with the fibers");
-    add_lines(rows, line_a_.data(), line_b_.data(), z_store);
 }
 
 void recon_pipeline::end_sheet() {

@@ -29,6 +29,7 @@
 // deviation slope); see split().
 #pragma once
 
+#include <cstdint>
 #include <memory>
 
 #include "reconstruction/robust.hpp"
@@ -38,22 +39,27 @@ namespace flt {
 struct recon_config {
     recon_params params;       // the main (or only) engine's parameters
     robust_params robust;      // robust reweighting of every channel
+    // With rigid_motion, the reweighted stages of the line channels, which
+    // carry the shear station's ringing (it hits every fiber alike); they
+    // are one value per row, so their stages cost next to nothing.
+    int line_iterations = 8;
     bool rigid_motion = true;
     double shape_sigma = 0.1;  // mm, sigma of a height's deviation from the frame's line
 };
 
 class recon_pipeline {
 public:
-    // rows_per_knot_hint: rows per knot interval when known (batch use),
-    // which sizes the robust stages' queues; 0 in streaming use.
+    // batch: made for batch(), whose rows go to z_store / flags_store.
     recon_pipeline(std::size_t fibers, const recon_config &config,
                    std::size_t knot_capacity, double *z_store = nullptr,
-                   std::uint8_t *flags_store = nullptr, double rows_per_knot_hint = 0.0);
+                   std::uint8_t *flags_store = nullptr, bool batch = false);
 
     std::size_t fibers() const { return K_; }
     const recon_config &config() const { return config_; }
-    std::size_t free_rows() const { return main_->free_rows(); }
-    std::size_t ready_rows() const { return main_->ready_rows(); }
+    std::size_t free_rows() const;
+    // The channels have different latencies (the line channels run more
+    // reweighted stages): a row is ready when every channel has finished it.
+    std::size_t ready_rows() const;
     bool has_last_s() const { return main_->has_last_s(); }
     double last_s() const { return main_->last_s(); }
     bool rows_since_sheet() const { return main_->rows_since_sheet(); }
@@ -67,12 +73,14 @@ public:
     void end_sheet();
     void reset();
     void boundary(double *s_out, double *height_out, double *slope_out) const;
-    // Batch use: after end_sheet(), adds the line channels to the rows the
-    // main engine wrote into its caller-provided z_store (rows 0..rows-1).
-    void finish_in_place(std::size_t rows, double *z_store);
+    // Batch use (flt_reconstruct): the whole sheet, into z_store (rows
+    // 0..rows-1, the row capacity) and flags_store. valid may be nullptr.
+    void batch(std::size_t rows, const double *s, const double *height,
+               const double *slope, const std::uint8_t *valid, double *z_store);
 
 private:
-    double xi(std::size_t k) const { return double(k) - 0.5 * double(K_ - 1); }
+    // Through a 32-bit integer, which vectorises (fibers < 2^31, recon_api.cpp).
+    double xi(std::size_t k) const { return double(std::int32_t(k)) - 0.5 * double(K_ - 1); }
     // Splits one kind of measurement (heights or slopes) of a row.
     void split(double s, const double *value, const std::uint8_t *valid,
                bool is_height, double *a, double *b, double *dev);
@@ -88,6 +96,12 @@ private:
     // Per fiber: the last valid deviations and where the height one was seen.
     std::vector<double> last_dev_h_, last_dev_g_, last_dev_s_;
     std::vector<std::uint8_t> has_dev_h_, has_dev_g_;
+    bool has_all_[2] = {false, false};  // has_dev_h_ / has_dev_g_ all set
+    // Scratch of split() for a row with missing fibers: 1 where valid, and
+    // the value or predicted deviation that enters the line's sums.
+    std::vector<double> ok_, fill_;
+    // Batch with rigid_motion: every row's line, heights' and slopes'.
+    std::vector<double> batch_ha_, batch_hb_, batch_ga_, batch_gb_;
     bool new_strip_ = true;
 };
 

@@ -47,6 +47,7 @@ flt_status read_params(const char *fn, const flt_options *options,
     config.shape_sigma = option_value(options, FLT_OPT_SHAPE_SIGMA);
     config.robust.kind = robust_kind(int(option_value(options, FLT_OPT_ROBUST)));
     config.robust.iterations = int(option_value(options, FLT_OPT_ROBUST_ITERATIONS));
+    config.line_iterations = int(option_value(options, FLT_OPT_ROBUST_LINE_ITERATIONS));
     if (p.laser_spacing / p.knot_spacing > k_max_knots_per_laser_spacing)
         return fail(FLT_ERR_INVALID_ARGUMENT,
                     "%s: knot_spacing = %g mm is more than %g times finer than "
@@ -74,6 +75,10 @@ flt_status check_fibers(const char *fn, std::size_t fibers, std::size_t expected
     return FLT_OK;
 }
 
+// The kernels index fibers with 32-bit integers (which vectorise); a real
+// sensor has a few thousand.
+constexpr std::size_t k_max_fibers = 0x7fffffff;
+
 // rows * fibers must be addressable as doubles.
 flt_status check_shape(const char *fn, std::size_t rows, std::size_t fibers) {
     if (rows == 0)
@@ -84,6 +89,10 @@ flt_status check_shape(const char *fn, std::size_t rows, std::size_t fibers) {
         return fail(FLT_ERR_INVALID_ARGUMENT,
                     "%s: rows * fibers = %zu * %zu overflows the address space",
                     fn, rows, fibers);
+    if (fibers > k_max_fibers)
+        return fail(FLT_ERR_INVALID_ARGUMENT,
+                    "%s: argument 'fibers' = %zu is too large (at most %zu)", fn, fibers,
+                    k_max_fibers);
     return FLT_OK;
 }
 
@@ -131,6 +140,10 @@ FLT_API flt_status FLT_CALL flt_recon_create(size_t fibers,
         *out = nullptr;
         if (fibers == 0)
             return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'fibers' is 0", fn);
+        if (fibers > k_max_fibers)
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'fibers' = %zu is too large (at most %zu)", fn, fibers,
+                        k_max_fibers);
         recon_config config;
         if (flt_status st = read_params(fn, options, &config)) return st;
         const recon_params &p = config.params;
@@ -187,6 +200,7 @@ FLT_API flt_status FLT_CALL flt_recon_get_option(const flt_recon *recon,
         case FLT_OPT_SHAPE_SIGMA: *out = c.shape_sigma; break;
         case FLT_OPT_ROBUST: *out = double(int(c.robust.kind)); break;
         case FLT_OPT_ROBUST_ITERATIONS: *out = double(c.robust.iterations); break;
+        case FLT_OPT_ROBUST_LINE_ITERATIONS: *out = double(c.line_iterations); break;
         default:
             return fail(FLT_ERR_NOT_FOUND,
                         "%s: option key %d is not a reconstructor option", fn,
@@ -321,13 +335,8 @@ FLT_API flt_status FLT_CALL flt_reconstruct(const flt_options *options,
         // Every knot of the sheet stays open until the end.
         const double span = s[rows - 1] - s[0] + p.laser_spacing;
         const std::size_t knots = std::size_t(span / p.knot_spacing) + 4;
-        const double rows_per_knot = double(rows) / std::max(1.0, span / p.knot_spacing);
-        recon_pipeline e(fibers, config, knots, z_out, flags_out, rows_per_knot);
-        for (std::size_t r = 0; r < rows; ++r)
-            e.push_row(s[r], height + r * fibers, slope + r * fibers,
-                       valid ? valid + r * fibers : nullptr);
-        e.end_sheet();
-        e.finish_in_place(rows, z_out);
+        recon_pipeline e(fibers, config, knots, z_out, flags_out, true);
+        e.batch(rows, s, height, slope, valid, z_out);
         return FLT_OK;
     });
 }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include "core/error.hpp"
@@ -30,41 +31,99 @@ constexpr double k_min_sigma_fraction = 1e-3;
 #define FLT_ROBUST_KERNEL
 #endif
 
-// Residuals of one row against the previous stage's prediction: height (mm)
-// and Delta-d * slope (mm). Queued rows mark invalid samples with NaN, which
-// the subtraction carries through.
-FLT_ROBUST_KERNEL void row_residuals(std::size_t K, double D, const double *__restrict h,
-                                     const double *__restrict g,
-                                     const double *__restrict pred_h,
-                                     const double *__restrict pred_g,
-                                     double *__restrict res_h, double *__restrict res_g) {
-    for (std::size_t k = 0; k < K; ++k) {
-        res_h[k] = h[k] - pred_h[k];
-        res_g[k] = D * g[k] - pred_g[k];
-    }
-}
+// The per-sample work of a reweighted stage, one pass over the row.
+//
+// Each sample's residual r against the previous stage's prediction (height,
+// mm, and Delta-d * slope, mm) adds its clipped magnitude to the running
+// scale's block sums, and decides how the sample enters the stage. Both
+// M-estimators solve sum psi(r_i) x_i = 0, with Huber's psi(r) = r clipped
+// at k_huber * scale and Tukey's psi(r) = r * w(r); a reweighted stage
+// reaches that fixed point in one of two ways per sample:
+//   - a moderate residual becomes a pseudo-observation, prediction + psi(r),
+//     at full weight: the window matrix does not change, so the sample costs
+//     what a plain one does;
+//   - a gross residual (beyond k_gross scales for Huber, outside Tukey's
+//     support) keeps its value and takes the weight psi(r) / r: only those
+//     samples need their share of the window matrix taken back out
+//     (engine.cpp's downdate), and they are few except at a shear cut.
+// Pseudo-observations alone converge too slowly for a burst of gross
+// outliers (the shear station's ringing is a thousand scales tall and
+// covers its own window), weights alone cost a matrix downdate for one
+// sample in three (Huber) on clean data; together each takes what it is good
+// at. Outputs: the value to use (height; slope in mm/mm), and the
+// multiplier of the sample's weight (0 where invalid: not finite, or masked
+// out by valid when given; queued rows carry invalid samples as NaN).
+// Every pointer is a restrict parameter: GCC vectorises across fibers only
+// when it need not check the arrays for overlap.
+constexpr double k_gross = 4.0;
 
-// Huber: 1 inside k_huber scales, k_huber * scale / |r| outside.
-FLT_ROBUST_KERNEL void huber_multipliers(std::size_t K, const double *__restrict residual,
-                                         const double *__restrict sigma,
-                                         double *__restrict out) {
-    for (std::size_t k = 0; k < K; ++k) {
-        const double a = std::fabs(residual[k]), c = k_huber * sigma[k];
-        const double m = a <= c ? 1.0 : c / a;
-        out[k] = residual[k] == residual[k] ? m : 0.0;
-    }
-}
+// One measurement kind of one row (heights: scale 1; slopes: the residual
+// is in Delta-d * slope, scale D), fibers 0..K-1. value[k] carries the line
+// a + b * (k - centre), taken off as it is read (rigid_motion; 0 else).
+// Writes out[k] (the value the stage takes, in value's unit) and mult[k]
+// (the weight multiplier; -1 marks a gross Huber sample, whose weight the
+// caller computes: one division per gross sample instead of one per
+// sample). Returns whether there is any gross Huber sample. Branch-free and
+// without divisions (1/sigma^2 is kept with the scale), so that it
+// vectorises; one kind per loop keeps the loop's values in registers.
+#define FLT_WEIGH_KIND_PARAMS                                                              \
+    std::size_t K, double scale, double inv_scale, const double *__restrict value,         \
+        const std::uint8_t *__restrict valid, double a, double b, double centre,          \
+        const double *__restrict pred, const double *__restrict sigma,                    \
+        const double *__restrict inv_var, double *__restrict sum, double *__restrict count, \
+        double *__restrict out, double *__restrict mult
 
-// Tukey's biweight: (1 - (r / (k_tukey scale))^2)^2 inside, 0 outside.
-FLT_ROBUST_KERNEL void tukey_multipliers(std::size_t K, const double *__restrict residual,
-                                         const double *__restrict sigma,
-                                         double *__restrict out) {
-    for (std::size_t k = 0; k < K; ++k) {
-        const double u = residual[k] / (k_tukey * sigma[k]);
-        const double v = 1.0 - u * u;
-        out[k] = std::fabs(u) < 1.0 ? v * v : 0.0;  // false for NaN too
-    }
-}
+// The residual and the scale's sums, common to both estimators.
+#define FLT_WEIGH_RESIDUAL(masked)                                                      \
+    const double x = double(std::int32_t(k)) - centre; /* vectorises */                 \
+    const double v = value[k] - (a + b * x);                                            \
+    const bool fin = std::fabs(value[k]) <= big;                                        \
+    double ok = fin ? 1.0 : 0.0;                                                        \
+    if (masked) ok *= valid[k] != 0 ? 1.0 : 0.0;                                        \
+    const double r = (fin ? scale * v - pred[k] : 0.0) * ok;                            \
+    const double ar = std::fabs(r), clip = k_clip * sigma[k];                           \
+    sum[k] += ar < clip ? ar : clip;                                                    \
+    count[k] += ok;
+
+// Huber: a pseudo-observation with psi(r) = r clipped at k_huber * sigma;
+// beyond k_gross * sigma the raw value with weight k_huber * sigma / |r|.
+#define FLT_WEIGH_HUBER_BODY(masked)                                                    \
+    const double big = std::numeric_limits<double>::max();                              \
+    std::uint64_t bits = 0; /* OR of the multipliers: the sign bit says -1 */            \
+    for (std::size_t k = 0; k < K; ++k) {                                               \
+        FLT_WEIGH_RESIDUAL(masked)                                                      \
+        const double c = k_huber * sigma[k], upper = r > c ? c : r;                     \
+        const double psi = upper < -c ? -c : upper;                                     \
+        const double gross = ar > k_gross * sigma[k] ? 1.0 : 0.0;                       \
+        const double pseudo = (pred[k] + psi) * inv_scale;                              \
+        out[k] = ok * (1.0 - gross) != 0.0 ? pseudo : v;                                \
+        const double m = ok * (gross != 0.0 ? -1.0 : 1.0); /* ok = 0: +0 */             \
+        mult[k] = m;                                                                    \
+        std::uint64_t u;                                                                \
+        std::memcpy(&u, &m, sizeof u);                                                  \
+        bits |= u;                                                                      \
+    }                                                                                   \
+    (void)inv_var;                                                                      \
+    return (bits >> 63) != 0;
+
+// Tukey: the raw value with weight (1 - u^2)^2, u = r / (k_tukey sigma),
+// 0 outside (plain IRLS).
+#define FLT_WEIGH_TUKEY_BODY(masked)                                                    \
+    const double big = std::numeric_limits<double>::max();                              \
+    for (std::size_t k = 0; k < K; ++k) {                                               \
+        FLT_WEIGH_RESIDUAL(masked)                                                      \
+        const double u2 = r * r * inv_var[k] * (1.0 / (k_tukey * k_tukey));             \
+        const double w = 1.0 - u2;                                                      \
+        out[k] = v;                                                                     \
+        mult[k] = ok * (u2 < 1.0 ? w * w : 0.0);                                        \
+    }                                                                                   \
+    (void)inv_scale;                                                                    \
+    return false;
+
+FLT_ROBUST_KERNEL bool weigh_huber(FLT_WEIGH_KIND_PARAMS) { FLT_WEIGH_HUBER_BODY(false) }
+FLT_ROBUST_KERNEL bool weigh_huber_masked(FLT_WEIGH_KIND_PARAMS) { FLT_WEIGH_HUBER_BODY(true) }
+FLT_ROBUST_KERNEL bool weigh_tukey(FLT_WEIGH_KIND_PARAMS) { FLT_WEIGH_TUKEY_BODY(false) }
+FLT_ROBUST_KERNEL bool weigh_tukey_masked(FLT_WEIGH_KIND_PARAMS) { FLT_WEIGH_TUKEY_BODY(true) }
 
 // out = in where finite, NaN elsewhere (the queues' mark of an invalid sample).
 FLT_ROBUST_KERNEL void copy_finite(std::size_t K, const double *__restrict in,
@@ -73,16 +132,48 @@ FLT_ROBUST_KERNEL void copy_finite(std::size_t K, const double *__restrict in,
     for (std::size_t k = 0; k < K; ++k) out[k] = std::fabs(in[k]) <= big ? in[k] : k_nan;
 }
 
-// Per fiber: sum += min(|r|, 3 sigma), count += 1, over finite residuals.
-FLT_ROBUST_KERNEL void accumulate_clipped(std::size_t K, const double *__restrict residual,
-                                          const double *__restrict sigma,
-                                          double *__restrict sum, double *__restrict count) {
+// A completed block's estimate per fiber: the clipped mean as a Gaussian
+// sigma, NaN with too few values; the block's sums restart.
+FLT_ROBUST_KERNEL void close_block(std::size_t K, double *__restrict sum,
+                                   double *__restrict count, double *__restrict estimate) {
     for (std::size_t k = 0; k < K; ++k) {
-        const double r = residual[k];
-        const double ok = r == r ? 1.0 : 0.0;  // NaN marks an invalid sample
-        const double a = std::min(std::fabs(r), k_clip * sigma[k]);
-        sum[k] += ok != 0.0 ? a : 0.0;
-        count[k] += ok;
+        estimate[k] = count[k] >= double(k_min_block_values)
+                          ? k_clipped_to_sigma * sum[k] / count[k]
+                          : k_nan;
+        sum[k] = 0.0;
+        count[k] = 0.0;
+    }
+}
+
+// The median of nine blocks per fiber, a sorting network of min/max
+// (vectorised across fibers), floored; incomplete[k] = 1 where one of the
+// nine is NaN (the network's result is then meaningless there).
+FLT_ROBUST_KERNEL void median9(std::size_t K, const double *__restrict e, double floor,
+                               double *__restrict sigma, double *__restrict incomplete) {
+    for (std::size_t k = 0; k < K; ++k) {
+        double p[9];
+        bool nan = false;
+        for (int i = 0; i < 9; ++i) {
+            p[i] = e[std::size_t(i) * K + k];
+            nan = nan | (p[i] != p[i]);
+        }
+        // Compare-exchange (a, b): afterwards p[a] <= p[b].
+        auto cx = [&p](int a, int b) {
+            const double lo = std::min(p[a], p[b]), hi = std::max(p[a], p[b]);
+            p[a] = lo;
+            p[b] = hi;
+        };
+        // A 19-exchange median-of-9 network (sorts rows of three, then
+        // columns, then the diagonal through the middle).
+        cx(1, 2); cx(4, 5); cx(7, 8);
+        cx(0, 1); cx(3, 4); cx(6, 7);
+        cx(1, 2); cx(4, 5); cx(7, 8);
+        cx(0, 3); cx(5, 8); cx(4, 7);
+        cx(3, 6); cx(1, 4); cx(2, 5);
+        cx(4, 7); cx(4, 2); cx(6, 4);
+        cx(4, 2);
+        sigma[k] = std::max(floor, p[4]);
+        incomplete[k] = nan ? 1.0 : 0.0;
     }
 }
 
@@ -97,6 +188,8 @@ robust_scale::robust_scale(std::size_t fibers, std::size_t block_rows,
     count_.assign(K_, 0.0);
     estimates_.assign(blocks_ * K_, k_nan);
     sigma_.assign(K_, initial_);
+    inv_var_.assign(K_, 1.0 / (initial_ * initial_));
+    incomplete_.assign(K_, 0.0);
 }
 
 void robust_scale::reset() {
@@ -104,31 +197,42 @@ void robust_scale::reset() {
     std::fill(count_.begin(), count_.end(), 0.0);
     std::fill(estimates_.begin(), estimates_.end(), k_nan);
     std::fill(sigma_.begin(), sigma_.end(), initial_);
+    std::fill(inv_var_.begin(), inv_var_.end(), 1.0 / (initial_ * initial_));
     rows_ = 0;
     next_ = 0;
+    filled_ = 0;
 }
 
-bool robust_scale::add(const double *residual) {
-    accumulate_clipped(K_, residual, sigma_.data(), sum_.data(), count_.data());
-    if (++rows_ < block_rows_) return false;
+// The median of fiber k's finite block values, when it has any.
+void robust_scale::median_scalar(std::size_t k) {
     double ring[64];
-    for (std::size_t k = 0; k < K_; ++k) {
-        estimates_[next_ * K_ + k] = count_[k] >= double(k_min_block_values)
-                                         ? k_clipped_to_sigma * sum_[k] / count_[k]
-                                         : k_nan;
-        std::size_t m = 0;
-        for (std::size_t b = 0; b < blocks_; ++b) {
-            const double v = estimates_[b * K_ + k];
-            if (std::isfinite(v)) ring[m++] = v;
-        }
-        if (m > 0) {
-            std::nth_element(ring, ring + m / 2, ring + m);
-            sigma_[k] = std::max(k_min_sigma_fraction * initial_, ring[m / 2]);
-        }
-        sum_[k] = count_[k] = 0.0;
+    std::size_t m = 0;
+    for (std::size_t b = 0; b < blocks_ && m < 64; ++b) {
+        const double v = estimates_[b * K_ + k];
+        if (std::isfinite(v)) ring[m++] = v;
     }
-    next_ = (next_ + 1) % blocks_;
+    if (m == 0) return;
+    std::nth_element(ring, ring + m / 2, ring + m);
+    sigma_[k] = std::max(k_min_sigma_fraction * initial_, ring[m / 2]);
+}
+
+bool robust_scale::end_row() {
+    if (++rows_ < block_rows_) return false;
     rows_ = 0;
+    close_block(K_, sum_.data(), count_.data(), estimates_.data() + next_ * K_);
+    next_ = (next_ + 1) % blocks_;
+    ++filled_;
+    if (blocks_ == 9 && filled_ >= 9) {
+        // The common case, vectorised; fibers with an empty block (too few
+        // valid samples) take the general path.
+        median9(K_, estimates_.data(), k_min_sigma_fraction * initial_, sigma_.data(),
+                incomplete_.data());
+        for (std::size_t k = 0; k < K_; ++k)
+            if (incomplete_[k] != 0.0) median_scalar(k);
+    } else {
+        for (std::size_t k = 0; k < K_; ++k) median_scalar(k);
+    }
+    for (std::size_t k = 0; k < K_; ++k) inv_var_[k] = 1.0 / (sigma_[k] * sigma_[k]);
     return true;
 }
 
@@ -136,14 +240,33 @@ bool robust_scale::add(const double *residual) {
 
 recon_chain::recon_chain(std::size_t fibers, const recon_params &params,
                          const robust_params &robust, std::size_t knot_capacity,
-                         double *z_store, std::uint8_t *flags_store,
-                         double rows_per_knot_hint)
-    : K_(fibers), robust_(robust), D_(params.laser_spacing) {
+                         double *z_store, std::uint8_t *flags_store, bool batch)
+    : K_(fibers), robust_(robust), D_(params.laser_spacing), batch_(batch) {
     const std::size_t n_stages =
         robust_.kind == robust_kind::none ? 1 : 1 + std::size_t(robust_.iterations);
-    // The reweighting stages stream with a short lag, in batch use too: the
-    // weights need only local context, and rows then move through short
-    // queues instead of whole-sheet buffers.
+    if (n_stages > 1) {
+        for (auto *v : {&pred_h_, &pred_g_, &out_h_, &out_g_, &mult_h_, &mult_g_})
+            v->assign(K_, 0.0);
+    }
+    if (batch_) {
+        // One engine for every pass, and one pair of running scales.
+        stages_.push_back(std::make_unique<recon_engine>(K_, params, knot_capacity, z_store,
+                                                         flags_store, true));
+        if (n_stages == 1) return;
+        saved_.assign(stages_[0]->solution_size(), 0.0);
+        initial_wh_.assign(K_, stages_[0]->default_height_weight());
+        initial_wg_.assign(K_, stages_[0]->default_slope_weight());
+        h_scale_.resize(2);
+        g_scale_.resize(2);
+        h_scale_[1] = std::make_unique<robust_scale>(K_, robust_.block_rows,
+                                                     robust_.scale_blocks, params.height_sigma);
+        g_scale_[1] = std::make_unique<robust_scale>(K_, robust_.block_rows,
+                                                     robust_.scale_blocks,
+                                                     D_ * params.slope_sigma);
+        return;
+    }
+    // Streaming: the reweighting stages stream with a short lag; rows move
+    // through short queues.
     for (std::size_t i = 0; i + 1 < n_stages; ++i) {
         recon_params stage = params;
         stage.lag_knots = robust_.stage_lag_knots;
@@ -158,12 +281,7 @@ recon_chain::recon_chain(std::size_t fibers, const recon_params &params,
     // its lag and emission group plus the row's own span, a few knots more
     // for the group's phase. Streaming use does not know the row spacing,
     // so it takes a quarter of the row capacity.
-    const double knots_in_flight =
-        double(robust_.stage_lag_knots + 1 + robust_.stage_lag_knots / 8) +
-        2.0 * stages_[0]->knots_per_row() + 8.0;
-    queue_capacity_ = rows_per_knot_hint > 0.0
-                          ? std::size_t(std::ceil(1.5 * rows_per_knot_hint * knots_in_flight)) + 16
-                          : std::max<std::size_t>(256, params.row_capacity / 4);
+    queue_capacity_ = std::max<std::size_t>(256, params.row_capacity / 4);
     queues_.resize(n_stages);
     h_scale_.resize(n_stages);
     g_scale_.resize(n_stages);
@@ -179,8 +297,6 @@ recon_chain::recon_chain(std::size_t fibers, const recon_params &params,
                                                      robust_.scale_blocks,
                                                      D_ * params.slope_sigma);
     }
-    for (auto *v : {&pred_h_, &pred_g_, &res_h_, &res_g_, &mult_h_, &mult_g_, &wh_, &wg_})
-        v->assign(K_, 0.0);
 }
 
 std::size_t recon_chain::free_rows() const {
@@ -208,6 +324,41 @@ void recon_chain::enqueue(std::size_t stage, double s, const double *height,
     ++q.tail;
 }
 
+void recon_chain::reweigh(std::size_t scale, recon_engine &next, const double *h,
+                          const double *g, const std::uint8_t *valid, const double *line) {
+    if (!line) line = no_line_;
+    robust_scale &hs = *h_scale_[scale], &gs = *g_scale_[scale];
+    // From the scales before this row; its residuals then join the current
+    // block.
+    const bool huber = robust_.kind == robust_kind::huber;
+    auto *kernel = huber ? (valid ? weigh_huber_masked : weigh_huber)
+                         : (valid ? weigh_tukey_masked : weigh_tukey);
+    const bool gross_h =
+        kernel(K_, 1.0, 1.0, h, valid, line[0], line[1], line[4], pred_h_.data(), hs.sigma(),
+               hs.inv_var(), hs.sum(), hs.count(), out_h_.data(), mult_h_.data());
+    const bool gross_g =
+        kernel(K_, D_, 1.0 / D_, g, valid, line[2], line[3], line[4], pred_g_.data(),
+               gs.sigma(), gs.inv_var(), gs.sum(), gs.count(), out_g_.data(), mult_g_.data());
+    // Gross Huber samples keep their value and take the weight c / |r|.
+    auto gross_weights = [&](const double *value, double a, double b, double scale_d,
+                             const double *pred, const double *sigma, double *mult) {
+        for (std::size_t k = 0; k < K_; ++k) {
+            if (mult[k] >= 0.0) continue;
+            const double x = double(std::int32_t(k)) - line[4];
+            const double r = scale_d * (value[k] - (a + b * x)) - pred[k];
+            mult[k] = k_huber * sigma[k] / std::fabs(r);
+        }
+    };
+    if (gross_h)
+        gross_weights(h, line[0], line[1], 1.0, pred_h_.data(), hs.sigma(), mult_h_.data());
+    if (gross_g)
+        gross_weights(g, line[2], line[3], D_, pred_g_.data(), gs.sigma(), mult_g_.data());
+    const bool new_h = hs.end_row();
+    const bool new_g = gs.end_row();
+    // A completed block sets the fibers' weights, 1 / sigma^2.
+    if (new_h || new_g) next.set_fiber_weights(hs.inv_var(), gs.inv_var());
+}
+
 void recon_chain::advance(std::size_t stage) {
     pending &q = queues_[stage];
     recon_engine &prev = *stages_[stage - 1], &next = *stages_[stage];
@@ -216,26 +367,9 @@ void recon_chain::advance(std::size_t stage) {
         const double s = q.s[r];
         if (!prev.predict(s, pred_h_.data(), pred_g_.data())) break;
         const double *h = q.height.get() + r * K_, *g = q.slope.get() + r * K_;
-        row_residuals(K_, D_, h, g, pred_h_.data(), pred_g_.data(), res_h_.data(),
-                      res_g_.data());
-        const bool new_h = h_scale_[stage]->add(res_h_.data());
-        const bool new_g = g_scale_[stage]->add(res_g_.data());
-        const double *sh = h_scale_[stage]->sigma(), *sg = g_scale_[stage]->sigma();
-        if (new_h || new_g) {
-            for (std::size_t k = 0; k < K_; ++k) {
-                wh_[k] = 1.0 / (sh[k] * sh[k]);
-                wg_[k] = 1.0 / (sg[k] * sg[k]);
-            }
-            next.set_fiber_weights(wh_.data(), wg_.data());
-        }
-        if (robust_.kind == robust_kind::huber) {
-            huber_multipliers(K_, res_h_.data(), sh, mult_h_.data());
-            huber_multipliers(K_, res_g_.data(), sg, mult_g_.data());
-        } else {
-            tukey_multipliers(K_, res_h_.data(), sh, mult_h_.data());
-            tukey_multipliers(K_, res_g_.data(), sg, mult_g_.data());
-        }
-        next.push_row(s, h, g, nullptr, mult_h_.data(), mult_g_.data());
+        reweigh(stage, next, h, g, nullptr, nullptr);
+        next.push_row(s, out_h_.data(), out_g_.data(), nullptr, mult_h_.data(),
+                      mult_g_.data());
         ++q.head;
         // Hand the row on at once: the next stage must take rows as this
         // one emits knots, before its ring of emitted knots moves on.
@@ -243,6 +377,41 @@ void recon_chain::advance(std::size_t stage) {
             enqueue(stage + 1, s, h, g, nullptr);
             advance(stage + 1);
         }
+    }
+}
+
+void recon_chain::batch(std::size_t rows, const double *s, row_source &source) {
+    if (!batch_) throw error(FLT_ERR_INTERNAL, "batch() on a streaming chain");
+    recon_engine &e = *stages_.front();
+    const int passes = robust_.kind == robust_kind::none ? 1 : 1 + robust_.iterations;
+    double saved_t0 = 0.0;
+    for (int pass = 0; pass < passes; ++pass) {
+        if (pass > 0) {
+            e.save_solution(saved_.data(), &saved_t0);
+            e.reset();
+            h_scale_[1]->reset();
+            g_scale_[1]->reset();
+            e.set_fiber_weights(initial_wh_.data(), initial_wg_.data());
+        }
+        // Only the last pass's rows are wanted.
+        e.set_keep_rows(pass + 1 == passes);
+        for (std::size_t r = 0; r < rows; ++r) {
+            const double *h, *g;
+            const std::uint8_t *valid;
+            double line[5] = {0, 0, 0, 0, 0};
+            source.row(pass, r, &h, &g, &valid, line);
+            if (pass == 0) {
+                if (line[0] != 0 || line[1] != 0 || line[2] != 0 || line[3] != 0)
+                    throw error(FLT_ERR_INTERNAL, "a first pass's row must come without a line");
+                e.push_row(s[r], h, g, valid);
+                continue;
+            }
+            e.predict_saved(saved_.data(), saved_t0, s[r], pred_h_.data(), pred_g_.data());
+            reweigh(1, e, h, g, valid, line);
+            e.push_row(s[r], out_h_.data(), out_g_.data(), valid, mult_h_.data(),
+                       mult_g_.data());
+        }
+        e.end_sheet();
     }
 }
 

@@ -40,35 +40,73 @@ struct robust_params {
 // rows, the mean of |residual| clipped at 3 times the current scale (O(1) per
 // sample; the clip bounds what an outlier can add), converted to a Gaussian
 // sigma; the scale is the median of the last blocks' values, so a burst of
-// outliers spoils at most a block or two.
+// outliers spoils at most a block or two. The caller adds each row's
+// clipped residuals to sum() and count() (fused with its other per-sample
+// work), then calls end_row().
 class robust_scale {
 public:
     robust_scale(std::size_t fibers, std::size_t block_rows, std::size_t blocks,
                  double initial_sigma);
-    // Adds one row of residuals (NaN where the sample is invalid). Returns
-    // true when a block completed and the scales changed.
-    bool add(const double *residual);
+    double *sum() { return sum_.data(); }
+    double *count() { return count_.data(); }
+    // Rows until the current block completes (>= 1).
+    std::size_t rows_to_block() const { return block_rows_ - rows_; }
+    // One row was added. Returns true when a block completed and the scales
+    // changed.
+    bool end_row();
     const double *sigma() const { return sigma_.data(); }
+    const double *inv_var() const { return inv_var_.data(); }  // 1 / sigma^2
     void reset();
 
 private:
+    void median_scalar(std::size_t k);
+
     std::size_t K_, block_rows_, blocks_;
     double initial_;
     std::vector<double> sum_, count_;  // per fiber, this block
     std::size_t rows_ = 0;
     std::vector<double> estimates_;    // ring [blocks][K], NaN when empty
     std::size_t next_ = 0;
+    std::size_t filled_ = 0;           // blocks in the ring since reset
     std::vector<double> sigma_;        // per fiber
+    std::vector<double> inv_var_;      // per fiber, 1 / sigma^2
+    std::vector<double> incomplete_;   // scratch: 1 where a fiber has a NaN block
+};
+
+// Where batch pass `pass` (0, 1, ...) reads row r of the sheet: its heights
+// and slopes, and validity (nullptr: every finite sample is valid), good
+// until the next call. Each pass asks for rows 0, 1, ... in order.
+// A reweighting pass (pass > 0) may instead get values that still carry a
+// line across the strip, which it takes off as it reads them: line =
+// {a_h, b_h, a_g, b_g, centre}, the value of fiber k being
+// value - (a + b * (k - centre)); the first pass gets no line (all zero).
+// (With rigid_motion the fibers' deviations are the caller's rows minus the
+// row's line; recomputing them in a pass of their own costs as much again.)
+class row_source {
+public:
+    virtual void row(int pass, std::size_t r, const double **height, const double **slope,
+                     const std::uint8_t **valid, double line[5]) = 0;
+
+protected:
+    ~row_source() = default;
 };
 
 // One channel (a set of fibers) reconstructed robustly, or plainly when
 // robust.kind is none (a single stage). Same interface as recon_engine.
+//
+// Batch use (flt_reconstruct) has the whole sheet at hand, so it need not
+// pipeline the stages: batch() runs them as passes over the sheet, one
+// after the other, in one engine, each pass predicting from the previous
+// pass's whole-sheet solution (no lag at all, where streaming stages have
+// 8 knots). Nothing is queued, and the memory is one engine's.
 class recon_chain {
 public:
+    // batch: made for batch() (a single engine, no queues), with the
+    // caller's z_store / flags_store for every row of the sheet.
     recon_chain(std::size_t fibers, const recon_params &params,
                 const robust_params &robust, std::size_t knot_capacity,
                 double *z_store = nullptr, std::uint8_t *flags_store = nullptr,
-                double rows_per_knot_hint = 0.0);
+                bool batch = false);
 
     std::size_t fibers() const { return K_; }
     std::size_t free_rows() const;
@@ -90,6 +128,9 @@ public:
     void boundary(double *s_out, double *height_out, double *slope_out) const {
         last().boundary(s_out, height_out, slope_out);
     }
+    // Batch: every row of the sheet (s strictly increasing), then end of
+    // sheet; the rows are in z_store / flags_store, or can be pulled.
+    void batch(std::size_t rows, const double *s, row_source &source);
 
 private:
     recon_engine &first() const { return *stages_.front(); }
@@ -104,16 +145,29 @@ private:
     void enqueue(std::size_t stage, double s, const double *height,
                  const double *slope, const std::uint8_t *valid);
     void advance(std::size_t stage);  // feed stage every row it can take
+    // Weighs one raw row for a reweighted stage from its residuals against
+    // the previous stage's prediction (pred_h_, pred_g_): adds them to the
+    // running scales `scale` (new fiber weights for `next` when a block
+    // completes), and leaves what the stage takes instead of the row in
+    // out_h_, out_g_ (pseudo-observations or raw values) and mult_h_,
+    // mult_g_ (weight multipliers); see robust.cpp.
+    // line: as row_source gives it, or nullptr for none.
+    void reweigh(std::size_t scale, recon_engine &next, const double *height,
+                 const double *slope, const std::uint8_t *valid, const double *line);
 
     std::size_t K_;
     robust_params robust_;
     double D_;
+    bool batch_ = false;
+    std::vector<double> saved_;              // batch: the previous pass's knots
+    std::vector<double> initial_wh_, initial_wg_;
+    const double no_line_[5] = {0, 0, 0, 0, 0};
     std::vector<std::unique_ptr<recon_engine>> stages_;
     std::vector<pending> queues_;            // [stage], 0 unused
     std::vector<std::unique_ptr<robust_scale>> h_scale_, g_scale_;  // [stage]
     std::size_t queue_capacity_ = 0;
     // Scratch, one row each.
-    std::vector<double> pred_h_, pred_g_, res_h_, res_g_, mult_h_, mult_g_, wh_, wg_;
+    std::vector<double> pred_h_, pred_g_, out_h_, out_g_, mult_h_, mult_g_;
 };
 
 }  // namespace flt

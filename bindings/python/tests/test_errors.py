@@ -115,12 +115,18 @@ def test_not_found_for_an_unknown_option_name():
 
 
 def test_out_of_memory_for_an_impossible_reconstructor():
-    # 1e12 fibers: the first per-fiber buffer alone (~21 doubles per fiber)
-    # is 168 TB, beyond the 128 TB user address space of x86-64, so the very
-    # first allocation fails whatever the overcommit policy, touching nothing.
+    # The most fibers the library takes (2^31 - 1) and 10^8 rows: the row
+    # ring, allocated first, is 1.7e18 bytes, beyond the 128 TB user address
+    # space of x86-64, so that first allocation fails whatever the overcommit
+    # policy, touching nothing.
     with pytest.raises(flatline.OutOfMemoryError) as info:
-        flatline.Reconstructor(10**12, row_capacity=16)
+        flatline.Reconstructor(2**31 - 1, row_capacity=10**8)
     assert info.value.status == -2 and isinstance(info.value, MemoryError)
+
+
+def test_too_many_fibers_is_refused_naming_the_limit():
+    with pytest.raises(flatline.InvalidArgumentError, match="'fibers' = 2147483648 is too large"):
+        flatline.Reconstructor(2**31, row_capacity=16)
 
 
 def test_unknown_keyword_is_a_type_error_naming_it():
