@@ -147,7 +147,7 @@ int main(int argc, char **argv) {
     /* The other modes, on the same sheet with experiment 3's noise (robust
      * mode's cost depends on the outliers it meets): rigid_motion (the line
      * across the strip split off each row, two one-value channels), robust
-     * Huber (a plain pass and three reweighted ones over the whole sheet),
+     * Huber (a plain pass and two reweighted ones over the whole sheet),
      * both together (the line channels take eight reweighted passes), and
      * Tukey. */
     add_noise(ROWS, s, h, g);

@@ -61,15 +61,26 @@
  *   no longer solved independently (a dead fiber is still NaN and flagged).
  *
  * Robust mode (option robust = 1 Huber, 2 Tukey)
- *   An iteratively reweighted least squares for outliers such as the shear
- *   station's ringing: a plain pass, then robust_iterations reweighted
- *   passes. Each pass weighs every sample by its residual against the
- *   previous pass and each fiber by its own noise level, estimated from the
- *   data (no noise level needs to be given). It streams: every pass is a
- *   stage with an 8-knot lag ahead of the final one, so the latency grows by
- *   about 13 knots per iteration; carry-over and flags work as without it.
+ *   An M-estimator for outliers such as the shear station's ringing and
+ *   spurious laser peaks: a plain pass, then robust_iterations reweighted
+ *   passes. Each reweighted pass judges every sample by its residual against
+ *   the previous pass, in units of its fiber's own noise level, estimated
+ *   from the data (no noise level needs to be given). Huber: a moderate
+ *   residual enters as a pseudo-observation, the prediction plus the
+ *   residual clipped at 1.345 noise levels; a gross one (beyond 4) keeps its
+ *   value with a weight that bounds its pull the same way. Both reach
+ *   Huber's estimate; the first costs no more than a plain sample, the
+ *   second converges fast for bursts like the ringing. Tukey: weights on
+ *   every sample. With rigid_motion the line across the strip, which
+ *   carries the ringing, takes robust_line_iterations passes of its own.
+ *   flt_reconstruct() runs the passes over the whole sheet one after the
+ *   other. Streaming, every pass is a stage with an 8-knot lag ahead of
+ *   the final one: the latency grows by about 13 knots per pass (with
+ *   rigid_motion, by the larger of the two counts), so row_capacity must
+ *   hold that much strip; carry-over and flags work as without it.
  *   Together with rigid_motion it meets issue 7's targets under the
- *   reference's hardest noise (tests/c/test_recon.c).
+ *   reference's hardest noise (tests/c/test_recon.c,
+ *   examples/python/compare_filters.py); speed in examples/bench.
  *
  * Memory
  *   Everything is allocated by flt_recon_create(); push, pull, end_sheet
@@ -107,7 +118,8 @@ typedef struct flt_recon flt_recon;
  * options: NULL for the defaults, else read for the FLT_OPT_* keys of the
  * reconstructor (knot_spacing, laser_spacing, height_sigma, slope_sigma,
  * curvature_weight, curvature_jump_weight, lag_knots, max_gap, row_capacity,
- * rigid_motion, shape_sigma, robust, robust_iterations); copied, not kept.
+ * rigid_motion, shape_sigma, robust, robust_iterations,
+ * robust_line_iterations); copied, not kept.
  * Fails with FLT_ERR_INVALID_ARGUMENT if fibers is 0 or the options are
  * inconsistent, FLT_ERR_OUT_OF_MEMORY if the buffers do not fit. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL

@@ -27,7 +27,7 @@ const option_spec k_options[] = {
     {FLT_OPT_SHAPE_SIGMA, "shape_sigma", 1.0e-9, 1.0e6, 0.1, false},
     {FLT_OPT_CURVATURE_JUMP_WEIGHT, "curvature_jump_weight", 0.0, 1.0e12, 10.0, false},
     {FLT_OPT_ROBUST, "robust", 0.0, 2.0, 0.0, true},
-    {FLT_OPT_ROBUST_ITERATIONS, "robust_iterations", 1.0, 10.0, 3.0, true},
+    {FLT_OPT_ROBUST_ITERATIONS, "robust_iterations", 1.0, 10.0, 2.0, true},
     // calibration
     {FLT_OPT_CALIB_RANSAC, "calib_ransac", 0.0, 1.0, 0.0, true},
     {FLT_OPT_CALIB_RANSAC_THRESHOLD, "calib_ransac_threshold", 1.0e-6, 1.0e4,

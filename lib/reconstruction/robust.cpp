@@ -35,24 +35,26 @@ constexpr double k_min_sigma_fraction = 1e-3;
 //
 // Each sample's residual r against the previous stage's prediction (height,
 // mm, and Delta-d * slope, mm) adds its clipped magnitude to the running
-// scale's block sums, and decides how the sample enters the stage. Both
-// M-estimators solve sum psi(r_i) x_i = 0, with Huber's psi(r) = r clipped
-// at k_huber * scale and Tukey's psi(r) = r * w(r); a reweighted stage
-// reaches that fixed point in one of two ways per sample:
-//   - a moderate residual becomes a pseudo-observation, prediction + psi(r),
-//     at full weight: the window matrix does not change, so the sample costs
-//     what a plain one does;
-//   - a gross residual (beyond k_gross scales for Huber, outside Tukey's
-//     support) keeps its value and takes the weight psi(r) / r: only those
-//     samples need their share of the window matrix taken back out
-//     (engine.cpp's downdate), and they are few except at a shear cut.
+// scale's block sums, and decides how the sample enters the stage. Huber's
+// estimate solves sum psi(r_i) x_i = 0 with psi(r) = r clipped at
+// c = k_huber * scale; a reweighted stage heads for it in one of two ways
+// per sample:
+//   - a moderate residual (up to k_gross scales) becomes a
+//     pseudo-observation, prediction + psi(r), at full weight: the window
+//     matrix does not change, so the sample costs what a plain one does;
+//   - a gross residual keeps its value and takes the weight psi(r) / r =
+//     c / |r|: only those samples need their share of the window matrix
+//     taken back out (engine.cpp's downdate), and they are few except at a
+//     shear cut.
 // Pseudo-observations alone converge too slowly for a burst of gross
 // outliers (the shear station's ringing is a thousand scales tall and
-// covers its own window), weights alone cost a matrix downdate for one
-// sample in three (Huber) on clean data; together each takes what it is good
-// at. Outputs: the value to use (height; slope in mm/mm), and the
-// multiplier of the sample's weight (0 where invalid: not finite, or masked
-// out by valid when given; queued rows carry invalid samples as NaN).
+// covers its own window: 1.7 mm left after three stages), weights alone
+// cost a downdate for one sample in three on clean data (40% more time);
+// together each does what it is good at, and both lead to the same
+// estimate. Tukey's biweight takes weights on every sample (plain IRLS):
+// its objective is not convex, and its pseudo-observations let a shifted
+// level persist between shear cuts. Invalid samples (not finite, or masked
+// out by valid when given; queued rows carry them as NaN) get multiplier 0.
 // Every pointer is a restrict parameter: GCC vectorises across fibers only
 // when it need not check the arrays for overlap.
 constexpr double k_gross = 4.0;
@@ -73,29 +75,31 @@ constexpr double k_gross = 4.0;
         const double *__restrict inv_var, double *__restrict sum, double *__restrict count, \
         double *__restrict out, double *__restrict mult
 
-// The residual and the scale's sums, common to both estimators.
-#define FLT_WEIGH_RESIDUAL(masked)                                                      \
-    const double x = double(std::int32_t(k)) - centre; /* vectorises */                 \
-    const double v = value[k] - (a + b * x);                                            \
+// The residual and the scale's sums, common to both estimators. Compiled
+// per case (masked, with a line, heights or slopes) so that the loop keeps
+// only what it needs in registers.
+#define FLT_WEIGH_RESIDUAL(masked, lined, slopes)                                       \
+    double v = value[k];                                                                \
+    if (lined) v -= a + b * (double(std::int32_t(k)) - centre); /* vectorises */        \
     const bool fin = std::fabs(value[k]) <= big;                                        \
     double ok = fin ? 1.0 : 0.0;                                                        \
     if (masked) ok *= valid[k] != 0 ? 1.0 : 0.0;                                        \
-    const double r = (fin ? scale * v - pred[k] : 0.0) * ok;                            \
-    const double ar = std::fabs(r), clip = k_clip * sigma[k];                           \
+    const double r = (fin ? (slopes ? scale * v : v) - pred[k] : 0.0) * ok;             \
+    const double ar = std::fabs(r), sg = sigma[k], clip = k_clip * sg;                  \
     sum[k] += ar < clip ? ar : clip;                                                    \
     count[k] += ok;
 
 // Huber: a pseudo-observation with psi(r) = r clipped at k_huber * sigma;
 // beyond k_gross * sigma the raw value with weight k_huber * sigma / |r|.
-#define FLT_WEIGH_HUBER_BODY(masked)                                                    \
+#define FLT_WEIGH_HUBER_BODY(masked, lined, slopes)                                     \
     const double big = std::numeric_limits<double>::max();                              \
     std::uint64_t bits = 0; /* OR of the multipliers: the sign bit says -1 */            \
     for (std::size_t k = 0; k < K; ++k) {                                               \
-        FLT_WEIGH_RESIDUAL(masked)                                                      \
-        const double c = k_huber * sigma[k], upper = r > c ? c : r;                     \
+        FLT_WEIGH_RESIDUAL(masked, lined, slopes)                                       \
+        const double c = k_huber * sg, upper = r > c ? c : r;                           \
         const double psi = upper < -c ? -c : upper;                                     \
-        const double gross = ar > k_gross * sigma[k] ? 1.0 : 0.0;                       \
-        const double pseudo = (pred[k] + psi) * inv_scale;                              \
+        const double gross = ar > k_gross * sg ? 1.0 : 0.0;                             \
+        const double pseudo = slopes ? (pred[k] + psi) * inv_scale : pred[k] + psi;     \
         out[k] = ok * (1.0 - gross) != 0.0 ? pseudo : v;                                \
         const double m = ok * (gross != 0.0 ? -1.0 : 1.0); /* ok = 0: +0 */             \
         mult[k] = m;                                                                    \
@@ -108,10 +112,10 @@ constexpr double k_gross = 4.0;
 
 // Tukey: the raw value with weight (1 - u^2)^2, u = r / (k_tukey sigma),
 // 0 outside (plain IRLS).
-#define FLT_WEIGH_TUKEY_BODY(masked)                                                    \
+#define FLT_WEIGH_TUKEY_BODY(masked, lined, slopes)                                     \
     const double big = std::numeric_limits<double>::max();                              \
     for (std::size_t k = 0; k < K; ++k) {                                               \
-        FLT_WEIGH_RESIDUAL(masked)                                                      \
+        FLT_WEIGH_RESIDUAL(masked, lined, slopes)                                       \
         const double u2 = r * r * inv_var[k] * (1.0 / (k_tukey * k_tukey));             \
         const double w = 1.0 - u2;                                                      \
         out[k] = v;                                                                     \
@@ -120,10 +124,26 @@ constexpr double k_gross = 4.0;
     (void)inv_scale;                                                                    \
     return false;
 
-FLT_ROBUST_KERNEL bool weigh_huber(FLT_WEIGH_KIND_PARAMS) { FLT_WEIGH_HUBER_BODY(false) }
-FLT_ROBUST_KERNEL bool weigh_huber_masked(FLT_WEIGH_KIND_PARAMS) { FLT_WEIGH_HUBER_BODY(true) }
-FLT_ROBUST_KERNEL bool weigh_tukey(FLT_WEIGH_KIND_PARAMS) { FLT_WEIGH_TUKEY_BODY(false) }
-FLT_ROBUST_KERNEL bool weigh_tukey_masked(FLT_WEIGH_KIND_PARAMS) { FLT_WEIGH_TUKEY_BODY(true) }
+#define FLT_WEIGH_VARIANTS(name, body, masked)                                           \
+    FLT_ROBUST_KERNEL bool name##_h(FLT_WEIGH_KIND_PARAMS) { body(masked, false, false) } \
+    FLT_ROBUST_KERNEL bool name##_g(FLT_WEIGH_KIND_PARAMS) { body(masked, false, true) }  \
+    FLT_ROBUST_KERNEL bool name##_lh(FLT_WEIGH_KIND_PARAMS) { body(masked, true, false) } \
+    FLT_ROBUST_KERNEL bool name##_lg(FLT_WEIGH_KIND_PARAMS) { body(masked, true, true) }
+FLT_WEIGH_VARIANTS(weigh_huber, FLT_WEIGH_HUBER_BODY, false)
+FLT_WEIGH_VARIANTS(weigh_huber_masked, FLT_WEIGH_HUBER_BODY, true)
+FLT_WEIGH_VARIANTS(weigh_tukey, FLT_WEIGH_TUKEY_BODY, false)
+FLT_WEIGH_VARIANTS(weigh_tukey_masked, FLT_WEIGH_TUKEY_BODY, true)
+
+using weigh_kernel = bool (*)(FLT_WEIGH_KIND_PARAMS);
+// [tukey][masked][lined][slopes]
+const weigh_kernel k_weigh[2][2][2][2] = {
+    {{{weigh_huber_h, weigh_huber_g}, {weigh_huber_lh, weigh_huber_lg}},
+     {{weigh_huber_masked_h, weigh_huber_masked_g},
+      {weigh_huber_masked_lh, weigh_huber_masked_lg}}},
+    {{{weigh_tukey_h, weigh_tukey_g}, {weigh_tukey_lh, weigh_tukey_lg}},
+     {{weigh_tukey_masked_h, weigh_tukey_masked_g},
+      {weigh_tukey_masked_lh, weigh_tukey_masked_lg}}},
+};
 
 // out = in where finite, NaN elsewhere (the queues' mark of an invalid sample).
 FLT_ROBUST_KERNEL void copy_finite(std::size_t K, const double *__restrict in,
@@ -221,10 +241,21 @@ bool robust_scale::end_row() {
     rows_ = 0;
     close_block(K_, sum_.data(), count_.data(), estimates_.data() + next_ * K_);
     next_ = (next_ + 1) % blocks_;
-    ++filled_;
-    if (blocks_ == 9 && filled_ >= 9) {
-        // The common case, vectorised; fibers with an empty block (too few
-        // valid samples) take the general path.
+    if (filled_ < blocks_) ++filled_;
+    if (blocks_ == 9) {
+        // The common case, vectorised. Until nine blocks are in (they fill
+        // slots 0, 1, ... in order), the empty slots hold -inf and +inf so
+        // that the median of nine is the median of the blocks in: with f
+        // blocks, 4 - f/2 below them puts element f/2 of theirs in the
+        // middle, as median_scalar picks. Fibers with an empty block (too
+        // few valid samples) take the general path.
+        if (filled_ < 9) {
+            const std::size_t below = 4 - filled_ / 2;
+            for (std::size_t b = filled_; b < 9; ++b)
+                std::fill_n(estimates_.data() + b * K_, K_,
+                            b < filled_ + below ? -std::numeric_limits<double>::infinity()
+                                                : std::numeric_limits<double>::infinity());
+        }
         median9(K_, estimates_.data(), k_min_sigma_fraction * initial_, sigma_.data(),
                 incomplete_.data());
         for (std::size_t k = 0; k < K_; ++k)
@@ -330,15 +361,14 @@ void recon_chain::reweigh(std::size_t scale, recon_engine &next, const double *h
     robust_scale &hs = *h_scale_[scale], &gs = *g_scale_[scale];
     // From the scales before this row; its residuals then join the current
     // block.
-    const bool huber = robust_.kind == robust_kind::huber;
-    auto *kernel = huber ? (valid ? weigh_huber_masked : weigh_huber)
-                         : (valid ? weigh_tukey_masked : weigh_tukey);
-    const bool gross_h =
-        kernel(K_, 1.0, 1.0, h, valid, line[0], line[1], line[4], pred_h_.data(), hs.sigma(),
-               hs.inv_var(), hs.sum(), hs.count(), out_h_.data(), mult_h_.data());
-    const bool gross_g =
-        kernel(K_, D_, 1.0 / D_, g, valid, line[2], line[3], line[4], pred_g_.data(),
-               gs.sigma(), gs.inv_var(), gs.sum(), gs.count(), out_g_.data(), mult_g_.data());
+    const int tukey = robust_.kind == robust_kind::tukey, masked = valid != nullptr;
+    const int lined = line[0] != 0 || line[1] != 0 || line[2] != 0 || line[3] != 0;
+    const bool gross_h = k_weigh[tukey][masked][lined][0](
+        K_, 1.0, 1.0, h, valid, line[0], line[1], line[4], pred_h_.data(), hs.sigma(),
+        hs.inv_var(), hs.sum(), hs.count(), out_h_.data(), mult_h_.data());
+    const bool gross_g = k_weigh[tukey][masked][lined][1](
+        K_, D_, 1.0 / D_, g, valid, line[2], line[3], line[4], pred_g_.data(), gs.sigma(),
+        gs.inv_var(), gs.sum(), gs.count(), out_g_.data(), mult_g_.data());
     // Gross Huber samples keep their value and take the weight c / |r|.
     auto gross_weights = [&](const double *value, double a, double b, double scale_d,
                              const double *pred, const double *sigma, double *mult) {

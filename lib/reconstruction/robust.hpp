@@ -1,21 +1,25 @@
-// Internal: robust reconstruction, a streaming IRLS.
+// Internal: robust reconstruction, an M-estimator (Huber or Tukey) that
+// streams.
 //
-// Iteratively reweighted least squares, arranged as a pipeline of stages so
-// that it streams: stage 0 is the plain fit (the options' noise levels);
-// stage i refits the same raw rows with weights from stage i-1: each sample's
-// residual against stage i-1's estimate (what the two lasers would have
-// measured on it) gives
-//   - per fiber and measurement kind, a running robust scale: 1.4826 times
-//     the median of the medians of |residual| over the last blocks of rows
-//     (no noise level needs to be given), which sets the fiber's weight
+// Stage 0 is the plain fit (the options' noise levels); stage i refits the
+// same raw rows judged against stage i-1: each sample's residual against
+// stage i-1's estimate (what the two lasers would have measured on it)
+// gives
+//   - per fiber and measurement kind, a running robust scale (a clipped mean
+//     of |residual| per block of rows, the median of the last blocks': no
+//     noise level needs to be given), which sets the fiber's weight
 //     1/scale^2, and
-//   - per sample, the Huber or Tukey multiplier of residual/scale, which
-//     takes outliers (shear-station ringing, spurious peaks) out.
-// A row enters stage i once stage i-1 has emitted every knot under it, so
-// each stage adds its lag to the latency; intermediate stages use a short
-// lag (robust_lag_knots), the last one the reconstructor's lag_knots. Every
-// stage carries its own boundary across sheets, and the output, from the
-// last stage, is C1 like the plain one. Deterministic: no randomness, a fixed
+//   - per sample, how it enters: Huber's moderate residuals as
+//     pseudo-observations (prediction + clipped residual, no change to the
+//     window matrix), gross ones and all of Tukey's with a weight multiplier
+//     on the raw value (robust.cpp says why).
+// Streaming, the stages are a pipeline: a row enters stage i once stage i-1
+// has emitted every knot under it, so each stage adds its lag to the
+// latency; intermediate stages use a short lag (stage_lag_knots), the last
+// one the reconstructor's lag_knots. Every stage carries its own boundary
+// across sheets, and the output, from the last stage, is C1 like the plain
+// one. Batch (flt_reconstruct), the stages are passes over the whole sheet
+// in one engine (recon_chain::batch). Deterministic: no randomness, a fixed
 // number of stages.
 #pragma once
 
@@ -30,7 +34,7 @@ enum class robust_kind { none = 0, huber = 1, tukey = 2 };
 
 struct robust_params {
     robust_kind kind = robust_kind::none;
-    int iterations = 3;              // reweighted stages after the plain one
+    int iterations = 2;              // reweighted stages after the plain one
     long stage_lag_knots = 8;        // lag of the intermediate stages
     std::size_t block_rows = 64;     // rows per scale block (192 mm at 3 mm)
     std::size_t scale_blocks = 9;    // blocks whose medians make the scale

@@ -132,6 +132,16 @@ namespace Flatline
         /// <summary>With RigidMotion, standard deviation of a height's
         /// deviation from its frame's line across the strip, mm.</summary>
         public double ShapeSigma { get => Get("shape_sigma"); set => Set("shape_sigma", value); }
+        /// <summary>Robust reconstruction: 0 least squares, 1 Huber, 2 Tukey;
+        /// takes outliers such as the shear station's ringing and spurious
+        /// laser peaks out, noise levels estimated from the data.</summary>
+        public int Robust { get => (int)Get("robust"); set => Set("robust", value); }
+        /// <summary>Reweighted passes over the fibers after the plain one (1..10).</summary>
+        public int RobustIterations { get => (int)Get("robust_iterations"); set => Set("robust_iterations", value); }
+        /// <summary>With RigidMotion and Robust, reweighted passes over the
+        /// line across the strip, which carries the shear station's ringing
+        /// (1..32).</summary>
+        public int RobustLineIterations { get => (int)Get("robust_line_iterations"); set => Set("robust_line_iterations", value); }
 
         // ---- calibration (Calibration.EstimateIntrinsics / EstimateHomography)
         /// <summary>Estimate the homographies inside RANSAC.</summary>

@@ -45,6 +45,9 @@ namespace Flatline.Tests
             Assert.Equal(8192, options.RowCapacity);
             Assert.False(options.RigidMotion);
             Assert.Equal(0.1, options.ShapeSigma);
+            Assert.Equal(0, options.Robust);
+            Assert.Equal(2, options.RobustIterations);
+            Assert.Equal(8, options.RobustLineIterations);
         }
 
         [Fact]
@@ -54,6 +57,7 @@ namespace Flatline.Tests
             {
                 KnotSpacing = 50, LaserSpacing = 120, HeightSigma = 1.5, SlopeSigma = 0.002,
                 CurvatureWeight = 0.01, LagKnots = 16, MaxGap = 300, RowCapacity = 1000,
+                Robust = 1, RobustIterations = 3, RobustLineIterations = 5,
             };
             Assert.Equal(50.0, options["knot_spacing"]);
             Assert.Equal(120.0, options.Get("laser_spacing"));
@@ -63,6 +67,9 @@ namespace Flatline.Tests
             Assert.Equal(16.0, options["lag_knots"]);
             Assert.Equal(300.0, options["max_gap"]);
             Assert.Equal(1000.0, options["row_capacity"]);
+            Assert.Equal(1.0, options["robust"]);
+            Assert.Equal(3.0, options["robust_iterations"]);
+            Assert.Equal(5.0, options["robust_line_iterations"]);
             options["max_gap"] = 250;
             Assert.Equal(250.0, options.MaxGap);
             Assert.Same(options, options.Set("lag_knots", 8));
