@@ -179,8 +179,11 @@ typedef enum flt_option {
     FLT_OPT_MAX_GAP = 106,
     /* "row_capacity": rows the streaming reconstructor can hold, pending
      * and finished-but-not-pulled together (integer). It costs 9 bytes per
-     * row and fiber. Default 8192: enough for the default lag at 1.5 mm
-     * row spacing. */
+     * row and fiber, and robust mode queues up to a quarter of it per
+     * reweighted pass (16 bytes per row and fiber). Default 8192: enough
+     * for the default lag at 1.5 mm row spacing, and for robust mode with
+     * rigid_motion (a row finished about 18 m after it) at 3 mm. A push
+     * that does not fit while no row is finished says so. */
     FLT_OPT_ROW_CAPACITY = 107,
     /* "rigid_motion": 1 to model the strip's vibration as what it is, a
      * rigid heave and roll of each frame: every fiber of a frame is offset

@@ -373,6 +373,12 @@ std::size_t recon_pipeline::free_rows() const {
     return n;
 }
 
+long recon_pipeline::latency_knots() const {
+    long knots = main_->latency_knots();
+    if (offset_) knots = std::max({knots, offset_->latency_knots(), tilt_->latency_knots()});
+    return knots;
+}
+
 std::size_t recon_pipeline::ready_rows() const {
     std::size_t n = main_->ready_rows();
     if (offset_) n = std::min({n, offset_->ready_rows(), tilt_->ready_rows()});

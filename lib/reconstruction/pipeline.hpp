@@ -60,6 +60,9 @@ public:
     // The channels have different latencies (the line channels run more
     // reweighted stages): a row is ready when every channel has finished it.
     std::size_t ready_rows() const;
+    // Streaming: about how far behind the newest row rows are finished, in
+    // knot intervals (the slowest channel's).
+    long latency_knots() const;
     bool has_last_s() const { return main_->has_last_s(); }
     double last_s() const { return main_->last_s(); }
     bool rows_since_sheet() const { return main_->rows_since_sheet(); }

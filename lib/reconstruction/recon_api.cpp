@@ -224,12 +224,28 @@ FLT_API flt_status FLT_CALL flt_recon_push(flt_recon *recon, size_t rows,
         if (flt_status st = check_fibers(fn, fibers, e.fibers())) return st;
         if (flt_status st = check_positions(fn, rows, s, e.has_last_s(), e.last_s()))
             return st;
-        if (rows > e.free_rows())
+        if (rows > e.free_rows()) {
+            if (e.ready_rows() == 0 && e.free_rows() < rows) {
+                // Nothing to pull: the rows held are all waiting for the
+                // strip the reconstructor needs beyond them.
+                const long knots = e.latency_knots();
+                const bool robust = e.config().robust.kind != robust_kind::none;
+                return fail(FLT_ERR_BUFFER_FULL,
+                            "%s: %zu rows do not fit, and no row is finished yet: a row is "
+                            "finished about %ld knots (%.0f mm) of strip after it, and "
+                            "row_capacity = %zu%s; create the reconstructor with a larger "
+                            "row_capacity or a shorter lag, or end the sheet",
+                            fn, rows, knots, double(knots) * e.config().params.knot_spacing,
+                            e.config().params.row_capacity,
+                            robust ? " (robust mode queues up to a quarter of it per pass)"
+                                   : "");
+            }
             return fail(FLT_ERR_BUFFER_FULL,
                         "%s: %zu rows do not fit: %zu of row_capacity = %zu are "
                         "free (%zu finished rows wait to be pulled)",
                         fn, rows, e.free_rows(), e.config().params.row_capacity,
                         e.ready_rows());
+        }
         for (std::size_t r = 0; r < rows; ++r)
             e.push_row(s[r], height + r * fibers, slope + r * fibers,
                        valid ? valid + r * fibers : nullptr);

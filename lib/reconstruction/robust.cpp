@@ -330,6 +330,16 @@ recon_chain::recon_chain(std::size_t fibers, const recon_params &params,
     }
 }
 
+long recon_chain::latency_knots() const {
+    long knots = 0;
+    for (const auto &stage : stages_) {
+        const recon_params &p = stage->params();
+        if (p.lag_knots == recon_params::no_lag) return recon_params::no_lag;
+        knots += p.lag_knots + p.emit_group() + stage->knots_per_row();
+    }
+    return knots;
+}
+
 std::size_t recon_chain::free_rows() const {
     std::size_t free = last().free_rows();
     for (std::size_t i = 1; i < queues_.size(); ++i)

@@ -120,6 +120,10 @@ public:
     bool rows_since_sheet() const { return first().rows_since_sheet(); }
     bool pushed_since_reset() const { return first().pushed_since_reset(); }
     bool has_boundary() const { return last().has_boundary(); }
+    // Streaming: about how many knot intervals of strip a row waits in
+    // this chain before it is finished (every stage's lag and emission
+    // group, plus the knots a row spans).
+    long latency_knots() const;
 
     void push_row(double s, const double *height, const double *slope,
                   const std::uint8_t *valid);

@@ -630,6 +630,45 @@ static void bad_input_is_rejected_and_handle_stays_usable(void **state) {
     test_sheet_free(t);
 }
 
+static void buffer_full_with_nothing_finished_says_why(void **state) {
+    (void)state;
+    /* rigid_motion + robust streams through a stage per pass, the line's
+     * eight among them: a row is finished some 180 knots (18 m) after it.
+     * Rows every 1 mm into 4096 slots fill the ring before any is finished;
+     * the refusal must say so, with the latency and what to do, and the
+     * handle must stay usable: end_sheet finishes what it holds. */
+    const size_t K = 3;
+    test_sheet *t = test_sheet_make(5000, K, 0.0, 1.0, 0.0, 100.0, LASER, 7);
+    flt_options *o = NULL;
+    assert_int_equal(flt_options_create(&o), FLT_OK);
+    assert_int_equal(flt_options_set(o, FLT_OPT_ROW_CAPACITY, 4096), FLT_OK);
+    assert_int_equal(flt_options_set(o, FLT_OPT_RIGID_MOTION, 1), FLT_OK);
+    assert_int_equal(flt_options_set(o, FLT_OPT_ROBUST, 1), FLT_OK);
+    flt_recon *rc = make_recon(K, o);
+    flt_options_destroy(o);
+    size_t r = 0;
+    flt_status st = FLT_OK;
+    for (; r < t->rows; ++r) {
+        st = flt_recon_push(rc, 1, K, &t->s[r], t->height + r * K, t->slope + r * K, NULL);
+        if (st != FLT_OK) break;
+    }
+    assert_int_equal(st, FLT_ERR_BUFFER_FULL);
+    print_message("full after %zu rows: %s\n", r, flt_last_error_message());
+    assert_non_null(strstr(flt_last_error_message(), "no row is finished yet"));
+    assert_non_null(strstr(flt_last_error_message(), "larger row_capacity"));
+    size_t ready = 1, n = 0;
+    assert_int_equal(flt_recon_ready(rc, &ready), FLT_OK);
+    assert_int_equal(ready, 0);
+    assert_int_equal(flt_recon_end_sheet(rc), FLT_OK);
+    double *s_out = malloc(r * sizeof(double)), *z = alloc_rows(r, K);
+    assert_int_equal(flt_recon_pull(rc, r, K, s_out, z, NULL, &n), FLT_OK);
+    assert_int_equal(n, r);
+    free(s_out);
+    free(z);
+    flt_recon_destroy(rc);
+    test_sheet_free(t);
+}
+
 static void options_are_reported_back(void **state) {
     (void)state;
     flt_options *o = NULL;
@@ -1022,6 +1061,7 @@ int main(void) {
         cmocka_unit_test(height_only_or_slope_only_samples_are_used),
         cmocka_unit_test(reset_starts_a_fresh_strip),
         cmocka_unit_test(buffer_full_then_pull_recovers),
+        cmocka_unit_test(buffer_full_with_nothing_finished_says_why),
         cmocka_unit_test(bad_input_is_rejected_and_handle_stays_usable),
         cmocka_unit_test(options_are_reported_back),
         cmocka_unit_test(finer_knots_than_laser_spacing_stay_exact),
