@@ -10,7 +10,8 @@
  *     largest error after removing one constant (a sanity check, not the
  *     accuracy study: examples/python/compare_filters.py is);
  *   - streaming: microseconds per pushed row, amortised over a long strip
- *     pushed one row at a time and pulled as rows finish (default options).
+ *     pushed one row at a time and pulled as rows finish (default options;
+ *     then rigid_motion + robust with experiment 3's noise).
  *
  * Usage: bench_recon [runs]   (default 15)
  */
@@ -190,38 +191,53 @@ int main(int argc, char **argv) {
     }
 
     /* Streaming: a 5-sheet strip (30 m), one row per push, pulled as it goes,
-     * end_sheet every 2000 rows. Row data is prepared up front. */
-    flt_recon *rc = NULL;
-    check(flt_recon_create(FIBERS, NULL, &rc), "flt_recon_create");
-    const int sheets = 5;
+     * end_sheet every 2000 rows. Row data is prepared up front. Default
+     * options on the noise-free strip (issue 2's goal), then rigid_motion +
+     * robust on the strip with experiment 3's noise. */
     double *s_out = malloc(ROWS * sizeof(double));
-    double total = 0;
-    size_t pushed = 0, pulled = 0;
-    for (int sh = 0; sh < sheets; ++sh) {
-        measure_rows((size_t)sh * ROWS, ROWS, s, h, g);
-        double t0 = now_s();
-        for (size_t r = 0; r < ROWS; ++r) {
+    for (int mode = 0; mode < 2; ++mode) {
+        flt_options *o = NULL;
+        check(flt_options_create(&o), "flt_options_create");
+        check(flt_options_set(o, FLT_OPT_RIGID_MOTION, mode), "flt_options_set");
+        check(flt_options_set(o, FLT_OPT_ROBUST, mode), "flt_options_set");
+        flt_recon *rc = NULL;
+        check(flt_recon_create(FIBERS, o, &rc), "flt_recon_create");
+        flt_options_destroy(o);
+        const int sheets = 5;
+        double total = 0;
+        size_t pushed = 0, pulled = 0;
+        for (int sh = 0; sh < sheets; ++sh) {
+            measure_rows((size_t)sh * ROWS, ROWS, s, h, g);
+            if (mode) add_noise(ROWS, s, h, g);
+            double t0 = now_s();
+            for (size_t r = 0; r < ROWS; ++r) {
+                size_t got = 0;
+                check(flt_recon_push(rc, 1, FIBERS, &s[r], h + r * FIBERS, g + r * FIBERS, NULL),
+                      "flt_recon_push");
+                check(flt_recon_pull(rc, ROWS, FIBERS, s_out, z, flags, &got), "flt_recon_pull");
+                pulled += got;
+            }
+            check(flt_recon_end_sheet(rc), "flt_recon_end_sheet");
             size_t got = 0;
-            check(flt_recon_push(rc, 1, FIBERS, &s[r], h + r * FIBERS, g + r * FIBERS, NULL),
-                  "flt_recon_push");
             check(flt_recon_pull(rc, ROWS, FIBERS, s_out, z, flags, &got), "flt_recon_pull");
             pulled += got;
+            total += now_s() - t0;
+            pushed += ROWS;
+            fprintf(stderr, "\rstreaming sheet %d/%d", sh + 1, sheets);
         }
-        check(flt_recon_end_sheet(rc), "flt_recon_end_sheet");
-        size_t got = 0;
-        check(flt_recon_pull(rc, ROWS, FIBERS, s_out, z, flags, &got), "flt_recon_pull");
-        pulled += got;
-        total += now_s() - t0;
-        pushed += ROWS;
-        fprintf(stderr, "\rstreaming sheet %d/%d", sh + 1, sheets);
+        fprintf(stderr, "\n");
+        if (mode == 0)
+            printf("streaming: %.2f us per pushed row (%zu rows, %zu pulled, end_sheet every %d "
+                   "rows)   [goal <= 10 us]\n",
+                   1e6 * total / (double)pushed, pushed, pulled, ROWS);
+        else
+            printf("streaming, rigid_motion + robust, experiment 3 noise: %.2f us per pushed "
+                   "row\n",
+                   1e6 * total / (double)pushed);
+        flt_recon_destroy(rc);
     }
-    fprintf(stderr, "\n");
-    printf("streaming: %.2f us per pushed row (%zu rows, %zu pulled, end_sheet every %d rows)   "
-           "[goal <= 10 us]\n",
-           1e6 * total / (double)pushed, pushed, pulled, ROWS);
     printf("line speed: one row per %.0f us at 120 m/min with 3 mm rows\n",
            1e6 * 0.003 / 2.0);
-    flt_recon_destroy(rc);
     free(s);
     free(h);
     free(g);
