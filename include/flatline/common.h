@@ -416,9 +416,10 @@ typedef enum flt_option {
     /* "u3v_command_attempts": times a command is sent when no acknowledge
      * comes (integer). Default 3. */
     FLT_OPT_U3V_COMMAND_ATTEMPTS = 610,
-    /* Not an option: makes every int a valid flt_option value, so any key
-     * can be passed (and rejected with a message) without undefined
-     * behaviour. New keys go above this line. */
+    /* Not an option: keeps the type int-sized whatever is added. Any int
+     * can be passed as a key (the library reads an enum argument as the int
+     * it is) and an unknown one is refused with a message. New keys go
+     * above this line. */
     FLT_OPT_MAX_ENUM_ = 0x7FFFFFFF
 } flt_option;
 

@@ -243,11 +243,12 @@ FLT_API flt_status FLT_CALL flt_calib_estimate_intrinsics(
         if (stride > std::size_t(INT32_MAX) / m.height)
             return fail(FLT_ERR_INVALID_ARGUMENT,
                         "%s: argument 'stride' = %zu is too large", fn, stride);
-        if (target != FLT_TARGET_CHESSBOARD && target != FLT_TARGET_CIRCLE_GRID &&
-            target != FLT_TARGET_ASYMMETRIC_CIRCLE_GRID)
+        const int raw_target = enum_arg(target);  // any int, from C
+        if (raw_target != FLT_TARGET_CHESSBOARD && raw_target != FLT_TARGET_CIRCLE_GRID &&
+            raw_target != FLT_TARGET_ASYMMETRIC_CIRCLE_GRID)
             return fail(FLT_ERR_INVALID_ARGUMENT,
                         "%s: argument 'target' = %d is not a flt_calib_target", fn,
-                        (int)target);
+                        raw_target);
         if (columns < 3 || columns > 1000)
             return fail(FLT_ERR_INVALID_ARGUMENT,
                         "%s: argument 'columns' = %u is outside [3, 1000]", fn,

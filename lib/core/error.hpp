@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <cstdarg>
+#include <cstring>
 #include <new>
 #include <stdexcept>
 
@@ -38,6 +39,21 @@ struct error : std::runtime_error {
 
 void record_exception(const char *function, const std::exception &e,
                       flt_status status);
+
+// The int an enum argument carries. C passes any int where a flt_ enum is
+// declared; in C++ an enum without a fixed underlying type only has the
+// values of the smallest bit-field that holds its enumerators (0 .. 2^31-1
+// with the MAX_ENUM_ sentinels), and reading a negative one as the enum is
+// undefined behaviour (UBSan's -fsanitize=enum says so). Entry points read
+// the argument's bytes with this, refuse a negative value, and only then
+// use it as the enum.
+template <class E>
+inline int enum_arg(const E &value) {
+    static_assert(sizeof(E) == sizeof(int), "flt_ enums are int-sized (common.h)");
+    int raw;
+    std::memcpy(&raw, &value, sizeof raw);
+    return raw;
+}
 
 // The one guard. `body` returns flt_status.
 template <class Body>

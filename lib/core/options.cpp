@@ -111,8 +111,8 @@ std::size_t slot_of(flt_option key) {
     return k_option_count;
 }
 
-flt_status unknown_key(const char *fn, flt_option key) {
-    return fail(FLT_ERR_NOT_FOUND, "%s: unknown option key %d", fn, (int)key);
+flt_status unknown_key(const char *fn, int key) {
+    return fail(FLT_ERR_NOT_FOUND, "%s: unknown option key %d", fn, key);
 }
 
 }  // namespace
@@ -155,10 +155,10 @@ FLT_API flt_status FLT_CALL flt_options_set(flt_options *options,
     const char *fn = "flt_options_set";
     return guard(fn, [&] {
         FLT_CHECK_NOT_NULL(fn, options);
-        const option_spec *spec = find_option(key);
+        const option_spec *spec = enum_arg(key) < 0 ? nullptr : find_option(key);
         if (!spec)
             return fail(FLT_ERR_INVALID_ARGUMENT, "%s: unknown option key %d",
-                        fn, (int)key);
+                        fn, enum_arg(key));
         if (std::isnan(value))
             return fail(FLT_ERR_INVALID_ARGUMENT, "%s: option '%s' is NaN", fn,
                         spec->name);
@@ -181,7 +181,7 @@ FLT_API flt_status FLT_CALL flt_options_get(const flt_options *options,
     return guard(fn, [&] {
         FLT_CHECK_NOT_NULL(fn, options);
         FLT_CHECK_NOT_NULL(fn, out);
-        if (!find_option(key)) return unknown_key(fn, key);
+        if (enum_arg(key) < 0 || !find_option(key)) return unknown_key(fn, enum_arg(key));
         *out = options->value[slot_of(key)];
         return FLT_OK;
     });
@@ -209,8 +209,8 @@ FLT_API flt_status FLT_CALL flt_option_info(flt_option key, const char **name,
                                             int *is_integer) {
     const char *fn = "flt_option_info";
     return guard(fn, [&] {
-        const option_spec *spec = find_option(key);
-        if (!spec) return unknown_key(fn, key);
+        const option_spec *spec = enum_arg(key) < 0 ? nullptr : find_option(key);
+        if (!spec) return unknown_key(fn, enum_arg(key));
         if (name) *name = spec->name;
         if (min_value) *min_value = spec->min_value;
         if (max_value) *max_value = spec->max_value;

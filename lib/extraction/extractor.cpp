@@ -713,12 +713,13 @@ FLT_API flt_status FLT_CALL flt_extractor_process(
         FLT_CHECK_NOT_NULL(fn, frame);
         FLT_CHECK_NOT_NULL(fn, height_out);
         FLT_CHECK_NOT_NULL(fn, slope_out);
-        if (format != FLT_PIXEL_MONO8 && format != FLT_PIXEL_MONO10 &&
-            format != FLT_PIXEL_MONO12 && format != FLT_PIXEL_MONO16)
+        const int raw_format = enum_arg(format);
+        if (raw_format != FLT_PIXEL_MONO8 && raw_format != FLT_PIXEL_MONO10 &&
+            raw_format != FLT_PIXEL_MONO12 && raw_format != FLT_PIXEL_MONO16)
             return fail(FLT_ERR_INVALID_ARGUMENT,
                         "%s: argument 'format' = %d is not a flt_pixel_format (8, 10, 12 "
                         "or 16)",
-                        fn, int(format));
+                        fn, raw_format);
         if (width != ex.width || height != ex.height)
             return fail(FLT_ERR_INVALID_ARGUMENT,
                         "%s: arguments 'width' x 'height' = %u x %u but the calibration's "

@@ -182,6 +182,7 @@ void restart_grid(flt_flatness &f) {
 extern "C" {
 
 FLT_API const char *FLT_CALL flt_shape_string(flt_shape shape) {
+    if (enum_arg(shape) < 0) return "unknown";
     switch (shape) {
     case FLT_SHAPE_FLAT: return "flat";
     case FLT_SHAPE_CENTRE_BUCKLE: return "centre buckle";

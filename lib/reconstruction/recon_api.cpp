@@ -184,6 +184,10 @@ FLT_API flt_status FLT_CALL flt_recon_get_option(const flt_recon *recon,
     return guard(fn, [&] {
         if (flt_status st = check_handle(fn, recon)) return st;
         FLT_CHECK_NOT_NULL(fn, out);
+        if (enum_arg(key) < 0)
+            return fail(FLT_ERR_NOT_FOUND,
+                        "%s: option key %d is not a reconstructor option", fn,
+                        enum_arg(key));
         const recon_config &c = recon->engine->config();
         const recon_params &p = c.params;
         switch (key) {

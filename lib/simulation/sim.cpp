@@ -496,9 +496,9 @@ FLT_API flt_status FLT_CALL flt_sim_add_defect(flt_sim *sim, flt_sim_defect kind
     const char *fn = "flt_sim_add_defect";
     return guard(fn, [&] {
         if (flt_status st = check_handle(fn, sim)) return st;
-        if (int(kind) < int(FLT_SIM_FLAT) || int(kind) > int(FLT_SIM_CROSSBOW))
+        if (enum_arg(kind) < int(FLT_SIM_FLAT) || enum_arg(kind) > int(FLT_SIM_CROSSBOW))
             return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'kind' = %d is unknown",
-                        fn, int(kind));
+                        fn, enum_arg(kind));
         if (!std::isfinite(amplitude_mm))
             return fail(FLT_ERR_INVALID_ARGUMENT,
                         "%s: argument 'amplitude_mm' = %g is not finite", fn, amplitude_mm);

@@ -620,9 +620,9 @@ FLT_API flt_status FLT_CALL flt_source_count(const flt_source *source,
     return guard(fn, [&] {
         if (flt_status st = check_source(fn, source)) return st;
         FLT_CHECK_NOT_NULL(fn, out);
-        if (int(counter) < 0 || int(counter) > int(FLT_COUNT_STREAM_RECOVERIES))
+        if (enum_arg(counter) < 0 || enum_arg(counter) > int(FLT_COUNT_STREAM_RECOVERIES))
             return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'counter' = %d is no counter", fn,
-                        int(counter));
+                        enum_arg(counter));
         if (source->camera) {
             *out = source->camera->counter(counter);
         } else {
@@ -644,9 +644,9 @@ FLT_API flt_status FLT_CALL flt_source_camera_string(const flt_source *source,
     return guard(fn, [&] {
         if (flt_status st = need_camera(fn, source)) return st;
         FLT_CHECK_NOT_NULL(fn, out);
-        if (int(which) < 0 || int(which) > int(FLT_CAMERA_USER_NAME))
+        if (enum_arg(which) < 0 || enum_arg(which) > int(FLT_CAMERA_USER_NAME))
             return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'which' = %d is no camera string",
-                        fn, int(which));
+                        fn, enum_arg(which));
         *out = source->camera->string_of(which).c_str();
         return FLT_OK;
     });
@@ -658,6 +658,9 @@ FLT_API flt_status FLT_CALL flt_source_camera_value(const flt_source *source,
     return guard(fn, [&] {
         if (flt_status st = need_camera(fn, source)) return st;
         FLT_CHECK_NOT_NULL(fn, out);
+        if (enum_arg(which) < 0)
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'which' = %d is no camera value",
+                        fn, enum_arg(which));
         *out = source->camera->value_of(which);
         return FLT_OK;
     });
@@ -800,12 +803,13 @@ FLT_API flt_status FLT_CALL flt_u3v_sim_add_camera(flt_u3v_sim *bus, const char 
         if (height < 16 || height > 8192)
             return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'height' = %u is outside "
                                                   "[16, 8192]", fn, height);
-        if (format != FLT_PIXEL_MONO8 && format != FLT_PIXEL_MONO10 &&
-            format != FLT_PIXEL_MONO12 && format != FLT_PIXEL_MONO16)
+        const int raw_format = enum_arg(format);
+        if (raw_format != FLT_PIXEL_MONO8 && raw_format != FLT_PIXEL_MONO10 &&
+            raw_format != FLT_PIXEL_MONO12 && raw_format != FLT_PIXEL_MONO16)
             return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'format' = %d is not a pixel "
-                                                  "format", fn, int(format));
+                                                  "format", fn, raw_format);
         const std::size_t index = bus->bus.add_camera(vendor, model, serial, width, height,
-                                                      int(format));
+                                                      raw_format);
         if (index_out) *index_out = index;
         return FLT_OK;
     });
@@ -826,6 +830,9 @@ FLT_API flt_status FLT_CALL flt_u3v_sim_set(flt_u3v_sim *bus, size_t camera,
     const char *fn = "flt_u3v_sim_set";
     return guard(fn, [&] {
         if (flt_status st = check_bus(fn, bus, camera)) return st;
+        if (enum_arg(param) < 0)
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'param' = %d: the parameter is "
+                                                  "unknown", fn, enum_arg(param));
         u3v::sim_set(bus->bus.camera(camera), param, value);
         return FLT_OK;
     });
@@ -837,6 +844,9 @@ FLT_API flt_status FLT_CALL flt_u3v_sim_get(const flt_u3v_sim *bus, size_t camer
     return guard(fn, [&] {
         if (flt_status st = check_bus(fn, bus, camera)) return st;
         FLT_CHECK_NOT_NULL(fn, out);
+        if (enum_arg(param) < 0)
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'param' = %d: the parameter is "
+                                                  "unknown", fn, enum_arg(param));
         *out = u3v::sim_get(bus->bus.camera(camera), param);
         return FLT_OK;
     });
@@ -848,6 +858,9 @@ FLT_API flt_status FLT_CALL flt_u3v_sim_inject(flt_u3v_sim *bus, size_t camera,
     const char *fn = "flt_u3v_sim_inject";
     return guard(fn, [&] {
         if (flt_status st = check_bus(fn, bus, camera)) return st;
+        if (enum_arg(fault) < 0)
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'fault' = %d: the fault is "
+                                                  "unknown", fn, enum_arg(fault));
         u3v::sim_inject(bus->bus.camera(camera), fault, at, count);
         return FLT_OK;
     });
