@@ -102,9 +102,17 @@ static void inverse3(const double m[9], double out[9]) {
  * edge's position is quantised to 1/64 px before 8-bit rounding. */
 #define SUB 8
 
-int synth_render_chessboard(const double *ray_map, int squares_x, int squares_y,
-                            double square_mm, double rx, double ry, double rz,
-                            const double t_mm[3], uint8_t *image) {
+/* A board's grey level at board point (X, Y) mm. */
+typedef double (*board_level)(const void *pattern, double X, double Y);
+
+/* Renders a planar board spanning [0, w] x [0, h] mm in its own frame, with a
+ * white margin of `margin` mm around it (grey 210) and background (100)
+ * beyond, whose pattern is level(); the board's centre at t_mm after the
+ * rotation (rx, ry, rz). Returns 0 if a corner of the margin falls outside
+ * the image or behind the camera. */
+static int render_board(const double *ray_map, double w, double hgt, double margin,
+                        board_level level, const void *pattern, double rx, double ry,
+                        double rz, const double t_mm[3], uint8_t *image) {
     double r[9], g[9], ginv[9];
     rotation(rx, ry, rz, r);
     /* Board (X, Y, 1) -> camera ray: G = [r1 r2 t]. */
@@ -112,16 +120,15 @@ int synth_render_chessboard(const double *ray_map, int squares_x, int squares_y,
     g[3] = r[3], g[4] = r[4], g[5] = t_mm[1];
     g[6] = r[6], g[7] = r[7], g[8] = t_mm[2];
     /* t_mm is the board's centre: its origin sits at t - R (w/2, h/2, 0). */
-    const double half_w = squares_x * square_mm / 2, half_h = squares_y * square_mm / 2;
+    const double half_w = w / 2, half_h = hgt / 2;
     g[2] -= r[0] * half_w + r[1] * half_h;
     g[5] -= r[3] * half_w + r[4] * half_h;
     g[8] -= r[6] * half_w + r[7] * half_h;
     inverse3(g, ginv);
-    /* Every inner corner and the margin's corners must be in the image. */
-    const double w = squares_x * square_mm, hgt = squares_y * square_mm;
+    /* The margin's corners must be in the image. */
     for (int k = 0; k < 4; ++k) {
-        const double X = (k & 1) ? w + square_mm : -square_mm;
-        const double Y = (k & 2) ? hgt + square_mm : -square_mm;
+        const double X = (k & 1) ? w + margin : -margin;
+        const double Y = (k & 2) ? hgt + margin : -margin;
         const double cxr = g[0] * X + g[1] * Y + g[2], cyr = g[3] * X + g[4] * Y + g[5],
                      czr = g[6] * X + g[7] * Y + g[8];
         if (czr <= 0) return 0;
@@ -164,19 +171,58 @@ int synth_render_chessboard(const double *ray_map, int squares_x, int squares_y,
                 const double ov = (b - (SUB - 1) / 2.0) / SUB;
                 const double X = bx[0] + dxu * ou + dxv * ov;
                 const double Y = by[0] + dyu * ou + dyv * ov;
-                double level;
-                if (X < -square_mm || Y < -square_mm || X > w + square_mm ||
-                    Y > hgt + square_mm)
-                    level = 100; /* background beyond the board */
+                if (X < -margin || Y < -margin || X > w + margin || Y > hgt + margin)
+                    sum += 100; /* background beyond the board */
                 else if (X < 0 || Y < 0 || X >= w || Y >= hgt)
-                    level = 210; /* white margin */
+                    sum += 210; /* white margin */
                 else
-                    level = (((int)floor(X / square_mm) + (int)floor(Y / square_mm)) & 1)
-                                ? 210
-                                : 40;
-                sum += level;
+                    sum += level(pattern, X, Y);
             }
         image[i] = (uint8_t)lround(sum / (SUB * SUB));
     }
     return 1;
+}
+
+static double chessboard_level(const void *pattern, double X, double Y) {
+    const double square_mm = *(const double *)pattern;
+    return (((int)floor(X / square_mm) + (int)floor(Y / square_mm)) & 1) ? 210 : 40;
+}
+
+int synth_render_chessboard(const double *ray_map, int squares_x, int squares_y,
+                            double square_mm, double rx, double ry, double rz,
+                            const double t_mm[3], uint8_t *image) {
+    return render_board(ray_map, squares_x * square_mm, squares_y * square_mm, square_mm,
+                        chessboard_level, &square_mm, rx, ry, rz, t_mm, image);
+}
+
+typedef struct circle_grid {
+    int columns, rows, asymmetric;
+    double pitch_mm, radius_mm, origin_mm; /* origin: centre of circle (0, 0) */
+} circle_grid;
+
+/* Dark circles (40) on white (210), centres in OpenCV's layout: symmetric
+ * (j p, i p); asymmetric ((2 j + i % 2) p, i p). The nearest row is the only
+ * one whose circle can hold the point (rows are p apart, radii < p / 2). */
+static double circle_level(const void *pattern, double X, double Y) {
+    const circle_grid *c = (const circle_grid *)pattern;
+    const double x = X - c->origin_mm, y = Y - c->origin_mm, p = c->pitch_mm;
+    const int i = (int)lround(y / p);
+    if (i < 0 || i >= c->rows) return 210;
+    const double shift = c->asymmetric ? (double)(i % 2) * p : 0.0;
+    const double column_pitch = c->asymmetric ? 2 * p : p;
+    const int j = (int)lround((x - shift) / column_pitch);
+    if (j < 0 || j >= c->columns) return 210;
+    const double dx = x - (shift + j * column_pitch), dy = y - i * p;
+    return dx * dx + dy * dy <= c->radius_mm * c->radius_mm ? 40 : 210;
+}
+
+int synth_render_circle_grid(const double *ray_map, int columns, int rows, double pitch_mm,
+                             double radius_mm, int asymmetric, double rx, double ry,
+                             double rz, const double t_mm[3], uint8_t *image) {
+    const circle_grid c = {columns, rows, asymmetric, pitch_mm, radius_mm, pitch_mm};
+    /* The board reaches one pitch beyond the outermost centres. */
+    const double w = ((asymmetric ? 2 * (columns - 1) + 1 : columns - 1) + 2) * pitch_mm;
+    const double hgt = (rows - 1 + 2) * pitch_mm;
+    return render_board(ray_map, w, hgt, pitch_mm, circle_level, &c, rx, ry, rz, t_mm,
+                        image);
 }

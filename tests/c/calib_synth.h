@@ -47,6 +47,16 @@ int synth_render_chessboard(const double *ray_map, int squares_x, int squares_y,
                             double square_mm, double rx, double ry, double rz,
                             const double t_mm[3], uint8_t *image);
 
+/* Renders a grid of columns x rows dark circles of radius_mm on white,
+ * centres pitch_mm apart in OpenCV's layout (asymmetric: the rows alternate
+ * by pitch_mm and a row's circles are 2 * pitch_mm apart), with white one
+ * pitch around the outermost circles and a white margin of one pitch beyond,
+ * at the pose of synth_render_chessboard (t_mm: the board's centre). Returns
+ * 0 if the board falls outside the image. */
+int synth_render_circle_grid(const double *ray_map, int columns, int rows, double pitch_mm,
+                             double radius_mm, int asymmetric, double rx, double ry,
+                             double rz, const double t_mm[3], uint8_t *image);
+
 /* Fills ray_map (2 * SYNTH_WIDTH * SYNTH_HEIGHT doubles) with each pixel's
  * undistorted normalised coordinates, by inverting the distortion with
  * Newton's method (independent of the library). */
