@@ -30,8 +30,6 @@ constexpr double k_nan = std::numeric_limits<double>::quiet_NaN();
 constexpr int k_map_degree = 5;
 constexpr int k_map_terms = k_map_degree + 1;
 constexpr int k_map_nodes = 24;
-// Candidates tried per column and laser after rejections.
-constexpr int k_max_candidates = 3;
 // The shape check (flt_extractor::reject_misshapen): a peak is compared
 // with the clean line's shape in its block of k_shape_block columns, which
 // the quantiles of the block's peaks give even when a reflection lies along
