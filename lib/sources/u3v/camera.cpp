@@ -6,6 +6,7 @@
 #include <cstdarg>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 
 #include "core/error.hpp"
 #include "sources/u3v/protocol.hpp"
@@ -514,6 +515,10 @@ void camera::set_float(const std::string &feature, double value) {
     }
     std::uint8_t b[8] = {0};
     if (a.length == 4) {
+        // Converting a double beyond float's range is undefined behaviour.
+        if (std::fabs(value) > double(std::numeric_limits<float>::max()))
+            raise(FLT_ERR_INVALID_ARGUMENT, "feature '%s': value %g is out of the range of its "
+                                            "32-bit float register", feature.c_str(), value);
         const float f = float(value);
         std::uint32_t bits;
         std::memcpy(&bits, &f, 4);

@@ -9,6 +9,7 @@
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <string>
 
 #include "core/error.hpp"
@@ -34,6 +35,16 @@ bool parse_int(const std::string &text, std::int64_t &out) {
     else
         out = std::strtoll(t.c_str(), &end, 10);
     return errno == 0 && end && *end == '\0';
+}
+
+// A float Value's integer view, saturated: converting a double outside
+// int64's range (or NaN) is undefined behaviour, and a camera file may say
+// anything (fuzz_genicam found <Value>0xfff...f2</Value>, 5e92).
+std::int64_t saturated_int64(double f) {
+    if (!(f == f)) return 0;
+    if (f >= 9223372036854775808.0) return std::numeric_limits<std::int64_t>::max();
+    if (f < -9223372036854775808.0) return std::numeric_limits<std::int64_t>::min();
+    return std::int64_t(f);
 }
 
 bool parse_float(const std::string &text, double &out) {
@@ -135,7 +146,7 @@ void set_property(parser_state &s, genicam_node &n, const std::string &tag,
             n.float_value = double(v);
             n.has_value = true;
         } else if (parse_float(text, n.float_value)) {
-            n.value = std::int64_t(n.float_value);
+            n.value = saturated_int64(n.float_value);
             n.has_value = true;
         }
     } else if (tag == "CommandValue" && parse_int(text, v)) {
