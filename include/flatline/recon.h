@@ -76,9 +76,10 @@
  *   flt_reconstruct() runs the passes over the whole sheet one after the
  *   other. Streaming, every pass is a stage with an 8-knot lag ahead of
  *   the final one: the latency grows by about 13 knots per pass (with
- *   rigid_motion, by the larger of the two counts: about 18 m of strip by
- *   default), so row_capacity must hold that much strip (see its option);
- *   carry-over and flags work as without it.
+ *   rigid_motion, per pass of the larger of the two counts; with the
+ *   defaults a row is finished about 18 m of strip after it), so
+ *   row_capacity must hold that much strip (see its option); carry-over
+ *   and flags work as without it.
  *   Together with rigid_motion it meets issue 7's targets under the
  *   reference's hardest noise (tests/c/test_recon.c,
  *   examples/python/compare_filters.py); speed in examples/bench.
