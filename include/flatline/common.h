@@ -148,7 +148,9 @@ FLT_API const char *FLT_CALL flt_version_string(void);
 typedef enum flt_option {
     /* --- reconstructor (flatline/recon.h) --- */
     /* "knot_spacing": distance L between spline knots along travel, mm.
-     * 0 (the default) means "equal to laser_spacing". */
+     * 0 (the default) means "equal to laser_spacing"; at least
+     * laser_spacing / 16 (a row spans about laser_spacing / L knots, and
+     * the cost per mm of strip grows with the cube of that). */
     FLT_OPT_KNOT_SPACING = 100,
     /* "laser_spacing": distance between the two laser lines along travel,
      * Delta-d, mm. Default 100. */

@@ -140,7 +140,11 @@ flt_recon_get_option(const flt_recon *recon, flt_option key, double *out);
 
 /* Pushes `rows` rows (>= 1).
  *   s       [rows]          material position of each row, mm, strictly
- *                           increasing, also across calls and sheets.
+ *                           increasing, also across calls and sheets, by
+ *                           at most 1 km and 1000 knot intervals from one
+ *                           row to the next (a larger jump is a new strip:
+ *                           flt_recon_reset() first; bridging it would
+ *                           take an elimination per knot).
  *   height  [rows * fibers] measured heights, mm.
  *   slope   [rows * fibers] measured slopes, mm/mm.
  *   valid   [rows * fibers] or NULL: non-zero where the sample is valid.

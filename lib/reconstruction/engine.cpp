@@ -25,7 +25,8 @@ constexpr double k_stiffness[4][4] = {
 // effect on measured fibers is below 1e-12 of the data.
 constexpr double k_ridge = 1e-12;
 
-// Largest knot span of one row we size scratch arrays for (D/L <= 64).
+// Largest knot span of one row we size scratch arrays for (the API allows
+// D/L <= 16, recon_api.cpp; the engine itself takes up to 64).
 constexpr int k_max_unknowns = 2 * 66;
 
 // The three per-row kernels below run once per fiber and row; they are built

@@ -16,10 +16,19 @@ using namespace flt;
 namespace {
 constexpr std::uint32_t k_recon_magic = 0x464c5452u;  // "FLTR"
 // A larger jump in s between consecutive rows is taken as a new strip that
-// was not announced with reset(): bridging it would take minutes of work.
+// was not announced with reset(): bridging it would take minutes of work,
+// for a stretch the spline could only extrapolate. The work is per knot (an
+// elimination each), so the limit is in knots too (100 m at the default
+// spacing): with fine knots a kilometre would be hundreds of thousands of
+// them (fuzz_recon found such an input taking seconds per push).
 constexpr double k_max_jump_mm = 1.0e6;
-// Knots per laser spacing we support (the window grows with it).
-constexpr double k_max_knots_per_laser_spacing = 64.0;
+constexpr double k_max_jump_knots = 1000.0;
+// Knots per laser spacing we support. A row spans about that many knots,
+// and each elimination works on a window of twice as many unknowns, so the
+// cost per mm of strip grows with its cube: 16 (6.25 mm knots with 100 mm
+// between the lasers) is far finer than a flatness gauge needs (the default
+// is 1) and keeps the worst case a few hundred times the default's cost.
+constexpr double k_max_knots_per_laser_spacing = 16.0;
 }  // namespace
 
 struct flt_recon {
@@ -98,7 +107,8 @@ flt_status check_shape(const char *fn, std::size_t rows, std::size_t fibers) {
 
 // Positions finite, strictly increasing, and continuing after `previous`.
 flt_status check_positions(const char *fn, std::size_t rows, const double *s,
-                           bool has_previous, double previous) {
+                           bool has_previous, double previous, double knot_spacing) {
+    const double max_jump = std::min(k_max_jump_mm, k_max_jump_knots * knot_spacing);
     for (std::size_t r = 0; r < rows; ++r) {
         if (!std::isfinite(s[r]))
             return fail(FLT_ERR_INVALID_ARGUMENT, "%s: s[%zu] = %g is not finite",
@@ -110,11 +120,11 @@ flt_status check_positions(const char *fn, std::size_t rows, const double *s,
                         "%s: s[%zu] = %.17g does not increase (previous row at "
                         "%.17g mm); positions must be strictly increasing",
                         fn, r, s[r], prev);
-        if (has_prev && s[r] - prev > k_max_jump_mm)
+        if (has_prev && s[r] - prev > max_jump)
             return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: s[%zu] = %g jumps %g mm past the previous row; call "
-                        "flt_recon_reset() to start a new strip",
-                        fn, r, s[r], s[r] - prev);
+                        "%s: s[%zu] = %g jumps %g mm past the previous row, more than "
+                        "%g mm (%g knots); call flt_recon_reset() to start a new strip",
+                        fn, r, s[r], s[r] - prev, max_jump, max_jump / knot_spacing);
     }
     return FLT_OK;
 }
@@ -226,7 +236,8 @@ FLT_API flt_status FLT_CALL flt_recon_push(flt_recon *recon, size_t rows,
         if (flt_status st = check_push_arrays(fn, s, height, slope)) return st;
         if (flt_status st = check_shape(fn, rows, fibers)) return st;
         if (flt_status st = check_fibers(fn, fibers, e.fibers())) return st;
-        if (flt_status st = check_positions(fn, rows, s, e.has_last_s(), e.last_s()))
+        if (flt_status st = check_positions(fn, rows, s, e.has_last_s(), e.last_s(),
+                                            e.config().params.knot_spacing))
             return st;
         if (rows > e.free_rows()) {
             if (e.ready_rows() == 0 && e.free_rows() < rows) {
@@ -346,10 +357,10 @@ FLT_API flt_status FLT_CALL flt_reconstruct(const flt_options *options,
         if (flt_status st = check_push_arrays(fn, s, height, slope)) return st;
         FLT_CHECK_NOT_NULL(fn, z_out);
         if (flt_status st = check_shape(fn, rows, fibers)) return st;
-        if (flt_status st = check_positions(fn, rows, s, false, 0.0)) return st;
         recon_config config;
         if (flt_status st = read_params(fn, options, &config)) return st;
         recon_params &p = config.params;
+        if (flt_status st = check_positions(fn, rows, s, false, 0.0, p.knot_spacing)) return st;
         p.lag_knots = recon_params::no_lag;  // one solve with every row
         p.row_capacity = rows;
         // Every knot of the sheet stays open until the end.

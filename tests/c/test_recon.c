@@ -624,6 +624,26 @@ static void bad_input_is_rejected_and_handle_stays_usable(void **state) {
                 FLT_ERR_INVALID_ARGUMENT, "s[10]");
     free(z);
 
+    /* A jump in s costs an elimination per knot it crosses, so the largest
+     * allowed jump is 1000 knots (and 1 km): with 10 mm knots, 12 m is
+     * refused (the handle stays usable), 8 m bridged. Knots finer than
+     * laser_spacing / 16 are refused. */
+    flt_options *fine = NULL;
+    flt_recon *rc2 = NULL;
+    assert_int_equal(flt_options_create(&fine), FLT_OK);
+    assert_int_equal(flt_options_set(fine, FLT_OPT_KNOT_SPACING, 6.0), FLT_OK);
+    EXPECT_FAIL(flt_recon_create(K, fine, &rc2), FLT_ERR_INVALID_ARGUMENT, "knot_spacing = 6");
+    assert_int_equal(flt_options_set(fine, FLT_OPT_KNOT_SPACING, 10.0), FLT_OK);
+    flt_recon *rf = make_recon(K, fine);
+    flt_options_destroy(fine);
+    double js[2] = {0.0, 12000.0}, jh[2 * 5] = {0}, jg[2 * 5] = {0};
+    assert_true(K <= 5);
+    EXPECT_FAIL(flt_recon_push(rf, 2, K, js, jh, jg, NULL), FLT_ERR_INVALID_ARGUMENT,
+                "1000 knots");
+    js[1] = 8000.0;
+    assert_int_equal(flt_recon_push(rf, 2, K, js, jh, jg, NULL), FLT_OK);
+    flt_recon_destroy(rf);
+
     /* destroy is a no-op on NULL */
     flt_recon_destroy(NULL);
     flt_recon_destroy(rc);
