@@ -956,6 +956,10 @@ bool recon_engine::predict(double s, double *height_out, double *dslope_out) con
     return true;
 }
 
+bool recon_engine::prediction_lost(double s) const {
+    return have_t0_ && interval_of(s - 0.5 * D_) <= w0_ + S_ - 1 - long(hist_cap_);
+}
+
 void recon_engine::save_solution(double *out, double *t0_out) const {
     std::copy(hist_.begin(), hist_.end(), out);
     *t0_out = t0_;

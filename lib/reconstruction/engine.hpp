@@ -105,6 +105,11 @@ public:
     // once every knot under s +- Delta-d/2 is emitted, or, right after
     // end_sheet(), solved; returns false otherwise.
     bool predict(double s, double *height_out, double *dslope_out) const;
+    // True when predict(s) can never succeed any more: the knots under s
+    // have left the ring of knot states (the strip moved on by more than
+    // the ring holds before s could be predicted: rows much sparser than
+    // the knots, or a jump in s).
+    bool prediction_lost(double s) const;
 
     // Batch robust passes (recon_chain::batch) run one after the other in
     // one engine, each predicting from the previous pass's solution:

@@ -405,11 +405,20 @@ void recon_chain::advance(std::size_t stage) {
     while (q.head < q.tail) {
         const std::size_t r = q.head % queue_capacity_;
         const double s = q.s[r];
-        if (!prev.predict(s, pred_h_.data(), pred_g_.data())) break;
         const double *h = q.height.get() + r * K_, *g = q.slope.get() + r * K_;
-        reweigh(stage, next, h, g, nullptr, nullptr);
-        next.push_row(s, out_h_.data(), out_g_.data(), nullptr, mult_h_.data(),
-                      mult_g_.data());
+        if (prev.predict(s, pred_h_.data(), pred_g_.data())) {
+            reweigh(stage, next, h, g, nullptr, nullptr);
+            next.push_row(s, out_h_.data(), out_g_.data(), nullptr, mult_h_.data(),
+                          mult_g_.data());
+        } else if (prev.prediction_lost(s)) {
+            // Rows far sparser than the knots (or a jump in s) moved stage
+            // i-1 on past this row's knots before it could be judged: it
+            // goes on as measured, at full weight (fuzz_recon found rows
+            // left queued for good).
+            next.push_row(s, h, g, nullptr);
+        } else {
+            break;  // stage i-1 has not emitted its knots yet
+        }
         ++q.head;
         // Hand the row on at once: the next stage must take rows as this
         // one emits knots, before its ring of emitted knots moves on.

@@ -689,6 +689,36 @@ static void buffer_full_with_nothing_finished_says_why(void **state) {
     test_sheet_free(t);
 }
 
+static void robust_streaming_with_rows_sparser_than_knots(void **state) {
+    (void)state;
+    /* Rows 20 knots apart: an intermediate robust stage has moved past a
+     * row's knots before the row could be judged against them. Such a row
+     * goes on unweighted; end_sheet finishes every row (fuzz_recon found
+     * rows left queued, an internal error). Laser and knots 3 mm apart. */
+    const size_t K = 2;
+    flt_options *o = NULL;
+    assert_int_equal(flt_options_create(&o), FLT_OK);
+    assert_int_equal(flt_options_set(o, FLT_OPT_ROBUST, 1), FLT_OK);
+    assert_int_equal(flt_options_set(o, FLT_OPT_LASER_SPACING, 3.0), FLT_OK);
+    flt_recon *rc = make_recon(K, o);
+    flt_options_destroy(o);
+    const double s[5] = {64.25, 128.5, 129.5, 190.0, 250.0};
+    double h[5 * 2], g[5 * 2];
+    for (int i = 0; i < 10; ++i) {
+        h[i] = 0.1 * i;
+        g[i] = 0.0;
+    }
+    for (int r = 0; r < 5; ++r)
+        assert_int_equal(flt_recon_push(rc, 1, K, &s[r], h + 2 * r, g + 2 * r, NULL), FLT_OK);
+    assert_int_equal(flt_recon_end_sheet(rc), FLT_OK);
+    double s_out[5], z[10];
+    size_t n = 0;
+    assert_int_equal(flt_recon_pull(rc, 5, K, s_out, z, NULL, &n), FLT_OK);
+    assert_int_equal(n, 5);
+    for (int i = 0; i < 10; ++i) assert_true(isfinite(z[i]));
+    flt_recon_destroy(rc);
+}
+
 static void options_are_reported_back(void **state) {
     (void)state;
     flt_options *o = NULL;
@@ -1082,6 +1112,7 @@ int main(void) {
         cmocka_unit_test(reset_starts_a_fresh_strip),
         cmocka_unit_test(buffer_full_then_pull_recovers),
         cmocka_unit_test(buffer_full_with_nothing_finished_says_why),
+        cmocka_unit_test(robust_streaming_with_rows_sparser_than_knots),
         cmocka_unit_test(bad_input_is_rejected_and_handle_stays_usable),
         cmocka_unit_test(options_are_reported_back),
         cmocka_unit_test(finer_knots_than_laser_spacing_stay_exact),
