@@ -23,7 +23,8 @@
  *
  * Validity
  *   A sample is used when its mask entry is non-zero (or the mask is NULL)
- *   and its value is finite. Height and slope are judged separately: a NaN
+ *   and its value is finite and at most 1e9 in magnitude (mm, mm/mm: no
+ *   measurement, and its square would overflow the sums). Height and slope are judged separately: a NaN
  *   slope with a finite height uses the height only. Output rows carry flags
  *   per fiber (FLT_FLAG_*): a value is never invented silently.
  *

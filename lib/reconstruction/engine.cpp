@@ -39,18 +39,19 @@ constexpr int k_max_unknowns = 2 * 66;
 #define FLT_ROW_KERNEL
 #endif
 
-// True when every height and slope of the row is finite. Integer tests (an
-// all-ones exponent is inf or NaN): an OR reduction vectorises, where a
-// floating-point sum would be one serial chain of additions.
+// True when every height and slope of the row is a sample (finite, at
+// most k_max_sample in magnitude). Integer tests on the bits: an OR
+// reduction vectorises, where a floating-point one would be a serial chain.
 FLT_ROW_KERNEL bool row_is_finite(std::size_t K, const double *__restrict height,
                    const double *__restrict slope) {
-    constexpr std::uint64_t exponent = 0x7ff0000000000000ull;
+    constexpr std::uint64_t magnitude = 0x7fffffffffffffffull;
     std::uint64_t bad = 0;
     for (std::size_t k = 0; k < K; ++k) {
         std::uint64_t h, g;
         std::memcpy(&h, height + k, sizeof h);
         std::memcpy(&g, slope + k, sizeof g);
-        bad |= ((h & exponent) == exponent ? 1u : 0u) | ((g & exponent) == exponent ? 1u : 0u);
+        bad |= ((h & magnitude) > k_max_sample_bits ? 1u : 0u) |
+               ((g & magnitude) > k_max_sample_bits ? 1u : 0u);
     }
     return bad == 0;
 }
@@ -101,7 +102,7 @@ FLT_ROW_KERNEL void accumulate_row6(std::size_t K, const double *__restrict heig
 // Flags are 1.0 / 0.0 and multiply, so that the only selects are the two
 // that keep a non-finite value out of the sums.
 #define FLT_ROW6_BODY(masked)                                                           \
-    const double big = std::numeric_limits<double>::max();                              \
+    const double big = k_max_sample;                                                    \
     std::size_t nbad = 0, affected = 0;                                                 \
     for (std::size_t k = 0; k < K; ++k) {                                               \
         const bool hfin = std::fabs(height[k]) <= big, gfin = std::fabs(slope[k]) <= big; \
@@ -139,7 +140,7 @@ FLT_ROW_KERNEL std::size_t mask_row(std::size_t K, double D, const double *__res
                                     const double *__restrict mult_g, double *__restrict hm,
                                     double *__restrict gm, double *__restrict hv,
                                     double *__restrict gv) {
-    const double big = std::numeric_limits<double>::max();
+    const double big = k_max_sample;
     double bad = 0.0;  // a double keeps the loop in one vector width
     for (std::size_t k = 0; k < K; ++k) {
         const double h = height[k], g = slope[k];
@@ -781,7 +782,7 @@ void recon_engine::push_row(double s, const double *height, const double *slope,
 
     // Masked measurements. The common row has every sample valid: this loop
     // vectorises and the bookkeeping below is O(1) for it.
-    const double big = std::numeric_limits<double>::max();
+    const double big = k_max_sample;
     auto h_ok = [&](std::size_t k) {
         return (valid == nullptr || valid[k] != 0) && std::fabs(height[k]) <= big;
     };

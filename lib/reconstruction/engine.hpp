@@ -35,6 +35,16 @@
 
 namespace flt {
 
+// The largest magnitude of a measured height (mm) or slope (mm/mm) that is
+// a sample: beyond it (or not finite) a sample is invalid. No sensor
+// measures a kilometre, and the squares of such values would overflow the
+// normal equations into NaN (fuzz_recon found -2e307).
+constexpr double k_max_sample = 1.0e9;
+// Its bit pattern: for a double x, |x| <= k_max_sample exactly when the
+// bits of |x| (sign cleared) are at most these as unsigned integers (NaN's
+// are larger), a test that vectorises as integers.
+constexpr std::uint64_t k_max_sample_bits = 0x41CDCD6500000000ull;
+
 struct recon_params {
     double knot_spacing = 100.0;   // L, mm (resolved, > 0)
     double laser_spacing = 100.0;  // D, mm

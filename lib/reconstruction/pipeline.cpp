@@ -32,17 +32,18 @@ inline double fiber_index(std::size_t k) { return double(static_cast<std::int32_
 #define FLT_SPLIT_KERNEL
 #endif
 
-// True when every value is finite and (valid == nullptr or) every valid
-// byte is set: the common row, which takes the vectorised path. Integer
-// tests (an all-ones exponent is inf or NaN) so that the loop vectorises.
+// True when every value is a sample (finite, at most k_max_sample in
+// magnitude) and (valid == nullptr or) every valid byte is set: the common
+// row, which takes the vectorised path. Integer tests on the bits so that
+// the loop vectorises.
 FLT_SPLIT_KERNEL bool row_complete(std::size_t K, const double *__restrict value,
                                    const std::uint8_t *__restrict valid) {
-    constexpr std::uint64_t exponent = 0x7ff0000000000000ull;
+    constexpr std::uint64_t magnitude = 0x7fffffffffffffffull;
     std::uint64_t bad = 0;
     for (std::size_t k = 0; k < K; ++k) {
         std::uint64_t u;
         std::memcpy(&u, value + k, sizeof u);
-        bad |= (u & exponent) == exponent ? 1u : 0u;
+        bad |= (u & magnitude) > k_max_sample_bits ? 1u : 0u;
     }
     if (valid) {
         unsigned missing = 0;
@@ -192,7 +193,8 @@ void recon_pipeline::split(double s, const double *value, const std::uint8_t *va
         line_sums(K_, centre, value, nullptr, sums);
     } else {
         for (std::size_t k = 0; k < K_; ++k) {
-            const bool ok = (valid == nullptr || valid[k] != 0) && std::isfinite(value[k]);
+            const bool ok = (valid == nullptr || valid[k] != 0) &&
+                            std::fabs(value[k]) <= k_max_sample;  // NaN: false
             double v = 0.0;
             if (ok) {
                 v = value[k];

@@ -92,7 +92,7 @@ constexpr double k_gross = 4.0;
 // Huber: a pseudo-observation with psi(r) = r clipped at k_huber * sigma;
 // beyond k_gross * sigma the raw value with weight k_huber * sigma / |r|.
 #define FLT_WEIGH_HUBER_BODY(masked, lined, slopes)                                     \
-    const double big = std::numeric_limits<double>::max();                              \
+    const double big = k_max_sample;                              \
     std::uint64_t bits = 0; /* OR of the multipliers: the sign bit says -1 */            \
     for (std::size_t k = 0; k < K; ++k) {                                               \
         FLT_WEIGH_RESIDUAL(masked, lined, slopes)                                       \
@@ -113,7 +113,7 @@ constexpr double k_gross = 4.0;
 // Tukey: the raw value with weight (1 - u^2)^2, u = r / (k_tukey sigma),
 // 0 outside (plain IRLS).
 #define FLT_WEIGH_TUKEY_BODY(masked, lined, slopes)                                     \
-    const double big = std::numeric_limits<double>::max();                              \
+    const double big = k_max_sample;                              \
     for (std::size_t k = 0; k < K; ++k) {                                               \
         FLT_WEIGH_RESIDUAL(masked, lined, slopes)                                       \
         const double u2 = r * r * inv_var[k] * (1.0 / (k_tukey * k_tukey));             \
@@ -148,7 +148,7 @@ const weigh_kernel k_weigh[2][2][2][2] = {
 // out = in where finite, NaN elsewhere (the queues' mark of an invalid sample).
 FLT_ROBUST_KERNEL void copy_finite(std::size_t K, const double *__restrict in,
                                    double *__restrict out) {
-    const double big = std::numeric_limits<double>::max();
+    const double big = k_max_sample;
     for (std::size_t k = 0; k < K; ++k) out[k] = std::fabs(in[k]) <= big ? in[k] : k_nan;
 }
 

@@ -719,6 +719,48 @@ static void robust_streaming_with_rows_sparser_than_knots(void **state) {
     flt_recon_destroy(rc);
 }
 
+static void absurd_values_are_invalid_samples(void **state) {
+    (void)state;
+    /* A finite but absurd reading (beyond 1e9 mm or mm/mm) is no sample:
+     * it is flagged and bridged like a NaN, in every mode (its square
+     * would overflow the sums into NaN output; fuzz_recon found -2e307). */
+    const size_t K = 5;
+    test_sheet *t = test_sheet_make(1000, K, 0.0, REF_DX, 0.0, 200.0, LASER, 21);
+    /* From the 11th row on: a fiber missing before it was ever seen leaves
+     * the rigid split's line (recon.h), a different, documented effect. */
+    for (size_t i = 10 * K + 1; i < t->rows * K; i += 97) {
+        t->height[i] = (i % 2) ? 2e307 : -3e9;
+        t->slope[i] = (i % 3) ? -1e300 : 5e9;
+    }
+    for (int mode = 0; mode < 3; ++mode) {
+        flt_options *o = NULL;
+        assert_int_equal(flt_options_create(&o), FLT_OK);
+        assert_int_equal(flt_options_set(o, FLT_OPT_RIGID_MOTION, mode >= 1), FLT_OK);
+        assert_int_equal(flt_options_set(o, FLT_OPT_ROBUST, mode == 2), FLT_OK);
+        double *z = alloc_rows(t->rows, K);
+        uint8_t *flags = malloc(t->rows * K);
+        assert_int_equal(flt_reconstruct(o, t->rows, K, t->s, t->height, t->slope, NULL, z, flags),
+                         FLT_OK);
+        flt_options_destroy(o);
+        size_t flagged = 0;
+        for (size_t i = 0; i < t->rows * K; ++i) {
+            assert_true(isfinite(z[i]));
+            flagged += (flags[i] & FLT_FLAG_INVALID_INPUT) != 0;
+        }
+        double mx, rms;
+        test_error(t, z, 0, t->rows, &mx, &rms);
+        print_message("absurd values, mode %d: %zu samples flagged, max error %.3g mm\n", mode,
+                      flagged, mx);
+        assert_int_equal(flagged, (t->rows * K - (10 * K + 1) + 96) / 97);
+        /* Bridged like missing samples: exact without rigid_motion, within
+         * its missing-fiber bound (0.03 mm) with it. */
+        assert_true(mx <= (mode ? 0.03 : 1e-3));
+        free(z);
+        free(flags);
+    }
+    test_sheet_free(t);
+}
+
 static void options_are_reported_back(void **state) {
     (void)state;
     flt_options *o = NULL;
@@ -1113,6 +1155,7 @@ int main(void) {
         cmocka_unit_test(buffer_full_then_pull_recovers),
         cmocka_unit_test(buffer_full_with_nothing_finished_says_why),
         cmocka_unit_test(robust_streaming_with_rows_sparser_than_knots),
+        cmocka_unit_test(absurd_values_are_invalid_samples),
         cmocka_unit_test(bad_input_is_rejected_and_handle_stays_usable),
         cmocka_unit_test(options_are_reported_back),
         cmocka_unit_test(finer_knots_than_laser_spacing_stay_exact),
