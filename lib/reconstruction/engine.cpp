@@ -20,9 +20,10 @@ constexpr double k_stiffness[4][4] = {
     {6.0, 2.0, -6.0, 4.0},
 };
 
-// The ridge on every knot height, relative to one height sample. Only there
-// so that a fiber with no height at all still has a regular system; its
-// effect on measured fibers is below 1e-12 of the data.
+// The ridge on every knot height, relative to one height sample (or to one
+// slope sample when that weighs more, see the constructor). Only there so
+// that a fiber with no height at all still has a regular system; its effect
+// on measured fibers is below 1e-12 of the data.
 constexpr double k_ridge = 1e-12;
 
 // Largest knot span of one row we size scratch arrays for (the API allows
@@ -272,7 +273,12 @@ recon_engine::recon_engine(std::size_t fibers, const recon_params &params,
     // Priors are relative to one height sample: they live in Rp_ unweighted
     // and are scaled by each fiber's height weight.
     w_curv_ = p_.curvature_weight;
-    w_ridge_ = k_ridge;
+    // The ridge must stay above the rounding of the strongest term, or a
+    // fiber with slopes but no height yet has a numerically singular level
+    // (NaN knots that later heights cannot repair): relative to the slope
+    // weight too when that is the larger (a laser spacing of 0.36 mm puts
+    // the slope weight 5e7 times above the height weight; fuzz_recon).
+    w_ridge_ = k_ridge * std::max(1.0, w_g_ / w_h_);
     w_curv_jump_ = p_.curvature_jump_weight;
 
     factor_cap_ = knot_capacity;

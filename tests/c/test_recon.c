@@ -761,6 +761,38 @@ static void absurd_values_are_invalid_samples(void **state) {
     test_sheet_free(t);
 }
 
+static void slopes_before_heights_with_close_lasers_stay_finite(void **state) {
+    (void)state;
+    /* Lasers 0.36 mm apart weigh a slope 5e7 times a height: a fiber with
+     * only slopes so far had a numerically singular level, its knots went
+     * NaN, and the height that came later could not repair them (a NaN
+     * without a flag; fuzz_recon). The ridge now scales with the stronger
+     * weight. Fiber 0: a slope at row 0, a height at row 1, both at row 2;
+     * rows 178 and 65 knots apart. */
+    flt_options *o = NULL;
+    assert_int_equal(flt_options_create(&o), FLT_OK);
+    assert_int_equal(flt_options_set(o, FLT_OPT_LASER_SPACING, 0.3598211333155632), FLT_OK);
+    flt_recon *rc = make_recon(2, o);
+    flt_options_destroy(o);
+    const double s[3] = {0.5, 64.75, 88.25};
+    const double h[6] = {-INFINITY, 0.4, 9.6093749860301614, 0.18037682399153709, 0.92, 0.92};
+    const double g[6] = {1e-4, 0.004, INFINITY, -INFINITY, 0.0092, 0.0092};
+    assert_int_equal(flt_recon_push(rc, 3, 2, s, h, g, NULL), FLT_OK);
+    assert_int_equal(flt_recon_end_sheet(rc), FLT_OK);
+    double s_out[3], z[6];
+    uint8_t flags[6];
+    size_t n = 0;
+    assert_int_equal(flt_recon_pull(rc, 3, 2, s_out, z, flags, &n), FLT_OK);
+    assert_int_equal(n, 3);
+    for (int i = 0; i < 6; ++i) {
+        print_message("row %d fiber %d: z %g flags %d\n", i / 2, i % 2, z[i], flags[i]);
+        assert_true(isfinite(z[i]) || (flags[i] & FLT_FLAG_NO_DATA));
+    }
+    /* The height the fiber has is reproduced where it was measured. */
+    assert_true(isfinite(z[2]));
+    flt_recon_destroy(rc);
+}
+
 static void options_are_reported_back(void **state) {
     (void)state;
     flt_options *o = NULL;
@@ -1156,6 +1188,7 @@ int main(void) {
         cmocka_unit_test(buffer_full_with_nothing_finished_says_why),
         cmocka_unit_test(robust_streaming_with_rows_sparser_than_knots),
         cmocka_unit_test(absurd_values_are_invalid_samples),
+        cmocka_unit_test(slopes_before_heights_with_close_lasers_stay_finite),
         cmocka_unit_test(bad_input_is_rejected_and_handle_stays_usable),
         cmocka_unit_test(options_are_reported_back),
         cmocka_unit_test(finer_knots_than_laser_spacing_stay_exact),
