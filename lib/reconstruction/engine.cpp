@@ -311,12 +311,11 @@ recon_engine::recon_engine(std::size_t fibers, const recon_params &params,
 
 }
 
-long recon_engine::interval_of(double p) const {
-    return long(std::floor((p - t0_) / L_));
-}
 
-void recon_engine::basis(double p, long i, double w[4]) const {
-    hermite_weights((p - knot_pos(i)) / L_, w);
+void recon_engine::basis(double p, long i, double w[4]) const { basis_on(t0_, p, i, w); }
+
+void recon_engine::basis_on(double t0, double p, long i, double w[4]) const {
+    hermite_weights((p - (t0 + double(i) * L_)) / L_, w);
 }
 
 double *recon_engine::hist_at(long j) {
@@ -976,17 +975,13 @@ void recon_engine::predict_saved(const double *saved, double saved_t0, double s,
                                  double *height_out, double *dslope_out) const {
     // The saved sheet's knot grid: the same as predict() on it, without the
     // checks (every knot under a row of that sheet was solved at its end).
-    auto interval = [&](double p) { return long(std::floor((p - saved_t0) / L_)); };
-    auto basis_at = [&](double p, long i, double w[4]) {
-        hermite_weights((p - (saved_t0 + double(i) * L_)) / L_, w);
-    };
     const double p1 = s - 0.5 * D_, p2 = s + 0.5 * D_;
-    const long i1 = interval(p1);
-    const long i2 = std::min(interval(p2), i1 + S_ - 2);
+    const long i1 = interval_on(saved_t0, p1);
+    const long i2 = std::min(interval_on(saved_t0, p2), i1 + S_ - 2);
     if (i1 < 0) throw error(FLT_ERR_INTERNAL, "predict_saved before the saved sheet");
     double b1[4], b2[4];
-    basis_at(p1, i1, b1);
-    basis_at(p2, i2, b2);
+    basis_on(saved_t0, p1, i1, b1);
+    basis_on(saved_t0, p2, i2, b2);
     auto at = [&](long j) { return saved + (std::size_t(j) % hist_cap_) * 2 * K_; };
     predict_row(K_, b1, b2, at(i1), at(i1 + 1), at(i2), at(i2 + 1), height_out, dslope_out);
 }

@@ -28,6 +28,7 @@
 //   samples (down). Everything is allocated in the constructor.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -136,8 +137,11 @@ public:
 
 private:
     // ---- geometry ----
-    long interval_of(double p) const;  // knot interval containing p
+    long interval_of(double p) const { return interval_on(t0_, p); }  // knot interval of p
     double knot_pos(long j) const { return t0_ + double(j) * L_; }
+    // The same on the grid of a strip starting at t0 (a saved solution's).
+    long interval_on(double t0, double p) const { return long(std::floor((p - t0) / L_)); }
+    void basis_on(double t0, double p, long i, double w[4]) const;
     // Hermite basis at p on interval i: weights of (z_i, m_i, z_i+1, m_i+1).
     void basis(double p, long i, double w[4]) const;
 

@@ -145,11 +145,11 @@ const weigh_kernel k_weigh[2][2][2][2] = {
       {weigh_tukey_masked_lh, weigh_tukey_masked_lg}}},
 };
 
-// out = in where finite, NaN elsewhere (the queues' mark of an invalid sample).
-FLT_ROBUST_KERNEL void copy_finite(std::size_t K, const double *__restrict in,
+// out = in where it is a sample (finite, at most k_max_sample), NaN elsewhere
+// (the queues' mark of an invalid sample).
+FLT_ROBUST_KERNEL void copy_sample(std::size_t K, const double *__restrict in,
                                    double *__restrict out) {
-    const double big = k_max_sample;
-    for (std::size_t k = 0; k < K; ++k) out[k] = std::fabs(in[k]) <= big ? in[k] : k_nan;
+    for (std::size_t k = 0; k < K; ++k) out[k] = std::fabs(in[k]) <= k_max_sample ? in[k] : k_nan;
 }
 
 // A completed block's estimate per fiber: the clipped mean as a Gaussian
@@ -357,8 +357,8 @@ void recon_chain::enqueue(std::size_t stage, double s, const double *height,
     // Invalid samples (masked, NaN or infinite) are stored as NaN: the
     // stages and the scale estimate then need no mask.
     double *qh = q.height.get() + r * K_, *qg = q.slope.get() + r * K_;
-    copy_finite(K_, height, qh);
-    copy_finite(K_, slope, qg);
+    copy_sample(K_, height, qh);
+    copy_sample(K_, slope, qg);
     if (valid)
         for (std::size_t k = 0; k < K_; ++k)
             if (!valid[k]) qh[k] = qg[k] = k_nan;

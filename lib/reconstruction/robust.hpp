@@ -53,8 +53,6 @@ public:
                  double initial_sigma);
     double *sum() { return sum_.data(); }
     double *count() { return count_.data(); }
-    // Rows until the current block completes (>= 1).
-    std::size_t rows_to_block() const { return block_rows_ - rows_; }
     // One row was added. Returns true when a block completed and the scales
     // changed.
     bool end_row();
