@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # ctest's csharp.example: restore the example against the freshly packed
 # Flatline package (local feed + offline folder), then run it.
 # -D DOTNET PROJECT FEED OFFLINE PACKAGES ARTIFACTS VERSION

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Builds the flatline package by driving CMake on the libflatline source tree.
 
 setuptools (Debian's python3-setuptools) is the build backend; the work is

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /*
  * Acquisition loop: a real USB3 Vision camera when one is connected,
  * otherwise a simulated U3V camera rendering the simulated sensor, both

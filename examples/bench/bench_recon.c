@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /*
  * Benchmark of the Hermite reconstructor on the reference's production sheet:
  * 6000 mm x 2300 mm at 3 mm x 2 mm, i.e. 2000 rows x 1150 fibers

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Example: calibrates a dual-line-laser sensor and writes its calibration
 // file.
 //

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: Apache-2.0
 """Generates the example dataset of examples/calibrate (committed in data/).
 
 The reference sensor of tests/c/calib_synth.h in its 2x2-binned mode, so the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A SCADA-style loop around the Flatline C# binding: camera frames from the
 // simulated line go through the extractor (frame -> profile row) and the
 // streaming reconstructor (rows -> flatness map), a cycle of frames at a

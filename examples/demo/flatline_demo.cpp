@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /*
  * The simulated line, end to end: camera frames -> extractor -> streaming
  * reconstructor with carry-over across sheets -> flatness per sheet.

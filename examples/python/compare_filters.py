@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Reruns the reference's three synthetic experiments and compares
 libflatline's Hermite reconstructor against the reference's four classic
 filters (issue 7).

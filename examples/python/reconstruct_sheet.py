@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Simulates the reference sheet with libflatline's simulated sensor,
 reconstructs it, and plots raw against reconstructed heights to PNG files.
 

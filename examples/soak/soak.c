@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /*
  * Endurance run (issue 10; not a CI test): the simulated line streamed for
  * the equivalent of one hour of production at 120 m/min, 2.4 million rows

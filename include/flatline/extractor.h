@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /*
  * libflatline - the frame-to-profile extractor: camera frame -> one profile
  * row (height, slope and validity per fiber).

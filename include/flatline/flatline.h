@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /*
  * libflatline - online flatness gauge for steel strip from a dual-line-laser
  * and camera sensor. This umbrella header includes every public header.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /*
  * libflatline - flatness metrics: I-Units per fiber and per zone, the largest
  * wave, the shape class, bow and crossbow.

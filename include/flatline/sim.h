@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /*
  * libflatline - the simulated sensor, the built-in default frame source.
  *

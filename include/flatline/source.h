@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /*
  * libflatline - frame sources: a USB3 Vision camera (over libusb-1.0, no
  * camera SDK), recorded image sequences and the simulator, behind one handle.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The C entry points of the calibration model: argument checks, then the
 // numerical pieces in camera.cpp, homography.cpp, intrinsics.cpp and
 // calib_io.cpp.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The calibration file: JSON text, version 1 (documented in calib.h).
 //
 // A small strict reader instead of a general JSON library: the format is

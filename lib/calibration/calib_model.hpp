@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Internal: the calibration model behind flt_calib, and the numerical pieces
 // the C entry points (calib.cpp) and the file reader (calib_io.cpp) share.
 //

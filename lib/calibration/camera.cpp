@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // OpenCV's lens distortion model, forward and inverse, written out here so
 // that mapping allocates nothing and inverts to 1e-10 px (cv::undistortPoints
 // stops after a fixed number of fixed-point steps, which leaves tenths of a

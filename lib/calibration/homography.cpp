@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Laser-plane homographies: normalised DLT (Hartley), Levenberg-Marquardt
 // refinement of the image reprojection error, and RANSAC.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Camera intrinsics from images of a planar target, through OpenCV:
 // detection, sub-pixel refinement, calibrateCamera.
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Internal: the thread-local error state and the guard that keeps C++
 // exceptions from crossing the C boundary. Every extern "C" entry point of
 // the library is written as

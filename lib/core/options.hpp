@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Internal: the option registry and the flt_options bag.
 //
 // Every option key is described once, in the table in options.cpp: its

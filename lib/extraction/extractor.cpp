@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The frame-to-profile extractor (flatline/extractor.h): per column and laser
 // the strongest valid peak in the laser's band, its sub-pixel row from the
 // Savitzky-Golay derivative, the calibrated map to (x, z), and the resampling

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Internal: the extractor's per-frame kernels.
 //
 // band_maximum: a running maximum over the band's rows, row-major, so every

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The C entry points of the flatness metrics: argument checks, the streaming
 // window buffer, and the results of the last window.
 #include <algorithm>

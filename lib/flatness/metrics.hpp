@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Internal: the flatness computation of one window (flatline/flatness.h),
 // independent of how the rows arrived (whole sheet or streamed buffer).
 #pragma once

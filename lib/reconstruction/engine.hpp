@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Internal: the streaming Hermite reconstruction engine behind flt_recon and
 // flt_reconstruct().
 //

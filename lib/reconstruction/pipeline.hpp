@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Internal: the reconstructor as the C API sees it. Wraps recon_engine with
 // the rigid-motion split.
 //

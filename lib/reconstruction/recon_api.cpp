@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The C entry points of the reconstructor: argument checks, then the engine.
 #include <algorithm>
 #include <cmath>

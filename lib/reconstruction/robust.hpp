@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Internal: robust reconstruction, an M-estimator (Huber or Tukey) that
 // streams.
 //

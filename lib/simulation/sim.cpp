@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The simulated sensor (flatline/sim.h): sheet model, motion and noise,
 // profile rows and rendered camera frames, with ground truth.
 #include <algorithm>

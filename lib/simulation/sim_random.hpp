@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Internal: the simulator's deterministic random numbers. Every draw of frame
 // f comes from a generator seeded with (seed, f, stream), so a frame's noise
 // does not depend on how many draws earlier frames made or on the call order.

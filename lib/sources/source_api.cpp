@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The frame-source handle (flatline/source.h): simulator, image sequences
 // and USB3 Vision cameras behind one interface, with encoder positions; and
 // the C API of the simulated USB3 Vision bus.

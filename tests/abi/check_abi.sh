@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # Compares a built libflatline.so with the committed ABI baseline
 # (tests/abi/libflatline.abi) and fails on any change that breaks binaries
 # built against the baseline. Policy and baseline updates: tests/abi/README.md.

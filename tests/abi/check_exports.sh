@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # Asserts that a shared library exports only flt_* symbols: everything else
 # (the C++ runtime, Eigen, OpenCV, libusb, zlib, expat, the library's own
 # C++ internals) must stay hidden, or it would clash with the vendor's copies

@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # Writes the ABI of a libflatline.so as libabigail XML to stdout: what the
 # flt_* symbols reach, public-header types only (the handles' layouts are
 # private), no source locations, type ids hashed from the types and the

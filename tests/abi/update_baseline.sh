@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # Records the current ABI of libflatline as the baseline the abi.abidiff test
 # compares against. Run it only for a deliberate ABI change (see README.md):
 #   tests/abi/update_baseline.sh [BUILD_DIR]      (default: build/dev)

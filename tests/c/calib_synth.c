@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "calib_synth.h"
 
 #include <math.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /*
  * The synthetic sensor of the calibration tests: the reference camera
  * (2048 x 2048 px, f = 6 mm, 5.5 um pixels, barrel distortion of a 6 mm lens)

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /*
  * Test helper: the reference's synthetic sheet and a two-laser measurement
  * of it (DESIGN.md, "Reference numbers").

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /*
  * The bad-input matrix (issue 10): every exported function of libflatline
  * against the inputs a careless or hostile caller gives it.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /*
  * Calibration model: handle life cycle and argument checks, laser-plane
  * homographies on the synthetic reference sensor (tests/c/calib_synth.h),

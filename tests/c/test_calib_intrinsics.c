@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /*
  * Camera intrinsics from rendered target images: 12 views of a
  * 10 x 7-square chessboard (9 x 6 inner corners, 60 mm squares), and of

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /*
  * Calibration files: exact round trips, and one test per malformed-file
  * case (truncated, missing field, extra field, wrong type, NaN, unknown

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /* The conventions every component relies on: status names, the thread-local
  * error message, versions, and the options bag. */
 #include <math.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /*
  * Frame-to-profile extractor against the simulated sensor's ground truth:
  * peak accuracy, height accuracy and validity, spurious reflections, end to

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /* "No allocation in per-frame hot paths": counts every malloc/calloc/realloc
  * made by libflatline (and the C++ runtime under it) while the simulator
  * renders frames and profile rows and the extractor turns frames into rows,

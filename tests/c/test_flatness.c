@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /*
  * Flatness metrics: I-Units, waves and steepness against analytic sines,
  * reference choice, zones, invalid rows, streaming windows against

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /*
  * Flatness shape classes on simulated sheets: every defect of the
  * simulator (flatline/sim.h) under the reference noise, reconstructed and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /* The streaming Hermite reconstructor against ground truth (issue 2).
  *
  * The reference sheet (tests/c/sheet.h): 12 mm centre buckle + wavy edges,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /* "No allocation in per-row hot paths": counts every malloc/calloc/realloc
  * made by libflatline (and the C++ runtime under it) while a reconstructor
  * streams rows, finishes sheets and resets. The counting allocator interposes

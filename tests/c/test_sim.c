@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /*
  * Simulated sensor: the sheet model, the two-laser operators of the profile
  * rows, the motion and noise model against independent formulas, rendered

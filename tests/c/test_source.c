@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /*
  * Frame sources (flatline/source.h): the simulator behind flt_source gives
  * the simulator's own bytes and encoder positions; image sequences read

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /*
  * Threads (issue 10): N threads, each with its own simulator, extractor and
  * reconstructor, all made from ONE finished calibration that they share

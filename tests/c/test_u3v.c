@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /*
  * USB3 Vision client against the simulated camera (flatline/source.h): the
  * real client code (discovery, GenCP, bootstrap, GenICam XML, SIRM set-up,

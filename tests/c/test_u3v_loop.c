@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /*
  * The loop: simulated sensor -> simulated USB3 Vision camera (leader,
  * payload in USB transfers, encoder chunk, trailer) -> flt_source ->

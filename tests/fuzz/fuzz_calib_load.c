@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /* libFuzzer harness: the calibration file loader, flt_calib_load_text().
  * Any input must give FLT_OK or FLT_ERR_FORMAT (never a crash, never
  * another status); an accepted model must save and load again to the same

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /* libFuzzer harness: the frame-to-profile extractor fed random frames and
  * options. A frame rendered by the simulator (a window of the reference
  * sensor where both lines lie) is patched with the input's bytes (runs

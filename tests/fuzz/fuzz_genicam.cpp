@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // libFuzzer harness: the GenICam XML and ZIP reader of the USB3 Vision
 // client (lib/sources/u3v/genicam.cpp, internal: flt::u3v::unzip_single,
 // genicam_map::parse and resolve). The first byte picks the input's form:

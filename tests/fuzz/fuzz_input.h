@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /* Reading a fuzzer's bytes as typed values; past the end everything is 0. */
 #ifndef FLT_FUZZ_INPUT_H
 #define FLT_FUZZ_INPUT_H

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /* libFuzzer harness: the streaming reconstructor fed random sequences of
  * push / pull / end_sheet / reset / boundary / ready with random options and
  * random values (NaN, Inf, huge, negative, any bit pattern), and the

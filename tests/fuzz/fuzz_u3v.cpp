@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // libFuzzer harness: the USB3 Vision packet parsers of the client
 // (lib/sources/u3v/camera.cpp, internal: flt::u3v::camera). The real client
 // opens a simulated camera (lib/sources/u3v/sim_camera.cpp) through a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /* Writes the seed corpus of the fuzzing harnesses into tests/fuzz/corpus/
  * (committed; rerun only to regenerate it):
  *   cc -std=c99 -Iinclude tests/fuzz/make_seeds.c -Lbuild/dev/lib -lflatline \

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /* Runs a libFuzzer harness over files, without libFuzzer: the ctest test
  * fuzz.<harness> replays the committed seed corpus and the regression
  * inputs of crashes found (tests/fuzz/regressions/<harness>/) in every

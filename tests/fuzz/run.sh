@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Builds the libFuzzer harnesses with Debian's clang and runs each for a
 # bounded time under AddressSanitizer + UndefinedBehaviorSanitizer; fails on
 # any crash, sanitizer report, leak, timeout (10 s per input) or out-of-memory

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /* The calibration model (include/flatline/calib.h). */
 %{
 #include "flatline/calib.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /*
  * Conventions shared by every component (include/flatline/common.h):
  * status codes, errors, strings, sizes, handles, arrays, options, version.

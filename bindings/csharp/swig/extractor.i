@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /* The frame-to-profile extractor (include/flatline/extractor.h). */
 %{
 #include "flatline/extractor.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /* Flatness metrics (include/flatline/flatness.h). */
 %{
 #include "flatline/flatness.h"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /* The streaming Hermite reconstructor (include/flatline/recon.h). */
 %{
 #include "flatline/recon.h"

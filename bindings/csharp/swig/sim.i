@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /* The simulated sensor (include/flatline/sim.h). */
 %{
 #include "flatline/sim.h"

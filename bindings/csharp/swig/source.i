@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /* Frame sources and the simulated USB3 Vision bus
  * (include/flatline/source.h). */
 %{

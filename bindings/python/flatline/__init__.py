@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """libflatline for Python: online flatness of steel strip from a
 dual-line-laser + camera sensor.
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Type stubs for the public API of flatline (the package is typed: py.typed).
 # Arrays: numpy float64, rows along travel x fibers; lengths in mm, slopes in
 # mm/mm.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Conversion of array-like arguments to what the C API reads.
 
 The C API takes C-contiguous, native-endian float64 (and uint8 masks).

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The calibration model (flatline/calib.h): camera intrinsics and lens
 distortion, one homography per laser plane, and the sensor geometry."""
 

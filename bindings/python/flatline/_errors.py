@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The exception hierarchy: one class per C status code (flatline/common.h).
 
 Every failed C call raises a subclass of :class:`FlatlineError` carrying the C

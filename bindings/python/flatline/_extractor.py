@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The frame-to-profile extractor (flatline/extractor.h): one camera frame
 in, one profile row (height, slope, validity per fiber) out."""
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Flatness metrics (flatline/flatness.h): I-Units per fiber and per zone,
 the largest wave, the shape class, bow and crossbow, from reconstructed
 rows."""

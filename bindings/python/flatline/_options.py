@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Keyword options: the C option names (flatline/common.h), mapped generically.
 
 Nothing here lists the options: the table comes from the library itself

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Pixel formats of camera frames (flatline/extractor.h), shared by the
 extractor and the simulated sensor."""
 

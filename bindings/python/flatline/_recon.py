@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The streaming Hermite reconstructor (flatline/recon.h)."""
 
 from __future__ import annotations

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The simulated sensor (flatline/sim.h): a synthetic sheet seen by the two
 lasers, as profile rows or as rendered camera frames, with ground truth."""
 

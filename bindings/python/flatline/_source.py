@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Frame sources (flatline/source.h): the simulator, recorded image
 sequences and USB3 Vision cameras behind one class, plus the simulated USB3
 Vision bus for testing acquisition without hardware."""

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /*
  * flatline/common.h: status codes, errors, version, options.
  *

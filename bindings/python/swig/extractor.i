@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /*
  * flatline/extractor.h: camera frame -> one profile row (and the pixel
  * formats, which the simulator shares).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /*
  * The low-level module flatline.capi (SWIG's proxy capi.py over the
  * extension _capi.so), generated from the public C headers. User code imports

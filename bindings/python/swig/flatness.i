@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /*
  * flatline/flatness.h: I-Units per fiber and zone, waves, shape class, bow
  * and crossbow.

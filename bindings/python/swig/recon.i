@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /*
  * flatline/recon.h: the streaming Hermite reconstructor.
  *

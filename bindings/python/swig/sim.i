@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /*
  * flatline/sim.h: the simulated sensor (and the reference-sensor
  * calibration, flt_calib_create_reference).

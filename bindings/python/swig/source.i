@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /*
  * flatline/source.h: frame sources (simulator, image sequences, USB3 Vision
  * cameras), the camera list and the simulated USB3 Vision bus.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Shared fixtures: reference sheets and a ctypes view of the very libflatline
 the extension loaded (for bit-for-bit comparisons with the C API)."""
 

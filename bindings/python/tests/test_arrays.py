@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """numpy conversion: what is accepted, what is refused (with the argument's
 name), and that nothing crashes, including direct calls of the raw layer."""
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The calibration model through Python: the reference sensor, setters and
 getters, finishing, files (round trip and every error mapping), mapping,
 estimation of homographies and intrinsics, lifetime."""

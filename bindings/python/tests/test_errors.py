@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Every C status maps to its exception class, and every status Python can
 trigger is raised by the real C path with the library's message."""
 

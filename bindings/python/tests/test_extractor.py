@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The frame-to-profile extractor through Python, against the simulated
 sensor's ground truth: rows, peaks, frames without copies, 16-bit frames,
 the streaming pipeline, errors."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Flatness: I-Units of analytic sines, results equal to the C API's bit for
 bit, streaming windows, flags, errors and lifetime."""
 

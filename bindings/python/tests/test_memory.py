@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Memory: creating and destroying reconstructors, and repeating large calls,
 leaves the resident set flat."""
 

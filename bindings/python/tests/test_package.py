@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Package surface: versions, option table, constants, typing files."""
 
 import ast

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The reconstructor's behaviour through Python: accuracy, flags, streaming,
 carry-over, lifetime."""
 

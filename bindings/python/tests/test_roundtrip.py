@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Python results equal the C API's, bit for bit, on the same input. The
 reference side calls the very libflatline the extension loaded through
 ctypes, so any difference would be the binding's (a conversion, a copy with a

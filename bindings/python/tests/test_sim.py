@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The simulated sensor through Python: the sheet and its ground truth,
 profile rows, rendered frames, determinism, errors, lifetime."""
 

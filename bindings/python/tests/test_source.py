@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Frame sources: the simulator, image sequences and the simulated USB3
 Vision camera (features, counters, injected faults and their errors), the
 camera -> Source -> Extractor -> reconstruct loop bit for bit, lifetimes."""

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Threads: each thread with its own reconstructor gets exactly the serial
 results, and the GIL is really released during the C calls."""
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The USB3 Vision client over the transport interface.
 #include "sources/u3v/camera.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Internal: the USB3 Vision client - discovery, GenCP control channel,
 // bootstrap registers, GenICam features, stream set-up and the transfer
 // pool assembled into frames with accounting of every failure mode.

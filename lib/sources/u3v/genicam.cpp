@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The GenICam XML: ZIP reader (one deflated entry, through zlib's raw
 // inflate), expat parser, feature resolution for the simple node kinds.
 #include "sources/u3v/genicam.hpp"

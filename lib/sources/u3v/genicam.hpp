@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Internal: the GenICam XML of a camera - unzipping it, parsing it (expat)
 // and resolving a feature name to a register for the simple node kinds.
 #pragma once

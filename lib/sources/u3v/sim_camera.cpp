@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The simulated USB3 Vision camera: descriptors, a register map answering
 // GenCP, a manifest with a (zipped) GenICam XML, and a stream of leader,
 // payload and trailer transfers with USB bulk packet semantics and

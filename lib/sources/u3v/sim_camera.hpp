@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Internal: a simulated USB bus with USB3 Vision cameras behind the
 // transport interface (see flatline/source.h, "Simulated USB3 Vision
 // cameras", for its behaviour as the tests see it).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Internal: the seam in front of every libusb call the USB3 Vision client
 // makes. Two implementations: libusb-1.0 (transport_libusb.cpp) and the
 // simulated bus (sim_camera.cpp), so the real client code runs in the tests.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The transport over libusb-1.0. Every libusb call of the library is here.
 #include <libusb.h>
 

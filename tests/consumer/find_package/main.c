@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 /* Links the installed libflatline from plain C and reconstructs a sine. */
 #include <math.h>
 #include <stdio.h>
