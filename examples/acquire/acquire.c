@@ -21,26 +21,34 @@ static double now_s(void) {
 }
 
 /* Reporting calls that cannot fail on a live handle; say so if one does. */
-static void report_error(void) { fprintf(stderr, "%s\n", flt_last_error_message()); }
+static void report_error(void) {
+    fprintf(stderr, "%s\n", flt_last_error_message());
+}
 
 static int check(flt_status st, const char *what) {
-    if (st == FLT_OK) return 0;
+    if (st == FLT_OK)
+        return 0;
     fprintf(stderr, "%s: %s (%s)\n", what, flt_status_string(st), flt_last_error_message());
     return 1;
 }
 
 static void report(const flt_source *src, double seconds, double megabytes) {
     uint64_t frames = 0, dropped = 0, lost = 0, timeouts = 0;
-    if (flt_source_count(src, FLT_COUNT_FRAMES, &frames) != FLT_OK) report_error();
-    if (flt_source_count(src, FLT_COUNT_DROPPED, &dropped) != FLT_OK) report_error();
-    if (flt_source_count(src, FLT_COUNT_LOST, &lost) != FLT_OK) report_error();
-    if (flt_source_count(src, FLT_COUNT_TIMEOUTS, &timeouts) != FLT_OK) report_error();
+    if (flt_source_count(src, FLT_COUNT_FRAMES, &frames) != FLT_OK)
+        report_error();
+    if (flt_source_count(src, FLT_COUNT_DROPPED, &dropped) != FLT_OK)
+        report_error();
+    if (flt_source_count(src, FLT_COUNT_LOST, &lost) != FLT_OK)
+        report_error();
+    if (flt_source_count(src, FLT_COUNT_TIMEOUTS, &timeouts) != FLT_OK)
+        report_error();
     printf("%8.2f s  %6llu frames  %7.1f frames/s  %7.1f MB/s  dropped %llu  lost %llu  "
            "timeouts %llu\n",
            seconds, (unsigned long long)frames, (double)frames / seconds, megabytes / seconds,
            (unsigned long long)dropped, (unsigned long long)lost, (unsigned long long)timeouts);
     const char *why = flt_source_stream_error(src);
-    if (why[0]) printf("          last stream error: %s\n", why);
+    if (why[0])
+        printf("          last stream error: %s\n", why);
 }
 
 int main(int argc, char **argv) {
@@ -55,7 +63,8 @@ int main(int argc, char **argv) {
     flt_camera_list *list = NULL;
     size_t cameras = 0;
     if (flt_camera_list_create(NULL, &list) == FLT_OK) {
-        if (flt_camera_list_count(list, &cameras) != FLT_OK) report_error();
+        if (flt_camera_list_count(list, &cameras) != FLT_OK)
+            report_error();
         for (size_t i = 0; i < cameras; ++i) {
             const char *vendor, *model, *sn;
             uint32_t speed;
@@ -77,16 +86,20 @@ int main(int argc, char **argv) {
             check(flt_sim_add_defect(sim, FLT_SIM_CENTRE_BUCKLE, 5.0, 1800.0), "defect") ||
             check(flt_u3v_sim_create(&bus), "bus") ||
             check(flt_u3v_sim_add_camera(bus, "Flatline", "Simulated sensor", "SIM-1", 2048, 256,
-                                         FLT_PIXEL_MONO8, NULL), "camera") ||
+                                         FLT_PIXEL_MONO8, NULL),
+                  "camera") ||
             check(flt_u3v_sim_set_frames(bus, 0, sim), "frames") ||
             check(flt_source_open_u3v(bus, NULL, NULL, &src), "open"))
             return 1;
     }
     const char *vendor = "", *model = "";
-    if (flt_source_camera_string(src, FLT_CAMERA_VENDOR, &vendor) != FLT_OK) report_error();
-    if (flt_source_camera_string(src, FLT_CAMERA_MODEL, &model) != FLT_OK) report_error();
+    if (flt_source_camera_string(src, FLT_CAMERA_VENDOR, &vendor) != FLT_OK)
+        report_error();
+    if (flt_source_camera_string(src, FLT_CAMERA_MODEL, &model) != FLT_OK)
+        report_error();
     printf("streaming from %s %s\n", vendor, model);
-    if (check(flt_source_start(src), "start")) return 1;
+    if (check(flt_source_start(src), "start"))
+        return 1;
 
     const double t0 = now_s();
     double last_print = t0, megabytes = 0.0;
@@ -97,10 +110,12 @@ int main(int argc, char **argv) {
             fprintf(stderr, "timeout: %s\n", flt_last_error_message());
             continue;
         }
-        if (check(st, "next")) break;
+        if (check(st, "next"))
+            break;
         uint32_t h = 0;
         size_t stride = 0;
-        if (flt_frame_info(frame, NULL, NULL, &h, &stride, NULL, NULL, NULL, NULL) != FLT_OK) report_error();
+        if (flt_frame_info(frame, NULL, NULL, &h, &stride, NULL, NULL, NULL, NULL) != FLT_OK)
+            report_error();
         megabytes += (double)stride * h / 1e6;
         ++n;
         const double t = now_s();

@@ -16,14 +16,14 @@
 
 #include "flatline/flatline.h"
 
-#define CHECK(call)                                                            \
-    do {                                                                       \
-        flt_status st_ = (call);                                               \
-        if (st_ != FLT_OK) {                                                   \
-            fprintf(stderr, "%s failed: %s\n", #call, flt_last_error_message()); \
-            return 1;                                                          \
-        }                                                                      \
-    } while (0)
+#define CHECK(call)                                                        \
+  do {                                                                     \
+    flt_status st_ = (call);                                               \
+    if (st_ != FLT_OK) {                                                   \
+      fprintf(stderr, "%s failed: %s\n", #call, flt_last_error_message()); \
+      return 1;                                                            \
+    }                                                                      \
+  } while (0)
 
 static double now(void) {
     struct timespec t;
@@ -42,8 +42,8 @@ int main(int argc, char **argv) {
     uint8_t *frames = malloc((size_t)FRAMES * W * H);
     double encoder[FRAMES];
     for (int f = 0; f < FRAMES; ++f)
-        CHECK(flt_sim_next_frame(sim, frames + (size_t)f * W * H, (size_t)W * H, W,
-                                 &encoder[f], 0, NULL, NULL));
+        CHECK(flt_sim_next_frame(sim, frames + (size_t)f * W * H, (size_t)W * H, W, &encoder[f], 0,
+                                 NULL, NULL));
     flt_options *o = NULL;
     CHECK(flt_options_create(&o));
     CHECK(flt_options_set(o, FLT_OPT_EXTRACT_LASER1_FIRST_ROW, 892));
@@ -60,11 +60,12 @@ int main(int argc, char **argv) {
     double elapsed = 0;
     while (elapsed < seconds) {
         for (int f = 0; f < FRAMES; ++f, ++done)
-            CHECK(flt_extractor_process(ex, frames + (size_t)f * W * H, FLT_PIXEL_MONO8, W, H,
-                                        W, encoder[f], FIBERS, &s, height, slope, valid));
+            CHECK(flt_extractor_process(ex, frames + (size_t)f * W * H, FLT_PIXEL_MONO8, W, H, W,
+                                        encoder[f], FIBERS, &s, height, slope, valid));
         elapsed = now() - start;
     }
-    for (int k = 0; k < FIBERS; ++k) valid_count += valid[k];
+    for (int k = 0; k < FIBERS; ++k)
+        valid_count += valid[k];
     printf("extractor: %zu frames of %dx%d Mono8, two 128-row bands, %d fibers: "
            "%.0f frames/s on one core (%.1f us/frame), %.1f%% fibers valid\n",
            done, W, H, FIBERS, (double)done / elapsed, 1e6 * elapsed / (double)done,

@@ -25,11 +25,11 @@
 
 #include <flatline/flatline.h>
 
-#define ROWS 2000
+#define ROWS   2000
 #define FIBERS 1150
-#define DX 3.0
-#define PITCH 2.0
-#define LASER 100.0
+#define DX     3.0
+#define PITCH  2.0
+#define LASER  100.0
 
 static double now_s(void) {
     struct timespec ts;
@@ -67,7 +67,8 @@ static double normal(double sigma) {
  * every 3000 mm from 0 (issue 7's experiment 3). */
 static double shear(double x) {
     const double pi = 3.14159265358979323846;
-    if (x < 0) return 0.0;
+    if (x < 0)
+        return 0.0;
     double u = fmod(x, 3000.0);
     return 50.0 * exp(-0.07 * u) * sin(2 * pi * u / 10.0);
 }
@@ -104,8 +105,8 @@ static void measure_rows(size_t r0, size_t rows, double *s, double *h, double *g
 
 static int check(flt_status st, const char *what) {
     if (st != FLT_OK) {
-        fprintf(stderr, "bench_recon: %s failed: %s: %s\n", what,
-                flt_status_string(st), flt_last_error_message());
+        fprintf(stderr, "bench_recon: %s failed: %s: %s\n", what, flt_status_string(st),
+                flt_last_error_message());
         exit(1);
     }
     return 0;
@@ -113,13 +114,15 @@ static int check(flt_status st, const char *what) {
 
 int main(int argc, char **argv) {
     int runs = argc > 1 ? atoi(argv[1]) : 15;
-    if (runs < 1) runs = 1;
+    if (runs < 1)
+        runs = 1;
     size_t n = (size_t)ROWS * FIBERS;
     double *s = malloc(ROWS * sizeof(double));
     double *h = malloc(n * sizeof(double)), *g = malloc(n * sizeof(double));
     double *z = malloc(n * sizeof(double));
     uint8_t *flags = malloc(n);
-    if (!s || !h || !g || !z || !flags) return 1;
+    if (!s || !h || !g || !z || !flags)
+        return 1;
     measure_rows(0, ROWS, s, h, g);
 
     printf("libflatline %s reconstructor benchmark: %d rows x %d fibers "
@@ -153,7 +156,10 @@ int main(int argc, char **argv) {
      * both together (the line channels take eight reweighted passes), and
      * Tukey. */
     add_noise(ROWS, s, h, g);
-    const struct { const char *name, *goal; int rigid, robust; } modes[] = {
+    const struct {
+        const char *name, *goal;
+        int rigid, robust;
+    } modes[] = {
         {"plain", "", 0, 0},
         {"rigid_motion", "", 1, 0},
         {"robust (Huber)", "   [goal <= 60 ms]", 0, 1},
@@ -209,7 +215,8 @@ int main(int argc, char **argv) {
         size_t pushed = 0, pulled = 0;
         for (int sh = 0; sh < sheets; ++sh) {
             measure_rows((size_t)sh * ROWS, ROWS, s, h, g);
-            if (mode) add_noise(ROWS, s, h, g);
+            if (mode)
+                add_noise(ROWS, s, h, g);
             double t0 = now_s();
             for (size_t r = 0; r < ROWS; ++r) {
                 size_t got = 0;
@@ -237,8 +244,7 @@ int main(int argc, char **argv) {
                    1e6 * total / (double)pushed);
         flt_recon_destroy(rc);
     }
-    printf("line speed: one row per %.0f us at 120 m/min with 3 mm rows\n",
-           1e6 * 0.003 / 2.0);
+    printf("line speed: one row per %.0f us at 120 m/min with 3 mm rows\n", 1e6 * 0.003 / 2.0);
     free(s);
     free(h);
     free(g);

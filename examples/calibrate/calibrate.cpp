@@ -28,9 +28,10 @@
 namespace {
 
 int check(flt_status st, const char *what) {
-    if (st == FLT_OK) return 0;
-    std::fprintf(stderr, "flt_calibrate: %s failed: %s: %s\n", what,
-                 flt_status_string(st), flt_last_error_message());
+    if (st == FLT_OK)
+        return 0;
+    std::fprintf(stderr, "flt_calibrate: %s failed: %s: %s\n", what, flt_status_string(st),
+                 flt_last_error_message());
     return 1;
 }
 
@@ -56,7 +57,8 @@ bool read_correspondences(const char *path, setup *s) {
     int line_no = 0;
     while (std::getline(in, line)) {
         ++line_no;
-        if (line.empty()) continue;
+        if (line.empty())
+            continue;
         std::istringstream ls(line[0] == '#' ? line.substr(1) : line);
         if (line[0] == '#') {
             std::string key;
@@ -78,14 +80,15 @@ bool read_correspondences(const char *path, setup *s) {
             }
             continue;
         }
-        if (line.rfind("laser,", 0) == 0) continue;  // the column header
+        if (line.rfind("laser,", 0) == 0)
+            continue;  // the column header
         int laser;
         double u, v, x, z;
         char c1, c2, c3, c4;
         if (!(ls >> laser >> c1 >> u >> c2 >> v >> c3 >> x >> c4 >> z) ||
             (laser != 0 && laser != 1)) {
-            std::fprintf(stderr, "flt_calibrate: %s:%d: cannot read '%s'\n", path,
-                         line_no, line.c_str());
+            std::fprintf(stderr, "flt_calibrate: %s:%d: cannot read '%s'\n", path, line_no,
+                         line.c_str());
             return false;
         }
         s->image[laser].insert(s->image[laser].end(), {u, v});
@@ -98,13 +101,13 @@ bool read_correspondences(const char *path, setup *s) {
 
 int main(int argc, char **argv) {
     if (argc < 4) {
-        std::fprintf(stderr,
-                     "usage: %s OUT.json CORRESPONDENCES.csv VIEW.png [VIEW.png ...]\n",
+        std::fprintf(stderr, "usage: %s OUT.json CORRESPONDENCES.csv VIEW.png [VIEW.png ...]\n",
                      argv[0]);
         return 2;
     }
     setup s;
-    if (!read_correspondences(argv[2], &s)) return 1;
+    if (!read_correspondences(argv[2], &s))
+        return 1;
 
     std::vector<cv::Mat> views;
     std::vector<const uint8_t *> pixels;
@@ -112,8 +115,8 @@ int main(int argc, char **argv) {
         cv::Mat img = cv::imread(argv[i], cv::IMREAD_GRAYSCALE);
         if (img.empty() || img.cols != int(s.width) || img.rows != int(s.height) ||
             !img.isContinuous()) {
-            std::fprintf(stderr, "flt_calibrate: %s is not a %ux%u grey image\n",
-                         argv[i], s.width, s.height);
+            std::fprintf(stderr, "flt_calibrate: %s is not a %ux%u grey image\n", argv[i], s.width,
+                         s.height);
             return 1;
         }
         views.push_back(img);
@@ -121,53 +124,55 @@ int main(int argc, char **argv) {
     }
 
     flt_calib *calib = nullptr;
-    if (check(flt_calib_create(&calib), "flt_calib_create")) return 1;
+    if (check(flt_calib_create(&calib), "flt_calib_create"))
+        return 1;
     int bad = check(flt_calib_set_frame_size(calib, s.width, s.height), "frame size");
 
     // 1. intrinsics
     std::vector<double> view_rms(views.size());
     double rms = NAN;
     if (!bad)
-        bad = check(flt_calib_estimate_intrinsics(calib, views.size(), pixels.data(),
-                                                  s.width, s.target, s.columns, s.rows,
-                                                  s.pitch_mm, nullptr, &rms,
-                                                  view_rms.data()),
+        bad = check(flt_calib_estimate_intrinsics(calib, views.size(), pixels.data(), s.width,
+                                                  s.target, s.columns, s.rows, s.pitch_mm, nullptr,
+                                                  &rms, view_rms.data()),
                     "intrinsics");
     if (!bad) {
         double cam[4], dist[8];
         bad = check(flt_calib_get_intrinsics(calib, cam, dist), "get intrinsics");
         std::printf("intrinsics: fx %.3f fy %.3f cx %.3f cy %.3f px; k1 %.5f k2 %.5f "
                     "p1 %.2e p2 %.2e k3 %.5f\n",
-                    cam[0], cam[1], cam[2], cam[3], dist[0], dist[1], dist[2], dist[3],
-                    dist[4]);
+                    cam[0], cam[1], cam[2], cam[3], dist[0], dist[1], dist[2], dist[3], dist[4]);
         std::printf("  reprojection RMS %.4f px over %zu views:", rms, views.size());
-        for (double e : view_rms) std::printf(" %.3f", e);
+        for (double e : view_rms)
+            std::printf(" %.3f", e);
         std::printf("\n");
     }
 
     // 2. laser planes, with RANSAC against mis-read target points
     flt_options *opts = nullptr;
-    if (!bad) bad = check(flt_options_create(&opts), "options");
-    if (!bad) bad = check(flt_options_set(opts, FLT_OPT_CALIB_RANSAC, 1), "options");
+    if (!bad)
+        bad = check(flt_options_create(&opts), "options");
+    if (!bad)
+        bad = check(flt_options_set(opts, FLT_OPT_CALIB_RANSAC, 1), "options");
     for (unsigned laser = 0; laser < 2 && !bad; ++laser) {
         const std::size_t n = s.image[laser].size() / 2;
         std::vector<double> res_px(n), res_mm(n);
         std::vector<uint8_t> inlier(n);
         double rms_px = NAN, rms_mm = NAN;
-        bad = check(flt_calib_estimate_homography(
-                        calib, laser, n, s.image[laser].data(), s.plane[laser].data(),
-                        opts, res_px.data(), res_mm.data(), inlier.data(), &rms_px,
-                        &rms_mm),
+        bad = check(flt_calib_estimate_homography(calib, laser, n, s.image[laser].data(),
+                                                  s.plane[laser].data(), opts, res_px.data(),
+                                                  res_mm.data(), inlier.data(), &rms_px, &rms_mm),
                     "homography");
-        if (bad) break;
+        if (bad)
+            break;
         std::size_t inliers = 0;
         double worst_mm = 0;
         for (std::size_t i = 0; i < n; ++i)
-            if (inlier[i]) ++inliers, worst_mm = std::fmax(worst_mm, res_mm[i]);
-        std::printf("laser %u: %zu/%zu inliers, RMS %.4f px = %.4f mm, worst %.4f mm\n",
-                    laser, inliers, n, rms_px, rms_mm, worst_mm);
-        bad = check(flt_calib_set_laser_offset(calib, laser, s.offset_mm[laser]),
-                    "laser offset");
+            if (inlier[i])
+                ++inliers, worst_mm = std::fmax(worst_mm, res_mm[i]);
+        std::printf("laser %u: %zu/%zu inliers, RMS %.4f px = %.4f mm, worst %.4f mm\n", laser,
+                    inliers, n, rms_px, rms_mm, worst_mm);
+        bad = check(flt_calib_set_laser_offset(calib, laser, s.offset_mm[laser]), "laser offset");
     }
     flt_options_destroy(opts);
 
@@ -175,13 +180,15 @@ int main(int argc, char **argv) {
     if (!bad)
         bad = check(flt_calib_set_encoder_scale(calib, s.encoder_mm_per_count), "encoder");
     if (!bad)
-        bad = check(flt_calib_set_fiber_grid(calib, s.first_x_mm, s.fiber_pitch_mm,
-                                             s.fibers),
+        bad = check(flt_calib_set_fiber_grid(calib, s.first_x_mm, s.fiber_pitch_mm, s.fibers),
                     "fiber grid");
-    if (!bad) bad = check(flt_calib_finish(calib), "finish");
-    if (!bad) bad = check(flt_calib_save(calib, argv[1]), "save");
+    if (!bad)
+        bad = check(flt_calib_finish(calib), "finish");
+    if (!bad)
+        bad = check(flt_calib_save(calib, argv[1]), "save");
     flt_calib *loaded = nullptr;
-    if (!bad) bad = check(flt_calib_load(argv[1], &loaded), "load back");
+    if (!bad)
+        bad = check(flt_calib_load(argv[1], &loaded), "load back");
     if (!bad) {
         double spacing = NAN;
         bad = check(flt_calib_laser_spacing(loaded, &spacing), "laser spacing");

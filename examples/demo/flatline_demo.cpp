@@ -92,8 +92,11 @@ void usage() {
                  flt_status_string(flt_last_error_status()));
     std::exit(1);
 }
-#define CHECK(call) \
-    do { if ((call) != FLT_OK) die(#call); } while (0)
+#define CHECK(call)       \
+  do {                    \
+    if ((call) != FLT_OK) \
+      die(#call);         \
+  } while (0)
 
 double now_s() {
     using clock = std::chrono::steady_clock;
@@ -105,7 +108,13 @@ double now_s() {
 struct sheet_data {
     std::vector<double> s, raw, z, truth;
     std::vector<uint8_t> flags;
-    void clear() { s.clear(); raw.clear(); z.clear(); truth.clear(); flags.clear(); }
+    void clear() {
+        s.clear();
+        raw.clear();
+        z.clear();
+        truth.clear();
+        flags.clear();
+    }
 };
 
 struct sheet_result {
@@ -143,7 +152,8 @@ std::string fmt(const char *f, double v) {
 double tick_step(double span, int target) {
     const double raw = span / target, p = std::pow(10.0, std::floor(std::log10(raw)));
     for (double m : {1.0, 2.0, 5.0, 10.0})
-        if (m * p >= raw) return m * p;
+        if (m * p >= raw)
+            return m * p;
     return 10 * p;
 }
 
@@ -162,7 +172,8 @@ void height_map_png(const std::string &path, const std::string &title, const she
     int r = 0;
     for (int py = 0; py < h; ++py) {
         const double s = d.s.front() + py * mm_per_px;
-        while (r + 1 < rows && d.s[r + 1] <= s) ++r;
+        while (r + 1 < rows && d.s[r + 1] <= s)
+            ++r;
         for (int k = 0; k < fibers; ++k) {
             const double v = values[size_t(r) * fibers + k];
             valid.at<uint8_t>(py, k) = std::isfinite(v);
@@ -197,7 +208,8 @@ void height_map_png(const std::string &path, const std::string &title, const she
     cv::Mat label(20, 200, CV_8UC3, k_white);
     text(label, "s along travel (m)", {5, 15});
     cv::rotate(label, label, cv::ROTATE_90_COUNTERCLOCKWISE);
-    if (h > 200) label.copyTo(img(cv::Rect(15, top + h / 2 - 100, 20, 200)));
+    if (h > 200)
+        label.copyTo(img(cv::Rect(15, top + h / 2 - 100, 20, 200)));
     // colour bar
     const int bx = left + fibers + 30, bw = 25;
     for (int py = 0; py < h; ++py) {
@@ -214,7 +226,8 @@ void height_map_png(const std::string &path, const std::string &title, const she
         text(img, fmt("%+.0f", v), {bx + bw + 8, py + 5});
     }
     text(img, "z (mm)", {bx - 5, top - 10});
-    if (!cv::imwrite(path, img)) std::fprintf(stderr, "could not write %s\n", path.c_str());
+    if (!cv::imwrite(path, img))
+        std::fprintf(stderr, "could not write %s\n", path.c_str());
 }
 
 struct series {
@@ -232,15 +245,23 @@ void line_plot_png(const std::string &path, const std::string &title, const std:
     double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
     for (const series &s : all)
         for (size_t i = 0; i < s.x.size(); ++i) {
-            if (!std::isfinite(s.y[i])) continue;
-            x0 = std::min(x0, s.x[i]); x1 = std::max(x1, s.x[i]);
-            y0 = std::min(y0, s.y[i]); y1 = std::max(y1, s.y[i]);
+            if (!std::isfinite(s.y[i]))
+                continue;
+            x0 = std::min(x0, s.x[i]);
+            x1 = std::max(x1, s.x[i]);
+            y0 = std::min(y0, s.y[i]);
+            y1 = std::max(y1, s.y[i]);
         }
     const double pad = 0.05 * (y1 - y0 + 1e-9);
-    y0 -= pad; y1 += pad;
+    y0 -= pad;
+    y1 += pad;
     cv::Mat img(H, W, CV_8UC3, k_white);
-    auto X = [&](double v) { return left + int(std::lround((v - x0) / (x1 - x0) * pw)); };
-    auto Y = [&](double v) { return top + int(std::lround((y1 - v) / (y1 - y0) * ph)); };
+    auto X = [&](double v) {
+        return left + int(std::lround((v - x0) / (x1 - x0) * pw));
+    };
+    auto Y = [&](double v) {
+        return top + int(std::lround((y1 - v) / (y1 - y0) * ph));
+    };
     const double xs = tick_step(x1 - x0, 8), ys = tick_step(y1 - y0, 8);
     for (double v = std::ceil(x0 / xs) * xs; v <= x1; v += xs) {
         cv::line(img, {X(v), top}, {X(v), top + ph}, cv::Scalar(230, 230, 230));
@@ -257,13 +278,15 @@ void line_plot_png(const std::string &path, const std::string &title, const std:
         std::vector<cv::Point> pts;
         for (size_t i = 0; i < s.x.size(); ++i) {
             if (!std::isfinite(s.y[i])) {
-                if (pts.size() > 1) cv::polylines(img, pts, false, s.colour, s.thickness, cv::LINE_AA);
+                if (pts.size() > 1)
+                    cv::polylines(img, pts, false, s.colour, s.thickness, cv::LINE_AA);
                 pts.clear();
                 continue;
             }
             pts.emplace_back(X(s.x[i]), Y(s.y[i]));
         }
-        if (pts.size() > 1) cv::polylines(img, pts, false, s.colour, s.thickness, cv::LINE_AA);
+        if (pts.size() > 1)
+            cv::polylines(img, pts, false, s.colour, s.thickness, cv::LINE_AA);
     }
     text(img, title, {left, 30}, 0.6);
     text(img, xlabel, {left + pw / 2 - text_width(xlabel) / 2, H - 15});
@@ -273,18 +296,21 @@ void line_plot_png(const std::string &path, const std::string &title, const std:
     label.copyTo(img(cv::Rect(10, top + ph / 2 - 130, 20, 260)));
     int ly = top + 20;
     for (const series &s : all) {
-        cv::line(img, {left + pw - 260, ly - 5}, {left + pw - 225, ly - 5}, s.colour, 3, cv::LINE_AA);
+        cv::line(img, {left + pw - 260, ly - 5}, {left + pw - 225, ly - 5}, s.colour, 3,
+                 cv::LINE_AA);
         text(img, s.name, {left + pw - 215, ly});
         ly += 22;
     }
-    if (!cv::imwrite(path, img)) std::fprintf(stderr, "could not write %s\n", path.c_str());
+    if (!cv::imwrite(path, img))
+        std::fprintf(stderr, "could not write %s\n", path.c_str());
 }
 
 // " (centre + edges + ...)" for a mix's components, else "".
 std::string components_text(unsigned c) {
     std::string s;
     auto add = [&](unsigned bit, const char *name) {
-        if (c & bit) s += (s.empty() ? " (" : " + ") + std::string(name);
+        if (c & bit)
+            s += (s.empty() ? " (" : " + ") + std::string(name);
     };
     add(FLT_SHAPE_HAS_CENTRE, "centre");
     add(FLT_SHAPE_HAS_QUARTER, "quarters");
@@ -310,11 +336,15 @@ void zone_chart_png(const std::string &path, const std::vector<sheet_result> &sh
     text(img, "I-Unit profile across the width, per sheet (bars: measured, black ticks: true)",
          {left, 30}, 0.6);
     const double x0 = zone_x.front() - zone_width / 2, x1 = zone_x.back() + zone_width / 2;
-    auto X = [&](double v) { return left + int(std::lround((v - x0) / (x1 - x0) * pw)); };
+    auto X = [&](double v) {
+        return left + int(std::lround((v - x0) / (x1 - x0) * pw));
+    };
     for (size_t p = 0; p < sheets.size(); ++p) {
         const sheet_result &r = sheets[p];
         const int py = top + int(p) * panel + 20;
-        auto Y = [&](double v) { return py + ph - int(std::lround(v / ymax * ph)); };
+        auto Y = [&](double v) {
+            return py + ph - int(std::lround(v / ymax * ph));
+        };
         const double ys = tick_step(ymax, 5);
         for (double v = 0; v <= ymax; v += ys) {
             cv::line(img, {left, Y(v)}, {left + pw, Y(v)}, cv::Scalar(230, 230, 230));
@@ -332,8 +362,8 @@ void zone_chart_png(const std::string &path, const std::vector<sheet_result> &sh
             cv::line(img, {xx, Y(flat_limit)}, {xx + 6, Y(flat_limit)}, cv::Scalar(0, 0, 200), 1);
         cv::rectangle(img, cv::Rect(left, py, pw, ph), k_black);
         char head[200];
-        std::snprintf(head, sizeof head, "sheet %d (%.1f-%.1f m): %s%s, confidence %.2f",
-                      r.index, r.s_first / 1000, r.s_last / 1000, flt_shape_string(r.shape),
+        std::snprintf(head, sizeof head, "sheet %d (%.1f-%.1f m): %s%s, confidence %.2f", r.index,
+                      r.s_first / 1000, r.s_last / 1000, flt_shape_string(r.shape),
                       components_text(r.components).c_str(), r.confidence);
         text(img, head, {left + 5, py - 5});
         const double xs = tick_step(x1 - x0, 8);
@@ -343,8 +373,10 @@ void zone_chart_png(const std::string &path, const std::vector<sheet_result> &sh
         }
         text(img, "I-Units", {10, py + ph / 2});
     }
-    text(img, "zone centre x across the width (mm); red dashes: flat limit", {left + pw / 2 - 220, H - 12});
-    if (!cv::imwrite(path, img)) std::fprintf(stderr, "could not write %s\n", path.c_str());
+    text(img, "zone centre x across the width (mm); red dashes: flat limit",
+         {left + pw / 2 - 220, H - 12});
+    if (!cv::imwrite(path, img))
+        std::fprintf(stderr, "could not write %s\n", path.c_str());
 }
 
 // ---------------------------------------------------------------- the line
@@ -352,29 +384,52 @@ void zone_chart_png(const std::string &path, const std::vector<sheet_result> &sh
 bool parse(int argc, char **argv, settings &st) {
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
-        if (a == "--help" || a == "-h") { usage(); std::exit(0); }
-        if (i + 1 >= argc) return false;
+        if (a == "--help" || a == "-h") {
+            usage();
+            std::exit(0);
+        }
+        if (i + 1 >= argc)
+            return false;
         const char *v = argv[++i];
         char *end = nullptr;
         const double d = std::strtod(v, &end);
         const bool number = end && *end == '\0' && std::isfinite(d);
-        if (a == "--out") { st.out = v; continue; }
-        if (!number) return false;
-        if (a == "--sheets") st.sheets = int(d);
-        else if (a == "--sheet-length") st.sheet_length = d;
-        else if (a == "--width") st.width = d;
-        else if (a == "--pitch") st.pitch = d;
-        else if (a == "--speed") st.speed = d;
-        else if (a == "--centre-buckle") st.centre_buckle = d;
-        else if (a == "--wavy-edges") st.wavy_edges = d;
-        else if (a == "--quarter-buckle") st.quarter_buckle = d;
-        else if (a == "--period") st.period = d;
-        else if (a == "--vibration") st.vibration = d;
-        else if (a == "--eccentricity") st.eccentricity = d;
-        else if (a == "--shear") st.shear = d;
-        else if (a == "--peak-noise") st.peak_noise = d;
-        else if (a == "--seed") st.seed = unsigned(d);
-        else return false;
+        if (a == "--out") {
+            st.out = v;
+            continue;
+        }
+        if (!number)
+            return false;
+        if (a == "--sheets")
+            st.sheets = int(d);
+        else if (a == "--sheet-length")
+            st.sheet_length = d;
+        else if (a == "--width")
+            st.width = d;
+        else if (a == "--pitch")
+            st.pitch = d;
+        else if (a == "--speed")
+            st.speed = d;
+        else if (a == "--centre-buckle")
+            st.centre_buckle = d;
+        else if (a == "--wavy-edges")
+            st.wavy_edges = d;
+        else if (a == "--quarter-buckle")
+            st.quarter_buckle = d;
+        else if (a == "--period")
+            st.period = d;
+        else if (a == "--vibration")
+            st.vibration = d;
+        else if (a == "--eccentricity")
+            st.eccentricity = d;
+        else if (a == "--shear")
+            st.shear = d;
+        else if (a == "--peak-noise")
+            st.peak_noise = d;
+        else if (a == "--seed")
+            st.seed = unsigned(d);
+        else
+            return false;
     }
     return st.sheets >= 1 && st.sheet_length >= 600 && st.width >= 100 && st.width <= 2000 &&
            st.pitch > 0 && st.width / st.pitch <= 4000 && st.speed > 0 && st.period > 0 &&
@@ -384,7 +439,8 @@ bool parse(int argc, char **argv, settings &st) {
 flt_options *make_options(std::initializer_list<std::pair<flt_option, double>> kv) {
     flt_options *o = nullptr;
     CHECK(flt_options_create(&o));
-    for (auto &p : kv) CHECK(flt_options_set(o, p.first, p.second));
+    for (auto &p : kv)
+        CHECK(flt_options_set(o, p.first, p.second));
     return o;
 }
 
@@ -401,7 +457,8 @@ int main(int argc, char **argv) {
     const size_t fibers = size_t(st.width / st.pitch) + 1;
     const double first_x = -0.5 * st.pitch * double(fibers - 1);
     std::vector<double> x(fibers);
-    for (size_t k = 0; k < fibers; ++k) x[k] = first_x + st.pitch * double(k);
+    for (size_t k = 0; k < fibers; ++k)
+        x[k] = first_x + st.pitch * double(k);
 
     flt_calib *calib = nullptr;
     CHECK(flt_calib_create_reference(k_roi_first, k_roi_rows, first_x, st.pitch, fibers, &calib));
@@ -431,8 +488,8 @@ int main(int argc, char **argv) {
     flt_recon *recon = nullptr;
     CHECK(flt_recon_create(fibers, recon_opt, &recon));
     // One window per sheet: the sheet is what the operator judges.
-    flt_options *flat_opt = make_options({{FLT_OPT_FLAT_WINDOW_LENGTH, 0},
-                                          {FLT_OPT_FLAT_ROW_CAPACITY, st.sheet_length / 3 + 64}});
+    flt_options *flat_opt = make_options(
+        {{FLT_OPT_FLAT_WINDOW_LENGTH, 0}, {FLT_OPT_FLAT_ROW_CAPACITY, st.sheet_length / 3 + 64}});
     flt_flatness *flatness = nullptr, *truth_flatness = nullptr;
     CHECK(flt_flatness_create(fibers, x.data(), flat_opt, &flatness));
     CHECK(flt_flatness_create(fibers, x.data(), flat_opt, &truth_flatness));
@@ -445,13 +502,14 @@ int main(int argc, char **argv) {
     double zone_width = 0;
     CHECK(flt_options_get(flat_opt, FLT_OPT_FLAT_ZONE_WIDTH, &zone_width));
 
-    std::printf("libflatline %s demo: %d sheets of %.0f mm x %.0f mm, %zu fibers every %.1f mm\n"
-                "defects: centre buckle %.1f mm, wavy edges %.1f mm, quarter buckle %.1f mm, "
-                "period %.0f mm\nnoise: heave %.2f mm, eccentricity %.2f mm, shear ringing %.1f mm, "
-                "peak noise %.3f px\n",
-                flt_version_string(), st.sheets, st.sheet_length, st.width, fibers, st.pitch,
-                st.centre_buckle, st.wavy_edges, st.quarter_buckle, st.period, st.vibration,
-                st.eccentricity, st.shear, st.peak_noise);
+    std::printf(
+        "libflatline %s demo: %d sheets of %.0f mm x %.0f mm, %zu fibers every %.1f mm\n"
+        "defects: centre buckle %.1f mm, wavy edges %.1f mm, quarter buckle %.1f mm, "
+        "period %.0f mm\nnoise: heave %.2f mm, eccentricity %.2f mm, shear ringing %.1f mm, "
+        "peak noise %.3f px\n",
+        flt_version_string(), st.sheets, st.sheet_length, st.width, fibers, st.pitch,
+        st.centre_buckle, st.wavy_edges, st.quarter_buckle, st.period, st.vibration,
+        st.eccentricity, st.shear, st.peak_noise);
     std::fflush(stdout);
     ::mkdir(st.out.c_str(), 0755);
 
@@ -477,7 +535,8 @@ int main(int argc, char **argv) {
         double t0 = now_s();
         CHECK(flt_flatness_finish(flatness, &evaluated));
         busy += now_s() - t0;
-        if (!evaluated) return;
+        if (!evaluated)
+            return;
         sheet_result r{};
         r.index = int(results.size()) + 1;
         CHECK(flt_flatness_window(flatness, &r.s_first, &r.s_last, nullptr, nullptr, nullptr));
@@ -498,11 +557,15 @@ int main(int argc, char **argv) {
         double sum = 0;
         size_t n = 0;
         for (size_t i = 0; i < sheet.z.size(); ++i)
-            if (std::isfinite(sheet.z[i])) { sum += sheet.z[i] - sheet.truth[i]; ++n; }
+            if (std::isfinite(sheet.z[i])) {
+                sum += sheet.z[i] - sheet.truth[i];
+                ++n;
+            }
         const double mean = n ? sum / double(n) : 0.0;
         double sq = 0;
         for (size_t i = 0; i < sheet.z.size(); ++i) {
-            if (!std::isfinite(sheet.z[i])) continue;
+            if (!std::isfinite(sheet.z[i]))
+                continue;
             const double e = sheet.z[i] - sheet.truth[i] - mean;
             sq += e * e;
             r.max_error = std::max(r.max_error, std::fabs(e));
@@ -516,18 +579,20 @@ int main(int argc, char **argv) {
         std::printf("sheet %d  %5.1f-%5.1f m  %-15s conf %.2f  peak %6.1f I-Units  "
                     "error rms %.3f max %.3f mm\n",
                     r.index, r.s_first / 1000, r.s_last / 1000, flt_shape_string(r.shape),
-                    r.confidence, *std::max_element(r.zone_i.begin(), r.zone_i.end()),
-                    r.rms_error, r.max_error);
+                    r.confidence, *std::max_element(r.zone_i.begin(), r.zone_i.end()), r.rms_error,
+                    r.max_error);
         std::fflush(stdout);
         const std::string base = st.out + "/sheet" + std::to_string(r.index);
         // Colour scale: the true surface's range plus a fifth, so the true
         // and reconstructed maps use most of it (raw heights, which carry
         // the heave, may clip at its ends).
         double true_max = 0;
-        for (double v : sheet.truth) true_max = std::max(true_max, std::fabs(v));
+        for (double v : sheet.truth)
+            true_max = std::max(true_max, std::fabs(v));
         const double scale = std::max(1.0, std::ceil(1.2 * true_max));
         char title[160];
-        std::snprintf(title, sizeof title, "Sheet %d: raw heights from the extractor (mm)", r.index);
+        std::snprintf(title, sizeof title, "Sheet %d: raw heights from the extractor (mm)",
+                      r.index);
         height_map_png(base + "_raw.png", title, sheet, sheet.raw, x, scale);
         std::snprintf(title, sizeof title, "Sheet %d: reconstructed heights (mm)", r.index);
         height_map_png(base + "_reconstructed.png", title, sheet, sheet.z, x, scale);
@@ -552,21 +617,24 @@ int main(int argc, char **argv) {
             CHECK(flt_recon_pull(recon, pull_capacity, fibers, s_out.data(), z_out.data(),
                                  flags_out.data(), &got));
             busy += now_s() - t0;
-            if (got == 0) return;
+            if (got == 0)
+                return;
             size_t fed = 0;
             while (fed < got) {
                 size_t used = 0;
                 int evaluated = 0;
                 t0 = now_s();
-                CHECK(flt_flatness_push(flatness, got - fed, fibers, &s_out[fed], &z_out[fed * fibers],
-                                        &flags_out[fed * fibers], &used, &evaluated));
+                CHECK(flt_flatness_push(flatness, got - fed, fibers, &s_out[fed],
+                                        &z_out[fed * fibers], &flags_out[fed * fibers], &used,
+                                        &evaluated));
                 busy += now_s() - t0;
                 fed += used;
             }
             for (size_t i = 0; i < got; ++i) {
                 sheet.s.push_back(s_out[i]);
                 sheet.z.insert(sheet.z.end(), &z_out[i * fibers], &z_out[(i + 1) * fibers]);
-                sheet.raw.insert(sheet.raw.end(), &pending.raw[i * fibers], &pending.raw[(i + 1) * fibers]);
+                sheet.raw.insert(sheet.raw.end(), &pending.raw[i * fibers],
+                                 &pending.raw[(i + 1) * fibers]);
                 sheet.truth.insert(sheet.truth.end(), &pending.truth[i * fibers],
                                    &pending.truth[(i + 1) * fibers]);
             }
@@ -591,8 +659,10 @@ int main(int argc, char **argv) {
                                     slope.data(), valid.data()));
         busy += now_s() - t0;
         ++frames;
-        if (s >= total_length) break;
-        if (s < 0) continue;  // the strip's head has not reached both lasers
+        if (s >= total_length)
+            break;
+        if (s < 0)
+            continue;  // the strip's head has not reached both lasers
         if (s >= next_cut) {
             // The cut: end the sheet in the reconstructor (its last knot
             // carries over into the next sheet) and in the metrics.
@@ -603,7 +673,8 @@ int main(int argc, char **argv) {
             finish_sheet();
             next_cut += st.sheet_length;
         }
-        for (size_t k = 0; k < fibers; ++k) invalid_samples += !valid[k];
+        for (size_t k = 0; k < fibers; ++k)
+            invalid_samples += !valid[k];
         pending.raw.insert(pending.raw.end(), height.begin(), height.end());
         pending.truth.insert(pending.truth.end(), truth.begin(), truth.end());
         t0 = now_s();
@@ -636,7 +707,8 @@ int main(int argc, char **argv) {
                     r.index, flt_shape_string(r.shape), components_text(r.components).c_str(),
                     r.confidence, r.bow, r.crossbow, r.zone_error);
         const size_t step = std::max<size_t>(1, zones / 15);
-        for (size_t j = 0; j < zones; j += step) std::printf(" %5.1f", r.zone_i[j]);
+        for (size_t j = 0; j < zones; j += step)
+            std::printf(" %5.1f", r.zone_i[j]);
         std::printf("  (zones of %.0f mm across, every %zu shown)\n", zone_width, step);
     }
 
@@ -644,14 +716,16 @@ int main(int argc, char **argv) {
     zone_chart_png(st.out + "/zones.png", results, zone_x, zone_width, flat_limit);
     {
         char title[160];
-        std::snprintf(title, sizeof title, "Sheet 1, fiber at x = %.0f mm: one longitudinal profile",
-                      x[plot_fiber]);
+        std::snprintf(title, sizeof title,
+                      "Sheet 1, fiber at x = %.0f mm: one longitudinal profile", x[plot_fiber]);
         std::vector<double> s_m(fiber_plot_s.size());
-        for (size_t i = 0; i < s_m.size(); ++i) s_m[i] = fiber_plot_s[i] / 1000;
-        line_plot_png(st.out + "/fiber_profile.png", title, "s along travel (m)", "height z (mm)",
-                      {{"raw (extractor heights)", s_m, fiber_plot_raw, cv::Scalar(170, 170, 170), 1},
-                       {"true surface", s_m, fiber_plot_truth, cv::Scalar(40, 40, 220), 3},
-                       {"reconstructed", s_m, fiber_plot_z, cv::Scalar(180, 100, 20), 2}});
+        for (size_t i = 0; i < s_m.size(); ++i)
+            s_m[i] = fiber_plot_s[i] / 1000;
+        line_plot_png(
+            st.out + "/fiber_profile.png", title, "s along travel (m)", "height z (mm)",
+            {{"raw (extractor heights)", s_m, fiber_plot_raw, cv::Scalar(170, 170, 170), 1},
+             {"true surface", s_m, fiber_plot_truth, cv::Scalar(40, 40, 220), 3},
+             {"reconstructed", s_m, fiber_plot_z, cv::Scalar(180, 100, 20), 2}});
     }
     FILE *csv = std::fopen((st.out + "/sheets.csv").c_str(), "w");
     FILE *zcsv = std::fopen((st.out + "/zones.csv").c_str(), "w");
@@ -663,10 +737,11 @@ int main(int argc, char **argv) {
     std::fprintf(csv, "sheet,s_first_mm,s_last_mm,shape,confidence,bow_mm,crossbow_mm,"
                       "rms_error_mm,max_error_mm,max_zone_error_iu\n");
     std::fprintf(zcsv, "sheet,zone,x_centre_mm,i_units,true_i_units\n");
-    std::fprintf(json, "{\n  \"version\": \"%s\",\n  \"fibers\": %zu,\n  \"pitch_mm\": %g,\n"
-                       "  \"zone_width_mm\": %g,\n  \"real_time_factor\": %.3f,\n"
-                       "  \"line_speed_m_per_min\": %g,\n  \"rms_error_mm\": %.4f,\n"
-                       "  \"max_error_mm\": %.4f,\n  \"sheets\": [\n",
+    std::fprintf(json,
+                 "{\n  \"version\": \"%s\",\n  \"fibers\": %zu,\n  \"pitch_mm\": %g,\n"
+                 "  \"zone_width_mm\": %g,\n  \"real_time_factor\": %.3f,\n"
+                 "  \"line_speed_m_per_min\": %g,\n  \"rms_error_mm\": %.4f,\n"
+                 "  \"max_error_mm\": %.4f,\n  \"sheets\": [\n",
                  flt_version_string(), fibers, st.pitch, zone_width, strip_s / busy, st.speed,
                  std::sqrt(sq_all / double(std::max<size_t>(1, n_all))), max_error_all);
     for (size_t p = 0; p < results.size(); ++p) {
@@ -674,10 +749,11 @@ int main(int argc, char **argv) {
         std::fprintf(csv, "%d,%.1f,%.1f,%s,%.3f,%.3f,%.3f,%.4f,%.4f,%.3f\n", r.index, r.s_first,
                      r.s_last, flt_shape_string(r.shape), r.confidence, r.bow, r.crossbow,
                      r.rms_error, r.max_error, r.zone_error);
-        std::fprintf(json, "    {\"sheet\": %d, \"s_first_mm\": %.1f, \"s_last_mm\": %.1f, "
-                           "\"shape\": \"%s\", \"confidence\": %.3f, \"bow_mm\": %.3f, "
-                           "\"crossbow_mm\": %.3f, \"rms_error_mm\": %.4f, \"max_error_mm\": %.4f,\n"
-                           "     \"zones\": [",
+        std::fprintf(json,
+                     "    {\"sheet\": %d, \"s_first_mm\": %.1f, \"s_last_mm\": %.1f, "
+                     "\"shape\": \"%s\", \"confidence\": %.3f, \"bow_mm\": %.3f, "
+                     "\"crossbow_mm\": %.3f, \"rms_error_mm\": %.4f, \"max_error_mm\": %.4f,\n"
+                     "     \"zones\": [",
                      r.index, r.s_first, r.s_last, flt_shape_string(r.shape), r.confidence, r.bow,
                      r.crossbow, r.rms_error, r.max_error);
         for (size_t j = 0; j < zones; ++j) {
@@ -700,7 +776,8 @@ int main(int argc, char **argv) {
     std::fclose(json);
     std::printf("\nreport written to %s/: sheet<N>_raw.png, sheet<N>_reconstructed.png, "
                 "sheet<N>_true.png,\n  fiber_profile.png, zones.png, sheets.csv, zones.csv, "
-                "report.json\n", st.out.c_str());
+                "report.json\n",
+                st.out.c_str());
 
     flt_flatness_destroy(flatness);
     flt_flatness_destroy(truth_flatness);

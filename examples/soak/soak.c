@@ -38,8 +38,10 @@
 static long rss_kb(void) {
     FILE *f = fopen("/proc/self/statm", "r");
     long size = 0, resident = 0;
-    if (!f) return -1;
-    if (fscanf(f, "%ld %ld", &size, &resident) != 2) resident = -1;
+    if (!f)
+        return -1;
+    if (fscanf(f, "%ld %ld", &size, &resident) != 2)
+        resident = -1;
     fclose(f);
     return resident < 0 ? -1 : resident * (sysconf(_SC_PAGESIZE) / 1024);
 }
@@ -65,24 +67,35 @@ int main(int argc, char **argv) {
     int frames = 0;
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : "0";
-        if (!strcmp(a, "--rows")) total_rows = strtoull(v, NULL, 10), ++i;
-        else if (!strcmp(a, "--fibers")) fibers = strtoull(v, NULL, 10), ++i;
-        else if (!strcmp(a, "--sheet-mm")) sheet_mm = atof(v), ++i;
-        else if (!strcmp(a, "--report-every")) report_every = strtoull(v, NULL, 10), ++i;
-        else if (!strcmp(a, "--max-rms-mm")) max_rms = atof(v), ++i;
-        else if (!strcmp(a, "--max-err-mm")) max_err = atof(v), ++i;
-        else if (!strcmp(a, "--rss-slack-kb")) rss_slack_kb = atol(v), ++i;
-        else if (!strcmp(a, "--frames")) frames = 1;
+        if (!strcmp(a, "--rows"))
+            total_rows = strtoull(v, NULL, 10), ++i;
+        else if (!strcmp(a, "--fibers"))
+            fibers = strtoull(v, NULL, 10), ++i;
+        else if (!strcmp(a, "--sheet-mm"))
+            sheet_mm = atof(v), ++i;
+        else if (!strcmp(a, "--report-every"))
+            report_every = strtoull(v, NULL, 10), ++i;
+        else if (!strcmp(a, "--max-rms-mm"))
+            max_rms = atof(v), ++i;
+        else if (!strcmp(a, "--max-err-mm"))
+            max_err = atof(v), ++i;
+        else if (!strcmp(a, "--rss-slack-kb"))
+            rss_slack_kb = atol(v), ++i;
+        else if (!strcmp(a, "--frames"))
+            frames = 1;
         else {
-            fprintf(stderr, "usage: %s [--rows N] [--fibers N] [--sheet-mm L] [--frames] "
-                            "[--report-every N] [--max-rms-mm X] [--max-err-mm X] "
-                            "[--rss-slack-kb K]\n", argv[0]);
+            fprintf(stderr,
+                    "usage: %s [--rows N] [--fibers N] [--sheet-mm L] [--frames] "
+                    "[--report-every N] [--max-rms-mm X] [--max-err-mm X] "
+                    "[--rss-slack-kb K]\n",
+                    argv[0]);
             return 2;
         }
     }
-    if (fibers < 2 || total_rows < 1 || !(sheet_mm > 0)) return 2;
+    if (fibers < 2 || total_rows < 1 || !(sheet_mm > 0))
+        return 2;
     const double pitch = 2000.0 / (double)(fibers - 1);
-    const double frame_mm = 3.0;  /* sim_frame_spacing: 120 m/min at 666.7 frames/s */
+    const double frame_mm = 3.0; /* sim_frame_spacing: 120 m/min at 666.7 frames/s */
     const size_t sheet_rows = (size_t)(sheet_mm / frame_mm + 0.5);
 
     /* The sensor: the reference, whole (rows) or a 240-row window (frames). */
@@ -104,7 +117,8 @@ int main(int argc, char **argv) {
     check(flt_sim_add_defect(sim, FLT_SIM_WAVY_EDGE_BOTH, 3.0, 700.0), "defect");
     check(flt_sim_add_defect(sim, FLT_SIM_QUARTER_BUCKLE, 1.5, 1100.0), "defect");
     flt_extractor *ex = NULL;
-    if (frames) check(flt_extractor_create(calib, opt, &ex), "extractor");
+    if (frames)
+        check(flt_extractor_create(calib, opt, &ex), "extractor");
     flt_recon *rec = NULL;
     check(flt_recon_create(fibers, NULL, &rec), "reconstructor");
 
@@ -123,7 +137,8 @@ int main(int argc, char **argv) {
     double *sum_e = calloc(fibers, sizeof(double)), *sum_e2 = calloc(fibers, sizeof(double));
     double *min_e = malloc(sizeof(double) * fibers), *max_e = malloc(sizeof(double) * fibers);
     size_t *count_e = calloc(fibers, sizeof(size_t));
-    for (size_t f = 0; f < fibers; ++f) min_e[f] = INFINITY, max_e[f] = -INFINITY;
+    for (size_t f = 0; f < fibers; ++f)
+        min_e[f] = INFINITY, max_e[f] = -INFINITY;
     /* Touched now, so that the RSS measures the library, not this program. */
     memset(truth_ring, 0, sizeof(double) * ring * fibers);
     memset(z_out, 0, sizeof(double) * ring * fibers);
@@ -139,72 +154,83 @@ int main(int argc, char **argv) {
     const double t0 = now_s();
     printf("soak: %zu rows (%.1f km of strip, %.1f min at 120 m/min), %zu fibers, sheets of "
            "%zu rows, %s; RSS %ld kB\n",
-           total_rows, total_rows * frame_mm / 1e6, total_rows * frame_mm / 2000.0 / 60.0,
-           fibers, sheet_rows, frames ? "rendered frames + extractor" : "profile rows",
-           rss_start);
+           total_rows, total_rows * frame_mm / 1e6, total_rows * frame_mm / 2000.0 / 60.0, fibers,
+           sheet_rows, frames ? "rendered frames + extractor" : "profile rows", rss_start);
 
-    /* One sheet's accuracy, from the sums of its pulled rows. */
-    #define CLOSE_SHEET()                                                                  \
-        do {                                                                               \
-            double se2 = 0.0, worst = 0.0;                                                 \
-            size_t n = 0;                                                                  \
-            for (size_t f = 0; f < fibers; ++f) {                                          \
-                if (!count_e[f]) continue;                                                 \
-                const double mean = sum_e[f] / (double)count_e[f];                         \
-                se2 += sum_e2[f] - mean * sum_e[f];                                        \
-                n += count_e[f];                                                           \
-                worst = fmax(worst, fmax(max_e[f] - mean, mean - min_e[f]));               \
-                sum_e[f] = sum_e2[f] = 0.0, count_e[f] = 0;                                \
-                min_e[f] = INFINITY, max_e[f] = -INFINITY;                                 \
-            }                                                                              \
-            if (n) {                                                                       \
-                const double rms = sqrt(fmax(0.0, se2) / (double)n);                       \
-                ++sheets;                                                                  \
-                sum_rms += rms;                                                            \
-                if (rms > worst_rms) worst_rms = rms;                                      \
-                if (worst > worst_err) worst_err = worst;                                  \
-                const int ok = rms <= max_rms && worst <= max_err;                         \
-                bad_sheets += !ok;                                                         \
-                if (!ok || sheets <= 3 || sheets % 200 == 0)                               \
-                    printf("  sheet %zu: %zu samples, rms %.4f mm, max %.4f mm%s\n", sheets, \
-                           n, rms, worst, ok ? "" : "  OUT OF BOUNDS");                    \
-            }                                                                              \
-        } while (0)
+/* One sheet's accuracy, from the sums of its pulled rows. */
+#define CLOSE_SHEET()                                                                           \
+  do {                                                                                          \
+    double se2 = 0.0, worst = 0.0;                                                              \
+    size_t n = 0;                                                                               \
+    for (size_t f = 0; f < fibers; ++f) {                                                       \
+      if (!count_e[f])                                                                          \
+        continue;                                                                               \
+      const double mean = sum_e[f] / (double)count_e[f];                                        \
+      se2 += sum_e2[f] - mean * sum_e[f];                                                       \
+      n += count_e[f];                                                                          \
+      worst = fmax(worst, fmax(max_e[f] - mean, mean - min_e[f]));                              \
+      sum_e[f] = sum_e2[f] = 0.0, count_e[f] = 0;                                               \
+      min_e[f] = INFINITY, max_e[f] = -INFINITY;                                                \
+    }                                                                                           \
+    if (n) {                                                                                    \
+      const double rms = sqrt(fmax(0.0, se2) / (double)n);                                      \
+      ++sheets;                                                                                 \
+      sum_rms += rms;                                                                           \
+      if (rms > worst_rms)                                                                      \
+        worst_rms = rms;                                                                        \
+      if (worst > worst_err)                                                                    \
+        worst_err = worst;                                                                      \
+      const int ok = rms <= max_rms && worst <= max_err;                                        \
+      bad_sheets += !ok;                                                                        \
+      if (!ok || sheets <= 3 || sheets % 200 == 0)                                              \
+        printf("  sheet %zu: %zu samples, rms %.4f mm, max %.4f mm%s\n", sheets, n, rms, worst, \
+               ok ? "" : "  OUT OF BOUNDS");                                                    \
+    }                                                                                           \
+  } while (0)
 
     while (pushed < total_rows) {
         /* Rows up to the end of the block or of the sheet. */
         size_t rows = BLOCK;
-        if (rows > sheet_rows - in_sheet) rows = sheet_rows - in_sheet;
-        if (rows > total_rows - pushed) rows = total_rows - pushed;
+        if (rows > sheet_rows - in_sheet)
+            rows = sheet_rows - in_sheet;
+        if (rows > total_rows - pushed)
+            rows = total_rows - pushed;
         for (size_t r = 0; r < rows; ++r) {
             double *truth = truth_ring + ((pushed + r) % ring) * fibers;
             if (frames) {
                 double encoder;
                 check(flt_sim_next_frame(sim, frame, (size_t)WIDTH * ROI_ROWS, WIDTH, &encoder,
-                                         fibers, truth, NULL), "frame");
+                                         fibers, truth, NULL),
+                      "frame");
                 check(flt_extractor_process(ex, frame, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH,
-                                            encoder, fibers, s + r, h + r * fibers,
-                                            k + r * fibers, valid + r * fibers), "extract");
+                                            encoder, fibers, s + r, h + r * fibers, k + r * fibers,
+                                            valid + r * fibers),
+                      "extract");
             } else {
-                check(flt_sim_next_rows(sim, 1, fibers, NULL, s + r, h + r * fibers,
-                                        k + r * fibers, valid + r * fibers, truth), "rows");
+                check(flt_sim_next_rows(sim, 1, fibers, NULL, s + r, h + r * fibers, k + r * fibers,
+                                        valid + r * fibers, truth),
+                      "rows");
             }
         }
         check(flt_recon_push(rec, rows, fibers, s, h, k, valid), "push");
         pushed += rows;
         in_sheet += rows;
         const int sheet_end = in_sheet == sheet_rows || pushed == total_rows;
-        if (sheet_end) check(flt_recon_end_sheet(rec), "end_sheet");
+        if (sheet_end)
+            check(flt_recon_end_sheet(rec), "end_sheet");
         size_t got = 0;
         check(flt_recon_pull(rec, ring, fibers, s_out, z_out, NULL, &got), "pull");
         for (size_t r = 0; r < got; ++r, ++pulled) {
             const double *truth = truth_ring + (pulled % ring) * fibers;
             for (size_t f = 0; f < fibers; ++f) {
                 const double e = z_out[r * fibers + f] - truth[f];
-                if (!isfinite(e)) continue;
+                if (!isfinite(e))
+                    continue;
                 sum_e[f] += e, sum_e2[f] += e * e, ++count_e[f];
-                if (e < min_e[f]) min_e[f] = e;
-                if (e > max_e[f]) max_e[f] = e;
+                if (e < min_e[f])
+                    min_e[f] = e;
+                if (e > max_e[f])
+                    max_e[f] = e;
             }
         }
         if (pushed - pulled > ring) {
@@ -220,8 +246,10 @@ int main(int argc, char **argv) {
             in_sheet = 0;
         }
         const long rss = rss_kb();
-        if (rss > rss_max) rss_max = rss;
-        if (rss_after_warmup < 0 && pushed >= warmup) rss_after_warmup = rss;
+        if (rss > rss_max)
+            rss_max = rss;
+        if (rss_after_warmup < 0 && pushed >= warmup)
+            rss_after_warmup = rss;
         if (pushed % report_every < rows || pushed == total_rows) {
             const double t = now_s() - t0, strip_s = pushed * frame_mm / 2000.0;
             printf("  %8zu rows  %6.2f km  %5.1f min of line  RSS %ld kB  sheets %zu  worst "
@@ -244,8 +272,9 @@ int main(int argc, char **argv) {
     printf("  memory: RSS %ld kB at start, %ld kB after the warm-up (%zu rows), %ld kB at the "
            "end, peak %ld kB: growth %+ld kB after the warm-up (bound %ld) %s\n",
            rss_start, rss_after_warmup, warmup, rss_end, rss_max, growth, rss_slack_kb,
-           !judged ? "(run too short to judge: give --rows >= 40000)"
-                   : memory_ok ? "flat" : "GROWING");
+           !judged     ? "(run too short to judge: give --rows >= 40000)"
+           : memory_ok ? "flat"
+                       : "GROWING");
     flt_recon_destroy(rec);
     flt_extractor_destroy(ex);
     flt_sim_destroy(sim);

@@ -80,11 +80,11 @@ extern "C" {
 #endif
 
 /* Number of lasers (and homographies) of the sensor. */
-#define FLT_CALIB_LASERS 2
+#define FLT_CALIB_LASERS            2
 /* Number of distortion coefficients, OpenCV order k1 k2 p1 p2 k3 k4 k5 k6. */
 #define FLT_CALIB_DISTORTION_COEFFS 8
 /* The version of the file format flt_calib_save() writes. */
-#define FLT_CALIB_FORMAT_VERSION 1
+#define FLT_CALIB_FORMAT_VERSION    1
 
 typedef struct flt_calib flt_calib;
 
@@ -113,31 +113,30 @@ FLT_API void FLT_CALL flt_calib_destroy(flt_calib *calib);
  * stays unfinished and usable). Finishing twice is FLT_ERR_STATE. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_finish(flt_calib *calib);
 /* *out = 1 if finished, else 0. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_calib_is_finished(const flt_calib *calib, int *out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_is_finished(const flt_calib *calib, int *out);
 
 /* ---------------------------------------------------------------------- */
 /* Camera                                                                  */
 /* ---------------------------------------------------------------------- */
 
 /* Frame size in px (each 1 .. 65536). Needed before estimating intrinsics. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_calib_set_frame_size(flt_calib *calib, uint32_t width, uint32_t height);
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_calib_get_frame_size(const flt_calib *calib, uint32_t *width_out,
-                         uint32_t *height_out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_set_frame_size(flt_calib *calib, uint32_t width,
+                                                                   uint32_t height);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_get_frame_size(const flt_calib *calib,
+                                                                   uint32_t *width_out,
+                                                                   uint32_t *height_out);
 
 /* Sets the intrinsics directly: camera = {fx, fy, cx, cy} (px, fx and fy
  * > 0, all finite) and distortion = FLT_CALIB_DISTORTION_COEFFS finite
  * coefficients (OpenCV order), or NULL for none. Both arrays are copied. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_calib_set_intrinsics(flt_calib *calib, const double camera[4],
-                         const double *distortion);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_set_intrinsics(flt_calib *calib,
+                                                                   const double camera[4],
+                                                                   const double *distortion);
 /* Copies the intrinsics out: camera_out[4], distortion_out[8] (either may
  * be NULL). FLT_ERR_STATE if none are set. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_calib_get_intrinsics(const flt_calib *calib, double *camera_out,
-                         double *distortion_out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_get_intrinsics(const flt_calib *calib,
+                                                                   double *camera_out,
+                                                                   double *distortion_out);
 
 /* Estimates the intrinsics from `views` images of a planar target, with
  * OpenCV's detection, sub-pixel corner refinement and calibrateCamera, and
@@ -153,13 +152,10 @@ flt_calib_get_intrinsics(const flt_calib *calib, double *camera_out,
  *               reprojection error in px, NaN where the target was not found.
  * Views without a detected target are skipped; fewer than 3 usable views is
  * FLT_ERR_NUMERIC and leaves the model unchanged. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_calib_estimate_intrinsics(flt_calib *calib, size_t views,
-                              const uint8_t *const *images, size_t stride,
-                              flt_calib_target target, uint32_t columns,
-                              uint32_t rows, double pitch_mm,
-                              const flt_options *options, double *rms_px_out,
-                              double *view_rms_px_out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_estimate_intrinsics(
+    flt_calib *calib, size_t views, const uint8_t *const *images, size_t stride,
+    flt_calib_target target, uint32_t columns, uint32_t rows, double pitch_mm,
+    const flt_options *options, double *rms_px_out, double *view_rms_px_out);
 
 /* ---------------------------------------------------------------------- */
 /* Laser planes                                                            */
@@ -168,11 +164,11 @@ flt_calib_estimate_intrinsics(flt_calib *calib, size_t views,
 /* Sets laser `laser`'s homography directly: h[9], row-major, maps
  * undistorted (u, v, 1) px to (x, z, 1) mm. It must be finite and
  * invertible (FLT_ERR_INVALID_ARGUMENT otherwise). Copied. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_calib_set_homography(flt_calib *calib, unsigned laser, const double h[9]);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_set_homography(flt_calib *calib, unsigned laser,
+                                                                   const double h[9]);
 /* Copies laser `laser`'s homography into h_out[9]. FLT_ERR_STATE if unset. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_calib_get_homography(const flt_calib *calib, unsigned laser, double *h_out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_get_homography(const flt_calib *calib,
+                                                                   unsigned laser, double *h_out);
 
 /* Estimates laser `laser`'s homography from `count` correspondences and
  * stores it (the intrinsics must be set: the image points are undistorted
@@ -193,42 +189,41 @@ flt_calib_get_homography(const flt_calib *calib, unsigned laser, double *h_out);
  * Needs count >= 4 with no three plane points collinear in practice;
  * a degenerate set is FLT_ERR_NUMERIC and leaves the model unchanged.
  * The estimation is deterministic (RANSAC draws from calib_ransac_seed). */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_calib_estimate_homography(flt_calib *calib, unsigned laser, size_t count,
-                              const double *image_px, const double *plane_mm,
-                              const flt_options *options,
-                              double *residual_px_out, double *residual_mm_out,
-                              uint8_t *inlier_out, double *rms_px_out,
-                              double *rms_mm_out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_estimate_homography(
+    flt_calib *calib, unsigned laser, size_t count, const double *image_px, const double *plane_mm,
+    const flt_options *options, double *residual_px_out, double *residual_mm_out,
+    uint8_t *inlier_out, double *rms_px_out, double *rms_mm_out);
 
 /* ---------------------------------------------------------------------- */
 /* Sensor geometry                                                         */
 /* ---------------------------------------------------------------------- */
 
 /* Laser `laser`'s offset along travel, mm (finite). */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_calib_set_laser_offset(flt_calib *calib, unsigned laser, double offset_mm);
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_calib_get_laser_offset(const flt_calib *calib, unsigned laser, double *out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_set_laser_offset(flt_calib *calib,
+                                                                     unsigned laser,
+                                                                     double offset_mm);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_get_laser_offset(const flt_calib *calib,
+                                                                     unsigned laser, double *out);
 /* Delta-d = offset_1 - offset_0, mm. FLT_ERR_STATE unless both are set. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_calib_laser_spacing(const flt_calib *calib, double *out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_laser_spacing(const flt_calib *calib,
+                                                                  double *out);
 
 /* Encoder scale, mm of travel per count (finite, non-zero; negative when the
  * encoder counts down as the strip moves forward). */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_calib_set_encoder_scale(flt_calib *calib, double encoder_mm_per_count);
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_calib_get_encoder_scale(const flt_calib *calib, double *out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_set_encoder_scale(flt_calib *calib,
+                                                                      double encoder_mm_per_count);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_get_encoder_scale(const flt_calib *calib,
+                                                                      double *out);
 
 /* Fiber grid: fiber k sits at x = first_x_mm + k * pitch_mm, k < count
  * (pitch > 0, count >= 1, all finite). */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_calib_set_fiber_grid(flt_calib *calib, double first_x_mm, double pitch_mm,
-                         size_t count);
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_calib_get_fiber_grid(const flt_calib *calib, double *first_x_mm_out,
-                         double *pitch_mm_out, size_t *count_out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_set_fiber_grid(flt_calib *calib,
+                                                                   double first_x_mm,
+                                                                   double pitch_mm, size_t count);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_get_fiber_grid(const flt_calib *calib,
+                                                                   double *first_x_mm_out,
+                                                                   double *pitch_mm_out,
+                                                                   size_t *count_out);
 
 /* ---------------------------------------------------------------------- */
 /* Mapping (finished model only; thread-safe; no allocation)               */
@@ -239,17 +234,19 @@ flt_calib_get_fiber_grid(const flt_calib *calib, double *first_x_mm_out,
  * A NaN input point gives a NaN output point (an invalid peak stays
  * invalid); so does a point whose ray is parallel to the plane. count = 0 is
  * allowed and does nothing. In-place (plane_out == image_px) is allowed. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_calib_image_to_plane(const flt_calib *calib, unsigned laser, size_t count,
-                         const double *image_px, double *plane_out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_image_to_plane(const flt_calib *calib,
+                                                                   unsigned laser, size_t count,
+                                                                   const double *image_px,
+                                                                   double *plane_out);
 
 /* Laser `laser`'s plane -> raw image points (the inverse of the above; for
  * the simulator and diagnostics).
  *   plane_mm   count x 2 (x, z), mm.   image_out  count x 2 (u, v), px.
  * A point behind the camera or at infinity gives NaN. In-place allowed. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_calib_plane_to_image(const flt_calib *calib, unsigned laser, size_t count,
-                         const double *plane_mm, double *image_out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_plane_to_image(const flt_calib *calib,
+                                                                   unsigned laser, size_t count,
+                                                                   const double *plane_mm,
+                                                                   double *image_out);
 
 /* Raw image points -> undistorted image points, both count x 2 px.
  * The inverse of the distortion model is solved by damped Newton
@@ -257,9 +254,9 @@ flt_calib_plane_to_image(const flt_calib *calib, unsigned laser, size_t count,
  * where it does not converge gives NaN. Needs only the
  * intrinsics (works on an unfinished model too; then it is not
  * thread-safe against concurrent setters). */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_calib_undistort(const flt_calib *calib, size_t count,
-                    const double *image_px, double *undistorted_out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_undistort(const flt_calib *calib, size_t count,
+                                                              const double *image_px,
+                                                              double *undistorted_out);
 
 /* ---------------------------------------------------------------------- */
 /* Save and load                                                           */
@@ -268,26 +265,24 @@ flt_calib_undistort(const flt_calib *calib, size_t count,
 /* Writes a finished model to `path` (see "File format"), through a
  * temporary file renamed into place, so a crash never leaves a half file.
  * FLT_ERR_IO if it cannot be written. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_calib_save(const flt_calib *calib, const char *path);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_save(const flt_calib *calib, const char *path);
 
 /* Writes the same text into text_out[capacity] with a terminating NUL.
  * *length_out = the text's length without the NUL, also when the buffer is
  * too small (then FLT_ERR_BUFFER_FULL; text_out may be NULL with capacity 0
  * to ask for the size). */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_calib_save_text(const flt_calib *calib, char *text_out, size_t capacity,
-                    size_t *length_out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_save_text(const flt_calib *calib,
+                                                              char *text_out, size_t capacity,
+                                                              size_t *length_out);
 
 /* Reads a model from `path` and returns it finished in *out (NULL on any
  * failure). FLT_ERR_IO if the file cannot be read, FLT_ERR_FORMAT if it is
  * malformed. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_calib_load(const char *path, flt_calib **out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_load(const char *path, flt_calib **out);
 
 /* The same from `length` bytes of text (need not be NUL-terminated). */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_calib_load_text(const char *text, size_t length, flt_calib **out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_load_text(const char *text, size_t length,
+                                                              flt_calib **out);
 
 #ifdef __cplusplus
 }

@@ -437,28 +437,26 @@ FLT_API void FLT_CALL flt_options_destroy(flt_options *options);
 /* Sets one value. Fails with FLT_ERR_INVALID_ARGUMENT, leaving the bag
  * unchanged, for an unknown key, a NaN, a value outside the key's bounds or a
  * fraction for an integer key. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_options_set(flt_options *options, flt_option key, double value);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_options_set(flt_options *options, flt_option key,
+                                                          double value);
 /* Reads one value (the default if never set). */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_options_get(const flt_options *options, flt_option key, double *out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_options_get(const flt_options *options,
+                                                          flt_option key, double *out);
 
 /* Looks a key up by its name (e.g. "knot_spacing"). FLT_ERR_NOT_FOUND if no
  * key has that name. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_option_find(const char *name, flt_option *out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_option_find(const char *name, flt_option *out);
 
 /* Describes a key: its name (static storage), inclusive bounds, default and
  * whether it takes whole numbers only. Any output pointer may be NULL.
  * FLT_ERR_NOT_FOUND for an unknown key. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_option_info(flt_option key, const char **name, double *min_value,
-                double *max_value, double *default_value, int *is_integer);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_option_info(flt_option key, const char **name,
+                                                          double *min_value, double *max_value,
+                                                          double *default_value, int *is_integer);
 
 /* Enumerates the keys: the index-th key for index 0, 1, ...;
  * FLT_ERR_NOT_FOUND past the last one. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_option_at(size_t index, flt_option *out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_option_at(size_t index, flt_option *out);
 
 #ifdef __cplusplus
 }

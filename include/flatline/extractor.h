@@ -103,22 +103,23 @@ typedef struct flt_extractor flt_extractor;
  * FLT_ERR_INVALID_ARGUMENT for a band outside the frame, an even or too
  * small Savitzky-Golay window (it must be >= order + 2), or a band shorter
  * than the window. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_extractor_create(const flt_calib *calib, const flt_options *options,
-                     flt_extractor **out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_extractor_create(const flt_calib *calib,
+                                                               const flt_options *options,
+                                                               flt_extractor **out);
 
 /* Frees everything. NULL is a no-op. */
 FLT_API void FLT_CALL flt_extractor_destroy(flt_extractor *extractor);
 
 /* The number of fibers of a profile row (the calibration's fiber count). */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_extractor_fibers(const flt_extractor *extractor, size_t *out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_extractor_fibers(const flt_extractor *extractor,
+                                                               size_t *out);
 
 /* Laser `laser`'s band of rows: first row and row count (px). FLT_ERR_STATE
  * while an automatic band waits for its first frame. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_extractor_band(const flt_extractor *extractor, unsigned laser,
-                   uint32_t *first_row_out, uint32_t *rows_out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_extractor_band(const flt_extractor *extractor,
+                                                             unsigned laser,
+                                                             uint32_t *first_row_out,
+                                                             uint32_t *rows_out);
 
 /* Turns one frame into one profile row.
  *   frame          width x height pixels of `format`, rows stride_bytes
@@ -131,27 +132,23 @@ flt_extractor_band(const flt_extractor *extractor, unsigned laser,
  *   valid_out      [fibers] 1 where valid, else 0 (may be NULL).
  * A wrong size, format or stride fails with FLT_ERR_INVALID_ARGUMENT naming
  * the argument; the extractor stays usable. Allocates nothing. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_extractor_process(flt_extractor *extractor, const void *frame,
-                      flt_pixel_format format, uint32_t width, uint32_t height,
-                      size_t stride_bytes, double encoder_mm, size_t fibers,
-                      double *s_out, double *height_out, double *slope_out,
-                      uint8_t *valid_out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_extractor_process(
+    flt_extractor *extractor, const void *frame, flt_pixel_format format, uint32_t width,
+    uint32_t height, size_t stride_bytes, double encoder_mm, size_t fibers, double *s_out,
+    double *height_out, double *slope_out, uint8_t *valid_out);
 
 /* Diagnostics of the last processed frame: the sub-pixel peak row of every
  * column, rows_out[laser * width + u] (px, raw image rows), NaN where the
  * column has no valid peak. `width` must equal the frame width.
  * FLT_ERR_STATE before the first successful process(). */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_extractor_peaks(const flt_extractor *extractor, size_t width,
-                    double *rows_out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_extractor_peaks(const flt_extractor *extractor,
+                                                              size_t width, double *rows_out);
 
 /* Diagnostics of the last processed frame: each laser's z on the fiber grid,
  * z_out[laser * fibers + k] (mm), NaN where invalid. The material position
  * of laser L's reading is s = encoder_mm - offset_L. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_extractor_laser_profiles(const flt_extractor *extractor, size_t fibers,
-                             double *z_out);
+flt_extractor_laser_profiles(const flt_extractor *extractor, size_t fibers, double *z_out);
 
 #ifdef __cplusplus
 }

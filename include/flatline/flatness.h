@@ -152,11 +152,11 @@ enum {
 typedef enum flt_shape {
     FLT_SHAPE_FLAT = 0,
     FLT_SHAPE_CENTRE_BUCKLE = 1,
-    FLT_SHAPE_WAVY_EDGE_LEFT = 2,  /* x < centre is left */
+    FLT_SHAPE_WAVY_EDGE_LEFT = 2, /* x < centre is left */
     FLT_SHAPE_WAVY_EDGE_RIGHT = 3,
     FLT_SHAPE_WAVY_EDGE_BOTH = 4,
     FLT_SHAPE_QUARTER_BUCKLE = 5,
-    FLT_SHAPE_MIX = 6,             /* see the component bits */
+    FLT_SHAPE_MIX = 6, /* see the component bits */
     /* Too short a window, no valid fiber, or fewer than 5 valid zones. */
     FLT_SHAPE_UNDETERMINED = 7,
     FLT_SHAPE_MAX_ENUM_ = 0x7FFFFFFF
@@ -185,32 +185,32 @@ typedef struct flt_flatness flt_flatness;
  * options: NULL for the defaults, else read for the flat_* keys; copied.
  * Fails with FLT_ERR_INVALID_ARGUMENT for NULL, zero fibers, bad positions
  * or inconsistent options (flat_update_interval > flat_window_length). */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_flatness_create(size_t fibers, const double *fiber_x,
-                    const flt_options *options, flt_flatness **out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_create(size_t fibers, const double *fiber_x,
+                                                              const flt_options *options,
+                                                              flt_flatness **out);
 
 /* The same with the fiber grid of a calibration (flt_calib_get_fiber_grid);
  * calib is only read during the call. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_flatness_create_from_calib(const flt_calib *calib,
-                               const flt_options *options, flt_flatness **out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_create_from_calib(const flt_calib *calib,
+                                                                         const flt_options *options,
+                                                                         flt_flatness **out);
 
 /* Frees everything. NULL is a no-op. */
 FLT_API void FLT_CALL flt_flatness_destroy(flt_flatness *flatness);
 
 /* The fiber and zone counts. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_flatness_fibers(const flt_flatness *flatness, size_t *out);
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_flatness_zones(const flt_flatness *flatness, size_t *out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_fibers(const flt_flatness *flatness,
+                                                              size_t *out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_zones(const flt_flatness *flatness,
+                                                             size_t *out);
 
 /* The zone layout: zone j covers [left_x[j], left_x[j] + zone width) mm,
  * centre_x[j] its middle, fiber_count[j] the fibers in it. `zones` must
  * equal flt_flatness_zones(). Any output may be NULL. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_flatness_zone_layout(const flt_flatness *flatness, size_t zones,
-                         double *left_x_out, double *centre_x_out,
-                         size_t *fiber_count_out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_zone_layout(const flt_flatness *flatness,
+                                                                   size_t zones, double *left_x_out,
+                                                                   double *centre_x_out,
+                                                                   size_t *fiber_count_out);
 
 /* Evaluates one window from the caller's rows (a whole sheet):
  *   s      [rows]          material position, mm, finite, strictly
@@ -222,9 +222,10 @@ flt_flatness_zone_layout(const flt_flatness *flatness, size_t zones,
  * Fails with FLT_ERR_INVALID_ARGUMENT, keeping the previous results, for
  * NULL arrays, rows < 2, non-increasing s, a window shorter than
  * flat_min_length, or no fiber with flat_min_coverage of usable data. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_flatness_evaluate(flt_flatness *flatness, size_t rows, size_t fibers,
-                      const double *s, const double *z, const uint8_t *flags);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_evaluate(flt_flatness *flatness, size_t rows,
+                                                                size_t fibers, const double *s,
+                                                                const double *z,
+                                                                const uint8_t *flags);
 
 /* Streaming: takes rows (arrays as in flt_flatness_evaluate; s continues to
  * increase across calls) until a window completes. *consumed_out: the rows
@@ -235,17 +236,18 @@ flt_flatness_evaluate(flt_flatness *flatness, size_t rows, size_t fibers,
  * rows taken before are kept and counted in *consumed_out. Any other failure
  * takes no row. flat_window_length = 0 means no automatic windows: only
  * finish() evaluates, and a sheet must fit in flat_row_capacity rows. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_flatness_push(flt_flatness *flatness, size_t rows, size_t fibers,
-                  const double *s, const double *z, const uint8_t *flags,
-                  size_t *consumed_out, int *evaluated_out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_push(flt_flatness *flatness, size_t rows,
+                                                            size_t fibers, const double *s,
+                                                            const double *z, const uint8_t *flags,
+                                                            size_t *consumed_out,
+                                                            int *evaluated_out);
 
 /* Ends the current sheet: evaluates the rows since the current window's
  * start as one window (*evaluated_out = 1; flagged FLT_WINDOW_SHORT if
  * shorter than flat_min_length), or does nothing (*evaluated_out = 0) when
  * fewer than 2 rows are pending. The next row pushed starts a new grid. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_flatness_finish(flt_flatness *flatness, int *evaluated_out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_finish(flt_flatness *flatness,
+                                                              int *evaluated_out);
 
 /* Drops the pending rows and restarts the window grid; results stay. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_reset(flt_flatness *flatness);
@@ -254,34 +256,34 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_reset(flt_flatness *flatn
  * count, FLT_WINDOW_* flags and its sequence number (1 for the first window
  * since create). Any output may be NULL. FLT_ERR_STATE before the first
  * window. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_flatness_window(const flt_flatness *flatness, double *s_first_out,
-                    double *s_last_out, size_t *rows_out,
-                    unsigned *window_flags_out, size_t *index_out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_window(const flt_flatness *flatness,
+                                                              double *s_first_out,
+                                                              double *s_last_out, size_t *rows_out,
+                                                              unsigned *window_flags_out,
+                                                              size_t *index_out);
 
 /* Per-fiber results of the last window, [fibers] each (mm, I-Units, mm, mm,
  * %, FLT_FIBER_* bits). Any output may be NULL. FLT_ERR_STATE before the
  * first window. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_flatness_fiber_results(const flt_flatness *flatness, size_t fibers,
-                           double *arc_length_out, double *i_units_out,
-                           double *wave_height_out, double *wave_period_out,
+flt_flatness_fiber_results(const flt_flatness *flatness, size_t fibers, double *arc_length_out,
+                           double *i_units_out, double *wave_height_out, double *wave_period_out,
                            double *steepness_percent_out, uint8_t *flags_out);
 
 /* The zone profile of the last window, [zones] I-Units and FLT_ZONE_* bits.
  * Either output may be NULL. FLT_ERR_STATE before the first window. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_flatness_zone_results(const flt_flatness *flatness, size_t zones,
-                          double *i_units_out, uint8_t *flags_out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_zone_results(const flt_flatness *flatness,
+                                                                    size_t zones,
+                                                                    double *i_units_out,
+                                                                    uint8_t *flags_out);
 
 /* The shape of the last window: class, confidence in [0, 1],
  * FLT_SHAPE_HAS_* bits, bow and crossbow sagittas (mm; NaN only with
  * FLT_WINDOW_NO_BOW / FLT_WINDOW_NO_CROSSBOW). Any output may be NULL. FLT_ERR_STATE before
  * the first window. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_flatness_shape(const flt_flatness *flatness, flt_shape *shape_out,
-                   double *confidence_out, unsigned *components_out,
-                   double *bow_mm_out, double *crossbow_mm_out);
+flt_flatness_shape(const flt_flatness *flatness, flt_shape *shape_out, double *confidence_out,
+                   unsigned *components_out, double *bow_mm_out, double *crossbow_mm_out);
 
 #ifdef __cplusplus
 }

@@ -25,9 +25,9 @@
  * Validity
  *   A sample is used when its mask entry is non-zero (or the mask is NULL)
  *   and its value is finite and at most 1e9 in magnitude (mm, mm/mm: no
- *   measurement, and its square would overflow the sums). Height and slope are judged separately: a NaN
- *   slope with a finite height uses the height only. Output rows carry flags
- *   per fiber (FLT_FLAG_*): a value is never invented silently.
+ *   measurement, and its square would overflow the sums). Height and slope are judged separately: a
+ * NaN slope with a finite height uses the height only. Output rows carry flags per fiber
+ * (FLT_FLAG_*): a value is never invented silently.
  *
  * Streaming
  *   push() takes rows; pull() returns finished rows. A knot is complete once
@@ -126,19 +126,19 @@ typedef struct flt_recon flt_recon;
  * robust_line_iterations); copied, not kept.
  * Fails with FLT_ERR_INVALID_ARGUMENT if fibers is 0 or the options are
  * inconsistent, FLT_ERR_OUT_OF_MEMORY if the buffers do not fit. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_recon_create(size_t fibers, const flt_options *options, flt_recon **out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_create(size_t fibers,
+                                                           const flt_options *options,
+                                                           flt_recon **out);
 
 /* Frees everything. NULL is a no-op. */
 FLT_API void FLT_CALL flt_recon_destroy(flt_recon *recon);
 
 /* The number of fibers the handle was created with. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_recon_fibers(const flt_recon *recon, size_t *out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_fibers(const flt_recon *recon, size_t *out);
 
 /* The effective value of an option (knot_spacing resolved to mm). */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_recon_get_option(const flt_recon *recon, flt_option key, double *out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_get_option(const flt_recon *recon,
+                                                               flt_option key, double *out);
 
 /* Pushes `rows` rows (>= 1).
  *   s       [rows]          material position of each row, mm, strictly
@@ -154,10 +154,10 @@ flt_recon_get_option(const flt_recon *recon, flt_option key, double *out);
  * row is taken: on failure nothing was pushed. Fails with
  * FLT_ERR_BUFFER_FULL when the rows do not fit in row_capacity: pull
  * finished rows, push smaller blocks, or create with a larger capacity. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_recon_push(flt_recon *recon, size_t rows, size_t fibers, const double *s,
-               const double *height, const double *slope,
-               const uint8_t *valid);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_push(flt_recon *recon, size_t rows,
+                                                         size_t fibers, const double *s,
+                                                         const double *height, const double *slope,
+                                                         const uint8_t *valid);
 
 /* Pulls up to max_rows finished rows, oldest first.
  *   s_out     [max_rows]          their positions, mm.
@@ -166,14 +166,13 @@ flt_recon_push(flt_recon *recon, size_t rows, size_t fibers, const double *s,
  *   flags_out [max_rows * fibers] FLT_FLAG_* bits, or NULL if unwanted.
  *   rows_out  the number of rows written (0 when none is finished yet).
  * FLT_ERR_STATE if nothing was pushed since create or reset. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_recon_pull(flt_recon *recon, size_t max_rows, size_t fibers,
-               double *s_out, double *z_out, uint8_t *flags_out,
-               size_t *rows_out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_pull(flt_recon *recon, size_t max_rows,
+                                                         size_t fibers, double *s_out,
+                                                         double *z_out, uint8_t *flags_out,
+                                                         size_t *rows_out);
 
 /* The number of finished rows waiting to be pulled. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_recon_ready(const flt_recon *recon, size_t *out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_ready(const flt_recon *recon, size_t *out);
 
 /* Finishes the current sheet: every pushed row becomes ready to pull, solved
  * with all data so far, and the last emitted knot becomes the hard boundary
@@ -187,19 +186,20 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_reset(flt_recon *recon);
 /* The boundary condition carried into the next sheet: the knot position
  * (mm), and per fiber its height (mm) and slope (mm/mm). Any output may be
  * NULL. FLT_ERR_STATE before the first end_sheet of a strip. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_recon_boundary(const flt_recon *recon, size_t fibers, double *s_out,
-                   double *height_out, double *slope_out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_boundary(const flt_recon *recon, size_t fibers,
+                                                             double *s_out, double *height_out,
+                                                             double *slope_out);
 
 /* Reconstructs one whole sheet in one call: the least-squares spline of all
  * rows at once (no lag, no carry-over). Arguments as in flt_recon_push;
  * z_out [rows * fibers] and flags_out [rows * fibers] (or NULL) as in
  * flt_recon_pull. Allocates its working memory for the duration of the call
  * (about 100 doubles per fiber and knot); reentrant. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_reconstruct(const flt_options *options, size_t rows, size_t fibers,
-                const double *s, const double *height, const double *slope,
-                const uint8_t *valid, double *z_out, uint8_t *flags_out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_reconstruct(const flt_options *options, size_t rows,
+                                                          size_t fibers, const double *s,
+                                                          const double *height, const double *slope,
+                                                          const uint8_t *valid, double *z_out,
+                                                          uint8_t *flags_out);
 
 #ifdef __cplusplus
 }

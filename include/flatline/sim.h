@@ -98,18 +98,16 @@ typedef struct flt_sim flt_sim;
  * is NULL (flt_calib_create_reference(0, 2048, -1000, 2, 1001)).
  * options: NULL for the defaults, else read for the sim_* keys. The sheet
  * starts flat. Allocates the frame scratch (4 bytes per pixel) here. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_sim_create(const flt_calib *calib, const flt_options *options,
-               flt_sim **out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_create(const flt_calib *calib,
+                                                         const flt_options *options, flt_sim **out);
 
 /* Frees everything. NULL is a no-op. */
 FLT_API void FLT_CALL flt_sim_destroy(flt_sim *sim);
 
 /* Adds a defect (see flt_sim_defect): amplitude_mm finite, period_mm >= 0
  * finite. At most 64 defects. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_sim_add_defect(flt_sim *sim, flt_sim_defect kind, double amplitude_mm,
-                   double period_mm);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_add_defect(flt_sim *sim, flt_sim_defect kind,
+                                                             double amplitude_mm, double period_mm);
 
 /* Removes every defect and the height map: the sheet is flat again. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_clear_sheet(flt_sim *sim);
@@ -118,26 +116,26 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_clear_sheet(flt_sim *sim);
  * heights [rows * cols] mm, row-major, row r at s = s0_mm + r * ds_mm, column
  * c at x = x0_mm + c * dx_mm (rows, cols >= 2; ds, dx > 0; all finite).
  * Interpolated bilinearly; clamped to the edge values outside. Copied. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_sim_set_height_map(flt_sim *sim, size_t rows, size_t cols, double s0_mm,
-                       double ds_mm, double x0_mm, double dx_mm,
-                       const double *heights);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_set_height_map(flt_sim *sim, size_t rows,
+                                                                 size_t cols, double s0_mm,
+                                                                 double ds_mm, double x0_mm,
+                                                                 double dx_mm,
+                                                                 const double *heights);
 
 /* The ground truth z_sheet at count points (x[i], s[i]) (mm) into z_out. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_sim_surface(const flt_sim *sim, size_t count, const double *x,
-                const double *s, double *z_out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_surface(const flt_sim *sim, size_t count,
+                                                          const double *x, const double *s,
+                                                          double *z_out);
 
 /* The fiber count (the calibration's grid) and the frame size, px. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_sim_fibers(const flt_sim *sim, size_t *out);
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_sim_frame_size(const flt_sim *sim, uint32_t *width_out,
-                   uint32_t *height_out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_fibers(const flt_sim *sim, size_t *out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_frame_size(const flt_sim *sim,
+                                                             uint32_t *width_out,
+                                                             uint32_t *height_out);
 /* The pixel format of flt_sim_next_frame (from sim_bit_depth) and the bytes
  * one frame needs at a given stride. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_sim_pixel_format(const flt_sim *sim, flt_pixel_format *out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_pixel_format(const flt_sim *sim,
+                                                               flt_pixel_format *out);
 
 /* Generates the next `rows` profile rows (frames f .. f + rows - 1).
  *   fibers          must equal flt_sim_fibers().
@@ -147,10 +145,11 @@ flt_sim_pixel_format(const flt_sim *sim, flt_pixel_format *out);
  *   valid_out       [rows * fibers] all 1 (may be NULL).
  *   truth_out       [rows * fibers] z_sheet(x_k, s_row), mm (may be NULL).
  * Allocates nothing. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_sim_next_rows(flt_sim *sim, size_t rows, size_t fibers,
-                  double *encoder_mm_out, double *s_out, double *height_out,
-                  double *slope_out, uint8_t *valid_out, double *truth_out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_next_rows(flt_sim *sim, size_t rows,
+                                                            size_t fibers, double *encoder_mm_out,
+                                                            double *s_out, double *height_out,
+                                                            double *slope_out, uint8_t *valid_out,
+                                                            double *truth_out);
 
 /* Renders the next frame.
  *   frame_out       height rows of stride_bytes (>= width * bytes per
@@ -164,9 +163,8 @@ flt_sim_next_rows(flt_sim *sim, size_t rows, size_t fibers,
  *                   the peak noise; NaN where the line is outside the frame.
  * Allocates nothing. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_sim_next_frame(flt_sim *sim, void *frame_out, size_t capacity_bytes,
-                   size_t stride_bytes, double *encoder_mm_out, size_t fibers,
-                   double *truth_out, double *peak_rows_out);
+flt_sim_next_frame(flt_sim *sim, void *frame_out, size_t capacity_bytes, size_t stride_bytes,
+                   double *encoder_mm_out, size_t fibers, double *truth_out, double *peak_rows_out);
 
 /* Back to frame 0: the following output repeats the first bytes exactly. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_rewind(flt_sim *sim);
@@ -187,10 +185,11 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_rewind(flt_sim *sim);
  *   first_x_mm, pitch_mm, fibers  the fiber grid (pitch > 0, fibers >= 1).
  * Declared here because the simulator is its user; it builds on the public
  * calibration API only. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_calib_create_reference(uint32_t first_row, uint32_t rows,
-                           double first_x_mm, double pitch_mm, size_t fibers,
-                           flt_calib **out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_create_reference(uint32_t first_row,
+                                                                     uint32_t rows,
+                                                                     double first_x_mm,
+                                                                     double pitch_mm, size_t fibers,
+                                                                     flt_calib **out);
 
 #ifdef __cplusplus
 }

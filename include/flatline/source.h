@@ -129,8 +129,9 @@ typedef enum flt_source_kind {
  * outlive the source, and the caller may still change its sheet between
  * frames. Block ids count from 0; timestamps are the host's monotonic clock,
  * ns. Allocates one frame buffer. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_source_create_sim(flt_sim *sim, const flt_options *options, flt_source **out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_create_sim(flt_sim *sim,
+                                                                const flt_options *options,
+                                                                flt_source **out);
 
 /* A source reading `count` image files (PNG, TIFF or anything OpenCV's
  * imread reads), in the given order. Every file must be single-channel, 8 or
@@ -149,35 +150,38 @@ flt_source_create_sim(flt_sim *sim, const flt_options *options, flt_source **out
  * file. Timestamps are the host's monotonic clock, ns. The first file is read
  * here to learn the size. After the last image flt_source_next() gives
  * FLT_OK with *out = NULL. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_source_create_images(const char *const *paths, size_t count,
-                         const char *encoder_csv, const flt_options *options,
-                         flt_source **out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_create_images(const char *const *paths,
+                                                                   size_t count,
+                                                                   const char *encoder_csv,
+                                                                   const flt_options *options,
+                                                                   flt_source **out);
 
 /* The same for every *.png, *.tif and *.tiff file of `directory` (not its
  * sub-folders), sorted by name (byte order). FLT_ERR_NOT_FOUND if there is
  * none. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_source_create_image_dir(const char *directory, const char *encoder_csv,
-                            const flt_options *options, flt_source **out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_create_image_dir(const char *directory,
+                                                                      const char *encoder_csv,
+                                                                      const flt_options *options,
+                                                                      flt_source **out);
 
 /* Lists the USB3 Vision cameras present: on the USB bus through libusb when
  * `bus` is NULL, else on a simulated bus. Devices that are not USB3 Vision are
  * skipped; cameras that cannot be opened to read their strings (no udev rule,
  * no WinUSB driver) are listed with vendor "?" and the reason as their
  * model. FLT_ERR_DEVICE if libusb cannot start. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_camera_list_create(flt_u3v_sim *bus, flt_camera_list **out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_camera_list_create(flt_u3v_sim *bus,
+                                                                 flt_camera_list **out);
 FLT_API void FLT_CALL flt_camera_list_destroy(flt_camera_list *list);
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_camera_list_count(const flt_camera_list *list, size_t *out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_camera_list_count(const flt_camera_list *list,
+                                                                size_t *out);
 /* Camera `index`: its strings (owned by the list, valid until it is
  * destroyed) and its link speed, Mbit/s (480 high speed, 5000 super speed,
  * 10000 super speed plus; 0 unknown). Any output may be NULL. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_camera_list_get(const flt_camera_list *list, size_t index,
-                    const char **vendor, const char **model,
-                    const char **serial, uint32_t *speed_mbps);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_camera_list_get(const flt_camera_list *list,
+                                                              size_t index, const char **vendor,
+                                                              const char **model,
+                                                              const char **serial,
+                                                              uint32_t *speed_mbps);
 
 /* Opens a USB3 Vision camera: on the USB bus when `bus` is NULL, else on a
  * simulated bus (which must outlive the source). `serial` picks the camera
@@ -188,16 +192,16 @@ flt_camera_list_get(const flt_camera_list *list, size_t index,
  * FLT_ERR_DEVICE says why a camera cannot be opened (permissions: see
  * lib/sources/deploy/). The stream buffers are allocated by
  * flt_source_start(). */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_source_open_u3v(flt_u3v_sim *bus, const char *serial,
-                    const flt_options *options, flt_source **out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_open_u3v(flt_u3v_sim *bus, const char *serial,
+                                                              const flt_options *options,
+                                                              flt_source **out);
 
 /* Stops a streaming camera, releases it and frees everything. NULL is a
  * no-op. */
 FLT_API void FLT_CALL flt_source_destroy(flt_source *source);
 
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_source_kind_of(const flt_source *source, flt_source_kind *out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_kind_of(const flt_source *source,
+                                                             flt_source_kind *out);
 
 /* ---------------------------------------------------------------------- */
 /* Acquisition                                                             */
@@ -221,8 +225,8 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_stop(flt_source *source);
  * sequence. FLT_ERR_TIMEOUT when no good frame came in time,
  * FLT_ERR_DEVICE when the camera is gone, FLT_ERR_STATE before start. The
  * simulator and images never wait. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_source_next(flt_source *source, uint32_t timeout_ms, const flt_frame **out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_next(flt_source *source, uint32_t timeout_ms,
+                                                          const flt_frame **out);
 
 /* Everything about a frame; any output may be NULL.
  *   pixels        height rows of stride_bytes, `format` pixels (16-bit
@@ -233,23 +237,25 @@ flt_source_next(flt_source *source, uint32_t timeout_ms, const flt_frame **out);
  *   timestamp_ns  camera: the leader's timestamp (device clock, ns);
  *                 otherwise the host's monotonic clock at delivery, ns.
  *   encoder_mm    the strip position, mm (see "Encoder positions"). */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_frame_info(const flt_frame *frame, const void **pixels, uint32_t *width,
-               uint32_t *height, size_t *stride_bytes, flt_pixel_format *format,
-               uint64_t *block_id, uint64_t *timestamp_ns, double *encoder_mm);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_frame_info(const flt_frame *frame,
+                                                         const void **pixels, uint32_t *width,
+                                                         uint32_t *height, size_t *stride_bytes,
+                                                         flt_pixel_format *format,
+                                                         uint64_t *block_id, uint64_t *timestamp_ns,
+                                                         double *encoder_mm);
 
 /* Encoder mode 2: the position the next frames carry, mm (finite).
  * FLT_ERR_STATE in any other mode. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_source_set_encoder(flt_source *source, double encoder_mm);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_set_encoder(flt_source *source,
+                                                                 double encoder_mm);
 
 /* Frame and channel counters, since the source was created. */
 typedef enum flt_source_counter {
-    FLT_COUNT_FRAMES = 0,          /* good frames delivered */
-    FLT_COUNT_DROPPED = 1,         /* frames that arrived damaged (sum of the
-                                      next five and BAD_LEADERS) */
+    FLT_COUNT_FRAMES = 0,  /* good frames delivered */
+    FLT_COUNT_DROPPED = 1, /* frames that arrived damaged (sum of the
+                              next five and BAD_LEADERS) */
     FLT_COUNT_SHORT = 2,
-    FLT_COUNT_INCOMPLETE = 3,      /* a new leader arrived mid-frame */
+    FLT_COUNT_INCOMPLETE = 3, /* a new leader arrived mid-frame */
     FLT_COUNT_OVERFLOW = 4,
     FLT_COUNT_SUBMIT_DROPPED = 5,  /* frames dropped after a refused submit */
     FLT_COUNT_TIMEOUT_DROPPED = 6, /* partial frames dropped at a timeout */
@@ -257,9 +263,9 @@ typedef enum flt_source_counter {
     FLT_COUNT_SUBMIT_REFUSED = 8,  /* bulk submissions refused */
     FLT_COUNT_TIMEOUTS = 9,        /* flt_source_next() calls that timed out */
     FLT_COUNT_DISCONNECTS = 10,
-    FLT_COUNT_BAD_PACKETS = 11,    /* transfers that are no leader, payload
-                                      of an open frame, or trailer */
-    FLT_COUNT_BAD_LEADERS = 12,    /* leaders with an unusable format/size */
+    FLT_COUNT_BAD_PACKETS = 11, /* transfers that are no leader, payload
+                                   of an open frame, or trailer */
+    FLT_COUNT_BAD_LEADERS = 12, /* leaders with an unusable format/size */
     FLT_COUNT_PENDING_ACKS = 13,
     FLT_COUNT_STALE_ACKS = 14,
     FLT_COUNT_COMMAND_RETRIES = 15,
@@ -267,9 +273,9 @@ typedef enum flt_source_counter {
     FLT_COUNT_MAX_ENUM_ = 0x7FFFFFFF
 } flt_source_counter;
 
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_source_count(const flt_source *source, flt_source_counter counter,
-                 uint64_t *out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_count(const flt_source *source,
+                                                           flt_source_counter counter,
+                                                           uint64_t *out);
 
 /* Why the last frame was dropped or lost ("" if none was). Owned by the
  * source, valid until its next call. Never NULL (for a NULL source too). */
@@ -293,9 +299,9 @@ typedef enum flt_camera_string {
 
 /* The string (owned by the source, valid until it is destroyed).
  * FLT_ERR_STATE for a source that is not a camera. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_source_camera_string(const flt_source *source, flt_camera_string which,
-                         const char **out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_camera_string(const flt_source *source,
+                                                                   flt_camera_string which,
+                                                                   const char **out);
 
 /* Camera values read from the registers or chosen for the stream. */
 typedef enum flt_camera_value {
@@ -307,12 +313,12 @@ typedef enum flt_camera_value {
     FLT_CAMERA_MAX_ACK_BYTES = 5,      /* SBRM max ack transfer */
     FLT_CAMERA_SIRM_ADDRESS = 6,
     FLT_CAMERA_MANIFEST_ADDRESS = 7,
-    FLT_CAMERA_XML_BYTES = 8,          /* the XML file as stored (zipped size) */
-    FLT_CAMERA_XML_ZIPPED = 9,         /* 1 when it was a ZIP */
+    FLT_CAMERA_XML_BYTES = 8,  /* the XML file as stored (zipped size) */
+    FLT_CAMERA_XML_ZIPPED = 9, /* 1 when it was a ZIP */
     FLT_CAMERA_SPEED_MBPS = 10,
-    FLT_CAMERA_ALIGNMENT = 11,         /* SIRM, bytes (after start) */
-    FLT_CAMERA_PAYLOAD_BYTES = 12,     /* SIRM required payload size */
-    FLT_CAMERA_TRANSFER_BYTES = 13,    /* payload transfer size written */
+    FLT_CAMERA_ALIGNMENT = 11,      /* SIRM, bytes (after start) */
+    FLT_CAMERA_PAYLOAD_BYTES = 12,  /* SIRM required payload size */
+    FLT_CAMERA_TRANSFER_BYTES = 13, /* payload transfer size written */
     FLT_CAMERA_TRANSFER_COUNT = 14,
     FLT_CAMERA_FINAL_TRANSFER_BYTES = 15,
     FLT_CAMERA_MAX_LEADER_BYTES = 16,
@@ -320,9 +326,9 @@ typedef enum flt_camera_value {
     FLT_CAMERA_VALUE_MAX_ENUM_ = 0x7FFFFFFF
 } flt_camera_value;
 
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_source_camera_value(const flt_source *source, flt_camera_value which,
-                        uint64_t *out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_camera_value(const flt_source *source,
+                                                                  flt_camera_value which,
+                                                                  uint64_t *out);
 
 /* GenICam features by name (e.g. "Width", "ExposureTime", "TriggerMode").
  * Integers: IntReg, MaskedIntReg, Integer, Boolean, and Enumeration (its
@@ -331,35 +337,38 @@ flt_source_camera_value(const flt_source *source, flt_camera_value which,
  * written as is: the camera checks its range and answers a GenCP status,
  * which the error message names. FLT_ERR_STATE for a source that is not a
  * camera. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_source_get_int(flt_source *source, const char *feature, int64_t *out);
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_source_set_int(flt_source *source, const char *feature, int64_t value);
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_source_get_float(flt_source *source, const char *feature, double *out);
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_source_set_float(flt_source *source, const char *feature, double value);
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_source_set_enum(flt_source *source, const char *feature, const char *entry);
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_source_execute(flt_source *source, const char *feature);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_get_int(flt_source *source,
+                                                             const char *feature, int64_t *out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_set_int(flt_source *source,
+                                                             const char *feature, int64_t value);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_get_float(flt_source *source,
+                                                               const char *feature, double *out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_set_float(flt_source *source,
+                                                               const char *feature, double value);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_set_enum(flt_source *source,
+                                                              const char *feature,
+                                                              const char *entry);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_execute(flt_source *source,
+                                                             const char *feature);
 
 /* Gives feature `feature` a register instead of its XML node (for features
  * the client cannot resolve, or to override one): `length` bytes (1, 2, 4 or
  * 8) at `address`, little-endian; an unsigned integer, or an IEEE float
  * (length 4 or 8) when is_float is non-zero. Commands write 1 to it.
  * Enumerations mapped this way take their integer values (set_int). */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_source_map_feature(flt_source *source, const char *feature,
-                       uint64_t address, uint32_t length, int is_float);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_map_feature(flt_source *source,
+                                                                 const char *feature,
+                                                                 uint64_t address, uint32_t length,
+                                                                 int is_float);
 
 /* Raw register access through GenCP (chunked to the camera's limits). */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_source_read_memory(flt_source *source, uint64_t address, void *out,
-                       size_t bytes);
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_source_write_memory(flt_source *source, uint64_t address,
-                        const void *bytes_in, size_t bytes);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_read_memory(flt_source *source,
+                                                                 uint64_t address, void *out,
+                                                                 size_t bytes);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_write_memory(flt_source *source,
+                                                                  uint64_t address,
+                                                                  const void *bytes_in,
+                                                                  size_t bytes);
 
 /* ---------------------------------------------------------------------- */
 /* Simulated USB3 Vision cameras (testing without hardware)                */
@@ -393,26 +402,26 @@ flt_source_write_memory(flt_source *source, uint64_t address,
 
 typedef enum flt_u3v_sim_param {
     /* settable before a camera is opened */
-    FLT_U3V_SIM_RESPONSE_TIME_MS = 0,   /* ABRM; default 200 */
-    FLT_U3V_SIM_MAX_COMMAND_BYTES = 1,  /* SBRM; default 1024 */
-    FLT_U3V_SIM_MAX_ACK_BYTES = 2,      /* SBRM; default 1024 */
-    FLT_U3V_SIM_ALIGNMENT_LOG2 = 3,     /* SIRM info; default 9 (512 B) */
-    FLT_U3V_SIM_XML_ZIPPED = 4,         /* default 1 */
-    FLT_U3V_SIM_ENCODER_CHUNK = 5,      /* 1: append the encoder chunk */
-    FLT_U3V_SIM_ENCODER_CHUNK_ID = 6,   /* default 0x4E434445 */
+    FLT_U3V_SIM_RESPONSE_TIME_MS = 0,        /* ABRM; default 200 */
+    FLT_U3V_SIM_MAX_COMMAND_BYTES = 1,       /* SBRM; default 1024 */
+    FLT_U3V_SIM_MAX_ACK_BYTES = 2,           /* SBRM; default 1024 */
+    FLT_U3V_SIM_ALIGNMENT_LOG2 = 3,          /* SIRM info; default 9 (512 B) */
+    FLT_U3V_SIM_XML_ZIPPED = 4,              /* default 1 */
+    FLT_U3V_SIM_ENCODER_CHUNK = 5,           /* 1: append the encoder chunk */
+    FLT_U3V_SIM_ENCODER_CHUNK_ID = 6,        /* default 0x4E434445 */
     FLT_U3V_SIM_ENCODER_MM_PER_COUNT_UM = 7, /* um per count; default 10 */
-    FLT_U3V_SIM_SPEED_MBPS = 8,         /* default 5000 */
+    FLT_U3V_SIM_SPEED_MBPS = 8,              /* default 5000 */
     /* 1: the camera was left streaming by a process that died: SI control 1,
      * acquisition running, a half-sent frame in its FIFO; SIRM writes are
      * refused (access denied) until SI control is cleared. */
     FLT_U3V_SIM_LEFT_STREAMING = 9,
     /* read-only */
-    FLT_U3V_SIM_SI_CONTROL = 20,        /* SIRM SI control register */
-    FLT_U3V_SIM_ACQUIRING = 21,         /* 1 between AcquisitionStart/Stop */
-    FLT_U3V_SIM_COMMANDS = 22,          /* GenCP commands received */
+    FLT_U3V_SIM_SI_CONTROL = 20,           /* SIRM SI control register */
+    FLT_U3V_SIM_ACQUIRING = 21,            /* 1 between AcquisitionStart/Stop */
+    FLT_U3V_SIM_COMMANDS = 22,             /* GenCP commands received */
     FLT_U3V_SIM_LAST_READ_TIMEOUT_MS = 23, /* timeout of the last control read */
-    FLT_U3V_SIM_FRAMES_SENT = 24,       /* leaders sent */
-    FLT_U3V_SIM_OPEN = 25,              /* 1 while a host holds it open */
+    FLT_U3V_SIM_FRAMES_SENT = 24,          /* leaders sent */
+    FLT_U3V_SIM_OPEN = 25,                 /* 1 while a host holds it open */
     FLT_U3V_SIM_PARAM_MAX_ENUM_ = 0x7FFFFFFF
 } flt_u3v_sim_param;
 
@@ -445,31 +454,27 @@ FLT_API void FLT_CALL flt_u3v_sim_destroy(flt_u3v_sim *bus);
 /* Adds a camera (at most 8): strings copied (at most 63 bytes each), a
  * width x height sensor (16..8192 px each) of format Mono8, 10, 12 or 16. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_u3v_sim_add_camera(flt_u3v_sim *bus, const char *vendor, const char *model,
-                       const char *serial, uint32_t width, uint32_t height,
-                       flt_pixel_format format, size_t *index_out);
+flt_u3v_sim_add_camera(flt_u3v_sim *bus, const char *vendor, const char *model, const char *serial,
+                       uint32_t width, uint32_t height, flt_pixel_format format, size_t *index_out);
 
 /* Renders the camera's frames with `sim` (borrowed; NULL: test pattern). The
  * camera takes the simulator's frame size and format. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_u3v_sim_set_frames(flt_u3v_sim *bus, size_t camera, flt_sim *sim);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_u3v_sim_set_frames(flt_u3v_sim *bus, size_t camera,
+                                                                 flt_sim *sim);
 
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_u3v_sim_set(flt_u3v_sim *bus, size_t camera, flt_u3v_sim_param param,
-                uint64_t value);
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_u3v_sim_get(const flt_u3v_sim *bus, size_t camera, flt_u3v_sim_param param,
-                uint64_t *out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_u3v_sim_set(flt_u3v_sim *bus, size_t camera,
+                                                          flt_u3v_sim_param param, uint64_t value);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_u3v_sim_get(const flt_u3v_sim *bus, size_t camera,
+                                                          flt_u3v_sim_param param, uint64_t *out);
 
 /* Schedules a fault (see flt_u3v_fault); faults add up. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_u3v_sim_inject(flt_u3v_sim *bus, size_t camera, flt_u3v_fault fault,
-                   uint64_t at, uint32_t count);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_u3v_sim_inject(flt_u3v_sim *bus, size_t camera,
+                                                             flt_u3v_fault fault, uint64_t at,
+                                                             uint32_t count);
 
 /* Reads a 32-bit register of the camera's map directly (no GenCP). */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_u3v_sim_peek(const flt_u3v_sim *bus, size_t camera, uint64_t address,
-                 uint32_t *out);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_u3v_sim_peek(const flt_u3v_sim *bus, size_t camera,
+                                                           uint64_t address, uint32_t *out);
 
 #ifdef __cplusplus
 }

@@ -35,14 +35,15 @@ flt_status check_handle(const char *fn, const flt_calib *calib) {
     if (calib == nullptr)
         return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'calib' is NULL", fn);
     if (calib->magic != k_calib_magic)
-        return fail(FLT_ERR_INVALID_ARGUMENT,
-                    "%s: argument 'calib' is not a live flt_calib handle", fn);
+        return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'calib' is not a live flt_calib handle",
+                    fn);
     return FLT_OK;
 }
 
 // For setters: a finished model is immutable (it may be shared by threads).
 flt_status check_mutable(const char *fn, const flt_calib *calib) {
-    if (flt_status st = check_handle(fn, calib)) return st;
+    if (flt_status st = check_handle(fn, calib))
+        return st;
     if (calib->finished)
         return fail(FLT_ERR_STATE,
                     "%s: the calibration is finished and immutable; create a "
@@ -52,28 +53,25 @@ flt_status check_mutable(const char *fn, const flt_calib *calib) {
 }
 
 flt_status check_finished(const char *fn, const flt_calib *calib) {
-    if (flt_status st = check_handle(fn, calib)) return st;
+    if (flt_status st = check_handle(fn, calib))
+        return st;
     if (!calib->finished)
-        return fail(FLT_ERR_STATE,
-                    "%s: the calibration is not finished (call flt_calib_finish)",
+        return fail(FLT_ERR_STATE, "%s: the calibration is not finished (call flt_calib_finish)",
                     fn);
     return FLT_OK;
 }
 
 flt_status check_laser(const char *fn, unsigned laser) {
     if (laser >= FLT_CALIB_LASERS)
-        return fail(FLT_ERR_INVALID_ARGUMENT,
-                    "%s: argument 'laser' = %u is not 0 or 1", fn, laser);
+        return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'laser' = %u is not 0 or 1", fn, laser);
     return FLT_OK;
 }
 
 // count x 2 doubles must be addressable.
-flt_status check_points(const char *fn, const char *name, const double *pts,
-                        std::size_t count) {
+flt_status check_points(const char *fn, const char *name, const double *pts, std::size_t count) {
     if (count > std::numeric_limits<std::size_t>::max() / (2 * sizeof(double)))
         return fail(FLT_ERR_INVALID_ARGUMENT,
-                    "%s: argument 'count' = %zu overflows the address space", fn,
-                    count);
+                    "%s: argument 'count' = %zu overflows the address space", fn, count);
     if (count > 0 && pts == nullptr)
         return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument '%s' is NULL", fn, name);
     return FLT_OK;
@@ -81,8 +79,7 @@ flt_status check_points(const char *fn, const char *name, const double *pts,
 
 flt_status check_finite(const char *fn, const char *name, double v) {
     if (!std::isfinite(v))
-        return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument '%s' = %g is not finite",
-                    fn, name, v);
+        return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument '%s' = %g is not finite", fn, name, v);
     return FLT_OK;
 }
 
@@ -112,7 +109,8 @@ FLT_API void FLT_CALL flt_calib_destroy(flt_calib *calib) {
 FLT_API flt_status FLT_CALL flt_calib_finish(flt_calib *calib) {
     const char *fn = "flt_calib_finish";
     return guard(fn, [&] {
-        if (flt_status st = check_mutable(fn, calib)) return st;
+        if (flt_status st = check_mutable(fn, calib))
+            return st;
         if (const char *missing = missing_part(calib->model))
             return fail(FLT_ERR_STATE, "%s: the calibration lacks %s", fn, missing);
         calib->finished = true;
@@ -123,27 +121,26 @@ FLT_API flt_status FLT_CALL flt_calib_finish(flt_calib *calib) {
 FLT_API flt_status FLT_CALL flt_calib_is_finished(const flt_calib *calib, int *out) {
     const char *fn = "flt_calib_is_finished";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, calib)) return st;
+        if (flt_status st = check_handle(fn, calib))
+            return st;
         FLT_CHECK_NOT_NULL(fn, out);
         *out = calib->finished ? 1 : 0;
         return FLT_OK;
     });
 }
 
-FLT_API flt_status FLT_CALL flt_calib_set_frame_size(flt_calib *calib,
-                                                     uint32_t width,
+FLT_API flt_status FLT_CALL flt_calib_set_frame_size(flt_calib *calib, uint32_t width,
                                                      uint32_t height) {
     const char *fn = "flt_calib_set_frame_size";
     return guard(fn, [&] {
-        if (flt_status st = check_mutable(fn, calib)) return st;
+        if (flt_status st = check_mutable(fn, calib))
+            return st;
         if (width == 0 || width > k_max_frame_side)
-            return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'width' = %u is outside [1, %u]", fn, width,
-                        k_max_frame_side);
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'width' = %u is outside [1, %u]",
+                        fn, width, k_max_frame_side);
         if (height == 0 || height > k_max_frame_side)
-            return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'height' = %u is outside [1, %u]", fn, height,
-                        k_max_frame_side);
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'height' = %u is outside [1, %u]",
+                        fn, height, k_max_frame_side);
         calib->model.width = width;
         calib->model.height = height;
         calib->model.has_frame = true;
@@ -151,12 +148,12 @@ FLT_API flt_status FLT_CALL flt_calib_set_frame_size(flt_calib *calib,
     });
 }
 
-FLT_API flt_status FLT_CALL flt_calib_get_frame_size(const flt_calib *calib,
-                                                     uint32_t *width_out,
+FLT_API flt_status FLT_CALL flt_calib_get_frame_size(const flt_calib *calib, uint32_t *width_out,
                                                      uint32_t *height_out) {
     const char *fn = "flt_calib_get_frame_size";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, calib)) return st;
+        if (flt_status st = check_handle(fn, calib))
+            return st;
         FLT_CHECK_NOT_NULL(fn, width_out);
         FLT_CHECK_NOT_NULL(fn, height_out);
         if (!calib->model.has_frame)
@@ -167,17 +164,18 @@ FLT_API flt_status FLT_CALL flt_calib_get_frame_size(const flt_calib *calib,
     });
 }
 
-FLT_API flt_status FLT_CALL flt_calib_set_intrinsics(flt_calib *calib,
-                                                     const double camera[4],
+FLT_API flt_status FLT_CALL flt_calib_set_intrinsics(flt_calib *calib, const double camera[4],
                                                      const double *distortion) {
     const char *fn = "flt_calib_set_intrinsics";
     return guard(fn, [&] {
-        if (flt_status st = check_mutable(fn, calib)) return st;
+        if (flt_status st = check_mutable(fn, calib))
+            return st;
         FLT_CHECK_NOT_NULL(fn, camera);
-        static const char *const names[4] = {"camera[0] (fx)", "camera[1] (fy)",
-                                             "camera[2] (cx)", "camera[3] (cy)"};
+        static const char *const names[4] = {"camera[0] (fx)", "camera[1] (fy)", "camera[2] (cx)",
+                                             "camera[3] (cy)"};
         for (int k = 0; k < 4; ++k)
-            if (flt_status st = check_finite(fn, names[k], camera[k])) return st;
+            if (flt_status st = check_finite(fn, names[k], camera[k]))
+                return st;
         if (!(camera[0] > 0) || !(camera[1] > 0))
             return fail(FLT_ERR_INVALID_ARGUMENT,
                         "%s: argument 'camera' has fx = %g, fy = %g; both must be "
@@ -189,8 +187,8 @@ FLT_API flt_status FLT_CALL flt_calib_set_intrinsics(flt_calib *calib,
             for (int k = 0; k < FLT_CALIB_DISTORTION_COEFFS; ++k) {
                 if (!std::isfinite(distortion[k]))
                     return fail(FLT_ERR_INVALID_ARGUMENT,
-                                "%s: argument 'distortion[%d]' = %g is not finite",
-                                fn, k, distortion[k]);
+                                "%s: argument 'distortion[%d]' = %g is not finite", fn, k,
+                                distortion[k]);
                 cam.distortion[k] = distortion[k];
             }
         calib->model.camera = cam;
@@ -199,12 +197,12 @@ FLT_API flt_status FLT_CALL flt_calib_set_intrinsics(flt_calib *calib,
     });
 }
 
-FLT_API flt_status FLT_CALL flt_calib_get_intrinsics(const flt_calib *calib,
-                                                     double *camera_out,
+FLT_API flt_status FLT_CALL flt_calib_get_intrinsics(const flt_calib *calib, double *camera_out,
                                                      double *distortion_out) {
     const char *fn = "flt_calib_get_intrinsics";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, calib)) return st;
+        if (flt_status st = check_handle(fn, calib))
+            return st;
         if (!calib->model.has_camera)
             return fail(FLT_ERR_STATE, "%s: the intrinsics are not set", fn);
         const camera_model &c = calib->model.camera;
@@ -224,73 +222,72 @@ FLT_API flt_status FLT_CALL flt_calib_estimate_intrinsics(
     const flt_options *options, double *rms_px_out, double *view_rms_px_out) {
     const char *fn = "flt_calib_estimate_intrinsics";
     return guard(fn, [&] {
-        if (flt_status st = check_mutable(fn, calib)) return st;
+        if (flt_status st = check_mutable(fn, calib))
+            return st;
         const calib_model &m = calib->model;
         if (!m.has_frame)
-            return fail(FLT_ERR_STATE,
-                        "%s: set the frame size (flt_calib_set_frame_size) first", fn);
+            return fail(FLT_ERR_STATE, "%s: set the frame size (flt_calib_set_frame_size) first",
+                        fn);
         if (views == 0)
             return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'views' is 0", fn);
         FLT_CHECK_NOT_NULL(fn, images);
         for (std::size_t v = 0; v < views; ++v)
             if (images[v] == nullptr)
-                return fail(FLT_ERR_INVALID_ARGUMENT,
-                            "%s: argument 'images[%zu]' is NULL", fn, v);
+                return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'images[%zu]' is NULL", fn, v);
         if (stride < m.width)
             return fail(FLT_ERR_INVALID_ARGUMENT,
                         "%s: argument 'stride' = %zu is less than the frame width "
                         "%u",
                         fn, stride, m.width);
         if (stride > std::size_t(INT32_MAX) / m.height)
-            return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'stride' = %zu is too large", fn, stride);
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'stride' = %zu is too large", fn,
+                        stride);
         const int raw_target = enum_arg(target);  // any int, from C
         if (raw_target != FLT_TARGET_CHESSBOARD && raw_target != FLT_TARGET_CIRCLE_GRID &&
             raw_target != FLT_TARGET_ASYMMETRIC_CIRCLE_GRID)
             return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'target' = %d is not a flt_calib_target", fn,
-                        raw_target);
+                        "%s: argument 'target' = %d is not a flt_calib_target", fn, raw_target);
         if (columns < 3 || columns > 1000)
             return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'columns' = %u is outside [3, 1000]", fn,
-                        columns);
+                        "%s: argument 'columns' = %u is outside [3, 1000]", fn, columns);
         if (rows < 3 || rows > 1000)
-            return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'rows' = %u is outside [3, 1000]", fn, rows);
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'rows' = %u is outside [3, 1000]",
+                        fn, rows);
         if (!std::isfinite(pitch_mm) || !(pitch_mm > 0))
             return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'pitch_mm' = %g must be finite and > 0", fn,
-                        pitch_mm);
-        const bool rational =
-            option_value(options, FLT_OPT_CALIB_RATIONAL_DISTORTION) != 0;
+                        "%s: argument 'pitch_mm' = %g must be finite and > 0", fn, pitch_mm);
+        const bool rational = option_value(options, FLT_OPT_CALIB_RATIONAL_DISTORTION) != 0;
         intrinsics_fit fit;
         try {
-            fit = estimate_intrinsics(m.width, m.height, views, images, stride,
-                                      target, columns, rows, pitch_mm, rational);
+            fit = estimate_intrinsics(m.width, m.height, views, images, stride, target, columns,
+                                      rows, pitch_mm, rational);
         } catch (const error &e) {
             return fail(e.status, "%s: %s", fn, e.what());
         }
         calib->model.camera = fit.camera;
         calib->model.has_camera = true;
-        if (rms_px_out) *rms_px_out = fit.rms_px;
+        if (rms_px_out)
+            *rms_px_out = fit.rms_px;
         if (view_rms_px_out)
-            for (std::size_t v = 0; v < views; ++v) view_rms_px_out[v] = fit.view_rms_px[v];
+            for (std::size_t v = 0; v < views; ++v)
+                view_rms_px_out[v] = fit.view_rms_px[v];
         return FLT_OK;
     });
 }
 
-FLT_API flt_status FLT_CALL flt_calib_set_homography(flt_calib *calib,
-                                                     unsigned laser,
+FLT_API flt_status FLT_CALL flt_calib_set_homography(flt_calib *calib, unsigned laser,
                                                      const double h[9]) {
     const char *fn = "flt_calib_set_homography";
     return guard(fn, [&] {
-        if (flt_status st = check_mutable(fn, calib)) return st;
-        if (flt_status st = check_laser(fn, laser)) return st;
+        if (flt_status st = check_mutable(fn, calib))
+            return st;
+        if (flt_status st = check_laser(fn, laser))
+            return st;
         FLT_CHECK_NOT_NULL(fn, h);
         for (int k = 0; k < 9; ++k)
             if (!std::isfinite(h[k]))
-                return fail(FLT_ERR_INVALID_ARGUMENT,
-                            "%s: argument 'h[%d]' = %g is not finite", fn, k, h[k]);
+                return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'h[%d]' = %g is not finite", fn,
+                            k, h[k]);
         if (!homography_invertible(h))
             return fail(FLT_ERR_INVALID_ARGUMENT,
                         "%s: argument 'h' is not invertible (singular or nearly "
@@ -304,34 +301,36 @@ FLT_API flt_status FLT_CALL flt_calib_set_homography(flt_calib *calib,
     });
 }
 
-FLT_API flt_status FLT_CALL flt_calib_get_homography(const flt_calib *calib,
-                                                     unsigned laser,
+FLT_API flt_status FLT_CALL flt_calib_get_homography(const flt_calib *calib, unsigned laser,
                                                      double *h_out) {
     const char *fn = "flt_calib_get_homography";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, calib)) return st;
-        if (flt_status st = check_laser(fn, laser)) return st;
+        if (flt_status st = check_handle(fn, calib))
+            return st;
+        if (flt_status st = check_laser(fn, laser))
+            return st;
         FLT_CHECK_NOT_NULL(fn, h_out);
         if (!calib->model.has_homography[laser])
-            return fail(FLT_ERR_STATE, "%s: laser %u's homography is not set", fn,
-                        laser);
+            return fail(FLT_ERR_STATE, "%s: laser %u's homography is not set", fn, laser);
         std::memcpy(h_out, calib->model.h[laser], sizeof calib->model.h[laser]);
         return FLT_OK;
     });
 }
 
 FLT_API flt_status FLT_CALL flt_calib_estimate_homography(
-    flt_calib *calib, unsigned laser, size_t count, const double *image_px,
-    const double *plane_mm, const flt_options *options, double *residual_px_out,
-    double *residual_mm_out, uint8_t *inlier_out, double *rms_px_out,
-    double *rms_mm_out) {
+    flt_calib *calib, unsigned laser, size_t count, const double *image_px, const double *plane_mm,
+    const flt_options *options, double *residual_px_out, double *residual_mm_out,
+    uint8_t *inlier_out, double *rms_px_out, double *rms_mm_out) {
     const char *fn = "flt_calib_estimate_homography";
     return guard(fn, [&] {
-        if (flt_status st = check_mutable(fn, calib)) return st;
-        if (flt_status st = check_laser(fn, laser)) return st;
+        if (flt_status st = check_mutable(fn, calib))
+            return st;
+        if (flt_status st = check_laser(fn, laser))
+            return st;
         FLT_CHECK_NOT_NULL(fn, image_px);
         FLT_CHECK_NOT_NULL(fn, plane_mm);
-        if (flt_status st = check_points(fn, "image_px", image_px, count)) return st;
+        if (flt_status st = check_points(fn, "image_px", image_px, count))
+            return st;
         if (count < 4)
             return fail(FLT_ERR_INVALID_ARGUMENT,
                         "%s: argument 'count' = %zu; a homography needs at least 4 "
@@ -345,18 +344,16 @@ FLT_API flt_status FLT_CALL flt_calib_estimate_homography(
                         fn);
         for (std::size_t i = 0; i < 2 * count; ++i) {
             if (!std::isfinite(image_px[i]))
-                return fail(FLT_ERR_INVALID_ARGUMENT,
-                            "%s: image_px[%zu][%zu] = %g is not finite", fn, i / 2,
-                            i % 2, image_px[i]);
+                return fail(FLT_ERR_INVALID_ARGUMENT, "%s: image_px[%zu][%zu] = %g is not finite",
+                            fn, i / 2, i % 2, image_px[i]);
             if (!std::isfinite(plane_mm[i]))
-                return fail(FLT_ERR_INVALID_ARGUMENT,
-                            "%s: plane_mm[%zu][%zu] = %g is not finite", fn, i / 2,
-                            i % 2, plane_mm[i]);
+                return fail(FLT_ERR_INVALID_ARGUMENT, "%s: plane_mm[%zu][%zu] = %g is not finite",
+                            fn, i / 2, i % 2, plane_mm[i]);
         }
         std::vector<double> undistorted(2 * count);
         for (std::size_t i = 0; i < count; ++i) {
-            undistort_pixel(m.camera, image_px[2 * i], image_px[2 * i + 1],
-                            &undistorted[2 * i], &undistorted[2 * i + 1]);
+            undistort_pixel(m.camera, image_px[2 * i], image_px[2 * i + 1], &undistorted[2 * i],
+                            &undistorted[2 * i + 1]);
             if (!std::isfinite(undistorted[2 * i]))
                 return fail(FLT_ERR_NUMERIC,
                             "%s: image_px[%zu] = (%g, %g) cannot be undistorted "
@@ -378,37 +375,45 @@ FLT_API flt_status FLT_CALL flt_calib_estimate_homography(
         homography_inverse(m.h[laser], m.h_inv[laser]);
         m.has_homography[laser] = true;
         for (std::size_t i = 0; i < count; ++i) {
-            if (residual_px_out) residual_px_out[i] = fit.residual_px[i];
-            if (residual_mm_out) residual_mm_out[i] = fit.residual_mm[i];
-            if (inlier_out) inlier_out[i] = fit.inlier[i];
+            if (residual_px_out)
+                residual_px_out[i] = fit.residual_px[i];
+            if (residual_mm_out)
+                residual_mm_out[i] = fit.residual_mm[i];
+            if (inlier_out)
+                inlier_out[i] = fit.inlier[i];
         }
-        if (rms_px_out) *rms_px_out = fit.rms_px;
-        if (rms_mm_out) *rms_mm_out = fit.rms_mm;
+        if (rms_px_out)
+            *rms_px_out = fit.rms_px;
+        if (rms_mm_out)
+            *rms_mm_out = fit.rms_mm;
         return FLT_OK;
     });
 }
 
-FLT_API flt_status FLT_CALL flt_calib_set_laser_offset(flt_calib *calib,
-                                                       unsigned laser,
+FLT_API flt_status FLT_CALL flt_calib_set_laser_offset(flt_calib *calib, unsigned laser,
                                                        double offset_mm) {
     const char *fn = "flt_calib_set_laser_offset";
     return guard(fn, [&] {
-        if (flt_status st = check_mutable(fn, calib)) return st;
-        if (flt_status st = check_laser(fn, laser)) return st;
-        if (flt_status st = check_finite(fn, "offset_mm", offset_mm)) return st;
+        if (flt_status st = check_mutable(fn, calib))
+            return st;
+        if (flt_status st = check_laser(fn, laser))
+            return st;
+        if (flt_status st = check_finite(fn, "offset_mm", offset_mm))
+            return st;
         calib->model.offset_mm[laser] = offset_mm;
         calib->model.has_offset[laser] = true;
         return FLT_OK;
     });
 }
 
-FLT_API flt_status FLT_CALL flt_calib_get_laser_offset(const flt_calib *calib,
-                                                       unsigned laser,
+FLT_API flt_status FLT_CALL flt_calib_get_laser_offset(const flt_calib *calib, unsigned laser,
                                                        double *out) {
     const char *fn = "flt_calib_get_laser_offset";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, calib)) return st;
-        if (flt_status st = check_laser(fn, laser)) return st;
+        if (flt_status st = check_handle(fn, calib))
+            return st;
+        if (flt_status st = check_laser(fn, laser))
+            return st;
         FLT_CHECK_NOT_NULL(fn, out);
         if (!calib->model.has_offset[laser])
             return fail(FLT_ERR_STATE, "%s: laser %u's offset is not set", fn, laser);
@@ -417,11 +422,11 @@ FLT_API flt_status FLT_CALL flt_calib_get_laser_offset(const flt_calib *calib,
     });
 }
 
-FLT_API flt_status FLT_CALL flt_calib_laser_spacing(const flt_calib *calib,
-                                                    double *out) {
+FLT_API flt_status FLT_CALL flt_calib_laser_spacing(const flt_calib *calib, double *out) {
     const char *fn = "flt_calib_laser_spacing";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, calib)) return st;
+        if (flt_status st = check_handle(fn, calib))
+            return st;
         FLT_CHECK_NOT_NULL(fn, out);
         const calib_model &m = calib->model;
         if (!m.has_offset[0] || !m.has_offset[1])
@@ -435,24 +440,23 @@ FLT_API flt_status FLT_CALL flt_calib_set_encoder_scale(flt_calib *calib,
                                                         double encoder_mm_per_count) {
     const char *fn = "flt_calib_set_encoder_scale";
     return guard(fn, [&] {
-        if (flt_status st = check_mutable(fn, calib)) return st;
-        if (flt_status st = check_finite(fn, "encoder_mm_per_count",
-                                         encoder_mm_per_count))
+        if (flt_status st = check_mutable(fn, calib))
+            return st;
+        if (flt_status st = check_finite(fn, "encoder_mm_per_count", encoder_mm_per_count))
             return st;
         if (encoder_mm_per_count == 0)
-            return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'encoder_mm_per_count' is 0", fn);
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'encoder_mm_per_count' is 0", fn);
         calib->model.encoder_mm_per_count = encoder_mm_per_count;
         calib->model.has_encoder = true;
         return FLT_OK;
     });
 }
 
-FLT_API flt_status FLT_CALL flt_calib_get_encoder_scale(const flt_calib *calib,
-                                                        double *out) {
+FLT_API flt_status FLT_CALL flt_calib_get_encoder_scale(const flt_calib *calib, double *out) {
     const char *fn = "flt_calib_get_encoder_scale";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, calib)) return st;
+        if (flt_status st = check_handle(fn, calib))
+            return st;
         FLT_CHECK_NOT_NULL(fn, out);
         if (!calib->model.has_encoder)
             return fail(FLT_ERR_STATE, "%s: the encoder scale is not set", fn);
@@ -461,22 +465,21 @@ FLT_API flt_status FLT_CALL flt_calib_get_encoder_scale(const flt_calib *calib,
     });
 }
 
-FLT_API flt_status FLT_CALL flt_calib_set_fiber_grid(flt_calib *calib,
-                                                     double first_x_mm,
-                                                     double pitch_mm,
-                                                     size_t count) {
+FLT_API flt_status FLT_CALL flt_calib_set_fiber_grid(flt_calib *calib, double first_x_mm,
+                                                     double pitch_mm, size_t count) {
     const char *fn = "flt_calib_set_fiber_grid";
     return guard(fn, [&] {
-        if (flt_status st = check_mutable(fn, calib)) return st;
-        if (flt_status st = check_finite(fn, "first_x_mm", first_x_mm)) return st;
+        if (flt_status st = check_mutable(fn, calib))
+            return st;
+        if (flt_status st = check_finite(fn, "first_x_mm", first_x_mm))
+            return st;
         if (!std::isfinite(pitch_mm) || !(pitch_mm > 0))
             return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'pitch_mm' = %g must be finite and > 0", fn,
-                        pitch_mm);
+                        "%s: argument 'pitch_mm' = %g must be finite and > 0", fn, pitch_mm);
         // The file stores the count as a number: keep it exact in a double.
         if (count == 0 || count > 1000000000u)
-            return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'count' = %zu is outside [1, 1e9]", fn, count);
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'count' = %zu is outside [1, 1e9]",
+                        fn, count);
         calib_model &m = calib->model;
         m.first_x_mm = first_x_mm, m.pitch_mm = pitch_mm, m.fiber_count = count;
         m.has_fibers = true;
@@ -484,13 +487,12 @@ FLT_API flt_status FLT_CALL flt_calib_set_fiber_grid(flt_calib *calib,
     });
 }
 
-FLT_API flt_status FLT_CALL flt_calib_get_fiber_grid(const flt_calib *calib,
-                                                     double *first_x_mm_out,
-                                                     double *pitch_mm_out,
-                                                     size_t *count_out) {
+FLT_API flt_status FLT_CALL flt_calib_get_fiber_grid(const flt_calib *calib, double *first_x_mm_out,
+                                                     double *pitch_mm_out, size_t *count_out) {
     const char *fn = "flt_calib_get_fiber_grid";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, calib)) return st;
+        if (flt_status st = check_handle(fn, calib))
+            return st;
         FLT_CHECK_NOT_NULL(fn, first_x_mm_out);
         FLT_CHECK_NOT_NULL(fn, pitch_mm_out);
         FLT_CHECK_NOT_NULL(fn, count_out);
@@ -504,16 +506,19 @@ FLT_API flt_status FLT_CALL flt_calib_get_fiber_grid(const flt_calib *calib,
     });
 }
 
-FLT_API flt_status FLT_CALL flt_calib_image_to_plane(const flt_calib *calib,
-                                                     unsigned laser, size_t count,
-                                                     const double *image_px,
+FLT_API flt_status FLT_CALL flt_calib_image_to_plane(const flt_calib *calib, unsigned laser,
+                                                     size_t count, const double *image_px,
                                                      double *plane_out) {
     const char *fn = "flt_calib_image_to_plane";
     return guard(fn, [&] {
-        if (flt_status st = check_finished(fn, calib)) return st;
-        if (flt_status st = check_laser(fn, laser)) return st;
-        if (flt_status st = check_points(fn, "image_px", image_px, count)) return st;
-        if (flt_status st = check_points(fn, "plane_out", plane_out, count)) return st;
+        if (flt_status st = check_finished(fn, calib))
+            return st;
+        if (flt_status st = check_laser(fn, laser))
+            return st;
+        if (flt_status st = check_points(fn, "image_px", image_px, count))
+            return st;
+        if (flt_status st = check_points(fn, "plane_out", plane_out, count))
+            return st;
         const calib_model &m = calib->model;
         for (std::size_t i = 0; i < count; ++i) {
             double u, v;
@@ -525,35 +530,37 @@ FLT_API flt_status FLT_CALL flt_calib_image_to_plane(const flt_calib *calib,
     });
 }
 
-FLT_API flt_status FLT_CALL flt_calib_plane_to_image(const flt_calib *calib,
-                                                     unsigned laser, size_t count,
-                                                     const double *plane_mm,
+FLT_API flt_status FLT_CALL flt_calib_plane_to_image(const flt_calib *calib, unsigned laser,
+                                                     size_t count, const double *plane_mm,
                                                      double *image_out) {
     const char *fn = "flt_calib_plane_to_image";
     return guard(fn, [&] {
-        if (flt_status st = check_finished(fn, calib)) return st;
-        if (flt_status st = check_laser(fn, laser)) return st;
-        if (flt_status st = check_points(fn, "plane_mm", plane_mm, count)) return st;
-        if (flt_status st = check_points(fn, "image_out", image_out, count)) return st;
+        if (flt_status st = check_finished(fn, calib))
+            return st;
+        if (flt_status st = check_laser(fn, laser))
+            return st;
+        if (flt_status st = check_points(fn, "plane_mm", plane_mm, count))
+            return st;
+        if (flt_status st = check_points(fn, "image_out", image_out, count))
+            return st;
         const calib_model &m = calib->model;
         for (std::size_t i = 0; i < count; ++i) {
             double u, v;
-            homography_apply(m.h_inv[laser], plane_mm[2 * i], plane_mm[2 * i + 1], &u,
-                             &v);
+            homography_apply(m.h_inv[laser], plane_mm[2 * i], plane_mm[2 * i + 1], &u, &v);
             distort_pixel(m.camera, u, v, &image_out[2 * i], &image_out[2 * i + 1]);
         }
         return FLT_OK;
     });
 }
 
-FLT_API flt_status FLT_CALL flt_calib_undistort(const flt_calib *calib,
-                                                size_t count,
-                                                const double *image_px,
-                                                double *undistorted_out) {
+FLT_API flt_status FLT_CALL flt_calib_undistort(const flt_calib *calib, size_t count,
+                                                const double *image_px, double *undistorted_out) {
     const char *fn = "flt_calib_undistort";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, calib)) return st;
-        if (flt_status st = check_points(fn, "image_px", image_px, count)) return st;
+        if (flt_status st = check_handle(fn, calib))
+            return st;
+        if (flt_status st = check_points(fn, "image_px", image_px, count))
+            return st;
         if (flt_status st = check_points(fn, "undistorted_out", undistorted_out, count))
             return st;
         if (!calib->model.has_camera)
@@ -565,23 +572,22 @@ FLT_API flt_status FLT_CALL flt_calib_undistort(const flt_calib *calib,
     });
 }
 
-FLT_API flt_status FLT_CALL flt_calib_save_text(const flt_calib *calib,
-                                                char *text_out, size_t capacity,
-                                                size_t *length_out) {
+FLT_API flt_status FLT_CALL flt_calib_save_text(const flt_calib *calib, char *text_out,
+                                                size_t capacity, size_t *length_out) {
     const char *fn = "flt_calib_save_text";
     return guard(fn, [&] {
-        if (flt_status st = check_finished(fn, calib)) return st;
+        if (flt_status st = check_finished(fn, calib))
+            return st;
         FLT_CHECK_NOT_NULL(fn, length_out);
         if (capacity > 0 && text_out == nullptr)
             return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'text_out' is NULL but capacity = %zu", fn,
-                        capacity);
+                        "%s: argument 'text_out' is NULL but capacity = %zu", fn, capacity);
         const std::string text = write_model(calib->model);
         *length_out = text.size();
         if (capacity < text.size() + 1)
             return fail(FLT_ERR_BUFFER_FULL,
-                        "%s: the text needs %zu bytes with its NUL; capacity = %zu",
-                        fn, text.size() + 1, capacity);
+                        "%s: the text needs %zu bytes with its NUL; capacity = %zu", fn,
+                        text.size() + 1, capacity);
         std::memcpy(text_out, text.c_str(), text.size() + 1);
         return FLT_OK;
     });
@@ -590,7 +596,8 @@ FLT_API flt_status FLT_CALL flt_calib_save_text(const flt_calib *calib,
 FLT_API flt_status FLT_CALL flt_calib_save(const flt_calib *calib, const char *path) {
     const char *fn = "flt_calib_save";
     return guard(fn, [&] {
-        if (flt_status st = check_finished(fn, calib)) return st;
+        if (flt_status st = check_finished(fn, calib))
+            return st;
         FLT_CHECK_NOT_NULL(fn, path);
         const std::string text = write_model(calib->model);
         const std::string tmp = std::string(path) + ".tmp";
@@ -614,13 +621,13 @@ FLT_API flt_status FLT_CALL flt_calib_save(const flt_calib *calib, const char *p
     });
 }
 
-FLT_API flt_status FLT_CALL flt_calib_load_text(const char *text, size_t length,
-                                                flt_calib **out) {
+FLT_API flt_status FLT_CALL flt_calib_load_text(const char *text, size_t length, flt_calib **out) {
     const char *fn = "flt_calib_load_text";
     return guard(fn, [&] {
         FLT_CHECK_NOT_NULL(fn, out);
         *out = nullptr;
-        if (length > 0) FLT_CHECK_NOT_NULL(fn, text);
+        if (length > 0)
+            FLT_CHECK_NOT_NULL(fn, text);
         // Parse into a local model; the handle exists only once it is whole.
         calib_model model;
         try {
@@ -644,8 +651,7 @@ FLT_API flt_status FLT_CALL flt_calib_load(const char *path, flt_calib **out) {
         FLT_CHECK_NOT_NULL(fn, path);
         std::FILE *f = std::fopen(path, "rb");
         if (!f)
-            return fail(FLT_ERR_IO, "%s: cannot open '%.300s': %s", fn, path,
-                        std::strerror(errno));
+            return fail(FLT_ERR_IO, "%s: cannot open '%.300s': %s", fn, path, std::strerror(errno));
         std::string text;
         char chunk[4096];
         std::size_t got;
@@ -663,7 +669,8 @@ FLT_API flt_status FLT_CALL flt_calib_load(const char *path, flt_calib **out) {
         }
         const bool read_error = std::ferror(f) != 0;
         std::fclose(f);
-        if (read_error) return fail(FLT_ERR_IO, "%s: cannot read '%.300s'", fn, path);
+        if (read_error)
+            return fail(FLT_ERR_IO, "%s: cannot read '%.300s'", fn, path);
         calib_model model;
         try {
             model = read_model(text.data(), text.size());

@@ -29,8 +29,8 @@ void append_double(std::string &s, double v) {
     s += buf;
 }
 
-void append_field(std::string &s, const char *indent, const char *name,
-                  double v, bool last = false) {
+void append_field(std::string &s, const char *indent, const char *name, double v,
+                  bool last = false) {
     s += indent;
     s += '"';
     s += name;
@@ -47,31 +47,36 @@ void append_field(std::string &s, const char *indent, const char *name,
 
 struct node {
     enum kind_t { number, string, word, object, array } kind = number;
-    std::string text;                                // number, string, word
+    std::string text;                                   // number, string, word
     std::vector<std::pair<std::string, node>> members;  // object, in order
-    std::vector<node> items;                         // array
+    std::vector<node> items;                            // array
     int line = 0;
 };
 
 const char *kind_name(node::kind_t k) {
     switch (k) {
-    case node::number: return "a number";
-    case node::string: return "a string";
-    case node::word: return "a bare word";
-    case node::object: return "an object";
-    case node::array: return "an array";
+        case node::number:
+            return "a number";
+        case node::string:
+            return "a string";
+        case node::word:
+            return "a bare word";
+        case node::object:
+            return "an object";
+        case node::array:
+            return "an array";
     }
     return "?";
 }
 
 class parser {
-public:
-    parser(const char *text, std::size_t length)
-        : p_(text), end_(text + length) {}
+  public:
+    parser(const char *text, std::size_t length) : p_(text), end_(text + length) {}
 
     node parse_document() {
         skip_space();
-        if (p_ == end_) format_error("the file is empty");
+        if (p_ == end_)
+            format_error("the file is empty");
         node root = parse_value("(top level)", 0);
         skip_space();
         if (p_ != end_)
@@ -80,32 +85,35 @@ public:
         return root;
     }
 
-private:
+  private:
     const char *p_, *end_;
     int line_ = 1;
 
     void skip_space() {
         while (p_ != end_ && (*p_ == ' ' || *p_ == '\t' || *p_ == '\r' || *p_ == '\n')) {
-            if (*p_ == '\n') ++line_;
+            if (*p_ == '\n')
+                ++line_;
             ++p_;
         }
     }
 
     [[noreturn]] void truncated(const std::string &path) {
-        format_error("the file ends early (truncated?) inside '" + path +
-                     "' at line " + std::to_string(line_));
+        format_error("the file ends early (truncated?) inside '" + path + "' at line " +
+                     std::to_string(line_));
     }
 
     [[noreturn]] void unexpected(const std::string &path, const char *expected) {
         std::string found = p_ == end_ ? "end of file" : std::string("'") + *p_ + "'";
-        format_error("line " + std::to_string(line_) + ": in '" + path +
-                     "' expected " + expected + ", found " + found);
+        format_error("line " + std::to_string(line_) + ": in '" + path + "' expected " + expected +
+                     ", found " + found);
     }
 
     node parse_value(const std::string &path, int depth) {
-        if (depth > 16) format_error("'" + path + "' is nested too deeply");
+        if (depth > 16)
+            format_error("'" + path + "' is nested too deeply");
         skip_space();
-        if (p_ == end_) truncated(path);
+        if (p_ == end_)
+            truncated(path);
         node n;
         n.line = line_;
         const char c = *p_;
@@ -113,24 +121,39 @@ private:
             n.kind = node::object;
             ++p_;
             skip_space();
-            if (p_ == end_) truncated(path);
-            if (*p_ == '}') { ++p_; return n; }
+            if (p_ == end_)
+                truncated(path);
+            if (*p_ == '}') {
+                ++p_;
+                return n;
+            }
             for (;;) {
                 skip_space();
-                if (p_ == end_) truncated(path);
-                if (*p_ != '"') unexpected(path, "a field name in quotes");
+                if (p_ == end_)
+                    truncated(path);
+                if (*p_ != '"')
+                    unexpected(path, "a field name in quotes");
                 std::string key = parse_string(path);
                 skip_space();
-                if (p_ == end_) truncated(path);
-                if (*p_ != ':') unexpected(path, "':' after a field name");
+                if (p_ == end_)
+                    truncated(path);
+                if (*p_ != ':')
+                    unexpected(path, "':' after a field name");
                 ++p_;
                 const std::string child = path == "(top level)" ? key : path + "." + key;
                 node value = parse_value(child, depth + 1);
                 n.members.emplace_back(std::move(key), std::move(value));
                 skip_space();
-                if (p_ == end_) truncated(path);
-                if (*p_ == ',') { ++p_; continue; }
-                if (*p_ == '}') { ++p_; return n; }
+                if (p_ == end_)
+                    truncated(path);
+                if (*p_ == ',') {
+                    ++p_;
+                    continue;
+                }
+                if (*p_ == '}') {
+                    ++p_;
+                    return n;
+                }
                 unexpected(path, "',' or '}'");
             }
         }
@@ -138,15 +161,26 @@ private:
             n.kind = node::array;
             ++p_;
             skip_space();
-            if (p_ == end_) truncated(path);
-            if (*p_ == ']') { ++p_; return n; }
+            if (p_ == end_)
+                truncated(path);
+            if (*p_ == ']') {
+                ++p_;
+                return n;
+            }
             for (;;) {
-                n.items.push_back(parse_value(
-                    path + "[" + std::to_string(n.items.size()) + "]", depth + 1));
+                n.items.push_back(
+                    parse_value(path + "[" + std::to_string(n.items.size()) + "]", depth + 1));
                 skip_space();
-                if (p_ == end_) truncated(path);
-                if (*p_ == ',') { ++p_; continue; }
-                if (*p_ == ']') { ++p_; return n; }
+                if (p_ == end_)
+                    truncated(path);
+                if (*p_ == ',') {
+                    ++p_;
+                    continue;
+                }
+                if (*p_ == ']') {
+                    ++p_;
+                    return n;
+                }
                 unexpected(path, "',' or ']'");
             }
         }
@@ -158,8 +192,10 @@ private:
         // A number or a bare word (true, null, nan, inf, ...): the token runs
         // to the next delimiter; the field that reads it judges it.
         const char *start = p_;
-        while (p_ != end_ && !std::strchr(" \t\r\n,]}:", *p_)) ++p_;
-        if (p_ == start) unexpected(path, "a value");
+        while (p_ != end_ && !std::strchr(" \t\r\n,]}:", *p_))
+            ++p_;
+        if (p_ == start)
+            unexpected(path, "a value");
         n.text.assign(start, p_);
         n.kind = is_json_number(n.text) ? node::number : node::word;
         // A number cut off by the end of the file looks complete; the
@@ -171,15 +207,18 @@ private:
         ++p_;  // opening quote
         std::string s;
         while (p_ != end_ && *p_ != '"') {
-            if (*p_ == '\n') format_error("line " + std::to_string(line_) +
-                                          ": a string in '" + path +
-                                          "' runs past the end of the line");
-            if (*p_ == '\\') format_error("line " + std::to_string(line_) +
-                                          ": escapes are not used in a "
-                                          "calibration file ('" + path + "')");
+            if (*p_ == '\n')
+                format_error("line " + std::to_string(line_) + ": a string in '" + path +
+                             "' runs past the end of the line");
+            if (*p_ == '\\')
+                format_error("line " + std::to_string(line_) +
+                             ": escapes are not used in a "
+                             "calibration file ('" +
+                             path + "')");
             s += *p_++;
         }
-        if (p_ == end_) truncated(path);
+        if (p_ == end_)
+            truncated(path);
         ++p_;  // closing quote
         return s;
     }
@@ -188,19 +227,25 @@ private:
         std::size_t i = 0, n = t.size();
         auto digits = [&] {
             std::size_t b = i;
-            while (i < n && t[i] >= '0' && t[i] <= '9') ++i;
+            while (i < n && t[i] >= '0' && t[i] <= '9')
+                ++i;
             return i > b;
         };
-        if (i < n && t[i] == '-') ++i;
-        if (!digits()) return false;
+        if (i < n && t[i] == '-')
+            ++i;
+        if (!digits())
+            return false;
         if (i < n && t[i] == '.') {
             ++i;
-            if (!digits()) return false;
+            if (!digits())
+                return false;
         }
         if (i < n && (t[i] == 'e' || t[i] == 'E')) {
             ++i;
-            if (i < n && (t[i] == '+' || t[i] == '-')) ++i;
-            if (!digits()) return false;
+            if (i < n && (t[i] == '+' || t[i] == '-'))
+                ++i;
+            if (!digits())
+                return false;
         }
         return i == n;
     }
@@ -213,9 +258,10 @@ std::string join(const std::string &path, const char *key) {
 }
 
 void expect_kind(const node &n, node::kind_t kind, const std::string &path) {
-    if (n.kind == kind) return;
-    format_error("field '" + path + "' (line " + std::to_string(n.line) +
-                 ") must be " + kind_name(kind) + ", found " + kind_name(n.kind) +
+    if (n.kind == kind)
+        return;
+    format_error("field '" + path + "' (line " + std::to_string(n.line) + ") must be " +
+                 kind_name(kind) + ", found " + kind_name(n.kind) +
                  (n.kind == node::word ? " '" + n.text + "'" : std::string()));
 }
 
@@ -227,22 +273,24 @@ std::vector<const node *> fields(const node &obj, const std::string &path,
     for (std::size_t i = 0; i < obj.members.size(); ++i) {
         const std::string &key = obj.members[i].first;
         bool known = false;
-        for (const char *name : names) known |= key == name;
+        for (const char *name : names)
+            known |= key == name;
         if (!known)
             format_error("unknown field '" + join(path, key.c_str()) + "' (line " +
                          std::to_string(obj.members[i].second.line) + ")");
         for (std::size_t j = 0; j < i; ++j)
             if (obj.members[j].first == key)
-                format_error("duplicate field '" + join(path, key.c_str()) +
-                             "' (line " +
+                format_error("duplicate field '" + join(path, key.c_str()) + "' (line " +
                              std::to_string(obj.members[i].second.line) + ")");
     }
     std::vector<const node *> out;
     for (const char *name : names) {
         const node *found = nullptr;
         for (const auto &m : obj.members)
-            if (m.first == name) found = &m.second;
-        if (!found) format_error("missing field '" + join(path, name) + "'");
+            if (m.first == name)
+                found = &m.second;
+        if (!found)
+            format_error("missing field '" + join(path, name) + "'");
         out.push_back(found);
     }
     return out;
@@ -251,39 +299,36 @@ std::vector<const node *> fields(const node &obj, const std::string &path,
 double number(const node &n, const std::string &path) {
     if (n.kind == node::word) {
         std::string lower;
-        for (char c : n.text) lower += char(c >= 'A' && c <= 'Z' ? c - 'A' + 'a' : c);
+        for (char c : n.text)
+            lower += char(c >= 'A' && c <= 'Z' ? c - 'A' + 'a' : c);
         if (lower.find("nan") != std::string::npos)
-            format_error("field '" + path + "' is NaN (line " +
-                         std::to_string(n.line) + ")");
+            format_error("field '" + path + "' is NaN (line " + std::to_string(n.line) + ")");
         if (lower.find("inf") != std::string::npos)
-            format_error("field '" + path + "' is infinite (line " +
-                         std::to_string(n.line) + ")");
+            format_error("field '" + path + "' is infinite (line " + std::to_string(n.line) + ")");
     }
     expect_kind(n, node::number, path);
     errno = 0;
     char *end = nullptr;
     const double v = std::strtod(n.text.c_str(), &end);
     if (!std::isfinite(v))
-        format_error("field '" + path + "' = " + n.text +
-                     " is outside the range of a double");
+        format_error("field '" + path + "' = " + n.text + " is outside the range of a double");
     return v;
 }
 
 double positive(const node &n, const std::string &path) {
     const double v = number(n, path);
-    if (!(v > 0)) format_error("field '" + path + "' = " + n.text + " must be > 0");
+    if (!(v > 0))
+        format_error("field '" + path + "' = " + n.text + " must be > 0");
     return v;
 }
 
-std::uint64_t integer(const node &n, const std::string &path, double min_value,
-                      double max_value) {
+std::uint64_t integer(const node &n, const std::string &path, double min_value, double max_value) {
     const double v = number(n, path);
     if (v != std::floor(v))
         format_error("field '" + path + "' = " + n.text + " must be a whole number");
     if (v < min_value || v > max_value) {
         char range[96];
-        std::snprintf(range, sizeof range, " is outside [%.17g, %.17g]", min_value,
-                      max_value);
+        std::snprintf(range, sizeof range, " is outside [%.17g, %.17g]", min_value, max_value);
         format_error("field '" + path + "' = " + n.text + range);
     }
     return std::uint64_t(v);
@@ -292,8 +337,8 @@ std::uint64_t integer(const node &n, const std::string &path, double min_value,
 }  // namespace
 
 std::string write_model(const calib_model &m) {
-    static const char *const dist_names[FLT_CALIB_DISTORTION_COEFFS] = {
-        "k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6"};
+    static const char *const dist_names[FLT_CALIB_DISTORTION_COEFFS] = {"k1", "k2", "p1", "p2",
+                                                                        "k3", "k4", "k5", "k6"};
     std::string s;
     s += "{\n";
     s += "  \"format\": \"flatline-calibration\",\n";
@@ -321,7 +366,8 @@ std::string write_model(const calib_model &m) {
         for (int k = 0; k < 9; ++k) {
             s += k % 3 == 0 ? "\n        " : " ";
             append_double(s, m.h[l][k]);
-            if (k < 8) s += ",";
+            if (k < 8)
+                s += ",";
         }
         s += "\n      ]\n";
         s += l + 1 == FLT_CALIB_LASERS ? "    }\n" : "    },\n";
@@ -344,23 +390,27 @@ calib_model read_model(const char *text, std::size_t length) {
     // newer file reports its version, not its new fields.
     const node *version = nullptr, *format = nullptr;
     for (const auto &m : root.members) {
-        if (m.first == "version") version = &m.second;
-        if (m.first == "format") format = &m.second;
+        if (m.first == "version")
+            version = &m.second;
+        if (m.first == "format")
+            format = &m.second;
     }
-    if (!format) format_error("missing field 'format'");
+    if (!format)
+        format_error("missing field 'format'");
     expect_kind(*format, node::string, "format");
     if (format->text != "flatline-calibration")
-        format_error("field 'format' = \"" + format->text +
-                     "\" is not \"flatline-calibration\"");
-    if (!version) format_error("missing field 'version'");
+        format_error("field 'format' = \"" + format->text + "\" is not \"flatline-calibration\"");
+    if (!version)
+        format_error("missing field 'version'");
     const std::uint64_t v = integer(*version, "version", 0, 1e9);
     if (v != FLT_CALIB_FORMAT_VERSION)
         format_error("field 'version' = " + std::to_string(v) +
                      " is a version this library cannot read (it reads " +
                      std::to_string(FLT_CALIB_FORMAT_VERSION) + ")");
 
-    const auto top = fields(root, "", {"format", "version", "frame", "camera",
-                                       "lasers", "encoder_mm_per_count", "fibers"});
+    const auto top = fields(
+        root, "",
+        {"format", "version", "frame", "camera", "lasers", "encoder_mm_per_count", "fibers"});
     calib_model m;
 
     const auto frame = fields(*top[2], "frame", {"width", "height"});
@@ -373,8 +423,8 @@ calib_model read_model(const char *text, std::size_t length) {
     m.camera.fy = positive(*cam[1], "camera.fy");
     m.camera.cx = number(*cam[2], "camera.cx");
     m.camera.cy = number(*cam[3], "camera.cy");
-    const auto dist = fields(*cam[4], "camera.distortion",
-                             {"k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6"});
+    const auto dist =
+        fields(*cam[4], "camera.distortion", {"k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6"});
     static const char *const dist_paths[FLT_CALIB_DISTORTION_COEFFS] = {
         "camera.distortion.k1", "camera.distortion.k2", "camera.distortion.p1",
         "camera.distortion.p2", "camera.distortion.k3", "camera.distortion.k4",
@@ -390,18 +440,17 @@ calib_model read_model(const char *text, std::size_t length) {
                      " entries; a sensor has " + std::to_string(FLT_CALIB_LASERS));
     for (int l = 0; l < FLT_CALIB_LASERS; ++l) {
         const std::string lp = "lasers[" + std::to_string(l) + "]";
-        const auto laser = fields(lasers.items[std::size_t(l)], lp,
-                                  {"offset_mm", "homography"});
+        const auto laser = fields(lasers.items[std::size_t(l)], lp, {"offset_mm", "homography"});
         m.offset_mm[l] = number(*laser[0], lp + ".offset_mm");
         m.has_offset[l] = true;
         const node &h = *laser[1];
         expect_kind(h, node::array, lp + ".homography");
         if (h.items.size() != 9)
-            format_error("field '" + lp + ".homography' has " +
-                         std::to_string(h.items.size()) + " entries, not 9");
+            format_error("field '" + lp + ".homography' has " + std::to_string(h.items.size()) +
+                         " entries, not 9");
         for (int k = 0; k < 9; ++k)
-            m.h[l][k] = number(h.items[std::size_t(k)],
-                               lp + ".homography[" + std::to_string(k) + "]");
+            m.h[l][k] =
+                number(h.items[std::size_t(k)], lp + ".homography[" + std::to_string(k) + "]");
         if (!homography_invertible(m.h[l]))
             format_error("field '" + lp + ".homography' is not invertible");
         homography_inverse(m.h[l], m.h_inv[l]);
@@ -425,15 +474,24 @@ calib_model read_model(const char *text, std::size_t length) {
 }
 
 const char *missing_part(const calib_model &m) {
-    if (!m.has_frame) return "the frame size (flt_calib_set_frame_size)";
-    if (!m.has_camera) return "the intrinsics (flt_calib_set_intrinsics or _estimate_intrinsics)";
-    if (!m.has_homography[0]) return "laser 0's homography";
-    if (!m.has_homography[1]) return "laser 1's homography";
-    if (!m.has_offset[0]) return "laser 0's offset (flt_calib_set_laser_offset)";
-    if (!m.has_offset[1]) return "laser 1's offset (flt_calib_set_laser_offset)";
-    if (m.offset_mm[0] == m.offset_mm[1]) return "distinct laser offsets (both are equal)";
-    if (!m.has_encoder) return "the encoder scale (flt_calib_set_encoder_scale)";
-    if (!m.has_fibers) return "the fiber grid (flt_calib_set_fiber_grid)";
+    if (!m.has_frame)
+        return "the frame size (flt_calib_set_frame_size)";
+    if (!m.has_camera)
+        return "the intrinsics (flt_calib_set_intrinsics or _estimate_intrinsics)";
+    if (!m.has_homography[0])
+        return "laser 0's homography";
+    if (!m.has_homography[1])
+        return "laser 1's homography";
+    if (!m.has_offset[0])
+        return "laser 0's offset (flt_calib_set_laser_offset)";
+    if (!m.has_offset[1])
+        return "laser 1's offset (flt_calib_set_laser_offset)";
+    if (m.offset_mm[0] == m.offset_mm[1])
+        return "distinct laser offsets (both are equal)";
+    if (!m.has_encoder)
+        return "the encoder scale (flt_calib_set_encoder_scale)";
+    if (!m.has_fibers)
+        return "the fiber grid (flt_calib_set_fiber_grid)";
     return nullptr;
 }
 

@@ -24,11 +24,9 @@ struct camera_model {
 };
 
 // Applies lens distortion to an ideal pixel (u, v) -> raw pixel.
-void distort_pixel(const camera_model &cam, double u, double v, double *u_out,
-                   double *v_out);
+void distort_pixel(const camera_model &cam, double u, double v, double *u_out, double *v_out);
 // Inverts distort_pixel by damped Newton iteration; NaN where it fails.
-void undistort_pixel(const camera_model &cam, double u, double v,
-                     double *u_out, double *v_out);
+void undistort_pixel(const camera_model &cam, double u, double v, double *u_out, double *v_out);
 
 struct calib_model {
     bool has_frame = false;
@@ -61,15 +59,14 @@ bool homography_invertible(const double h[9]);
 // inv = h^-1, scaled to unit Frobenius norm.
 void homography_inverse(const double h[9], double inv[9]);
 // Applies a homography to (a, b, 1); NaN when the result is at infinity.
-void homography_apply(const double h[9], double a, double b, double *a_out,
-                      double *b_out);
+void homography_apply(const double h[9], double a, double b, double *a_out, double *b_out);
 
 struct homography_fit {
     double h[9];                      // undistorted px -> plane mm
     std::vector<double> residual_px;  // per correspondence
     std::vector<double> residual_mm;
     std::vector<std::uint8_t> inlier;
-    double rms_px = 0, rms_mm = 0;    // over the inliers
+    double rms_px = 0, rms_mm = 0;  // over the inliers
 };
 
 struct ransac_params {
@@ -81,8 +78,7 @@ struct ransac_params {
 
 // Fits the homography from undistorted image points (n x 2, px) to plane
 // points (n x 2, mm). Throws flt::error(FLT_ERR_NUMERIC) if degenerate.
-homography_fit fit_homography(std::size_t n, const double *image_px,
-                              const double *plane_mm,
+homography_fit fit_homography(std::size_t n, const double *image_px, const double *plane_mm,
                               const ransac_params &ransac);
 
 // Intrinsics from target images (intrinsics.cpp); throws flt::error.
@@ -91,12 +87,10 @@ struct intrinsics_fit {
     double rms_px = 0;
     std::vector<double> view_rms_px;  // NaN where the target was not found
 };
-intrinsics_fit estimate_intrinsics(std::uint32_t width, std::uint32_t height,
-                                   std::size_t views,
-                                   const std::uint8_t *const *images,
-                                   std::size_t stride, flt_calib_target target,
-                                   std::uint32_t columns, std::uint32_t rows,
-                                   double pitch_mm, bool rational);
+intrinsics_fit estimate_intrinsics(std::uint32_t width, std::uint32_t height, std::size_t views,
+                                   const std::uint8_t *const *images, std::size_t stride,
+                                   flt_calib_target target, std::uint32_t columns,
+                                   std::uint32_t rows, double pitch_mm, bool rational);
 
 // The file format (calib_io.cpp). write_model needs a complete model.
 std::string write_model(const calib_model &model);

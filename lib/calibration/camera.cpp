@@ -12,13 +12,13 @@ namespace flt {
 namespace {
 
 struct distortion_eval {
-    double xd, yd;                    // distorted normalised point
-    double j00, j01, j10, j11;        // d(xd, yd) / d(x, y)
+    double xd, yd;              // distorted normalised point
+    double j00, j01, j10, j11;  // d(xd, yd) / d(x, y)
 };
 
 distortion_eval distort_normalised(const double *d, double x, double y) {
-    const double k1 = d[0], k2 = d[1], p1 = d[2], p2 = d[3], k3 = d[4],
-                 k4 = d[5], k5 = d[6], k6 = d[7];
+    const double k1 = d[0], k2 = d[1], p1 = d[2], p2 = d[3], k3 = d[4], k4 = d[5], k5 = d[6],
+                 k6 = d[7];
     const double r2 = x * x + y * y, r4 = r2 * r2, r6 = r4 * r2;
     const double num = 1 + k1 * r2 + k2 * r4 + k3 * r6;
     const double den = 1 + k4 * r2 + k5 * r4 + k6 * r6;
@@ -39,16 +39,14 @@ distortion_eval distort_normalised(const double *d, double x, double y) {
 
 }  // namespace
 
-void distort_pixel(const camera_model &cam, double u, double v, double *u_out,
-                   double *v_out) {
+void distort_pixel(const camera_model &cam, double u, double v, double *u_out, double *v_out) {
     const double x = (u - cam.cx) / cam.fx, y = (v - cam.cy) / cam.fy;
     const distortion_eval e = distort_normalised(cam.distortion, x, y);
     *u_out = cam.fx * e.xd + cam.cx;
     *v_out = cam.fy * e.yd + cam.cy;
 }
 
-void undistort_pixel(const camera_model &cam, double u, double v,
-                     double *u_out, double *v_out) {
+void undistort_pixel(const camera_model &cam, double u, double v, double *u_out, double *v_out) {
     const double nan = std::numeric_limits<double>::quiet_NaN();
     const double xd = (u - cam.cx) / cam.fx, yd = (v - cam.cy) / cam.fy;
     if (!std::isfinite(xd) || !std::isfinite(yd)) {
@@ -64,7 +62,8 @@ void undistort_pixel(const camera_model &cam, double u, double v,
     double err = std::hypot(rx, ry);
     for (int it = 0; it < 100 && err > tolerance; ++it) {
         const double det = e.j00 * e.j11 - e.j01 * e.j10;
-        if (!(std::fabs(det) > 1e-300)) break;
+        if (!(std::fabs(det) > 1e-300))
+            break;
         const double dx = (e.j11 * rx - e.j01 * ry) / det;
         const double dy = (-e.j10 * rx + e.j00 * ry) / det;
         // Damped step: halve until the residual shrinks, so a strongly
@@ -82,7 +81,8 @@ void undistort_pixel(const camera_model &cam, double u, double v,
                 break;
             }
         }
-        if (!improved) break;
+        if (!improved)
+            break;
     }
     if (!(err <= tolerance * 1e3)) {  // no convergence (1e-7 px at worst)
         *u_out = *v_out = nan;

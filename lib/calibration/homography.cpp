@@ -32,13 +32,15 @@ constexpr double k_min_rcond = 1e-12;
 // Hartley normalisation: centroid to the origin, mean distance sqrt(2).
 mat3 normalising_transform(std::size_t n, const double *pts) {
     double mx = 0, my = 0;
-    for (std::size_t i = 0; i < n; ++i) mx += pts[2 * i], my += pts[2 * i + 1];
+    for (std::size_t i = 0; i < n; ++i)
+        mx += pts[2 * i], my += pts[2 * i + 1];
     mx /= double(n), my /= double(n);
     double mean_dist = 0;
     for (std::size_t i = 0; i < n; ++i)
         mean_dist += std::hypot(pts[2 * i] - mx, pts[2 * i + 1] - my);
     mean_dist /= double(n);
-    if (!(mean_dist > 0)) throw error(FLT_ERR_NUMERIC, "all points coincide");
+    if (!(mean_dist > 0))
+        throw error(FLT_ERR_NUMERIC, "all points coincide");
     const double s = std::sqrt(2.0) / mean_dist;
     mat3 t;
     t << s, 0, -s * mx, 0, s, -s * my, 0, 0, 1;
@@ -51,8 +53,8 @@ Eigen::Vector2d project(const mat3 &g, double a, double b) {
 }
 
 // Normalised points, row i = (a, b).
-Eigen::MatrixX2d transform_points(const mat3 &t, std::size_t n,
-                                  const double *pts, const std::size_t *index) {
+Eigen::MatrixX2d transform_points(const mat3 &t, std::size_t n, const double *pts,
+                                  const std::size_t *index) {
     Eigen::MatrixX2d out(n, 2);
     for (std::size_t i = 0; i < n; ++i) {
         const std::size_t k = index ? index[i] : i;
@@ -64,8 +66,7 @@ Eigen::MatrixX2d transform_points(const mat3 &t, std::size_t n,
 
 // DLT on normalised points: G maps plane -> image. Returns false when the
 // points do not determine a homography (rank < 8).
-bool dlt(const Eigen::MatrixX2d &plane, const Eigen::MatrixX2d &image,
-         mat3 *g_out) {
+bool dlt(const Eigen::MatrixX2d &plane, const Eigen::MatrixX2d &image, mat3 *g_out) {
     const Eigen::Index n = plane.rows();
     Eigen::MatrixXd a = Eigen::MatrixXd::Zero(2 * n, 9);
     for (Eigen::Index i = 0; i < n; ++i) {
@@ -83,7 +84,8 @@ bool dlt(const Eigen::MatrixX2d &plane, const Eigen::MatrixX2d &image,
     Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeFullV);
     const Eigen::VectorXd sv = svd.singularValues();
     // The 8th singular value is what separates the solution from a family.
-    if (!(sv(7) > 1e-10 * sv(0))) return false;
+    if (!(sv(7) > 1e-10 * sv(0)))
+        return false;
     const Eigen::VectorXd h = svd.matrixV().col(8);
     mat3 g;
     g << h(0), h(1), h(2), h(3), h(4), h(5), h(6), h(7), h(8);
@@ -99,8 +101,7 @@ double rcond(const mat3 &m) {
 
 // Levenberg-Marquardt on the 9 entries of the normalised G, kept at unit
 // norm (the scale is a gauge freedom; the damping keeps the step finite).
-mat3 refine(const mat3 &g0, const Eigen::MatrixX2d &plane,
-            const Eigen::MatrixX2d &image) {
+mat3 refine(const mat3 &g0, const Eigen::MatrixX2d &plane, const Eigen::MatrixX2d &image) {
     const Eigen::Index n = plane.rows();
     auto cost_of = [&](const mat3 &g) {
         double c = 0;
@@ -133,10 +134,12 @@ mat3 refine(const mat3 &g0, const Eigen::MatrixX2d &plane,
         bool accepted = false;
         for (int tries = 0; tries < 20; ++tries) {
             Eigen::Matrix<double, 9, 9> a = jtj;
-            for (int k = 0; k < 9; ++k) a(k, k) += lambda * (jtj(k, k) + 1e-12);
+            for (int k = 0; k < 9; ++k)
+                a(k, k) += lambda * (jtj(k, k) + 1e-12);
             const Eigen::Matrix<double, 9, 1> step = a.ldlt().solve(-jtr);
             mat3 gn = g;
-            for (int k = 0; k < 9; ++k) gn(k / 3, k % 3) += step(k);
+            for (int k = 0; k < 9; ++k)
+                gn(k / 3, k % 3) += step(k);
             gn /= gn.norm();
             const double cn = cost_of(gn);
             if (cn < cost) {
@@ -149,7 +152,8 @@ mat3 refine(const mat3 &g0, const Eigen::MatrixX2d &plane,
             }
             lambda *= 10;
         }
-        if (!accepted) break;
+        if (!accepted)
+            break;
     }
     return g;
 }
@@ -157,8 +161,7 @@ mat3 refine(const mat3 &g0, const Eigen::MatrixX2d &plane,
 // Fits G (plane -> undistorted image, in pixel and mm units) to the
 // correspondences listed in index (all when index is null).
 bool fit_subset(std::size_t n, const double *image_px, const double *plane_mm,
-                const std::size_t *index, std::size_t m, bool refine_it,
-                mat3 *g_out) {
+                const std::size_t *index, std::size_t m, bool refine_it, mat3 *g_out) {
     std::vector<double> sub_img, sub_pl;
     const double *img = image_px, *pl = plane_mm;
     if (index) {
@@ -182,17 +185,21 @@ bool fit_subset(std::size_t n, const double *image_px, const double *plane_mm,
     const Eigen::MatrixX2d pn = transform_points(t_pl, m, pl, nullptr);
     const Eigen::MatrixX2d un = transform_points(t_img, m, img, nullptr);
     mat3 gn;
-    if (!dlt(pn, un, &gn)) return false;
-    if (refine_it) gn = refine(gn, pn, un);
-    if (!(rcond(gn) > k_min_rcond)) return false;
+    if (!dlt(pn, un, &gn))
+        return false;
+    if (refine_it)
+        gn = refine(gn, pn, un);
+    if (!(rcond(gn) > k_min_rcond))
+        return false;
     const mat3 g = t_img.inverse() * gn * t_pl;
-    if (!g.allFinite()) return false;
+    if (!g.allFinite())
+        return false;
     *g_out = g / g.norm();
     return true;
 }
 
-double reprojection_px(const mat3 &g, const double *image_px,
-                       const double *plane_mm, std::size_t i) {
+double reprojection_px(const mat3 &g, const double *image_px, const double *plane_mm,
+                       std::size_t i) {
     const Eigen::Vector2d p = project(g, plane_mm[2 * i], plane_mm[2 * i + 1]);
     const double d = std::hypot(p(0) - image_px[2 * i], p(1) - image_px[2 * i + 1]);
     return std::isfinite(d) ? d : std::numeric_limits<double>::infinity();
@@ -202,7 +209,8 @@ double reprojection_px(const mat3 &g, const double *image_px,
 
 bool homography_invertible(const double h[9]) {
     const rowmat3 m = Eigen::Map<const rowmat3>(h);
-    if (!m.allFinite()) return false;
+    if (!m.allFinite())
+        return false;
     return rcond(m) > k_min_rcond;
 }
 
@@ -214,8 +222,7 @@ void homography_inverse(const double h[9], double inv[9]) {
     out = m_inv;
 }
 
-void homography_apply(const double h[9], double a, double b, double *a_out,
-                      double *b_out) {
+void homography_apply(const double h[9], double a, double b, double *a_out, double *b_out) {
     const double x = h[0] * a + h[1] * b + h[2];
     const double y = h[3] * a + h[4] * b + h[5];
     const double w = h[6] * a + h[7] * b + h[8];
@@ -227,8 +234,7 @@ void homography_apply(const double h[9], double a, double b, double *a_out,
     *b_out = y / w;
 }
 
-homography_fit fit_homography(std::size_t n, const double *image_px,
-                              const double *plane_mm,
+homography_fit fit_homography(std::size_t n, const double *image_px, const double *plane_mm,
                               const ransac_params &ransac) {
     std::vector<std::size_t> inliers;
     mat3 g;
@@ -247,54 +253,56 @@ homography_fit fit_homography(std::size_t n, const double *image_px,
                 do {
                     sample[k] = std::size_t(rng()) % n;
                     fresh = true;
-                    for (int j = 0; j < k; ++j) fresh &= sample[j] != sample[k];
+                    for (int j = 0; j < k; ++j)
+                        fresh &= sample[j] != sample[k];
                 } while (!fresh);
             }
             mat3 gs;
-            if (!fit_subset(n, image_px, plane_mm, sample, 4, false, &gs)) continue;
+            if (!fit_subset(n, image_px, plane_mm, sample, 4, false, &gs))
+                continue;
             current.clear();
             double sum = 0;
             for (std::size_t i = 0; i < n; ++i) {
                 const double e = reprojection_px(gs, image_px, plane_mm, i);
-                if (e < ransac.threshold_px) current.push_back(i), sum += e;
+                if (e < ransac.threshold_px)
+                    current.push_back(i), sum += e;
             }
-            if (current.size() > best_count ||
-                (current.size() == best_count && sum < best_sum)) {
+            if (current.size() > best_count || (current.size() == best_count && sum < best_sum)) {
                 best_count = current.size(), best_sum = sum;
                 best.swap(current);
             }
         }
         if (best_count < 4)
-            throw error(FLT_ERR_NUMERIC,
-                        "RANSAC found no homography with 4 or more inliers; "
-                        "check calib_ransac_threshold and the correspondences");
+            throw error(FLT_ERR_NUMERIC, "RANSAC found no homography with 4 or more inliers; "
+                                         "check calib_ransac_threshold and the correspondences");
         // Refit on the consensus, then re-select inliers with the refined
         // model once more (the minimal-sample model is noisy).
         inliers = best;
         for (int round = 0; round < 3; ++round) {
-            if (!fit_subset(n, image_px, plane_mm, inliers.data(), inliers.size(),
-                            true, &g))
+            if (!fit_subset(n, image_px, plane_mm, inliers.data(), inliers.size(), true, &g))
                 throw error(FLT_ERR_NUMERIC, "the RANSAC inliers are degenerate");
             std::vector<std::size_t> again;
             for (std::size_t i = 0; i < n; ++i)
                 if (reprojection_px(g, image_px, plane_mm, i) < ransac.threshold_px)
                     again.push_back(i);
-            if (again == inliers || again.size() < 4) break;
+            if (again == inliers || again.size() < 4)
+                break;
             inliers.swap(again);
         }
     } else {
         if (!fit_subset(n, image_px, plane_mm, nullptr, n, true, &g))
-            throw error(FLT_ERR_NUMERIC,
-                        "the correspondences do not determine a homography "
-                        "(fewer than 4 distinct points, or collinear)");
+            throw error(FLT_ERR_NUMERIC, "the correspondences do not determine a homography "
+                                         "(fewer than 4 distinct points, or collinear)");
         inliers.resize(n);
-        for (std::size_t i = 0; i < n; ++i) inliers[i] = i;
+        for (std::size_t i = 0; i < n; ++i)
+            inliers[i] = i;
     }
 
     homography_fit fit;
     rowmat3 h = g.inverse();
     h /= h.norm();
-    if (h(2, 2) < 0) h = -h;  // a fixed sign makes saved files comparable
+    if (h(2, 2) < 0)
+        h = -h;  // a fixed sign makes saved files comparable
     Eigen::Map<rowmat3> h_out(fit.h);
     h_out = h;
     if (!homography_invertible(fit.h))
@@ -302,7 +310,8 @@ homography_fit fit_homography(std::size_t n, const double *image_px,
     fit.residual_px.resize(n);
     fit.residual_mm.resize(n);
     fit.inlier.assign(n, 0);
-    for (std::size_t i : inliers) fit.inlier[i] = 1;
+    for (std::size_t i : inliers)
+        fit.inlier[i] = 1;
     double sum_px = 0, sum_mm = 0;
     for (std::size_t i = 0; i < n; ++i) {
         fit.residual_px[i] = reprojection_px(g, image_px, plane_mm, i);

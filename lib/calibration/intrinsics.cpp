@@ -17,8 +17,7 @@ namespace flt {
 namespace {
 
 // The target's points in its own plane (mm, z = 0), OpenCV's ordering.
-std::vector<cv::Point3f> target_points(flt_calib_target target,
-                                       std::uint32_t columns,
+std::vector<cv::Point3f> target_points(flt_calib_target target, std::uint32_t columns,
                                        std::uint32_t rows, double pitch_mm) {
     std::vector<cv::Point3f> pts;
     pts.reserve(std::size_t(columns) * rows);
@@ -34,8 +33,7 @@ std::vector<cv::Point3f> target_points(flt_calib_target target,
 
 // Half-size of the cornerSubPix window: 40% of the smallest distance between
 // neighbouring corners, so the window never reaches the next corner.
-int subpix_half_window(const std::vector<cv::Point2f> &corners,
-                       std::uint32_t columns) {
+int subpix_half_window(const std::vector<cv::Point2f> &corners, std::uint32_t columns) {
     double nearest = std::numeric_limits<double>::infinity();
     for (std::size_t i = 0; i + 1 < corners.size(); ++i)
         if ((i + 1) % columns != 0)
@@ -46,12 +44,10 @@ int subpix_half_window(const std::vector<cv::Point2f> &corners,
 
 }  // namespace
 
-intrinsics_fit estimate_intrinsics(std::uint32_t width, std::uint32_t height,
-                                   std::size_t views,
-                                   const std::uint8_t *const *images,
-                                   std::size_t stride, flt_calib_target target,
-                                   std::uint32_t columns, std::uint32_t rows,
-                                   double pitch_mm, bool rational) {
+intrinsics_fit estimate_intrinsics(std::uint32_t width, std::uint32_t height, std::size_t views,
+                                   const std::uint8_t *const *images, std::size_t stride,
+                                   flt_calib_target target, std::uint32_t columns,
+                                   std::uint32_t rows, double pitch_mm, bool rational) {
     const cv::Size pattern{int(columns), int(rows)};
     const std::vector<cv::Point3f> object = target_points(target, columns, rows, pitch_mm);
     std::vector<std::vector<cv::Point3f>> object_points;
@@ -60,21 +56,20 @@ intrinsics_fit estimate_intrinsics(std::uint32_t width, std::uint32_t height,
 
     for (std::size_t v = 0; v < views; ++v) {
         // A header over the caller's pixels: nothing is copied or written.
-        const cv::Mat img(int(height), int(width), CV_8UC1,
-                          const_cast<std::uint8_t *>(images[v]), stride);
+        const cv::Mat img(int(height), int(width), CV_8UC1, const_cast<std::uint8_t *>(images[v]),
+                          stride);
         std::vector<cv::Point2f> found;
         bool ok;
         if (target == FLT_TARGET_CHESSBOARD) {
-            ok = cv::findChessboardCorners(
-                img, pattern, found,
-                cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE |
-                    cv::CALIB_CB_FAST_CHECK);
+            ok = cv::findChessboardCorners(img, pattern, found,
+                                           cv::CALIB_CB_ADAPTIVE_THRESH |
+                                               cv::CALIB_CB_NORMALIZE_IMAGE |
+                                               cv::CALIB_CB_FAST_CHECK);
             if (ok) {
                 const int half = subpix_half_window(found, columns);
-                cv::cornerSubPix(img, found, cv::Size(half, half), cv::Size(-1, -1),
-                                 cv::TermCriteria(cv::TermCriteria::EPS +
-                                                      cv::TermCriteria::COUNT,
-                                                  100, 1e-4));
+                cv::cornerSubPix(
+                    img, found, cv::Size(half, half), cv::Size(-1, -1),
+                    cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 100, 1e-4));
             }
         } else {
             // Blob centroids are sub-pixel already.
@@ -83,27 +78,25 @@ intrinsics_fit estimate_intrinsics(std::uint32_t width, std::uint32_t height,
                                          ? cv::CALIB_CB_SYMMETRIC_GRID
                                          : cv::CALIB_CB_ASYMMETRIC_GRID);
         }
-        if (!ok || found.size() != object.size()) continue;
+        if (!ok || found.size() != object.size())
+            continue;
         object_points.push_back(object);
         image_points.push_back(found);
         used.push_back(v);
     }
     if (used.size() < 3)
         throw error(FLT_ERR_NUMERIC,
-                    ("the target was found in " + std::to_string(used.size()) +
-                     " of " + std::to_string(views) +
-                     " views; at least 3 are needed")
+                    ("the target was found in " + std::to_string(used.size()) + " of " +
+                     std::to_string(views) + " views; at least 3 are needed")
                         .c_str());
 
     cv::Mat camera_matrix, dist_coeffs, std_intrinsics, std_extrinsics, per_view;
     std::vector<cv::Mat> rvecs, tvecs;
     const int flags = rational ? cv::CALIB_RATIONAL_MODEL : 0;
     const double rms = cv::calibrateCamera(
-        object_points, image_points, cv::Size(int(width), int(height)),
-        camera_matrix, dist_coeffs, rvecs, tvecs, std_intrinsics, std_extrinsics,
-        per_view, flags,
-        cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100,
-                         1e-12));
+        object_points, image_points, cv::Size(int(width), int(height)), camera_matrix, dist_coeffs,
+        rvecs, tvecs, std_intrinsics, std_extrinsics, per_view, flags,
+        cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, 1e-12));
 
     intrinsics_fit fit;
     fit.rms_px = rms;
@@ -118,9 +111,9 @@ intrinsics_fit estimate_intrinsics(std::uint32_t width, std::uint32_t height,
     for (std::size_t i = 0; i < used.size(); ++i)
         fit.view_rms_px[used[i]] = per_view.at<double>(int(i));
     const bool finite = std::isfinite(rms) && std::isfinite(fit.camera.fx) &&
-                        std::isfinite(fit.camera.fy) && fit.camera.fx > 0 &&
-                        fit.camera.fy > 0;
-    if (!finite) throw error(FLT_ERR_NUMERIC, "calibrateCamera did not converge");
+                        std::isfinite(fit.camera.fy) && fit.camera.fx > 0 && fit.camera.fy > 0;
+    if (!finite)
+        throw error(FLT_ERR_NUMERIC, "calibrateCamera did not converge");
     return fit;
 }
 

@@ -32,12 +32,11 @@ void clear_error() {
 void set_status(flt_status status) {
     t_error.status = status;
     if (status != FLT_OK && t_error.message[0] == '\0')
-        std::snprintf(t_error.message, sizeof t_error.message,
-                      "failed with %s", flt_status_string(status));
+        std::snprintf(t_error.message, sizeof t_error.message, "failed with %s",
+                      flt_status_string(status));
 }
 
-void record_exception(const char *function, const std::exception &e,
-                      flt_status status) {
+void record_exception(const char *function, const std::exception &e, flt_status status) {
     fail(status, "%s: %s", function, e.what());
 }
 
@@ -47,19 +46,32 @@ extern "C" {
 
 FLT_API const char *FLT_CALL flt_status_string(flt_status status) {
     switch (status) {
-    case FLT_OK: return "FLT_OK";
-    case FLT_ERR_INVALID_ARGUMENT: return "FLT_ERR_INVALID_ARGUMENT";
-    case FLT_ERR_OUT_OF_MEMORY: return "FLT_ERR_OUT_OF_MEMORY";
-    case FLT_ERR_STATE: return "FLT_ERR_STATE";
-    case FLT_ERR_BUFFER_FULL: return "FLT_ERR_BUFFER_FULL";
-    case FLT_ERR_IO: return "FLT_ERR_IO";
-    case FLT_ERR_FORMAT: return "FLT_ERR_FORMAT";
-    case FLT_ERR_DEVICE: return "FLT_ERR_DEVICE";
-    case FLT_ERR_TIMEOUT: return "FLT_ERR_TIMEOUT";
-    case FLT_ERR_NOT_FOUND: return "FLT_ERR_NOT_FOUND";
-    case FLT_ERR_NUMERIC: return "FLT_ERR_NUMERIC";
-    case FLT_ERR_INTERNAL: return "FLT_ERR_INTERNAL";
-    case FLT_STATUS_MAX_ENUM_: break;
+        case FLT_OK:
+            return "FLT_OK";
+        case FLT_ERR_INVALID_ARGUMENT:
+            return "FLT_ERR_INVALID_ARGUMENT";
+        case FLT_ERR_OUT_OF_MEMORY:
+            return "FLT_ERR_OUT_OF_MEMORY";
+        case FLT_ERR_STATE:
+            return "FLT_ERR_STATE";
+        case FLT_ERR_BUFFER_FULL:
+            return "FLT_ERR_BUFFER_FULL";
+        case FLT_ERR_IO:
+            return "FLT_ERR_IO";
+        case FLT_ERR_FORMAT:
+            return "FLT_ERR_FORMAT";
+        case FLT_ERR_DEVICE:
+            return "FLT_ERR_DEVICE";
+        case FLT_ERR_TIMEOUT:
+            return "FLT_ERR_TIMEOUT";
+        case FLT_ERR_NOT_FOUND:
+            return "FLT_ERR_NOT_FOUND";
+        case FLT_ERR_NUMERIC:
+            return "FLT_ERR_NUMERIC";
+        case FLT_ERR_INTERNAL:
+            return "FLT_ERR_INTERNAL";
+        case FLT_STATUS_MAX_ENUM_:
+            break;
     }
     return "FLT_ERR_UNKNOWN";
 }
@@ -72,7 +84,9 @@ FLT_API flt_status FLT_CALL flt_last_error_status(void) {
     return flt::t_error.status;
 }
 
-FLT_API int FLT_CALL flt_version(void) { return FLT_VERSION_NUMBER; }
+FLT_API int FLT_CALL flt_version(void) {
+    return FLT_VERSION_NUMBER;
+}
 
 FLT_API const char *FLT_CALL flt_version_string(void) {
     return FLT_VERSION_STRING;

@@ -38,8 +38,7 @@ struct error : std::runtime_error {
     error(flt_status st, const char *msg) : std::runtime_error(msg), status(st) {}
 };
 
-void record_exception(const char *function, const std::exception &e,
-                      flt_status status);
+void record_exception(const char *function, const std::exception &e, flt_status status);
 
 // The int an enum argument carries. C passes any int where a flt_ enum is
 // declared; in C++ an enum without a fixed underlying type only has the
@@ -48,8 +47,7 @@ void record_exception(const char *function, const std::exception &e,
 // undefined behaviour (UBSan's -fsanitize=enum says so). Entry points read
 // the argument's bytes with this, refuse a negative value, and only then
 // use it as the enum.
-template <class E>
-inline int enum_arg(const E &value) {
+template <class E> inline int enum_arg(const E &value) {
     static_assert(sizeof(E) == sizeof(int), "flt_ enums are int-sized (common.h)");
     int raw;
     std::memcpy(&raw, &value, sizeof raw);
@@ -57,8 +55,7 @@ inline int enum_arg(const E &value) {
 }
 
 // The one guard. `body` returns flt_status.
-template <class Body>
-flt_status guard(const char *function, Body &&body) noexcept {
+template <class Body> flt_status guard(const char *function, Body &&body) noexcept {
     clear_error();
     try {
         flt_status st = body();
@@ -82,8 +79,7 @@ flt_status guard(const char *function, Body &&body) noexcept {
 
 // The same for functions with no status to return (destroy): swallows
 // everything, because a destructor must not fail.
-template <class Body>
-void guard_void(Body &&body) noexcept {
+template <class Body> void guard_void(Body &&body) noexcept {
     try {
         body();
     } catch (...) {
@@ -92,11 +88,10 @@ void guard_void(Body &&body) noexcept {
 
 // Argument checks shared by every component. Each names the function and the
 // argument in the message.
-#define FLT_CHECK_NOT_NULL(fn, arg)                                           \
-    do {                                                                      \
-        if ((arg) == nullptr)                                                 \
-            return ::flt::fail(FLT_ERR_INVALID_ARGUMENT,                      \
-                               "%s: argument '%s' is NULL", fn, #arg);        \
-    } while (0)
+#define FLT_CHECK_NOT_NULL(fn, arg)                                                        \
+  do {                                                                                     \
+    if ((arg) == nullptr)                                                                  \
+      return ::flt::fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument '%s' is NULL", fn, #arg); \
+  } while (0)
 
 }  // namespace flt

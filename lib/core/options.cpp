@@ -19,8 +19,7 @@ const option_spec k_options[] = {
     {FLT_OPT_LASER_SPACING, "laser_spacing", 1.0e-3, 1.0e5, 100.0, false},
     {FLT_OPT_HEIGHT_SIGMA, "height_sigma", 1.0e-9, 1.0e6, 2.5, false},
     {FLT_OPT_SLOPE_SIGMA, "slope_sigma", 1.0e-12, 1.0e3, 1.0e-3, false},
-    {FLT_OPT_CURVATURE_WEIGHT, "curvature_weight", 1.0e-12, 1.0e12, 1.0e-3,
-     false},
+    {FLT_OPT_CURVATURE_WEIGHT, "curvature_weight", 1.0e-12, 1.0e12, 1.0e-3, false},
     {FLT_OPT_LAG_KNOTS, "lag_knots", 0.0, 100000.0, 64.0, true},
     {FLT_OPT_MAX_GAP, "max_gap", 0.0, inf, 200.0, false},
     {FLT_OPT_ROW_CAPACITY, "row_capacity", 16.0, 1.0e8, 8192.0, true},
@@ -31,14 +30,10 @@ const option_spec k_options[] = {
     {FLT_OPT_ROBUST_ITERATIONS, "robust_iterations", 1.0, 10.0, 2.0, true},
     // calibration
     {FLT_OPT_CALIB_RANSAC, "calib_ransac", 0.0, 1.0, 0.0, true},
-    {FLT_OPT_CALIB_RANSAC_THRESHOLD, "calib_ransac_threshold", 1.0e-6, 1.0e4,
-     1.0, false},
-    {FLT_OPT_CALIB_RANSAC_ITERATIONS, "calib_ransac_iterations", 1.0, 1.0e7,
-     1000.0, true},
-    {FLT_OPT_CALIB_RANSAC_SEED, "calib_ransac_seed", 0.0, 4294967295.0, 1.0,
-     true},
-    {FLT_OPT_CALIB_RATIONAL_DISTORTION, "calib_rational_distortion", 0.0, 1.0,
-     0.0, true},
+    {FLT_OPT_CALIB_RANSAC_THRESHOLD, "calib_ransac_threshold", 1.0e-6, 1.0e4, 1.0, false},
+    {FLT_OPT_CALIB_RANSAC_ITERATIONS, "calib_ransac_iterations", 1.0, 1.0e7, 1000.0, true},
+    {FLT_OPT_CALIB_RANSAC_SEED, "calib_ransac_seed", 0.0, 4294967295.0, 1.0, true},
+    {FLT_OPT_CALIB_RATIONAL_DISTORTION, "calib_rational_distortion", 0.0, 1.0, 0.0, true},
     // simulated sensor
     {FLT_OPT_SIM_SEED, "sim_seed", 0.0, 4294967295.0, 1.0, true},
     {FLT_OPT_SIM_FRAME_SPACING, "sim_frame_spacing", 1.0e-3, 1.0e4, 3.0, false},
@@ -46,10 +41,8 @@ const option_spec k_options[] = {
     {FLT_OPT_SIM_STRIP_WIDTH, "sim_strip_width", 1.0, 1.0e5, 2000.0, false},
     {FLT_OPT_SIM_HEAVE_SIGMA, "sim_heave_sigma", 0.0, 1.0e3, 0.0, false},
     {FLT_OPT_SIM_TILT_SIGMA, "sim_tilt_sigma", 0.0, 1.0, 0.0, false},
-    {FLT_OPT_SIM_ECCENTRICITY_AMPLITUDE, "sim_eccentricity_amplitude", 0.0, 1.0e3,
-     0.0, false},
-    {FLT_OPT_SIM_ECCENTRICITY_PERIOD, "sim_eccentricity_period", 1.0e-3, 1.0e6, 50.0,
-     false},
+    {FLT_OPT_SIM_ECCENTRICITY_AMPLITUDE, "sim_eccentricity_amplitude", 0.0, 1.0e3, 0.0, false},
+    {FLT_OPT_SIM_ECCENTRICITY_PERIOD, "sim_eccentricity_period", 1.0e-3, 1.0e6, 50.0, false},
     {FLT_OPT_SIM_SHEAR_AMPLITUDE, "sim_shear_amplitude", 0.0, 1.0e3, 0.0, false},
     {FLT_OPT_SIM_SHEAR_DECAY, "sim_shear_decay", 0.0, 1.0e3, 0.07, false},
     {FLT_OPT_SIM_SHEAR_PERIOD, "sim_shear_period", 1.0e-3, 1.0e6, 10.0, false},
@@ -63,11 +56,9 @@ const option_spec k_options[] = {
     {FLT_OPT_SIM_FULL_WELL, "sim_full_well", 0.0, 1.0e9, 10000.0, false},
     {FLT_OPT_SIM_REFLECTIONS, "sim_reflections", 0.0, 1000.0, 0.0, false},
     // frame-to-profile extractor
-    {FLT_OPT_EXTRACT_LASER0_FIRST_ROW, "extract_laser0_first_row", 0.0, 65535.0, 0.0,
-     true},
+    {FLT_OPT_EXTRACT_LASER0_FIRST_ROW, "extract_laser0_first_row", 0.0, 65535.0, 0.0, true},
     {FLT_OPT_EXTRACT_LASER0_ROWS, "extract_laser0_rows", 0.0, 65536.0, 0.0, true},
-    {FLT_OPT_EXTRACT_LASER1_FIRST_ROW, "extract_laser1_first_row", 0.0, 65535.0, 0.0,
-     true},
+    {FLT_OPT_EXTRACT_LASER1_FIRST_ROW, "extract_laser1_first_row", 0.0, 65535.0, 0.0, true},
     {FLT_OPT_EXTRACT_LASER1_ROWS, "extract_laser1_rows", 0.0, 65536.0, 0.0, true},
     {FLT_OPT_EXTRACT_SG_WINDOW, "extract_sg_window", 3.0, 31.0, 11.0, true},
     {FLT_OPT_EXTRACT_SG_ORDER, "extract_sg_order", 1.0, 6.0, 2.0, true},
@@ -89,10 +80,10 @@ const option_spec k_options[] = {
     {FLT_OPT_SOURCE_ENCODER_MODE, "source_encoder_mode", 0.0, 3.0, 0.0, true},
     {FLT_OPT_SOURCE_ENCODER_STEP, "source_encoder_step", 1.0e-6, 1.0e6, 3.0, false},
     {FLT_OPT_SOURCE_ENCODER_START, "source_encoder_start", -1.0e12, 1.0e12, 0.0, false},
-    {FLT_OPT_SOURCE_ENCODER_MM_PER_COUNT, "source_encoder_mm_per_count", 1.0e-9, 1.0e6,
-     0.01, false},
-    {FLT_OPT_SOURCE_ENCODER_CHUNK_ID, "source_encoder_chunk_id", 0.0, 4294967295.0,
-     1313031237.0, true},
+    {FLT_OPT_SOURCE_ENCODER_MM_PER_COUNT, "source_encoder_mm_per_count", 1.0e-9, 1.0e6, 0.01,
+     false},
+    {FLT_OPT_SOURCE_ENCODER_CHUNK_ID, "source_encoder_chunk_id", 0.0, 4294967295.0, 1313031237.0,
+     true},
     {FLT_OPT_SOURCE_IMAGE_BITS, "source_image_bits", 0.0, 16.0, 0.0, true},
     {FLT_OPT_U3V_TRANSFERS, "u3v_transfers", 2.0, 64.0, 8.0, true},
     {FLT_OPT_U3V_TRANSFER_SIZE, "u3v_transfer_size", 512.0, 16777216.0, 1048576.0, true},
@@ -108,7 +99,8 @@ static_assert(k_option_count <= flt_options::max_keys,
 
 std::size_t slot_of(flt_option key) {
     for (std::size_t i = 0; i < k_option_count; ++i)
-        if (k_options[i].key == key) return i;
+        if (k_options[i].key == key)
+            return i;
     return k_option_count;
 }
 
@@ -125,7 +117,8 @@ const option_spec *find_option(flt_option key) {
 
 double option_value(const flt_options *options, flt_option key) {
     std::size_t i = slot_of(key);
-    if (i == k_option_count) throw error(FLT_ERR_INTERNAL, "unregistered option key");
+    if (i == k_option_count)
+        throw error(FLT_ERR_INTERNAL, "unregistered option key");
     return options ? options->value[i] : k_options[i].default_value;
 }
 
@@ -151,38 +144,34 @@ FLT_API void FLT_CALL flt_options_destroy(flt_options *options) {
     delete options;
 }
 
-FLT_API flt_status FLT_CALL flt_options_set(flt_options *options,
-                                            flt_option key, double value) {
+FLT_API flt_status FLT_CALL flt_options_set(flt_options *options, flt_option key, double value) {
     const char *fn = "flt_options_set";
     return guard(fn, [&] {
         FLT_CHECK_NOT_NULL(fn, options);
         const option_spec *spec = enum_arg(key) < 0 ? nullptr : find_option(key);
         if (!spec)
-            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: unknown option key %d",
-                        fn, enum_arg(key));
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: unknown option key %d", fn, enum_arg(key));
         if (std::isnan(value))
-            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: option '%s' is NaN", fn,
-                        spec->name);
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: option '%s' is NaN", fn, spec->name);
         if (value < spec->min_value || value > spec->max_value)
-            return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: option '%s' = %g is outside [%g, %g]", fn,
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: option '%s' = %g is outside [%g, %g]", fn,
                         spec->name, value, spec->min_value, spec->max_value);
         if (spec->is_integer && value != std::floor(value))
-            return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: option '%s' = %g must be a whole number", fn,
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: option '%s' = %g must be a whole number", fn,
                         spec->name, value);
         options->value[slot_of(key)] = value;
         return FLT_OK;
     });
 }
 
-FLT_API flt_status FLT_CALL flt_options_get(const flt_options *options,
-                                            flt_option key, double *out) {
+FLT_API flt_status FLT_CALL flt_options_get(const flt_options *options, flt_option key,
+                                            double *out) {
     const char *fn = "flt_options_get";
     return guard(fn, [&] {
         FLT_CHECK_NOT_NULL(fn, options);
         FLT_CHECK_NOT_NULL(fn, out);
-        if (enum_arg(key) < 0 || !find_option(key)) return unknown_key(fn, enum_arg(key));
+        if (enum_arg(key) < 0 || !find_option(key))
+            return unknown_key(fn, enum_arg(key));
         *out = options->value[slot_of(key)];
         return FLT_OK;
     });
@@ -198,25 +187,28 @@ FLT_API flt_status FLT_CALL flt_option_find(const char *name, flt_option *out) {
                 *out = spec.key;
                 return FLT_OK;
             }
-        return fail(FLT_ERR_NOT_FOUND, "%s: no option is named '%.200s'", fn,
-                    name);
+        return fail(FLT_ERR_NOT_FOUND, "%s: no option is named '%.200s'", fn, name);
     });
 }
 
-FLT_API flt_status FLT_CALL flt_option_info(flt_option key, const char **name,
-                                            double *min_value,
-                                            double *max_value,
-                                            double *default_value,
+FLT_API flt_status FLT_CALL flt_option_info(flt_option key, const char **name, double *min_value,
+                                            double *max_value, double *default_value,
                                             int *is_integer) {
     const char *fn = "flt_option_info";
     return guard(fn, [&] {
         const option_spec *spec = enum_arg(key) < 0 ? nullptr : find_option(key);
-        if (!spec) return unknown_key(fn, enum_arg(key));
-        if (name) *name = spec->name;
-        if (min_value) *min_value = spec->min_value;
-        if (max_value) *max_value = spec->max_value;
-        if (default_value) *default_value = spec->default_value;
-        if (is_integer) *is_integer = spec->is_integer ? 1 : 0;
+        if (!spec)
+            return unknown_key(fn, enum_arg(key));
+        if (name)
+            *name = spec->name;
+        if (min_value)
+            *min_value = spec->min_value;
+        if (max_value)
+            *max_value = spec->max_value;
+        if (default_value)
+            *default_value = spec->default_value;
+        if (is_integer)
+            *is_integer = spec->is_integer ? 1 : 0;
         return FLT_OK;
     });
 }
@@ -226,8 +218,8 @@ FLT_API flt_status FLT_CALL flt_option_at(size_t index, flt_option *out) {
     return guard(fn, [&] {
         FLT_CHECK_NOT_NULL(fn, out);
         if (index >= k_option_count)
-            return fail(FLT_ERR_NOT_FOUND, "%s: index %zu is past the last of %zu options",
-                        fn, index, k_option_count);
+            return fail(FLT_ERR_NOT_FOUND, "%s: index %zu is past the last of %zu options", fn,
+                        index, k_option_count);
         *out = k_options[index].key;
         return FLT_OK;
     });

@@ -35,12 +35,12 @@ constexpr int k_map_nodes = 24;
 // with the clean line's shape in its block of k_shape_block columns, which
 // the quantiles of the block's peaks give even when a reflection lies along
 // the line over half the block.
-constexpr std::uint32_t k_shape_block = 256;    // columns
+constexpr std::uint32_t k_shape_block = 256;  // columns
 // The quantiles come from every k_shape_sampling-th column of the block (32
 // peaks: the quartiles to about a quarter of the scatter), which keeps their
 // cost small.
 constexpr std::uint32_t k_shape_sampling = 8;
-constexpr std::size_t k_shape_min_peaks = 8;    // sampled per block, else a neighbour's
+constexpr std::size_t k_shape_min_peaks = 8;  // sampled per block, else a neighbour's
 // Tolerances in robust standard deviations of the column-to-column scatter
 // (from the blocks' quartiles), which the noise sets: with the reference
 // speckle (5 % per pixel) and shot noise the scatter is about 4 % for the
@@ -57,13 +57,15 @@ constexpr double k_min_scatter = 0.01;
 constexpr double k_min_skew_scatter = 0.002;
 
 void check(flt_status st) {
-    if (st != FLT_OK) throw error(st, flt_last_error_message());
+    if (st != FLT_OK)
+        throw error(st, flt_last_error_message());
 }
 
 flt_calib *copy_calib(const flt_calib *calib) {
     std::size_t length = 0;
     flt_status st = flt_calib_save_text(calib, nullptr, 0, &length);
-    if (st != FLT_OK && st != FLT_ERR_BUFFER_FULL) check(st);
+    if (st != FLT_OK && st != FLT_ERR_BUFFER_FULL)
+        check(st);
     std::string text(length + 1, '\0');
     check(flt_calib_save_text(calib, &text[0], text.size(), &length));
     flt_calib *copy = nullptr;
@@ -99,25 +101,25 @@ struct flt_extractor {
     // coefficients poly[laser][(u * 2 + {0: x, 1: z}) * k_map_terms + k].
     std::vector<double> poly[2];
     double v_mid[2] = {0, 0}, v_half[2] = {1, 1};
-    double map_error_mm = 0;  // largest fit error at the build check points
-    std::vector<double> map_scratch;                          // 2 * nodes * width
+    double map_error_mm = 0;          // largest fit error at the build check points
+    std::vector<double> map_scratch;  // 2 * nodes * width
 
     // Per frame, reused.
     std::vector<std::uint16_t> best_value, best_row;  // [width]
-    std::vector<double> peak_row[2];                   // [width], px
-    std::vector<double> column_x[2], column_z[2];      // [width], mm
-    std::vector<double> fiber_z[2];                    // [fibers], mm
+    std::vector<double> peak_row[2];                  // [width], px
+    std::vector<double> column_x[2], column_z[2];     // [width], mm
+    std::vector<double> fiber_z[2];                   // [fibers], mm
     // suspect: saturated, or a brighter peak rejected (column_peak).
     std::vector<std::uint8_t> suspect_column, tainted_column, fringe_row;  // [width]
-    std::vector<peak_shape> shape;                     // [width]
-    std::vector<double> shape_scratch;                 // [width]
+    std::vector<peak_shape> shape;                                         // [width]
+    std::vector<double> shape_scratch;                                     // [width]
     // Per block of k_shape_block columns: the lower quartile of the widths
     // (px) and of the areas (counts x rows) and the relative scatters.
     std::vector<double> block_width, block_area, block_scatter;  // [blocks], [3 * blocks]
-    std::vector<double> fit_sums;                      // [5 * fibers]
-    std::vector<std::uint8_t> fit_flags;               // [fibers]
-    double support = 1;  // half-width of a fiber's resampling window, mm
-    std::vector<double> row_sum;                       // [height], auto band
+    std::vector<double> fit_sums;                                // [5 * fibers]
+    std::vector<std::uint8_t> fit_flags;                         // [fibers]
+    double support = 1;           // half-width of a fiber's resampling window, mm
+    std::vector<double> row_sum;  // [height], auto band
     bool has_frame = false;
 
     ~flt_extractor() { flt_calib_destroy(calib); }
@@ -142,11 +144,13 @@ std::vector<float> sg_derivative_taps(int half, int order) {
     for (int j = -half; j <= half; ++j) {
         const double t = double(j) / half;  // scaled for conditioning
         double p = 1;
-        for (int k = 0; k <= order; ++k, p *= t) a(j + half, k) = p;
+        for (int k = 0; k <= order; ++k, p *= t)
+            a(j + half, k) = p;
     }
     const Eigen::MatrixXd pinv = (a.transpose() * a).ldlt().solve(a.transpose());
     std::vector<float> taps(n);
-    for (int j = 0; j < n; ++j) taps[j] = float(pinv(1, j) / half);  // d/dj = d/dt / h
+    for (int j = 0; j < n; ++j)
+        taps[j] = float(pinv(1, j) / half);  // d/dj = d/dt / h
     // Odd by symmetry; exactly so, since the peak kernel relies on it.
     for (int j = 1; j <= half; ++j) {
         const float odd = 0.5f * (taps[half + j] - taps[half - j]);
@@ -172,7 +176,8 @@ void flt_extractor::build_maps() {
     for (int i = 0; i < k_map_nodes; ++i) {
         node_t[i] = std::cos(M_PI * (i + 0.5) / k_map_nodes);
         double p = 1;
-        for (int k = 0; k < k_map_terms; ++k, p *= node_t[i]) vander(i, k) = p;
+        for (int k = 0; k < k_map_terms; ++k, p *= node_t[i])
+            vander(i, k) = p;
     }
     const Eigen::Matrix<double, k_map_terms, k_map_nodes> map_fit =
         (vander.transpose() * vander).ldlt().solve(vander.transpose());
@@ -185,8 +190,7 @@ void flt_extractor::build_maps() {
                 pts[2 * (std::size_t(u) * k_map_nodes + i) + 1] =
                     v_mid[laser] + v_half[laser] * node_t[i];
             }
-        check(flt_calib_image_to_plane(calib, laser, std::size_t(width) * k_map_nodes, pts,
-                                       pts));
+        check(flt_calib_image_to_plane(calib, laser, std::size_t(width) * k_map_nodes, pts, pts));
         for (std::uint32_t u = 0; u < width; ++u) {
             const double *col = pts + 2 * std::size_t(u) * k_map_nodes;
             bool finite = true;
@@ -203,13 +207,14 @@ void flt_extractor::build_maps() {
                 continue;
             }
             const Eigen::Matrix<double, k_map_terms, 1> ax = map_fit * xs, az = map_fit * zs;
-            for (int k = 0; k < k_map_terms; ++k) cx[k] = ax(k), cz[k] = az(k);
+            for (int k = 0; k < k_map_terms; ++k)
+                cx[k] = ax(k), cz[k] = az(k);
             for (int i = 0; i < k_map_nodes; ++i) {
                 double px = 0, pz = 0;
                 for (int k = k_map_degree; k >= 0; --k)
                     px = px * node_t[i] + cx[k], pz = pz * node_t[i] + cz[k];
-                map_error_mm = std::max(
-                    map_error_mm, std::max(std::fabs(px - xs(i)), std::fabs(pz - zs(i))));
+                map_error_mm =
+                    std::max(map_error_mm, std::max(std::fabs(px - xs(i)), std::fabs(pz - zs(i))));
             }
         }
     }
@@ -225,13 +230,13 @@ void flt_extractor::build_maps() {
 
 // The two brightest rows of the frame's row sums (every 4th column) are the
 // lines; each band reaches halfway to the other line on both sides.
-void flt_extractor::detect_bands(const unsigned char *frame, std::size_t stride,
-                                 int bytes) {
+void flt_extractor::detect_bands(const unsigned char *frame, std::size_t stride, int bytes) {
     for (std::uint32_t v = 0; v < height; ++v) {
         const unsigned char *row = frame + std::size_t(v) * stride;
         double sum = 0;
         if (bytes == 1)
-            for (std::uint32_t u = 0; u < width; u += 4) sum += row[u];
+            for (std::uint32_t u = 0; u < width; u += 4)
+                sum += row[u];
         else
             for (std::uint32_t u = 0; u < width; u += 4)
                 sum += reinterpret_cast<const std::uint16_t *>(row)[u];
@@ -243,7 +248,8 @@ void flt_extractor::detect_bands(const unsigned char *frame, std::size_t stride,
     const long exclusion = long(std::ceil(2 * max_width));
     long r2 = -1;
     for (long v = 0; v < long(height); ++v)
-        if (std::labs(v - r1) > exclusion && (r2 < 0 || row_sum[v] > row_sum[r2])) r2 = v;
+        if (std::labs(v - r1) > exclusion && (r2 < 0 || row_sum[v] > row_sum[r2]))
+            r2 = v;
     if (r2 < 0 || !(row_sum[r2] - floor_level > 0.25 * (row_sum[r1] - floor_level)))
         throw error(FLT_ERR_NUMERIC,
                     "the first frame does not show two laser lines (no second row "
@@ -270,19 +276,24 @@ void flt_extractor::detect_bands(const unsigned char *frame, std::size_t stride,
             throw error(FLT_ERR_NUMERIC,
                         "the automatic band is shorter than the Savitzky-Golay window");
     for (unsigned laser = 0; laser < 2; ++laser)
-        if (bands[laser].automatic) bands[laser].first = b[laser].first,
-                                    bands[laser].rows = b[laser].rows;
+        if (bands[laser].automatic)
+            bands[laser].first = b[laser].first, bands[laser].rows = b[laser].rows;
     build_maps();
-    for (unsigned laser = 0; laser < 2; ++laser) bands[laser].automatic = false;
+    for (unsigned laser = 0; laser < 2; ++laser)
+        bands[laser].automatic = false;
 }
 
 template <class Pixel>
 void flt_extractor::extract(const unsigned char *frame, std::size_t stride,
                             std::uint32_t full_scale) {
-    const peak_params params{sg_half, sg_derivative.data(), std::uint32_t(std::ceil(
-                                 min_peak * full_scale)),
-                             full_scale, int(std::floor(max_width)), height,
-                             long(3 * sg_half / 2), long(std::max(3 * sg_half / 2, sg_half + 3))};
+    const peak_params params{sg_half,
+                             sg_derivative.data(),
+                             std::uint32_t(std::ceil(min_peak * full_scale)),
+                             full_scale,
+                             int(std::floor(max_width)),
+                             height,
+                             long(3 * sg_half / 2),
+                             long(std::max(3 * sg_half / 2, sg_half + 3))};
     for (unsigned laser = 0; laser < 2; ++laser) {
         const band &b = bands[laser];
         band_maximum<Pixel>(frame, stride, width, b.first, b.rows, best_value.data(),
@@ -301,7 +312,8 @@ void flt_extractor::extract(const unsigned char *frame, std::size_t stride,
         // Shape first, so that the continuity check's medians see only
         // well-formed peaks.
         reject_misshapen(rows_out);
-        if (any_suspect) reject_glint_fringes(rows_out);
+        if (any_suspect)
+            reject_glint_fringes(rows_out);
         for (std::uint32_t u = 0; u < width; ++u) {
             const double v = rows_out[u];
             double x = k_nan, z = k_nan;
@@ -310,7 +322,8 @@ void flt_extractor::extract(const unsigned char *frame, std::size_t stride,
                 const double *cx = coeffs + (std::size_t(u) * 2) * k_map_terms;
                 const double *cz = cx + k_map_terms;
                 x = cx[k_map_degree], z = cz[k_map_degree];
-                for (int k = k_map_degree - 1; k >= 0; --k) x = x * t + cx[k], z = z * t + cz[k];
+                for (int k = k_map_degree - 1; k >= 0; --k)
+                    x = x * t + cx[k], z = z * t + cz[k];
             }
             column_x[laser][u] = x;
             column_z[laser][u] = z;
@@ -365,7 +378,8 @@ void flt_extractor::reject_misshapen(double *rows) {
             if (rows[u] == rows[u] && shape[u].width == shape[u].width &&
                 shape[u].area == shape[u].area)
                 ++n;
-        if (n < k_shape_min_peaks) continue;
+        if (n < k_shape_min_peaks)
+            continue;
         double median[2];
         for (int which = 0; which < 3; ++which) {
             std::size_t m = 0;
@@ -395,18 +409,19 @@ void flt_extractor::reject_misshapen(double *rows) {
     }
     double sigma[3];
     for (int which = 0; which < 3; ++which) {
-        for (std::size_t i = 0; i < measured_blocks; ++i) values[i] = scatter[i * 3 + which];
+        for (std::size_t i = 0; i < measured_blocks; ++i)
+            values[i] = scatter[i * 3 + which];
         sigma[which] = std::max(which == 2 ? k_min_skew_scatter : k_min_scatter,
                                 quantile(measured_blocks, 0.5, measured_blocks));
     }
     // A block with too few peaks takes its nearest measured neighbour's
     // quartiles.
     for (std::size_t b = 0; b < blocks; ++b) {
-        if (block_width[b] == block_width[b]) continue;
+        if (block_width[b] == block_width[b])
+            continue;
         for (std::size_t step = 1; step < blocks; ++step) {
-            std::size_t near = b >= step && block_width[b - step] == block_width[b - step]
-                                   ? b - step
-                                   : b + step;
+            std::size_t near =
+                b >= step && block_width[b - step] == block_width[b - step] ? b - step : b + step;
             if (near < blocks && block_width[near] == block_width[near]) {
                 block_width[b] = block_width[near], block_area[b] = block_area[near];
                 break;
@@ -425,15 +440,16 @@ void flt_extractor::reject_misshapen(double *rows) {
         const std::size_t b1 = std::min(blocks - 1, segment);
         const double c0 = double(b0) * k_shape_block + half_block;
         const long u_first = segment == 0 ? 0 : long(std::floor(c0)) + 1;
-        const long u_last = segment == blocks ? long(width) - 1
-                                              : long(std::floor(double(b1) * k_shape_block +
-                                                                half_block));
+        const long u_last = segment == blocks
+                                ? long(width) - 1
+                                : long(std::floor(double(b1) * k_shape_block + half_block));
         const double width_step =
             b1 == b0 ? 0 : (block_width[b1] - block_width[b0]) / double(k_shape_block);
         const double area_step =
             b1 == b0 ? 0 : (block_area[b1] - block_area[b0]) / double(k_shape_block);
         for (long u = u_first; u <= std::min(u_last, long(width) - 1); ++u) {
-            if (!(rows[u] == rows[u])) continue;
+            if (!(rows[u] == rows[u]))
+                continue;
             const double offset = segment == 0 ? 0 : double(u) - c0;
             const double ref_width = block_width[b0] + offset * width_step;
             const double ref_area = block_area[b0] + offset * area_step;
@@ -441,7 +457,8 @@ void flt_extractor::reject_misshapen(double *rows) {
             const bool well_formed = sh.width <= width_limit * ref_width &&
                                      sh.area <= area_limit * ref_area &&
                                      std::fabs(sh.skew) <= skew_limit * ref_width;
-            if (!well_formed) rows[u] = k_nan;  // also when the shape is NaN
+            if (!well_formed)
+                rows[u] = k_nan;  // also when the shape is NaN
         }
     }
 }
@@ -462,20 +479,24 @@ void flt_extractor::reject_glint_fringes(double *rows) {
     long last_suspect = -(1L << 30);
     // tainted[u]: a suspect column within +-reach (two sweeps).
     for (long u = 0; u < w; ++u) {
-        if (suspect_column[u]) last_suspect = u;
+        if (suspect_column[u])
+            last_suspect = u;
         tainted_column[u] = u - last_suspect <= reach;
     }
     last_suspect = 1L << 30;
     for (long u = w - 1; u >= 0; --u) {
-        if (suspect_column[u]) last_suspect = u;
+        if (suspect_column[u])
+            last_suspect = u;
         tainted_column[u] = tainted_column[u] || last_suspect - u <= reach;
     }
     for (long u = 0; u < w; ++u) {
-        if (!tainted_column[u] || !(rows[u] == rows[u])) continue;
+        if (!tainted_column[u] || !(rows[u] == rows[u]))
+            continue;
         double around[2 * window + 1];
         int n = 0;
         for (long j = std::max(0L, u - window); j <= std::min(w - 1, u + window); ++j)
-            if (rows[j] == rows[j]) around[n++] = rows[j];
+            if (rows[j] == rows[j])
+                around[n++] = rows[j];
         // Too few neighbours to confirm the peak (itself among the n): a
         // glint's fringe column amid rejected ones looks just like that.
         if (n <= k_min_neighbours) {
@@ -483,11 +504,14 @@ void flt_extractor::reject_glint_fringes(double *rows) {
             continue;
         }
         std::nth_element(around, around + n / 2, around + n);
-        if (std::fabs(rows[u] - around[n / 2]) > k_glint_tolerance_px) fringe_row[u] = 1;
-        else fringe_row[u] = 0;
+        if (std::fabs(rows[u] - around[n / 2]) > k_glint_tolerance_px)
+            fringe_row[u] = 1;
+        else
+            fringe_row[u] = 0;
     }
     for (long u = 0; u < w; ++u)
-        if (tainted_column[u] && fringe_row[u]) rows[u] = k_nan, fringe_row[u] = 0;
+        if (tainted_column[u] && fringe_row[u])
+            rows[u] = k_nan, fringe_row[u] = 0;
 }
 
 // Resampling onto the fiber grid: a least-squares line z = a + b (x - x_k)
@@ -521,7 +545,8 @@ void flt_extractor::resample(unsigned laser) {
         long k0, k1;
         if (gap && previous_x == previous_x) {
             fiber_range(std::min(previous_x, x) - half, std::max(previous_x, x) + half, &k0, &k1);
-            for (long k = k0; k <= k1; ++k) fit_flags[std::size_t(k)] |= poisoned;
+            for (long k = k0; k <= k1; ++k)
+                fit_flags[std::size_t(k)] |= poisoned;
         }
         gap = false;
         previous_x = x;
@@ -536,7 +561,8 @@ void flt_extractor::resample(unsigned laser) {
         }
     }
     for (std::size_t k = 0; k < fibers; ++k) {
-        if (fit_flags[k] != (left | right)) continue;
+        if (fit_flags[k] != (left | right))
+            continue;
         const double *sums = &fit_sums[5 * k];
         const double det = sums[0] * sums[2] - sums[1] * sums[1];
         if (sums[0] == 1)
@@ -561,8 +587,7 @@ flt_status check_handle(const char *fn, const flt_extractor *ex) {
 
 extern "C" {
 
-FLT_API flt_status FLT_CALL flt_extractor_create(const flt_calib *calib,
-                                                 const flt_options *options,
+FLT_API flt_status FLT_CALL flt_extractor_create(const flt_calib *calib, const flt_options *options,
                                                  flt_extractor **out) {
     const char *fn = "flt_extractor_create";
     return guard(fn, [&] {
@@ -587,8 +612,8 @@ FLT_API flt_status FLT_CALL flt_extractor_create(const flt_calib *calib,
         const int window = int(option_value(options, FLT_OPT_EXTRACT_SG_WINDOW));
         const int order = int(option_value(options, FLT_OPT_EXTRACT_SG_ORDER));
         if (window % 2 == 0)
-            return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: option 'extract_sg_window' = %d must be odd", fn, window);
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: option 'extract_sg_window' = %d must be odd",
+                        fn, window);
         if (window < order + 2)
             return fail(FLT_ERR_INVALID_ARGUMENT,
                         "%s: option 'extract_sg_window' = %d must be at least "
@@ -606,14 +631,14 @@ FLT_API flt_status FLT_CALL flt_extractor_create(const flt_calib *calib,
 
         const flt_option first_key[2] = {FLT_OPT_EXTRACT_LASER0_FIRST_ROW,
                                          FLT_OPT_EXTRACT_LASER1_FIRST_ROW};
-        const flt_option rows_key[2] = {FLT_OPT_EXTRACT_LASER0_ROWS,
-                                        FLT_OPT_EXTRACT_LASER1_ROWS};
+        const flt_option rows_key[2] = {FLT_OPT_EXTRACT_LASER0_ROWS, FLT_OPT_EXTRACT_LASER1_ROWS};
         for (unsigned laser = 0; laser < 2; ++laser) {
             band &b = ex->bands[laser];
             b.first = std::uint32_t(option_value(options, first_key[laser]));
             b.rows = std::uint32_t(option_value(options, rows_key[laser]));
             b.automatic = b.rows == 0;
-            if (b.automatic) continue;
+            if (b.automatic)
+                continue;
             if (std::uint64_t(b.first) + b.rows > ex->height)
                 return fail(FLT_ERR_INVALID_ARGUMENT,
                             "%s: option 'extract_laser%u_first_row' = %u + "
@@ -654,7 +679,8 @@ FLT_API flt_status FLT_CALL flt_extractor_create(const flt_calib *calib,
         ex->best_row.assign(w, 0);
         ex->row_sum.assign(ex->height, 0);
         ex->map_scratch.assign(2 * w * k_map_nodes, 0);
-        if (!ex->bands[0].automatic) ex->build_maps();
+        if (!ex->bands[0].automatic)
+            ex->build_maps();
         *out = ex.release();
         return FLT_OK;
     });
@@ -669,45 +695,47 @@ FLT_API void FLT_CALL flt_extractor_destroy(flt_extractor *extractor) {
     });
 }
 
-FLT_API flt_status FLT_CALL flt_extractor_fibers(const flt_extractor *extractor,
-                                                 size_t *out) {
+FLT_API flt_status FLT_CALL flt_extractor_fibers(const flt_extractor *extractor, size_t *out) {
     const char *fn = "flt_extractor_fibers";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, extractor)) return st;
+        if (flt_status st = check_handle(fn, extractor))
+            return st;
         FLT_CHECK_NOT_NULL(fn, out);
         *out = extractor->fibers;
         return FLT_OK;
     });
 }
 
-FLT_API flt_status FLT_CALL flt_extractor_band(const flt_extractor *extractor,
-                                               unsigned laser, uint32_t *first_row_out,
-                                               uint32_t *rows_out) {
+FLT_API flt_status FLT_CALL flt_extractor_band(const flt_extractor *extractor, unsigned laser,
+                                               uint32_t *first_row_out, uint32_t *rows_out) {
     const char *fn = "flt_extractor_band";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, extractor)) return st;
+        if (flt_status st = check_handle(fn, extractor))
+            return st;
         if (laser >= FLT_CALIB_LASERS)
-            return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'laser' = %u is not 0 or 1", fn, laser);
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'laser' = %u is not 0 or 1", fn,
+                        laser);
         FLT_CHECK_NOT_NULL(fn, first_row_out);
         FLT_CHECK_NOT_NULL(fn, rows_out);
         if (!extractor->maps_ready)
             return fail(FLT_ERR_STATE,
-                        "%s: the band is automatic and no frame has been processed yet",
-                        fn);
+                        "%s: the band is automatic and no frame has been processed yet", fn);
         *first_row_out = extractor->bands[laser].first;
         *rows_out = extractor->bands[laser].rows;
         return FLT_OK;
     });
 }
 
-FLT_API flt_status FLT_CALL flt_extractor_process(
-    flt_extractor *extractor, const void *frame, flt_pixel_format format, uint32_t width,
-    uint32_t height, size_t stride_bytes, double encoder_mm, size_t fibers, double *s_out,
-    double *height_out, double *slope_out, uint8_t *valid_out) {
+FLT_API flt_status FLT_CALL flt_extractor_process(flt_extractor *extractor, const void *frame,
+                                                  flt_pixel_format format, uint32_t width,
+                                                  uint32_t height, size_t stride_bytes,
+                                                  double encoder_mm, size_t fibers, double *s_out,
+                                                  double *height_out, double *slope_out,
+                                                  uint8_t *valid_out) {
     const char *fn = "flt_extractor_process";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, extractor)) return st;
+        if (flt_status st = check_handle(fn, extractor))
+            return st;
         flt_extractor &ex = *extractor;
         FLT_CHECK_NOT_NULL(fn, frame);
         FLT_CHECK_NOT_NULL(fn, height_out);
@@ -737,21 +765,22 @@ FLT_API flt_status FLT_CALL flt_extractor_process(
                         "%s: argument 'stride_bytes' = %zu times height %u overflows the "
                         "address space",
                         fn, stride_bytes, height);
-        if (bytes == 2 && (stride_bytes % 2 != 0 ||
-                           reinterpret_cast<std::uintptr_t>(frame) % 2 != 0))
+        if (bytes == 2 &&
+            (stride_bytes % 2 != 0 || reinterpret_cast<std::uintptr_t>(frame) % 2 != 0))
             return fail(FLT_ERR_INVALID_ARGUMENT,
                         "%s: 16-bit frames need an even 'stride_bytes' (= %zu) and a "
                         "2-byte aligned 'frame'",
                         fn, stride_bytes);
         if (!std::isfinite(encoder_mm))
-            return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'encoder_mm' = %g is not finite", fn, encoder_mm);
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'encoder_mm' = %g is not finite",
+                        fn, encoder_mm);
         if (fibers != ex.fibers)
             return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'fibers' = %zu but the calibration has %zu", fn,
-                        fibers, ex.fibers);
+                        "%s: argument 'fibers' = %zu but the calibration has %zu", fn, fibers,
+                        ex.fibers);
         const auto *pixels = static_cast<const unsigned char *>(frame);
-        if (!ex.maps_ready) ex.detect_bands(pixels, stride_bytes, bytes);
+        if (!ex.maps_ready)
+            ex.detect_bands(pixels, stride_bytes, bytes);
         const std::uint32_t full_scale = (1u << unsigned(format)) - 1u;
         if (bytes == 1)
             ex.extract<std::uint8_t>(pixels, stride_bytes, full_scale);
@@ -764,24 +793,27 @@ FLT_API flt_status FLT_CALL flt_extractor_process(
             const bool valid = za[k] == za[k] && zb[k] == zb[k];
             height_out[k] = valid ? 0.5 * (za[k] + zb[k]) : k_nan;
             slope_out[k] = valid ? (za[k] - zb[k]) * inv_spacing : k_nan;
-            if (valid_out) valid_out[k] = valid ? 1 : 0;
+            if (valid_out)
+                valid_out[k] = valid ? 1 : 0;
         }
-        if (s_out) *s_out = encoder_mm - 0.5 * (ex.offset_mm[0] + ex.offset_mm[1]);
+        if (s_out)
+            *s_out = encoder_mm - 0.5 * (ex.offset_mm[0] + ex.offset_mm[1]);
         ex.has_frame = true;
         return FLT_OK;
     });
 }
 
-FLT_API flt_status FLT_CALL flt_extractor_peaks(const flt_extractor *extractor,
-                                                size_t width, double *rows_out) {
+FLT_API flt_status FLT_CALL flt_extractor_peaks(const flt_extractor *extractor, size_t width,
+                                                double *rows_out) {
     const char *fn = "flt_extractor_peaks";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, extractor)) return st;
+        if (flt_status st = check_handle(fn, extractor))
+            return st;
         FLT_CHECK_NOT_NULL(fn, rows_out);
         if (width != extractor->width)
             return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'width' = %zu but the frames are %u px wide", fn,
-                        width, extractor->width);
+                        "%s: argument 'width' = %zu but the frames are %u px wide", fn, width,
+                        extractor->width);
         if (!extractor->has_frame)
             return fail(FLT_ERR_STATE, "%s: no frame has been processed yet", fn);
         for (unsigned laser = 0; laser < 2; ++laser)
@@ -795,12 +827,13 @@ FLT_API flt_status FLT_CALL flt_extractor_laser_profiles(const flt_extractor *ex
                                                          size_t fibers, double *z_out) {
     const char *fn = "flt_extractor_laser_profiles";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, extractor)) return st;
+        if (flt_status st = check_handle(fn, extractor))
+            return st;
         FLT_CHECK_NOT_NULL(fn, z_out);
         if (fibers != extractor->fibers)
             return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'fibers' = %zu but the calibration has %zu", fn,
-                        fibers, extractor->fibers);
+                        "%s: argument 'fibers' = %zu but the calibration has %zu", fn, fibers,
+                        extractor->fibers);
         if (!extractor->has_frame)
             return fail(FLT_ERR_STATE, "%s: no frame has been processed yet", fn);
         for (unsigned laser = 0; laser < 2; ++laser)

@@ -22,14 +22,14 @@ namespace flt {
 
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && \
     !defined(__SANITIZE_ADDRESS__)
-#define FLT_PEAK_KERNEL __attribute__((target_clones("avx2", "default")))
+#  define FLT_PEAK_KERNEL __attribute__((target_clones("avx2", "default")))
 #else
-#define FLT_PEAK_KERNEL
+#  define FLT_PEAK_KERNEL
 #endif
 
 template <class Pixel>
-inline void band_maximum_body(const unsigned char *frame, std::size_t stride,
-                              std::uint32_t width, std::uint32_t first, std::uint32_t rows,
+inline void band_maximum_body(const unsigned char *frame, std::size_t stride, std::uint32_t width,
+                              std::uint32_t first, std::uint32_t rows,
                               std::uint16_t *__restrict best_value,
                               std::uint16_t *__restrict best_row) {
     const Pixel *row = reinterpret_cast<const Pixel *>(frame + std::size_t(first) * stride);
@@ -61,8 +61,7 @@ FLT_PEAK_KERNEL inline void band_maximum_u16(const unsigned char *frame, std::si
                                              std::uint32_t width, std::uint32_t first,
                                              std::uint32_t rows, std::uint16_t *best_value,
                                              std::uint16_t *best_row) {
-    band_maximum_body<std::uint16_t>(frame, stride, width, first, rows, best_value,
-                                     best_row);
+    band_maximum_body<std::uint16_t>(frame, stride, width, first, rows, best_value, best_row);
 }
 
 template <class Pixel>
@@ -94,8 +93,8 @@ struct peak_params {
     std::uint32_t full_scale;  // saturation, counts
     int max_width;             // rows at or above half the maximum
     std::uint32_t frame_height;
-    long shape_reach;          // rows either side of the maximum for the area
-    long gather_reach;         // max(shape_reach, sg_half + 3) <= k_max_gather_reach
+    long shape_reach;   // rows either side of the maximum for the area
+    long gather_reach;  // max(shape_reach, sg_half + 3) <= k_max_gather_reach
 };
 
 // The rows column_peak copies around a maximum: the area's and those of the
@@ -109,9 +108,8 @@ constexpr long k_max_gather_reach = 31;
 // then checks the peak's continuity with its neighbours.
 template <class Pixel>
 inline double column_peak(const unsigned char *frame, std::size_t stride, std::uint32_t u,
-                          std::uint32_t first, std::uint32_t rows, std::uint32_t value,
-                          long row, const peak_params &p, bool *suspect,
-                          peak_shape *shape) {
+                          std::uint32_t first, std::uint32_t rows, std::uint32_t value, long row,
+                          const peak_params &p, bool *suspect, peak_shape *shape) {
     constexpr double nan = std::numeric_limits<double>::quiet_NaN();
     auto px = [&](long v) -> std::uint32_t {
         return reinterpret_cast<const Pixel *>(frame + std::size_t(v) * stride)[u];
@@ -129,17 +127,21 @@ inline double column_peak(const unsigned char *frame, std::size_t stride, std::u
     auto derivative = [&](long i) -> float {
         const float *centre = gathered + (i - row + reach);
         float d = 0;
-        for (long j = 1; j <= h; ++j) d += p.sg_taps[h + j] * (centre[j] - centre[-j]);
+        for (long j = 1; j <= h; ++j)
+            d += p.sg_taps[h + j] * (centre[j] - centre[-j]);
         return d;
     };
     long excluded_lo[3], excluded_hi[3];
     int excluded = 0;
     for (int candidate = 0; candidate < 3; ++candidate) {
-        if (value < p.min_value || value == 0) return nan;  // the rest is weaker still
+        if (value < p.min_value || value == 0)
+            return nan;  // the rest is weaker still
         // Rows at or above half the maximum around it (the line's extent).
         long lo = row, hi = row;
-        while (lo > band_lo && 2 * px(lo - 1) >= value && row - lo <= p.max_width) --lo;
-        while (hi < band_hi && 2 * px(hi + 1) >= value && hi - row <= p.max_width) ++hi;
+        while (lo > band_lo && 2 * px(lo - 1) >= value && row - lo <= p.max_width)
+            --lo;
+        while (hi < band_hi && 2 * px(hi + 1) >= value && hi - row <= p.max_width)
+            ++hi;
         const bool saturated = value >= p.full_scale;
         *suspect = *suspect || saturated;
         const bool too_wide = hi - lo + 1 > p.max_width;
@@ -173,12 +175,16 @@ inline double column_peak(const unsigned char *frame, std::size_t stride, std::u
             double v = nan;
             if (d0 > 0) {
                 float d1 = derivative(i + 1);
-                for (int step = 0; step < 2 && d1 > 0; ++step) d0 = d1, d1 = derivative(++i + 1);
-                if (d1 <= 0) v = double(i) + double(d0) / double(d0 - d1);
+                for (int step = 0; step < 2 && d1 > 0; ++step)
+                    d0 = d1, d1 = derivative(++i + 1);
+                if (d1 <= 0)
+                    v = double(i) + double(d0) / double(d0 - d1);
             } else if (d0 <= 0) {
                 float dm = derivative(i - 1);
-                for (int step = 0; step < 2 && dm <= 0; ++step) d0 = dm, dm = derivative(--i - 1);
-                if (dm > 0) v = double(i - 1) + double(dm) / double(dm - d0);
+                for (int step = 0; step < 2 && dm <= 0; ++step)
+                    d0 = dm, dm = derivative(--i - 1);
+                if (dm > 0)
+                    v = double(i - 1) + double(dm) / double(dm - d0);
             }
             if (v >= double(lo) - 1 && v <= double(hi) + 1) {
                 shape->width = shape->skew = shape->area = nan;
@@ -187,7 +193,8 @@ inline double column_peak(const unsigned char *frame, std::size_t stride, std::u
                 const long most = p.max_width + 1;
                 long left = lo, right = hi;  // lo, hi stopped at half or at the band
                 if (left == band_lo)
-                    while (left > 0 && 2 * px(left - 1) >= value && row - left <= most) --left;
+                    while (left > 0 && 2 * px(left - 1) >= value && row - left <= most)
+                        --left;
                 if (right == band_hi)
                     while (right < last && 2 * px(right + 1) >= value && right - row <= most)
                         ++right;
@@ -210,7 +217,8 @@ inline double column_peak(const unsigned char *frame, std::size_t stride, std::u
                 return v;
             }
         }
-        if (candidate == 2) break;
+        if (candidate == 2)
+            break;
         // Rejected: the next brightest local maximum outside the rejected
         // peaks (a strided scan, only for the few rejected columns).
         excluded_lo[excluded] = lo, excluded_hi[excluded] = hi, ++excluded;
@@ -218,15 +226,19 @@ inline double column_peak(const unsigned char *frame, std::size_t stride, std::u
         long best_row = -1;
         for (long v = band_lo; v <= band_hi; ++v) {
             bool skip = false;
-            for (int e = 0; e < excluded; ++e) skip |= v >= excluded_lo[e] && v <= excluded_hi[e];
-            if (skip) continue;
+            for (int e = 0; e < excluded; ++e)
+                skip |= v >= excluded_lo[e] && v <= excluded_hi[e];
+            if (skip)
+                continue;
             const std::uint32_t value_v = px(v);
-            if (value_v <= best) continue;
+            if (value_v <= best)
+                continue;
             if ((v > band_lo && px(v - 1) > value_v) || (v < band_hi && px(v + 1) > value_v))
                 continue;  // not a local maximum (e.g. the tail of a rejected peak)
             best = value_v, best_row = v;
         }
-        if (best_row < 0) break;
+        if (best_row < 0)
+            break;
         value = best, row = best_row;
     }
     return nan;

@@ -53,12 +53,12 @@ struct flt_flatness {
 
 namespace {
 
-flt_status read_params(const char *fn, const flt_options *options,
-                       flatness_params *out) {
+flt_status read_params(const char *fn, const flt_options *options, flatness_params *out) {
     flatness_params p;
     p.window_length = option_value(options, FLT_OPT_FLAT_WINDOW_LENGTH);
     p.update_interval = option_value(options, FLT_OPT_FLAT_UPDATE_INTERVAL);
-    if (p.update_interval == 0.0) p.update_interval = p.window_length;
+    if (p.update_interval == 0.0)
+        p.update_interval = p.window_length;
     p.zone_width = option_value(options, FLT_OPT_FLAT_ZONE_WIDTH);
     p.reference_mean = option_value(options, FLT_OPT_FLAT_REFERENCE) != 0.0;
     p.min_length = option_value(options, FLT_OPT_FLAT_MIN_LENGTH);
@@ -86,12 +86,11 @@ flt_status check_handle(const char *fn, const flt_flatness *f) {
     return FLT_OK;
 }
 
-flt_status check_count(const char *fn, const char *what, std::size_t given,
-                       std::size_t expected) {
+flt_status check_count(const char *fn, const char *what, std::size_t given, std::size_t expected) {
     if (given != expected)
         return fail(FLT_ERR_INVALID_ARGUMENT,
-                    "%s: argument '%s' = %zu but the flatness handle has %zu",
-                    fn, what, given, expected);
+                    "%s: argument '%s' = %zu but the flatness handle has %zu", fn, what, given,
+                    expected);
     return FLT_OK;
 }
 
@@ -103,21 +102,19 @@ flt_status check_has_result(const char *fn, const flt_flatness *f) {
 
 // Rows: arrays present, shape addressable, positions finite and strictly
 // increasing (also after `previous` when has_previous).
-flt_status check_rows(const char *fn, std::size_t rows, std::size_t fibers,
-                      const double *s, const double *z, bool has_previous,
-                      double previous) {
+flt_status check_rows(const char *fn, std::size_t rows, std::size_t fibers, const double *s,
+                      const double *z, bool has_previous, double previous) {
     FLT_CHECK_NOT_NULL(fn, s);
     FLT_CHECK_NOT_NULL(fn, z);
     if (rows == 0)
         return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'rows' is 0", fn);
     if (rows > std::numeric_limits<std::size_t>::max() / sizeof(double) / fibers)
         return fail(FLT_ERR_INVALID_ARGUMENT,
-                    "%s: rows * fibers = %zu * %zu overflows the address space",
-                    fn, rows, fibers);
+                    "%s: rows * fibers = %zu * %zu overflows the address space", fn, rows, fibers);
     for (std::size_t r = 0; r < rows; ++r) {
         if (!std::isfinite(s[r]))
-            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 's[%zu]' = %g is not finite",
-                        fn, r, s[r]);
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 's[%zu]' = %g is not finite", fn, r,
+                        s[r]);
         const bool has_prev = r > 0 || has_previous;
         const double prev = r > 0 ? s[r - 1] : previous;
         if (has_prev && !(s[r] > prev))
@@ -132,11 +129,12 @@ flt_status check_rows(const char *fn, std::size_t rows, std::size_t fibers,
 flt_status create_handle(const char *fn, std::size_t fibers, const double *x,
                          const flt_options *options, flt_flatness **out) {
     flatness_params p;
-    if (flt_status st = read_params(fn, options, &p)) return st;
+    if (flt_status st = read_params(fn, options, &p))
+        return st;
     if (p.row_capacity > std::numeric_limits<std::size_t>::max() / sizeof(double) / fibers)
         return fail(FLT_ERR_INVALID_ARGUMENT,
-                    "%s: flat_row_capacity * fibers = %zu * %zu is too large", fn,
-                    p.row_capacity, fibers);
+                    "%s: flat_row_capacity * fibers = %zu * %zu is too large", fn, p.row_capacity,
+                    fibers);
     auto f = std::make_unique<flt_flatness>();
     f->params = p;
     f->layout.build(x, fibers, p.zone_width);
@@ -144,7 +142,8 @@ flt_status create_handle(const char *fn, std::size_t fibers, const double *x,
     f->buffer_s.resize(p.row_capacity);
     f->buffer_z.resize(p.row_capacity * fibers);
     f->buffer_flags.resize(p.row_capacity * fibers);
-    for (window_result &r : f->results) r.allocate(fibers, f->layout.zones());
+    for (window_result &r : f->results)
+        r.allocate(fibers, f->layout.zones());
     *out = f.release();
     return FLT_OK;
 }
@@ -153,20 +152,20 @@ flt_status create_handle(const char *fn, std::size_t fibers, const double *x,
 // error) and publishes the result.
 void evaluate_buffer(flt_flatness &f) {
     window_result &r = f.spare();
-    f.engine->evaluate(f.buffered, f.buffer_s.data(), f.buffer_z.data(),
-                       f.buffer_flags.data(), r);
+    f.engine->evaluate(f.buffered, f.buffer_s.data(), f.buffer_z.data(), f.buffer_flags.data(), r);
     f.publish();
 }
 
 // Drops the buffered rows before s_keep (they belong to no later window).
 void trim_buffer(flt_flatness &f, double s_keep) {
     std::size_t drop = 0;
-    while (drop < f.buffered && f.buffer_s[drop] < s_keep) ++drop;
-    if (drop == 0) return;
+    while (drop < f.buffered && f.buffer_s[drop] < s_keep)
+        ++drop;
+    if (drop == 0)
+        return;
     const std::size_t keep = f.buffered - drop, n = f.fibers();
     std::memmove(f.buffer_s.data(), f.buffer_s.data() + drop, keep * sizeof(double));
-    std::memmove(f.buffer_z.data(), f.buffer_z.data() + drop * n,
-                 keep * n * sizeof(double));
+    std::memmove(f.buffer_z.data(), f.buffer_z.data() + drop * n, keep * n * sizeof(double));
     std::memmove(f.buffer_flags.data(), f.buffer_flags.data() + drop * n, keep * n);
     f.buffered = keep;
 }
@@ -183,23 +182,32 @@ void restart_grid(flt_flatness &f) {
 extern "C" {
 
 FLT_API const char *FLT_CALL flt_shape_string(flt_shape shape) {
-    if (enum_arg(shape) < 0) return "unknown";
+    if (enum_arg(shape) < 0)
+        return "unknown";
     switch (shape) {
-    case FLT_SHAPE_FLAT: return "flat";
-    case FLT_SHAPE_CENTRE_BUCKLE: return "centre buckle";
-    case FLT_SHAPE_WAVY_EDGE_LEFT: return "wavy edge left";
-    case FLT_SHAPE_WAVY_EDGE_RIGHT: return "wavy edge right";
-    case FLT_SHAPE_WAVY_EDGE_BOTH: return "wavy edges";
-    case FLT_SHAPE_QUARTER_BUCKLE: return "quarter buckle";
-    case FLT_SHAPE_MIX: return "mix";
-    case FLT_SHAPE_UNDETERMINED: return "undetermined";
-    default: return "unknown";
+        case FLT_SHAPE_FLAT:
+            return "flat";
+        case FLT_SHAPE_CENTRE_BUCKLE:
+            return "centre buckle";
+        case FLT_SHAPE_WAVY_EDGE_LEFT:
+            return "wavy edge left";
+        case FLT_SHAPE_WAVY_EDGE_RIGHT:
+            return "wavy edge right";
+        case FLT_SHAPE_WAVY_EDGE_BOTH:
+            return "wavy edges";
+        case FLT_SHAPE_QUARTER_BUCKLE:
+            return "quarter buckle";
+        case FLT_SHAPE_MIX:
+            return "mix";
+        case FLT_SHAPE_UNDETERMINED:
+            return "undetermined";
+        default:
+            return "unknown";
     }
 }
 
 FLT_API flt_status FLT_CALL flt_flatness_create(size_t fibers, const double *fiber_x,
-                                                const flt_options *options,
-                                                flt_flatness **out) {
+                                                const flt_options *options, flt_flatness **out) {
     const char *fn = "flt_flatness_create";
     return guard(fn, [&] {
         FLT_CHECK_NOT_NULL(fn, out);
@@ -213,8 +221,7 @@ FLT_API flt_status FLT_CALL flt_flatness_create(size_t fibers, const double *fib
         for (std::size_t k = 0; k < fibers; ++k) {
             if (!std::isfinite(fiber_x[k]))
                 return fail(FLT_ERR_INVALID_ARGUMENT,
-                            "%s: argument 'fiber_x[%zu]' = %g is not finite", fn, k,
-                            fiber_x[k]);
+                            "%s: argument 'fiber_x[%zu]' = %g is not finite", fn, k, fiber_x[k]);
             if (k > 0 && !(fiber_x[k] > fiber_x[k - 1]))
                 return fail(FLT_ERR_INVALID_ARGUMENT,
                             "%s: argument 'fiber_x[%zu]' = %g does not increase "
@@ -238,12 +245,12 @@ FLT_API flt_status FLT_CALL flt_flatness_create_from_calib(const flt_calib *cali
         if (flt_calib_get_fiber_grid(calib, &first, &pitch, &count) != FLT_OK) {
             // Copied: fail() writes the buffer that message points into.
             const std::string why = flt_last_error_message();
-            return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'calib' has no fiber grid (%s)", fn,
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'calib' has no fiber grid (%s)", fn,
                         why.c_str());
         }
         std::vector<double> x(count);
-        for (std::size_t k = 0; k < count; ++k) x[k] = first + double(k) * pitch;
+        for (std::size_t k = 0; k < count; ++k)
+            x[k] = first + double(k) * pitch;
         return create_handle(fn, count, x.data(), options, out);
     });
 }
@@ -257,60 +264,65 @@ FLT_API void FLT_CALL flt_flatness_destroy(flt_flatness *flatness) {
     });
 }
 
-FLT_API flt_status FLT_CALL flt_flatness_fibers(const flt_flatness *flatness,
-                                                size_t *out) {
+FLT_API flt_status FLT_CALL flt_flatness_fibers(const flt_flatness *flatness, size_t *out) {
     const char *fn = "flt_flatness_fibers";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, flatness)) return st;
+        if (flt_status st = check_handle(fn, flatness))
+            return st;
         FLT_CHECK_NOT_NULL(fn, out);
         *out = flatness->fibers();
         return FLT_OK;
     });
 }
 
-FLT_API flt_status FLT_CALL flt_flatness_zones(const flt_flatness *flatness,
-                                               size_t *out) {
+FLT_API flt_status FLT_CALL flt_flatness_zones(const flt_flatness *flatness, size_t *out) {
     const char *fn = "flt_flatness_zones";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, flatness)) return st;
+        if (flt_status st = check_handle(fn, flatness))
+            return st;
         FLT_CHECK_NOT_NULL(fn, out);
         *out = flatness->layout.zones();
         return FLT_OK;
     });
 }
 
-FLT_API flt_status FLT_CALL flt_flatness_zone_layout(const flt_flatness *flatness,
-                                                     size_t zones, double *left_x_out,
-                                                     double *centre_x_out,
+FLT_API flt_status FLT_CALL flt_flatness_zone_layout(const flt_flatness *flatness, size_t zones,
+                                                     double *left_x_out, double *centre_x_out,
                                                      size_t *fiber_count_out) {
     const char *fn = "flt_flatness_zone_layout";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, flatness)) return st;
+        if (flt_status st = check_handle(fn, flatness))
+            return st;
         const fiber_layout &l = flatness->layout;
-        if (flt_status st = check_count(fn, "zones", zones, l.zones())) return st;
+        if (flt_status st = check_count(fn, "zones", zones, l.zones()))
+            return st;
         for (std::size_t j = 0; j < zones; ++j) {
-            if (left_x_out) left_x_out[j] = l.zone_left[j];
-            if (centre_x_out) centre_x_out[j] = l.zone_left[j] + 0.5 * l.zone_width;
-            if (fiber_count_out) fiber_count_out[j] = l.zone_count[j];
+            if (left_x_out)
+                left_x_out[j] = l.zone_left[j];
+            if (centre_x_out)
+                centre_x_out[j] = l.zone_left[j] + 0.5 * l.zone_width;
+            if (fiber_count_out)
+                fiber_count_out[j] = l.zone_count[j];
         }
         return FLT_OK;
     });
 }
 
 FLT_API flt_status FLT_CALL flt_flatness_evaluate(flt_flatness *flatness, size_t rows,
-                                                  size_t fibers, const double *s,
-                                                  const double *z,
+                                                  size_t fibers, const double *s, const double *z,
                                                   const uint8_t *flags) {
     const char *fn = "flt_flatness_evaluate";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, flatness)) return st;
+        if (flt_status st = check_handle(fn, flatness))
+            return st;
         flt_flatness &f = *flatness;
-        if (flt_status st = check_count(fn, "fibers", fibers, f.fibers())) return st;
-        if (flt_status st = check_rows(fn, rows, fibers, s, z, false, 0.0)) return st;
+        if (flt_status st = check_count(fn, "fibers", fibers, f.fibers()))
+            return st;
+        if (flt_status st = check_rows(fn, rows, fibers, s, z, false, 0.0))
+            return st;
         if (rows < 2)
             return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'rows' = %zu: a window needs at least 2 rows",
-                        fn, rows);
+                        "%s: argument 'rows' = %zu: a window needs at least 2 rows", fn, rows);
         const double length = s[rows - 1] - s[0];
         if (length < f.params.min_length)
             return fail(FLT_ERR_INVALID_ARGUMENT,
@@ -330,20 +342,21 @@ FLT_API flt_status FLT_CALL flt_flatness_evaluate(flt_flatness *flatness, size_t
     });
 }
 
-FLT_API flt_status FLT_CALL flt_flatness_push(flt_flatness *flatness, size_t rows,
-                                              size_t fibers, const double *s,
-                                              const double *z, const uint8_t *flags,
-                                              size_t *consumed_out,
+FLT_API flt_status FLT_CALL flt_flatness_push(flt_flatness *flatness, size_t rows, size_t fibers,
+                                              const double *s, const double *z,
+                                              const uint8_t *flags, size_t *consumed_out,
                                               int *evaluated_out) {
     const char *fn = "flt_flatness_push";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, flatness)) return st;
+        if (flt_status st = check_handle(fn, flatness))
+            return st;
         flt_flatness &f = *flatness;
         FLT_CHECK_NOT_NULL(fn, consumed_out);
         FLT_CHECK_NOT_NULL(fn, evaluated_out);
         *consumed_out = 0;
         *evaluated_out = 0;
-        if (flt_status st = check_count(fn, "fibers", fibers, f.fibers())) return st;
+        if (flt_status st = check_count(fn, "fibers", fibers, f.fibers()))
+            return st;
         if (flt_status st = check_rows(fn, rows, fibers, s, z, f.has_last_s, f.last_s))
             return st;
         const flatness_params &p = f.params;
@@ -371,8 +384,10 @@ FLT_API flt_status FLT_CALL flt_flatness_push(flt_flatness *flatness, size_t row
             const std::size_t n = f.fibers(), at = f.buffered;
             f.buffer_s[at] = s[r];
             std::memcpy(&f.buffer_z[at * n], z + r * n, n * sizeof(double));
-            if (flags) std::memcpy(&f.buffer_flags[at * n], flags + r * n, n);
-            else std::memset(&f.buffer_flags[at * n], 0, n);
+            if (flags)
+                std::memcpy(&f.buffer_flags[at * n], flags + r * n, n);
+            else
+                std::memset(&f.buffer_flags[at * n], 0, n);
             ++f.buffered;
             f.has_last_s = true;
             f.last_s = s[r];
@@ -382,11 +397,11 @@ FLT_API flt_status FLT_CALL flt_flatness_push(flt_flatness *flatness, size_t row
     });
 }
 
-FLT_API flt_status FLT_CALL flt_flatness_finish(flt_flatness *flatness,
-                                                int *evaluated_out) {
+FLT_API flt_status FLT_CALL flt_flatness_finish(flt_flatness *flatness, int *evaluated_out) {
     const char *fn = "flt_flatness_finish";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, flatness)) return st;
+        if (flt_status st = check_handle(fn, flatness))
+            return st;
         FLT_CHECK_NOT_NULL(fn, evaluated_out);
         flt_flatness &f = *flatness;
         *evaluated_out = 0;
@@ -402,87 +417,106 @@ FLT_API flt_status FLT_CALL flt_flatness_finish(flt_flatness *flatness,
 FLT_API flt_status FLT_CALL flt_flatness_reset(flt_flatness *flatness) {
     const char *fn = "flt_flatness_reset";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, flatness)) return st;
+        if (flt_status st = check_handle(fn, flatness))
+            return st;
         restart_grid(*flatness);
         return FLT_OK;
     });
 }
 
-FLT_API flt_status FLT_CALL flt_flatness_window(const flt_flatness *flatness,
-                                                double *s_first_out, double *s_last_out,
-                                                size_t *rows_out,
-                                                unsigned *window_flags_out,
-                                                size_t *index_out) {
+FLT_API flt_status FLT_CALL flt_flatness_window(const flt_flatness *flatness, double *s_first_out,
+                                                double *s_last_out, size_t *rows_out,
+                                                unsigned *window_flags_out, size_t *index_out) {
     const char *fn = "flt_flatness_window";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, flatness)) return st;
-        if (flt_status st = check_has_result(fn, flatness)) return st;
+        if (flt_status st = check_handle(fn, flatness))
+            return st;
+        if (flt_status st = check_has_result(fn, flatness))
+            return st;
         const window_result &r = flatness->results[flatness->current];
-        if (s_first_out) *s_first_out = r.s_first;
-        if (s_last_out) *s_last_out = r.s_last;
-        if (rows_out) *rows_out = r.rows;
-        if (window_flags_out) *window_flags_out = r.flags;
-        if (index_out) *index_out = r.index;
+        if (s_first_out)
+            *s_first_out = r.s_first;
+        if (s_last_out)
+            *s_last_out = r.s_last;
+        if (rows_out)
+            *rows_out = r.rows;
+        if (window_flags_out)
+            *window_flags_out = r.flags;
+        if (index_out)
+            *index_out = r.index;
         return FLT_OK;
     });
 }
 
-FLT_API flt_status FLT_CALL flt_flatness_fiber_results(
-    const flt_flatness *flatness, size_t fibers, double *arc_length_out,
-    double *i_units_out, double *wave_height_out, double *wave_period_out,
-    double *steepness_percent_out, uint8_t *flags_out) {
+FLT_API flt_status FLT_CALL flt_flatness_fiber_results(const flt_flatness *flatness, size_t fibers,
+                                                       double *arc_length_out, double *i_units_out,
+                                                       double *wave_height_out,
+                                                       double *wave_period_out,
+                                                       double *steepness_percent_out,
+                                                       uint8_t *flags_out) {
     const char *fn = "flt_flatness_fiber_results";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, flatness)) return st;
+        if (flt_status st = check_handle(fn, flatness))
+            return st;
         if (flt_status st = check_count(fn, "fibers", fibers, flatness->fibers()))
             return st;
-        if (flt_status st = check_has_result(fn, flatness)) return st;
+        if (flt_status st = check_has_result(fn, flatness))
+            return st;
         const window_result &r = flatness->results[flatness->current];
         auto copy = [&](double *dst, const std::vector<double> &src) {
-            if (dst) std::copy(src.begin(), src.end(), dst);
+            if (dst)
+                std::copy(src.begin(), src.end(), dst);
         };
         copy(arc_length_out, r.arc_length);
         copy(i_units_out, r.i_units);
         copy(wave_height_out, r.wave_height);
         copy(wave_period_out, r.wave_period);
         copy(steepness_percent_out, r.steepness);
-        if (flags_out) std::copy(r.fiber_flags.begin(), r.fiber_flags.end(), flags_out);
+        if (flags_out)
+            std::copy(r.fiber_flags.begin(), r.fiber_flags.end(), flags_out);
         return FLT_OK;
     });
 }
 
-FLT_API flt_status FLT_CALL flt_flatness_zone_results(const flt_flatness *flatness,
-                                                      size_t zones, double *i_units_out,
-                                                      uint8_t *flags_out) {
+FLT_API flt_status FLT_CALL flt_flatness_zone_results(const flt_flatness *flatness, size_t zones,
+                                                      double *i_units_out, uint8_t *flags_out) {
     const char *fn = "flt_flatness_zone_results";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, flatness)) return st;
+        if (flt_status st = check_handle(fn, flatness))
+            return st;
         if (flt_status st = check_count(fn, "zones", zones, flatness->layout.zones()))
             return st;
-        if (flt_status st = check_has_result(fn, flatness)) return st;
+        if (flt_status st = check_has_result(fn, flatness))
+            return st;
         const window_result &r = flatness->results[flatness->current];
-        if (i_units_out) std::copy(r.zone_i_units.begin(), r.zone_i_units.end(), i_units_out);
-        if (flags_out) std::copy(r.zone_flags.begin(), r.zone_flags.end(), flags_out);
+        if (i_units_out)
+            std::copy(r.zone_i_units.begin(), r.zone_i_units.end(), i_units_out);
+        if (flags_out)
+            std::copy(r.zone_flags.begin(), r.zone_flags.end(), flags_out);
         return FLT_OK;
     });
 }
 
-FLT_API flt_status FLT_CALL flt_flatness_shape(const flt_flatness *flatness,
-                                               flt_shape *shape_out,
-                                               double *confidence_out,
-                                               unsigned *components_out,
-                                               double *bow_mm_out,
-                                               double *crossbow_mm_out) {
+FLT_API flt_status FLT_CALL flt_flatness_shape(const flt_flatness *flatness, flt_shape *shape_out,
+                                               double *confidence_out, unsigned *components_out,
+                                               double *bow_mm_out, double *crossbow_mm_out) {
     const char *fn = "flt_flatness_shape";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, flatness)) return st;
-        if (flt_status st = check_has_result(fn, flatness)) return st;
+        if (flt_status st = check_handle(fn, flatness))
+            return st;
+        if (flt_status st = check_has_result(fn, flatness))
+            return st;
         const window_result &r = flatness->results[flatness->current];
-        if (shape_out) *shape_out = r.shape;
-        if (confidence_out) *confidence_out = r.confidence;
-        if (components_out) *components_out = r.components;
-        if (bow_mm_out) *bow_mm_out = r.bow_mm;
-        if (crossbow_mm_out) *crossbow_mm_out = r.crossbow_mm;
+        if (shape_out)
+            *shape_out = r.shape;
+        if (confidence_out)
+            *confidence_out = r.confidence;
+        if (components_out)
+            *components_out = r.components;
+        if (bow_mm_out)
+            *bow_mm_out = r.bow_mm;
+        if (crossbow_mm_out)
+            *crossbow_mm_out = r.crossbow_mm;
         return FLT_OK;
     });
 }

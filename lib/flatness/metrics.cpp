@@ -27,12 +27,12 @@ constexpr std::size_t k_min_zones_for_shape = 5;
 // normal equations: callers scale t to [-1, 1], where they are well
 // conditioned.
 double parabola_c(const double S[5], const double T[3]) {
-    const double a00 = S[0], a01 = S[1], a02 = S[2], a11 = S[2], a12 = S[3],
-                 a22 = S[4];
+    const double a00 = S[0], a01 = S[1], a02 = S[2], a11 = S[2], a12 = S[3], a22 = S[4];
     const double det = a00 * (a11 * a22 - a12 * a12) - a01 * (a01 * a22 - a12 * a02) +
                        a02 * (a01 * a12 - a11 * a02);
     const double scale = S[0] * S[2] * S[4];
-    if (!(std::fabs(det) > 1e-12 * scale)) return nan_value;
+    if (!(std::fabs(det) > 1e-12 * scale))
+        return nan_value;
     // Replace the third column by T.
     const double det_c = a00 * (a11 * T[2] - T[1] * a12) - a01 * (a01 * T[2] - T[1] * a02) +
                          T[0] * (a01 * a12 - a11 * a02);
@@ -42,14 +42,15 @@ double parabola_c(const double S[5], const double T[3]) {
 // Vertex of the parabola through three points (s0 < s1 < s2), or the middle
 // point when they are collinear. Newton form: z0 + d1 (s - s0) + a (s - s0)
 // (s - s1).
-void refine_extremum(double s0, double z0, double s1, double z1, double s2,
-                     double z2, double &s_out, double &z_out) {
+void refine_extremum(double s0, double z0, double s1, double z1, double s2, double z2,
+                     double &s_out, double &z_out) {
     const double d1 = (z1 - z0) / (s1 - s0);
     const double d2 = (z2 - z1) / (s2 - s1);
     const double a = (d2 - d1) / (s2 - s0);
     s_out = s1;
     z_out = z1;
-    if (a == 0.0) return;
+    if (a == 0.0)
+        return;
     double v = 0.5 * (s0 + s1) - d1 / (2.0 * a);
     v = std::min(std::max(v, s0), s2);
     s_out = v;
@@ -58,20 +59,18 @@ void refine_extremum(double s0, double z0, double s1, double z1, double s2,
 
 }  // namespace
 
-void fiber_layout::build(const double *fiber_x, std::size_t fibers,
-                         double width_of_zone) {
+void fiber_layout::build(const double *fiber_x, std::size_t fibers, double width_of_zone) {
     x.assign(fiber_x, fiber_x + fibers);
     zone_width = width_of_zone;
     const double first = x.front(), last = x.back();
     // Each fiber stands for one pitch of strip, so the grid covers its span
     // plus one pitch.
     const double covered =
-        fibers >= 2 ? (last - first) * double(fibers) / double(fibers - 1)
-                    : width_of_zone;
+        fibers >= 2 ? (last - first) * double(fibers) / double(fibers - 1) : width_of_zone;
     centre = 0.5 * (first + last);
     half_width = 0.5 * covered;
-    const std::size_t zones = std::max<std::size_t>(
-        1, std::size_t(std::ceil(covered / width_of_zone - 1e-9)));
+    const std::size_t zones =
+        std::max<std::size_t>(1, std::size_t(std::ceil(covered / width_of_zone - 1e-9)));
     const double left0 = centre - 0.5 * double(zones) * width_of_zone;
     zone_left.resize(zones);
     for (std::size_t j = 0; j < zones; ++j)
@@ -80,8 +79,7 @@ void fiber_layout::build(const double *fiber_x, std::size_t fibers,
     zone_count.assign(zones, 0);
     for (std::size_t k = 0; k < fibers; ++k) {
         const double j = std::floor((x[k] - left0) / width_of_zone);
-        const std::size_t zj =
-            j < 0.0 ? 0 : std::min(zones - 1, std::size_t(j));
+        const std::size_t zj = j < 0.0 ? 0 : std::min(zones - 1, std::size_t(j));
         zone_of[k] = zj;
         ++zone_count[zj];
     }
@@ -98,8 +96,7 @@ void window_result::allocate(std::size_t fibers, std::size_t zones) {
     zone_flags.assign(zones, 0);
 }
 
-flatness_engine::flatness_engine(const flatness_params &params,
-                                 const fiber_layout &layout)
+flatness_engine::flatness_engine(const flatness_params &params, const fiber_layout &layout)
     : p_(params), layout_(layout) {
     const std::size_t fibers = layout.fibers();
     stretch_.resize(fibers);
@@ -113,7 +110,8 @@ flatness_engine::flatness_engine(const flatness_params &params,
 }
 
 void flatness_engine::reserve_rows(std::size_t rows) {
-    if (col_s_.size() >= rows) return;
+    if (col_s_.size() >= rows)
+        return;
     col_s_.resize(rows);
     col_z_.resize(rows);
     col_ok_.resize(rows);
@@ -132,10 +130,12 @@ bool flatness_engine::largest_wave(std::size_t rows, wave &best) const {
     bool found = false;
     best = {0.0, 0.0};
 
-    struct extremum { double s, z; };
+    struct extremum {
+        double s, z;
+    };
     extremum e[2];
-    int have = 0;        // extrema of the current run held in e (0..2)
-    int dir = 0;         // 0 = first extremum not known, +1 seek crest, -1 trough
+    int have = 0;  // extrema of the current run held in e (0..2)
+    int dir = 0;   // 0 = first extremum not known, +1 seek crest, -1 trough
     std::size_t first = 0, cand = 0, cand_max = 0, cand_min = 0;
     double rise_to_max = 0.0, fall_to_min = 0.0, run_min = 0.0, run_max = 0.0;
     bool in_run = false;
@@ -143,7 +143,8 @@ bool flatness_engine::largest_wave(std::size_t rows, wave &best) const {
     auto emit = [&](std::size_t i) {
         double es = s[i], ez = z[i];
         // i + 1 is usable (the retreat came after i); i - 1 when i > first.
-        if (i > first) refine_extremum(s[i - 1], z[i - 1], s[i], z[i], s[i + 1], z[i + 1], es, ez);
+        if (i > first)
+            refine_extremum(s[i - 1], z[i - 1], s[i], z[i], s[i + 1], z[i + 1], es, ez);
         if (have == 2) {
             const double height = std::fabs(0.5 * (e[0].z + ez) - e[1].z);
             if (!found || height > best.height) {
@@ -184,11 +185,13 @@ bool flatness_engine::largest_wave(std::size_t rows, wave &best) const {
             run_min = std::min(run_min, v);
             run_max = std::max(run_max, v);
             if (z[cand_max] - v >= h) {
-                if (rise_to_max >= h) emit(cand_max);
+                if (rise_to_max >= h)
+                    emit(cand_max);
                 dir = -1;
                 cand = r;
             } else if (v - z[cand_min] >= h) {
-                if (fall_to_min >= h) emit(cand_min);
+                if (fall_to_min >= h)
+                    emit(cand_min);
                 dir = +1;
                 cand = r;
             }
@@ -222,9 +225,8 @@ bool flatness_engine::largest_wave(std::size_t rows, wave &best) const {
 // for a 100 mm wave (the shortest the spline with 100 mm knots can show).
 // Flatness waves are 500-3000 mm, so chord sums are exact enough, cost one
 // square root per sample, and need nothing but the rows.
-void flatness_engine::evaluate(std::size_t rows, const double *s,
-                               const double *z, const std::uint8_t *flags,
-                               window_result &out) {
+void flatness_engine::evaluate(std::size_t rows, const double *s, const double *z,
+                               const std::uint8_t *flags, window_result &out) {
     const std::size_t fibers = layout_.fibers();
     const std::size_t zones = layout_.zones();
     reserve_rows(rows);
@@ -239,7 +241,8 @@ void flatness_engine::evaluate(std::size_t rows, const double *s,
     out.s_last = rows ? s[rows - 1] : nan_value;
     const double length = rows >= 2 ? s[rows - 1] - s[0] : 0.0;
     const bool is_short = !(length >= p_.min_length);
-    if (is_short) out.flags |= FLT_WINDOW_SHORT;
+    if (is_short)
+        out.flags |= FLT_WINDOW_SHORT;
 
     // Per fiber: gather the column, sum the chord excess over usable
     // segments, fit the longitudinal parabola, find the largest wave.
@@ -252,18 +255,24 @@ void flatness_engine::evaluate(std::size_t rows, const double *s,
         std::size_t usable = 0;
         for (std::size_t r = 0; r < rows; ++r) {
             const double zk = z[r * fibers + k];
-            const bool ok = std::isfinite(zk) &&
-                            !(flags && (flags[r * fibers + k] & k_unusable));
+            const bool ok = std::isfinite(zk) && !(flags && (flags[r * fibers + k] & k_unusable));
             col_s_[r] = s[r];
             col_z_[r] = zk;
             col_ok_[r] = ok;
-            if (!ok) continue;
+            if (!ok)
+                continue;
             ++usable;
             z_sum += zk;
             if (half > 0.0) {
                 const double t = (s[r] - mid) / half, t2 = t * t;
-                S[0] += 1.0; S[1] += t; S[2] += t2; S[3] += t2 * t; S[4] += t2 * t2;
-                T[0] += zk; T[1] += zk * t; T[2] += zk * t2;
+                S[0] += 1.0;
+                S[1] += t;
+                S[2] += t2;
+                S[3] += t2 * t;
+                S[4] += t2 * t2;
+                T[0] += zk;
+                T[1] += zk * t;
+                T[2] += zk * t2;
             }
             if (r > 0 && col_ok_[r - 1]) {
                 const double ds = s[r] - s[r - 1], dz = zk - col_z_[r - 1];
@@ -271,15 +280,15 @@ void flatness_engine::evaluate(std::size_t rows, const double *s,
                 covered += ds;
             }
         }
-        const bool fiber_ok =
-            length > 0.0 && covered > 0.0 && covered >= p_.min_coverage * length;
+        const bool fiber_ok = length > 0.0 && covered > 0.0 && covered >= p_.min_coverage * length;
         if (!fiber_ok) {
             out.fiber_flags[k] = FLT_FIBER_NO_DATA | FLT_FIBER_NO_WAVE;
             stretch_[k] = nan_value;
             continue;
         }
         ++valid;
-        if (usable < rows) out.fiber_flags[k] |= FLT_FIBER_PARTIAL;
+        if (usable < rows)
+            out.fiber_flags[k] |= FLT_FIBER_PARTIAL;
         stretch_[k] = excess / covered;
         mean_z_[k] = z_sum / double(usable);
         // t spans [-1, 1], so the t^2 coefficient is the sagitta: the ends'
@@ -295,9 +304,9 @@ void flatness_engine::evaluate(std::size_t rows, const double *s,
         }
     }
     if (valid == 0) {
-        out.flags |= FLT_WINDOW_NO_VALID_FIBER | FLT_WINDOW_NO_BOW |
-                     FLT_WINDOW_NO_CROSSBOW;
-        for (std::size_t j = 0; j < zones; ++j) out.zone_flags[j] = FLT_ZONE_NO_DATA;
+        out.flags |= FLT_WINDOW_NO_VALID_FIBER | FLT_WINDOW_NO_BOW | FLT_WINDOW_NO_CROSSBOW;
+        for (std::size_t j = 0; j < zones; ++j)
+            out.zone_flags[j] = FLT_ZONE_NO_DATA;
         return;
     }
 
@@ -306,13 +315,18 @@ void flatness_engine::evaluate(std::size_t rows, const double *s,
     // (e_k - e_ref) / (1 + e_ref) without subtracting two near-equal lengths.
     double ref = p_.reference_mean ? 0.0 : std::numeric_limits<double>::infinity();
     for (std::size_t k = 0; k < fibers; ++k) {
-        if (out.fiber_flags[k] & FLT_FIBER_NO_DATA) continue;
-        if (p_.reference_mean) ref += stretch_[k];
-        else ref = std::min(ref, stretch_[k]);
+        if (out.fiber_flags[k] & FLT_FIBER_NO_DATA)
+            continue;
+        if (p_.reference_mean)
+            ref += stretch_[k];
+        else
+            ref = std::min(ref, stretch_[k]);
     }
-    if (p_.reference_mean) ref /= double(valid);
+    if (p_.reference_mean)
+        ref /= double(valid);
     for (std::size_t k = 0; k < fibers; ++k) {
-        if (out.fiber_flags[k] & FLT_FIBER_NO_DATA) continue;
+        if (out.fiber_flags[k] & FLT_FIBER_NO_DATA)
+            continue;
         out.arc_length[k] = (1.0 + stretch_[k]) * length;
         out.i_units[k] = (stretch_[k] - ref) / (1.0 + ref) * 1e5;
     }
@@ -325,7 +339,8 @@ void flatness_engine::evaluate(std::size_t rows, const double *s,
             std::size_t n = 0;
             double sum = 0.0;
             for (; k < fibers && layout_.zone_of[k] == j; ++k) {
-                if (out.fiber_flags[k] & FLT_FIBER_NO_DATA) continue;
+                if (out.fiber_flags[k] & FLT_FIBER_NO_DATA)
+                    continue;
                 sum += out.i_units[k];
                 ++n;
             }
@@ -349,12 +364,12 @@ void flatness_engine::evaluate(std::size_t rows, const double *s,
             out.flags |= FLT_WINDOW_NO_BOW;
         } else {
             const std::size_t take = std::max<std::size_t>(1, n / 4);
-            std::nth_element(order_.begin(), order_.begin() + (take - 1),
-                             order_.begin() + n, [&](std::size_t a, std::size_t b) {
-                                 return out.i_units[a] < out.i_units[b];
-                             });
+            std::nth_element(
+                order_.begin(), order_.begin() + (take - 1), order_.begin() + n,
+                [&](std::size_t a, std::size_t b) { return out.i_units[a] < out.i_units[b]; });
             double sum = 0.0;
-            for (std::size_t i = 0; i < take; ++i) sum += bow_coef_[order_[i]];
+            for (std::size_t i = 0; i < take; ++i)
+                sum += bow_coef_[order_[i]];
             out.bow_mm = sum / double(take);
         }
     }
@@ -365,11 +380,18 @@ void flatness_engine::evaluate(std::size_t rows, const double *s,
     if (valid >= 3) {
         double S[5] = {0, 0, 0, 0, 0}, T[3] = {0, 0, 0};
         for (std::size_t k = 0; k < fibers; ++k) {
-            if (out.fiber_flags[k] & FLT_FIBER_NO_DATA) continue;
+            if (out.fiber_flags[k] & FLT_FIBER_NO_DATA)
+                continue;
             const double u = (layout_.x[k] - layout_.centre) / layout_.half_width;
             const double u2 = u * u, zk = mean_z_[k];
-            S[0] += 1.0; S[1] += u; S[2] += u2; S[3] += u2 * u; S[4] += u2 * u2;
-            T[0] += zk; T[1] += zk * u; T[2] += zk * u2;
+            S[0] += 1.0;
+            S[1] += u;
+            S[2] += u2;
+            S[3] += u2 * u;
+            S[4] += u2 * u2;
+            T[0] += zk;
+            T[1] += zk * u;
+            T[2] += zk * u2;
         }
         out.crossbow_mm = parabola_c(S, T);
     }
@@ -382,7 +404,8 @@ void flatness_engine::evaluate(std::size_t rows, const double *s,
     if (std::isfinite(out.crossbow_mm) && std::fabs(out.crossbow_mm) >= p_.crossbow_limit)
         out.components |= FLT_SHAPE_HAS_CROSSBOW;
 
-    if (!is_short) classify(out);
+    if (!is_short)
+        classify(out);
 }
 
 // The shape class from the zone profile (flatline/flatness.h, flt_shape).
@@ -391,12 +414,14 @@ void flatness_engine::classify(window_result &out) {
     std::size_t valid_zones = 0;
     double low = std::numeric_limits<double>::infinity(), high = -low;
     for (std::size_t j = 0; j < zones; ++j) {
-        if (out.zone_flags[j] & FLT_ZONE_NO_DATA) continue;
+        if (out.zone_flags[j] & FLT_ZONE_NO_DATA)
+            continue;
         ++valid_zones;
         low = std::min(low, out.zone_i_units[j]);
         high = std::max(high, out.zone_i_units[j]);
     }
-    if (valid_zones < k_min_zones_for_shape) return;  // undetermined
+    if (valid_zones < k_min_zones_for_shape)
+        return;  // undetermined
     const double peak = high - low;
     const double limit = p_.flat_limit;
     if (peak < limit) {
@@ -409,7 +434,8 @@ void flatness_engine::classify(window_result &out) {
     enum { centre, quarter, left, right, bands };
     std::size_t n = 0;
     for (std::size_t j = 0; j < zones; ++j) {
-        if (out.zone_flags[j] & FLT_ZONE_NO_DATA) continue;
+        if (out.zone_flags[j] & FLT_ZONE_NO_DATA)
+            continue;
         const double centre_x = layout_.zone_left[j] + 0.5 * layout_.zone_width;
         const double u = (centre_x - layout_.centre) / layout_.half_width;
         const double a = std::fabs(u);
@@ -431,50 +457,80 @@ void flatness_engine::classify(window_result &out) {
     bool has[bands] = {false, false, false, false};
     for (std::size_t i = 0; i < n; ++i) {
         const double v = zone_value_[i];
-        const bool crest = (i == 0 || v > zone_value_[i - 1]) &&
-                           (i + 1 == n || v >= zone_value_[i + 1]);
-        if (!crest || v < 0.5 * peak) continue;
+        const bool crest =
+            (i == 0 || v > zone_value_[i - 1]) && (i + 1 == n || v >= zone_value_[i + 1]);
+        if (!crest || v < 0.5 * peak)
+            continue;
         double col = 0.0;  // the lowest zone is 0
         bool bounded = false;
         double lowest = v;
         for (std::size_t l = i; l-- > 0;) {
             lowest = std::min(lowest, zone_value_[l]);
-            if (zone_value_[l] > v) { col = lowest; bounded = true; break; }
+            if (zone_value_[l] > v) {
+                col = lowest;
+                bounded = true;
+                break;
+            }
         }
         lowest = v;
         for (std::size_t r = i + 1; r < n; ++r) {
             lowest = std::min(lowest, zone_value_[r]);
             if (zone_value_[r] > v || (zone_value_[r] == v && r > i)) {
-                if (!bounded || lowest > col) col = lowest;
+                if (!bounded || lowest > col)
+                    col = lowest;
                 bounded = true;
                 break;
             }
         }
-        if (v - col >= k_crest_prominence * peak) has[zone_band_[i]] = true;
+        if (v - col >= k_crest_prominence * peak)
+            has[zone_band_[i]] = true;
     }
     // Confidence: the share of the long material (the profile above half its
     // peak, weighted by the fibers a zone holds) in the named bands.
     double mass[bands] = {0, 0, 0, 0}, total = 0.0;
     for (std::size_t i = 0; i < n; ++i) {
         const double above = zone_value_[i] - 0.5 * peak;
-        if (above <= 0.0) continue;
+        if (above <= 0.0)
+            continue;
         mass[zone_band_[i]] += above * zone_weight_[i];
         total += above * zone_weight_[i];
     }
     double explained = 0.0;
     int groups = 0;
-    if (has[centre]) { out.components |= FLT_SHAPE_HAS_CENTRE; explained += mass[centre]; ++groups; }
-    if (has[quarter]) { out.components |= FLT_SHAPE_HAS_QUARTER; explained += mass[quarter]; ++groups; }
-    if (has[left]) { out.components |= FLT_SHAPE_HAS_EDGE_LEFT; explained += mass[left]; }
-    if (has[right]) { out.components |= FLT_SHAPE_HAS_EDGE_RIGHT; explained += mass[right]; }
-    if (has[left] || has[right]) ++groups;
-    if (groups == 0 || !(total > 0.0)) return;  // cannot happen: the top zone is a crest
-    if (groups > 1) out.shape = FLT_SHAPE_MIX;
-    else if (has[centre]) out.shape = FLT_SHAPE_CENTRE_BUCKLE;
-    else if (has[quarter]) out.shape = FLT_SHAPE_QUARTER_BUCKLE;
-    else if (has[left] && has[right]) out.shape = FLT_SHAPE_WAVY_EDGE_BOTH;
-    else if (has[left]) out.shape = FLT_SHAPE_WAVY_EDGE_LEFT;
-    else out.shape = FLT_SHAPE_WAVY_EDGE_RIGHT;
+    if (has[centre]) {
+        out.components |= FLT_SHAPE_HAS_CENTRE;
+        explained += mass[centre];
+        ++groups;
+    }
+    if (has[quarter]) {
+        out.components |= FLT_SHAPE_HAS_QUARTER;
+        explained += mass[quarter];
+        ++groups;
+    }
+    if (has[left]) {
+        out.components |= FLT_SHAPE_HAS_EDGE_LEFT;
+        explained += mass[left];
+    }
+    if (has[right]) {
+        out.components |= FLT_SHAPE_HAS_EDGE_RIGHT;
+        explained += mass[right];
+    }
+    if (has[left] || has[right])
+        ++groups;
+    if (groups == 0 || !(total > 0.0))
+        return;  // cannot happen: the top zone is a crest
+    if (groups > 1)
+        out.shape = FLT_SHAPE_MIX;
+    else if (has[centre])
+        out.shape = FLT_SHAPE_CENTRE_BUCKLE;
+    else if (has[quarter])
+        out.shape = FLT_SHAPE_QUARTER_BUCKLE;
+    else if (has[left] && has[right])
+        out.shape = FLT_SHAPE_WAVY_EDGE_BOTH;
+    else if (has[left])
+        out.shape = FLT_SHAPE_WAVY_EDGE_LEFT;
+    else
+        out.shape = FLT_SHAPE_WAVY_EDGE_RIGHT;
     const double margin = limit > 0.0 ? std::min(1.0, 0.5 * peak / limit) : 1.0;
     out.confidence = margin * explained / total;
 }

@@ -27,13 +27,13 @@ struct flatness_params {
 
 // The fiber grid and its zones: fixed at create time.
 struct fiber_layout {
-    std::vector<double> x;               // [fibers] mm
-    double centre = 0.0;                 // mm, middle of the grid
-    double half_width = 0.0;             // mm, half the covered width
-    double zone_width = 0.0;             // mm
-    std::vector<double> zone_left;       // [zones] mm
-    std::vector<std::size_t> zone_of;    // [fibers]
-    std::vector<std::size_t> zone_count; // [zones]
+    std::vector<double> x;                // [fibers] mm
+    double centre = 0.0;                  // mm, middle of the grid
+    double half_width = 0.0;              // mm, half the covered width
+    double zone_width = 0.0;              // mm
+    std::vector<double> zone_left;        // [zones] mm
+    std::vector<std::size_t> zone_of;     // [fibers]
+    std::vector<std::size_t> zone_count;  // [zones]
 
     void build(const double *fiber_x, std::size_t fibers, double zone_width);
     std::size_t fibers() const { return x.size(); }
@@ -47,7 +47,7 @@ struct window_result {
     unsigned flags = 0;
     std::size_t index = 0;
     std::vector<double> arc_length, i_units, wave_height, wave_period,
-        steepness;                        // [fibers]
+        steepness;                          // [fibers]
     std::vector<std::uint8_t> fiber_flags;  // [fibers]
     std::vector<double> zone_i_units;       // [zones]
     std::vector<std::uint8_t> zone_flags;   // [zones]
@@ -61,7 +61,7 @@ struct window_result {
 
 // Scratch reused by every evaluation: one fiber's column and per-fiber sums.
 class flatness_engine {
-public:
+  public:
     flatness_engine(const flatness_params &params, const fiber_layout &layout);
 
     // Grows the column scratch to `rows` (the only allocation after create;
@@ -70,11 +70,13 @@ public:
 
     // Evaluates rows [0, rows) of a row-major block (row stride = fibers).
     // flags may be null. Writes every field of `out` except `index`.
-    void evaluate(std::size_t rows, const double *s, const double *z,
-                  const std::uint8_t *flags, window_result &out);
+    void evaluate(std::size_t rows, const double *s, const double *z, const std::uint8_t *flags,
+                  window_result &out);
 
-private:
-    struct wave { double height, period; };
+  private:
+    struct wave {
+        double height, period;
+    };
     // Largest crest-trough-crest wave of the gathered column; false if none.
     bool largest_wave(std::size_t rows, wave &best) const;
     void classify(window_result &out);

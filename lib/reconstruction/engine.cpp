@@ -36,16 +36,16 @@ constexpr int k_max_unknowns = 2 * 66;
 // per machine (GCC function multiversioning). AVX2 without FMA keeps every
 // rounding identical, so results do not depend on the machine.
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
-#define FLT_ROW_KERNEL __attribute__((target_clones("avx2", "default")))
+#  define FLT_ROW_KERNEL __attribute__((target_clones("avx2", "default")))
 #else
-#define FLT_ROW_KERNEL
+#  define FLT_ROW_KERNEL
 #endif
 
 // True when every height and slope of the row is a sample (finite, at
 // most k_max_sample in magnitude). Integer tests on the bits: an OR
 // reduction vectorises, where a floating-point one would be a serial chain.
 FLT_ROW_KERNEL bool row_is_finite(std::size_t K, const double *__restrict height,
-                   const double *__restrict slope) {
+                                  const double *__restrict slope) {
     constexpr std::uint64_t magnitude = 0x7fffffffffffffffull;
     std::uint64_t bad = 0;
     for (std::size_t k = 0; k < K; ++k) {
@@ -92,56 +92,53 @@ FLT_ROW_KERNEL void accumulate_row6(std::size_t K, const double *__restrict heig
 // counts[0] and those that lose weight in counts[1] (integer sums, so the
 // loop vectorises). Same arithmetic as mask_row + weigh_row + add_row_rhs
 // + downdate_weights.
-#define FLT_ROW6_PARAMS                                                                   \
-    std::size_t K, double D, const double *__restrict height,                            \
-        const double *__restrict slope, const std::uint8_t *__restrict valid,            \
-        const double *__restrict mult_h, const double *__restrict mult_g,                \
-        const double *__restrict wh, const double *__restrict wg,                        \
-        const double *__restrict a, const double *__restrict b, double *__restrict r0,   \
-        double *__restrict r1, double *__restrict r2, double *__restrict r3,             \
-        double *__restrict r4, double *__restrict r5, double *__restrict dh,             \
-        double *__restrict dg, std::size_t counts[2]
+#define FLT_ROW6_PARAMS                                                                           \
+  std::size_t K, double D, const double *__restrict height, const double *__restrict slope,       \
+      const std::uint8_t *__restrict valid, const double *__restrict mult_h,                      \
+      const double *__restrict mult_g, const double *__restrict wh, const double *__restrict wg,  \
+      const double *__restrict a, const double *__restrict b, double *__restrict r0,              \
+      double *__restrict r1, double *__restrict r2, double *__restrict r3, double *__restrict r4, \
+      double *__restrict r5, double *__restrict dh, double *__restrict dg, std::size_t counts[2]
 // Flags are 1.0 / 0.0 and multiply, so that the only selects are the two
 // that keep a non-finite value out of the sums.
-#define FLT_ROW6_BODY(masked)                                                           \
-    const double big = k_max_sample;                                                    \
-    std::size_t nbad = 0, affected = 0;                                                 \
-    for (std::size_t k = 0; k < K; ++k) {                                               \
-        const bool hfin = std::fabs(height[k]) <= big, gfin = std::fabs(slope[k]) <= big; \
-        double hok = hfin ? 1.0 : 0.0, gok = gfin ? 1.0 : 0.0;                          \
-        if (masked) {                                                                   \
-            const double m = valid[k] != 0 ? 1.0 : 0.0;                                 \
-            hok *= m;                                                                   \
-            gok *= m;                                                                   \
-        }                                                                               \
-        const double hm = hok * mult_h[k], gm = gok * mult_g[k];                        \
-        const double hv = (hfin ? height[k] : 0.0) * (wh[k] * hm);                      \
-        const double gv = (gfin ? D * slope[k] : 0.0) * (wg[k] * gm);                   \
-        r0[k] += a[0] * hv + b[0] * gv;                                                 \
-        r1[k] += a[1] * hv + b[1] * gv;                                                 \
-        r2[k] += a[2] * hv + b[2] * gv;                                                 \
-        r3[k] += a[3] * hv + b[3] * gv;                                                 \
-        r4[k] += a[4] * hv + b[4] * gv;                                                 \
-        r5[k] += a[5] * hv + b[5] * gv;                                                 \
-        dh[k] = (1.0 - hm) * wh[k];                                                     \
-        dg[k] = (1.0 - gm) * wg[k];                                                     \
-        nbad += std::size_t(hok * gok == 0.0);                                          \
-        affected += std::size_t(hm * gm != 1.0); /* both in [0, 1] */                 \
-    }                                                                                   \
-    counts[0] = nbad;                                                                   \
-    counts[1] = affected;
+#define FLT_ROW6_BODY(masked)                                                         \
+  const double big = k_max_sample;                                                    \
+  std::size_t nbad = 0, affected = 0;                                                 \
+  for (std::size_t k = 0; k < K; ++k) {                                               \
+    const bool hfin = std::fabs(height[k]) <= big, gfin = std::fabs(slope[k]) <= big; \
+    double hok = hfin ? 1.0 : 0.0, gok = gfin ? 1.0 : 0.0;                            \
+    if (masked) {                                                                     \
+      const double m = valid[k] != 0 ? 1.0 : 0.0;                                     \
+      hok *= m;                                                                       \
+      gok *= m;                                                                       \
+    }                                                                                 \
+    const double hm = hok * mult_h[k], gm = gok * mult_g[k];                          \
+    const double hv = (hfin ? height[k] : 0.0) * (wh[k] * hm);                        \
+    const double gv = (gfin ? D * slope[k] : 0.0) * (wg[k] * gm);                     \
+    r0[k] += a[0] * hv + b[0] * gv;                                                   \
+    r1[k] += a[1] * hv + b[1] * gv;                                                   \
+    r2[k] += a[2] * hv + b[2] * gv;                                                   \
+    r3[k] += a[3] * hv + b[3] * gv;                                                   \
+    r4[k] += a[4] * hv + b[4] * gv;                                                   \
+    r5[k] += a[5] * hv + b[5] * gv;                                                   \
+    dh[k] = (1.0 - hm) * wh[k];                                                       \
+    dg[k] = (1.0 - gm) * wg[k];                                                       \
+    nbad += std::size_t(hok * gok == 0.0);                                            \
+    affected += std::size_t(hm * gm != 1.0); /* both in [0, 1] */                     \
+  }                                                                                   \
+  counts[0] = nbad;                                                                   \
+  counts[1] = affected;
 
-FLT_ROW_KERNEL void weighted_row6(FLT_ROW6_PARAMS) { FLT_ROW6_BODY(false) }
-FLT_ROW_KERNEL void weighted_row6_masked(FLT_ROW6_PARAMS) { FLT_ROW6_BODY(true) }
+FLT_ROW_KERNEL void weighted_row6(FLT_ROW6_PARAMS){FLT_ROW6_BODY(false)} FLT_ROW_KERNEL
+    void weighted_row6_masked(FLT_ROW6_PARAMS){FLT_ROW6_BODY(true)}
 
 // Masks one row without a validity array: a non-finite height or slope is
 // invalid (multiplier 0, value 0). Returns the fibers with an invalid sample.
-FLT_ROW_KERNEL std::size_t mask_row(std::size_t K, double D, const double *__restrict height,
-                                    const double *__restrict slope,
-                                    const double *__restrict mult_h,
-                                    const double *__restrict mult_g, double *__restrict hm,
-                                    double *__restrict gm, double *__restrict hv,
-                                    double *__restrict gv) {
+FLT_ROW_KERNEL std::size_t
+    mask_row(std::size_t K, double D, const double *__restrict height,
+             const double *__restrict slope, const double *__restrict mult_h,
+             const double *__restrict mult_g, double *__restrict hm, double *__restrict gm,
+             double *__restrict hv, double *__restrict gv) {
     const double big = k_max_sample;
     double bad = 0.0;  // a double keeps the loop in one vector width
     for (std::size_t k = 0; k < K; ++k) {
@@ -177,7 +174,8 @@ FLT_ROW_KERNEL std::size_t downdate_weights(std::size_t K, const double *__restr
 FLT_ROW_KERNEL void downdate_entry(std::size_t K, double chh, double cgg,
                                    const double *__restrict dh, const double *__restrict dg,
                                    double *__restrict down) {
-    for (std::size_t k = 0; k < K; ++k) down[k] += dh[k] * chh + dg[k] * cgg;
+    for (std::size_t k = 0; k < K; ++k)
+        down[k] += dh[k] * chh + dg[k] * cgg;
 }
 
 // hv, gv (the masked height and Delta-d * slope) times each fiber's weight and
@@ -193,10 +191,10 @@ FLT_ROW_KERNEL void weigh_row(std::size_t K, const double *__restrict hm,
 }
 
 // One unknown's right-hand side: rhs += ch * hv + cg * gv, over the fibers.
-FLT_ROW_KERNEL void add_row_rhs(std::size_t K, double ch, double cg,
-                                const double *__restrict hv, const double *__restrict gv,
-                                double *__restrict rhs) {
-    for (std::size_t k = 0; k < K; ++k) rhs[k] += ch * hv[k] + cg * gv[k];
+FLT_ROW_KERNEL void add_row_rhs(std::size_t K, double ch, double cg, const double *__restrict hv,
+                                const double *__restrict gv, double *__restrict rhs) {
+    for (std::size_t k = 0; k < K; ++k)
+        rhs[k] += ch * hv[k] + cg * gv[k];
 }
 
 // The two lasers' view of the spline at one row, per fiber: heights z1, z2
@@ -238,10 +236,11 @@ void hermite_weights(double t, double w[4]) {
 }  // namespace
 
 recon_engine::recon_engine(std::size_t fibers, const recon_params &params,
-                           std::size_t knot_capacity, double *z_store,
-                           std::uint8_t *flags_store, bool keep_rows)
+                           std::size_t knot_capacity, double *z_store, std::uint8_t *flags_store,
+                           bool keep_rows)
     : K_(fibers), p_(params), keep_rows_(keep_rows), has_row_ring_(keep_rows) {
-    if (!keep_rows_) p_.row_capacity = 1;  // no row ring
+    if (!keep_rows_)
+        p_.row_capacity = 1;  // no row ring
     // The row ring first: the largest buffer, so an impossible size fails
     // before anything else is touched.
     if (z_store) {
@@ -264,7 +263,8 @@ recon_engine::recon_engine(std::size_t fibers, const recon_params &params,
     // apart, so ceil(D/L)+2 knots (the epsilon absorbs D/L = 1 +- rounding).
     S_ = int(std::ceil(D_ / L_ - 1e-9)) + 2;
     n_ = 2 * S_;
-    if (n_ > k_max_unknowns) throw error(FLT_ERR_INTERNAL, "knot span too large");
+    if (n_ > k_max_unknowns)
+        throw error(FLT_ERR_INTERNAL, "knot span too large");
     ntri_ = n_ * (n_ + 1) / 2;
     nf_ = 5 + 2 * (n_ - 2);
 
@@ -309,11 +309,11 @@ recon_engine::recon_engine(std::size_t fibers, const recon_params &params,
     has_height_.assign(K_, 0);
     bc_z_.assign(K_, 0.0);
     bc_m_.assign(K_, 0.0);
-
 }
 
-
-void recon_engine::basis(double p, long i, double w[4]) const { basis_on(t0_, p, i, w); }
+void recon_engine::basis(double p, long i, double w[4]) const {
+    basis_on(t0_, p, i, w);
+}
 
 void recon_engine::basis_on(double t0, double p, long i, double w[4]) const {
     hermite_weights((p - (t0 + double(i) * L_)) / L_, w);
@@ -345,7 +345,8 @@ void recon_engine::set_fiber_weights(const double *wh, const double *wg) {
 // New weights take effect when the shared matrices are empty (right after a
 // knot is eliminated), so every row in them carries one weight per fiber.
 void recon_engine::apply_pending_weights() {
-    if (!weights_pending_) return;
+    if (!weights_pending_)
+        return;
     wh_.swap(next_wh_);
     wg_.swap(next_wg_);
     std::copy_n(wh_.data(), K_, next_wh_.data());
@@ -363,9 +364,11 @@ void recon_engine::assemble_entry(int r, int c) {
     const double *__restrict dn = down_.data() + e * K_;
     const double *__restrict wh = wh_.data(), *__restrict wg = wg_.data();
     if (bad_fibers_seen_)
-        for (std::size_t k = 0; k < K_; ++k) w[k] = sc[k] + wh[k] * hp + wg[k] * g - dn[k];
+        for (std::size_t k = 0; k < K_; ++k)
+            w[k] = sc[k] + wh[k] * hp + wg[k] * g - dn[k];
     else
-        for (std::size_t k = 0; k < K_; ++k) w[k] = sc[k] + wh[k] * hp + wg[k] * g;
+        for (std::size_t k = 0; k < K_; ++k)
+            w[k] = sc[k] + wh[k] * hp + wg[k] * g;
 }
 
 // The row's unweighted outer products over the window unknowns.
@@ -386,27 +389,31 @@ void recon_engine::start_window(long first_knot) {
     std::fill(down_.begin(), down_.end(), 0.0);
     bad_fibers_seen_ = false;
     std::fill(rhs_.begin(), rhs_.end(), 0.0);
-    for (long j = first_knot; j < first_knot + S_; ++j) add_priors_for_knot(j);
+    for (long j = first_knot; j < first_knot + S_; ++j)
+        add_priors_for_knot(j);
 }
 
 // Adds w * (sum_i coef[i] * x[i])^2 to the objective, x[i] being unknown
 // unit[i] (0: z, 1: m) of knot[i]. Open knots enter the window matrix; carried
 // boundary knots move to every fiber's right-hand side. Skipped when a knot
 // is neither (before the strip, or already eliminated).
-void recon_engine::add_rank1_prior(const long *knot, const int *unit,
-                                   const double *coef, int count, double w) {
+void recon_engine::add_rank1_prior(const long *knot, const int *unit, const double *coef, int count,
+                                   double w) {
     int open = 0;
     for (int i = 0; i < count; ++i) {
         if (knot[i] >= w0_) {
-            if (knot[i] >= w0_ + S_) return;
+            if (knot[i] >= w0_ + S_)
+                return;
             ++open;
         } else if (knot[i] < 0 || knot[i] > fixed_upto_) {
             return;
         }
     }
-    if (open == 0) return;
+    if (open == 0)
+        return;
     for (int i = 0; i < count; ++i) {
-        if (knot[i] < w0_) continue;
+        if (knot[i] < w0_)
+            continue;
         const int wi = 2 * int(knot[i] - w0_) + unit[i];
         for (int q = 0; q < count; ++q) {
             if (knot[q] >= w0_) {
@@ -416,7 +423,8 @@ void recon_engine::add_rank1_prior(const long *knot, const int *unit,
                 const double *x = hist_at(knot[q]) + std::size_t(unit[q]) * K_;
                 double *rhs = rhs_.data() + std::size_t(wi) * K_;
                 const double c = w * coef[i] * coef[q];
-                for (std::size_t k = 0; k < K_; ++k) rhs[k] -= c * wh_[k] * x[k];
+                for (std::size_t k = 0; k < K_; ++k)
+                    rhs[k] -= c * wh_[k] * x[k];
             }
         }
     }
@@ -471,9 +479,8 @@ void recon_engine::close_knot() {
     if (std::size_t(w0_ - next_emit_) >= factor_cap_)
         throw error(FLT_ERR_INTERNAL, "factor ring overflow");
     double *f = factor_.data() + (std::size_t(w0_) % factor_cap_) * nf_ * K_;
-    double *il00 = f, *l10 = f + K_, *il11 = f + 2 * K_, *y0 = f + 3 * K_,
-           *y1 = f + 4 * K_;
-    double *L0 = f + 5 * K_;                  // [n-2][K]
+    double *il00 = f, *l10 = f + K_, *il11 = f + 2 * K_, *y0 = f + 3 * K_, *y1 = f + 4 * K_;
+    double *L0 = f + 5 * K_;                     // [n-2][K]
     double *L1 = L0 + std::size_t(n_ - 2) * K_;  // [n-2][K]
 
     // work = schur + R - down (packed upper).
@@ -534,16 +541,18 @@ void recon_engine::close_knot() {
         // down_ is all zero: nothing to clear.
     } else {
         std::fill(down_.begin(), down_.end(), 0.0);
-            bad_fibers_seen_ = false;
+        bad_fibers_seen_ = false;
     }
     ++w0_;
     add_priors_for_knot(w0_ + S_ - 1);
 }
 
 void recon_engine::maybe_emit() {
-    if (p_.lag_knots == recon_params::no_lag) return;
+    if (p_.lag_knots == recon_params::no_lag)
+        return;
     const long last = w0_ - 1 - p_.lag_knots;
-    if (last - next_emit_ + 1 >= emit_group()) emit_upto(last);
+    if (last - next_emit_ + 1 >= emit_group())
+        emit_upto(last);
 }
 
 // Solves for every knot from next_emit_ to the end of the window given all
@@ -559,7 +568,8 @@ void recon_engine::emit_upto(long last) {
         double *ujj = work_.data() + tri(j, j) * K_;
         for (int i = 0; i < j; ++i) {
             const double *uij = work_.data() + tri(i, j) * K_;
-            for (std::size_t k = 0; k < K_; ++k) ujj[k] -= uij[k] * uij[k];
+            for (std::size_t k = 0; k < K_; ++k)
+                ujj[k] -= uij[k] * uij[k];
         }
         for (std::size_t k = 0; k < K_; ++k)
             ujj[k] = 1.0 / std::sqrt(std::max(ujj[k], 1e-300));  // keep 1/U_jj
@@ -568,9 +578,11 @@ void recon_engine::emit_upto(long last) {
             for (int i = 0; i < j; ++i) {
                 const double *uij = work_.data() + tri(i, j) * K_;
                 const double *uic = work_.data() + tri(i, c) * K_;
-                for (std::size_t k = 0; k < K_; ++k) ujc[k] -= uij[k] * uic[k];
+                for (std::size_t k = 0; k < K_; ++k)
+                    ujc[k] -= uij[k] * uic[k];
             }
-            for (std::size_t k = 0; k < K_; ++k) ujc[k] *= ujj[k];
+            for (std::size_t k = 0; k < K_; ++k)
+                ujc[k] *= ujj[k];
         }
     }
     // U^T y = rhs
@@ -581,10 +593,12 @@ void recon_engine::emit_upto(long last) {
         for (int i = 0; i < j; ++i) {
             const double *uij = work_.data() + tri(i, j) * K_;
             const double *yi = xwin_.data() + std::size_t(i) * K_;
-            for (std::size_t k = 0; k < K_; ++k) y[k] -= uij[k] * yi[k];
+            for (std::size_t k = 0; k < K_; ++k)
+                y[k] -= uij[k] * yi[k];
         }
         const double *inv = work_.data() + tri(j, j) * K_;
-        for (std::size_t k = 0; k < K_; ++k) y[k] *= inv[k];
+        for (std::size_t k = 0; k < K_; ++k)
+            y[k] *= inv[k];
     }
     // U x = y
     for (int j = n_ - 1; j >= 0; --j) {
@@ -592,10 +606,12 @@ void recon_engine::emit_upto(long last) {
         for (int c = j + 1; c < n_; ++c) {
             const double *ujc = work_.data() + tri(j, c) * K_;
             const double *xc = xwin_.data() + std::size_t(c) * K_;
-            for (std::size_t k = 0; k < K_; ++k) x[k] -= ujc[k] * xc[k];
+            for (std::size_t k = 0; k < K_; ++k)
+                x[k] -= ujc[k] * xc[k];
         }
         const double *inv = work_.data() + tri(j, j) * K_;
-        for (std::size_t k = 0; k < K_; ++k) x[k] *= inv[k];
+        for (std::size_t k = 0; k < K_; ++k)
+            x[k] *= inv[k];
     }
     for (int j = 0; j < S_; ++j) {
         double *h = hist_at(w0_ + j);
@@ -605,8 +621,8 @@ void recon_engine::emit_upto(long last) {
     // 2. Back-substitution through the eliminated knots, newest first.
     for (long j = w0_ - 1; j >= next_emit_; --j) {
         const double *f = factor_.data() + (std::size_t(j) % factor_cap_) * nf_ * K_;
-        const double *il00 = f, *l10 = f + K_, *il11 = f + 2 * K_,
-                     *y0 = f + 3 * K_, *y1 = f + 4 * K_;
+        const double *il00 = f, *l10 = f + K_, *il11 = f + 2 * K_, *y0 = f + 3 * K_,
+                     *y1 = f + 4 * K_;
         const double *L0 = f + 5 * K_;
         const double *L1 = L0 + std::size_t(n_ - 2) * K_;
         double *out = hist_at(j);
@@ -636,13 +652,15 @@ void recon_engine::emit_upto(long last) {
 
 // Evaluates every pending row whose knot interval is fully emitted.
 void recon_engine::finish_rows() {
-    if (!keep_rows_) return;
+    if (!keep_rows_)
+        return;
     const std::size_t cap = p_.row_capacity;
     while (ready_ < tail_) {
         const std::size_t r = ready_ % cap;
         const double s = ring_s_[r];
         const long i = interval_of(s);
-        if (i + 1 > last_emitted_) break;
+        if (i + 1 > last_emitted_)
+            break;
         double w[4];
         basis(s, i, w);
         const double *a = hist_at(i), *b = hist_at(i + 1);
@@ -652,8 +670,7 @@ void recon_engine::finish_rows() {
         if (ring_any_invalid_[r] || no_height_fibers_ > 0) {
             for (std::size_t k = 0; k < K_; ++k) {
                 const double last = std::max(last_valid_s_[k], all_valid_s_);
-                if ((fl[k] & FLT_FLAG_INVALID_INPUT) && last < s &&
-                    last_s_ - last > p_.max_gap)
+                if ((fl[k] & FLT_FLAG_INVALID_INPUT) && last < s && last_s_ - last > p_.max_gap)
                     fl[k] |= FLT_FLAG_GAP;  // the run is still open and long
                 if (!has_height_[k]) {
                     z[k] = std::numeric_limits<double>::quiet_NaN();
@@ -701,7 +718,8 @@ void recon_engine::finish_row(double s, std::size_t nbad, HeightOk h_ok, SlopeOk
         if (!(prev_row_all_valid_ && s - all_valid_s_ <= p_.max_gap))
             for (std::size_t k = 0; k < K_; ++k) {
                 const double last = std::max(last_valid_s_[k], all_valid_s_);
-                if (s - last > p_.max_gap) mark_gap(k, last);
+                if (s - last > p_.max_gap)
+                    mark_gap(k, last);
             }
         all_valid_s_ = s;
         prev_row_all_valid_ = true;
@@ -712,9 +730,11 @@ void recon_engine::finish_row(double s, std::size_t nbad, HeightOk h_ok, SlopeOk
     } else {
         for (std::size_t k = 0; k < K_; ++k) {
             const bool hok = h_ok(k);
-            if (!(hok || g_ok(k))) continue;
+            if (!(hok || g_ok(k)))
+                continue;
             const double last = std::max(last_valid_s_[k], all_valid_s_);
-            if (s - last > p_.max_gap) mark_gap(k, last);
+            if (s - last > p_.max_gap)
+                mark_gap(k, last);
             last_valid_s_[k] = s;
             if (hok && !has_height_[k]) {
                 has_height_[k] = 1;
@@ -767,9 +787,9 @@ void recon_engine::row_coefficients(double s, long i1, double *ch, double *cg) c
 }
 
 void recon_engine::push_row(double s, const double *height, const double *slope,
-                            const std::uint8_t *valid, const double *mult_h,
-                            const double *mult_g) {
-    if (!have_t0_) begin_strip(s);
+                            const std::uint8_t *valid, const double *mult_h, const double *mult_g) {
+    if (!have_t0_)
+        begin_strip(s);
 
     const double p1 = s - 0.5 * D_;
     const long i1 = interval_of(p1);
@@ -815,8 +835,8 @@ void recon_engine::push_row(double s, const double *height, const double *slope,
         std::size_t counts[2];
         (valid ? weighted_row6_masked : weighted_row6)(
             K_, D_, height, slope, valid, mult_h ? mult_h : ones_.data(),
-            mult_g ? mult_g : ones_.data(), wh_.data(), wg_.data(), ch, cg, r, r + K_,
-            r + 2 * K_, r + 3 * K_, r + 4 * K_, r + 5 * K_, dh6, dg6, counts);
+            mult_g ? mult_g : ones_.data(), wh_.data(), wg_.data(), ch, cg, r, r + K_, r + 2 * K_,
+            r + 3 * K_, r + 4 * K_, r + 5 * K_, dh6, dg6, counts);
         nbad = counts[0];
         affected6 = counts[1];
         fused6 = true;
@@ -885,13 +905,15 @@ void recon_engine::push_row(double s, const double *height, const double *slope,
             bad_.push_back(-1);  // marks "some fiber": only emptiness is read
         } else if (affected > 0) {
             for (std::size_t k = 0; k < K_; ++k) {
-                if (dh[k] == 0.0 && dg[k] == 0.0) continue;
+                if (dh[k] == 0.0 && dg[k] == 0.0)
+                    continue;
                 bad_.push_back(int(k));
                 for (int e = 0; e < entries; ++e)
                     down_[entry[e] * K_ + k] += dh[k] * chh[e] + dg[k] * cgg[e];
             }
         }
-        if (!bad_.empty()) bad_fibers_seen_ = true;
+        if (!bad_.empty())
+            bad_fibers_seen_ = true;
     }
 
     finish_row(s, nbad, h_ok, g_ok);
@@ -903,21 +925,24 @@ void recon_engine::mark_gap(std::size_t k, double from) {
     const std::size_t cap = p_.row_capacity;
     for (std::size_t i = tail_; i > head_; --i) {
         const std::size_t r = (i - 1) % cap;
-        if (ring_s_[r] <= from) break;
+        if (ring_s_[r] <= from)
+            break;
         std::uint8_t &f = ring_flags_[r * K_ + k];
-        if (f & FLT_FLAG_INVALID_INPUT) f |= FLT_FLAG_GAP;
+        if (f & FLT_FLAG_INVALID_INPUT)
+            f |= FLT_FLAG_GAP;
     }
 }
 
-std::size_t recon_engine::pull(std::size_t max_rows, double *s_out,
-                               double *z_out, std::uint8_t *flags_out) {
+std::size_t recon_engine::pull(std::size_t max_rows, double *s_out, double *z_out,
+                               std::uint8_t *flags_out) {
     const std::size_t cap = p_.row_capacity;
     const std::size_t n = std::min(max_rows, ready_ - head_);
     for (std::size_t i = 0; i < n; ++i) {
         const std::size_t r = (head_ + i) % cap;
         s_out[i] = ring_s_[r];
         std::copy_n(ring_z_ + r * K_, K_, z_out + i * K_);
-        if (flags_out) std::copy_n(ring_flags_ + r * K_, K_, flags_out + i * K_);
+        if (flags_out)
+            std::copy_n(ring_flags_ + r * K_, K_, flags_out + i * K_);
     }
     head_ += n;
     return n;
@@ -948,18 +973,21 @@ void recon_engine::reset() {
 }
 
 bool recon_engine::predict(double s, double *height_out, double *dslope_out) const {
-    if (!have_t0_) return false;
+    if (!have_t0_)
+        return false;
     const double p1 = s - 0.5 * D_, p2 = s + 0.5 * D_;
     const long i1 = interval_of(p1);
     const long i2 = std::min(interval_of(p2), i1 + S_ - 2);
     const long needed = i2 + 1;
-    if (needed > last_emitted_ && !(solved_fresh_ && needed <= solved_upto_)) return false;
-    if (i1 <= w0_ + S_ - 1 - long(hist_cap_)) return false;  // overwritten in the ring
+    if (needed > last_emitted_ && !(solved_fresh_ && needed <= solved_upto_))
+        return false;
+    if (i1 <= w0_ + S_ - 1 - long(hist_cap_))
+        return false;  // overwritten in the ring
     double b1[4], b2[4];
     basis(p1, i1, b1);
     basis(p2, i2, b2);
-    predict_row(K_, b1, b2, hist_at(i1), hist_at(i1 + 1), hist_at(i2), hist_at(i2 + 1),
-                height_out, dslope_out);
+    predict_row(K_, b1, b2, hist_at(i1), hist_at(i1 + 1), hist_at(i2), hist_at(i2 + 1), height_out,
+                dslope_out);
     return true;
 }
 
@@ -972,18 +1000,21 @@ void recon_engine::save_solution(double *out, double *t0_out) const {
     *t0_out = t0_;
 }
 
-void recon_engine::predict_saved(const double *saved, double saved_t0, double s,
-                                 double *height_out, double *dslope_out) const {
+void recon_engine::predict_saved(const double *saved, double saved_t0, double s, double *height_out,
+                                 double *dslope_out) const {
     // The saved sheet's knot grid: the same as predict() on it, without the
     // checks (every knot under a row of that sheet was solved at its end).
     const double p1 = s - 0.5 * D_, p2 = s + 0.5 * D_;
     const long i1 = interval_on(saved_t0, p1);
     const long i2 = std::min(interval_on(saved_t0, p2), i1 + S_ - 2);
-    if (i1 < 0) throw error(FLT_ERR_INTERNAL, "predict_saved before the saved sheet");
+    if (i1 < 0)
+        throw error(FLT_ERR_INTERNAL, "predict_saved before the saved sheet");
     double b1[4], b2[4];
     basis_on(saved_t0, p1, i1, b1);
     basis_on(saved_t0, p2, i2, b2);
-    auto at = [&](long j) { return saved + (std::size_t(j) % hist_cap_) * 2 * K_; };
+    auto at = [&](long j) {
+        return saved + (std::size_t(j) % hist_cap_) * 2 * K_;
+    };
     predict_row(K_, b1, b2, at(i1), at(i1 + 1), at(i2), at(i2 + 1), height_out, dslope_out);
 }
 
@@ -993,12 +1024,14 @@ void recon_engine::set_keep_rows(bool keep) {
     keep_rows_ = keep;
 }
 
-void recon_engine::boundary(double *s_out, double *height_out,
-                            double *slope_out) const {
-    if (s_out) *s_out = bc_s_;
-    if (height_out) std::copy_n(bc_z_.data(), K_, height_out);
+void recon_engine::boundary(double *s_out, double *height_out, double *slope_out) const {
+    if (s_out)
+        *s_out = bc_s_;
+    if (height_out)
+        std::copy_n(bc_z_.data(), K_, height_out);
     if (slope_out)
-        for (std::size_t k = 0; k < K_; ++k) slope_out[k] = bc_m_[k] / L_;
+        for (std::size_t k = 0; k < K_; ++k)
+            slope_out[k] = bc_m_[k] / L_;
 }
 
 }  // namespace flt

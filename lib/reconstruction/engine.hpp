@@ -54,8 +54,8 @@ struct recon_params {
     double slope_sigma = 1e-3;     // mm/mm
     double curvature_weight = 1e-3;
     double curvature_jump_weight = 10.0;
-    double max_gap = 200.0;        // mm
-    long lag_knots = 40;           // batch: no_lag
+    double max_gap = 200.0;  // mm
+    long lag_knots = 40;     // batch: no_lag
     std::size_t row_capacity = 4096;
 
     // Knots are emitted in groups: one back-substitution through the lag
@@ -70,16 +70,16 @@ struct recon_params {
 };
 
 class recon_engine {
-public:
+  public:
     // knot_capacity: the most knots that can be eliminated but not yet emitted;
     // for streaming lag_knots + 2, for batch the sheet's knot count.
     // z_store/flags_store: caller storage for the row ring (batch writes
     // straight into the caller's output), or nullptr to own it.
     // keep_rows = false: an intermediate stage of a robust chain, whose
     // rows are never pulled; it keeps no row ring at all.
-    recon_engine(std::size_t fibers, const recon_params &params,
-                 std::size_t knot_capacity, double *z_store = nullptr,
-                 std::uint8_t *flags_store = nullptr, bool keep_rows = true);
+    recon_engine(std::size_t fibers, const recon_params &params, std::size_t knot_capacity,
+                 double *z_store = nullptr, std::uint8_t *flags_store = nullptr,
+                 bool keep_rows = true);
 
     std::size_t fibers() const { return K_; }
     const recon_params &params() const { return p_; }
@@ -97,17 +97,15 @@ public:
     // One row; arguments already validated (s increasing, sizes right).
     // mult_h, mult_g: per-fiber multipliers of this row's height and slope
     // weights in [0, 1] (robust down-weighting), or nullptr for 1.
-    void push_row(double s, const double *height, const double *slope,
-                  const std::uint8_t *valid, const double *mult_h = nullptr,
-                  const double *mult_g = nullptr);
+    void push_row(double s, const double *height, const double *slope, const std::uint8_t *valid,
+                  const double *mult_h = nullptr, const double *mult_g = nullptr);
     // Per-fiber weights 1/sigma^2 of heights (mm^-2) and of Delta-d * slope;
     // they take effect at the next knot elimination.
     void set_fiber_weights(const double *wh, const double *wg);
     double default_height_weight() const { return w_h_; }
     double default_slope_weight() const { return w_g_; }
     // Copies up to max_rows ready rows out; returns how many.
-    std::size_t pull(std::size_t max_rows, double *s_out, double *z_out,
-                     std::uint8_t *flags_out);
+    std::size_t pull(std::size_t max_rows, double *s_out, double *z_out, std::uint8_t *flags_out);
     void end_sheet();
     void reset();
     // The carried boundary knot.
@@ -135,8 +133,7 @@ public:
                        double *dslope_out) const;
     void set_keep_rows(bool keep);
 
-
-private:
+  private:
     // ---- geometry ----
     long interval_of(double p) const { return interval_on(t0_, p); }  // knot interval of p
     double knot_pos(long j) const { return t0_ + double(j) * L_; }
@@ -158,25 +155,27 @@ private:
     void finish_row(double s, std::size_t nbad, HeightOk hok, SlopeOk gok);
 
     // ---- window management ----
-    void start_window(long first_knot);     // empty window at first_knot
-    void add_priors_for_knot(long j);       // priors that complete with knot j
+    void start_window(long first_knot);  // empty window at first_knot
+    void add_priors_for_knot(long j);    // priors that complete with knot j
     void clear_shared();
     void apply_pending_weights();
-    void assemble_entry(int r, int c);      // work = W(r, c) for every fiber
+    void assemble_entry(int r, int c);  // work = W(r, c) for every fiber
     void add_row_geometry(const double *ch, const double *cg, int off);
-    void add_rank1_prior(const long *knot, const int *unit, const double *coef,
-                         int count, double weight);
-    void close_knot();                      // eliminate knot w0_
-    void maybe_emit();                      // emit knots whose lag is reached
+    void add_rank1_prior(const long *knot, const int *unit, const double *coef, int count,
+                         double weight);
+    void close_knot();  // eliminate knot w0_
+    void maybe_emit();  // emit knots whose lag is reached
     long emit_group() const { return p_.emit_group(); }
-    void emit_upto(long last);              // solve and emit knots <= last
-    void finish_rows();                     // evaluate rows now determined
+    void emit_upto(long last);  // solve and emit knots <= last
+    void finish_rows();         // evaluate rows now determined
     void mark_gap(std::size_t fiber, double from);
-    double *hist_at(long j);                // state (z, m) of knot j, [2][K]
+    double *hist_at(long j);  // state (z, m) of knot j, [2][K]
     const double *hist_at(long j) const;
 
     // Per-fiber symmetric window matrix W = schur + R - down, packed upper.
-    std::size_t tri(int r, int c) const { return std::size_t(r) * n_ - std::size_t(r) * (r - 1) / 2 + std::size_t(c - r); }
+    std::size_t tri(int r, int c) const {
+        return std::size_t(r) * n_ - std::size_t(r) * (r - 1) / 2 + std::size_t(c - r);
+    }
     double *fiber_entry(std::vector<double> &v, std::size_t entry) { return v.data() + entry * K_; }
 
     // ---- sizes ----
@@ -192,11 +191,11 @@ private:
     // ---- knot state ----
     bool have_t0_ = false;
     double t0_ = 0.0;
-    long w0_ = 0;           // first open knot (window start)
-    long next_emit_ = 0;    // first knot not emitted yet
+    long w0_ = 0;         // first open knot (window start)
+    long next_emit_ = 0;  // first knot not emitted yet
     long last_emitted_ = -1;
-    long fixed_upto_ = -1;  // knots <= this are hard boundary conditions
-    bool anchored_ = false; // a boundary condition has been carried
+    long fixed_upto_ = -1;   // knots <= this are hard boundary conditions
+    bool anchored_ = false;  // a boundary condition has been carried
 
     // Shared, unweighted contributions since the last elimination, n x n
     // dense: the rows' height and slope outer products, and the priors (in
@@ -205,29 +204,29 @@ private:
     std::vector<double> Rh_, Rg_, Rp_;
     std::vector<double> wh_, wg_, next_wh_, next_wg_;
     bool weights_pending_ = false;
-    std::vector<double> schur_;  // [ntri][K]
-    std::vector<double> down_;   // [ntri][K]
-    std::vector<double> rhs_;    // [n][K]
-    bool bad_fibers_seen_ = false;        // down_ is non-zero
+    std::vector<double> schur_;     // [ntri][K]
+    std::vector<double> down_;      // [ntri][K]
+    std::vector<double> rhs_;       // [n][K]
+    bool bad_fibers_seen_ = false;  // down_ is non-zero
 
     std::size_t factor_cap_;
     std::vector<double> factor_;  // ring [factor_cap][nf][K]
     std::size_t hist_cap_;
-    std::vector<double> hist_;    // ring of knot states [hist_cap][2][K]
+    std::vector<double> hist_;  // ring of knot states [hist_cap][2][K]
 
     // ---- scratch (allocated once) ----
-    std::vector<double> work_;    // [ntri][K]
-    std::vector<double> xwin_;    // [n][K]
-    std::vector<double> hv_, gv_; // per fiber masked measurements
-    std::vector<double> hm_, gm_; // per fiber effective weight multipliers
+    std::vector<double> work_;     // [ntri][K]
+    std::vector<double> xwin_;     // [n][K]
+    std::vector<double> hv_, gv_;  // per fiber masked measurements
+    std::vector<double> hm_, gm_;  // per fiber effective weight multipliers
     std::vector<double> ones_;
-    std::vector<int> bad_;        // fibers with an invalid sample this row
+    std::vector<int> bad_;  // fibers with an invalid sample this row
 
     // ---- per fiber bookkeeping ----
-    double bc_s_ = 0.0;           // carried boundary knot
+    double bc_s_ = 0.0;  // carried boundary knot
     std::vector<double> bc_z_, bc_m_;
-    std::vector<double> last_valid_s_;   // see all_valid_s_
-    double all_valid_s_ = 0.0;           // last row with every fiber valid
+    std::vector<double> last_valid_s_;  // see all_valid_s_
+    double all_valid_s_ = 0.0;          // last row with every fiber valid
     bool prev_row_all_valid_ = false;
     std::vector<std::uint8_t> has_height_;  // a valid height since reset
     std::size_t no_height_fibers_ = 0;
@@ -241,9 +240,9 @@ private:
     std::uint8_t *ring_flags_;
     std::size_t head_ = 0, ready_ = 0, tail_ = 0;  // monotonic counters
     bool keep_rows_ = true;
-    bool has_row_ring_ = true;    // constructed with keep_rows
-    long solved_upto_ = -1;       // knots in hist_ solved at the last solve
-    bool solved_fresh_ = false;   // no row pushed since that solve
+    bool has_row_ring_ = true;   // constructed with keep_rows
+    long solved_upto_ = -1;      // knots in hist_ solved at the last solve
+    bool solved_fresh_ = false;  // no row pushed since that solve
     double last_s_ = 0.0;
     std::size_t rows_in_sheet_ = 0;
     double sheet_first_s_ = 0.0;

@@ -22,15 +22,17 @@ constexpr double k_max_prediction_mm = 10.0;
 // A fiber index as a double, through a 32-bit integer: AVX2 converts those
 // in one vector instruction, 64-bit ones not at all (the loops would stay
 // scalar). The constructor refuses more fibers than that.
-inline double fiber_index(std::size_t k) { return double(static_cast<std::int32_t>(k)); }
+inline double fiber_index(std::size_t k) {
+    return double(static_cast<std::int32_t>(k));
+}
 
 // The per-row kernels of the split are built for baseline x86-64 and for
 // AVX2 (no FMA, so every rounding is the same on every machine), as in
 // engine.cpp.
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
-#define FLT_SPLIT_KERNEL __attribute__((target_clones("avx2", "default")))
+#  define FLT_SPLIT_KERNEL __attribute__((target_clones("avx2", "default")))
 #else
-#define FLT_SPLIT_KERNEL
+#  define FLT_SPLIT_KERNEL
 #endif
 
 // True when every value is a sample (finite, at most k_max_sample in
@@ -48,7 +50,8 @@ FLT_SPLIT_KERNEL bool row_complete(std::size_t K, const double *__restrict value
     }
     if (valid) {
         unsigned missing = 0;
-        for (std::size_t k = 0; k < K; ++k) missing |= valid[k] == 0 ? 1u : 0u;
+        for (std::size_t k = 0; k < K; ++k)
+            missing |= valid[k] == 0 ? 1u : 0u;
         bad |= missing;
     }
     return bad == 0;
@@ -63,7 +66,9 @@ FLT_SPLIT_KERNEL bool row_complete(std::size_t K, const double *__restrict value
 // the machine has (GCC's vector extension fixes the lanes).
 typedef double v4d __attribute__((vector_size(32)));
 
-inline void load4(v4d &v, const double *p) { std::memcpy(&v, p, sizeof v); }
+inline void load4(v4d &v, const double *p) {
+    std::memcpy(&v, p, sizeof v);
+}
 
 FLT_SPLIT_KERNEL void line_sums(std::size_t K, double centre, const double *__restrict v,
                                 const double *__restrict ok, double out[5]) {
@@ -116,7 +121,8 @@ FLT_SPLIT_KERNEL void line_sums(std::size_t K, double centre, const double *__re
 // Deviations of a row from the line a + b * xi, every fiber.
 FLT_SPLIT_KERNEL void line_deviations(std::size_t K, double centre, double a, double b,
                                       const double *__restrict value, double *__restrict dev) {
-    for (std::size_t k = 0; k < K; ++k) dev[k] = value[k] - (a + b * (fiber_index(k) - centre));
+    for (std::size_t k = 0; k < K; ++k)
+        dev[k] = value[k] - (a + b * (fiber_index(k) - centre));
 }
 }  // namespace
 
@@ -125,9 +131,8 @@ recon_pipeline::recon_pipeline(std::size_t fibers, const recon_config &config,
                                std::uint8_t *flags_store, bool batch)
     : K_(fibers), config_(config) {
     if (!config_.rigid_motion) {
-        main_ = std::make_unique<recon_chain>(K_, config_.params, config_.robust,
-                                              knot_capacity, z_store, flags_store,
-                                              batch);
+        main_ = std::make_unique<recon_chain>(K_, config_.params, config_.robust, knot_capacity,
+                                              z_store, flags_store, batch);
         return;
     }
     recon_params dev = config_.params;
@@ -157,10 +162,10 @@ recon_pipeline::recon_pipeline(std::size_t fibers, const recon_config &config,
     tilt.slope_sigma = config_.params.slope_sigma / std::sqrt(sum_xi2);
     robust_params line_robust = config_.robust;
     line_robust.iterations = config_.line_iterations;
-    offset_ = std::make_unique<recon_chain>(1, offset, line_robust, knot_capacity, nullptr,
-                                            nullptr, batch);
-    tilt_ = std::make_unique<recon_chain>(1, tilt, line_robust, knot_capacity, nullptr,
-                                          nullptr, batch);
+    offset_ = std::make_unique<recon_chain>(1, offset, line_robust, knot_capacity, nullptr, nullptr,
+                                            batch);
+    tilt_ =
+        std::make_unique<recon_chain>(1, tilt, line_robust, knot_capacity, nullptr, nullptr, batch);
 
     dev_h_.assign(K_, 0.0);
     dev_g_.assign(K_, 0.0);
@@ -176,8 +181,8 @@ recon_pipeline::recon_pipeline(std::size_t fibers, const recon_config &config,
     line_s_.assign(config_.params.row_capacity, 0.0);
 }
 
-void recon_pipeline::split(double s, const double *value, const std::uint8_t *valid,
-                           bool is_height, double *a, double *b, double *dev) {
+void recon_pipeline::split(double s, const double *value, const std::uint8_t *valid, bool is_height,
+                           double *a, double *b, double *dev) {
     std::vector<double> &last = is_height ? last_dev_h_ : last_dev_g_;
     std::vector<std::uint8_t> &has = is_height ? has_dev_h_ : has_dev_g_;
     const double centre = 0.5 * double(K_ - 1);
@@ -201,7 +206,8 @@ void recon_pipeline::split(double s, const double *value, const std::uint8_t *va
                 v = value[k];
             } else if (has[k] && s - last_dev_s_[k] <= k_max_prediction_mm) {
                 v = last[k];  // moved on by its slope deviation
-                if (is_height && has_dev_g_[k]) v += last_dev_g_[k] * (s - last_dev_s_[k]);
+                if (is_height && has_dev_g_[k])
+                    v += last_dev_g_[k] * (s - last_dev_s_[k]);
             }
             ok_[k] = ok ? 1.0 : 0.0;
             fill_[k] = v;
@@ -229,7 +235,8 @@ void recon_pipeline::split(double s, const double *value, const std::uint8_t *va
             std::fill(has.begin(), has.end(), 1);
             has_all_[is_height ? 0 : 1] = true;
         }
-        if (is_height) std::fill(last_dev_s_.begin(), last_dev_s_.end(), s);
+        if (is_height)
+            std::fill(last_dev_s_.begin(), last_dev_s_.end(), s);
         return;
     }
     for (std::size_t k = 0; k < K_; ++k) {
@@ -238,7 +245,8 @@ void recon_pipeline::split(double s, const double *value, const std::uint8_t *va
         if (ok) {
             last[k] = dev[k];
             has[k] = 1;
-            if (is_height) last_dev_s_[k] = s;
+            if (is_height)
+                last_dev_s_[k] = s;
         }
     }
 }
@@ -273,7 +281,8 @@ void recon_pipeline::add_lines(std::size_t rows, const double *a, const double *
         const double ar = std::isfinite(a[r]) ? a[r] : 0.0;
         const double br = std::isfinite(b[r]) ? b[r] : 0.0;
         double *zr = z + r * K_;
-        for (std::size_t k = 0; k < K_; ++k) zr[k] += ar + br * xi(k);
+        for (std::size_t k = 0; k < K_; ++k)
+            zr[k] += ar + br * xi(k);
     }
 }
 
@@ -305,7 +314,8 @@ void recon_pipeline::batch(std::size_t rows, const double *s, const double *heig
     // as they weigh them (cheaper than keeping a whole sheet of deviations,
     // or recomputing them in a pass of their own). Then the line channels
     // take the lines.
-    for (auto *v : {&batch_ha_, &batch_hb_, &batch_ga_, &batch_gb_}) v->assign(rows, 0.0);
+    for (auto *v : {&batch_ha_, &batch_hb_, &batch_ga_, &batch_gb_})
+        v->assign(rows, 0.0);
     has_all_[0] = has_all_[1] = false;
     std::fill(has_dev_h_.begin(), has_dev_h_.end(), 0);
     std::fill(has_dev_g_.begin(), has_dev_g_.end(), 0);
@@ -330,7 +340,9 @@ void recon_pipeline::batch(std::size_t rows, const double *s, const double *heig
                 return;
             }
             // The caller's row, and its line to take off (NaN: unseen, 0).
-            auto or0 = [](double x) { return std::isnan(x) ? 0.0 : x; };
+            auto or0 = [](double x) {
+                return std::isnan(x) ? 0.0 : x;
+            };
             line[0] = or0(p.batch_ha_[r]);
             line[1] = or0(p.batch_hb_[r]);
             line[2] = or0(p.batch_ga_[r]);
@@ -350,8 +362,8 @@ void recon_pipeline::batch(std::size_t rows, const double *s, const double *heig
 
     struct line_rows final : row_source {
         const double *h, *g;
-        void row(int, std::size_t r, const double **ho, const double **go,
-                 const std::uint8_t **vo, double *) override {
+        void row(int, std::size_t r, const double **ho, const double **go, const std::uint8_t **vo,
+                 double *) override {
             *ho = h + r;  // one fiber; NaN where the line is unseen
             *go = g + r;
             *vo = nullptr;
@@ -372,26 +384,30 @@ void recon_pipeline::batch(std::size_t rows, const double *s, const double *heig
 
 std::size_t recon_pipeline::free_rows() const {
     std::size_t n = main_->free_rows();
-    if (offset_) n = std::min({n, offset_->free_rows(), tilt_->free_rows()});
+    if (offset_)
+        n = std::min({n, offset_->free_rows(), tilt_->free_rows()});
     return n;
 }
 
 long recon_pipeline::latency_knots() const {
     long knots = main_->latency_knots();
-    if (offset_) knots = std::max({knots, offset_->latency_knots(), tilt_->latency_knots()});
+    if (offset_)
+        knots = std::max({knots, offset_->latency_knots(), tilt_->latency_knots()});
     return knots;
 }
 
 std::size_t recon_pipeline::ready_rows() const {
     std::size_t n = main_->ready_rows();
-    if (offset_) n = std::min({n, offset_->ready_rows(), tilt_->ready_rows()});
+    if (offset_)
+        n = std::min({n, offset_->ready_rows(), tilt_->ready_rows()});
     return n;
 }
 
 std::size_t recon_pipeline::pull(std::size_t max_rows, double *s_out, double *z_out,
                                  std::uint8_t *flags_out) {
     const std::size_t n = main_->pull(std::min(max_rows, ready_rows()), s_out, z_out, flags_out);
-    if (!config_.rigid_motion || n == 0) return n;
+    if (!config_.rigid_motion || n == 0)
+        return n;
     // The line engines have finished these rows too (ready_rows).
     if (offset_->pull(n, line_s_.data(), line_a_.data(), nullptr) != n ||
         tilt_->pull(n, line_s_.data(), line_b_.data(), nullptr) != n)
@@ -402,26 +418,33 @@ std::size_t recon_pipeline::pull(std::size_t max_rows, double *s_out, double *z_
 
 void recon_pipeline::end_sheet() {
     main_->end_sheet();
-    if (offset_) offset_->end_sheet();
-    if (tilt_) tilt_->end_sheet();
+    if (offset_)
+        offset_->end_sheet();
+    if (tilt_)
+        tilt_->end_sheet();
 }
 
 void recon_pipeline::reset() {
     new_strip_ = true;
     main_->reset();
-    if (offset_) offset_->reset();
-    if (tilt_) tilt_->reset();
+    if (offset_)
+        offset_->reset();
+    if (tilt_)
+        tilt_->reset();
 }
 
 void recon_pipeline::boundary(double *s_out, double *height_out, double *slope_out) const {
     main_->boundary(s_out, height_out, slope_out);
-    if (!config_.rigid_motion) return;
+    if (!config_.rigid_motion)
+        return;
     double a = 0, b = 0, ga = 0, gb = 0;
     offset_->boundary(nullptr, &a, &ga);
     tilt_->boundary(nullptr, &b, &gb);
     for (std::size_t k = 0; k < K_; ++k) {
-        if (height_out) height_out[k] += a + b * xi(k);
-        if (slope_out) slope_out[k] += ga + gb * xi(k);
+        if (height_out)
+            height_out[k] += a + b * xi(k);
+        if (slope_out)
+            slope_out[k] += ga + gb * xi(k);
     }
 }
 

@@ -38,8 +38,8 @@
 namespace flt {
 
 struct recon_config {
-    recon_params params;       // the main (or only) engine's parameters
-    robust_params robust;      // robust reweighting of every channel
+    recon_params params;   // the main (or only) engine's parameters
+    robust_params robust;  // robust reweighting of every channel
     // With rigid_motion, the reweighted stages of the line channels, which
     // carry the shear station's ringing (it hits every fiber alike); they
     // are one value per row, so their stages cost next to nothing.
@@ -49,11 +49,11 @@ struct recon_config {
 };
 
 class recon_pipeline {
-public:
+  public:
     // batch: made for batch(), whose rows go to z_store / flags_store.
-    recon_pipeline(std::size_t fibers, const recon_config &config,
-                   std::size_t knot_capacity, double *z_store = nullptr,
-                   std::uint8_t *flags_store = nullptr, bool batch = false);
+    recon_pipeline(std::size_t fibers, const recon_config &config, std::size_t knot_capacity,
+                   double *z_store = nullptr, std::uint8_t *flags_store = nullptr,
+                   bool batch = false);
 
     std::size_t fibers() const { return K_; }
     const recon_config &config() const { return config_; }
@@ -70,26 +70,23 @@ public:
     bool pushed_since_reset() const { return main_->pushed_since_reset(); }
     bool has_boundary() const { return main_->has_boundary(); }
 
-    void push_row(double s, const double *height, const double *slope,
-                  const std::uint8_t *valid);
-    std::size_t pull(std::size_t max_rows, double *s_out, double *z_out,
-                     std::uint8_t *flags_out);
+    void push_row(double s, const double *height, const double *slope, const std::uint8_t *valid);
+    std::size_t pull(std::size_t max_rows, double *s_out, double *z_out, std::uint8_t *flags_out);
     void end_sheet();
     void reset();
     void boundary(double *s_out, double *height_out, double *slope_out) const;
     // Batch use (flt_reconstruct): the whole sheet, into z_store (rows
     // 0..rows-1, the row capacity) and flags_store. valid may be nullptr.
-    void batch(std::size_t rows, const double *s, const double *height,
-               const double *slope, const std::uint8_t *valid, double *z_store);
+    void batch(std::size_t rows, const double *s, const double *height, const double *slope,
+               const std::uint8_t *valid, double *z_store);
 
-private:
+  private:
     // Through a 32-bit integer, which vectorises (fibers < 2^31, recon_api.cpp).
     double xi(std::size_t k) const { return double(std::int32_t(k)) - 0.5 * double(K_ - 1); }
     // Splits one kind of measurement (heights or slopes) of a row.
-    void split(double s, const double *value, const std::uint8_t *valid,
-               bool is_height, double *a, double *b, double *dev);
-    void add_lines(std::size_t rows, const double *a, const double *b,
-                   double *z) const;
+    void split(double s, const double *value, const std::uint8_t *valid, bool is_height, double *a,
+               double *b, double *dev);
+    void add_lines(std::size_t rows, const double *a, const double *b, double *z) const;
 
     std::size_t K_;
     recon_config config_;

@@ -39,8 +39,7 @@ struct flt_recon {
 
 namespace {
 
-flt_status read_params(const char *fn, const flt_options *options,
-                       recon_config *out) {
+flt_status read_params(const char *fn, const flt_options *options, recon_config *out) {
     recon_config config;
     recon_params &p = config.params;
     p.laser_spacing = option_value(options, FLT_OPT_LASER_SPACING);
@@ -62,8 +61,7 @@ flt_status read_params(const char *fn, const flt_options *options,
         return fail(FLT_ERR_INVALID_ARGUMENT,
                     "%s: knot_spacing = %g mm is more than %g times finer than "
                     "laser_spacing = %g mm",
-                    fn, p.knot_spacing, k_max_knots_per_laser_spacing,
-                    p.laser_spacing);
+                    fn, p.knot_spacing, k_max_knots_per_laser_spacing, p.laser_spacing);
     *out = config;
     return FLT_OK;
 }
@@ -72,16 +70,16 @@ flt_status check_handle(const char *fn, const flt_recon *recon) {
     if (recon == nullptr)
         return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'recon' is NULL", fn);
     if (recon->magic != k_recon_magic || !recon->engine)
-        return fail(FLT_ERR_INVALID_ARGUMENT,
-                    "%s: argument 'recon' is not a live flt_recon handle", fn);
+        return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'recon' is not a live flt_recon handle",
+                    fn);
     return FLT_OK;
 }
 
 flt_status check_fibers(const char *fn, std::size_t fibers, std::size_t expected) {
     if (fibers != expected)
         return fail(FLT_ERR_INVALID_ARGUMENT,
-                    "%s: argument 'fibers' = %zu but the reconstructor has %zu",
-                    fn, fibers, expected);
+                    "%s: argument 'fibers' = %zu but the reconstructor has %zu", fn, fibers,
+                    expected);
     return FLT_OK;
 }
 
@@ -97,8 +95,7 @@ flt_status check_shape(const char *fn, std::size_t rows, std::size_t fibers) {
         return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'fibers' is 0", fn);
     if (rows > std::numeric_limits<std::size_t>::max() / sizeof(double) / fibers)
         return fail(FLT_ERR_INVALID_ARGUMENT,
-                    "%s: rows * fibers = %zu * %zu overflows the address space",
-                    fn, rows, fibers);
+                    "%s: rows * fibers = %zu * %zu overflows the address space", fn, rows, fibers);
     if (fibers > k_max_fibers)
         return fail(FLT_ERR_INVALID_ARGUMENT,
                     "%s: argument 'fibers' = %zu is too large (at most %zu)", fn, fibers,
@@ -107,13 +104,12 @@ flt_status check_shape(const char *fn, std::size_t rows, std::size_t fibers) {
 }
 
 // Positions finite, strictly increasing, and continuing after `previous`.
-flt_status check_positions(const char *fn, std::size_t rows, const double *s,
-                           bool has_previous, double previous, double knot_spacing) {
+flt_status check_positions(const char *fn, std::size_t rows, const double *s, bool has_previous,
+                           double previous, double knot_spacing) {
     const double max_jump = std::min(k_max_jump_mm, k_max_jump_knots * knot_spacing);
     for (std::size_t r = 0; r < rows; ++r) {
         if (!std::isfinite(s[r]))
-            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: s[%zu] = %g is not finite",
-                        fn, r, s[r]);
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: s[%zu] = %g is not finite", fn, r, s[r]);
         const bool has_prev = r > 0 || has_previous;
         const double prev = r > 0 ? s[r - 1] : previous;
         if (has_prev && !(s[r] > prev))
@@ -142,8 +138,7 @@ flt_status check_push_arrays(const char *fn, const double *s, const double *heig
 
 extern "C" {
 
-FLT_API flt_status FLT_CALL flt_recon_create(size_t fibers,
-                                             const flt_options *options,
+FLT_API flt_status FLT_CALL flt_recon_create(size_t fibers, const flt_options *options,
                                              flt_recon **out) {
     const char *fn = "flt_recon_create";
     return guard(fn, [&] {
@@ -156,15 +151,15 @@ FLT_API flt_status FLT_CALL flt_recon_create(size_t fibers,
                         "%s: argument 'fibers' = %zu is too large (at most %zu)", fn, fibers,
                         k_max_fibers);
         recon_config config;
-        if (flt_status st = read_params(fn, options, &config)) return st;
+        if (flt_status st = read_params(fn, options, &config))
+            return st;
         const recon_params &p = config.params;
         if (check_shape(fn, p.row_capacity, fibers) != FLT_OK)
             return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: row_capacity * fibers = %zu * %zu is too large", fn,
-                        p.row_capacity, fibers);
+                        "%s: row_capacity * fibers = %zu * %zu is too large", fn, p.row_capacity,
+                        fibers);
         auto handle = std::make_unique<flt_recon>();
-        handle->engine = std::make_unique<recon_pipeline>(
-            fibers, config, p.knot_capacity());
+        handle->engine = std::make_unique<recon_pipeline>(fibers, config, p.knot_capacity());
         *out = handle.release();
         return FLT_OK;
     });
@@ -182,61 +177,91 @@ FLT_API void FLT_CALL flt_recon_destroy(flt_recon *recon) {
 FLT_API flt_status FLT_CALL flt_recon_fibers(const flt_recon *recon, size_t *out) {
     const char *fn = "flt_recon_fibers";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, recon)) return st;
+        if (flt_status st = check_handle(fn, recon))
+            return st;
         FLT_CHECK_NOT_NULL(fn, out);
         *out = recon->engine->fibers();
         return FLT_OK;
     });
 }
 
-FLT_API flt_status FLT_CALL flt_recon_get_option(const flt_recon *recon,
-                                                 flt_option key, double *out) {
+FLT_API flt_status FLT_CALL flt_recon_get_option(const flt_recon *recon, flt_option key,
+                                                 double *out) {
     const char *fn = "flt_recon_get_option";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, recon)) return st;
+        if (flt_status st = check_handle(fn, recon))
+            return st;
         FLT_CHECK_NOT_NULL(fn, out);
         if (enum_arg(key) < 0)
-            return fail(FLT_ERR_NOT_FOUND,
-                        "%s: option key %d is not a reconstructor option", fn,
+            return fail(FLT_ERR_NOT_FOUND, "%s: option key %d is not a reconstructor option", fn,
                         enum_arg(key));
         const recon_config &c = recon->engine->config();
         const recon_params &p = c.params;
         switch (key) {
-        case FLT_OPT_KNOT_SPACING: *out = p.knot_spacing; break;
-        case FLT_OPT_LASER_SPACING: *out = p.laser_spacing; break;
-        case FLT_OPT_HEIGHT_SIGMA: *out = p.height_sigma; break;
-        case FLT_OPT_SLOPE_SIGMA: *out = p.slope_sigma; break;
-        case FLT_OPT_CURVATURE_WEIGHT: *out = p.curvature_weight; break;
-        case FLT_OPT_CURVATURE_JUMP_WEIGHT: *out = p.curvature_jump_weight; break;
-        case FLT_OPT_LAG_KNOTS: *out = double(p.lag_knots); break;
-        case FLT_OPT_MAX_GAP: *out = p.max_gap; break;
-        case FLT_OPT_ROW_CAPACITY: *out = double(p.row_capacity); break;
-        case FLT_OPT_RIGID_MOTION: *out = c.rigid_motion ? 1.0 : 0.0; break;
-        case FLT_OPT_SHAPE_SIGMA: *out = c.shape_sigma; break;
-        case FLT_OPT_ROBUST: *out = double(int(c.robust.kind)); break;
-        case FLT_OPT_ROBUST_ITERATIONS: *out = double(c.robust.iterations); break;
-        case FLT_OPT_ROBUST_LINE_ITERATIONS: *out = double(c.line_iterations); break;
-        default:
-            return fail(FLT_ERR_NOT_FOUND,
-                        "%s: option key %d is not a reconstructor option", fn,
-                        (int)key);
+            case FLT_OPT_KNOT_SPACING:
+                *out = p.knot_spacing;
+                break;
+            case FLT_OPT_LASER_SPACING:
+                *out = p.laser_spacing;
+                break;
+            case FLT_OPT_HEIGHT_SIGMA:
+                *out = p.height_sigma;
+                break;
+            case FLT_OPT_SLOPE_SIGMA:
+                *out = p.slope_sigma;
+                break;
+            case FLT_OPT_CURVATURE_WEIGHT:
+                *out = p.curvature_weight;
+                break;
+            case FLT_OPT_CURVATURE_JUMP_WEIGHT:
+                *out = p.curvature_jump_weight;
+                break;
+            case FLT_OPT_LAG_KNOTS:
+                *out = double(p.lag_knots);
+                break;
+            case FLT_OPT_MAX_GAP:
+                *out = p.max_gap;
+                break;
+            case FLT_OPT_ROW_CAPACITY:
+                *out = double(p.row_capacity);
+                break;
+            case FLT_OPT_RIGID_MOTION:
+                *out = c.rigid_motion ? 1.0 : 0.0;
+                break;
+            case FLT_OPT_SHAPE_SIGMA:
+                *out = c.shape_sigma;
+                break;
+            case FLT_OPT_ROBUST:
+                *out = double(int(c.robust.kind));
+                break;
+            case FLT_OPT_ROBUST_ITERATIONS:
+                *out = double(c.robust.iterations);
+                break;
+            case FLT_OPT_ROBUST_LINE_ITERATIONS:
+                *out = double(c.line_iterations);
+                break;
+            default:
+                return fail(FLT_ERR_NOT_FOUND, "%s: option key %d is not a reconstructor option",
+                            fn, (int)key);
         }
         return FLT_OK;
     });
 }
 
-FLT_API flt_status FLT_CALL flt_recon_push(flt_recon *recon, size_t rows,
-                                           size_t fibers, const double *s,
-                                           const double *height,
-                                           const double *slope,
-                                           const uint8_t *valid) {
+FLT_API flt_status FLT_CALL flt_recon_push(flt_recon *recon, size_t rows, size_t fibers,
+                                           const double *s, const double *height,
+                                           const double *slope, const uint8_t *valid) {
     const char *fn = "flt_recon_push";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, recon)) return st;
+        if (flt_status st = check_handle(fn, recon))
+            return st;
         recon_pipeline &e = *recon->engine;
-        if (flt_status st = check_push_arrays(fn, s, height, slope)) return st;
-        if (flt_status st = check_shape(fn, rows, fibers)) return st;
-        if (flt_status st = check_fibers(fn, fibers, e.fibers())) return st;
+        if (flt_status st = check_push_arrays(fn, s, height, slope))
+            return st;
+        if (flt_status st = check_shape(fn, rows, fibers))
+            return st;
+        if (flt_status st = check_fibers(fn, fibers, e.fibers()))
+            return st;
         if (flt_status st = check_positions(fn, rows, s, e.has_last_s(), e.last_s(),
                                             e.config().params.knot_spacing))
             return st;
@@ -253,14 +278,12 @@ FLT_API flt_status FLT_CALL flt_recon_push(flt_recon *recon, size_t rows,
                             "row_capacity or a shorter lag, or end the sheet",
                             fn, rows, knots, double(knots) * e.config().params.knot_spacing,
                             e.config().params.row_capacity,
-                            robust ? " (robust mode queues up to a quarter of it per pass)"
-                                   : "");
+                            robust ? " (robust mode queues up to a quarter of it per pass)" : "");
             }
             return fail(FLT_ERR_BUFFER_FULL,
                         "%s: %zu rows do not fit: %zu of row_capacity = %zu are "
                         "free (%zu finished rows wait to be pulled)",
-                        fn, rows, e.free_rows(), e.config().params.row_capacity,
-                        e.ready_rows());
+                        fn, rows, e.free_rows(), e.config().params.row_capacity, e.ready_rows());
         }
         for (std::size_t r = 0; r < rows; ++r)
             e.push_row(s[r], height + r * fibers, slope + r * fibers,
@@ -269,21 +292,23 @@ FLT_API flt_status FLT_CALL flt_recon_push(flt_recon *recon, size_t rows,
     });
 }
 
-FLT_API flt_status FLT_CALL flt_recon_pull(flt_recon *recon, size_t max_rows,
-                                           size_t fibers, double *s_out,
-                                           double *z_out, uint8_t *flags_out,
+FLT_API flt_status FLT_CALL flt_recon_pull(flt_recon *recon, size_t max_rows, size_t fibers,
+                                           double *s_out, double *z_out, uint8_t *flags_out,
                                            size_t *rows_out) {
     const char *fn = "flt_recon_pull";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, recon)) return st;
+        if (flt_status st = check_handle(fn, recon))
+            return st;
         recon_pipeline &e = *recon->engine;
         FLT_CHECK_NOT_NULL(fn, rows_out);
         *rows_out = 0;
-        if (flt_status st = check_fibers(fn, fibers, e.fibers())) return st;
+        if (flt_status st = check_fibers(fn, fibers, e.fibers()))
+            return st;
         if (max_rows > 0) {
             FLT_CHECK_NOT_NULL(fn, s_out);
             FLT_CHECK_NOT_NULL(fn, z_out);
-            if (flt_status st = check_shape(fn, max_rows, fibers)) return st;
+            if (flt_status st = check_shape(fn, max_rows, fibers))
+                return st;
         }
         if (!e.pushed_since_reset())
             return fail(FLT_ERR_STATE,
@@ -298,7 +323,8 @@ FLT_API flt_status FLT_CALL flt_recon_pull(flt_recon *recon, size_t max_rows,
 FLT_API flt_status FLT_CALL flt_recon_ready(const flt_recon *recon, size_t *out) {
     const char *fn = "flt_recon_ready";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, recon)) return st;
+        if (flt_status st = check_handle(fn, recon))
+            return st;
         FLT_CHECK_NOT_NULL(fn, out);
         *out = recon->engine->ready_rows();
         return FLT_OK;
@@ -308,7 +334,8 @@ FLT_API flt_status FLT_CALL flt_recon_ready(const flt_recon *recon, size_t *out)
 FLT_API flt_status FLT_CALL flt_recon_end_sheet(flt_recon *recon) {
     const char *fn = "flt_recon_end_sheet";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, recon)) return st;
+        if (flt_status st = check_handle(fn, recon))
+            return st;
         if (!recon->engine->rows_since_sheet())
             return fail(FLT_ERR_STATE,
                         "%s: no row was pushed since the last end_sheet, create "
@@ -322,21 +349,22 @@ FLT_API flt_status FLT_CALL flt_recon_end_sheet(flt_recon *recon) {
 FLT_API flt_status FLT_CALL flt_recon_reset(flt_recon *recon) {
     const char *fn = "flt_recon_reset";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, recon)) return st;
+        if (flt_status st = check_handle(fn, recon))
+            return st;
         recon->engine->reset();
         return FLT_OK;
     });
 }
 
-FLT_API flt_status FLT_CALL flt_recon_boundary(const flt_recon *recon,
-                                               size_t fibers, double *s_out,
-                                               double *height_out,
-                                               double *slope_out) {
+FLT_API flt_status FLT_CALL flt_recon_boundary(const flt_recon *recon, size_t fibers, double *s_out,
+                                               double *height_out, double *slope_out) {
     const char *fn = "flt_recon_boundary";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, recon)) return st;
+        if (flt_status st = check_handle(fn, recon))
+            return st;
         const recon_pipeline &e = *recon->engine;
-        if (flt_status st = check_fibers(fn, fibers, e.fibers())) return st;
+        if (flt_status st = check_fibers(fn, fibers, e.fibers()))
+            return st;
         if (!e.has_boundary())
             return fail(FLT_ERR_STATE,
                         "%s: no sheet has ended since the strip began, so "
@@ -347,21 +375,23 @@ FLT_API flt_status FLT_CALL flt_recon_boundary(const flt_recon *recon,
     });
 }
 
-FLT_API flt_status FLT_CALL flt_reconstruct(const flt_options *options,
-                                            size_t rows, size_t fibers,
+FLT_API flt_status FLT_CALL flt_reconstruct(const flt_options *options, size_t rows, size_t fibers,
                                             const double *s, const double *height,
-                                            const double *slope,
-                                            const uint8_t *valid, double *z_out,
-                                            uint8_t *flags_out) {
+                                            const double *slope, const uint8_t *valid,
+                                            double *z_out, uint8_t *flags_out) {
     const char *fn = "flt_reconstruct";
     return guard(fn, [&] {
-        if (flt_status st = check_push_arrays(fn, s, height, slope)) return st;
+        if (flt_status st = check_push_arrays(fn, s, height, slope))
+            return st;
         FLT_CHECK_NOT_NULL(fn, z_out);
-        if (flt_status st = check_shape(fn, rows, fibers)) return st;
+        if (flt_status st = check_shape(fn, rows, fibers))
+            return st;
         recon_config config;
-        if (flt_status st = read_params(fn, options, &config)) return st;
+        if (flt_status st = read_params(fn, options, &config))
+            return st;
         recon_params &p = config.params;
-        if (flt_status st = check_positions(fn, rows, s, false, 0.0, p.knot_spacing)) return st;
+        if (flt_status st = check_positions(fn, rows, s, false, 0.0, p.knot_spacing))
+            return st;
         p.lag_knots = recon_params::no_lag;  // one solve with every row
         p.row_capacity = rows;
         // Every knot of the sheet stays open until the end.

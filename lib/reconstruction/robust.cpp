@@ -27,9 +27,9 @@ constexpr std::size_t k_min_block_values = 5;
 constexpr double k_min_sigma_fraction = 1e-3;
 
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
-#define FLT_ROBUST_KERNEL __attribute__((target_clones("avx2", "default")))
+#  define FLT_ROBUST_KERNEL __attribute__((target_clones("avx2", "default")))
 #else
-#define FLT_ROBUST_KERNEL
+#  define FLT_ROBUST_KERNEL
 #endif
 
 // The per-sample work of a reweighted stage, one pass over the row.
@@ -69,67 +69,71 @@ constexpr double k_gross = 4.0;
 // sample). Returns whether there is any gross Huber sample. Branch-free and
 // without divisions (1/sigma^2 is kept with the scale), so that it
 // vectorises; one kind per loop keeps the loop's values in registers.
-#define FLT_WEIGH_KIND_PARAMS                                                              \
-    std::size_t K, double scale, double inv_scale, const double *__restrict value,         \
-        const std::uint8_t *__restrict valid, double a, double b, double centre,          \
-        const double *__restrict pred, const double *__restrict sigma,                    \
-        const double *__restrict inv_var, double *__restrict sum, double *__restrict count, \
-        double *__restrict out, double *__restrict mult
+#define FLT_WEIGH_KIND_PARAMS                                                             \
+  std::size_t K, double scale, double inv_scale, const double *__restrict value,          \
+      const std::uint8_t *__restrict valid, double a, double b, double centre,            \
+      const double *__restrict pred, const double *__restrict sigma,                      \
+      const double *__restrict inv_var, double *__restrict sum, double *__restrict count, \
+      double *__restrict out, double *__restrict mult
 
 // The residual and the scale's sums, common to both estimators. Compiled
 // per case (masked, with a line, heights or slopes) so that the loop keeps
 // only what it needs in registers.
-#define FLT_WEIGH_RESIDUAL(masked, lined, slopes)                                       \
-    double v = value[k];                                                                \
-    if (lined) v -= a + b * (double(std::int32_t(k)) - centre); /* vectorises */        \
-    const bool fin = std::fabs(value[k]) <= big;                                        \
-    double ok = fin ? 1.0 : 0.0;                                                        \
-    if (masked) ok *= valid[k] != 0 ? 1.0 : 0.0;                                        \
-    const double r = (fin ? (slopes ? scale * v : v) - pred[k] : 0.0) * ok;             \
-    const double ar = std::fabs(r), sg = sigma[k], clip = k_clip * sg;                  \
-    sum[k] += ar < clip ? ar : clip;                                                    \
-    count[k] += ok;
+#define FLT_WEIGH_RESIDUAL(masked, lined, slopes)                         \
+  double v = value[k];                                                    \
+  if (lined)                                                              \
+    v -= a + b * (double(std::int32_t(k)) - centre); /* vectorises */     \
+  const bool fin = std::fabs(value[k]) <= big;                            \
+  double ok = fin ? 1.0 : 0.0;                                            \
+  if (masked)                                                             \
+    ok *= valid[k] != 0 ? 1.0 : 0.0;                                      \
+  const double r = (fin ? (slopes ? scale * v : v) - pred[k] : 0.0) * ok; \
+  const double ar = std::fabs(r), sg = sigma[k], clip = k_clip * sg;      \
+  sum[k] += ar < clip ? ar : clip;                                        \
+  count[k] += ok;
 
 // Huber: a pseudo-observation with psi(r) = r clipped at k_huber * sigma;
 // beyond k_gross * sigma the raw value with weight k_huber * sigma / |r|.
-#define FLT_WEIGH_HUBER_BODY(masked, lined, slopes)                                     \
-    const double big = k_max_sample;                              \
-    std::uint64_t bits = 0; /* OR of the multipliers: the sign bit says -1 */            \
-    for (std::size_t k = 0; k < K; ++k) {                                               \
-        FLT_WEIGH_RESIDUAL(masked, lined, slopes)                                       \
-        const double c = k_huber * sg, upper = r > c ? c : r;                           \
-        const double psi = upper < -c ? -c : upper;                                     \
-        const double gross = ar > k_gross * sg ? 1.0 : 0.0;                             \
-        const double pseudo = slopes ? (pred[k] + psi) * inv_scale : pred[k] + psi;     \
-        out[k] = ok * (1.0 - gross) != 0.0 ? pseudo : v;                                \
-        const double m = ok * (gross != 0.0 ? -1.0 : 1.0); /* ok = 0: +0 */             \
-        mult[k] = m;                                                                    \
-        std::uint64_t u;                                                                \
-        std::memcpy(&u, &m, sizeof u);                                                  \
-        bits |= u;                                                                      \
-    }                                                                                   \
-    (void)inv_var;                                                                      \
-    return (bits >> 63) != 0;
+#define FLT_WEIGH_HUBER_BODY(masked, lined, slopes)                             \
+  const double big = k_max_sample;                                              \
+  std::uint64_t bits = 0; /* OR of the multipliers: the sign bit says -1 */     \
+  for (std::size_t k = 0; k < K; ++k) {                                         \
+    FLT_WEIGH_RESIDUAL(masked, lined, slopes)                                   \
+    const double c = k_huber * sg, upper = r > c ? c : r;                       \
+    const double psi = upper < -c ? -c : upper;                                 \
+    const double gross = ar > k_gross * sg ? 1.0 : 0.0;                         \
+    const double pseudo = slopes ? (pred[k] + psi) * inv_scale : pred[k] + psi; \
+    out[k] = ok * (1.0 - gross) != 0.0 ? pseudo : v;                            \
+    const double m = ok * (gross != 0.0 ? -1.0 : 1.0); /* ok = 0: +0 */         \
+    mult[k] = m;                                                                \
+    std::uint64_t u;                                                            \
+    std::memcpy(&u, &m, sizeof u);                                              \
+    bits |= u;                                                                  \
+  }                                                                             \
+  (void)inv_var;                                                                \
+  return (bits >> 63) != 0;
 
 // Tukey: the raw value with weight (1 - u^2)^2, u = r / (k_tukey sigma),
 // 0 outside (plain IRLS).
-#define FLT_WEIGH_TUKEY_BODY(masked, lined, slopes)                                     \
-    const double big = k_max_sample;                              \
-    for (std::size_t k = 0; k < K; ++k) {                                               \
-        FLT_WEIGH_RESIDUAL(masked, lined, slopes)                                       \
-        const double u2 = r * r * inv_var[k] * (1.0 / (k_tukey * k_tukey));             \
-        const double w = 1.0 - u2;                                                      \
-        out[k] = v;                                                                     \
-        mult[k] = ok * (u2 < 1.0 ? w * w : 0.0);                                        \
-    }                                                                                   \
-    (void)inv_scale;                                                                    \
-    return false;
+#define FLT_WEIGH_TUKEY_BODY(masked, lined, slopes)                     \
+  const double big = k_max_sample;                                      \
+  for (std::size_t k = 0; k < K; ++k) {                                 \
+    FLT_WEIGH_RESIDUAL(masked, lined, slopes)                           \
+    const double u2 = r * r * inv_var[k] * (1.0 / (k_tukey * k_tukey)); \
+    const double w = 1.0 - u2;                                          \
+    out[k] = v;                                                         \
+    mult[k] = ok * (u2 < 1.0 ? w * w : 0.0);                            \
+  }                                                                     \
+  (void)inv_scale;                                                      \
+  return false;
 
-#define FLT_WEIGH_VARIANTS(name, body, masked)                                           \
-    FLT_ROBUST_KERNEL bool name##_h(FLT_WEIGH_KIND_PARAMS) { body(masked, false, false) } \
-    FLT_ROBUST_KERNEL bool name##_g(FLT_WEIGH_KIND_PARAMS) { body(masked, false, true) }  \
-    FLT_ROBUST_KERNEL bool name##_lh(FLT_WEIGH_KIND_PARAMS) { body(masked, true, false) } \
-    FLT_ROBUST_KERNEL bool name##_lg(FLT_WEIGH_KIND_PARAMS) { body(masked, true, true) }
+#define FLT_WEIGH_VARIANTS(name, body, masked)                                             \
+  FLT_ROBUST_KERNEL bool name##_h(FLT_WEIGH_KIND_PARAMS){                                  \
+      body(masked, false, false)} FLT_ROBUST_KERNEL bool name##_g(FLT_WEIGH_KIND_PARAMS){  \
+      body(masked, false, true)} FLT_ROBUST_KERNEL bool name##_lh(FLT_WEIGH_KIND_PARAMS){  \
+      body(masked, true, false)} FLT_ROBUST_KERNEL bool name##_lg(FLT_WEIGH_KIND_PARAMS) { \
+    body(masked, true, true)                                                               \
+  }
 FLT_WEIGH_VARIANTS(weigh_huber, FLT_WEIGH_HUBER_BODY, false)
 FLT_WEIGH_VARIANTS(weigh_huber_masked, FLT_WEIGH_HUBER_BODY, true)
 FLT_WEIGH_VARIANTS(weigh_tukey, FLT_WEIGH_TUKEY_BODY, false)
@@ -150,17 +154,17 @@ const weigh_kernel k_weigh[2][2][2][2] = {
 // (the queues' mark of an invalid sample).
 FLT_ROBUST_KERNEL void copy_sample(std::size_t K, const double *__restrict in,
                                    double *__restrict out) {
-    for (std::size_t k = 0; k < K; ++k) out[k] = std::fabs(in[k]) <= k_max_sample ? in[k] : k_nan;
+    for (std::size_t k = 0; k < K; ++k)
+        out[k] = std::fabs(in[k]) <= k_max_sample ? in[k] : k_nan;
 }
 
 // A completed block's estimate per fiber: the clipped mean as a Gaussian
 // sigma, NaN with too few values; the block's sums restart.
-FLT_ROBUST_KERNEL void close_block(std::size_t K, double *__restrict sum,
-                                   double *__restrict count, double *__restrict estimate) {
+FLT_ROBUST_KERNEL void close_block(std::size_t K, double *__restrict sum, double *__restrict count,
+                                   double *__restrict estimate) {
     for (std::size_t k = 0; k < K; ++k) {
-        estimate[k] = count[k] >= double(k_min_block_values)
-                          ? k_clipped_to_sigma * sum[k] / count[k]
-                          : k_nan;
+        estimate[k] =
+            count[k] >= double(k_min_block_values) ? k_clipped_to_sigma * sum[k] / count[k] : k_nan;
         sum[k] = 0.0;
         count[k] = 0.0;
     }
@@ -186,12 +190,24 @@ FLT_ROBUST_KERNEL void median9(std::size_t K, const double *__restrict e, double
         };
         // A 19-exchange median-of-9 network (sorts rows of three, then
         // columns, then the diagonal through the middle).
-        cx(1, 2); cx(4, 5); cx(7, 8);
-        cx(0, 1); cx(3, 4); cx(6, 7);
-        cx(1, 2); cx(4, 5); cx(7, 8);
-        cx(0, 3); cx(5, 8); cx(4, 7);
-        cx(3, 6); cx(1, 4); cx(2, 5);
-        cx(4, 7); cx(4, 2); cx(6, 4);
+        cx(1, 2);
+        cx(4, 5);
+        cx(7, 8);
+        cx(0, 1);
+        cx(3, 4);
+        cx(6, 7);
+        cx(1, 2);
+        cx(4, 5);
+        cx(7, 8);
+        cx(0, 3);
+        cx(5, 8);
+        cx(4, 7);
+        cx(3, 6);
+        cx(1, 4);
+        cx(2, 5);
+        cx(4, 7);
+        cx(4, 2);
+        cx(6, 4);
         cx(4, 2);
         sigma[k] = std::max(floor, p[4]);
         incomplete[k] = nan ? 1.0 : 0.0;
@@ -202,8 +218,8 @@ FLT_ROBUST_KERNEL void median9(std::size_t K, const double *__restrict e, double
 
 // ---------------------------------------------------------------------------
 
-robust_scale::robust_scale(std::size_t fibers, std::size_t block_rows,
-                           std::size_t blocks, double initial_sigma)
+robust_scale::robust_scale(std::size_t fibers, std::size_t block_rows, std::size_t blocks,
+                           double initial_sigma)
     : K_(fibers), block_rows_(block_rows), blocks_(blocks), initial_(initial_sigma) {
     sum_.assign(K_, 0.0);
     count_.assign(K_, 0.0);
@@ -230,19 +246,23 @@ void robust_scale::median_scalar(std::size_t k) {
     std::size_t m = 0;
     for (std::size_t b = 0; b < blocks_ && m < 64; ++b) {
         const double v = estimates_[b * K_ + k];
-        if (std::isfinite(v)) ring[m++] = v;
+        if (std::isfinite(v))
+            ring[m++] = v;
     }
-    if (m == 0) return;
+    if (m == 0)
+        return;
     std::nth_element(ring, ring + m / 2, ring + m);
     sigma_[k] = std::max(k_min_sigma_fraction * initial_, ring[m / 2]);
 }
 
 bool robust_scale::end_row() {
-    if (++rows_ < block_rows_) return false;
+    if (++rows_ < block_rows_)
+        return false;
     rows_ = 0;
     close_block(K_, sum_.data(), count_.data(), estimates_.data() + next_ * K_);
     next_ = (next_ + 1) % blocks_;
-    if (filled_ < blocks_) ++filled_;
+    if (filled_ < blocks_)
+        ++filled_;
     if (blocks_ == 9) {
         // The common case, vectorised. Until nine blocks are in (they fill
         // slots 0, 1, ... in order), the empty slots hold -inf and +inf so
@@ -260,19 +280,22 @@ bool robust_scale::end_row() {
         median9(K_, estimates_.data(), k_min_sigma_fraction * initial_, sigma_.data(),
                 incomplete_.data());
         for (std::size_t k = 0; k < K_; ++k)
-            if (incomplete_[k] != 0.0) median_scalar(k);
+            if (incomplete_[k] != 0.0)
+                median_scalar(k);
     } else {
-        for (std::size_t k = 0; k < K_; ++k) median_scalar(k);
+        for (std::size_t k = 0; k < K_; ++k)
+            median_scalar(k);
     }
-    for (std::size_t k = 0; k < K_; ++k) inv_var_[k] = 1.0 / (sigma_[k] * sigma_[k]);
+    for (std::size_t k = 0; k < K_; ++k)
+        inv_var_[k] = 1.0 / (sigma_[k] * sigma_[k]);
     return true;
 }
 
 // ---------------------------------------------------------------------------
 
 recon_chain::recon_chain(std::size_t fibers, const recon_params &params,
-                         const robust_params &robust, std::size_t knot_capacity,
-                         double *z_store, std::uint8_t *flags_store, bool batch)
+                         const robust_params &robust, std::size_t knot_capacity, double *z_store,
+                         std::uint8_t *flags_store, bool batch)
     : K_(fibers), robust_(robust), D_(params.laser_spacing), batch_(batch) {
     const std::size_t n_stages =
         robust_.kind == robust_kind::none ? 1 : 1 + std::size_t(robust_.iterations);
@@ -282,18 +305,18 @@ recon_chain::recon_chain(std::size_t fibers, const recon_params &params,
     }
     if (batch_) {
         // One engine for every pass, and one pair of running scales.
-        stages_.push_back(std::make_unique<recon_engine>(K_, params, knot_capacity, z_store,
-                                                         flags_store, true));
-        if (n_stages == 1) return;
+        stages_.push_back(
+            std::make_unique<recon_engine>(K_, params, knot_capacity, z_store, flags_store, true));
+        if (n_stages == 1)
+            return;
         saved_.assign(stages_[0]->solution_size(), 0.0);
         initial_wh_.assign(K_, stages_[0]->default_height_weight());
         initial_wg_.assign(K_, stages_[0]->default_slope_weight());
         h_scale_.resize(2);
         g_scale_.resize(2);
-        h_scale_[1] = std::make_unique<robust_scale>(K_, robust_.block_rows,
-                                                     robust_.scale_blocks, params.height_sigma);
-        g_scale_[1] = std::make_unique<robust_scale>(K_, robust_.block_rows,
-                                                     robust_.scale_blocks,
+        h_scale_[1] = std::make_unique<robust_scale>(K_, robust_.block_rows, robust_.scale_blocks,
+                                                     params.height_sigma);
+        g_scale_[1] = std::make_unique<robust_scale>(K_, robust_.block_rows, robust_.scale_blocks,
                                                      D_ * params.slope_sigma);
         return;
     }
@@ -302,12 +325,13 @@ recon_chain::recon_chain(std::size_t fibers, const recon_params &params,
     for (std::size_t i = 0; i + 1 < n_stages; ++i) {
         recon_params stage = params;
         stage.lag_knots = robust_.stage_lag_knots;
-        stages_.push_back(std::make_unique<recon_engine>(K_, stage, stage.knot_capacity(),
-                                                         nullptr, nullptr, false));
+        stages_.push_back(std::make_unique<recon_engine>(K_, stage, stage.knot_capacity(), nullptr,
+                                                         nullptr, false));
     }
-    stages_.push_back(std::make_unique<recon_engine>(K_, params, knot_capacity,
-                                                     z_store, flags_store, true));
-    if (n_stages == 1) return;
+    stages_.push_back(
+        std::make_unique<recon_engine>(K_, params, knot_capacity, z_store, flags_store, true));
+    if (n_stages == 1)
+        return;
 
     // A row waits in queue i until stage i-1 has emitted the knots under it:
     // its lag and emission group plus the row's own span, a few knots more
@@ -322,11 +346,9 @@ recon_chain::recon_chain(std::size_t fibers, const recon_params &params,
         q.s.reset(new double[queue_capacity_]);
         q.height.reset(new double[queue_capacity_ * K_]);
         q.slope.reset(new double[queue_capacity_ * K_]);
-        h_scale_[i] = std::make_unique<robust_scale>(K_, robust_.block_rows,
-                                                     robust_.scale_blocks,
+        h_scale_[i] = std::make_unique<robust_scale>(K_, robust_.block_rows, robust_.scale_blocks,
                                                      params.height_sigma);
-        g_scale_[i] = std::make_unique<robust_scale>(K_, robust_.block_rows,
-                                                     robust_.scale_blocks,
+        g_scale_[i] = std::make_unique<robust_scale>(K_, robust_.block_rows, robust_.scale_blocks,
                                                      D_ * params.slope_sigma);
     }
 }
@@ -335,7 +357,8 @@ long recon_chain::latency_knots() const {
     long knots = 0;
     for (const auto &stage : stages_) {
         const recon_params &p = stage->params();
-        if (p.lag_knots == recon_params::no_lag) return recon_params::no_lag;
+        if (p.lag_knots == recon_params::no_lag)
+            return recon_params::no_lag;
         knots += p.lag_knots + p.emit_group() + stage->knots_per_row();
     }
     return knots;
@@ -348,8 +371,8 @@ std::size_t recon_chain::free_rows() const {
     return free;
 }
 
-void recon_chain::enqueue(std::size_t stage, double s, const double *height,
-                          const double *slope, const std::uint8_t *valid) {
+void recon_chain::enqueue(std::size_t stage, double s, const double *height, const double *slope,
+                          const std::uint8_t *valid) {
     pending &q = queues_[stage];
     if (q.tail - q.head >= queue_capacity_)
         throw error(FLT_ERR_BUFFER_FULL, "robust stage queue is full");
@@ -362,21 +385,23 @@ void recon_chain::enqueue(std::size_t stage, double s, const double *height,
     copy_sample(K_, slope, qg);
     if (valid)
         for (std::size_t k = 0; k < K_; ++k)
-            if (!valid[k]) qh[k] = qg[k] = k_nan;
+            if (!valid[k])
+                qh[k] = qg[k] = k_nan;
     ++q.tail;
 }
 
-void recon_chain::reweigh(std::size_t scale, recon_engine &next, const double *h,
-                          const double *g, const std::uint8_t *valid, const double *line) {
-    if (!line) line = no_line_;
+void recon_chain::reweigh(std::size_t scale, recon_engine &next, const double *h, const double *g,
+                          const std::uint8_t *valid, const double *line) {
+    if (!line)
+        line = no_line_;
     robust_scale &hs = *h_scale_[scale], &gs = *g_scale_[scale];
     // From the scales before this row; its residuals then join the current
     // block.
     const int tukey = robust_.kind == robust_kind::tukey, masked = valid != nullptr;
     const int lined = line[0] != 0 || line[1] != 0 || line[2] != 0 || line[3] != 0;
     const bool gross_h = k_weigh[tukey][masked][lined][0](
-        K_, 1.0, 1.0, h, valid, line[0], line[1], line[4], pred_h_.data(), hs.sigma(),
-        hs.inv_var(), hs.sum(), hs.count(), out_h_.data(), mult_h_.data());
+        K_, 1.0, 1.0, h, valid, line[0], line[1], line[4], pred_h_.data(), hs.sigma(), hs.inv_var(),
+        hs.sum(), hs.count(), out_h_.data(), mult_h_.data());
     const bool gross_g = k_weigh[tukey][masked][lined][1](
         K_, D_, 1.0 / D_, g, valid, line[2], line[3], line[4], pred_g_.data(), gs.sigma(),
         gs.inv_var(), gs.sum(), gs.count(), out_g_.data(), mult_g_.data());
@@ -384,7 +409,8 @@ void recon_chain::reweigh(std::size_t scale, recon_engine &next, const double *h
     auto gross_weights = [&](const double *value, double a, double b, double scale_d,
                              const double *pred, const double *sigma, double *mult) {
         for (std::size_t k = 0; k < K_; ++k) {
-            if (mult[k] >= 0.0) continue;
+            if (mult[k] >= 0.0)
+                continue;
             const double x = double(std::int32_t(k)) - line[4];
             const double r = scale_d * (value[k] - (a + b * x)) - pred[k];
             mult[k] = k_huber * sigma[k] / std::fabs(r);
@@ -397,7 +423,8 @@ void recon_chain::reweigh(std::size_t scale, recon_engine &next, const double *h
     const bool new_h = hs.end_row();
     const bool new_g = gs.end_row();
     // A completed block sets the fibers' weights, 1 / sigma^2.
-    if (new_h || new_g) next.set_fiber_weights(hs.inv_var(), gs.inv_var());
+    if (new_h || new_g)
+        next.set_fiber_weights(hs.inv_var(), gs.inv_var());
 }
 
 void recon_chain::advance(std::size_t stage) {
@@ -409,8 +436,7 @@ void recon_chain::advance(std::size_t stage) {
         const double *h = q.height.get() + r * K_, *g = q.slope.get() + r * K_;
         if (prev.predict(s, pred_h_.data(), pred_g_.data())) {
             reweigh(stage, next, h, g, nullptr, nullptr);
-            next.push_row(s, out_h_.data(), out_g_.data(), nullptr, mult_h_.data(),
-                          mult_g_.data());
+            next.push_row(s, out_h_.data(), out_g_.data(), nullptr, mult_h_.data(), mult_g_.data());
         } else if (prev.prediction_lost(s)) {
             // Rows far sparser than the knots (or a jump in s) moved stage
             // i-1 on past this row's knots before it could be judged: it
@@ -431,7 +457,8 @@ void recon_chain::advance(std::size_t stage) {
 }
 
 void recon_chain::batch(std::size_t rows, const double *s, row_source &source) {
-    if (!batch_) throw error(FLT_ERR_INTERNAL, "batch() on a streaming chain");
+    if (!batch_)
+        throw error(FLT_ERR_INTERNAL, "batch() on a streaming chain");
     recon_engine &e = *stages_.front();
     const int passes = robust_.kind == robust_kind::none ? 1 : 1 + robust_.iterations;
     double saved_t0 = 0.0;
@@ -458,8 +485,7 @@ void recon_chain::batch(std::size_t rows, const double *s, row_source &source) {
             }
             e.predict_saved(saved_.data(), saved_t0, s[r], pred_h_.data(), pred_g_.data());
             reweigh(1, e, h, g, valid, line);
-            e.push_row(s[r], out_h_.data(), out_g_.data(), valid, mult_h_.data(),
-                       mult_g_.data());
+            e.push_row(s[r], out_h_.data(), out_g_.data(), valid, mult_h_.data(), mult_g_.data());
         }
         e.end_sheet();
     }
@@ -468,7 +494,8 @@ void recon_chain::batch(std::size_t rows, const double *s, row_source &source) {
 void recon_chain::push_row(double s, const double *height, const double *slope,
                            const std::uint8_t *valid) {
     first().push_row(s, height, slope, valid);
-    if (stages_.size() == 1) return;
+    if (stages_.size() == 1)
+        return;
     enqueue(1, s, height, slope, valid);
     advance(1);
 }
@@ -487,7 +514,8 @@ void recon_chain::end_sheet() {
 }
 
 void recon_chain::reset() {
-    for (auto &stage : stages_) stage->reset();
+    for (auto &stage : stages_)
+        stage->reset();
     for (std::size_t i = 1; i < queues_.size(); ++i) {
         queues_[i].head = queues_[i].tail = 0;
         h_scale_[i]->reset();

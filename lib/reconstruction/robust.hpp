@@ -35,10 +35,10 @@ enum class robust_kind { none = 0, huber = 1, tukey = 2 };
 
 struct robust_params {
     robust_kind kind = robust_kind::none;
-    int iterations = 2;              // reweighted stages after the plain one
-    long stage_lag_knots = 8;        // lag of the intermediate stages
-    std::size_t block_rows = 64;     // rows per scale block (192 mm at 3 mm)
-    std::size_t scale_blocks = 9;    // blocks whose medians make the scale
+    int iterations = 2;            // reweighted stages after the plain one
+    long stage_lag_knots = 8;      // lag of the intermediate stages
+    std::size_t block_rows = 64;   // rows per scale block (192 mm at 3 mm)
+    std::size_t scale_blocks = 9;  // blocks whose medians make the scale
 };
 
 // Running robust scale of one measurement kind, per fiber: per block of
@@ -49,7 +49,7 @@ struct robust_params {
 // clipped residuals to sum() and count() (fused with its other per-sample
 // work), then calls end_row().
 class robust_scale {
-public:
+  public:
     robust_scale(std::size_t fibers, std::size_t block_rows, std::size_t blocks,
                  double initial_sigma);
     double *sum() { return sum_.data(); }
@@ -61,19 +61,19 @@ public:
     const double *inv_var() const { return inv_var_.data(); }  // 1 / sigma^2
     void reset();
 
-private:
+  private:
     void median_scalar(std::size_t k);
 
     std::size_t K_, block_rows_, blocks_;
     double initial_;
     std::vector<double> sum_, count_;  // per fiber, this block
     std::size_t rows_ = 0;
-    std::vector<double> estimates_;    // ring [blocks][K], NaN when empty
+    std::vector<double> estimates_;  // ring [blocks][K], NaN when empty
     std::size_t next_ = 0;
-    std::size_t filled_ = 0;           // blocks in the ring since reset
-    std::vector<double> sigma_;        // per fiber
-    std::vector<double> inv_var_;      // per fiber, 1 / sigma^2
-    std::vector<double> incomplete_;   // scratch: 1 where a fiber has a NaN block
+    std::size_t filled_ = 0;          // blocks in the ring since reset
+    std::vector<double> sigma_;       // per fiber
+    std::vector<double> inv_var_;     // per fiber, 1 / sigma^2
+    std::vector<double> incomplete_;  // scratch: 1 where a fiber has a NaN block
 };
 
 // Where batch pass `pass` (0, 1, ...) reads row r of the sheet: its heights
@@ -86,11 +86,11 @@ private:
 // (With rigid_motion the fibers' deviations are the caller's rows minus the
 // row's line; recomputing them in a pass of their own costs as much again.)
 class row_source {
-public:
+  public:
     virtual void row(int pass, std::size_t r, const double **height, const double **slope,
                      const std::uint8_t **valid, double line[5]) = 0;
 
-protected:
+  protected:
     ~row_source() = default;
 };
 
@@ -103,13 +103,12 @@ protected:
 // pass's whole-sheet solution (no lag at all, where streaming stages have
 // 8 knots). Nothing is queued, and the memory is one engine's.
 class recon_chain {
-public:
+  public:
     // batch: made for batch() (a single engine, no queues), with the
     // caller's z_store / flags_store for every row of the sheet.
-    recon_chain(std::size_t fibers, const recon_params &params,
-                const robust_params &robust, std::size_t knot_capacity,
-                double *z_store = nullptr, std::uint8_t *flags_store = nullptr,
-                bool batch = false);
+    recon_chain(std::size_t fibers, const recon_params &params, const robust_params &robust,
+                std::size_t knot_capacity, double *z_store = nullptr,
+                std::uint8_t *flags_store = nullptr, bool batch = false);
 
     std::size_t fibers() const { return K_; }
     std::size_t free_rows() const;
@@ -124,10 +123,8 @@ public:
     // group, plus the knots a row spans).
     long latency_knots() const;
 
-    void push_row(double s, const double *height, const double *slope,
-                  const std::uint8_t *valid);
-    std::size_t pull(std::size_t max_rows, double *s_out, double *z_out,
-                     std::uint8_t *flags_out) {
+    void push_row(double s, const double *height, const double *slope, const std::uint8_t *valid);
+    std::size_t pull(std::size_t max_rows, double *s_out, double *z_out, std::uint8_t *flags_out) {
         return last().pull(max_rows, s_out, z_out, flags_out);
     }
     void end_sheet();
@@ -139,7 +136,7 @@ public:
     // sheet; the rows are in z_store / flags_store, or can be pulled.
     void batch(std::size_t rows, const double *s, row_source &source);
 
-private:
+  private:
     recon_engine &first() const { return *stages_.front(); }
     recon_engine &last() const { return *stages_.back(); }
     // Raw rows waiting for stage i (1..iterations) to be able to take them.
@@ -149,8 +146,8 @@ private:
         std::unique_ptr<double[]> s, height, slope;
         std::size_t head = 0, tail = 0;
     };
-    void enqueue(std::size_t stage, double s, const double *height,
-                 const double *slope, const std::uint8_t *valid);
+    void enqueue(std::size_t stage, double s, const double *height, const double *slope,
+                 const std::uint8_t *valid);
     void advance(std::size_t stage);  // feed stage every row it can take
     // Weighs one raw row for a reweighted stage from its residuals against
     // the previous stage's prediction (pred_h_, pred_g_): adds them to the
@@ -159,18 +156,18 @@ private:
     // out_h_, out_g_ (pseudo-observations or raw values) and mult_h_,
     // mult_g_ (weight multipliers); see robust.cpp.
     // line: as row_source gives it, or nullptr for none.
-    void reweigh(std::size_t scale, recon_engine &next, const double *height,
-                 const double *slope, const std::uint8_t *valid, const double *line);
+    void reweigh(std::size_t scale, recon_engine &next, const double *height, const double *slope,
+                 const std::uint8_t *valid, const double *line);
 
     std::size_t K_;
     robust_params robust_;
     double D_;
     bool batch_ = false;
-    std::vector<double> saved_;              // batch: the previous pass's knots
+    std::vector<double> saved_;  // batch: the previous pass's knots
     std::vector<double> initial_wh_, initial_wg_;
     const double no_line_[5] = {0, 0, 0, 0, 0};
     std::vector<std::unique_ptr<recon_engine>> stages_;
-    std::vector<pending> queues_;            // [stage], 0 unused
+    std::vector<pending> queues_;                                   // [stage], 0 unused
     std::vector<std::unique_ptr<robust_scale>> h_scale_, g_scale_;  // [stage]
     std::size_t queue_capacity_ = 0;
     // Scratch, one row each.

@@ -11,19 +11,18 @@ using namespace flt;
 
 namespace {
 
-constexpr double k_focal_px = 6.0 / 0.0055;          // f = 6 mm, 5.5 um pixels
-constexpr double k_cx = 1030.25, k_cy = 1019.75;     // principal point, px
-constexpr double k_camera_height_mm = 1140.0;        // above the strip
+constexpr double k_focal_px = 6.0 / 0.0055;       // f = 6 mm, 5.5 um pixels
+constexpr double k_cx = 1030.25, k_cy = 1019.75;  // principal point, px
+constexpr double k_camera_height_mm = 1140.0;     // above the strip
 constexpr double k_offsets_mm[FLT_CALIB_LASERS] = {-50.0, 50.0};
 constexpr std::uint32_t k_sensor_side = 2048;
 // Barrel distortion of a 6 mm lens on an 11 mm sensor (about -10 % in the
 // corners), the same as tests/c/calib_synth.c.
-constexpr double k_distortion[FLT_CALIB_DISTORTION_COEFFS] = {
-    -0.08, 0.012, 1.5e-4, -1.0e-4, -0.002, 0, 0, 0};
+constexpr double k_distortion[FLT_CALIB_DISTORTION_COEFFS] = {-0.08,  0.012, 1.5e-4, -1.0e-4,
+                                                              -0.002, 0,     0,      0};
 
 void inverse3(const double m[9], double out[9]) {
-    const double det = m[0] * (m[4] * m[8] - m[5] * m[7]) -
-                       m[1] * (m[3] * m[8] - m[5] * m[6]) +
+    const double det = m[0] * (m[4] * m[8] - m[5] * m[7]) - m[1] * (m[3] * m[8] - m[5] * m[6]) +
                        m[2] * (m[3] * m[7] - m[4] * m[6]);
     out[0] = (m[4] * m[8] - m[5] * m[7]) / det;
     out[1] = (m[2] * m[7] - m[1] * m[8]) / det;
@@ -42,19 +41,17 @@ struct calib_owner {
 };
 
 void check(flt_status st) {
-    if (st != FLT_OK) throw error(st, flt_last_error_message());
+    if (st != FLT_OK)
+        throw error(st, flt_last_error_message());
 }
 
 }  // namespace
 
 extern "C" {
 
-FLT_API flt_status FLT_CALL flt_calib_create_reference(uint32_t first_row,
-                                                       uint32_t rows,
-                                                       double first_x_mm,
-                                                       double pitch_mm,
-                                                       size_t fibers,
-                                                       flt_calib **out) {
+FLT_API flt_status FLT_CALL flt_calib_create_reference(uint32_t first_row, uint32_t rows,
+                                                       double first_x_mm, double pitch_mm,
+                                                       size_t fibers, flt_calib **out) {
     const char *fn = "flt_calib_create_reference";
     return guard(fn, [&] {
         FLT_CHECK_NOT_NULL(fn, out);
@@ -65,12 +62,11 @@ FLT_API flt_status FLT_CALL flt_calib_create_reference(uint32_t first_row,
                         "the %u-row sensor",
                         fn, first_row, rows, k_sensor_side);
         if (!std::isfinite(first_x_mm))
-            return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'first_x_mm' = %g is not finite", fn, first_x_mm);
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'first_x_mm' = %g is not finite",
+                        fn, first_x_mm);
         if (!(pitch_mm > 0) || !std::isfinite(pitch_mm))
             return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'pitch_mm' = %g must be finite and > 0", fn,
-                        pitch_mm);
+                        "%s: argument 'pitch_mm' = %g must be finite and > 0", fn, pitch_mm);
         if (fibers == 0)
             return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'fibers' is 0", fn);
         calib_owner c;
@@ -92,11 +88,11 @@ FLT_API flt_status FLT_CALL flt_calib_create_reference(uint32_t first_row,
             double g[9];
             for (int i = 0; i < 3; ++i)
                 for (int j = 0; j < 3; ++j) {
-                    const double k_row[3] = {i == 0 ? k_focal_px : 0.0,
-                                             i == 1 ? k_focal_px : 0.0,
-                                             i == 0 ? k_cx : i == 1 ? cy : 1.0};
-                    g[3 * i + j] = k_row[0] * m[j] + k_row[1] * m[3 + j] +
-                                   k_row[2] * m[6 + j];
+                    const double k_row[3] = {i == 0 ? k_focal_px : 0.0, i == 1 ? k_focal_px : 0.0,
+                                             i == 0   ? k_cx
+                                             : i == 1 ? cy
+                                                      : 1.0};
+                    g[3 * i + j] = k_row[0] * m[j] + k_row[1] * m[3 + j] + k_row[2] * m[6 + j];
                 }
             double hom[9];
             inverse3(g, hom);

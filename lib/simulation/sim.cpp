@@ -74,7 +74,8 @@ sim_params read_params(const flt_options *o) {
 }
 
 void check(flt_status st) {
-    if (st != FLT_OK) throw error(st, flt_last_error_message());
+    if (st != FLT_OK)
+        throw error(st, flt_last_error_message());
 }
 
 // A private copy of a finished calibration (through its text form, so the
@@ -82,7 +83,8 @@ void check(flt_status st) {
 flt_calib *copy_calib(const flt_calib *calib) {
     std::size_t length = 0;
     flt_status st = flt_calib_save_text(calib, nullptr, 0, &length);
-    if (st != FLT_OK && st != FLT_ERR_BUFFER_FULL) check(st);
+    if (st != FLT_OK && st != FLT_ERR_BUFFER_FULL)
+        check(st);
     std::string text(length + 1, '\0');
     check(flt_calib_save_text(calib, &text[0], text.size(), &length));
     flt_calib *copy = nullptr;
@@ -99,10 +101,10 @@ struct flt_sim {
     flt_calib *calib = nullptr;
     std::uint32_t width = 0, height = 0;  // frame, px
     double offset_mm[2] = {0, 0};
-    double ahead_laser = 0;  // the laser reading the larger s
-    double laser_spacing = 0;  // |offset_1 - offset_0|, mm
-    std::vector<double> fiber_x;       // mm
-    std::vector<double> dz_dv[2];      // per fiber, mm per px of peak error
+    double ahead_laser = 0;        // the laser reading the larger s
+    double laser_spacing = 0;      // |offset_1 - offset_0|, mm
+    std::vector<double> fiber_x;   // mm
+    std::vector<double> dz_dv[2];  // per fiber, mm per px of peak error
     std::vector<defect> defects;
     // User height map.
     std::size_t map_rows = 0, map_cols = 0;
@@ -130,29 +132,44 @@ struct flt_sim {
         for (const defect &d : defects) {
             double g = 0;
             switch (d.kind) {
-            case FLT_SIM_FLAT: g = 0; break;
-            case FLT_SIM_CENTRE_BUCKLE: {
-                const double c = std::cos(k_pi * xc / params.strip_width);
-                g = c * c;
-                break;
-            }
-            case FLT_SIM_WAVY_EDGE_LEFT: g = q < 0 ? q * q * q * q : 0; break;
-            case FLT_SIM_WAVY_EDGE_RIGHT: g = q > 0 ? q * q * q * q : 0; break;
-            case FLT_SIM_WAVY_EDGE_BOTH: g = q * q * q * q; break;
-            case FLT_SIM_QUARTER_BUCKLE: {
-                const double a = (std::fabs(xc) - 0.25 * params.strip_width) /
-                                 (0.125 * params.strip_width);
-                g = std::exp(-a * a);
-                break;
-            }
-            case FLT_SIM_BOW: g = 1; break;
-            case FLT_SIM_CROSSBOW: g = q * q; break;
-            default: g = 0; break;
+                case FLT_SIM_FLAT:
+                    g = 0;
+                    break;
+                case FLT_SIM_CENTRE_BUCKLE: {
+                    const double c = std::cos(k_pi * xc / params.strip_width);
+                    g = c * c;
+                    break;
+                }
+                case FLT_SIM_WAVY_EDGE_LEFT:
+                    g = q < 0 ? q * q * q * q : 0;
+                    break;
+                case FLT_SIM_WAVY_EDGE_RIGHT:
+                    g = q > 0 ? q * q * q * q : 0;
+                    break;
+                case FLT_SIM_WAVY_EDGE_BOTH:
+                    g = q * q * q * q;
+                    break;
+                case FLT_SIM_QUARTER_BUCKLE: {
+                    const double a =
+                        (std::fabs(xc) - 0.25 * params.strip_width) / (0.125 * params.strip_width);
+                    g = std::exp(-a * a);
+                    break;
+                }
+                case FLT_SIM_BOW:
+                    g = 1;
+                    break;
+                case FLT_SIM_CROSSBOW:
+                    g = q * q;
+                    break;
+                default:
+                    g = 0;
+                    break;
             }
             const double w = d.period_mm > 0 ? std::sin(2 * k_pi * s / d.period_mm) : 1.0;
             z += d.amplitude_mm * g * w;
         }
-        if (map_rows) z += height_map(x, s);
+        if (map_rows)
+            z += height_map(x, s);
         return z;
     }
 
@@ -172,15 +189,18 @@ struct flt_sim {
     // each earlier cut, until its envelope is negligible (exp(-30)).
     double shear(double s) const {
         const sim_params &p = params;
-        if (!(p.shear_amplitude > 0)) return 0;
+        if (!(p.shear_amplitude > 0))
+            return 0;
         double z = 0;
         double cut = std::floor(s / p.shear_interval) * p.shear_interval;
         for (int k = 0; k < 16; ++k, cut -= p.shear_interval) {
             const double d = s - cut;
-            if (d * p.shear_decay > 30) break;
+            if (d * p.shear_decay > 30)
+                break;
             z += p.shear_amplitude * std::exp(-p.shear_decay * d) *
                  std::sin(2 * k_pi * d / p.shear_period);
-            if (p.shear_decay <= 0) break;  // undamped: only the latest cut
+            if (p.shear_decay <= 0)
+                break;  // undamped: only the latest cut
         }
         return z;
     }
@@ -188,9 +208,7 @@ struct flt_sim {
     double encoder_of(std::uint64_t f) const {
         return params.start + double(f) * params.frame_spacing;
     }
-    double row_position(double e) const {
-        return e - 0.5 * (offset_mm[0] + offset_mm[1]);
-    }
+    double row_position(double e) const { return e - 0.5 * (offset_mm[0] + offset_mm[1]); }
 
     struct motion {
         double heave, tilt, eccentricity;
@@ -200,8 +218,8 @@ struct flt_sim {
         motion m;
         m.heave = params.heave_sigma * rng.gauss();
         m.tilt = params.tilt_sigma * rng.gauss();
-        m.eccentricity = params.ecc_amplitude *
-                         std::sin(2 * k_pi * encoder_of(f) / params.ecc_period);
+        m.eccentricity =
+            params.ecc_amplitude * std::sin(2 * k_pi * encoder_of(f) / params.ecc_period);
         return m;
     }
 
@@ -220,7 +238,8 @@ struct flt_sim {
             const motion m = motion_of(frame);
             sim_rng rng(params.seed, frame, stream_row_noise);
             const double s_row = row_position(e);
-            if (encoder_out) encoder_out[r] = e;
+            if (encoder_out)
+                encoder_out[r] = e;
             s_out[r] = s_row;
             for (std::size_t k = 0; k < n; ++k) {
                 const double x = fiber_x[k];
@@ -232,8 +251,10 @@ struct flt_sim {
                 }
                 height_out[r * n + k] = 0.5 * (z[0] + z[1]);
                 slope[r * n + k] = (z[ahead] - z[behind]) / laser_spacing;
-                if (valid) valid[r * n + k] = 1;
-                if (truth) truth[r * n + k] = sheet(x, s_row);
+                if (valid)
+                    valid[r * n + k] = 1;
+                if (truth)
+                    truth[r * n + k] = sheet(x, s_row);
             }
         }
     }
@@ -263,15 +284,18 @@ struct flt_sim {
                 return image_points[2 * (u_increasing[laser] ? i : ns - 1 - i) + 1];
             };
             for (std::uint32_t u = 0; u < width; ++u) {
-                while (j + 2 < ns && !(u_at(j + 1) >= double(u))) ++j;
+                while (j + 2 < ns && !(u_at(j + 1) >= double(u)))
+                    ++j;
                 const double u0 = u_at(j), u1 = u_at(j + 1);
                 double v = k_nan;
                 if (u0 <= double(u) && double(u) <= u1 && u1 > u0) {
                     const double t = (double(u) - u0) / (u1 - u0);
                     v = v_at(j) + t * (v_at(j + 1) - v_at(j));
                 }
-                if (params.peak_sigma_px > 0) v += params.peak_sigma_px * rng.gauss();
-                if (!(v >= 0 && v <= double(height - 1))) v = k_nan;
+                if (params.peak_sigma_px > 0)
+                    v += params.peak_sigma_px * rng.gauss();
+                if (!(v >= 0 && v <= double(height - 1)))
+                    v = k_nan;
                 centre[u] = v;
             }
         }
@@ -280,9 +304,9 @@ struct flt_sim {
     // Adds a Gaussian ridge along columns [u_first, u_last] with centre row
     // v(u) = v0 + slope (u - u0), sigma px, peak amplitude * envelope(u),
     // times a multiplicative speckle factor per pixel.
-    void add_ridge(std::uint32_t u, double centre, double sigma, double amplitude,
-                   sim_rng &rng) {
-        if (!(centre == centre)) return;
+    void add_ridge(std::uint32_t u, double centre, double sigma, double amplitude, sim_rng &rng) {
+        if (!(centre == centre))
+            return;
         const double reach = 4.5 * sigma;
         const long v_first = std::max(0L, long(std::floor(centre - reach)));
         const long v_last = std::min(long(height) - 1, long(std::ceil(centre + reach)));
@@ -291,7 +315,8 @@ struct flt_sim {
         for (long v = v_first; v <= v_last; ++v) {
             const double d = double(v) - centre;
             float speckle = 1.0f + contrast * rng.fast_gauss();
-            if (speckle < 0) speckle = 0;
+            if (speckle < 0)
+                speckle = 0;
             intensity[std::size_t(v) * width + u] +=
                 float(amplitude * std::exp(d * d * inv)) * speckle;
         }
@@ -334,8 +359,7 @@ struct flt_sim {
         }
     }
 
-    template <class Pixel>
-    void quantise(void *frame_out, std::size_t stride, sim_rng &rng) const {
+    template <class Pixel> void quantise(void *frame_out, std::size_t stride, sim_rng &rng) const {
         const double fs = full_scale();
         // Shot noise: I counts hold I * full_well / fs electrons, whose
         // Poisson sigma is sqrt of that; back in counts sqrt(I * fs / full_well).
@@ -347,7 +371,8 @@ struct flt_sim {
             const float *in = &intensity[std::size_t(v) * width];
             for (std::uint32_t u = 0; u < width; ++u) {
                 float value = in[u];
-                if (gain > 0) value += std::sqrt(std::max(value, 0.0f) * gain) * rng.fast_gauss();
+                if (gain > 0)
+                    value += std::sqrt(std::max(value, 0.0f) * gain) * rng.fast_gauss();
                 value = std::min(std::max(value + 0.5f, 0.0f), top);
                 row[u] = Pixel(value);
             }
@@ -363,7 +388,8 @@ struct flt_sim {
         for (unsigned laser = 0; laser < 2; ++laser)
             for (std::uint32_t u = 0; u < width; ++u)
                 add_ridge(u, centre_row[laser][u], params.line_sigma_px, amplitude, rng);
-        if (params.reflections > 0) add_reflections(f, amplitude, rng);
+        if (params.reflections > 0)
+            add_reflections(f, amplitude, rng);
         if (params.bit_depth == 8)
             quantise<std::uint8_t>(frame_out, stride, rng);
         else
@@ -377,8 +403,8 @@ flt_status check_handle(const char *fn, const flt_sim *sim) {
     if (sim == nullptr)
         return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'sim' is NULL", fn);
     if (sim->magic != k_sim_magic)
-        return fail(FLT_ERR_INVALID_ARGUMENT,
-                    "%s: argument 'sim' is not a live flt_sim handle", fn);
+        return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'sim' is not a live flt_sim handle",
+                    fn);
     return FLT_OK;
 }
 
@@ -402,20 +428,24 @@ void setup_geometry(flt_sim &sim) {
     std::size_t count;
     check(flt_calib_get_fiber_grid(sim.calib, &first_x, &pitch, &count));
     sim.fiber_x.resize(count);
-    for (std::size_t k = 0; k < count; ++k) sim.fiber_x[k] = first_x + double(k) * pitch;
+    for (std::size_t k = 0; k < count; ++k)
+        sim.fiber_x[k] = first_x + double(k) * pitch;
 
     for (unsigned laser = 0; laser < 2; ++laser) {
         // dz/dv at each fiber at z = 0: map (x, 0) into the image, step one
         // row down and map back.
         std::vector<double> pts(2 * count), img(2 * count);
-        for (std::size_t k = 0; k < count; ++k) pts[2 * k] = sim.fiber_x[k], pts[2 * k + 1] = 0;
+        for (std::size_t k = 0; k < count; ++k)
+            pts[2 * k] = sim.fiber_x[k], pts[2 * k + 1] = 0;
         check(flt_calib_plane_to_image(sim.calib, laser, count, pts.data(), img.data()));
-        for (std::size_t k = 0; k < count; ++k) img[2 * k + 1] += 1.0;
+        for (std::size_t k = 0; k < count; ++k)
+            img[2 * k + 1] += 1.0;
         check(flt_calib_image_to_plane(sim.calib, laser, count, img.data(), pts.data()));
         sim.dz_dv[laser].resize(count);
         double fallback = 0;
         for (std::size_t k = 0; k < count; ++k)
-            if (std::isfinite(pts[2 * k + 1])) fallback = std::fabs(pts[2 * k + 1]);
+            if (std::isfinite(pts[2 * k + 1]))
+                fallback = std::fabs(pts[2 * k + 1]);
         for (std::size_t k = 0; k < count; ++k)
             sim.dz_dv[laser][k] =
                 std::isfinite(pts[2 * k + 1]) ? std::fabs(pts[2 * k + 1]) : fallback;
@@ -451,8 +481,8 @@ void setup_geometry(flt_sim &sim) {
 
 extern "C" {
 
-FLT_API flt_status FLT_CALL flt_sim_create(const flt_calib *calib,
-                                           const flt_options *options, flt_sim **out) {
+FLT_API flt_status FLT_CALL flt_sim_create(const flt_calib *calib, const flt_options *options,
+                                           flt_sim **out) {
     const char *fn = "flt_sim_create";
     return guard(fn, [&] {
         FLT_CHECK_NOT_NULL(fn, out);
@@ -496,17 +526,17 @@ FLT_API flt_status FLT_CALL flt_sim_add_defect(flt_sim *sim, flt_sim_defect kind
                                                double amplitude_mm, double period_mm) {
     const char *fn = "flt_sim_add_defect";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, sim)) return st;
+        if (flt_status st = check_handle(fn, sim))
+            return st;
         if (enum_arg(kind) < int(FLT_SIM_FLAT) || enum_arg(kind) > int(FLT_SIM_CROSSBOW))
-            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'kind' = %d is unknown",
-                        fn, enum_arg(kind));
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'kind' = %d is unknown", fn,
+                        enum_arg(kind));
         if (!std::isfinite(amplitude_mm))
-            return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'amplitude_mm' = %g is not finite", fn, amplitude_mm);
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'amplitude_mm' = %g is not finite",
+                        fn, amplitude_mm);
         if (!std::isfinite(period_mm) || period_mm < 0)
             return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'period_mm' = %g must be finite and >= 0", fn,
-                        period_mm);
+                        "%s: argument 'period_mm' = %g must be finite and >= 0", fn, period_mm);
         if (sim->defects.size() >= k_max_defects)
             return fail(FLT_ERR_BUFFER_FULL, "%s: the sheet already has %zu defects", fn,
                         k_max_defects);
@@ -518,7 +548,8 @@ FLT_API flt_status FLT_CALL flt_sim_add_defect(flt_sim *sim, flt_sim_defect kind
 FLT_API flt_status FLT_CALL flt_sim_clear_sheet(flt_sim *sim) {
     const char *fn = "flt_sim_clear_sheet";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, sim)) return st;
+        if (flt_status st = check_handle(fn, sim))
+            return st;
         sim->defects.clear();
         sim->map.clear();
         sim->map_rows = sim->map_cols = 0;
@@ -526,18 +557,18 @@ FLT_API flt_status FLT_CALL flt_sim_clear_sheet(flt_sim *sim) {
     });
 }
 
-FLT_API flt_status FLT_CALL flt_sim_set_height_map(flt_sim *sim, size_t rows,
-                                                   size_t cols, double s0_mm,
-                                                   double ds_mm, double x0_mm,
+FLT_API flt_status FLT_CALL flt_sim_set_height_map(flt_sim *sim, size_t rows, size_t cols,
+                                                   double s0_mm, double ds_mm, double x0_mm,
                                                    double dx_mm, const double *heights) {
     const char *fn = "flt_sim_set_height_map";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, sim)) return st;
+        if (flt_status st = check_handle(fn, sim))
+            return st;
         FLT_CHECK_NOT_NULL(fn, heights);
         if (rows < 2 || cols < 2)
             return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: arguments 'rows' = %zu, 'cols' = %zu must both be >= 2", fn,
-                        rows, cols);
+                        "%s: arguments 'rows' = %zu, 'cols' = %zu must both be >= 2", fn, rows,
+                        cols);
         if (rows > std::numeric_limits<std::size_t>::max() / sizeof(double) / cols)
             return fail(FLT_ERR_INVALID_ARGUMENT,
                         "%s: arguments 'rows' x 'cols' = %zu x %zu overflow", fn, rows, cols);
@@ -545,14 +576,12 @@ FLT_API flt_status FLT_CALL flt_sim_set_height_map(flt_sim *sim, size_t rows,
         const char *names[4] = {"s0_mm", "ds_mm", "x0_mm", "dx_mm"};
         for (int i = 0; i < 4; ++i)
             if (!std::isfinite(values[i]) || (i % 2 == 1 && !(values[i] > 0)))
-                return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument '%s' = %g is %s", fn,
-                            names[i], values[i],
-                            i % 2 == 1 ? "not finite and > 0" : "not finite");
+                return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument '%s' = %g is %s", fn, names[i],
+                            values[i], i % 2 == 1 ? "not finite and > 0" : "not finite");
         for (std::size_t i = 0; i < rows * cols; ++i)
             if (!std::isfinite(heights[i]))
                 return fail(FLT_ERR_INVALID_ARGUMENT,
-                            "%s: argument 'heights[%zu]' = %g is not finite", fn, i,
-                            heights[i]);
+                            "%s: argument 'heights[%zu]' = %g is not finite", fn, i, heights[i]);
         std::vector<double> map(heights, heights + rows * cols);
         sim->map.swap(map);
         sim->map_rows = rows, sim->map_cols = cols;
@@ -561,20 +590,22 @@ FLT_API flt_status FLT_CALL flt_sim_set_height_map(flt_sim *sim, size_t rows,
     });
 }
 
-FLT_API flt_status FLT_CALL flt_sim_surface(const flt_sim *sim, size_t count,
-                                            const double *x, const double *s,
-                                            double *z_out) {
+FLT_API flt_status FLT_CALL flt_sim_surface(const flt_sim *sim, size_t count, const double *x,
+                                            const double *s, double *z_out) {
     const char *fn = "flt_sim_surface";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, sim)) return st;
-        if (count == 0) return FLT_OK;
+        if (flt_status st = check_handle(fn, sim))
+            return st;
+        if (count == 0)
+            return FLT_OK;
         FLT_CHECK_NOT_NULL(fn, x);
         FLT_CHECK_NOT_NULL(fn, s);
         FLT_CHECK_NOT_NULL(fn, z_out);
         if (count > std::numeric_limits<std::size_t>::max() / sizeof(double))
             return fail(FLT_ERR_INVALID_ARGUMENT,
                         "%s: argument 'count' = %zu overflows the address space", fn, count);
-        for (std::size_t i = 0; i < count; ++i) z_out[i] = sim->sheet(x[i], s[i]);
+        for (std::size_t i = 0; i < count; ++i)
+            z_out[i] = sim->sheet(x[i], s[i]);
         return FLT_OK;
     });
 }
@@ -582,7 +613,8 @@ FLT_API flt_status FLT_CALL flt_sim_surface(const flt_sim *sim, size_t count,
 FLT_API flt_status FLT_CALL flt_sim_fibers(const flt_sim *sim, size_t *out) {
     const char *fn = "flt_sim_fibers";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, sim)) return st;
+        if (flt_status st = check_handle(fn, sim))
+            return st;
         FLT_CHECK_NOT_NULL(fn, out);
         *out = sim->fiber_x.size();
         return FLT_OK;
@@ -593,7 +625,8 @@ FLT_API flt_status FLT_CALL flt_sim_frame_size(const flt_sim *sim, uint32_t *wid
                                                uint32_t *height_out) {
     const char *fn = "flt_sim_frame_size";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, sim)) return st;
+        if (flt_status st = check_handle(fn, sim))
+            return st;
         FLT_CHECK_NOT_NULL(fn, width_out);
         FLT_CHECK_NOT_NULL(fn, height_out);
         *width_out = sim->width;
@@ -602,11 +635,11 @@ FLT_API flt_status FLT_CALL flt_sim_frame_size(const flt_sim *sim, uint32_t *wid
     });
 }
 
-FLT_API flt_status FLT_CALL flt_sim_pixel_format(const flt_sim *sim,
-                                                 flt_pixel_format *out) {
+FLT_API flt_status FLT_CALL flt_sim_pixel_format(const flt_sim *sim, flt_pixel_format *out) {
     const char *fn = "flt_sim_pixel_format";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, sim)) return st;
+        if (flt_status st = check_handle(fn, sim))
+            return st;
         FLT_CHECK_NOT_NULL(fn, out);
         *out = flt_pixel_format(sim->params.bit_depth);
         return FLT_OK;
@@ -619,29 +652,30 @@ FLT_API flt_status FLT_CALL flt_sim_next_rows(flt_sim *sim, size_t rows, size_t 
                                               uint8_t *valid_out, double *truth_out) {
     const char *fn = "flt_sim_next_rows";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, sim)) return st;
+        if (flt_status st = check_handle(fn, sim))
+            return st;
         if (rows == 0)
             return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'rows' is 0", fn);
-        if (flt_status st = check_fibers(fn, sim, fibers)) return st;
+        if (flt_status st = check_fibers(fn, sim, fibers))
+            return st;
         if (rows > std::numeric_limits<std::size_t>::max() / sizeof(double) / fibers)
-            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'rows' = %zu overflows",
-                        fn, rows);
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'rows' = %zu overflows", fn, rows);
         FLT_CHECK_NOT_NULL(fn, s_out);
         FLT_CHECK_NOT_NULL(fn, height_out);
         FLT_CHECK_NOT_NULL(fn, slope_out);
-        sim->make_rows(rows, encoder_mm_out, s_out, height_out, slope_out, valid_out,
-                       truth_out);
+        sim->make_rows(rows, encoder_mm_out, s_out, height_out, slope_out, valid_out, truth_out);
         return FLT_OK;
     });
 }
 
-FLT_API flt_status FLT_CALL flt_sim_next_frame(flt_sim *sim, void *frame_out,
-                                               size_t capacity_bytes, size_t stride_bytes,
-                                               double *encoder_mm_out, size_t fibers,
-                                               double *truth_out, double *peak_rows_out) {
+FLT_API flt_status FLT_CALL flt_sim_next_frame(flt_sim *sim, void *frame_out, size_t capacity_bytes,
+                                               size_t stride_bytes, double *encoder_mm_out,
+                                               size_t fibers, double *truth_out,
+                                               double *peak_rows_out) {
     const char *fn = "flt_sim_next_frame";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, sim)) return st;
+        if (flt_status st = check_handle(fn, sim))
+            return st;
         FLT_CHECK_NOT_NULL(fn, frame_out);
         const std::size_t bytes_per_pixel = sim->params.bit_depth == 8 ? 1 : 2;
         if (stride_bytes < std::size_t(sim->width) * bytes_per_pixel)
@@ -662,10 +696,12 @@ FLT_API flt_status FLT_CALL flt_sim_next_frame(flt_sim *sim, void *frame_out,
                         "height %u",
                         fn, capacity_bytes, stride_bytes, sim->height);
         if (truth_out)
-            if (flt_status st = check_fibers(fn, sim, fibers)) return st;
+            if (flt_status st = check_fibers(fn, sim, fibers))
+                return st;
         sim->render(sim->frame, frame_out, stride_bytes);
         const double e = sim->encoder_of(sim->frame);
-        if (encoder_mm_out) *encoder_mm_out = e;
+        if (encoder_mm_out)
+            *encoder_mm_out = e;
         if (truth_out) {
             const double s_row = sim->row_position(e);
             for (std::size_t k = 0; k < fibers; ++k)
@@ -683,7 +719,8 @@ FLT_API flt_status FLT_CALL flt_sim_next_frame(flt_sim *sim, void *frame_out,
 FLT_API flt_status FLT_CALL flt_sim_rewind(flt_sim *sim) {
     const char *fn = "flt_sim_rewind";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, sim)) return st;
+        if (flt_status st = check_handle(fn, sim))
+            return st;
         sim->frame = 0;
         return FLT_OK;
     });

@@ -18,11 +18,12 @@ inline std::uint64_t splitmix64(std::uint64_t x) {
 
 // xoshiro256** (Blackman and Vigna): fast, 256-bit state, passes BigCrush.
 class sim_rng {
-public:
+  public:
     sim_rng(std::uint64_t seed, std::uint64_t frame, std::uint64_t stream) {
         std::uint64_t x = splitmix64(seed) ^ splitmix64(frame * 0xD1B54A32D192ED03ull + 1) ^
                           splitmix64(stream * 0x8CB92BA72F3D8DD7ull + 2);
-        for (auto &w : state_) w = x = splitmix64(x);
+        for (auto &w : state_)
+            w = x = splitmix64(x);
     }
     std::uint64_t next() {
         const std::uint64_t result = rotl(state_[1] * 5, 7) * 9;
@@ -53,16 +54,19 @@ public:
     }
     // Poisson(lambda) by Knuth's product method (lambda is small here).
     unsigned poisson(double lambda) {
-        if (!(lambda > 0)) return 0;
-        if (lambda > 500) lambda = 500;
+        if (!(lambda > 0))
+            return 0;
+        if (lambda > 500)
+            lambda = 500;
         const double limit = std::exp(-lambda);
         double p = uniform();
         unsigned k = 0;
-        while (p > limit && k < 10000) p *= uniform(), ++k;
+        while (p > limit && k < 10000)
+            p *= uniform(), ++k;
         return k;
     }
 
-private:
+  private:
     static std::uint64_t rotl(std::uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
     std::uint64_t state_[4];
 };

@@ -53,7 +53,8 @@ bool has_image_suffix(const std::string &name) {
                    [](unsigned char c) { return char(std::tolower(c)); });
     for (const char *s : {".png", ".tif", ".tiff"}) {
         const std::size_t n = std::strlen(s);
-        if (lower.size() > n && lower.compare(lower.size() - n, n, s) == 0) return true;
+        if (lower.size() > n && lower.compare(lower.size() - n, n, s) == 0)
+            return true;
     }
     return false;
 }
@@ -116,9 +117,12 @@ struct flt_source {
             first_block = block;
         }
         switch (mode) {
-        case encoder_fixed: return start + step * double(block - first_block);
-        case encoder_host: return host_encoder;
-        default: return own_mm;
+            case encoder_fixed:
+                return start + step * double(block - first_block);
+            case encoder_host:
+                return host_encoder;
+            default:
+                return own_mm;
         }
     }
 };
@@ -135,7 +139,8 @@ flt_status check_source(const char *fn, const flt_source *source) {
 }
 
 flt_status check_bus(const char *fn, const flt_u3v_sim *bus, std::size_t camera) {
-    if (bus == nullptr) return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'bus' is NULL", fn);
+    if (bus == nullptr)
+        return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'bus' is NULL", fn);
     if (bus->magic != k_bus_magic)
         return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'bus' is not a live flt_u3v_sim", fn);
     if (camera >= bus->bus.cameras())
@@ -146,7 +151,8 @@ flt_status check_bus(const char *fn, const flt_u3v_sim *bus, std::size_t camera)
 }
 
 flt_status need_camera(const char *fn, const flt_source *source) {
-    if (flt_status st = check_source(fn, source)) return st;
+    if (flt_status st = check_source(fn, source))
+        return st;
     if (source->kind != FLT_SOURCE_U3V)
         return fail(FLT_ERR_STATE, "%s: the source is not a USB3 Vision camera", fn);
     return FLT_OK;
@@ -160,52 +166,67 @@ flt_status read_encoder_options(const char *fn, const flt_options *options, flt_
     if (s.mode == encoder_chunk && s.kind != FLT_SOURCE_U3V)
         return fail(FLT_ERR_INVALID_ARGUMENT,
                     "%s: option 'source_encoder_mode' = 3 (chunk counter) needs a USB3 Vision "
-                    "camera", fn);
+                    "camera",
+                    fn);
     return FLT_OK;
 }
 
-flt_pixel_format format_of_bits(int bits) { return flt_pixel_format(bits); }
+flt_pixel_format format_of_bits(int bits) {
+    return flt_pixel_format(bits);
+}
 
 // Reads one image file into source.image and checks it.
 flt_status load_image(const char *fn, flt_source &s, std::size_t index) {
     const std::string &path = s.paths[index];
     // Checked first so that OpenCV does not print its own warning.
     if (!std::ifstream(path).good())
-        return fail(FLT_ERR_IO, "%s: image %zu '%.200s' cannot be read (missing or not "
-                                "readable)", fn, index, path.c_str());
+        return fail(FLT_ERR_IO,
+                    "%s: image %zu '%.200s' cannot be read (missing or not "
+                    "readable)",
+                    fn, index, path.c_str());
     s.image = cv::imread(path, cv::IMREAD_UNCHANGED);
     if (s.image.empty())
-        return fail(FLT_ERR_IO, "%s: image %zu '%.200s' cannot be read (missing, or not an "
-                                "image OpenCV can decode)", fn, index, path.c_str());
-    if (s.image.channels() != 1)
-        return fail(FLT_ERR_FORMAT, "%s: image %zu '%.200s' has %d channels; a laser frame is "
-                                    "monochrome (1 channel)", fn, index, path.c_str(),
-                    s.image.channels());
-    if (s.image.depth() != CV_8U && s.image.depth() != CV_16U)
-        return fail(FLT_ERR_FORMAT, "%s: image %zu '%.200s' is neither 8 nor 16 bits per pixel",
+        return fail(FLT_ERR_IO,
+                    "%s: image %zu '%.200s' cannot be read (missing, or not an "
+                    "image OpenCV can decode)",
                     fn, index, path.c_str());
+    if (s.image.channels() != 1)
+        return fail(FLT_ERR_FORMAT,
+                    "%s: image %zu '%.200s' has %d channels; a laser frame is "
+                    "monochrome (1 channel)",
+                    fn, index, path.c_str(), s.image.channels());
+    if (s.image.depth() != CV_8U && s.image.depth() != CV_16U)
+        return fail(FLT_ERR_FORMAT, "%s: image %zu '%.200s' is neither 8 nor 16 bits per pixel", fn,
+                    index, path.c_str());
     return FLT_OK;
 }
 
 flt_status read_csv(const char *fn, const std::string &csv, flt_source &s) {
     std::ifstream in(csv);
-    if (!in) return fail(FLT_ERR_IO, "%s: encoder CSV '%.200s' cannot be opened", fn, csv.c_str());
+    if (!in)
+        return fail(FLT_ERR_IO, "%s: encoder CSV '%.200s' cannot be opened", fn, csv.c_str());
     std::string line;
     std::size_t line_no = 0;
     while (std::getline(in, line)) {
         ++line_no;
-        if (!line.empty() && line.back() == '\r') line.pop_back();
-        if (line.find_first_not_of(" \t") == std::string::npos || line[0] == '#') continue;
+        if (!line.empty() && line.back() == '\r')
+            line.pop_back();
+        if (line.find_first_not_of(" \t") == std::string::npos || line[0] == '#')
+            continue;
         const std::size_t comma = line.rfind(',');
         const std::string value = comma == std::string::npos ? line : line.substr(comma + 1);
         char *end = nullptr;
         const double mm = std::strtod(value.c_str(), &end);
-        while (end && (*end == ' ' || *end == '\t')) ++end;
+        while (end && (*end == ' ' || *end == '\t'))
+            ++end;
         const bool number = end && end != value.c_str() && *end == '\0';
         if (!number) {
-            if (s.csv_encoder.empty() && line_no == 1) continue;  // a header
-            return fail(FLT_ERR_FORMAT, "%s: encoder CSV '%.200s' line %zu: '%.60s' is not a "
-                                        "number", fn, csv.c_str(), line_no, value.c_str());
+            if (s.csv_encoder.empty() && line_no == 1)
+                continue;  // a header
+            return fail(FLT_ERR_FORMAT,
+                        "%s: encoder CSV '%.200s' line %zu: '%.60s' is not a "
+                        "number",
+                        fn, csv.c_str(), line_no, value.c_str());
         }
         if (!std::isfinite(mm))
             return fail(FLT_ERR_FORMAT, "%s: encoder CSV '%.200s' line %zu: %g mm is not finite",
@@ -216,15 +237,17 @@ flt_status read_csv(const char *fn, const std::string &csv, flt_source &s) {
             name.erase(0, name.find_first_not_of(" \t\""));
             name.erase(name.find_last_not_of(" \t\"") + 1);
             if (name != base_name(s.paths[row]))
-                return fail(FLT_ERR_FORMAT, "%s: encoder CSV '%.200s' line %zu names '%.80s', "
-                                            "but image %zu is '%.80s'", fn, csv.c_str(), line_no,
-                            name.c_str(), row, base_name(s.paths[row]).c_str());
+                return fail(FLT_ERR_FORMAT,
+                            "%s: encoder CSV '%.200s' line %zu names '%.80s', "
+                            "but image %zu is '%.80s'",
+                            fn, csv.c_str(), line_no, name.c_str(), row,
+                            base_name(s.paths[row]).c_str());
         }
         s.csv_encoder.push_back(mm);
     }
     if (s.csv_encoder.size() != s.paths.size())
-        return fail(FLT_ERR_FORMAT, "%s: encoder CSV '%.200s' has %zu positions for %zu images",
-                    fn, csv.c_str(), s.csv_encoder.size(), s.paths.size());
+        return fail(FLT_ERR_FORMAT, "%s: encoder CSV '%.200s' has %zu positions for %zu images", fn,
+                    csv.c_str(), s.csv_encoder.size(), s.paths.size());
     return FLT_OK;
 }
 
@@ -233,20 +256,26 @@ flt_status create_images(const char *fn, std::vector<std::string> paths, const c
     auto s = std::make_unique<flt_source>();
     s->kind = FLT_SOURCE_IMAGES;
     s->paths = std::move(paths);
-    if (flt_status st = read_encoder_options(fn, options, *s)) return st;
+    if (flt_status st = read_encoder_options(fn, options, *s))
+        return st;
     const int bits = int(option_value(options, FLT_OPT_SOURCE_IMAGE_BITS));
     if (bits != 0 && bits != 10 && bits != 12 && bits != 16)
-        return fail(FLT_ERR_INVALID_ARGUMENT, "%s: option 'source_image_bits' = %d must be 0, "
-                                              "10, 12 or 16", fn, bits);
+        return fail(FLT_ERR_INVALID_ARGUMENT,
+                    "%s: option 'source_image_bits' = %d must be 0, "
+                    "10, 12 or 16",
+                    fn, bits);
     if (csv) {
-        if (flt_status st = read_csv(fn, csv, *s)) return st;
+        if (flt_status st = read_csv(fn, csv, *s))
+            return st;
     }
-    if (flt_status st = load_image(fn, *s, 0)) return st;
+    if (flt_status st = load_image(fn, *s, 0))
+        return st;
     const bool wide = s->image.depth() == CV_16U;
     if (!wide && bits != 0)
-        return fail(FLT_ERR_INVALID_ARGUMENT, "%s: option 'source_image_bits' = %d, but '%.200s' "
-                                              "has 8 bits per pixel", fn, bits,
-                    s->paths[0].c_str());
+        return fail(FLT_ERR_INVALID_ARGUMENT,
+                    "%s: option 'source_image_bits' = %d, but '%.200s' "
+                    "has 8 bits per pixel",
+                    fn, bits, s->paths[0].c_str());
     s->image_bits = wide ? (bits ? bits : 16) : 8;
     s->frame.width = std::uint32_t(s->image.cols);
     s->frame.height = std::uint32_t(s->image.rows);
@@ -263,17 +292,19 @@ flt_status next_images(const char *fn, flt_source &s, const flt_frame **out) {
     }
     const std::size_t index = std::size_t(s.next_index++);
     if (index > 0) {
-        if (flt_status st = load_image(fn, s, index)) return st;
+        if (flt_status st = load_image(fn, s, index))
+            return st;
     }
     const bool wide = s.image.depth() == CV_16U;
     if (std::uint32_t(s.image.cols) != s.frame.width ||
         std::uint32_t(s.image.rows) != s.frame.height || wide != (s.image_bits > 8))
-        return fail(FLT_ERR_FORMAT, "%s: image %zu '%.200s' is %d x %d, %d bits; the sequence "
-                                    "started with %u x %u, %d bits", fn, index,
-                    s.paths[index].c_str(), s.image.cols, s.image.rows, wide ? 16 : 8,
+        return fail(FLT_ERR_FORMAT,
+                    "%s: image %zu '%.200s' is %d x %d, %d bits; the sequence "
+                    "started with %u x %u, %d bits",
+                    fn, index, s.paths[index].c_str(), s.image.cols, s.image.rows, wide ? 16 : 8,
                     s.frame.width, s.frame.height, s.image_bits > 8 ? 16 : 8);
-    const double own = s.csv_encoder.empty() ? s.start + s.step * double(index)
-                                             : s.csv_encoder[index];
+    const double own =
+        s.csv_encoder.empty() ? s.start + s.step * double(index) : s.csv_encoder[index];
     s.frame.pixels = s.image.data;
     s.frame.stride = s.image.step[0];
     s.frame.block_id = index;
@@ -285,8 +316,8 @@ flt_status next_images(const char *fn, flt_source &s, const flt_frame **out) {
 
 flt_status next_sim(const char *fn, flt_source &s, const flt_frame **out) {
     double encoder_mm = k_nan;
-    if (flt_sim_next_frame(s.sim, s.pixels.data(), s.pixels.size(), s.frame.stride, &encoder_mm,
-                           0, nullptr, nullptr) != FLT_OK)
+    if (flt_sim_next_frame(s.sim, s.pixels.data(), s.pixels.size(), s.frame.stride, &encoder_mm, 0,
+                           nullptr, nullptr) != FLT_OK)
         return fail(flt_last_error_status(), "%s: the simulator failed: %s", fn,
                     flt_last_error_message());
     const std::uint64_t index = s.next_index++;
@@ -301,7 +332,8 @@ flt_status next_sim(const char *fn, flt_source &s, const flt_frame **out) {
 flt_status next_camera(flt_source &s, std::uint32_t timeout_ms, const flt_frame **out) {
     u3v::frame_view view;
     const flt_status st = s.camera->next(timeout_ms, view);
-    if (st != FLT_OK) return st;
+    if (st != FLT_OK)
+        return st;
     s.frame.pixels = view.pixels;
     s.frame.width = view.width;
     s.frame.height = view.height;
@@ -314,8 +346,8 @@ flt_status next_camera(flt_source &s, std::uint32_t timeout_ms, const flt_frame 
         // Unroll wraps of a 32-bit counter (a 64-bit one never wraps).
         const std::uint64_t c = view.chunk_counter;
         if (!s.have_counter) {
-            s.counter_total = view.chunk_counter_bytes == 4 ? std::int64_t(std::int32_t(c))
-                                                            : std::int64_t(c);
+            s.counter_total =
+                view.chunk_counter_bytes == 4 ? std::int64_t(std::int32_t(c)) : std::int64_t(c);
         } else if (view.chunk_counter_bytes == 4) {
             s.counter_total += std::int64_t(std::int32_t(std::uint32_t(c - s.last_counter)));
         } else {
@@ -325,8 +357,8 @@ flt_status next_camera(flt_source &s, std::uint32_t timeout_ms, const flt_frame 
         s.last_counter = c;
         own = s.start + s.mm_per_count * double(s.counter_total);
     } else if (s.mode == encoder_auto) {
-        own = s.start + s.step * double(view.block_id - (s.have_first_block ? s.first_block
-                                                                            : view.block_id));
+        own = s.start +
+              s.step * double(view.block_id - (s.have_first_block ? s.first_block : view.block_id));
     }
     s.frame.encoder_mm = s.mode == encoder_chunk ? own : s.encoder_of(view.block_id, own);
     *out = &s.frame;
@@ -346,7 +378,8 @@ FLT_API flt_status FLT_CALL flt_source_create_sim(flt_sim *sim, const flt_option
         FLT_CHECK_NOT_NULL(fn, sim);
         auto s = std::make_unique<flt_source>();
         s->kind = FLT_SOURCE_SIMULATOR;
-        if (flt_status st = read_encoder_options(fn, options, *s)) return st;
+        if (flt_status st = read_encoder_options(fn, options, *s))
+            return st;
         std::uint32_t w = 0, h = 0;
         flt_pixel_format format = FLT_PIXEL_MONO8;
         if (flt_sim_frame_size(sim, &w, &h) != FLT_OK ||
@@ -366,14 +399,14 @@ FLT_API flt_status FLT_CALL flt_source_create_sim(flt_sim *sim, const flt_option
 
 FLT_API flt_status FLT_CALL flt_source_create_images(const char *const *paths, size_t count,
                                                      const char *encoder_csv,
-                                                     const flt_options *options,
-                                                     flt_source **out) {
+                                                     const flt_options *options, flt_source **out) {
     const char *fn = "flt_source_create_images";
     return guard(fn, [&] {
         FLT_CHECK_NOT_NULL(fn, out);
         *out = nullptr;
         FLT_CHECK_NOT_NULL(fn, paths);
-        if (count == 0) return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'count' is 0", fn);
+        if (count == 0)
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'count' is 0", fn);
         std::vector<std::string> list;
         for (size_t i = 0; i < count; ++i) {
             if (!paths[i])
@@ -398,15 +431,20 @@ FLT_API flt_status FLT_CALL flt_source_create_image_dir(const char *directory,
             return fail(FLT_ERR_IO, "%s: directory '%.200s' cannot be opened", fn, directory);
         std::vector<std::string> names;
         while (dirent *e = readdir(dir))
-            if (has_image_suffix(e->d_name)) names.emplace_back(e->d_name);
+            if (has_image_suffix(e->d_name))
+                names.emplace_back(e->d_name);
         closedir(dir);
         if (names.empty())
-            return fail(FLT_ERR_NOT_FOUND, "%s: directory '%.200s' holds no .png, .tif or .tiff "
-                                           "file", fn, directory);
+            return fail(FLT_ERR_NOT_FOUND,
+                        "%s: directory '%.200s' holds no .png, .tif or .tiff "
+                        "file",
+                        fn, directory);
         std::sort(names.begin(), names.end());
         std::string folder(directory);
-        if (folder.back() != '/') folder += '/';
-        for (std::string &n : names) n = folder + n;
+        if (folder.back() != '/')
+            folder += '/';
+        for (std::string &n : names)
+            n = folder + n;
         return create_images(fn, std::move(names), encoder_csv, options, out);
     });
 }
@@ -461,14 +499,19 @@ FLT_API flt_status FLT_CALL flt_camera_list_get(const flt_camera_list *list, siz
         if (list->magic != k_list_magic)
             return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'list' is not a live list", fn);
         if (index >= list->cameras.size())
-            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'index' = %zu but the list has "
-                                                  "%zu camera(s)", fn, index,
-                        list->cameras.size());
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'index' = %zu but the list has "
+                        "%zu camera(s)",
+                        fn, index, list->cameras.size());
         const u3v::camera_entry &e = list->cameras[index];
-        if (vendor) *vendor = e.vendor.c_str();
-        if (model) *model = e.model.c_str();
-        if (serial) *serial = e.serial.c_str();
-        if (speed_mbps) *speed_mbps = e.desc.speed_mbps;
+        if (vendor)
+            *vendor = e.vendor.c_str();
+        if (model)
+            *model = e.model.c_str();
+        if (serial)
+            *serial = e.serial.c_str();
+        if (speed_mbps)
+            *speed_mbps = e.desc.speed_mbps;
         return FLT_OK;
     });
 }
@@ -484,7 +527,8 @@ FLT_API flt_status FLT_CALL flt_source_open_u3v(flt_u3v_sim *bus, const char *se
                         fn);
         auto s = std::make_unique<flt_source>();
         s->kind = FLT_SOURCE_U3V;
-        if (flt_status st = read_encoder_options(fn, options, *s)) return st;
+        if (flt_status st = read_encoder_options(fn, options, *s))
+            return st;
         u3v::camera_config config;
         config.control_timeout_floor_ms =
             unsigned(option_value(options, FLT_OPT_U3V_CONTROL_TIMEOUT));
@@ -521,7 +565,8 @@ FLT_API void FLT_CALL flt_source_destroy(flt_source *source) {
 FLT_API flt_status FLT_CALL flt_source_kind_of(const flt_source *source, flt_source_kind *out) {
     const char *fn = "flt_source_kind_of";
     return guard(fn, [&] {
-        if (flt_status st = check_source(fn, source)) return st;
+        if (flt_status st = check_source(fn, source))
+            return st;
         FLT_CHECK_NOT_NULL(fn, out);
         *out = source->kind;
         return FLT_OK;
@@ -531,13 +576,16 @@ FLT_API flt_status FLT_CALL flt_source_kind_of(const flt_source *source, flt_sou
 FLT_API flt_status FLT_CALL flt_source_start(flt_source *source) {
     const char *fn = "flt_source_start";
     return guard(fn, [&] {
-        if (flt_status st = check_source(fn, source)) return st;
+        if (flt_status st = check_source(fn, source))
+            return st;
         if (source->started)
             return fail(FLT_ERR_STATE, "%s: the source is already started", fn);
-        if (source->kind == FLT_SOURCE_U3V) source->camera->start();
+        if (source->kind == FLT_SOURCE_U3V)
+            source->camera->start();
         if (source->kind == FLT_SOURCE_IMAGES && source->next_index > 0) {
             source->next_index = 0;
-            if (flt_status st = load_image(fn, *source, 0)) return st;
+            if (flt_status st = load_image(fn, *source, 0))
+                return st;
         }
         source->have_first_block = false;
         source->have_counter = false;
@@ -549,8 +597,10 @@ FLT_API flt_status FLT_CALL flt_source_start(flt_source *source) {
 FLT_API flt_status FLT_CALL flt_source_stop(flt_source *source) {
     const char *fn = "flt_source_stop";
     return guard(fn, [&] {
-        if (flt_status st = check_source(fn, source)) return st;
-        if (source->kind == FLT_SOURCE_U3V) source->camera->stop();
+        if (flt_status st = check_source(fn, source))
+            return st;
+        if (source->kind == FLT_SOURCE_U3V)
+            source->camera->stop();
         source->started = false;
         source->frame.pixels = nullptr;
         return FLT_OK;
@@ -563,39 +613,53 @@ FLT_API flt_status FLT_CALL flt_source_next(flt_source *source, uint32_t timeout
     return guard(fn, [&] {
         FLT_CHECK_NOT_NULL(fn, out);
         *out = nullptr;
-        if (flt_status st = check_source(fn, source)) return st;
+        if (flt_status st = check_source(fn, source))
+            return st;
         if (!source->started)
             return fail(FLT_ERR_STATE, "%s: the source is not started; call flt_source_start()",
                         fn);
         switch (source->kind) {
-        case FLT_SOURCE_SIMULATOR: return next_sim(fn, *source, out);
-        case FLT_SOURCE_IMAGES: return next_images(fn, *source, out);
-        case FLT_SOURCE_U3V: return next_camera(*source, timeout_ms, out);
-        default: break;
+            case FLT_SOURCE_SIMULATOR:
+                return next_sim(fn, *source, out);
+            case FLT_SOURCE_IMAGES:
+                return next_images(fn, *source, out);
+            case FLT_SOURCE_U3V:
+                return next_camera(*source, timeout_ms, out);
+            default:
+                break;
         }
         return fail(FLT_ERR_INTERNAL, "%s: unknown source kind", fn);
     });
 }
 
 FLT_API flt_status FLT_CALL flt_frame_info(const flt_frame *frame, const void **pixels,
-                                           uint32_t *width, uint32_t *height,
-                                           size_t *stride_bytes, flt_pixel_format *format,
-                                           uint64_t *block_id, uint64_t *timestamp_ns,
-                                           double *encoder_mm) {
+                                           uint32_t *width, uint32_t *height, size_t *stride_bytes,
+                                           flt_pixel_format *format, uint64_t *block_id,
+                                           uint64_t *timestamp_ns, double *encoder_mm) {
     const char *fn = "flt_frame_info";
     return guard(fn, [&] {
         FLT_CHECK_NOT_NULL(fn, frame);
         if (frame->magic != k_frame_magic || !frame->pixels)
-            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'frame' is not a live frame "
-                                                  "(its source was destroyed or stopped?)", fn);
-        if (pixels) *pixels = frame->pixels;
-        if (width) *width = frame->width;
-        if (height) *height = frame->height;
-        if (stride_bytes) *stride_bytes = frame->stride;
-        if (format) *format = frame->format;
-        if (block_id) *block_id = frame->block_id;
-        if (timestamp_ns) *timestamp_ns = frame->timestamp_ns;
-        if (encoder_mm) *encoder_mm = frame->encoder_mm;
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'frame' is not a live frame "
+                        "(its source was destroyed or stopped?)",
+                        fn);
+        if (pixels)
+            *pixels = frame->pixels;
+        if (width)
+            *width = frame->width;
+        if (height)
+            *height = frame->height;
+        if (stride_bytes)
+            *stride_bytes = frame->stride;
+        if (format)
+            *format = frame->format;
+        if (block_id)
+            *block_id = frame->block_id;
+        if (timestamp_ns)
+            *timestamp_ns = frame->timestamp_ns;
+        if (encoder_mm)
+            *encoder_mm = frame->encoder_mm;
         return FLT_OK;
     });
 }
@@ -603,7 +667,8 @@ FLT_API flt_status FLT_CALL flt_frame_info(const flt_frame *frame, const void **
 FLT_API flt_status FLT_CALL flt_source_set_encoder(flt_source *source, double encoder_mm) {
     const char *fn = "flt_source_set_encoder";
     return guard(fn, [&] {
-        if (flt_status st = check_source(fn, source)) return st;
+        if (flt_status st = check_source(fn, source))
+            return st;
         if (source->mode != encoder_host)
             return fail(FLT_ERR_STATE, "%s: option 'source_encoder_mode' is %d, not 2 (host)", fn,
                         source->mode);
@@ -615,11 +680,12 @@ FLT_API flt_status FLT_CALL flt_source_set_encoder(flt_source *source, double en
     });
 }
 
-FLT_API flt_status FLT_CALL flt_source_count(const flt_source *source,
-                                             flt_source_counter counter, uint64_t *out) {
+FLT_API flt_status FLT_CALL flt_source_count(const flt_source *source, flt_source_counter counter,
+                                             uint64_t *out) {
     const char *fn = "flt_source_count";
     return guard(fn, [&] {
-        if (flt_status st = check_source(fn, source)) return st;
+        if (flt_status st = check_source(fn, source))
+            return st;
         FLT_CHECK_NOT_NULL(fn, out);
         if (enum_arg(counter) < 0 || enum_arg(counter) > int(FLT_COUNT_STREAM_RECOVERIES))
             return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'counter' = %d is no counter", fn,
@@ -635,7 +701,8 @@ FLT_API flt_status FLT_CALL flt_source_count(const flt_source *source,
 }
 
 FLT_API const char *FLT_CALL flt_source_stream_error(const flt_source *source) {
-    if (!source || source->magic != k_source_magic || !source->camera) return "";
+    if (!source || source->magic != k_source_magic || !source->camera)
+        return "";
     return source->camera->stream_error().c_str();
 }
 
@@ -643,7 +710,8 @@ FLT_API flt_status FLT_CALL flt_source_camera_string(const flt_source *source,
                                                      flt_camera_string which, const char **out) {
     const char *fn = "flt_source_camera_string";
     return guard(fn, [&] {
-        if (flt_status st = need_camera(fn, source)) return st;
+        if (flt_status st = need_camera(fn, source))
+            return st;
         FLT_CHECK_NOT_NULL(fn, out);
         if (enum_arg(which) < 0 || enum_arg(which) > int(FLT_CAMERA_USER_NAME))
             return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'which' = %d is no camera string",
@@ -657,7 +725,8 @@ FLT_API flt_status FLT_CALL flt_source_camera_value(const flt_source *source,
                                                     flt_camera_value which, uint64_t *out) {
     const char *fn = "flt_source_camera_value";
     return guard(fn, [&] {
-        if (flt_status st = need_camera(fn, source)) return st;
+        if (flt_status st = need_camera(fn, source))
+            return st;
         FLT_CHECK_NOT_NULL(fn, out);
         if (enum_arg(which) < 0)
             return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'which' = %d is no camera value",
@@ -667,14 +736,15 @@ FLT_API flt_status FLT_CALL flt_source_camera_value(const flt_source *source,
     });
 }
 
-#define FLT_FEATURE_CALL(name, body)                                          \
-    const char *fn = name;                                                    \
-    return guard(fn, [&] {                                                    \
-        if (flt_status st = need_camera(fn, source)) return st;               \
-        FLT_CHECK_NOT_NULL(fn, feature);                                      \
-        body;                                                                 \
-        return FLT_OK;                                                        \
-    })
+#define FLT_FEATURE_CALL(name, body)           \
+  const char *fn = name;                       \
+  return guard(fn, [&] {                       \
+  if (flt_status st = need_camera(fn, source)) \
+    return st;                                 \
+  FLT_CHECK_NOT_NULL(fn, feature);             \
+  body;                                        \
+  return FLT_OK;                               \
+  })
 
 FLT_API flt_status FLT_CALL flt_source_get_int(flt_source *source, const char *feature,
                                                int64_t *out) {
@@ -713,28 +783,36 @@ FLT_API flt_status FLT_CALL flt_source_map_feature(flt_source *source, const cha
                                                    int is_float) {
     FLT_FEATURE_CALL("flt_source_map_feature", {
         if (length != 1 && length != 2 && length != 4 && length != 8)
-            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'length' = %u must be 1, 2, 4 "
-                                                  "or 8 bytes", fn, length);
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'length' = %u must be 1, 2, 4 "
+                        "or 8 bytes",
+                        fn, length);
         if (is_float && length != 4 && length != 8)
-            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'length' = %u: a float register "
-                                                  "has 4 or 8 bytes", fn, length);
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'length' = %u: a float register "
+                        "has 4 or 8 bytes",
+                        fn, length);
         source->camera->map_feature(feature, address, length, is_float != 0);
     });
 }
 
-FLT_API flt_status FLT_CALL flt_source_read_memory(flt_source *source, uint64_t address,
-                                                   void *out, size_t bytes) {
+FLT_API flt_status FLT_CALL flt_source_read_memory(flt_source *source, uint64_t address, void *out,
+                                                   size_t bytes) {
     const char *fn = "flt_source_read_memory";
     return guard(fn, [&] {
-        if (flt_status st = need_camera(fn, source)) return st;
+        if (flt_status st = need_camera(fn, source))
+            return st;
         FLT_CHECK_NOT_NULL(fn, out);
         if (bytes == 0 || bytes > (64u << 20))
-            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'bytes' = %zu is outside "
-                                                  "[1, 64 MiB]", fn, bytes);
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'bytes' = %zu is outside "
+                        "[1, 64 MiB]",
+                        fn, bytes);
         if (address > UINT64_MAX - (bytes - 1))  // the range must not wrap past 2^64
-            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'address' = 0x%llx + %zu "
-                        "bytes passes the end of the address space", fn,
-                        (unsigned long long)address, bytes);
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'address' = 0x%llx + %zu "
+                        "bytes passes the end of the address space",
+                        fn, (unsigned long long)address, bytes);
         source->camera->read_memory(address, static_cast<std::uint8_t *>(out), bytes);
         return FLT_OK;
     });
@@ -744,17 +822,20 @@ FLT_API flt_status FLT_CALL flt_source_write_memory(flt_source *source, uint64_t
                                                     const void *bytes_in, size_t bytes) {
     const char *fn = "flt_source_write_memory";
     return guard(fn, [&] {
-        if (flt_status st = need_camera(fn, source)) return st;
+        if (flt_status st = need_camera(fn, source))
+            return st;
         FLT_CHECK_NOT_NULL(fn, bytes_in);
         if (bytes == 0 || bytes > (64u << 20))
-            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'bytes' = %zu is outside "
-                                                  "[1, 64 MiB]", fn, bytes);
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'bytes' = %zu is outside "
+                        "[1, 64 MiB]",
+                        fn, bytes);
         if (address > UINT64_MAX - (bytes - 1))  // the range must not wrap past 2^64
-            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'address' = 0x%llx + %zu "
-                        "bytes passes the end of the address space", fn,
-                        (unsigned long long)address, bytes);
-        source->camera->write_memory(address, static_cast<const std::uint8_t *>(bytes_in),
-                                     bytes);
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'address' = 0x%llx + %zu "
+                        "bytes passes the end of the address space",
+                        fn, (unsigned long long)address, bytes);
+        source->camera->write_memory(address, static_cast<const std::uint8_t *>(bytes_in), bytes);
         return FLT_OK;
     });
 }
@@ -794,33 +875,42 @@ FLT_API flt_status FLT_CALL flt_u3v_sim_add_camera(flt_u3v_sim *bus, const char 
         FLT_CHECK_NOT_NULL(fn, serial);
         for (const char *s : {vendor, model, serial})
             if (std::strlen(s) > 63)
-                return fail(FLT_ERR_INVALID_ARGUMENT, "%s: string '%.80s...' is longer than 63 "
-                                                      "bytes", fn, s);
+                return fail(FLT_ERR_INVALID_ARGUMENT,
+                            "%s: string '%.80s...' is longer than 63 "
+                            "bytes",
+                            fn, s);
         if (bus->bus.cameras() >= 8)
             return fail(FLT_ERR_BUFFER_FULL, "%s: the bus already holds 8 cameras", fn);
         if (width < 16 || width > 8192)
-            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'width' = %u is outside "
-                                                  "[16, 8192]", fn, width);
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'width' = %u is outside "
+                        "[16, 8192]",
+                        fn, width);
         if (height < 16 || height > 8192)
-            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'height' = %u is outside "
-                                                  "[16, 8192]", fn, height);
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'height' = %u is outside "
+                        "[16, 8192]",
+                        fn, height);
         const int raw_format = enum_arg(format);
         if (raw_format != FLT_PIXEL_MONO8 && raw_format != FLT_PIXEL_MONO10 &&
             raw_format != FLT_PIXEL_MONO12 && raw_format != FLT_PIXEL_MONO16)
-            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'format' = %d is not a pixel "
-                                                  "format", fn, raw_format);
-        const std::size_t index = bus->bus.add_camera(vendor, model, serial, width, height,
-                                                      raw_format);
-        if (index_out) *index_out = index;
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'format' = %d is not a pixel "
+                        "format",
+                        fn, raw_format);
+        const std::size_t index =
+            bus->bus.add_camera(vendor, model, serial, width, height, raw_format);
+        if (index_out)
+            *index_out = index;
         return FLT_OK;
     });
 }
 
-FLT_API flt_status FLT_CALL flt_u3v_sim_set_frames(flt_u3v_sim *bus, size_t camera,
-                                                   flt_sim *sim) {
+FLT_API flt_status FLT_CALL flt_u3v_sim_set_frames(flt_u3v_sim *bus, size_t camera, flt_sim *sim) {
     const char *fn = "flt_u3v_sim_set_frames";
     return guard(fn, [&] {
-        if (flt_status st = check_bus(fn, bus, camera)) return st;
+        if (flt_status st = check_bus(fn, bus, camera))
+            return st;
         u3v::sim_set_frames(bus->bus.camera(camera), sim);
         return FLT_OK;
     });
@@ -830,10 +920,13 @@ FLT_API flt_status FLT_CALL flt_u3v_sim_set(flt_u3v_sim *bus, size_t camera,
                                             flt_u3v_sim_param param, uint64_t value) {
     const char *fn = "flt_u3v_sim_set";
     return guard(fn, [&] {
-        if (flt_status st = check_bus(fn, bus, camera)) return st;
+        if (flt_status st = check_bus(fn, bus, camera))
+            return st;
         if (enum_arg(param) < 0)
-            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'param' = %d: the parameter is "
-                                                  "unknown", fn, enum_arg(param));
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'param' = %d: the parameter is "
+                        "unknown",
+                        fn, enum_arg(param));
         u3v::sim_set(bus->bus.camera(camera), param, value);
         return FLT_OK;
     });
@@ -843,25 +936,30 @@ FLT_API flt_status FLT_CALL flt_u3v_sim_get(const flt_u3v_sim *bus, size_t camer
                                             flt_u3v_sim_param param, uint64_t *out) {
     const char *fn = "flt_u3v_sim_get";
     return guard(fn, [&] {
-        if (flt_status st = check_bus(fn, bus, camera)) return st;
+        if (flt_status st = check_bus(fn, bus, camera))
+            return st;
         FLT_CHECK_NOT_NULL(fn, out);
         if (enum_arg(param) < 0)
-            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'param' = %d: the parameter is "
-                                                  "unknown", fn, enum_arg(param));
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'param' = %d: the parameter is "
+                        "unknown",
+                        fn, enum_arg(param));
         *out = u3v::sim_get(bus->bus.camera(camera), param);
         return FLT_OK;
     });
 }
 
-FLT_API flt_status FLT_CALL flt_u3v_sim_inject(flt_u3v_sim *bus, size_t camera,
-                                               flt_u3v_fault fault, uint64_t at,
-                                               uint32_t count) {
+FLT_API flt_status FLT_CALL flt_u3v_sim_inject(flt_u3v_sim *bus, size_t camera, flt_u3v_fault fault,
+                                               uint64_t at, uint32_t count) {
     const char *fn = "flt_u3v_sim_inject";
     return guard(fn, [&] {
-        if (flt_status st = check_bus(fn, bus, camera)) return st;
+        if (flt_status st = check_bus(fn, bus, camera))
+            return st;
         if (enum_arg(fault) < 0)
-            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'fault' = %d: the fault is "
-                                                  "unknown", fn, enum_arg(fault));
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'fault' = %d: the fault is "
+                        "unknown",
+                        fn, enum_arg(fault));
         u3v::sim_inject(bus->bus.camera(camera), fault, at, count);
         return FLT_OK;
     });
@@ -871,12 +969,14 @@ FLT_API flt_status FLT_CALL flt_u3v_sim_peek(const flt_u3v_sim *bus, size_t came
                                              uint64_t address, uint32_t *out) {
     const char *fn = "flt_u3v_sim_peek";
     return guard(fn, [&] {
-        if (flt_status st = check_bus(fn, bus, camera)) return st;
+        if (flt_status st = check_bus(fn, bus, camera))
+            return st;
         FLT_CHECK_NOT_NULL(fn, out);
         if (!u3v::sim_peek(bus->bus.camera(camera), address, *out))
-            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'address' = 0x%llx is outside "
-                                                  "the register map", fn,
-                        (unsigned long long)address);
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'address' = 0x%llx is outside "
+                        "the register map",
+                        fn, (unsigned long long)address);
         return FLT_OK;
     });
 }

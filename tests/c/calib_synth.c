@@ -25,7 +25,8 @@ int synth_project(double x, double s, double z, double *u, double *v) {
     const double h = SYNTH_CAMERA_HEIGHT_MM, r = 1 / sqrt(2.0);
     const double px = x, ps = s + h, pz = z - h;
     const double xc = px, yc = -r * ps - r * pz, zc = r * ps - r * pz;
-    if (zc <= 0) return 0;
+    if (zc <= 0)
+        return 0;
     double xd, yd;
     distort(xc / zc, yc / zc, &xd, &yd);
     *u = synth_camera[0] * xd + synth_camera[2];
@@ -67,7 +68,8 @@ void synth_ray_map(double *ray_map) {
                 const double det = j00 * j11 - j01 * j10;
                 x -= (j11 * rx - j01 * ry) / det;
                 y -= (-j10 * rx + j00 * ry) / det;
-                if (fabs(rx) + fabs(ry) < 1e-15) break;
+                if (fabs(rx) + fabs(ry) < 1e-15)
+                    break;
             }
             ray_map[2 * ((size_t)v * SYNTH_WIDTH + u)] = x;
             ray_map[2 * ((size_t)v * SYNTH_WIDTH + u) + 1] = y;
@@ -75,8 +77,7 @@ void synth_ray_map(double *ray_map) {
 }
 
 static void rotation(double rx, double ry, double rz, double r[9]) {
-    const double cx = cos(rx), sx = sin(rx), cy = cos(ry), sy = sin(ry),
-                 cz = cos(rz), sz = sin(rz);
+    const double cx = cos(rx), sx = sin(rx), cy = cos(ry), sy = sin(ry), cz = cos(rz), sz = sin(rz);
     /* R = Rz * Ry * Rx */
     r[0] = cz * cy, r[1] = cz * sy * sx - sz * cx, r[2] = cz * sy * cx + sz * sx;
     r[3] = sz * cy, r[4] = sz * sy * sx + cz * cx, r[5] = sz * sy * cx - cz * sx;
@@ -85,8 +86,7 @@ static void rotation(double rx, double ry, double rz, double r[9]) {
 
 /* Inverse of a 3x3 matrix (row-major). */
 static void inverse3(const double m[9], double out[9]) {
-    const double det = m[0] * (m[4] * m[8] - m[5] * m[7]) -
-                       m[1] * (m[3] * m[8] - m[5] * m[6]) +
+    const double det = m[0] * (m[4] * m[8] - m[5] * m[7]) - m[1] * (m[3] * m[8] - m[5] * m[6]) +
                        m[2] * (m[3] * m[7] - m[4] * m[6]);
     out[0] = (m[4] * m[8] - m[5] * m[7]) / det;
     out[1] = (m[2] * m[7] - m[1] * m[8]) / det;
@@ -112,8 +112,8 @@ typedef double (*board_level)(const void *pattern, double X, double Y);
  * rotation (rx, ry, rz). Returns 0 if a corner of the margin falls outside
  * the image or behind the camera. */
 static int render_board(const double *ray_map, double w, double hgt, double margin,
-                        board_level level, const void *pattern, double rx, double ry,
-                        double rz, const double t_mm[3], uint8_t *image) {
+                        board_level level, const void *pattern, double rx, double ry, double rz,
+                        const double t_mm[3], uint8_t *image) {
     double r[9], g[9], ginv[9];
     rotation(rx, ry, rz, r);
     /* Board (X, Y, 1) -> camera ray: G = [r1 r2 t]. */
@@ -132,12 +132,14 @@ static int render_board(const double *ray_map, double w, double hgt, double marg
         const double Y = (k & 2) ? hgt + margin : -margin;
         const double cxr = g[0] * X + g[1] * Y + g[2], cyr = g[3] * X + g[4] * Y + g[5],
                      czr = g[6] * X + g[7] * Y + g[8];
-        if (czr <= 0) return 0;
+        if (czr <= 0)
+            return 0;
         double xd, yd;
         distort(cxr / czr, cyr / czr, &xd, &yd);
         const double u = synth_camera[0] * xd + synth_camera[2];
         const double v = synth_camera[1] * yd + synth_camera[3];
-        if (u < 2 || v < 2 || u > SYNTH_WIDTH - 3 || v > SYNTH_HEIGHT - 3) return 0;
+        if (u < 2 || v < 2 || u > SYNTH_WIDTH - 3 || v > SYNTH_HEIGHT - 3)
+            return 0;
     }
     const size_t npx = (size_t)SYNTH_WIDTH * SYNTH_HEIGHT;
     for (size_t i = 0; i < npx; ++i) {
@@ -146,16 +148,17 @@ static int render_board(const double *ray_map, double w, double hgt, double marg
         /* Board coordinates of the pixel centre and, from the neighbouring
          * pixels' rays, their derivatives in u and v. */
         double bx[3], by[3];
-        const double *rays[3] = {
-            ray, ray_map + 2 * (i + (u + 1 < SYNTH_WIDTH ? 1 : -1)),
-            ray_map + 2 * (i + (v + 1 < SYNTH_HEIGHT ? SYNTH_WIDTH : -SYNTH_WIDTH))};
+        const double *rays[3] = {ray, ray_map + 2 * (i + (u + 1 < SYNTH_WIDTH ? 1 : -1)),
+                                 ray_map +
+                                     2 * (i + (v + 1 < SYNTH_HEIGHT ? SYNTH_WIDTH : -SYNTH_WIDTH))};
         int behind = 0;
         for (int k = 0; k < 3; ++k) {
             const double a = rays[k][0], b = rays[k][1];
             const double X = ginv[0] * a + ginv[1] * b + ginv[2];
             const double Y = ginv[3] * a + ginv[4] * b + ginv[5];
             const double W = ginv[6] * a + ginv[7] * b + ginv[8];
-            if (W <= 0) behind = 1;
+            if (W <= 0)
+                behind = 1;
             bx[k] = X / W, by[k] = Y / W;
         }
         if (behind) {
@@ -189,9 +192,8 @@ static double chessboard_level(const void *pattern, double X, double Y) {
     return (((int)floor(X / square_mm) + (int)floor(Y / square_mm)) & 1) ? 210 : 40;
 }
 
-int synth_render_chessboard(const double *ray_map, int squares_x, int squares_y,
-                            double square_mm, double rx, double ry, double rz,
-                            const double t_mm[3], uint8_t *image) {
+int synth_render_chessboard(const double *ray_map, int squares_x, int squares_y, double square_mm,
+                            double rx, double ry, double rz, const double t_mm[3], uint8_t *image) {
     return render_board(ray_map, squares_x * square_mm, squares_y * square_mm, square_mm,
                         chessboard_level, &square_mm, rx, ry, rz, t_mm, image);
 }
@@ -208,22 +210,23 @@ static double circle_level(const void *pattern, double X, double Y) {
     const circle_grid *c = (const circle_grid *)pattern;
     const double x = X - c->origin_mm, y = Y - c->origin_mm, p = c->pitch_mm;
     const int i = (int)lround(y / p);
-    if (i < 0 || i >= c->rows) return 210;
+    if (i < 0 || i >= c->rows)
+        return 210;
     const double shift = c->asymmetric ? (double)(i % 2) * p : 0.0;
     const double column_pitch = c->asymmetric ? 2 * p : p;
     const int j = (int)lround((x - shift) / column_pitch);
-    if (j < 0 || j >= c->columns) return 210;
+    if (j < 0 || j >= c->columns)
+        return 210;
     const double dx = x - (shift + j * column_pitch), dy = y - i * p;
     return dx * dx + dy * dy <= c->radius_mm * c->radius_mm ? 40 : 210;
 }
 
 int synth_render_circle_grid(const double *ray_map, int columns, int rows, double pitch_mm,
-                             double radius_mm, int asymmetric, double rx, double ry,
-                             double rz, const double t_mm[3], uint8_t *image) {
+                             double radius_mm, int asymmetric, double rx, double ry, double rz,
+                             const double t_mm[3], uint8_t *image) {
     const circle_grid c = {columns, rows, asymmetric, pitch_mm, radius_mm, pitch_mm};
     /* The board reaches one pitch beyond the outermost centres. */
     const double w = ((asymmetric ? 2 * (columns - 1) + 1 : columns - 1) + 2) * pitch_mm;
     const double hgt = (rows - 1 + 2) * pitch_mm;
-    return render_board(ray_map, w, hgt, pitch_mm, circle_level, &c, rx, ry, rz, t_mm,
-                        image);
+    return render_board(ray_map, w, hgt, pitch_mm, circle_level, &c, rx, ry, rz, t_mm, image);
 }

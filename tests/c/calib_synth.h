@@ -15,9 +15,9 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#define SYNTH_WIDTH 2048
-#define SYNTH_HEIGHT 2048
-#define SYNTH_FOCAL_PX (6.0 / 0.0055) /* 1090.9 px */
+#define SYNTH_WIDTH            2048
+#define SYNTH_HEIGHT           2048
+#define SYNTH_FOCAL_PX         (6.0 / 0.0055) /* 1090.9 px */
 #define SYNTH_CAMERA_HEIGHT_MM 1140.0
 
 /* fx, fy, cx, cy (px) and k1 k2 p1 p2 k3 k4 k5 k6 of the reference camera. */
@@ -44,9 +44,8 @@ double synth_uniform(uint64_t *state);
  * anti-aliased. ray_map: per pixel the undistorted normalised ray (x, y),
  * 2 doubles per pixel, from synth_ray_map(). Returns 0 if any corner of the
  * board falls outside the image. */
-int synth_render_chessboard(const double *ray_map, int squares_x, int squares_y,
-                            double square_mm, double rx, double ry, double rz,
-                            const double t_mm[3], uint8_t *image);
+int synth_render_chessboard(const double *ray_map, int squares_x, int squares_y, double square_mm,
+                            double rx, double ry, double rz, const double t_mm[3], uint8_t *image);
 
 /* Renders a grid of columns x rows dark circles of radius_mm on white,
  * centres pitch_mm apart in OpenCV's layout (asymmetric: the rows alternate
@@ -55,8 +54,8 @@ int synth_render_chessboard(const double *ray_map, int squares_x, int squares_y,
  * at the pose of synth_render_chessboard (t_mm: the board's centre). Returns
  * 0 if the board falls outside the image. */
 int synth_render_circle_grid(const double *ray_map, int columns, int rows, double pitch_mm,
-                             double radius_mm, int asymmetric, double rx, double ry,
-                             double rz, const double t_mm[3], uint8_t *image);
+                             double radius_mm, int asymmetric, double rx, double ry, double rz,
+                             const double t_mm[3], uint8_t *image);
 
 /* Fills ray_map (2 * SYNTH_WIDTH * SYNTH_HEIGHT doubles) with each pixel's
  * undistorted normalised coordinates, by inverting the distortion with
@@ -66,11 +65,10 @@ void synth_ray_map(double *ray_map);
 /* cmocka 1.1.5 has no assert_double_equal: |a - b| <= tol, printing both.
  * Needs <math.h> and <cmocka.h> first. */
 #define assert_near(a, b, tol)                                                 \
-    do {                                                                       \
-        const double a_ = (a), b_ = (b);                                       \
-        if (!(fabs(a_ - b_) <= (tol)))                                         \
-            fail_msg("%s = %.17g, expected %.17g +- %g", #a, a_, b_,           \
-                     (double)(tol));                                           \
-    } while (0)
+  do {                                                                         \
+    const double a_ = (a), b_ = (b);                                           \
+    if (!(fabs(a_ - b_) <= (tol)))                                             \
+      fail_msg("%s = %.17g, expected %.17g +- %g", #a, a_, b_, (double)(tol)); \
+  } while (0)
 
 #endif

@@ -8,7 +8,8 @@ static const double k_pi = 3.14159265358979323846;
 
 void test_rng_seed(test_rng *rng, unsigned seed) {
     rng->state = 0x9E3779B97F4A7C15ull ^ ((uint64_t)seed * 0xD1B54A32D192ED03ull);
-    if (rng->state == 0) rng->state = 1;
+    if (rng->state == 0)
+        rng->state = 1;
 }
 
 double test_rng_uniform(test_rng *rng) {
@@ -22,7 +23,8 @@ double test_rng_uniform(test_rng *rng) {
 
 double test_rng_gauss(test_rng *rng) {
     double u1 = test_rng_uniform(rng), u2 = test_rng_uniform(rng);
-    if (u1 < 1e-300) u1 = 1e-300;
+    if (u1 < 1e-300)
+        u1 = 1e-300;
     return sqrt(-2.0 * log(u1)) * cos(2.0 * k_pi * u2);
 }
 
@@ -30,9 +32,8 @@ double test_surface(double x, double s) {
     return 12.0 * sin(2.0 * k_pi * s / 1800.0) * cos(2.0 * k_pi * x / 1500.0);
 }
 
-test_sheet *test_sheet_make(size_t rows, size_t fibers, double s0, double dx,
-                            double jitter, double pitch, double laser_spacing,
-                            unsigned seed) {
+test_sheet *test_sheet_make(size_t rows, size_t fibers, double s0, double dx, double jitter,
+                            double pitch, double laser_spacing, unsigned seed) {
     test_sheet *t = calloc(1, sizeof *t);
     test_rng rng;
     test_rng_seed(&rng, seed);
@@ -64,8 +65,7 @@ test_sheet *test_sheet_make(size_t rows, size_t fibers, double s0, double dx,
     return t;
 }
 
-void test_sheet_add_noise(test_sheet *t, double vib_sigma, double peak_sigma,
-                          unsigned seed) {
+void test_sheet_add_noise(test_sheet *t, double vib_sigma, double peak_sigma, unsigned seed) {
     test_rng rng;
     test_rng_seed(&rng, seed);
     for (size_t r = 0; r < t->rows; ++r) {
@@ -79,10 +79,10 @@ void test_sheet_add_noise(test_sheet *t, double vib_sigma, double peak_sigma,
     }
 }
 
-static double shear_wave(double p, double amplitude, double decay, double period,
-                         double interval) {
+static double shear_wave(double p, double amplitude, double decay, double period, double interval) {
     double cut = floor(p / interval) * interval;
-    if (cut <= 0.0) return 0.0;
+    if (cut <= 0.0)
+        return 0.0;
     double u = p - cut;
     return amplitude * exp(-decay * u) * sin(2.0 * k_pi * u / period);
 }
@@ -103,12 +103,14 @@ void test_sheet_add_shear(test_sheet *t, double amplitude, double decay, double 
 void test_sheet_add_eccentricity(test_sheet *t, double amplitude, double period) {
     for (size_t r = 0; r < t->rows; ++r) {
         double e = amplitude * sin(2.0 * k_pi * t->s[r] / period);
-        for (size_t k = 0; k < t->fibers; ++k) t->height[r * t->fibers + k] += e;
+        for (size_t k = 0; k < t->fibers; ++k)
+            t->height[r * t->fibers + k] += e;
     }
 }
 
 void test_sheet_free(test_sheet *t) {
-    if (!t) return;
+    if (!t)
+        return;
     free(t->s);
     free(t->x);
     free(t->truth);
@@ -118,14 +120,15 @@ void test_sheet_free(test_sheet *t) {
     free(t);
 }
 
-void test_error(const test_sheet *t, const double *z, size_t r0, size_t r1,
-                double *max_err, double *rms_err) {
+void test_error(const test_sheet *t, const double *z, size_t r0, size_t r1, double *max_err,
+                double *rms_err) {
     double mx = 0, sum = 0;
     size_t n = 0;
     for (size_t r = r0; r < r1; ++r)
         for (size_t k = 0; k < t->fibers; ++k) {
             double e = fabs(z[r * t->fibers + k] - t->truth[r * t->fibers + k]);
-            if (e > mx || isnan(e)) mx = isnan(e) ? INFINITY : e;
+            if (e > mx || isnan(e))
+                mx = isnan(e) ? INFINITY : e;
             sum += e * e;
             ++n;
         }

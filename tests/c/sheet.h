@@ -30,16 +30,14 @@ double test_surface(double x, double s);
 
 /* Rows at s0 + r * dx (+ jitter * dx * U(-1, 1) when jitter > 0), fibers at
  * pitch across width (x centred). Noise-free two-laser measurement. */
-test_sheet *test_sheet_make(size_t rows, size_t fibers, double s0, double dx,
-                            double jitter, double pitch, double laser_spacing,
-                            unsigned seed);
+test_sheet *test_sheet_make(size_t rows, size_t fibers, double s0, double dx, double jitter,
+                            double pitch, double laser_spacing, unsigned seed);
 
 /* Adds per-frame rigid heave N(0, vib_sigma) to every height of a row and
  * independent per-laser peak noise N(0, peak_sigma) (mm) to each laser's
  * reading, which enters the height as the mean and the slope as the
  * difference over Delta-d. */
-void test_sheet_add_noise(test_sheet *sheet, double vib_sigma,
-                          double peak_sigma, unsigned seed);
+void test_sheet_add_noise(test_sheet *sheet, double vib_sigma, double peak_sigma, unsigned seed);
 
 /* The reference's hard case, as physics has it (issue 7's model b): after
  * every cut (at multiples of `interval` mm of material) the strip rings with
@@ -47,8 +45,8 @@ void test_sheet_add_noise(test_sheet *sheet, double vib_sigma,
  * past the cut. It travels with the material, so each laser reads it at its
  * own position s -+ Delta-d/2: the height gets the mean, the slope the
  * difference over Delta-d. Adds it to every fiber. */
-void test_sheet_add_shear(test_sheet *sheet, double amplitude, double decay,
-                          double period, double interval);
+void test_sheet_add_shear(test_sheet *sheet, double amplitude, double decay, double period,
+                          double interval);
 
 /* Roll eccentricity: a rigid offset amplitude * sin(2 pi s / period) of the
  * whole frame at s (both lasers alike, so only the heights see it). */
@@ -57,11 +55,13 @@ void test_sheet_add_eccentricity(test_sheet *sheet, double amplitude, double per
 void test_sheet_free(test_sheet *sheet);
 
 /* Max and RMS of |z - truth| over the valid rows [r0, r1) and all fibers. */
-void test_error(const test_sheet *sheet, const double *z, size_t r0, size_t r1,
-                double *max_err, double *rms_err);
+void test_error(const test_sheet *sheet, const double *z, size_t r0, size_t r1, double *max_err,
+                double *rms_err);
 
 /* A small deterministic PRNG (xorshift64*) with Gaussian draws. */
-typedef struct test_rng { uint64_t state; } test_rng;
+typedef struct test_rng {
+    uint64_t state;
+} test_rng;
 void test_rng_seed(test_rng *rng, unsigned seed);
 double test_rng_uniform(test_rng *rng); /* [0, 1) */
 double test_rng_gauss(test_rng *rng);   /* N(0, 1) */

@@ -49,23 +49,23 @@
 /* Checking                                                                */
 /* ---------------------------------------------------------------------- */
 
-static const char *g_fn = "";  /* the row being checked */
+static const char *g_fn = ""; /* the row being checked */
 static int g_failures = 0;
 static int g_checks = 0;
 static int g_known = 0;
 
-#define ERR(...)                                                         \
-    do {                                                                 \
-        fprintf(stderr, "FAIL %s (line %d): ", g_fn, __LINE__);          \
-        fprintf(stderr, __VA_ARGS__);                                    \
-        fputc('\n', stderr);                                             \
-        ++g_failures;                                                    \
-    } while (0)
+#define ERR(...)                                            \
+  do {                                                      \
+    fprintf(stderr, "FAIL %s (line %d): ", g_fn, __LINE__); \
+    fprintf(stderr, __VA_ARGS__);                           \
+    fputc('\n', stderr);                                    \
+    ++g_failures;                                           \
+  } while (0)
 
 /* A bad call: the status, the thread's last status and a message naming
  * the function and containing `needle`. */
-static int check_fail(int line, const char *expr, flt_status got,
-                      flt_status want, const char *needle, int quiet) {
+static int check_fail(int line, const char *expr, flt_status got, flt_status want,
+                      const char *needle, int quiet) {
     const char *msg = flt_last_error_message();
     char why[512] = "", fn[128];
     /* The function that must be named: the one called, when the expression
@@ -89,8 +89,8 @@ static int check_fail(int line, const char *expr, flt_status got,
         snprintf(why, sizeof why, "message lacks \"%s\"", needle);
     ++g_checks;
     if (why[0] && !quiet) {
-        fprintf(stderr, "FAIL %s (line %d): %s\n    call: %s\n    message: \"%s\"\n",
-                g_fn, line, why, expr, msg);
+        fprintf(stderr, "FAIL %s (line %d): %s\n    call: %s\n    message: \"%s\"\n", g_fn, line,
+                why, expr, msg);
         ++g_failures;
     }
     return why[0] == 0;
@@ -99,14 +99,14 @@ static int check_fail(int line, const char *expr, flt_status got,
 static int check_ok(int line, const char *expr, flt_status got) {
     ++g_checks;
     if (got != FLT_OK) {
-        fprintf(stderr, "FAIL %s (line %d): valid call returned %s: %s\n    call: %s\n",
-                g_fn, line, flt_status_string(got), flt_last_error_message(), expr);
+        fprintf(stderr, "FAIL %s (line %d): valid call returned %s: %s\n    call: %s\n", g_fn, line,
+                flt_status_string(got), flt_last_error_message(), expr);
         ++g_failures;
         return 0;
     }
     if (flt_last_error_message()[0] != 0 || flt_last_error_status() != FLT_OK) {
-        fprintf(stderr, "FAIL %s (line %d): success left message \"%s\"\n    call: %s\n",
-                g_fn, line, flt_last_error_message(), expr);
+        fprintf(stderr, "FAIL %s (line %d): success left message \"%s\"\n    call: %s\n", g_fn,
+                line, flt_last_error_message(), expr);
         ++g_failures;
         return 0;
     }
@@ -114,20 +114,20 @@ static int check_ok(int line, const char *expr, flt_status got) {
 }
 
 #define BAD(want, needle, call) check_fail(__LINE__, #call, (call), (want), (needle), 0)
-#define GOOD(call) check_ok(__LINE__, #call, (call))
+#define GOOD(call)              check_ok(__LINE__, #call, (call))
 
 /* A case that is known to be wrong and was reported: it must still be wrong
  * (if it passes, the bug was fixed: remove the mark). */
-#define KNOWN_BUG(report, want, needle, call)                                   \
-    do {                                                                        \
-        ++g_known;                                                              \
-        if (check_fail(__LINE__, #call, (call), (want), (needle), 1)) {         \
-            ERR("KNOWN_BUG now passes (%s): turn it into BAD()", report);       \
-        } else {                                                                \
-            fprintf(stderr, "known bug (reported) %s line %d: %s\n    message: \"%s\"\n", \
-                    g_fn, __LINE__, report, flt_last_error_message());          \
-        }                                                                       \
-    } while (0)
+#define KNOWN_BUG(report, want, needle, call)                                             \
+  do {                                                                                    \
+    ++g_known;                                                                            \
+    if (check_fail(__LINE__, #call, (call), (want), (needle), 1)) {                       \
+      ERR("KNOWN_BUG now passes (%s): turn it into BAD()", report);                       \
+    } else {                                                                              \
+      fprintf(stderr, "known bug (reported) %s line %d: %s\n    message: \"%s\"\n", g_fn, \
+              __LINE__, report, flt_last_error_message());                                \
+    }                                                                                     \
+  } while (0)
 /* An enum value outside the C++ range of its type. In C an enum argument
  * is a plain int; the library receives it as a C++ enum, whose values are
  * only those of the smallest bit-field holding every enumerator: with the
@@ -139,16 +139,15 @@ static int check_ok(int line, const char *expr, flt_status got) {
 #define ENUM_UB_BAD(want, needle, call) BAD(want, needle, call)
 
 /* A case that crashes: written, reported, run only on request. */
-#define KNOWN_CRASH(report, want, needle, call)                                 \
-    do {                                                                        \
-        ++g_known;                                                              \
-        if (getenv("FLT_BAD_INPUT_CRASHERS")) {                                 \
-            BAD(want, needle, call);                                            \
-        } else {                                                                \
-            fprintf(stderr, "known crash (reported, not run) %s line %d: %s\n", \
-                    g_fn, __LINE__, report);                                    \
-        }                                                                       \
-    } while (0)
+#define KNOWN_CRASH(report, want, needle, call)                                                    \
+  do {                                                                                             \
+    ++g_known;                                                                                     \
+    if (getenv("FLT_BAD_INPUT_CRASHERS")) {                                                        \
+      BAD(want, needle, call);                                                                     \
+    } else {                                                                                       \
+      fprintf(stderr, "known crash (reported, not run) %s line %d: %s\n", g_fn, __LINE__, report); \
+    }                                                                                              \
+  } while (0)
 
 /* ---------------------------------------------------------------------- */
 /* Fixtures                                                                */
@@ -160,19 +159,21 @@ static int check_ok(int line, const char *expr, flt_status got) {
 enum { ROI_FIRST = 900, ROI_ROWS = 240, FIBERS = 101, WIDTH = 2048 };
 static const double FIRST_X = -1000.0, PITCH = 20.0;
 
-static flt_calib *g_calib;        /* finished */
-static flt_sim *g_sim;            /* over g_calib */
-static uint8_t *g_frame;          /* one rendered Mono8 frame */
+static flt_calib *g_calib; /* finished */
+static flt_sim *g_sim;     /* over g_calib */
+static uint8_t *g_frame;   /* one rendered Mono8 frame */
 static double g_frame_encoder;
-static char g_dir[256];           /* scratch folder */
+static char g_dir[256]; /* scratch folder */
 static char g_calib_text[8192];
 static size_t g_calib_text_length;
 
 static const double NaN_ = NAN;
 static const double Inf_ = INFINITY;
-static const size_t NEG = (size_t)-1;                 /* -1 passed as size_t */
+static const size_t NEG = (size_t)-1; /* -1 passed as size_t */
 /* rows such that rows * FIBERS * sizeof(double) overflows size_t */
-static size_t overflow_rows(size_t fibers) { return SIZE_MAX / sizeof(double) / fibers + 1; }
+static size_t overflow_rows(size_t fibers) {
+    return SIZE_MAX / sizeof(double) / fibers + 1;
+}
 
 static flt_options *options_with(flt_option key, double value) {
     flt_options *o = NULL;
@@ -197,8 +198,10 @@ static void write_file(const char *path, const void *bytes, size_t n) {
 
 /* A grey 8-bit PNG (zlib-compressed IDAT), for the image sources. */
 static void be32(uint8_t *p, uint32_t v) {
-    p[0] = (uint8_t)(v >> 24); p[1] = (uint8_t)(v >> 16);
-    p[2] = (uint8_t)(v >> 8); p[3] = (uint8_t)v;
+    p[0] = (uint8_t)(v >> 24);
+    p[1] = (uint8_t)(v >> 16);
+    p[2] = (uint8_t)(v >> 8);
+    p[3] = (uint8_t)v;
 }
 static void write_png(const char *path, const uint8_t *pixels, uint32_t w, uint32_t h) {
     size_t raw_n = (size_t)h * (w + 1);
@@ -211,20 +214,32 @@ static void write_png(const char *path, const uint8_t *pixels, uint32_t w, uint3
     }
     static const uint8_t sig[8] = {137, 80, 78, 71, 13, 10, 26, 10};
     size_t n = 0;
-    memcpy(png, sig, 8); n = 8;
+    memcpy(png, sig, 8);
+    n = 8;
     /* IHDR */
-    be32(png + n, 13); memcpy(png + n + 4, "IHDR", 4);
-    be32(png + n + 8, w); be32(png + n + 12, h);
-    png[n + 16] = 8; png[n + 17] = 0; png[n + 18] = 0; png[n + 19] = 0; png[n + 20] = 0;
-    be32(png + n + 21, (uint32_t)crc32(0, png + n + 4, 17)); n += 25;
+    be32(png + n, 13);
+    memcpy(png + n + 4, "IHDR", 4);
+    be32(png + n + 8, w);
+    be32(png + n + 12, h);
+    png[n + 16] = 8;
+    png[n + 17] = 0;
+    png[n + 18] = 0;
+    png[n + 19] = 0;
+    png[n + 20] = 0;
+    be32(png + n + 21, (uint32_t)crc32(0, png + n + 4, 17));
+    n += 25;
     /* IDAT */
-    if (compress(png + n + 8, &z_n, raw, (uLong)raw_n) != Z_OK) exit(2);
-    be32(png + n, (uint32_t)z_n); memcpy(png + n + 4, "IDAT", 4);
+    if (compress(png + n + 8, &z_n, raw, (uLong)raw_n) != Z_OK)
+        exit(2);
+    be32(png + n, (uint32_t)z_n);
+    memcpy(png + n + 4, "IDAT", 4);
     be32(png + n + 8 + z_n, (uint32_t)crc32(0, png + n + 4, (uInt)(z_n + 4)));
     n += 12 + z_n;
     /* IEND */
-    be32(png + n, 0); memcpy(png + n + 4, "IEND", 4);
-    be32(png + n + 8, (uint32_t)crc32(0, png + n + 4, 4)); n += 12;
+    be32(png + n, 0);
+    memcpy(png + n + 4, "IEND", 4);
+    be32(png + n + 8, (uint32_t)crc32(0, png + n + 4, 4));
+    n += 12;
     write_file(path, png, n);
     free(raw);
     free(png);
@@ -232,7 +247,8 @@ static void write_png(const char *path, const uint8_t *pixels, uint32_t w, uint3
 
 static void setup(void) {
     snprintf(g_dir, sizeof g_dir, "/tmp/flt_bad_input_%ld", (long)getpid());
-    if (mkdir(g_dir, 0700) != 0 && errno != EEXIST) exit(2);
+    if (mkdir(g_dir, 0700) != 0 && errno != EEXIST)
+        exit(2);
     if (flt_calib_create_reference(ROI_FIRST, ROI_ROWS, FIRST_X, PITCH, FIBERS, &g_calib) ||
         flt_sim_create(g_calib, NULL, &g_sim) ||
         flt_sim_add_defect(g_sim, FLT_SIM_CENTRE_BUCKLE, 2.0, 1500.0)) {
@@ -240,10 +256,9 @@ static void setup(void) {
         exit(2);
     }
     g_frame = malloc((size_t)WIDTH * ROI_ROWS);
-    if (flt_sim_next_frame(g_sim, g_frame, (size_t)WIDTH * ROI_ROWS, WIDTH,
-                           &g_frame_encoder, 0, NULL, NULL) ||
-        flt_calib_save_text(g_calib, g_calib_text, sizeof g_calib_text,
-                            &g_calib_text_length)) {
+    if (flt_sim_next_frame(g_sim, g_frame, (size_t)WIDTH * ROI_ROWS, WIDTH, &g_frame_encoder, 0,
+                           NULL, NULL) ||
+        flt_calib_save_text(g_calib, g_calib_text, sizeof g_calib_text, &g_calib_text_length)) {
         fprintf(stderr, "fixture: %s\n", flt_last_error_message());
         exit(2);
     }
@@ -252,7 +267,8 @@ static void setup(void) {
 static void teardown(void) {
     char cmd[300];
     snprintf(cmd, sizeof cmd, "rm -rf '%s'", g_dir);
-    if (system(cmd) != 0) fprintf(stderr, "could not remove %s\n", g_dir);
+    if (system(cmd) != 0)
+        fprintf(stderr, "could not remove %s\n", g_dir);
     free(g_frame);
     flt_sim_destroy(g_sim);
     flt_calib_destroy(g_calib);
@@ -267,8 +283,7 @@ static rows_t g_rows;
 static void make_rows(size_t rows) {
     g_rows.rows = rows;
     if (flt_sim_rewind(g_sim) ||
-        flt_sim_next_rows(g_sim, rows, FIBERS, NULL, g_rows.s, g_rows.h, g_rows.k, NULL,
-                          NULL)) {
+        flt_sim_next_rows(g_sim, rows, FIBERS, NULL, g_rows.s, g_rows.h, g_rows.k, NULL, NULL)) {
         fprintf(stderr, "fixture: %s\n", flt_last_error_message());
         exit(2);
     }
@@ -280,13 +295,17 @@ static void make_rows(size_t rows) {
 
 static void row_status_string(void) {
     /* Never NULL, for known and unknown codes. */
-    const flt_status codes[] = {FLT_OK, FLT_ERR_INVALID_ARGUMENT, FLT_ERR_INTERNAL,
-                                (flt_status)-12345, (flt_status)INT32_MIN,
+    const flt_status codes[] = {FLT_OK,
+                                FLT_ERR_INVALID_ARGUMENT,
+                                FLT_ERR_INTERNAL,
+                                (flt_status)-12345,
+                                (flt_status)INT32_MIN,
                                 (flt_status)INT32_MAX};
     for (size_t i = 0; i < sizeof codes / sizeof codes[0]; ++i) {
         const char *s = flt_status_string(codes[i]);
         ++g_checks;
-        if (s == NULL || s[0] == 0) ERR("flt_status_string(%d) is empty", (int)codes[i]);
+        if (s == NULL || s[0] == 0)
+            ERR("flt_status_string(%d) is empty", (int)codes[i]);
     }
     ++g_checks;
     if (strcmp(flt_status_string((flt_status)-12345), "FLT_ERR_UNKNOWN") != 0)
@@ -319,18 +338,21 @@ static void row_last_error_status(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'options'", flt_options_get(NULL, FLT_OPT_MAX_GAP, NULL));
     g_fn = "flt_last_error_status";
     ++g_checks;
-    if (flt_last_error_status() != FLT_ERR_INVALID_ARGUMENT) ERR("not the last status");
+    if (flt_last_error_status() != FLT_ERR_INVALID_ARGUMENT)
+        ERR("not the last status");
     g_fn = "flt_options_create";
     GOOD(flt_options_create(&o));
     g_fn = "flt_last_error_status";
     ++g_checks;
-    if (flt_last_error_status() != FLT_OK) ERR("not FLT_OK after a success");
+    if (flt_last_error_status() != FLT_OK)
+        ERR("not FLT_OK after a success");
     flt_options_destroy(o);
 }
 
 static void row_version(void) {
     ++g_checks;
-    if (flt_version() != FLT_VERSION_NUMBER) ERR("flt_version() = %d", flt_version());
+    if (flt_version() != FLT_VERSION_NUMBER)
+        ERR("flt_version() = %d", flt_version());
 }
 
 static void row_version_string(void) {
@@ -347,7 +369,7 @@ static void row_options_create(void) {
 }
 
 static void row_options_destroy(void) {
-    flt_options_destroy(NULL);  /* no-op */
+    flt_options_destroy(NULL); /* no-op */
     ++g_checks;
 }
 
@@ -356,9 +378,9 @@ static void row_options_set(void) {
     GOOD(flt_options_create(&o));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'options'", flt_options_set(NULL, FLT_OPT_MAX_GAP, 1.0));
     BAD(FLT_ERR_INVALID_ARGUMENT, "unknown option key", flt_options_set(o, (flt_option)99, 1.0));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "unknown option key",
-        flt_options_set(o, FLT_OPT_MAX_ENUM_, 1.0));
-    ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "unknown option key", flt_options_set(o, (flt_option)-1, 1.0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "unknown option key", flt_options_set(o, FLT_OPT_MAX_ENUM_, 1.0));
+    ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "unknown option key",
+                flt_options_set(o, (flt_option)-1, 1.0));
     BAD(FLT_ERR_INVALID_ARGUMENT, "is NaN", flt_options_set(o, FLT_OPT_LASER_SPACING, NaN_));
     BAD(FLT_ERR_INVALID_ARGUMENT, "outside", flt_options_set(o, FLT_OPT_LASER_SPACING, Inf_));
     BAD(FLT_ERR_INVALID_ARGUMENT, "outside", flt_options_set(o, FLT_OPT_LASER_SPACING, -Inf_));
@@ -370,7 +392,8 @@ static void row_options_set(void) {
     double v = 0;
     GOOD(flt_options_get(o, FLT_OPT_LASER_SPACING, &v));
     ++g_checks;
-    if (v != 100.0) ERR("laser_spacing changed to %g by failed sets", v);
+    if (v != 100.0)
+        ERR("laser_spacing changed to %g by failed sets", v);
     GOOD(flt_options_set(o, FLT_OPT_LASER_SPACING, 90.0));
     /* max_gap takes +infinity (its documented upper bound). */
     GOOD(flt_options_set(o, FLT_OPT_MAX_GAP, Inf_));
@@ -440,11 +463,11 @@ static void row_recon_create(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_recon_create(FIBERS, NULL, NULL));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers' is 0", flt_recon_create(0, NULL, &r));
     ++g_checks;
-    if (r != NULL) ERR("*out not NULL after a failure");
+    if (r != NULL)
+        ERR("*out not NULL after a failure");
     /* (size_t)-1 fibers times row_capacity doubles cannot exist. */
     BAD(FLT_ERR_INVALID_ARGUMENT, "too large", flt_recon_create(NEG, NULL, &r));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "too large",
-        flt_recon_create(SIZE_MAX / 8 / 8192 + 1, NULL, &r));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "too large", flt_recon_create(SIZE_MAX / 8 / 8192 + 1, NULL, &r));
     /* Inconsistent options: knots far finer than the laser spacing. */
     flt_options *o = options_with(FLT_OPT_KNOT_SPACING, 0.001);
     BAD(FLT_ERR_INVALID_ARGUMENT, "knot_spacing", flt_recon_create(FIBERS, o, &r));
@@ -460,7 +483,8 @@ static void row_recon_create(void) {
     FILE *oc = fopen("/proc/sys/vm/overcommit_memory", "r");
     int overcommit = 0;
     if (oc) {
-        if (fscanf(oc, "%d", &overcommit) != 1) overcommit = 0;
+        if (fscanf(oc, "%d", &overcommit) != 1)
+            overcommit = 0;
         fclose(oc);
     }
 #if defined(__SANITIZE_ADDRESS__)
@@ -535,17 +559,24 @@ static void row_recon_push(void) {
     bad_s[3] = s[1];
     BAD(FLT_ERR_INVALID_ARGUMENT, "increas", flt_recon_push(r, 8, FIBERS, bad_s, h, k, NULL));
     memcpy(bad_s, s, sizeof bad_s);
-    for (int i = 4; i < 8; ++i) bad_s[i] = s[i] + 1e7;
-    BAD(FLT_ERR_INVALID_ARGUMENT, "flt_recon_reset", flt_recon_push(r, 8, FIBERS, bad_s, h, k, NULL));
+    for (int i = 4; i < 8; ++i)
+        bad_s[i] = s[i] + 1e7;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "flt_recon_reset",
+        flt_recon_push(r, 8, FIBERS, bad_s, h, k, NULL));
     /* NaN / Inf / huge data are invalid samples, not errors: they are
      * flagged (recon.h, "Validity"). */
     double *hh = malloc(sizeof(double) * 8 * FIBERS);
     memcpy(hh, h, sizeof(double) * 8 * FIBERS);
-    hh[0] = NaN_; hh[1] = Inf_; hh[2] = -Inf_; hh[3] = 1e308; hh[4] = -1e308;
+    hh[0] = NaN_;
+    hh[1] = Inf_;
+    hh[2] = -Inf_;
+    hh[3] = 1e308;
+    hh[4] = -1e308;
     GOOD(flt_recon_push(r, 8, FIBERS, s, hh, k, NULL));
     /* The block is checked whole: a bad row late in it pushes nothing. */
     double s2[8];
-    for (int i = 0; i < 8; ++i) s2[i] = s[7] + 3.0 * (i + 1);
+    for (int i = 0; i < 8; ++i)
+        s2[i] = s[7] + 3.0 * (i + 1);
     s2[7] = s2[6];
     BAD(FLT_ERR_INVALID_ARGUMENT, "s[7]", flt_recon_push(r, 8, FIBERS, s2, h, k, NULL));
     /* Rows before the last pushed are refused across calls. */
@@ -557,12 +588,16 @@ static void row_recon_push(void) {
     flt_options *o = options_with(FLT_OPT_ROW_CAPACITY, 16);
     GOOD(flt_recon_create(FIBERS, o, &small));
     double *s40 = malloc(sizeof(double) * 40), *h40 = calloc(40 * FIBERS, sizeof(double));
-    for (int i = 0; i < 40; ++i) s40[i] = 3.0 * i;
-    BAD(FLT_ERR_BUFFER_FULL, "row_capacity", flt_recon_push(small, 40, FIBERS, s40, h40, h40, NULL));
+    for (int i = 0; i < 40; ++i)
+        s40[i] = 3.0 * i;
+    BAD(FLT_ERR_BUFFER_FULL, "row_capacity",
+        flt_recon_push(small, 40, FIBERS, s40, h40, h40, NULL));
     GOOD(flt_recon_push(small, 16, FIBERS, s40, h40, h40, NULL));
     flt_recon_destroy(small);
     flt_options_destroy(o);
-    free(s40); free(h40); free(hh);
+    free(s40);
+    free(h40);
+    free(hh);
     flt_recon_destroy(r);
 }
 
@@ -575,9 +610,11 @@ static void row_recon_pull(void) {
     /* Wrong order: pull before any push. */
     BAD(FLT_ERR_STATE, "nothing was pushed", flt_recon_pull(r, 8, FIBERS, s_out, z, flags, &n));
     ++g_checks;
-    if (n != 0) ERR("rows_out = %zu after a failure", n);
+    if (n != 0)
+        ERR("rows_out = %zu after a failure", n);
     BAD(FLT_ERR_INVALID_ARGUMENT, "'recon'", flt_recon_pull(NULL, 8, FIBERS, s_out, z, flags, &n));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'rows_out'", flt_recon_pull(r, 8, FIBERS, s_out, z, flags, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'rows_out'",
+        flt_recon_pull(r, 8, FIBERS, s_out, z, flags, NULL));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'s_out'", flt_recon_pull(r, 8, FIBERS, NULL, z, flags, &n));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'z_out'", flt_recon_pull(r, 8, FIBERS, s_out, NULL, flags, &n));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'", flt_recon_pull(r, 8, 3, s_out, z, flags, &n));
@@ -586,11 +623,12 @@ static void row_recon_pull(void) {
         flt_recon_pull(r, overflow_rows(FIBERS), FIBERS, s_out, z, flags, &n));
     GOOD(flt_recon_push(r, 8, FIBERS, g_rows.s, g_rows.h, g_rows.k, NULL));
     GOOD(flt_recon_pull(r, 8, FIBERS, s_out, z, flags, &n));
-    GOOD(flt_recon_pull(r, 0, FIBERS, NULL, NULL, NULL, &n));  /* max_rows 0: NULLs fine */
+    GOOD(flt_recon_pull(r, 0, FIBERS, NULL, NULL, NULL, &n)); /* max_rows 0: NULLs fine */
     /* After reset, pull is again "before push". */
     GOOD(flt_recon_reset(r));
     BAD(FLT_ERR_STATE, "reset", flt_recon_pull(r, 8, FIBERS, s_out, z, flags, &n));
-    free(z); free(flags);
+    free(z);
+    free(flags);
     flt_recon_destroy(r);
 }
 
@@ -625,7 +663,7 @@ static void row_recon_reset(void) {
     flt_recon *r = new_recon();
     BAD(FLT_ERR_INVALID_ARGUMENT, "'recon'", flt_recon_reset(NULL));
     GOOD(flt_recon_reset(r));
-    GOOD(flt_recon_reset(r));  /* reset of a fresh or reset handle is fine */
+    GOOD(flt_recon_reset(r)); /* reset of a fresh or reset handle is fine */
     flt_recon_destroy(r);
 }
 
@@ -646,7 +684,8 @@ static void row_recon_boundary(void) {
     /* reset drops the carry-over. */
     GOOD(flt_recon_reset(r));
     BAD(FLT_ERR_STATE, "no sheet has ended", flt_recon_boundary(r, FIBERS, &s0, hb, kb));
-    free(hb); free(kb);
+    free(hb);
+    free(kb);
     flt_recon_destroy(r);
 }
 
@@ -654,23 +693,33 @@ static void row_reconstruct(void) {
     make_rows(40);
     double *s = g_rows.s, *h = g_rows.h, *k = g_rows.k;
     double *z = malloc(sizeof(double) * 40 * FIBERS);
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'s'", flt_reconstruct(NULL, 40, FIBERS, NULL, h, k, NULL, z, NULL));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'height'", flt_reconstruct(NULL, 40, FIBERS, s, NULL, k, NULL, z, NULL));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'slope'", flt_reconstruct(NULL, 40, FIBERS, s, h, NULL, NULL, z, NULL));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'z_out'", flt_reconstruct(NULL, 40, FIBERS, s, h, k, NULL, NULL, NULL));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'rows' is 0", flt_reconstruct(NULL, 0, FIBERS, s, h, k, NULL, z, NULL));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers' is 0", flt_reconstruct(NULL, 40, 0, s, h, k, NULL, z, NULL));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "overflows", flt_reconstruct(NULL, NEG, FIBERS, s, h, k, NULL, z, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'s'",
+        flt_reconstruct(NULL, 40, FIBERS, NULL, h, k, NULL, z, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'height'",
+        flt_reconstruct(NULL, 40, FIBERS, s, NULL, k, NULL, z, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'slope'",
+        flt_reconstruct(NULL, 40, FIBERS, s, h, NULL, NULL, z, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'z_out'",
+        flt_reconstruct(NULL, 40, FIBERS, s, h, k, NULL, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'rows' is 0",
+        flt_reconstruct(NULL, 0, FIBERS, s, h, k, NULL, z, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers' is 0",
+        flt_reconstruct(NULL, 40, 0, s, h, k, NULL, z, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "overflows",
+        flt_reconstruct(NULL, NEG, FIBERS, s, h, k, NULL, z, NULL));
     BAD(FLT_ERR_INVALID_ARGUMENT, "overflows",
         flt_reconstruct(NULL, overflow_rows(FIBERS), FIBERS, s, h, k, NULL, z, NULL));
     double bad_s[40];
     memcpy(bad_s, s, sizeof bad_s);
     bad_s[39] = NaN_;
-    BAD(FLT_ERR_INVALID_ARGUMENT, "not finite", flt_reconstruct(NULL, 40, FIBERS, bad_s, h, k, NULL, z, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "not finite",
+        flt_reconstruct(NULL, 40, FIBERS, bad_s, h, k, NULL, z, NULL));
     bad_s[39] = bad_s[38];
-    BAD(FLT_ERR_INVALID_ARGUMENT, "increas", flt_reconstruct(NULL, 40, FIBERS, bad_s, h, k, NULL, z, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "increas",
+        flt_reconstruct(NULL, 40, FIBERS, bad_s, h, k, NULL, z, NULL));
     flt_options *o = options_with(FLT_OPT_KNOT_SPACING, 0.001);
-    BAD(FLT_ERR_INVALID_ARGUMENT, "knot_spacing", flt_reconstruct(o, 40, FIBERS, s, h, k, NULL, z, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "knot_spacing",
+        flt_reconstruct(o, 40, FIBERS, s, h, k, NULL, z, NULL));
     flt_options_destroy(o);
     GOOD(flt_reconstruct(NULL, 40, FIBERS, s, h, k, NULL, z, NULL));
     free(z);
@@ -685,15 +734,15 @@ static double H0[9], H1[9];
 
 static flt_calib *new_unfinished(void) {
     flt_calib *c = NULL;
-    if (flt_calib_create(&c)) exit(2);
+    if (flt_calib_create(&c))
+        exit(2);
     return c;
 }
 
 /* An unfinished model with everything set but the fiber grid. */
 static flt_calib *almost_finished(void) {
     flt_calib *c = new_unfinished();
-    if (flt_calib_set_frame_size(c, WIDTH, ROI_ROWS) ||
-        flt_calib_set_intrinsics(c, CAMERA, NULL) ||
+    if (flt_calib_set_frame_size(c, WIDTH, ROI_ROWS) || flt_calib_set_intrinsics(c, CAMERA, NULL) ||
         flt_calib_set_homography(c, 0, H0) || flt_calib_set_homography(c, 1, H1) ||
         flt_calib_set_laser_offset(c, 0, -50) || flt_calib_set_laser_offset(c, 1, 50) ||
         flt_calib_set_encoder_scale(c, 0.01)) {
@@ -718,10 +767,10 @@ static void row_calib_destroy(void) {
 static void row_calib_finish(void) {
     flt_calib *c = almost_finished();
     BAD(FLT_ERR_INVALID_ARGUMENT, "'calib'", flt_calib_finish(NULL));
-    BAD(FLT_ERR_STATE, "fiber", flt_calib_finish(c));  /* names the missing part */
+    BAD(FLT_ERR_STATE, "fiber", flt_calib_finish(c)); /* names the missing part */
     GOOD(flt_calib_set_fiber_grid(c, FIRST_X, PITCH, FIBERS));
     GOOD(flt_calib_finish(c));
-    BAD(FLT_ERR_STATE, NULL, flt_calib_finish(c));  /* twice */
+    BAD(FLT_ERR_STATE, NULL, flt_calib_finish(c)); /* twice */
     flt_calib_destroy(c);
     c = new_unfinished();
     BAD(FLT_ERR_STATE, "lacks", flt_calib_finish(c));
@@ -802,39 +851,52 @@ static void row_calib_estimate_intrinsics(void) {
     uint8_t *blank = calloc(64 * 64, 1);
     const uint8_t *views[3] = {blank, blank, blank};
     BAD(FLT_ERR_INVALID_ARGUMENT, "'calib'",
-        flt_calib_estimate_intrinsics(NULL, 3, views, 64, FLT_TARGET_CHESSBOARD, 9, 6, 10, NULL, &rms, NULL));
+        flt_calib_estimate_intrinsics(NULL, 3, views, 64, FLT_TARGET_CHESSBOARD, 9, 6, 10, NULL,
+                                      &rms, NULL));
     /* Wrong order: the frame size comes first. */
     BAD(FLT_ERR_STATE, "frame size",
-        flt_calib_estimate_intrinsics(c, 3, views, 64, FLT_TARGET_CHESSBOARD, 9, 6, 10, NULL, &rms, NULL));
+        flt_calib_estimate_intrinsics(c, 3, views, 64, FLT_TARGET_CHESSBOARD, 9, 6, 10, NULL, &rms,
+                                      NULL));
     GOOD(flt_calib_set_frame_size(c, 64, 64));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'views' is 0",
-        flt_calib_estimate_intrinsics(c, 0, views, 64, FLT_TARGET_CHESSBOARD, 9, 6, 10, NULL, &rms, NULL));
+        flt_calib_estimate_intrinsics(c, 0, views, 64, FLT_TARGET_CHESSBOARD, 9, 6, 10, NULL, &rms,
+                                      NULL));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'images'",
-        flt_calib_estimate_intrinsics(c, 3, NULL, 64, FLT_TARGET_CHESSBOARD, 9, 6, 10, NULL, &rms, NULL));
+        flt_calib_estimate_intrinsics(c, 3, NULL, 64, FLT_TARGET_CHESSBOARD, 9, 6, 10, NULL, &rms,
+                                      NULL));
     const uint8_t *with_null[3] = {blank, NULL, blank};
     BAD(FLT_ERR_INVALID_ARGUMENT, "images[1]",
-        flt_calib_estimate_intrinsics(c, 3, with_null, 64, FLT_TARGET_CHESSBOARD, 9, 6, 10, NULL, &rms, NULL));
+        flt_calib_estimate_intrinsics(c, 3, with_null, 64, FLT_TARGET_CHESSBOARD, 9, 6, 10, NULL,
+                                      &rms, NULL));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'stride'",
-        flt_calib_estimate_intrinsics(c, 3, views, 63, FLT_TARGET_CHESSBOARD, 9, 6, 10, NULL, &rms, NULL));
+        flt_calib_estimate_intrinsics(c, 3, views, 63, FLT_TARGET_CHESSBOARD, 9, 6, 10, NULL, &rms,
+                                      NULL));
     ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "'target'",
-        flt_calib_estimate_intrinsics(c, 3, views, 64, (flt_calib_target)7, 9, 6, 10, NULL, &rms, NULL));
+                flt_calib_estimate_intrinsics(c, 3, views, 64, (flt_calib_target)7, 9, 6, 10, NULL,
+                                              &rms, NULL));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'columns'",
-        flt_calib_estimate_intrinsics(c, 3, views, 64, FLT_TARGET_CHESSBOARD, 2, 6, 10, NULL, &rms, NULL));
+        flt_calib_estimate_intrinsics(c, 3, views, 64, FLT_TARGET_CHESSBOARD, 2, 6, 10, NULL, &rms,
+                                      NULL));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'rows'",
-        flt_calib_estimate_intrinsics(c, 3, views, 64, FLT_TARGET_CHESSBOARD, 9, 0, 10, NULL, &rms, NULL));
+        flt_calib_estimate_intrinsics(c, 3, views, 64, FLT_TARGET_CHESSBOARD, 9, 0, 10, NULL, &rms,
+                                      NULL));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'pitch_mm'",
-        flt_calib_estimate_intrinsics(c, 3, views, 64, FLT_TARGET_CHESSBOARD, 9, 6, NaN_, NULL, &rms, NULL));
+        flt_calib_estimate_intrinsics(c, 3, views, 64, FLT_TARGET_CHESSBOARD, 9, 6, NaN_, NULL,
+                                      &rms, NULL));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'pitch_mm'",
-        flt_calib_estimate_intrinsics(c, 3, views, 64, FLT_TARGET_CHESSBOARD, 9, 6, -1, NULL, &rms, NULL));
+        flt_calib_estimate_intrinsics(c, 3, views, 64, FLT_TARGET_CHESSBOARD, 9, 6, -1, NULL, &rms,
+                                      NULL));
     /* No target in any view: NUMERIC, model unchanged. */
     BAD(FLT_ERR_NUMERIC, NULL,
-        flt_calib_estimate_intrinsics(c, 3, views, 64, FLT_TARGET_CHESSBOARD, 9, 6, 10, NULL, &rms, NULL));
+        flt_calib_estimate_intrinsics(c, 3, views, 64, FLT_TARGET_CHESSBOARD, 9, 6, 10, NULL, &rms,
+                                      NULL));
     double cam[4];
     BAD(FLT_ERR_STATE, "not set", flt_calib_get_intrinsics(c, cam, NULL));
     g_fn = "flt_calib_estimate_intrinsics";
     BAD(FLT_ERR_STATE, "finished",
-        flt_calib_estimate_intrinsics(g_calib, 3, views, 64, FLT_TARGET_CHESSBOARD, 9, 6, 10, NULL, &rms, NULL));
-    GOOD(flt_calib_set_intrinsics(c, CAMERA, NULL));  /* the handle is usable */
+        flt_calib_estimate_intrinsics(g_calib, 3, views, 64, FLT_TARGET_CHESSBOARD, 9, 6, 10, NULL,
+                                      &rms, NULL));
+    GOOD(flt_calib_set_intrinsics(c, CAMERA, NULL)); /* the handle is usable */
     free(blank);
     flt_calib_destroy(c);
 }
@@ -875,7 +937,8 @@ static void row_calib_estimate_homography(void) {
     GOOD(flt_calib_plane_to_image(g_calib, 0, 4, plane, image));
     g_fn = "flt_calib_estimate_homography";
     BAD(FLT_ERR_INVALID_ARGUMENT, "'calib'",
-        flt_calib_estimate_homography(NULL, 0, 4, image, plane, NULL, NULL, NULL, NULL, NULL, NULL));
+        flt_calib_estimate_homography(NULL, 0, 4, image, plane, NULL, NULL, NULL, NULL, NULL,
+                                      NULL));
     /* Wrong order: intrinsics first. */
     BAD(FLT_ERR_STATE, "intrinsics",
         flt_calib_estimate_homography(c, 0, 4, image, plane, NULL, NULL, NULL, NULL, NULL, NULL));
@@ -905,7 +968,8 @@ static void row_calib_estimate_homography(void) {
         flt_calib_estimate_homography(c, 0, 4, image, line, NULL, NULL, NULL, NULL, NULL, NULL));
     GOOD(flt_calib_estimate_homography(c, 0, 4, image, plane, NULL, NULL, NULL, NULL, NULL, NULL));
     BAD(FLT_ERR_STATE, "finished",
-        flt_calib_estimate_homography(g_calib, 0, 4, image, plane, NULL, NULL, NULL, NULL, NULL, NULL));
+        flt_calib_estimate_homography(g_calib, 0, 4, image, plane, NULL, NULL, NULL, NULL, NULL,
+                                      NULL));
     flt_calib_destroy(c);
 }
 
@@ -948,7 +1012,7 @@ static void row_calib_set_encoder_scale(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "encoder_mm_per_count", flt_calib_set_encoder_scale(c, 0.0));
     BAD(FLT_ERR_INVALID_ARGUMENT, "encoder_mm_per_count", flt_calib_set_encoder_scale(c, NaN_));
     BAD(FLT_ERR_INVALID_ARGUMENT, "encoder_mm_per_count", flt_calib_set_encoder_scale(c, Inf_));
-    GOOD(flt_calib_set_encoder_scale(c, -0.01));  /* counting down is allowed */
+    GOOD(flt_calib_set_encoder_scale(c, -0.01)); /* counting down is allowed */
     BAD(FLT_ERR_STATE, "finished", flt_calib_set_encoder_scale(g_calib, 0.01));
     flt_calib_destroy(c);
 }
@@ -983,8 +1047,10 @@ static void row_calib_get_fiber_grid(void) {
     double a, b;
     size_t n;
     BAD(FLT_ERR_INVALID_ARGUMENT, "'calib'", flt_calib_get_fiber_grid(NULL, &a, &b, &n));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'first_x_mm_out'", flt_calib_get_fiber_grid(g_calib, NULL, &b, &n));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'pitch_mm_out'", flt_calib_get_fiber_grid(g_calib, &a, NULL, &n));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'first_x_mm_out'",
+        flt_calib_get_fiber_grid(g_calib, NULL, &b, &n));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'pitch_mm_out'",
+        flt_calib_get_fiber_grid(g_calib, &a, NULL, &n));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'count_out'", flt_calib_get_fiber_grid(g_calib, &a, &b, NULL));
     BAD(FLT_ERR_STATE, "not set", flt_calib_get_fiber_grid(c, &a, &b, &n));
     GOOD(flt_calib_get_fiber_grid(g_calib, &a, &b, &n));
@@ -993,8 +1059,8 @@ static void row_calib_get_fiber_grid(void) {
 
 /* image_to_plane, plane_to_image, undistort share their argument checks. */
 typedef flt_status (*map_fn)(const flt_calib *, unsigned, size_t, const double *, double *);
-static flt_status undistort_as_map(const flt_calib *c, unsigned laser, size_t n,
-                                   const double *in, double *out) {
+static flt_status undistort_as_map(const flt_calib *c, unsigned laser, size_t n, const double *in,
+                                   double *out) {
     (void)laser;
     return flt_calib_undistort(c, n, in, out);
 }
@@ -1009,9 +1075,10 @@ static void check_map(map_fn f, const char *in_name, const char *out_name, int n
     BAD(FLT_ERR_INVALID_ARGUMENT, out_name, f(g_calib, 0, 2, in, NULL));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'count'", f(g_calib, 0, NEG, in, out));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'count'", f(g_calib, 0, SIZE_MAX / 16 + 1, in, out));
-    if (needs_finish) BAD(FLT_ERR_STATE, "finished", f(c, 0, 2, in, out));
-    GOOD(f(g_calib, 0, 0, NULL, NULL));  /* count 0 does nothing */
-    GOOD(f(g_calib, 0, 2, in, out));     /* NaN / Inf points give NaN */
+    if (needs_finish)
+        BAD(FLT_ERR_STATE, "finished", f(c, 0, 2, in, out));
+    GOOD(f(g_calib, 0, 0, NULL, NULL)); /* count 0 does nothing */
+    GOOD(f(g_calib, 0, 2, in, out));    /* NaN / Inf points give NaN */
     ++g_checks;
     if (!isnan(out[2]) || !isnan(out[3]))
         ERR("a non-finite point mapped to (%g, %g), not NaN", out[2], out[3]);
@@ -1050,17 +1117,20 @@ static void row_calib_save_text(void) {
     char buf[16];
     size_t n = 0;
     BAD(FLT_ERR_INVALID_ARGUMENT, "'calib'", flt_calib_save_text(NULL, buf, sizeof buf, &n));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'length_out'", flt_calib_save_text(g_calib, buf, sizeof buf, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'length_out'",
+        flt_calib_save_text(g_calib, buf, sizeof buf, NULL));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'text_out'", flt_calib_save_text(g_calib, NULL, 10, &n));
     BAD(FLT_ERR_STATE, "finished", flt_calib_save_text(c, buf, sizeof buf, &n));
     BAD(FLT_ERR_BUFFER_FULL, NULL, flt_calib_save_text(g_calib, buf, sizeof buf, &n));
     ++g_checks;
-    if (n != g_calib_text_length) ERR("length_out = %zu on BUFFER_FULL", n);
+    if (n != g_calib_text_length)
+        ERR("length_out = %zu on BUFFER_FULL", n);
     /* Asking for the size: BUFFER_FULL with the length (calib.h). */
     n = 0;
     BAD(FLT_ERR_BUFFER_FULL, NULL, flt_calib_save_text(g_calib, NULL, 0, &n));
     ++g_checks;
-    if (n != g_calib_text_length) ERR("length_out = %zu when asking for the size", n);
+    if (n != g_calib_text_length)
+        ERR("length_out = %zu when asking for the size", n);
     GOOD(flt_calib_save_text(g_calib, g_calib_text, sizeof g_calib_text, &n));
     flt_calib_destroy(c);
 }
@@ -1072,14 +1142,19 @@ static void row_calib_load_text(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_calib_load_text(t, n, NULL));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'text'", flt_calib_load_text(NULL, n, &c));
     ++g_checks;
-    if (c != NULL) ERR("*out not NULL after a failure");
+    if (c != NULL)
+        ERR("*out not NULL after a failure");
     BAD(FLT_ERR_FORMAT, NULL, flt_calib_load_text(t, 0, &c));
     /* Truncated at every 97th byte: always FORMAT, never an object. */
     for (size_t cut = 1; cut < n; cut += 97) {
         c = (flt_calib *)1;
-        if (!BAD(FLT_ERR_FORMAT, NULL, flt_calib_load_text(t, cut, &c))) break;
+        if (!BAD(FLT_ERR_FORMAT, NULL, flt_calib_load_text(t, cut, &c)))
+            break;
         ++g_checks;
-        if (c != NULL) { ERR("truncated at %zu gave an object", cut); break; }
+        if (c != NULL) {
+            ERR("truncated at %zu gave an object", cut);
+            break;
+        }
     }
     /* Garbage: binary noise, deep nesting, a huge number, NaN spelled out. */
     char garbage[4096];
@@ -1132,7 +1207,7 @@ static void row_calib_load(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_calib_load(path, NULL));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'path'", flt_calib_load(NULL, &c));
     BAD(FLT_ERR_IO, "no_such_file", flt_calib_load("/nonexistent/no_such_file.json", &c));
-    BAD(FLT_ERR_IO, NULL, flt_calib_load(g_dir, &c));  /* a directory */
+    BAD(FLT_ERR_IO, NULL, flt_calib_load(g_dir, &c)); /* a directory */
     path_in_dir(trunc_path, sizeof trunc_path, "truncated.json");
     write_file(trunc_path, g_calib_text, g_calib_text_length / 3);
     BAD(FLT_ERR_FORMAT, "truncated.json", flt_calib_load(trunc_path, &c));
@@ -1141,7 +1216,8 @@ static void row_calib_load(void) {
     write_file(trunc_path, "\x89PNG\r\n\x1a\n\0\0\0", 11);
     BAD(FLT_ERR_FORMAT, NULL, flt_calib_load(trunc_path, &c));
     ++g_checks;
-    if (c != NULL) ERR("*out not NULL after a failure");
+    if (c != NULL)
+        ERR("*out not NULL after a failure");
     GOOD(flt_calib_load(path, &c));
     flt_calib_destroy(c);
 }
@@ -1149,14 +1225,20 @@ static void row_calib_load(void) {
 /* sim.h declares it. */
 static void row_calib_create_reference(void) {
     flt_calib *c = NULL;
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_calib_create_reference(0, 2048, -1000, 2, 1001, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'",
+        flt_calib_create_reference(0, 2048, -1000, 2, 1001, NULL));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'rows'", flt_calib_create_reference(0, 0, -1000, 2, 1001, &c));
     BAD(FLT_ERR_INVALID_ARGUMENT, NULL, flt_calib_create_reference(2000, 100, -1000, 2, 1001, &c));
-    BAD(FLT_ERR_INVALID_ARGUMENT, NULL, flt_calib_create_reference(UINT32_MAX, 2, -1000, 2, 1001, &c));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'pitch_mm'", flt_calib_create_reference(0, 2048, -1000, 0, 1001, &c));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'pitch_mm'", flt_calib_create_reference(0, 2048, -1000, NaN_, 1001, &c));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'first_x_mm'", flt_calib_create_reference(0, 2048, Inf_, 2, 1001, &c));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers' is 0", flt_calib_create_reference(0, 2048, -1000, 2, 0, &c));
+    BAD(FLT_ERR_INVALID_ARGUMENT, NULL,
+        flt_calib_create_reference(UINT32_MAX, 2, -1000, 2, 1001, &c));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'pitch_mm'",
+        flt_calib_create_reference(0, 2048, -1000, 0, 1001, &c));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'pitch_mm'",
+        flt_calib_create_reference(0, 2048, -1000, NaN_, 1001, &c));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'first_x_mm'",
+        flt_calib_create_reference(0, 2048, Inf_, 2, 1001, &c));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers' is 0",
+        flt_calib_create_reference(0, 2048, -1000, 2, 0, &c));
     GOOD(flt_calib_create_reference(0, 2048, -1000, 2, 1001, &c));
     flt_calib_destroy(c);
 }
@@ -1198,7 +1280,8 @@ static void row_extractor_create(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "Savitzky-Golay window", flt_extractor_create(g_calib, o, &e));
     flt_options_destroy(o);
     ++g_checks;
-    if (e != NULL) ERR("*out not NULL after a failure");
+    if (e != NULL)
+        ERR("*out not NULL after a failure");
     GOOD(flt_extractor_create(g_calib, NULL, &e));
     flt_extractor_destroy(e);
     flt_calib_destroy(c);
@@ -1215,7 +1298,8 @@ static void row_extractor_fibers(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'extractor' is NULL", flt_extractor_fibers(NULL, &n));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_extractor_fibers(e, NULL));
     uint64_t junk[16] = {0};
-    BAD(FLT_ERR_INVALID_ARGUMENT, "not a live", flt_extractor_fibers((const flt_extractor *)junk, &n));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "not a live",
+        flt_extractor_fibers((const flt_extractor *)junk, &n));
     GOOD(flt_extractor_fibers(e, &n));
     flt_extractor_destroy(e);
 }
@@ -1230,8 +1314,8 @@ static void row_extractor_band(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'rows_out'", flt_extractor_band(e, 0, &a, NULL));
     /* Wrong order: an automatic band before the first frame. */
     BAD(FLT_ERR_STATE, "no frame", flt_extractor_band(e, 0, &a, &b));
-    GOOD(flt_extractor_process(e, g_frame, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH,
-                               g_frame_encoder, FIBERS, NULL, h, k, NULL));
+    GOOD(flt_extractor_process(e, g_frame, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, g_frame_encoder,
+                               FIBERS, NULL, h, k, NULL));
     GOOD(flt_extractor_band(e, 1, &a, &b));
     flt_extractor_destroy(e);
 }
@@ -1242,26 +1326,41 @@ static void row_extractor_process(void) {
     uint8_t v[FIBERS];
     const void *f = g_frame;
 #define PROC(fr, fmt, w, hh, st, enc, fib, ho, ko) \
-    flt_extractor_process(e, fr, fmt, w, hh, st, enc, fib, &s, ho, ko, v)
+  flt_extractor_process(e, fr, fmt, w, hh, st, enc, fib, &s, ho, ko, v)
     BAD(FLT_ERR_INVALID_ARGUMENT, "'extractor'",
-        flt_extractor_process(NULL, f, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, 0, FIBERS, &s, h, k, v));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'frame'", PROC(NULL, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, 0, FIBERS, h, k));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'height_out'", PROC(f, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, 0, FIBERS, NULL, k));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'slope_out'", PROC(f, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, 0, FIBERS, h, NULL));
+        flt_extractor_process(NULL, f, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, 0, FIBERS, &s, h, k,
+                              v));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'frame'",
+        PROC(NULL, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, 0, FIBERS, h, k));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'height_out'",
+        PROC(f, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, 0, FIBERS, NULL, k));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'slope_out'",
+        PROC(f, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, 0, FIBERS, h, NULL));
     /* Pixel formats: unknown values, and the sentinel. */
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'format'", PROC(f, (flt_pixel_format)0, WIDTH, ROI_ROWS, WIDTH, 0, FIBERS, h, k));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'format'", PROC(f, (flt_pixel_format)9, WIDTH, ROI_ROWS, WIDTH, 0, FIBERS, h, k));
-    ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "'format'", PROC(f, (flt_pixel_format)-8, WIDTH, ROI_ROWS, WIDTH, 0, FIBERS, h, k));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'format'", PROC(f, FLT_PIXEL_MAX_ENUM_, WIDTH, ROI_ROWS, WIDTH, 0, FIBERS, h, k));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'format'",
+        PROC(f, (flt_pixel_format)0, WIDTH, ROI_ROWS, WIDTH, 0, FIBERS, h, k));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'format'",
+        PROC(f, (flt_pixel_format)9, WIDTH, ROI_ROWS, WIDTH, 0, FIBERS, h, k));
+    ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "'format'",
+                PROC(f, (flt_pixel_format)-8, WIDTH, ROI_ROWS, WIDTH, 0, FIBERS, h, k));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'format'",
+        PROC(f, FLT_PIXEL_MAX_ENUM_, WIDTH, ROI_ROWS, WIDTH, 0, FIBERS, h, k));
     /* Sizes other than the calibration's. */
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'width'", PROC(f, FLT_PIXEL_MONO8, 0, ROI_ROWS, WIDTH, 0, FIBERS, h, k));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'width'", PROC(f, FLT_PIXEL_MONO8, WIDTH, 0, WIDTH, 0, FIBERS, h, k));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'width'", PROC(f, FLT_PIXEL_MONO8, UINT32_MAX, UINT32_MAX, WIDTH, 0, FIBERS, h, k));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'width'", PROC(f, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS + 1, WIDTH, 0, FIBERS, h, k));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'width'",
+        PROC(f, FLT_PIXEL_MONO8, 0, ROI_ROWS, WIDTH, 0, FIBERS, h, k));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'width'",
+        PROC(f, FLT_PIXEL_MONO8, WIDTH, 0, WIDTH, 0, FIBERS, h, k));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'width'",
+        PROC(f, FLT_PIXEL_MONO8, UINT32_MAX, UINT32_MAX, WIDTH, 0, FIBERS, h, k));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'width'",
+        PROC(f, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS + 1, WIDTH, 0, FIBERS, h, k));
     /* Strides: too short, zero, odd for 16-bit, misaligned 16-bit buffer. */
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'stride_bytes'", PROC(f, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH - 1, 0, FIBERS, h, k));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'stride_bytes'", PROC(f, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, 0, 0, FIBERS, h, k));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'stride_bytes'", PROC(f, FLT_PIXEL_MONO16, WIDTH, ROI_ROWS, WIDTH, 0, FIBERS, h, k));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'stride_bytes'",
+        PROC(f, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH - 1, 0, FIBERS, h, k));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'stride_bytes'",
+        PROC(f, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, 0, 0, FIBERS, h, k));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'stride_bytes'",
+        PROC(f, FLT_PIXEL_MONO16, WIDTH, ROI_ROWS, WIDTH, 0, FIBERS, h, k));
     uint8_t *frame16 = calloc((size_t)WIDTH * 2 * ROI_ROWS + 2, 1);
     BAD(FLT_ERR_INVALID_ARGUMENT, "'stride_bytes'",
         PROC(frame16, FLT_PIXEL_MONO12, WIDTH, ROI_ROWS, 2 * WIDTH + 1, 0, FIBERS, h, k));
@@ -1273,15 +1372,21 @@ static void row_extractor_process(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'stride_bytes'",
         PROC(f, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, SIZE_MAX / 2, 0, FIBERS, h, k));
     /* Encoder position: NaN, infinities. */
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'encoder_mm'", PROC(f, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, NaN_, FIBERS, h, k));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'encoder_mm'", PROC(f, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, Inf_, FIBERS, h, k));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'encoder_mm'", PROC(f, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, -Inf_, FIBERS, h, k));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'encoder_mm'",
+        PROC(f, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, NaN_, FIBERS, h, k));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'encoder_mm'",
+        PROC(f, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, Inf_, FIBERS, h, k));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'encoder_mm'",
+        PROC(f, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, -Inf_, FIBERS, h, k));
     /* Fibers. */
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'", PROC(f, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, 0, 0, h, k));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'", PROC(f, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, 0, NEG, h, k));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'",
+        PROC(f, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, 0, 0, h, k));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'",
+        PROC(f, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, 0, NEG, h, k));
     /* A dark frame (no lines) for an automatic band: NUMERIC, and the next
      * frame tries again. */
-    BAD(FLT_ERR_NUMERIC, NULL, PROC(frame16, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, 0, FIBERS, h, k));
+    BAD(FLT_ERR_NUMERIC, NULL,
+        PROC(frame16, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, 0, FIBERS, h, k));
     /* Valid calls: the rendered frame, then a saturated white frame (every
      * peak rejected: all fibers invalid, no error). */
     GOOD(PROC(f, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, g_frame_encoder, FIBERS, h, k));
@@ -1291,10 +1396,12 @@ static void row_extractor_process(void) {
     /* A 16-bit frame of the 8-bit data with the high bits set beyond the
      * format's range (garbage above bit 12): no crash, any result. */
     uint16_t *w16 = (uint16_t *)frame16;
-    for (size_t i = 0; i < (size_t)WIDTH * ROI_ROWS; ++i) w16[i] = (uint16_t)(g_frame[i] * 16 | 0xF000);
+    for (size_t i = 0; i < (size_t)WIDTH * ROI_ROWS; ++i)
+        w16[i] = (uint16_t)(g_frame[i] * 16 | 0xF000);
     flt_status st = PROC(frame16, FLT_PIXEL_MONO12, WIDTH, ROI_ROWS, 2 * WIDTH, 0, FIBERS, h, k);
     ++g_checks;
-    if (st != FLT_OK && st != FLT_ERR_NUMERIC) ERR("out-of-range 12-bit pixels gave %s", flt_status_string(st));
+    if (st != FLT_OK && st != FLT_ERR_NUMERIC)
+        ERR("out-of-range 12-bit pixels gave %s", flt_status_string(st));
     GOOD(PROC(f, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, g_frame_encoder, FIBERS, h, k));
 #undef PROC
     free(white);
@@ -1310,8 +1417,8 @@ static void row_extractor_peaks(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'width'", flt_extractor_peaks(e, WIDTH - 1, rows));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'width'", flt_extractor_peaks(e, NEG, rows));
     BAD(FLT_ERR_STATE, "no frame", flt_extractor_peaks(e, WIDTH, rows));
-    GOOD(flt_extractor_process(e, g_frame, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH,
-                               g_frame_encoder, FIBERS, NULL, h, k, NULL));
+    GOOD(flt_extractor_process(e, g_frame, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, g_frame_encoder,
+                               FIBERS, NULL, h, k, NULL));
     GOOD(flt_extractor_peaks(e, WIDTH, rows));
     free(rows);
     flt_extractor_destroy(e);
@@ -1325,8 +1432,8 @@ static void row_extractor_laser_profiles(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'", flt_extractor_laser_profiles(e, FIBERS + 1, z));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'", flt_extractor_laser_profiles(e, NEG, z));
     BAD(FLT_ERR_STATE, "no frame", flt_extractor_laser_profiles(e, FIBERS, z));
-    GOOD(flt_extractor_process(e, g_frame, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH,
-                               g_frame_encoder, FIBERS, NULL, h, k, NULL));
+    GOOD(flt_extractor_process(e, g_frame, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, g_frame_encoder,
+                               FIBERS, NULL, h, k, NULL));
     GOOD(flt_extractor_laser_profiles(e, FIBERS, z));
     flt_extractor_destroy(e);
 }
@@ -1352,7 +1459,8 @@ static void row_sim_create(void) {
     uint64_t junk[16] = {0};
     BAD(FLT_ERR_INVALID_ARGUMENT, "'calib'", flt_sim_create((const flt_calib *)junk, NULL, &s));
     ++g_checks;
-    if (s != NULL) ERR("*out not NULL after a failure");
+    if (s != NULL)
+        ERR("*out not NULL after a failure");
     GOOD(flt_sim_create(g_calib, NULL, &s));
     flt_sim_destroy(s);
     flt_calib_destroy(c);
@@ -1367,13 +1475,16 @@ static void row_sim_add_defect(void) {
     flt_sim *s = new_sim();
     BAD(FLT_ERR_INVALID_ARGUMENT, "'sim'", flt_sim_add_defect(NULL, FLT_SIM_BOW, 1, 100));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'kind'", flt_sim_add_defect(s, (flt_sim_defect)8, 1, 100));
-    ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "'kind'", flt_sim_add_defect(s, (flt_sim_defect)-1, 1, 100));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'kind'", flt_sim_add_defect(s, FLT_SIM_DEFECT_MAX_ENUM_, 1, 100));
+    ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "'kind'",
+                flt_sim_add_defect(s, (flt_sim_defect)-1, 1, 100));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'kind'",
+        flt_sim_add_defect(s, FLT_SIM_DEFECT_MAX_ENUM_, 1, 100));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'amplitude_mm'", flt_sim_add_defect(s, FLT_SIM_BOW, NaN_, 100));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'amplitude_mm'", flt_sim_add_defect(s, FLT_SIM_BOW, Inf_, 100));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'period_mm'", flt_sim_add_defect(s, FLT_SIM_BOW, 1, -1));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'period_mm'", flt_sim_add_defect(s, FLT_SIM_BOW, 1, Inf_));
-    for (int i = 0; i < 64; ++i) GOOD(flt_sim_add_defect(s, FLT_SIM_BOW, 0.01, 1000));
+    for (int i = 0; i < 64; ++i)
+        GOOD(flt_sim_add_defect(s, FLT_SIM_BOW, 0.01, 1000));
     BAD(FLT_ERR_BUFFER_FULL, "defects", flt_sim_add_defect(s, FLT_SIM_BOW, 1, 100));
     GOOD(flt_sim_clear_sheet(s));
     GOOD(flt_sim_add_defect(s, FLT_SIM_BOW, 1, 100));
@@ -1395,7 +1506,8 @@ static void row_sim_set_height_map(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'rows'", flt_sim_set_height_map(s, 1, 3, 0, 1, 0, 1, hm));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'cols'", flt_sim_set_height_map(s, 2, 0, 0, 1, 0, 1, hm));
     BAD(FLT_ERR_INVALID_ARGUMENT, NULL, flt_sim_set_height_map(s, NEG, 3, 0, 1, 0, 1, hm));
-    BAD(FLT_ERR_INVALID_ARGUMENT, NULL, flt_sim_set_height_map(s, SIZE_MAX / 16, 3, 0, 1, 0, 1, hm));
+    BAD(FLT_ERR_INVALID_ARGUMENT, NULL,
+        flt_sim_set_height_map(s, SIZE_MAX / 16, 3, 0, 1, 0, 1, hm));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'ds_mm'", flt_sim_set_height_map(s, 2, 3, 0, 0, 0, 1, hm));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'dx_mm'", flt_sim_set_height_map(s, 2, 3, 0, 1, 0, -1, hm));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'s0_mm'", flt_sim_set_height_map(s, 2, 3, NaN_, 1, 0, 1, hm));
@@ -1421,7 +1533,8 @@ static void row_sim_surface(void) {
     /* A NaN position: NaN out or an error, never a crash. */
     flt_status st = flt_sim_surface(g_sim, 2, x, sv, z);
     ++g_checks;
-    if (st == FLT_OK && !isnan(z[1])) ERR("NaN position gave z = %g", z[1]);
+    if (st == FLT_OK && !isnan(z[1]))
+        ERR("NaN position gave z = %g", z[1]);
 }
 
 static void row_sim_fibers(void) {
@@ -1451,14 +1564,21 @@ static void row_sim_pixel_format(void) {
 static void row_sim_next_rows(void) {
     flt_sim *s = new_sim();
     double e[4], sv[4], h[4 * FIBERS], k[4 * FIBERS];
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'sim'", flt_sim_next_rows(NULL, 4, FIBERS, e, sv, h, k, NULL, NULL));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'s_out'", flt_sim_next_rows(s, 4, FIBERS, e, NULL, h, k, NULL, NULL));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'height_out'", flt_sim_next_rows(s, 4, FIBERS, e, sv, NULL, k, NULL, NULL));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'slope_out'", flt_sim_next_rows(s, 4, FIBERS, e, sv, h, NULL, NULL, NULL));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'rows' is 0", flt_sim_next_rows(s, 0, FIBERS, e, sv, h, k, NULL, NULL));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'", flt_sim_next_rows(s, 4, FIBERS - 1, e, sv, h, k, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'sim'",
+        flt_sim_next_rows(NULL, 4, FIBERS, e, sv, h, k, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'s_out'",
+        flt_sim_next_rows(s, 4, FIBERS, e, NULL, h, k, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'height_out'",
+        flt_sim_next_rows(s, 4, FIBERS, e, sv, NULL, k, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'slope_out'",
+        flt_sim_next_rows(s, 4, FIBERS, e, sv, h, NULL, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'rows' is 0",
+        flt_sim_next_rows(s, 0, FIBERS, e, sv, h, k, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'",
+        flt_sim_next_rows(s, 4, FIBERS - 1, e, sv, h, k, NULL, NULL));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'", flt_sim_next_rows(s, 4, 0, e, sv, h, k, NULL, NULL));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "overflows", flt_sim_next_rows(s, NEG, FIBERS, e, sv, h, k, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "overflows",
+        flt_sim_next_rows(s, NEG, FIBERS, e, sv, h, k, NULL, NULL));
     BAD(FLT_ERR_INVALID_ARGUMENT, "overflows",
         flt_sim_next_rows(s, overflow_rows(FIBERS), FIBERS, e, sv, h, k, NULL, NULL));
     GOOD(flt_sim_next_rows(s, 4, FIBERS, NULL, sv, h, k, NULL, NULL));
@@ -1470,15 +1590,23 @@ static void row_sim_next_frame(void) {
     const size_t cap = (size_t)WIDTH * ROI_ROWS;
     uint8_t *buf = malloc(cap + 2);
     double enc, truth[FIBERS];
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'sim'", flt_sim_next_frame(NULL, buf, cap, WIDTH, &enc, 0, NULL, NULL));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'frame_out'", flt_sim_next_frame(s, NULL, cap, WIDTH, &enc, 0, NULL, NULL));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'stride_bytes'", flt_sim_next_frame(s, buf, cap, WIDTH - 1, &enc, 0, NULL, NULL));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'stride_bytes'", flt_sim_next_frame(s, buf, cap, 0, &enc, 0, NULL, NULL));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'capacity_bytes'", flt_sim_next_frame(s, buf, cap - 1, WIDTH, &enc, 0, NULL, NULL));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'capacity_bytes'", flt_sim_next_frame(s, buf, 0, WIDTH, &enc, 0, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'sim'",
+        flt_sim_next_frame(NULL, buf, cap, WIDTH, &enc, 0, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'frame_out'",
+        flt_sim_next_frame(s, NULL, cap, WIDTH, &enc, 0, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'stride_bytes'",
+        flt_sim_next_frame(s, buf, cap, WIDTH - 1, &enc, 0, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'stride_bytes'",
+        flt_sim_next_frame(s, buf, cap, 0, &enc, 0, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'capacity_bytes'",
+        flt_sim_next_frame(s, buf, cap - 1, WIDTH, &enc, 0, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'capacity_bytes'",
+        flt_sim_next_frame(s, buf, 0, WIDTH, &enc, 0, NULL, NULL));
     /* stride * height overflows size_t: refused, never written. */
-    BAD(FLT_ERR_INVALID_ARGUMENT, NULL, flt_sim_next_frame(s, buf, cap, SIZE_MAX / 8, &enc, 0, NULL, NULL));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'", flt_sim_next_frame(s, buf, cap, WIDTH, &enc, FIBERS + 1, truth, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, NULL,
+        flt_sim_next_frame(s, buf, cap, SIZE_MAX / 8, &enc, 0, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'",
+        flt_sim_next_frame(s, buf, cap, WIDTH, &enc, FIBERS + 1, truth, NULL));
     GOOD(flt_sim_next_frame(s, buf, cap, WIDTH, &enc, FIBERS, truth, NULL));
     GOOD(flt_sim_next_frame(s, buf, cap, WIDTH, NULL, 0, NULL, NULL));
     flt_sim_destroy(s);
@@ -1486,9 +1614,12 @@ static void row_sim_next_frame(void) {
     flt_options *o = options_with(FLT_OPT_SIM_BIT_DEPTH, 12);
     GOOD(flt_sim_create(g_calib, o, &s));
     uint8_t *buf16 = malloc(2 * cap + 4);
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'stride_bytes'", flt_sim_next_frame(s, buf16, 2 * cap + 4, 2 * WIDTH + 1, &enc, 0, NULL, NULL));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "align", flt_sim_next_frame(s, buf16 + 1, 2 * cap, 2 * WIDTH, &enc, 0, NULL, NULL));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'capacity_bytes'", flt_sim_next_frame(s, buf16, cap, 2 * WIDTH, &enc, 0, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'stride_bytes'",
+        flt_sim_next_frame(s, buf16, 2 * cap + 4, 2 * WIDTH + 1, &enc, 0, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "align",
+        flt_sim_next_frame(s, buf16 + 1, 2 * cap, 2 * WIDTH, &enc, 0, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'capacity_bytes'",
+        flt_sim_next_frame(s, buf16, cap, 2 * WIDTH, &enc, 0, NULL, NULL));
     GOOD(flt_sim_next_frame(s, buf16, 2 * cap, 2 * WIDTH, &enc, 0, NULL, NULL));
     flt_sim_destroy(s);
     flt_options_destroy(o);
@@ -1522,11 +1653,13 @@ static flt_flatness *new_flatness(void) {
 enum { FROWS = 400 };
 static double g_fs[FROWS], g_fz[FROWS * FIBERS];
 static void make_flat_sheet(void) {
-    for (int i = 0; i < FIBERS; ++i) g_x[i] = FIRST_X + PITCH * i;
+    for (int i = 0; i < FIBERS; ++i)
+        g_x[i] = FIRST_X + PITCH * i;
     for (int r = 0; r < FROWS; ++r) {
         g_fs[r] = 3.0 * r;
         for (int k = 0; k < FIBERS; ++k)
-            g_fz[r * FIBERS + k] = 2.0 * sin(2 * M_PI * g_fs[r] / 600.0) * cos(M_PI * g_x[k] / 2020.0);
+            g_fz[r * FIBERS + k] =
+                2.0 * sin(2 * M_PI * g_fs[r] / 600.0) * cos(M_PI * g_x[k] / 2020.0);
     }
 }
 
@@ -1536,10 +1669,12 @@ static void row_shape_string(void) {
                            FLT_SHAPE_MAX_ENUM_};
     for (size_t i = 0; i < sizeof v / sizeof v[0]; ++i) {
         ++g_checks;
-        if (flt_shape_string(v[i]) == NULL) ERR("NULL for %d", (int)v[i]);
+        if (flt_shape_string(v[i]) == NULL)
+            ERR("NULL for %d", (int)v[i]);
     }
     ++g_checks;
-    if (strcmp(flt_shape_string((flt_shape)99), "unknown") != 0) ERR("unknown shape is \"%s\"", flt_shape_string((flt_shape)99));
+    if (strcmp(flt_shape_string((flt_shape)99), "unknown") != 0)
+        ERR("unknown shape is \"%s\"", flt_shape_string((flt_shape)99));
 }
 
 static void row_flatness_create(void) {
@@ -1562,7 +1697,8 @@ static void row_flatness_create(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "flat_update_interval", flt_flatness_create(FIBERS, g_x, o, &f));
     flt_options_destroy(o);
     ++g_checks;
-    if (f != NULL) ERR("*out not NULL after a failure");
+    if (f != NULL)
+        ERR("*out not NULL after a failure");
     GOOD(flt_flatness_create(FIBERS, g_x, NULL, &f));
     flt_flatness_destroy(f);
 }
@@ -1589,7 +1725,8 @@ static void row_flatness_fibers(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'flatness' is NULL", flt_flatness_fibers(NULL, &n));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_flatness_fibers(f, NULL));
     uint64_t junk[16] = {0};
-    BAD(FLT_ERR_INVALID_ARGUMENT, "not a live", flt_flatness_fibers((const flt_flatness *)junk, &n));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "not a live",
+        flt_flatness_fibers((const flt_flatness *)junk, &n));
     GOOD(flt_flatness_fibers(f, &n));
     flt_flatness_destroy(f);
 }
@@ -1608,7 +1745,8 @@ static void row_flatness_zone_layout(void) {
     size_t zones;
     GOOD(flt_flatness_zones(f, &zones));
     double *a = malloc(sizeof(double) * zones);
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'flatness'", flt_flatness_zone_layout(NULL, zones, a, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'flatness'",
+        flt_flatness_zone_layout(NULL, zones, a, NULL, NULL));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'zones'", flt_flatness_zone_layout(f, zones + 1, a, NULL, NULL));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'zones'", flt_flatness_zone_layout(f, NEG, a, NULL, NULL));
     GOOD(flt_flatness_zone_layout(f, zones, a, NULL, NULL));
@@ -1618,12 +1756,15 @@ static void row_flatness_zone_layout(void) {
 
 static void row_flatness_evaluate(void) {
     flt_flatness *f = new_flatness();
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'flatness'", flt_flatness_evaluate(NULL, FROWS, FIBERS, g_fs, g_fz, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'flatness'",
+        flt_flatness_evaluate(NULL, FROWS, FIBERS, g_fs, g_fz, NULL));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'s'", flt_flatness_evaluate(f, FROWS, FIBERS, NULL, g_fz, NULL));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'z'", flt_flatness_evaluate(f, FROWS, FIBERS, g_fs, NULL, NULL));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'rows' is 0", flt_flatness_evaluate(f, 0, FIBERS, g_fs, g_fz, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'rows' is 0",
+        flt_flatness_evaluate(f, 0, FIBERS, g_fs, g_fz, NULL));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'rows'", flt_flatness_evaluate(f, 1, FIBERS, g_fs, g_fz, NULL));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'", flt_flatness_evaluate(f, FROWS, FIBERS - 1, g_fs, g_fz, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'",
+        flt_flatness_evaluate(f, FROWS, FIBERS - 1, g_fs, g_fz, NULL));
     BAD(FLT_ERR_INVALID_ARGUMENT, NULL, flt_flatness_evaluate(f, NEG, FIBERS, g_fs, g_fz, NULL));
     BAD(FLT_ERR_INVALID_ARGUMENT, NULL,
         flt_flatness_evaluate(f, overflow_rows(FIBERS), FIBERS, g_fs, g_fz, NULL));
@@ -1634,15 +1775,18 @@ static void row_flatness_evaluate(void) {
     s[10] = s[9];
     BAD(FLT_ERR_INVALID_ARGUMENT, "s[10]", flt_flatness_evaluate(f, FROWS, FIBERS, s, g_fz, NULL));
     /* Too short: 100 rows = 297 mm < flat_min_length = 500 mm. */
-    BAD(FLT_ERR_INVALID_ARGUMENT, "flat_min_length", flt_flatness_evaluate(f, 100, FIBERS, g_fs, g_fz, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "flat_min_length",
+        flt_flatness_evaluate(f, 100, FIBERS, g_fs, g_fz, NULL));
     /* All heights NaN: no valid fiber. */
     double *zn = malloc(sizeof g_fz);
-    for (size_t i = 0; i < FROWS * FIBERS; ++i) zn[i] = NaN_;
+    for (size_t i = 0; i < FROWS * FIBERS; ++i)
+        zn[i] = NaN_;
     BAD(FLT_ERR_INVALID_ARGUMENT, "fiber", flt_flatness_evaluate(f, FROWS, FIBERS, g_fs, zn, NULL));
     /* Infinite and huge heights in one fiber: that fiber is unusable or
      * large, the call succeeds, results stay flagged-or-finite. */
     memcpy(zn, g_fz, sizeof g_fz);
-    for (int r = 0; r < FROWS; ++r) zn[r * FIBERS + 3] = (r % 2) ? Inf_ : -1e300;
+    for (int r = 0; r < FROWS; ++r)
+        zn[r * FIBERS + 3] = (r % 2) ? Inf_ : -1e300;
     GOOD(flt_flatness_evaluate(f, FROWS, FIBERS, g_fs, zn, NULL));
     free(zn);
     GOOD(flt_flatness_evaluate(f, FROWS, FIBERS, g_fs, g_fz, NULL));
@@ -1653,30 +1797,42 @@ static void row_flatness_push(void) {
     flt_flatness *f = new_flatness();
     size_t used;
     int ev;
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'flatness'", flt_flatness_push(NULL, 10, FIBERS, g_fs, g_fz, NULL, &used, &ev));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'s'", flt_flatness_push(f, 10, FIBERS, NULL, g_fz, NULL, &used, &ev));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'z'", flt_flatness_push(f, 10, FIBERS, g_fs, NULL, NULL, &used, &ev));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'consumed_out'", flt_flatness_push(f, 10, FIBERS, g_fs, g_fz, NULL, NULL, &ev));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'evaluated_out'", flt_flatness_push(f, 10, FIBERS, g_fs, g_fz, NULL, &used, NULL));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'rows' is 0", flt_flatness_push(f, 0, FIBERS, g_fs, g_fz, NULL, &used, &ev));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'", flt_flatness_push(f, 10, 1, g_fs, g_fz, NULL, &used, &ev));
-    BAD(FLT_ERR_INVALID_ARGUMENT, NULL, flt_flatness_push(f, NEG, FIBERS, g_fs, g_fz, NULL, &used, &ev));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'flatness'",
+        flt_flatness_push(NULL, 10, FIBERS, g_fs, g_fz, NULL, &used, &ev));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'s'",
+        flt_flatness_push(f, 10, FIBERS, NULL, g_fz, NULL, &used, &ev));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'z'",
+        flt_flatness_push(f, 10, FIBERS, g_fs, NULL, NULL, &used, &ev));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'consumed_out'",
+        flt_flatness_push(f, 10, FIBERS, g_fs, g_fz, NULL, NULL, &ev));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'evaluated_out'",
+        flt_flatness_push(f, 10, FIBERS, g_fs, g_fz, NULL, &used, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'rows' is 0",
+        flt_flatness_push(f, 0, FIBERS, g_fs, g_fz, NULL, &used, &ev));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'",
+        flt_flatness_push(f, 10, 1, g_fs, g_fz, NULL, &used, &ev));
+    BAD(FLT_ERR_INVALID_ARGUMENT, NULL,
+        flt_flatness_push(f, NEG, FIBERS, g_fs, g_fz, NULL, &used, &ev));
     double s[10];
     memcpy(s, g_fs, sizeof s);
     s[5] = Inf_;
-    BAD(FLT_ERR_INVALID_ARGUMENT, "s[5]", flt_flatness_push(f, 10, FIBERS, s, g_fz, NULL, &used, &ev));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "s[5]",
+        flt_flatness_push(f, 10, FIBERS, s, g_fz, NULL, &used, &ev));
     GOOD(flt_flatness_push(f, 10, FIBERS, g_fs, g_fz, NULL, &used, &ev));
     /* Rows must keep increasing across calls. */
-    BAD(FLT_ERR_INVALID_ARGUMENT, "s[0]", flt_flatness_push(f, 10, FIBERS, g_fs, g_fz, NULL, &used, &ev));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "s[0]",
+        flt_flatness_push(f, 10, FIBERS, g_fs, g_fz, NULL, &used, &ev));
     GOOD(flt_flatness_push(f, 10, FIBERS, g_fs + 10, g_fz + 10 * FIBERS, NULL, &used, &ev));
     /* Capacity: a window longer than flat_row_capacity rows. */
     flt_options *o = options_with(FLT_OPT_FLAT_ROW_CAPACITY, 16);
     GOOD(flt_options_set(o, FLT_OPT_FLAT_WINDOW_LENGTH, 0));
     flt_flatness *g = NULL;
     GOOD(flt_flatness_create(FIBERS, g_x, o, &g));
-    BAD(FLT_ERR_BUFFER_FULL, "flat_row_capacity", flt_flatness_push(g, 40, FIBERS, g_fs, g_fz, NULL, &used, &ev));
+    BAD(FLT_ERR_BUFFER_FULL, "flat_row_capacity",
+        flt_flatness_push(g, 40, FIBERS, g_fs, g_fz, NULL, &used, &ev));
     ++g_checks;
-    if (used != 16) ERR("consumed %zu rows before BUFFER_FULL, expected 16", used);
+    if (used != 16)
+        ERR("consumed %zu rows before BUFFER_FULL, expected 16", used);
     GOOD(flt_flatness_reset(g));
     GOOD(flt_flatness_push(g, 10, FIBERS, g_fs, g_fz, NULL, &used, &ev));
     flt_flatness_destroy(g);
@@ -1690,9 +1846,10 @@ static void row_flatness_finish(void) {
     size_t used;
     BAD(FLT_ERR_INVALID_ARGUMENT, "'flatness'", flt_flatness_finish(NULL, &ev));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'evaluated_out'", flt_flatness_finish(f, NULL));
-    GOOD(flt_flatness_finish(f, &ev));  /* nothing pending: evaluates nothing */
+    GOOD(flt_flatness_finish(f, &ev)); /* nothing pending: evaluates nothing */
     ++g_checks;
-    if (ev != 0) ERR("finish with no rows evaluated");
+    if (ev != 0)
+        ERR("finish with no rows evaluated");
     GOOD(flt_flatness_push(f, FROWS, FIBERS, g_fs, g_fz, NULL, &used, &ev));
     GOOD(flt_flatness_finish(f, &ev));
     flt_flatness_destroy(f);
@@ -1751,7 +1908,8 @@ static void row_flatness_zone_results(void) {
 static void row_flatness_shape(void) {
     flt_flatness *f = new_flatness();
     flt_shape sh;
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'flatness'", flt_flatness_shape(NULL, &sh, NULL, NULL, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'flatness'",
+        flt_flatness_shape(NULL, &sh, NULL, NULL, NULL, NULL));
     BAD(FLT_ERR_STATE, "no window", flt_flatness_shape(f, &sh, NULL, NULL, NULL, NULL));
     GOOD(flt_flatness_evaluate(f, FROWS, FIBERS, g_fs, g_fz, NULL));
     GOOD(flt_flatness_shape(f, &sh, NULL, NULL, NULL, NULL));
@@ -1800,7 +1958,8 @@ static void row_source_create_sim(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "source_encoder_mode", flt_source_create_sim(g_sim, o, &s));
     flt_options_destroy(o);
     ++g_checks;
-    if (s != NULL) ERR("*out not NULL after a failure");
+    if (s != NULL)
+        ERR("*out not NULL after a failure");
     GOOD(flt_source_create_sim(g_sim, NULL, &s));
     flt_source_destroy(s);
 }
@@ -1813,7 +1972,8 @@ static void row_source_create_images(void) {
     path_in_dir(other, sizeof other, "small.png");
     path_in_dir(csv, sizeof csv, "enc.csv");
     uint8_t px[64 * 32];
-    for (size_t i = 0; i < sizeof px; ++i) px[i] = (uint8_t)i;
+    for (size_t i = 0; i < sizeof px; ++i)
+        px[i] = (uint8_t)i;
     write_png(png, px, 64, 32);
     write_png(other, px, 32, 16);
     write_file(junk, "not an image at all", 19);
@@ -1822,7 +1982,8 @@ static void row_source_create_images(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_source_create_images(one, 1, NULL, NULL, NULL));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'paths'", flt_source_create_images(NULL, 1, NULL, NULL, &s));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'count'", flt_source_create_images(one, 0, NULL, NULL, &s));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "paths[1]", flt_source_create_images(with_null, 2, NULL, NULL, &s));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "paths[1]",
+        flt_source_create_images(with_null, 2, NULL, NULL, &s));
     BAD(FLT_ERR_IO, "x.png", flt_source_create_images(missing, 1, NULL, NULL, &s));
     /* OpenCV cannot tell "unreadable" from "not an image": IO, named. */
     BAD(FLT_ERR_IO, "junk.png", flt_source_create_images(garbage, 1, NULL, NULL, &s));
@@ -1833,7 +1994,8 @@ static void row_source_create_images(void) {
     BAD(FLT_ERR_FORMAT, "enc.csv", flt_source_create_images(one, 1, csv, NULL, &s));
     write_file(csv, "encoder_mm\nnan\n", 15);
     BAD(FLT_ERR_FORMAT, "enc.csv", flt_source_create_images(one, 1, csv, NULL, &s));
-    BAD(FLT_ERR_IO, "no_such.csv", flt_source_create_images(one, 1, "/nonexistent/no_such.csv", NULL, &s));
+    BAD(FLT_ERR_IO, "no_such.csv",
+        flt_source_create_images(one, 1, "/nonexistent/no_such.csv", NULL, &s));
     write_file(csv, "12.5\n", 5);
     GOOD(flt_source_create_images(one, 1, csv, NULL, &s));
     flt_source_destroy(s);
@@ -1861,7 +2023,8 @@ static void row_source_create_image_dir(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_source_create_image_dir(d, NULL, NULL, NULL));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'directory'", flt_source_create_image_dir(NULL, NULL, NULL, &s));
     BAD(FLT_ERR_NOT_FOUND, "empty", flt_source_create_image_dir(empty, NULL, NULL, &s));
-    BAD(FLT_ERR_IO, "no_such_dir", flt_source_create_image_dir("/nonexistent/no_such_dir", NULL, NULL, &s));
+    BAD(FLT_ERR_IO, "no_such_dir",
+        flt_source_create_image_dir("/nonexistent/no_such_dir", NULL, NULL, &s));
     GOOD(flt_source_create_image_dir(d, NULL, NULL, &s));
     flt_source_destroy(s);
 }
@@ -1895,7 +2058,7 @@ static void row_source_start(void) {
 static void row_source_stop(void) {
     flt_source *s = new_sim_source();
     BAD(FLT_ERR_INVALID_ARGUMENT, "'source'", flt_source_stop(NULL));
-    GOOD(flt_source_stop(s));  /* stopping a stopped source is a no-op */
+    GOOD(flt_source_stop(s)); /* stopping a stopped source is a no-op */
     flt_source_destroy(s);
 }
 
@@ -1920,7 +2083,8 @@ static void row_frame_info(void) {
     GOOD(flt_source_start(s));
     GOOD(flt_source_next(s, 0, &f));
     g_fn = "flt_frame_info";
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'frame'", flt_frame_info(NULL, &px, NULL, NULL, NULL, NULL, NULL, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'frame'",
+        flt_frame_info(NULL, &px, NULL, NULL, NULL, NULL, NULL, NULL, NULL));
     GOOD(flt_frame_info(f, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL));
     GOOD(flt_frame_info(f, &px, NULL, NULL, NULL, NULL, NULL, NULL, NULL));
     flt_source_destroy(s);
@@ -1948,7 +2112,8 @@ static void row_source_count(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'source'", flt_source_count(NULL, FLT_COUNT_FRAMES, &v));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_source_count(s, FLT_COUNT_FRAMES, NULL));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'counter'", flt_source_count(s, (flt_source_counter)17, &v));
-    ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "'counter'", flt_source_count(s, (flt_source_counter)-1, &v));
+    ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "'counter'",
+                flt_source_count(s, (flt_source_counter)-1, &v));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'counter'", flt_source_count(s, FLT_COUNT_MAX_ENUM_, &v));
     GOOD(flt_source_count(s, FLT_COUNT_FRAMES, &v));
     flt_source_destroy(s);
@@ -1957,7 +2122,8 @@ static void row_source_count(void) {
 static void row_source_stream_error(void) {
     flt_source *s = new_sim_source();
     ++g_checks;
-    if (flt_source_stream_error(NULL) == NULL) ERR("NULL for a NULL source");
+    if (flt_source_stream_error(NULL) == NULL)
+        ERR("NULL for a NULL source");
     ++g_checks;
     if (flt_source_stream_error(s) == NULL || flt_source_stream_error(s)[0] != 0)
         ERR("not \"\" for a fresh source");
@@ -1969,11 +2135,14 @@ static void row_source_camera_string(void) {
     flt_u3v_sim *bus = new_bus();
     flt_source *cam = open_camera(bus);
     const char *str;
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'source'", flt_source_camera_string(NULL, FLT_CAMERA_VENDOR, &str));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'source'",
+        flt_source_camera_string(NULL, FLT_CAMERA_VENDOR, &str));
     BAD(FLT_ERR_STATE, "camera", flt_source_camera_string(s, FLT_CAMERA_VENDOR, &str));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_source_camera_string(cam, FLT_CAMERA_VENDOR, NULL));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'which'", flt_source_camera_string(cam, (flt_camera_string)7, &str));
-    ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "'which'", flt_source_camera_string(cam, (flt_camera_string)-1, &str));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'which'",
+        flt_source_camera_string(cam, (flt_camera_string)7, &str));
+    ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "'which'",
+                flt_source_camera_string(cam, (flt_camera_string)-1, &str));
     GOOD(flt_source_camera_string(cam, FLT_CAMERA_SERIAL, &str));
     flt_source_destroy(cam);
     flt_u3v_sim_destroy(bus);
@@ -1985,12 +2154,17 @@ static void row_source_camera_value(void) {
     flt_u3v_sim *bus = new_bus();
     flt_source *cam = open_camera(bus);
     uint64_t v;
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'source'", flt_source_camera_value(NULL, FLT_CAMERA_U3V_VERSION, &v));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'source'",
+        flt_source_camera_value(NULL, FLT_CAMERA_U3V_VERSION, &v));
     BAD(FLT_ERR_STATE, "camera", flt_source_camera_value(s, FLT_CAMERA_U3V_VERSION, &v));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_source_camera_value(cam, FLT_CAMERA_U3V_VERSION, NULL));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'which'", flt_source_camera_value(cam, (flt_camera_value)18, &v));
-    ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "'which' = -1", flt_source_camera_value(cam, (flt_camera_value)-1, &v));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'which'", flt_source_camera_value(cam, FLT_CAMERA_VALUE_MAX_ENUM_, &v));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'",
+        flt_source_camera_value(cam, FLT_CAMERA_U3V_VERSION, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'which'",
+        flt_source_camera_value(cam, (flt_camera_value)18, &v));
+    ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "'which' = -1",
+                flt_source_camera_value(cam, (flt_camera_value)-1, &v));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'which'",
+        flt_source_camera_value(cam, FLT_CAMERA_VALUE_MAX_ENUM_, &v));
     GOOD(flt_source_camera_value(cam, FLT_CAMERA_U3V_VERSION, &v));
     flt_source_destroy(cam);
     flt_u3v_sim_destroy(bus);
@@ -2004,15 +2178,15 @@ static void check_feature_access(int which) {
     flt_source *cam = open_camera(bus);
     int64_t iv;
     double dv;
-#define CALL(src, name)                                                          \
-    (which == 0   ? flt_source_get_int(src, name, &iv)                           \
-     : which == 1 ? flt_source_set_int(src, name, 32)                            \
-     : which == 2 ? flt_source_get_float(src, name, &dv)                         \
-     : which == 3 ? flt_source_set_float(src, name, 1.5)                         \
-     : which == 4 ? flt_source_set_enum(src, name, "Continuous")                 \
-                  : flt_source_execute(src, name))
-    static const char *const good_feature[6] = {"Width", "Height", "Gain", "Gain",
-                                                "AcquisitionMode", "AcquisitionStop"};
+#define CALL(src, name)                                        \
+  (which == 0   ? flt_source_get_int(src, name, &iv)           \
+   : which == 1 ? flt_source_set_int(src, name, 32)            \
+   : which == 2 ? flt_source_get_float(src, name, &dv)         \
+   : which == 3 ? flt_source_set_float(src, name, 1.5)         \
+   : which == 4 ? flt_source_set_enum(src, name, "Continuous") \
+                : flt_source_execute(src, name))
+    static const char *const good_feature[6] = {"Width", "Height",          "Gain",
+                                                "Gain",  "AcquisitionMode", "AcquisitionStop"};
     BAD(FLT_ERR_INVALID_ARGUMENT, "'source'", CALL(NULL, good_feature[which]));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'feature'", CALL(cam, NULL));
     BAD(FLT_ERR_STATE, "camera", CALL(s, good_feature[which]));
@@ -2022,12 +2196,16 @@ static void check_feature_access(int which) {
     memset(longname, 'Q', sizeof longname - 1);
     longname[sizeof longname - 1] = 0;
     BAD(FLT_ERR_NOT_FOUND, "QQQQ", CALL(cam, longname));
-    if (which == 0) BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_source_get_int(cam, "Width", NULL));
-    if (which == 2) BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_source_get_float(cam, "Gain", NULL));
-    if (which == 3) BAD(FLT_ERR_INVALID_ARGUMENT, "not finite", flt_source_set_float(cam, "Gain", NaN_));
+    if (which == 0)
+        BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_source_get_int(cam, "Width", NULL));
+    if (which == 2)
+        BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_source_get_float(cam, "Gain", NULL));
+    if (which == 3)
+        BAD(FLT_ERR_INVALID_ARGUMENT, "not finite", flt_source_set_float(cam, "Gain", NaN_));
     if (which == 4) {
         BAD(FLT_ERR_INVALID_ARGUMENT, "'entry'", flt_source_set_enum(cam, "AcquisitionMode", NULL));
-        BAD(FLT_ERR_NOT_FOUND, "NoSuchEntry", flt_source_set_enum(cam, "AcquisitionMode", "NoSuchEntry"));
+        BAD(FLT_ERR_NOT_FOUND, "NoSuchEntry",
+            flt_source_set_enum(cam, "AcquisitionMode", "NoSuchEntry"));
     }
     GOOD(CALL(cam, good_feature[which]));
 #undef CALL
@@ -2035,12 +2213,24 @@ static void check_feature_access(int which) {
     flt_u3v_sim_destroy(bus);
     flt_source_destroy(s);
 }
-static void row_source_get_int(void) { check_feature_access(0); }
-static void row_source_set_int(void) { check_feature_access(1); }
-static void row_source_get_float(void) { check_feature_access(2); }
-static void row_source_set_float(void) { check_feature_access(3); }
-static void row_source_set_enum(void) { check_feature_access(4); }
-static void row_source_execute(void) { check_feature_access(5); }
+static void row_source_get_int(void) {
+    check_feature_access(0);
+}
+static void row_source_set_int(void) {
+    check_feature_access(1);
+}
+static void row_source_get_float(void) {
+    check_feature_access(2);
+}
+static void row_source_set_float(void) {
+    check_feature_access(3);
+}
+static void row_source_set_enum(void) {
+    check_feature_access(4);
+}
+static void row_source_execute(void) {
+    check_feature_access(5);
+}
 
 static void row_source_map_feature(void) {
     flt_source *s = new_sim_source();
@@ -2088,8 +2278,9 @@ static void row_source_write_memory(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'source'", flt_source_write_memory(NULL, 0x10000, buf, 4));
     BAD(FLT_ERR_STATE, "camera", flt_source_write_memory(s, 0x10000, buf, 4));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'bytes_in'", flt_source_write_memory(cam, 0x10000, NULL, 4));
-    BAD(FLT_ERR_DEVICE, NULL, flt_source_write_memory(cam, 0x0, buf, 4));  /* read-only ABRM */
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'address'", flt_source_write_memory(cam, UINT64_MAX - 1, buf, 4));
+    BAD(FLT_ERR_DEVICE, NULL, flt_source_write_memory(cam, 0x0, buf, 4)); /* read-only ABRM */
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'address'",
+        flt_source_write_memory(cam, UINT64_MAX - 1, buf, 4));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'bytes'", flt_source_write_memory(cam, 0x10000, buf, 0));
     GOOD(flt_source_write_memory(cam, 0x10000, buf, 4));
     flt_source_destroy(cam);
@@ -2178,15 +2369,24 @@ static void row_u3v_sim_add_camera(void) {
     char longs[100];
     memset(longs, 'L', sizeof longs - 1);
     longs[sizeof longs - 1] = 0;
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'bus'", flt_u3v_sim_add_camera(NULL, "V", "M", "S", 64, 32, FLT_PIXEL_MONO8, &idx));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'vendor'", flt_u3v_sim_add_camera(bus, NULL, "M", "S", 64, 32, FLT_PIXEL_MONO8, &idx));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "longer than 63", flt_u3v_sim_add_camera(bus, "V", "M", longs, 64, 32, FLT_PIXEL_MONO8, &idx));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'width'", flt_u3v_sim_add_camera(bus, "V", "M", "S", 8, 32, FLT_PIXEL_MONO8, &idx));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'height'", flt_u3v_sim_add_camera(bus, "V", "M", "S", 64, 9000, FLT_PIXEL_MONO8, &idx));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'format'", flt_u3v_sim_add_camera(bus, "V", "M", "S", 64, 32, (flt_pixel_format)11, &idx));
-    ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "'format' = -8", flt_u3v_sim_add_camera(bus, "V", "M", "S", 64, 32, (flt_pixel_format)-8, &idx));
-    for (int i = 0; i < 8; ++i) GOOD(flt_u3v_sim_add_camera(bus, "V", "M", "S", 64, 32, FLT_PIXEL_MONO8, &idx));
-    BAD(FLT_ERR_BUFFER_FULL, NULL, flt_u3v_sim_add_camera(bus, "V", "M", "S", 64, 32, FLT_PIXEL_MONO8, &idx));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'bus'",
+        flt_u3v_sim_add_camera(NULL, "V", "M", "S", 64, 32, FLT_PIXEL_MONO8, &idx));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'vendor'",
+        flt_u3v_sim_add_camera(bus, NULL, "M", "S", 64, 32, FLT_PIXEL_MONO8, &idx));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "longer than 63",
+        flt_u3v_sim_add_camera(bus, "V", "M", longs, 64, 32, FLT_PIXEL_MONO8, &idx));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'width'",
+        flt_u3v_sim_add_camera(bus, "V", "M", "S", 8, 32, FLT_PIXEL_MONO8, &idx));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'height'",
+        flt_u3v_sim_add_camera(bus, "V", "M", "S", 64, 9000, FLT_PIXEL_MONO8, &idx));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'format'",
+        flt_u3v_sim_add_camera(bus, "V", "M", "S", 64, 32, (flt_pixel_format)11, &idx));
+    ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "'format' = -8",
+                flt_u3v_sim_add_camera(bus, "V", "M", "S", 64, 32, (flt_pixel_format)-8, &idx));
+    for (int i = 0; i < 8; ++i)
+        GOOD(flt_u3v_sim_add_camera(bus, "V", "M", "S", 64, 32, FLT_PIXEL_MONO8, &idx));
+    BAD(FLT_ERR_BUFFER_FULL, NULL,
+        flt_u3v_sim_add_camera(bus, "V", "M", "S", 64, 32, FLT_PIXEL_MONO8, &idx));
     uint64_t v;
     GOOD(flt_u3v_sim_get(bus, 7, FLT_U3V_SIM_COMMANDS, &v));
     flt_u3v_sim_destroy(bus);
@@ -2206,10 +2406,14 @@ static void row_u3v_sim_set(void) {
     flt_u3v_sim *bus = new_bus();
     BAD(FLT_ERR_INVALID_ARGUMENT, "'bus'", flt_u3v_sim_set(NULL, 0, FLT_U3V_SIM_XML_ZIPPED, 0));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'camera'", flt_u3v_sim_set(bus, 3, FLT_U3V_SIM_XML_ZIPPED, 0));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "parameter is unknown", flt_u3v_sim_set(bus, 0, (flt_u3v_sim_param)15, 0));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "parameter is unknown", flt_u3v_sim_set(bus, 0, FLT_U3V_SIM_FRAMES_SENT, 0));  /* read-only */
-    BAD(FLT_ERR_INVALID_ARGUMENT, "parameter is unknown", flt_u3v_sim_set(bus, 0, FLT_U3V_SIM_PARAM_MAX_ENUM_, 0));
-    ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "'param' = -1", flt_u3v_sim_set(bus, 0, (flt_u3v_sim_param)-1, 0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "parameter is unknown",
+        flt_u3v_sim_set(bus, 0, (flt_u3v_sim_param)15, 0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "parameter is unknown",
+        flt_u3v_sim_set(bus, 0, FLT_U3V_SIM_FRAMES_SENT, 0)); /* read-only */
+    BAD(FLT_ERR_INVALID_ARGUMENT, "parameter is unknown",
+        flt_u3v_sim_set(bus, 0, FLT_U3V_SIM_PARAM_MAX_ENUM_, 0));
+    ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "'param' = -1",
+                flt_u3v_sim_set(bus, 0, (flt_u3v_sim_param)-1, 0));
     GOOD(flt_u3v_sim_set(bus, 0, FLT_U3V_SIM_XML_ZIPPED, 0));
     flt_u3v_sim_destroy(bus);
 }
@@ -2220,18 +2424,24 @@ static void row_u3v_sim_get(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'bus'", flt_u3v_sim_get(NULL, 0, FLT_U3V_SIM_COMMANDS, &v));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'camera'", flt_u3v_sim_get(bus, 1, FLT_U3V_SIM_COMMANDS, &v));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_u3v_sim_get(bus, 0, FLT_U3V_SIM_COMMANDS, NULL));
-    ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "parameter is unknown", flt_u3v_sim_get(bus, 0, (flt_u3v_sim_param)-3, &v));
+    ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "parameter is unknown",
+                flt_u3v_sim_get(bus, 0, (flt_u3v_sim_param)-3, &v));
     GOOD(flt_u3v_sim_get(bus, 0, FLT_U3V_SIM_COMMANDS, &v));
     flt_u3v_sim_destroy(bus);
 }
 
 static void row_u3v_sim_inject(void) {
     flt_u3v_sim *bus = new_bus();
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'bus'", flt_u3v_sim_inject(NULL, 0, FLT_U3V_FAULT_SHORT_FRAME, 1, 1));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'camera'", flt_u3v_sim_inject(bus, 2, FLT_U3V_FAULT_SHORT_FRAME, 1, 1));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "fault is unknown", flt_u3v_sim_inject(bus, 0, (flt_u3v_fault)8, 1, 1));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "fault is unknown", flt_u3v_sim_inject(bus, 0, FLT_U3V_FAULT_MAX_ENUM_, 1, 1));
-    ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "'fault' = -4", flt_u3v_sim_inject(bus, 0, (flt_u3v_fault)-4, 1, 1));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'bus'",
+        flt_u3v_sim_inject(NULL, 0, FLT_U3V_FAULT_SHORT_FRAME, 1, 1));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'camera'",
+        flt_u3v_sim_inject(bus, 2, FLT_U3V_FAULT_SHORT_FRAME, 1, 1));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "fault is unknown",
+        flt_u3v_sim_inject(bus, 0, (flt_u3v_fault)8, 1, 1));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "fault is unknown",
+        flt_u3v_sim_inject(bus, 0, FLT_U3V_FAULT_MAX_ENUM_, 1, 1));
+    ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "'fault' = -4",
+                flt_u3v_sim_inject(bus, 0, (flt_u3v_fault)-4, 1, 1));
     GOOD(flt_u3v_sim_inject(bus, 0, FLT_U3V_FAULT_SHORT_FRAME, 1, 1));
     flt_u3v_sim_destroy(bus);
 }
@@ -2259,52 +2469,136 @@ typedef struct row {
     void (*check)(void);
 } row;
 
-#define ROW(name) {"flt_" #name, row_##name}
+#define ROW(name) \
+  { "flt_" #name, row_##name }
 static const row k_rows[] = {
     /* common.h */
-    ROW(status_string), ROW(last_error_message), ROW(last_error_status), ROW(version),
-    ROW(version_string), ROW(options_create), ROW(options_destroy), ROW(options_set),
-    ROW(options_get), ROW(option_find), ROW(option_info), ROW(option_at),
+    ROW(status_string),
+    ROW(last_error_message),
+    ROW(last_error_status),
+    ROW(version),
+    ROW(version_string),
+    ROW(options_create),
+    ROW(options_destroy),
+    ROW(options_set),
+    ROW(options_get),
+    ROW(option_find),
+    ROW(option_info),
+    ROW(option_at),
     /* recon.h */
-    ROW(recon_create), ROW(recon_destroy), ROW(recon_fibers), ROW(recon_get_option),
-    ROW(recon_push), ROW(recon_pull), ROW(recon_ready), ROW(recon_end_sheet),
-    ROW(recon_reset), ROW(recon_boundary), ROW(reconstruct),
+    ROW(recon_create),
+    ROW(recon_destroy),
+    ROW(recon_fibers),
+    ROW(recon_get_option),
+    ROW(recon_push),
+    ROW(recon_pull),
+    ROW(recon_ready),
+    ROW(recon_end_sheet),
+    ROW(recon_reset),
+    ROW(recon_boundary),
+    ROW(reconstruct),
     /* calib.h */
-    ROW(calib_create), ROW(calib_destroy), ROW(calib_finish), ROW(calib_is_finished),
-    ROW(calib_set_frame_size), ROW(calib_get_frame_size), ROW(calib_set_intrinsics),
-    ROW(calib_get_intrinsics), ROW(calib_estimate_intrinsics), ROW(calib_set_homography),
-    ROW(calib_get_homography), ROW(calib_estimate_homography), ROW(calib_set_laser_offset),
-    ROW(calib_get_laser_offset), ROW(calib_laser_spacing), ROW(calib_set_encoder_scale),
-    ROW(calib_get_encoder_scale), ROW(calib_set_fiber_grid), ROW(calib_get_fiber_grid),
-    ROW(calib_image_to_plane), ROW(calib_plane_to_image), ROW(calib_undistort),
-    ROW(calib_save), ROW(calib_save_text), ROW(calib_load), ROW(calib_load_text),
+    ROW(calib_create),
+    ROW(calib_destroy),
+    ROW(calib_finish),
+    ROW(calib_is_finished),
+    ROW(calib_set_frame_size),
+    ROW(calib_get_frame_size),
+    ROW(calib_set_intrinsics),
+    ROW(calib_get_intrinsics),
+    ROW(calib_estimate_intrinsics),
+    ROW(calib_set_homography),
+    ROW(calib_get_homography),
+    ROW(calib_estimate_homography),
+    ROW(calib_set_laser_offset),
+    ROW(calib_get_laser_offset),
+    ROW(calib_laser_spacing),
+    ROW(calib_set_encoder_scale),
+    ROW(calib_get_encoder_scale),
+    ROW(calib_set_fiber_grid),
+    ROW(calib_get_fiber_grid),
+    ROW(calib_image_to_plane),
+    ROW(calib_plane_to_image),
+    ROW(calib_undistort),
+    ROW(calib_save),
+    ROW(calib_save_text),
+    ROW(calib_load),
+    ROW(calib_load_text),
     /* extractor.h */
-    ROW(extractor_create), ROW(extractor_destroy), ROW(extractor_fibers),
-    ROW(extractor_band), ROW(extractor_process), ROW(extractor_peaks),
+    ROW(extractor_create),
+    ROW(extractor_destroy),
+    ROW(extractor_fibers),
+    ROW(extractor_band),
+    ROW(extractor_process),
+    ROW(extractor_peaks),
     ROW(extractor_laser_profiles),
     /* sim.h */
-    ROW(sim_create), ROW(sim_destroy), ROW(sim_add_defect), ROW(sim_clear_sheet),
-    ROW(sim_set_height_map), ROW(sim_surface), ROW(sim_fibers), ROW(sim_frame_size),
-    ROW(sim_pixel_format), ROW(sim_next_rows), ROW(sim_next_frame), ROW(sim_rewind),
+    ROW(sim_create),
+    ROW(sim_destroy),
+    ROW(sim_add_defect),
+    ROW(sim_clear_sheet),
+    ROW(sim_set_height_map),
+    ROW(sim_surface),
+    ROW(sim_fibers),
+    ROW(sim_frame_size),
+    ROW(sim_pixel_format),
+    ROW(sim_next_rows),
+    ROW(sim_next_frame),
+    ROW(sim_rewind),
     ROW(calib_create_reference),
     /* flatness.h */
-    ROW(shape_string), ROW(flatness_create), ROW(flatness_create_from_calib),
-    ROW(flatness_destroy), ROW(flatness_fibers), ROW(flatness_zones),
-    ROW(flatness_zone_layout), ROW(flatness_evaluate), ROW(flatness_push),
-    ROW(flatness_finish), ROW(flatness_reset), ROW(flatness_window),
-    ROW(flatness_fiber_results), ROW(flatness_zone_results), ROW(flatness_shape),
+    ROW(shape_string),
+    ROW(flatness_create),
+    ROW(flatness_create_from_calib),
+    ROW(flatness_destroy),
+    ROW(flatness_fibers),
+    ROW(flatness_zones),
+    ROW(flatness_zone_layout),
+    ROW(flatness_evaluate),
+    ROW(flatness_push),
+    ROW(flatness_finish),
+    ROW(flatness_reset),
+    ROW(flatness_window),
+    ROW(flatness_fiber_results),
+    ROW(flatness_zone_results),
+    ROW(flatness_shape),
     /* source.h */
-    ROW(source_create_sim), ROW(source_create_images), ROW(source_create_image_dir),
-    ROW(camera_list_create), ROW(camera_list_destroy), ROW(camera_list_count),
-    ROW(camera_list_get), ROW(source_open_u3v), ROW(source_destroy), ROW(source_kind_of),
-    ROW(source_start), ROW(source_stop), ROW(source_next), ROW(frame_info),
-    ROW(source_set_encoder), ROW(source_count), ROW(source_stream_error),
-    ROW(source_camera_string), ROW(source_camera_value), ROW(source_get_int),
-    ROW(source_set_int), ROW(source_get_float), ROW(source_set_float), ROW(source_set_enum),
-    ROW(source_execute), ROW(source_map_feature), ROW(source_read_memory),
-    ROW(source_write_memory), ROW(u3v_sim_create), ROW(u3v_sim_destroy),
-    ROW(u3v_sim_add_camera), ROW(u3v_sim_set_frames), ROW(u3v_sim_set), ROW(u3v_sim_get),
-    ROW(u3v_sim_inject), ROW(u3v_sim_peek),
+    ROW(source_create_sim),
+    ROW(source_create_images),
+    ROW(source_create_image_dir),
+    ROW(camera_list_create),
+    ROW(camera_list_destroy),
+    ROW(camera_list_count),
+    ROW(camera_list_get),
+    ROW(source_open_u3v),
+    ROW(source_destroy),
+    ROW(source_kind_of),
+    ROW(source_start),
+    ROW(source_stop),
+    ROW(source_next),
+    ROW(frame_info),
+    ROW(source_set_encoder),
+    ROW(source_count),
+    ROW(source_stream_error),
+    ROW(source_camera_string),
+    ROW(source_camera_value),
+    ROW(source_get_int),
+    ROW(source_set_int),
+    ROW(source_get_float),
+    ROW(source_set_float),
+    ROW(source_set_enum),
+    ROW(source_execute),
+    ROW(source_map_feature),
+    ROW(source_read_memory),
+    ROW(source_write_memory),
+    ROW(u3v_sim_create),
+    ROW(u3v_sim_destroy),
+    ROW(u3v_sim_add_camera),
+    ROW(u3v_sim_set_frames),
+    ROW(u3v_sim_set),
+    ROW(u3v_sim_get),
+    ROW(u3v_sim_inject),
+    ROW(u3v_sim_peek),
 };
 #define N_ROWS (sizeof k_rows / sizeof k_rows[0])
 
@@ -2315,14 +2609,20 @@ static const row k_rows[] = {
 static char **exported_functions(size_t *count) {
     Dl_info info;
     *count = 0;
-    if (!dladdr((void *)flt_version, &info) || !info.dli_fname) return NULL;
+    if (!dladdr((void *)flt_version, &info) || !info.dli_fname)
+        return NULL;
     FILE *f = fopen(info.dli_fname, "rb");
-    if (!f) return NULL;
+    if (!f)
+        return NULL;
     fseek(f, 0, SEEK_END);
     long n = ftell(f);
     fseek(f, 0, SEEK_SET);
     unsigned char *elf = malloc((size_t)n);
-    if (fread(elf, 1, (size_t)n, f) != (size_t)n) { fclose(f); free(elf); return NULL; }
+    if (fread(elf, 1, (size_t)n, f) != (size_t)n) {
+        fclose(f);
+        free(elf);
+        return NULL;
+    }
     fclose(f);
     const Elf64_Ehdr *eh = (const Elf64_Ehdr *)elf;
     if (memcmp(eh->e_ident, ELFMAG, SELFMAG) != 0 || eh->e_ident[EI_CLASS] != ELFCLASS64) {
@@ -2333,16 +2633,21 @@ static char **exported_functions(size_t *count) {
     char **names = NULL;
     size_t cap = 0;
     for (int i = 0; i < eh->e_shnum; ++i) {
-        if (sh[i].sh_type != SHT_DYNSYM) continue;
+        if (sh[i].sh_type != SHT_DYNSYM)
+            continue;
         const Elf64_Sym *sym = (const Elf64_Sym *)(elf + sh[i].sh_offset);
         const char *str = (const char *)(elf + sh[sh[i].sh_link].sh_offset);
         size_t nsym = sh[i].sh_size / sizeof(Elf64_Sym);
         for (size_t k = 0; k < nsym; ++k) {
             int type = ELF64_ST_TYPE(sym[k].st_info), bind = ELF64_ST_BIND(sym[k].st_info);
-            if (sym[k].st_shndx == SHN_UNDEF) continue;
-            if (bind != STB_GLOBAL && bind != STB_WEAK) continue;
-            if (type != STT_FUNC && type != STT_GNU_IFUNC) continue;
-            if (*count == cap) names = realloc(names, sizeof(char *) * (cap = cap ? 2 * cap : 256));
+            if (sym[k].st_shndx == SHN_UNDEF)
+                continue;
+            if (bind != STB_GLOBAL && bind != STB_WEAK)
+                continue;
+            if (type != STT_FUNC && type != STT_GNU_IFUNC)
+                continue;
+            if (*count == cap)
+                names = realloc(names, sizeof(char *) * (cap = cap ? 2 * cap : 256));
             names[(*count)++] = strdup(str + sym[k].st_name);
         }
     }
@@ -2362,22 +2667,27 @@ int main(void) {
     /* Every exported function has a row; every row is exported. */
     for (size_t i = 0; i < n_exported; ++i) {
         int found = 0;
-        for (size_t r = 0; r < N_ROWS && !found; ++r) found = strcmp(exported[i], k_rows[r].function) == 0;
+        for (size_t r = 0; r < N_ROWS && !found; ++r)
+            found = strcmp(exported[i], k_rows[r].function) == 0;
         ++g_checks;
         if (!found)
             ERR("exported function %s has no row in the bad-input matrix "
-                "(tests/c/test_bad_input.c): add one", exported[i]);
+                "(tests/c/test_bad_input.c): add one",
+                exported[i]);
     }
     for (size_t r = 0; r < N_ROWS; ++r) {
         int found = 0;
-        for (size_t i = 0; i < n_exported && !found; ++i) found = strcmp(exported[i], k_rows[r].function) == 0;
+        for (size_t i = 0; i < n_exported && !found; ++i)
+            found = strcmp(exported[i], k_rows[r].function) == 0;
         ++g_checks;
-        if (!found) ERR("row %s names a function the library does not export", k_rows[r].function);
+        if (!found)
+            ERR("row %s names a function the library does not export", k_rows[r].function);
     }
 
     setup();
     /* Homographies of the fixture calibration for the unfinished models. */
-    if (flt_calib_get_homography(g_calib, 0, H0) || flt_calib_get_homography(g_calib, 1, H1)) return 2;
+    if (flt_calib_get_homography(g_calib, 0, H0) || flt_calib_get_homography(g_calib, 1, H1))
+        return 2;
     make_flat_sheet();
     for (size_t r = 0; r < N_ROWS; ++r) {
         g_fn = k_rows[r].function;
@@ -2390,7 +2700,8 @@ int main(void) {
                (t1.tv_sec - t0.tv_sec) * 1e3 + (t1.tv_nsec - t0.tv_nsec) * 1e-6);
     }
     teardown();
-    for (size_t i = 0; i < n_exported; ++i) free(exported[i]);
+    for (size_t i = 0; i < n_exported; ++i)
+        free(exported[i]);
     free(exported);
     printf("bad-input matrix: %zu exported functions, %zu rows, %d checks, %d failures, "
            "%d known bugs (reported)\n",

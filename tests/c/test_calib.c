@@ -26,9 +26,8 @@
 
 /* Calibration correspondences: a target stepped through the measuring field
  * every 100 mm in x and 50 mm in z (25 x 5 = 125 points per laser). */
-static size_t make_correspondences(unsigned laser, double noise_px,
-                                   double outlier_fraction, uint64_t seed,
-                                   double *image_px, double *plane_mm,
+static size_t make_correspondences(unsigned laser, double noise_px, double outlier_fraction,
+                                   uint64_t seed, double *image_px, double *plane_mm,
                                    int *is_outlier) {
     uint64_t rng = seed;
     size_t n = 0;
@@ -46,7 +45,8 @@ static size_t make_correspondences(unsigned laser, double noise_px,
                 const double a = 6.283185307179586 * synth_uniform(&rng);
                 u += d * cos(a), v += d * sin(a);
             }
-            if (is_outlier) is_outlier[n] = outlier;
+            if (is_outlier)
+                is_outlier[n] = outlier;
             image_px[2 * n] = u, image_px[2 * n + 1] = v;
             plane_mm[2 * n] = x, plane_mm[2 * n + 1] = z;
             ++n;
@@ -67,30 +67,32 @@ static void set_geometry(flt_calib *calib) {
 /* Builds and finishes a calibration of the synthetic sensor with the true
  * intrinsics and estimated homographies. */
 static flt_calib *calibrate_sensor(double noise_px, double outlier_fraction,
-                                   const flt_options *options, double rms_px[2],
-                                   double rms_mm[2], size_t misclassified[2]) {
+                                   const flt_options *options, double rms_px[2], double rms_mm[2],
+                                   size_t misclassified[2]) {
     flt_calib *calib = NULL;
     assert_int_equal(flt_calib_create(&calib), FLT_OK);
     set_geometry(calib);
-    assert_int_equal(flt_calib_set_intrinsics(calib, synth_camera, synth_distortion),
-                     FLT_OK);
+    assert_int_equal(flt_calib_set_intrinsics(calib, synth_camera, synth_distortion), FLT_OK);
     for (unsigned laser = 0; laser < 2; ++laser) {
         double image[2 * max_points], plane[2 * max_points];
         double res_px[max_points], res_mm[max_points];
         uint8_t inlier[max_points];
         int outlier[max_points];
-        const size_t n = make_correspondences(laser, noise_px, outlier_fraction,
-                                              1234 + laser, image, plane, outlier);
+        const size_t n = make_correspondences(laser, noise_px, outlier_fraction, 1234 + laser,
+                                              image, plane, outlier);
         double rp, rm;
-        assert_int_equal(flt_calib_estimate_homography(calib, laser, n, image, plane,
-                                                       options, res_px, res_mm,
-                                                       inlier, &rp, &rm),
+        assert_int_equal(flt_calib_estimate_homography(calib, laser, n, image, plane, options,
+                                                       res_px, res_mm, inlier, &rp, &rm),
                          FLT_OK);
-        if (rms_px) rms_px[laser] = rp;
-        if (rms_mm) rms_mm[laser] = rm;
+        if (rms_px)
+            rms_px[laser] = rp;
+        if (rms_mm)
+            rms_mm[laser] = rm;
         size_t wrong = 0;
-        for (size_t i = 0; i < n; ++i) wrong += (inlier[i] != 0) == (outlier[i] != 0);
-        if (misclassified) misclassified[laser] = wrong;
+        for (size_t i = 0; i < n; ++i)
+            wrong += (inlier[i] != 0) == (outlier[i] != 0);
+        if (misclassified)
+            misclassified[laser] = wrong;
     }
     assert_int_equal(flt_calib_finish(calib), FLT_OK);
     return calib;
@@ -98,8 +100,7 @@ static flt_calib *calibrate_sensor(double noise_px, double outlier_fraction,
 
 /* RMS and max distance (mm) between the true plane points of a dense grid
  * over the measuring field and their images mapped back onto the plane. */
-static void field_error(const flt_calib *calib, unsigned laser, double *rms,
-                        double *max) {
+static void field_error(const flt_calib *calib, unsigned laser, double *rms, double *max) {
     enum { nx = 121, nz = 41 };
     static double image[2 * nx * nz], plane[2 * nx * nz];
     size_t n = 0;
@@ -107,8 +108,8 @@ static void field_error(const flt_calib *calib, unsigned laser, double *rms,
         for (int i = 0; i < nx; ++i) {
             const double x = -FOV_X_MM + 2 * FOV_X_MM * i / (nx - 1);
             const double z = -FOV_Z_MM + 2 * FOV_Z_MM * j / (nz - 1);
-            assert_true(synth_project(x, synth_laser_offset[laser], z, &image[2 * n],
-                                      &image[2 * n + 1]));
+            assert_true(
+                synth_project(x, synth_laser_offset[laser], z, &image[2 * n], &image[2 * n + 1]));
             plane[2 * n] = x, plane[2 * n + 1] = z;
             ++n;
         }
@@ -116,10 +117,10 @@ static void field_error(const flt_calib *calib, unsigned laser, double *rms,
     double sum = 0;
     *max = 0;
     for (size_t i = 0; i < n; ++i) {
-        const double d = hypot(image[2 * i] - plane[2 * i],
-                               image[2 * i + 1] - plane[2 * i + 1]);
+        const double d = hypot(image[2 * i] - plane[2 * i], image[2 * i + 1] - plane[2 * i + 1]);
         sum += d * d;
-        if (!(d <= *max)) *max = d;
+        if (!(d <= *max))
+            *max = d;
     }
     *rms = sqrt(sum / n);
 }
@@ -204,17 +205,16 @@ static void homography_residuals_are_consistent(void **state) {
     (void)state;
     flt_calib *calib = NULL;
     assert_int_equal(flt_calib_create(&calib), FLT_OK);
-    assert_int_equal(flt_calib_set_intrinsics(calib, synth_camera, synth_distortion),
-                     FLT_OK);
+    assert_int_equal(flt_calib_set_intrinsics(calib, synth_camera, synth_distortion), FLT_OK);
     double image[2 * max_points], plane[2 * max_points];
     double res_px[max_points], res_mm[max_points], rms_px, rms_mm;
     const size_t n = make_correspondences(0, 0.05, 0.0, 99, image, plane, NULL);
-    assert_int_equal(flt_calib_estimate_homography(calib, 0, n, image, plane, NULL,
-                                                   res_px, res_mm, NULL, &rms_px,
-                                                   &rms_mm),
+    assert_int_equal(flt_calib_estimate_homography(calib, 0, n, image, plane, NULL, res_px, res_mm,
+                                                   NULL, &rms_px, &rms_mm),
                      FLT_OK);
     double sp = 0, sm = 0;
-    for (size_t i = 0; i < n; ++i) sp += res_px[i] * res_px[i], sm += res_mm[i] * res_mm[i];
+    for (size_t i = 0; i < n; ++i)
+        sp += res_px[i] * res_px[i], sm += res_mm[i] * res_mm[i];
     assert_near(sqrt(sp / n), rms_px, 1e-12);
     assert_near(sqrt(sm / n), rms_mm, 1e-12);
     /* mm per px on this plane is 1.5..2.1 (see above): the ratio says the
@@ -232,8 +232,7 @@ static void undistort_inverts_distortion(void **state) {
     (void)state;
     flt_calib *calib = NULL;
     assert_int_equal(flt_calib_create(&calib), FLT_OK);
-    assert_int_equal(flt_calib_set_intrinsics(calib, synth_camera, synth_distortion),
-                     FLT_OK);
+    assert_int_equal(flt_calib_set_intrinsics(calib, synth_camera, synth_distortion), FLT_OK);
     assert_int_equal(flt_calib_set_frame_size(calib, SYNTH_WIDTH, SYNTH_HEIGHT), FLT_OK);
     enum { n = 33 * 33 };
     static double raw[2 * n], ideal[2 * n];
@@ -258,7 +257,8 @@ static void undistort_inverts_distortion(void **state) {
         const double yd = y * radial + d[2] * (r2 + 2 * y * y) + 2 * d[3] * x * y;
         const double e = hypot(synth_camera[0] * xd + synth_camera[2] - raw[2 * i],
                                synth_camera[1] * yd + synth_camera[3] - raw[2 * i + 1]);
-        if (!(e <= worst)) worst = e;
+        if (!(e <= worst))
+            worst = e;
     }
     /* The raw corner, 1445 px from the centre, is an ideal point ~1710 px
      * out, where the radial factor is 1 - 0.155: a shift of ~265 px. */
@@ -283,8 +283,8 @@ static void mapping_round_trip_and_nan(void **state) {
             assert_near(back[2 * i], pts[2 * i], 1e-9);
             assert_near(back[2 * i + 1], pts[2 * i + 1], 1e-9);
             double u, v; /* and the image point is where the true camera sees it */
-            assert_true(synth_project(pts[2 * i], synth_laser_offset[laser],
-                                      pts[2 * i + 1], &u, &v));
+            assert_true(
+                synth_project(pts[2 * i], synth_laser_offset[laser], pts[2 * i + 1], &u, &v));
             assert_near(img[2 * i], u, 1e-6);
             assert_near(img[2 * i + 1], v, 1e-6);
         }
@@ -334,33 +334,30 @@ static void life_cycle_and_bad_arguments(void **state) {
     assert_int_equal(flt_calib_set_frame_size(calib, 0, 10), FLT_ERR_INVALID_ARGUMENT);
     assert_non_null(strstr(flt_last_error_message(), "'width' = 0"));
     const double bad_cam[4] = {-5, 1000, 1024, 1024};
-    assert_int_equal(flt_calib_set_intrinsics(calib, bad_cam, NULL),
-                     FLT_ERR_INVALID_ARGUMENT);
+    assert_int_equal(flt_calib_set_intrinsics(calib, bad_cam, NULL), FLT_ERR_INVALID_ARGUMENT);
     const double singular[9] = {1, 2, 3, 2, 4, 6, 0, 0, 1};
-    assert_int_equal(flt_calib_set_homography(calib, 0, singular),
-                     FLT_ERR_INVALID_ARGUMENT);
+    assert_int_equal(flt_calib_set_homography(calib, 0, singular), FLT_ERR_INVALID_ARGUMENT);
     const double identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-    assert_int_equal(flt_calib_set_homography(calib, 2, identity),
-                     FLT_ERR_INVALID_ARGUMENT);
+    assert_int_equal(flt_calib_set_homography(calib, 2, identity), FLT_ERR_INVALID_ARGUMENT);
     assert_non_null(strstr(flt_last_error_message(), "'laser' = 2"));
     assert_int_equal(flt_calib_set_laser_offset(calib, 0, NAN), FLT_ERR_INVALID_ARGUMENT);
     assert_int_equal(flt_calib_set_encoder_scale(calib, 0.0), FLT_ERR_INVALID_ARGUMENT);
     assert_int_equal(flt_calib_set_fiber_grid(calib, 0, -2, 10), FLT_ERR_INVALID_ARGUMENT);
     /* homography before intrinsics: state error */
     double img[8] = {0, 0, 1, 0, 0, 1, 1, 1}, pl[8] = {0, 0, 1, 0, 0, 1, 1, 1};
-    assert_int_equal(flt_calib_estimate_homography(calib, 0, 4, img, pl, NULL, NULL,
-                                                   NULL, NULL, NULL, NULL),
-                     FLT_ERR_STATE);
+    assert_int_equal(
+        flt_calib_estimate_homography(calib, 0, 4, img, pl, NULL, NULL, NULL, NULL, NULL, NULL),
+        FLT_ERR_STATE);
     /* collinear correspondences are degenerate */
     assert_int_equal(flt_calib_set_intrinsics(calib, synth_camera, NULL), FLT_OK);
     double line_img[10] = {0, 0, 1, 1, 2, 2, 3, 3, 4, 4};
     double line_pl[10] = {0, 0, 1, 0, 2, 0, 3, 0, 4, 0};
-    assert_int_equal(flt_calib_estimate_homography(calib, 0, 5, line_img, line_pl, NULL,
-                                                   NULL, NULL, NULL, NULL, NULL),
+    assert_int_equal(flt_calib_estimate_homography(calib, 0, 5, line_img, line_pl, NULL, NULL, NULL,
+                                                   NULL, NULL, NULL),
                      FLT_ERR_NUMERIC);
-    assert_int_equal(flt_calib_estimate_homography(calib, 0, 3, img, pl, NULL, NULL,
-                                                   NULL, NULL, NULL, NULL),
-                     FLT_ERR_INVALID_ARGUMENT);
+    assert_int_equal(
+        flt_calib_estimate_homography(calib, 0, 3, img, pl, NULL, NULL, NULL, NULL, NULL, NULL),
+        FLT_ERR_INVALID_ARGUMENT);
     flt_calib_destroy(calib);
     flt_calib_destroy(NULL); /* no-op */
 
@@ -387,8 +384,8 @@ enum { thread_points = 20000, thread_rounds = 10, thread_count = 4 };
 
 struct thread_job {
     const flt_calib *calib;
-    const double *image;     /* thread_points x 2 */
-    const double *expected;  /* thread_points x 2, single-threaded result */
+    const double *image;    /* thread_points x 2 */
+    const double *expected; /* thread_points x 2, single-threaded result */
     size_t mismatches;
     int status;
 };
@@ -401,14 +398,14 @@ static void *map_concurrently(void *arg) {
     job->status = FLT_OK;
     for (int round = 0; round < thread_rounds; ++round) {
         const unsigned laser = (unsigned)round % 2;
-        flt_status st = flt_calib_image_to_plane(job->calib, laser, thread_points,
-                                                 job->image, out);
-        if (st != FLT_OK) job->status = st;
+        flt_status st = flt_calib_image_to_plane(job->calib, laser, thread_points, job->image, out);
+        if (st != FLT_OK)
+            job->status = st;
         st = flt_calib_plane_to_image(job->calib, laser, thread_points, out, back);
-        if (st != FLT_OK) job->status = st;
+        if (st != FLT_OK)
+            job->status = st;
         for (size_t i = 0; i < 2 * thread_points; ++i)
-            if (memcmp(&out[i], &job->expected[laser * 2 * thread_points + i],
-                       sizeof(double)) != 0)
+            if (memcmp(&out[i], &job->expected[laser * 2 * thread_points + i], sizeof(double)) != 0)
                 ++job->mismatches;
     }
     free(out);

@@ -29,12 +29,10 @@ static const double square_mm = 60.0;
  * of 20..35 degrees about both axes and boards in every quadrant, so focal
  * length, principal point and distortion are all observable. */
 static const double poses[views][6] = {
-    {0, 0, 0, 0, 0, 1000},          {25, 0, 0, 0, -300, 1100},
-    {-25, 0, 0, 0, 300, 1100},      {0, 25, 0, -350, 0, 1100},
-    {0, -25, 0, 350, 0, 1100},      {20, 20, 10, -400, -350, 1200},
-    {-20, 20, -10, -400, 350, 1200}, {20, -20, 5, 400, -350, 1200},
-    {-20, -20, -5, 400, 350, 1200}, {35, 0, 15, 0, 0, 1300},
-    {0, 35, -15, 0, 0, 1300},       {-30, -30, 0, 0, 0, 1400},
+    {0, 0, 0, 0, 0, 1000},           {25, 0, 0, 0, -300, 1100},     {-25, 0, 0, 0, 300, 1100},
+    {0, 25, 0, -350, 0, 1100},       {0, -25, 0, 350, 0, 1100},     {20, 20, 10, -400, -350, 1200},
+    {-20, 20, -10, -400, 350, 1200}, {20, -20, 5, 400, -350, 1200}, {-20, -20, -5, 400, 350, 1200},
+    {35, 0, 15, 0, 0, 1300},         {0, 35, -15, 0, 0, 1300},      {-30, -30, 0, 0, 0, 1400},
 };
 
 static uint8_t *g_images[views];
@@ -47,9 +45,8 @@ static int render_views(void **state) {
     for (int v = 0; v < views; ++v) {
         g_images[v] = malloc((size_t)SYNTH_WIDTH * SYNTH_HEIGHT);
         const double *p = poses[v];
-        if (!synth_render_chessboard(ray_map, squares_x, squares_y, square_mm,
-                                     p[0] * DEG, p[1] * DEG, p[2] * DEG, p + 3,
-                                     g_images[v]))
+        if (!synth_render_chessboard(ray_map, squares_x, squares_y, square_mm, p[0] * DEG,
+                                     p[1] * DEG, p[2] * DEG, p + 3, g_images[v]))
             fail_msg("pose %d puts the board outside the image", v);
     }
     free(ray_map);
@@ -58,7 +55,8 @@ static int render_views(void **state) {
 
 static int free_views(void **state) {
     (void)state;
-    for (int v = 0; v < views; ++v) free(g_images[v]);
+    for (int v = 0; v < views; ++v)
+        free(g_images[v]);
     return 0;
 }
 
@@ -75,8 +73,7 @@ static void chessboard_views_give_the_camera(void **state) {
     const uint8_t *const *images = (const uint8_t *const *)g_images;
     assert_int_equal(flt_calib_estimate_intrinsics(calib, views, images, SYNTH_WIDTH,
                                                    FLT_TARGET_CHESSBOARD, squares_x - 1,
-                                                   squares_y - 1, square_mm, NULL, &rms,
-                                                   view_rms),
+                                                   squares_y - 1, square_mm, NULL, &rms, view_rms),
                      FLT_OK);
     double cam[4], dist[8];
     assert_int_equal(flt_calib_get_intrinsics(calib, cam, dist), FLT_OK);
@@ -84,15 +81,16 @@ static void chessboard_views_give_the_camera(void **state) {
     const double fy_err = cam[1] / synth_camera[1] - 1;
     print_message("rms %.4f px; fx %.3f (%+.4f %%), fy %.3f (%+.4f %%), cx %.2f "
                   "(true %.2f), cy %.2f (true %.2f), k1 %.4f k2 %.4f\n",
-                  rms, cam[0], 100 * fx_err, cam[1], 100 * fy_err, cam[2],
-                  synth_camera[2], cam[3], synth_camera[3], dist[0], dist[1]);
+                  rms, cam[0], 100 * fx_err, cam[1], 100 * fy_err, cam[2], synth_camera[2], cam[3],
+                  synth_camera[3], dist[0], dist[1]);
     size_t found = 0;
     double worst_view = 0;
     for (int v = 0; v < views; ++v) {
         print_message("  view %2d rms %.4f px\n", v, view_rms[v]);
         if (!isnan(view_rms[v])) {
             ++found;
-            if (view_rms[v] > worst_view) worst_view = view_rms[v];
+            if (view_rms[v] > worst_view)
+                worst_view = view_rms[v];
         }
     }
     assert_int_equal(found, views); /* every rendered board is detected */
@@ -115,8 +113,7 @@ static void chessboard_views_give_the_camera(void **state) {
      * corners, 1445 px out, are extrapolation and are not judged. */
     flt_calib *true_cam = NULL;
     assert_int_equal(flt_calib_create(&true_cam), FLT_OK);
-    assert_int_equal(flt_calib_set_intrinsics(true_cam, synth_camera, synth_distortion),
-                     FLT_OK);
+    assert_int_equal(flt_calib_set_intrinsics(true_cam, synth_camera, synth_distortion), FLT_OK);
     const double probe[8] = {1030 - 600, 1020 - 600, 1030 + 600, 1020 - 600,
                              1030 - 600, 1020 + 600, 1030 + 600, 1020 + 600};
     double est[8], truth[8], worst_px = 0;
@@ -124,7 +121,8 @@ static void chessboard_views_give_the_camera(void **state) {
     assert_int_equal(flt_calib_undistort(true_cam, 4, probe, truth), FLT_OK);
     for (int i = 0; i < 4; ++i) {
         const double d = hypot(est[2 * i] - truth[2 * i], est[2 * i + 1] - truth[2 * i + 1]);
-        if (d > worst_px) worst_px = d;
+        if (d > worst_px)
+            worst_px = d;
     }
     print_message("undistortion at 850 px radius: worst difference %.3f px\n", worst_px);
     assert_true(worst_px < 1.5);
@@ -157,7 +155,8 @@ static double estimate_from(render_fn render, flt_calib_target target, uint32_t 
         }
         free(ray_map);
     } else {
-        for (int v = 0; v < views; ++v) images[v] = g_images[v];
+        for (int v = 0; v < views; ++v)
+            images[v] = g_images[v];
     }
     flt_calib *calib = NULL;
     assert_int_equal(flt_calib_create(&calib), FLT_OK);
@@ -169,13 +168,13 @@ static double estimate_from(render_fn render, flt_calib_target target, uint32_t 
                      FLT_OK);
     assert_int_equal(flt_calib_get_intrinsics(calib, cam, dist), FLT_OK);
     *found = 0;
-    for (int v = 0; v < views; ++v) *found += !isnan(view_rms[v]);
+    for (int v = 0; v < views; ++v)
+        *found += !isnan(view_rms[v]);
     /* How far the estimated model undistorts from the true one where the
      * targets were seen (see chessboard_views_give_the_camera). */
     flt_calib *true_cam = NULL;
     assert_int_equal(flt_calib_create(&true_cam), FLT_OK);
-    assert_int_equal(flt_calib_set_intrinsics(true_cam, synth_camera, synth_distortion),
-                     FLT_OK);
+    assert_int_equal(flt_calib_set_intrinsics(true_cam, synth_camera, synth_distortion), FLT_OK);
     const double probe[8] = {1030 - 600, 1020 - 600, 1030 + 600, 1020 - 600,
                              1030 - 600, 1020 + 600, 1030 + 600, 1020 + 600};
     double est[8], truth[8];
@@ -187,22 +186,20 @@ static double estimate_from(render_fn render, flt_calib_target target, uint32_t 
                                                               est[2 * i + 1] - truth[2 * i + 1]));
     flt_calib_destroy(true_cam);
     if (render)
-        for (int v = 0; v < views; ++v) free(images[v]);
+        for (int v = 0; v < views; ++v)
+            free(images[v]);
     flt_calib_destroy(calib);
     return rms;
 }
 
 static int render_circles(const double *ray_map, const double p[6], uint8_t *image) {
     /* 9 x 6 circles of 15 mm radius, 60 mm apart: the chessboard's extent. */
-    return synth_render_circle_grid(ray_map, 9, 6, 60.0, 15.0, 0, p[0], p[1], p[2], p + 3,
-                                    image);
+    return synth_render_circle_grid(ray_map, 9, 6, 60.0, 15.0, 0, p[0], p[1], p[2], p + 3, image);
 }
 
-static int render_asymmetric_circles(const double *ray_map, const double p[6],
-                                     uint8_t *image) {
+static int render_asymmetric_circles(const double *ray_map, const double p[6], uint8_t *image) {
     /* OpenCV's 4 x 11 asymmetric pattern, 30 mm half-distance, 10 mm radius. */
-    return synth_render_circle_grid(ray_map, 4, 11, 30.0, 10.0, 1, p[0], p[1], p[2], p + 3,
-                                    image);
+    return synth_render_circle_grid(ray_map, 4, 11, 30.0, 10.0, 1, p[0], p[1], p[2], p + 3, image);
 }
 
 /* Circle grids, symmetric and asymmetric, through the same poses: every
@@ -221,8 +218,8 @@ static void circle_grid_views_give_the_camera(void **state) {
         double pitch;
     } cases[] = {
         {"symmetric 9 x 6", render_circles, FLT_TARGET_CIRCLE_GRID, 9, 6, 60.0},
-        {"asymmetric 4 x 11", render_asymmetric_circles, FLT_TARGET_ASYMMETRIC_CIRCLE_GRID, 4,
-         11, 30.0},
+        {"asymmetric 4 x 11", render_asymmetric_circles, FLT_TARGET_ASYMMETRIC_CIRCLE_GRID, 4, 11,
+         30.0},
     };
     for (size_t c = 0; c < sizeof cases / sizeof cases[0]; ++c) {
         double cam[4], dist[8], worst_px;
@@ -257,8 +254,8 @@ static void rational_distortion_gives_the_camera(void **state) {
     assert_int_equal(flt_options_set(o, FLT_OPT_CALIB_RATIONAL_DISTORTION, 1), FLT_OK);
     double cam[4], dist[8], worst_px;
     size_t found = 0;
-    const double rms = estimate_from(NULL, FLT_TARGET_CHESSBOARD, squares_x - 1,
-                                     squares_y - 1, square_mm, o, cam, dist, &found, &worst_px);
+    const double rms = estimate_from(NULL, FLT_TARGET_CHESSBOARD, squares_x - 1, squares_y - 1,
+                                     square_mm, o, cam, dist, &found, &worst_px);
     flt_options_destroy(o);
     const double fx_err = cam[0] / synth_camera[0] - 1;
     print_message("rational model: rms %.4f px; fx %+.4f %%; k1 %.4f k2 %.4f k3 %.4f "
@@ -283,15 +280,13 @@ static void views_without_target_are_skipped(void **state) {
     assert_int_equal(flt_calib_set_frame_size(calib, SYNTH_WIDTH, SYNTH_HEIGHT), FLT_OK);
     assert_int_equal(flt_calib_estimate_intrinsics(calib, 4, images, SYNTH_WIDTH,
                                                    FLT_TARGET_CHESSBOARD, squares_x - 1,
-                                                   squares_y - 1, square_mm, NULL, NULL,
-                                                   view_rms),
+                                                   squares_y - 1, square_mm, NULL, NULL, view_rms),
                      FLT_ERR_NUMERIC);
     assert_non_null(strstr(flt_last_error_message(), "found in 2 of 4 views"));
     assert_int_equal(flt_calib_get_intrinsics(calib, NULL, NULL), FLT_ERR_STATE);
     /* bad arguments are named */
-    assert_int_equal(flt_calib_estimate_intrinsics(calib, 4, images, 100,
-                                                   FLT_TARGET_CHESSBOARD, 9, 6, 60.0,
-                                                   NULL, NULL, NULL),
+    assert_int_equal(flt_calib_estimate_intrinsics(calib, 4, images, 100, FLT_TARGET_CHESSBOARD, 9,
+                                                   6, 60.0, NULL, NULL, NULL),
                      FLT_ERR_INVALID_ARGUMENT);
     assert_non_null(strstr(flt_last_error_message(), "'stride' = 100"));
     flt_calib_destroy(calib);

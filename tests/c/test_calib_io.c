@@ -25,8 +25,7 @@ static flt_calib *make_calibration(void) {
     flt_calib *calib = NULL;
     assert_int_equal(flt_calib_create(&calib), FLT_OK);
     assert_int_equal(flt_calib_set_frame_size(calib, SYNTH_WIDTH, SYNTH_HEIGHT), FLT_OK);
-    assert_int_equal(flt_calib_set_intrinsics(calib, synth_camera, synth_distortion),
-                     FLT_OK);
+    assert_int_equal(flt_calib_set_intrinsics(calib, synth_camera, synth_distortion), FLT_OK);
     uint64_t rng = 5;
     for (unsigned laser = 0; laser < 2; ++laser) {
         double image[2 * 50], plane[2 * 50];
@@ -34,18 +33,15 @@ static flt_calib *make_calibration(void) {
         for (int j = 0; j < 5; ++j)
             for (int i = 0; i < 10; ++i, ++n) {
                 plane[2 * n] = -900 + 200 * i, plane[2 * n + 1] = -100 + 50 * j;
-                assert_true(synth_project(plane[2 * n], synth_laser_offset[laser],
-                                          plane[2 * n + 1], &image[2 * n],
-                                          &image[2 * n + 1]));
+                assert_true(synth_project(plane[2 * n], synth_laser_offset[laser], plane[2 * n + 1],
+                                          &image[2 * n], &image[2 * n + 1]));
                 image[2 * n] += 0.05 * synth_gauss(&rng);
                 image[2 * n + 1] += 0.05 * synth_gauss(&rng);
             }
-        assert_int_equal(flt_calib_estimate_homography(calib, laser, n, image, plane,
-                                                       NULL, NULL, NULL, NULL, NULL,
-                                                       NULL),
+        assert_int_equal(flt_calib_estimate_homography(calib, laser, n, image, plane, NULL, NULL,
+                                                       NULL, NULL, NULL, NULL),
                          FLT_OK);
-        assert_int_equal(flt_calib_set_laser_offset(calib, laser,
-                                                    synth_laser_offset[laser]),
+        assert_int_equal(flt_calib_set_laser_offset(calib, laser, synth_laser_offset[laser]),
                          FLT_OK);
     }
     assert_int_equal(flt_calib_set_encoder_scale(calib, 0.1 / 3), FLT_OK);
@@ -143,7 +139,8 @@ static void save_load_save_is_byte_identical(void **state) {
     enum { n = 500 };
     double image[2 * n], a[2 * n], b[2 * n];
     uint64_t rng = 11;
-    for (size_t i = 0; i < 2 * n; ++i) image[i] = SYNTH_WIDTH * synth_uniform(&rng);
+    for (size_t i = 0; i < 2 * n; ++i)
+        image[i] = SYNTH_WIDTH * synth_uniform(&rng);
     size_t differing = 0;
     for (unsigned laser = 0; laser < 2; ++laser) {
         assert_int_equal(flt_calib_image_to_plane(original, laser, n, image, a), FLT_OK);
@@ -167,15 +164,22 @@ static void save_load_save_is_byte_identical(void **state) {
 /* The format is documented in calib.h: the fields appear in that order. */
 static void text_has_documented_layout(void **state) {
     (void)state;
-    const char *order[] = {"\"format\": \"flatline-calibration\"", "\"version\": 1",
-                           "\"frame\"", "\"camera\"", "\"distortion\"", "\"lasers\"",
-                           "\"offset_mm\"", "\"homography\"", "\"encoder_mm_per_count\"",
+    const char *order[] = {"\"format\": \"flatline-calibration\"",
+                           "\"version\": 1",
+                           "\"frame\"",
+                           "\"camera\"",
+                           "\"distortion\"",
+                           "\"lasers\"",
+                           "\"offset_mm\"",
+                           "\"homography\"",
+                           "\"encoder_mm_per_count\"",
                            "\"fibers\""};
     const char *at = g_text;
     size_t found = 0;
     for (size_t i = 0; i < sizeof order / sizeof *order; ++i) {
         const char *next = strstr(at, order[i]);
-        if (next) at = next, ++found;
+        if (next)
+            at = next, ++found;
     }
     assert_int_equal(found, sizeof order / sizeof *order);
 }
@@ -328,10 +332,8 @@ int main(void) {
         cmocka_unit_test_setup_teardown(wrong_type_is_rejected, setup, teardown),
         cmocka_unit_test_setup_teardown(nan_is_rejected, setup, teardown),
         cmocka_unit_test_setup_teardown(unknown_version_is_rejected, setup, teardown),
-        cmocka_unit_test_setup_teardown(non_invertible_homography_is_rejected, setup,
-                                        teardown),
-        cmocka_unit_test_setup_teardown(other_malformations_are_rejected, setup,
-                                        teardown),
+        cmocka_unit_test_setup_teardown(non_invertible_homography_is_rejected, setup, teardown),
+        cmocka_unit_test_setup_teardown(other_malformations_are_rejected, setup, teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -54,7 +54,8 @@ static void error_message_names_argument_and_is_cleared(void **state) {
 static void *fail_in_thread(void *arg) {
     (void)arg;
     flt_option key;
-    if (flt_option_find("no_such_option_in_thread", &key) == FLT_OK) return (void *)1;
+    if (flt_option_find("no_such_option_in_thread", &key) == FLT_OK)
+        return (void *)1;
     return NULL;
 }
 
@@ -101,7 +102,8 @@ static void options_are_found_by_name_and_enumerated(void **state) {
     size_t count = 0;
     for (size_t i = 0;; ++i) {
         flt_option k;
-        if (flt_option_at(i, &k) != FLT_OK) break;
+        if (flt_option_at(i, &k) != FLT_OK)
+            break;
         const char *name = NULL;
         double lo, hi, def;
         int integer;

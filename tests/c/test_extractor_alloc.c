@@ -28,18 +28,23 @@ static int g_counting;
 static size_t g_allocations;
 
 void *malloc(size_t n) {
-    if (g_counting) ++g_allocations;
+    if (g_counting)
+        ++g_allocations;
     return __libc_malloc(n);
 }
 void *calloc(size_t n, size_t size) {
-    if (g_counting) ++g_allocations;
+    if (g_counting)
+        ++g_allocations;
     return __libc_calloc(n, size);
 }
 void *realloc(void *p, size_t n) {
-    if (g_counting) ++g_allocations;
+    if (g_counting)
+        ++g_allocations;
     return __libc_realloc(p, n);
 }
-void free(void *p) { __libc_free(p); }
+void free(void *p) {
+    __libc_free(p);
+}
 
 /* The reference sensor's rows 892..1147 (both lines), as in test_extractor. */
 enum { W = 2048, ROWS = 256, FIBERS = 201, FRAMES = 12 };
@@ -100,8 +105,10 @@ static void frames_and_rows_allocate_nothing(int bit_depth) {
         if (st == FLT_OK)
             st = flt_extractor_process(ex, frame, format, W, ROWS, stride, e, FIBERS, &row_s,
                                        height, slope, valid);
-        if (st == FLT_OK) st = flt_extractor_peaks(ex, W, peaks);
-        for (size_t k = 0; k < FIBERS; ++k) valid_count += valid[k];
+        if (st == FLT_OK)
+            st = flt_extractor_peaks(ex, W, peaks);
+        for (size_t k = 0; k < FIBERS; ++k)
+            valid_count += valid[k];
     }
     if (st == FLT_OK)
         st = flt_sim_next_rows(sim, 64, FIBERS, encoder, s, row_height, row_slope, row_valid,

@@ -20,19 +20,17 @@
 #define DS 3.0 /* mm between rows, as the sensor's frames */
 
 #define assert_near(a, b, tol)                                                 \
-    do {                                                                       \
-        const double a_ = (a), b_ = (b);                                       \
-        if (!(fabs(a_ - b_) <= (tol)))                                         \
-            fail_msg("%s = %.17g, expected %.17g +- %g", #a, a_, b_,           \
-                     (double)(tol));                                           \
-    } while (0)
+  do {                                                                         \
+    const double a_ = (a), b_ = (b);                                           \
+    if (!(fabs(a_ - b_) <= (tol)))                                             \
+      fail_msg("%s = %.17g, expected %.17g +- %g", #a, a_, b_, (double)(tol)); \
+  } while (0)
 
-#define assert_message_has(text)                                               \
-    do {                                                                       \
-        if (!strstr(flt_last_error_message(), (text)))                         \
-            fail_msg("message '%s' does not name '%s'",                        \
-                     flt_last_error_message(), (text));                        \
-    } while (0)
+#define assert_message_has(text)                                                     \
+  do {                                                                               \
+    if (!strstr(flt_last_error_message(), (text)))                                   \
+      fail_msg("message '%s' does not name '%s'", flt_last_error_message(), (text)); \
+  } while (0)
 
 /* Arc length of z = (H/2) sin(2 pi s / P) over [0, L], composite Simpson
  * with 2e5 intervals: the integrand is smooth and periodic, so this is
@@ -52,7 +50,8 @@ static double sine_arc_length(double H, double P, double L) {
 static flt_options *options_with(int n, const flt_option *keys, const double *values) {
     flt_options *o = NULL;
     assert_int_equal(flt_options_create(&o), FLT_OK);
-    for (int i = 0; i < n; ++i) assert_int_equal(flt_options_set(o, keys[i], values[i]), FLT_OK);
+    for (int i = 0; i < n; ++i)
+        assert_int_equal(flt_options_set(o, keys[i], values[i]), FLT_OK);
     return o;
 }
 
@@ -169,7 +168,8 @@ static void zones_average_their_fibers(void **state) {
     (void)state;
     enum { N = 20 };
     double x[N];
-    for (int k = 0; k < N; ++k) x[k] = -95.0 + 10.0 * k;
+    for (int k = 0; k < N; ++k)
+        x[k] = -95.0 + 10.0 * k;
     flt_flatness *f = NULL;
     assert_int_equal(flt_flatness_create(N, x, NULL, &f), FLT_OK);
     size_t zones = 0;
@@ -187,7 +187,8 @@ static void zones_average_their_fibers(void **state) {
     double *s = malloc(rows * sizeof *s), *z = malloc(rows * N * sizeof *z);
     for (size_t r = 0; r < rows; ++r) {
         s[r] = DS * (double)r;
-        for (int k = 0; k < N; ++k) z[r * N + k] = 0.5 * k * sin(2 * PI * s[r] / 1000);
+        for (int k = 0; k < N; ++k)
+            z[r * N + k] = 0.5 * k * sin(2 * PI * s[r] / 1000);
     }
     assert_int_equal(flt_flatness_evaluate(f, rows, N, s, z, NULL), FLT_OK);
     double iu[N], ziu[4];
@@ -196,7 +197,8 @@ static void zones_average_their_fibers(void **state) {
     assert_int_equal(flt_flatness_zone_results(f, 4, ziu, zfl), FLT_OK);
     for (int j = 0; j < 4; ++j) {
         double mean = 0;
-        for (int k = 5 * j; k < 5 * j + 5; ++k) mean += iu[k] / 5;
+        for (int k = 5 * j; k < 5 * j + 5; ++k)
+            mean += iu[k] / 5;
         assert_near(ziu[j], mean, 1e-9 * fabs(mean) + 1e-12);
         assert_int_equal(zfl[j], 0);
     }
@@ -227,14 +229,16 @@ static void flagged_rows_are_excluded(void **state) {
         z[r * N + 2] = w;
         z[r * N + 3] = w;
         /* fiber 2: one whole period (600 mm, 10%) flagged GAP */
-        if (s[r] > 1200 && s[r] < 1800) flags[r * N + 2] = FLT_FLAG_GAP;
+        if (s[r] > 1200 && s[r] < 1800)
+            flags[r * N + 2] = FLT_FLAG_GAP;
         /* fiber 3: 1800 mm (30%) without data */
         if (s[r] > 3000 && s[r] < 4800) {
             flags[r * N + 3] = FLT_FLAG_NO_DATA;
             z[r * N + 3] = NAN;
         }
         /* fiber 0: bridged samples are usable */
-        if (r % 7 == 0) flags[r * N + 0] = FLT_FLAG_INVALID_INPUT;
+        if (r % 7 == 0)
+            flags[r * N + 0] = FLT_FLAG_INVALID_INPUT;
     }
     flt_flatness *f = NULL;
     assert_int_equal(flt_flatness_create(N, x, NULL, &f), FLT_OK);
@@ -242,8 +246,8 @@ static void flagged_rows_are_excluded(void **state) {
     double iu[N], arc[N], wh[N];
     uint8_t fl[N];
     assert_int_equal(flt_flatness_fiber_results(f, N, arc, iu, wh, NULL, NULL, fl), FLT_OK);
-    print_message("flagged: I = %.4f %.4f %.4f %.4f, flags %d %d %d %d\n", iu[0], iu[1],
-                  iu[2], iu[3], fl[0], fl[1], fl[2], fl[3]);
+    print_message("flagged: I = %.4f %.4f %.4f %.4f, flags %d %d %d %d\n", iu[0], iu[1], iu[2],
+                  iu[3], fl[0], fl[1], fl[2], fl[3]);
     assert_int_equal(fl[0], FLT_FIBER_NO_WAVE);
     assert_int_equal(fl[1], 0);
     assert_int_equal(fl[2], FLT_FIBER_PARTIAL);
@@ -287,11 +291,12 @@ static void streaming_windows_match_whole_sheet_rows(void **state) {
             const size_t n = rows - next < blocks[b] ? rows - next : blocks[b];
             size_t used = 0;
             int evaluated = 0;
-            assert_int_equal(flt_flatness_push(f, n, N, s + next, z + next * N, NULL, &used,
-                                               &evaluated),
-                             FLT_OK);
+            assert_int_equal(
+                flt_flatness_push(f, n, N, s + next, z + next * N, NULL, &used, &evaluated),
+                FLT_OK);
             next += used;
-            if (!evaluated) continue;
+            if (!evaluated)
+                continue;
             ++windows_seen[b];
             double first, last, iu[N];
             size_t wrows, index;
@@ -306,14 +311,16 @@ static void streaming_windows_match_whole_sheet_rows(void **state) {
             assert_int_equal(flt_flatness_fiber_results(f, N, NULL, iu, NULL, NULL, NULL, NULL),
                              FLT_OK);
             size_t r0 = 0;
-            while (s[r0] < first) ++r0;
+            while (s[r0] < first)
+                ++r0;
             assert_int_equal(flt_flatness_evaluate(whole, wrows, N, s + r0, z + r0 * N, NULL),
                              FLT_OK);
             double iu_whole[N];
-            assert_int_equal(flt_flatness_fiber_results(whole, N, NULL, iu_whole, NULL, NULL,
-                                                        NULL, NULL),
-                             FLT_OK);
-            for (int k = 0; k < N; ++k) assert_near(iu[k], iu_whole[k], 1e-9 * fabs(iu_whole[k]));
+            assert_int_equal(
+                flt_flatness_fiber_results(whole, N, NULL, iu_whole, NULL, NULL, NULL, NULL),
+                FLT_OK);
+            for (int k = 0; k < N; ++k)
+                assert_near(iu[k], iu_whole[k], 1e-9 * fabs(iu_whole[k]));
         }
         /* Windows end at s0 + 2000 + 700 j <= s0 + 8997: j = 0..9, 10 windows. */
         assert_int_equal(windows_seen[b], 10);
@@ -400,7 +407,8 @@ static void bad_input(void **state) {
     assert_message_has("'s'");
     /* All fibers invalid: NaN heights, then every row flagged NO_DATA. */
     double *z_nan = malloc(rows * N * sizeof *z_nan);
-    for (size_t i = 0; i < rows * N; ++i) z_nan[i] = NAN;
+    for (size_t i = 0; i < rows * N; ++i)
+        z_nan[i] = NAN;
     assert_int_equal(flt_flatness_evaluate(f, rows, N, s, z_nan, NULL), FLT_ERR_INVALID_ARGUMENT);
     assert_message_has("'z'");
     uint8_t *no_data = malloc(rows * N);
@@ -411,7 +419,8 @@ static void bad_input(void **state) {
     /* The previous results survived every failure, and the handle works. */
     double after[N];
     assert_int_equal(flt_flatness_fiber_results(f, N, NULL, after, NULL, NULL, NULL, NULL), FLT_OK);
-    for (int k = 0; k < N; ++k) assert_near(after[k], good[k], 0.0);
+    for (int k = 0; k < N; ++k)
+        assert_near(after[k], good[k], 0.0);
     assert_int_equal(flt_flatness_fiber_results(f, N + 1, NULL, after, NULL, NULL, NULL, NULL),
                      FLT_ERR_INVALID_ARGUMENT);
     assert_message_has("fibers");
@@ -433,15 +442,15 @@ static void bad_input(void **state) {
     assert_int_equal(evaluated, 0);
     s[10] = keep;
     /* rows - 1 rows span 2997 mm, inside the default 3000 mm window. */
-    assert_int_equal(flt_flatness_push(f, rows - 1, N, s, z_nan, NULL, &used, &evaluated),
-                     FLT_OK);
+    assert_int_equal(flt_flatness_push(f, rows - 1, N, s, z_nan, NULL, &used, &evaluated), FLT_OK);
     assert_int_equal(used, rows - 1);
     assert_int_equal(evaluated, 0);
     assert_int_equal(flt_flatness_finish(f, &evaluated), FLT_OK);
     assert_int_equal(evaluated, 1);
     unsigned wflags = 0;
     assert_int_equal(flt_flatness_window(f, NULL, NULL, NULL, &wflags, NULL), FLT_OK);
-    assert_int_equal(wflags, FLT_WINDOW_NO_VALID_FIBER | FLT_WINDOW_NO_BOW | FLT_WINDOW_NO_CROSSBOW);
+    assert_int_equal(wflags,
+                     FLT_WINDOW_NO_VALID_FIBER | FLT_WINDOW_NO_BOW | FLT_WINDOW_NO_CROSSBOW);
     flt_shape shape = FLT_SHAPE_FLAT;
     double bow = 0;
     assert_int_equal(flt_flatness_shape(f, &shape, NULL, NULL, &bow, NULL), FLT_OK);
@@ -463,7 +472,8 @@ static void bad_input(void **state) {
     /* And the handle still evaluates a good sheet to the same numbers. */
     assert_int_equal(flt_flatness_evaluate(f, rows, N, s, z, NULL), FLT_OK);
     assert_int_equal(flt_flatness_fiber_results(f, N, NULL, after, NULL, NULL, NULL, NULL), FLT_OK);
-    for (int k = 0; k < N; ++k) assert_near(after[k], good[k], 0.0);
+    for (int k = 0; k < N; ++k)
+        assert_near(after[k], good[k], 0.0);
 
     /* Buffer full: a window longer than flat_row_capacity rows. */
     {

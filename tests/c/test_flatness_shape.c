@@ -36,18 +36,17 @@
 #include "flatline/flatline.h"
 
 #define FIBERS 101
-#define PITCH 20.0
-#define WIDTH 2000.0
-#define ROWS 1100 /* 3300 mm at 3 mm */
-#define SEEDS 5
+#define PITCH  20.0
+#define WIDTH  2000.0
+#define ROWS   1100 /* 3300 mm at 3 mm */
+#define SEEDS  5
 
 #define assert_near(a, b, tol)                                                 \
-    do {                                                                       \
-        const double a_ = (a), b_ = (b);                                       \
-        if (!(fabs(a_ - b_) <= (tol)))                                         \
-            fail_msg("%s = %.17g, expected %.17g +- %g", #a, a_, b_,           \
-                     (double)(tol));                                           \
-    } while (0)
+  do {                                                                         \
+    const double a_ = (a), b_ = (b);                                           \
+    if (!(fabs(a_ - b_) <= (tol)))                                             \
+      fail_msg("%s = %.17g, expected %.17g +- %g", #a, a_, b_, (double)(tol)); \
+  } while (0)
 
 /* Test classes: the shape classes, plus bow and crossbow (a flat class with
  * the HAS_BOW / HAS_CROSSBOW bit, since they leave fiber lengths equal). */
@@ -64,8 +63,8 @@ enum {
     C_OTHER,
     C_COUNT
 };
-static const char *class_name[C_COUNT] = {"flat",  "centre", "edge L", "edge R", "edges",
-                                          "quarter", "mix",  "bow",    "xbow",   "other"};
+static const char *class_name[C_COUNT] = {"flat",    "centre", "edge L", "edge R", "edges",
+                                          "quarter", "mix",    "bow",    "xbow",   "other"};
 
 typedef struct sheet_result {
     int label;
@@ -77,18 +76,19 @@ typedef struct sheet_result {
 static flt_options *options_with(int n, const flt_option *keys, const double *values) {
     flt_options *o = NULL;
     assert_int_equal(flt_options_create(&o), FLT_OK);
-    for (int i = 0; i < n; ++i) assert_int_equal(flt_options_set(o, keys[i], values[i]), FLT_OK);
+    for (int i = 0; i < n; ++i)
+        assert_int_equal(flt_options_set(o, keys[i], values[i]), FLT_OK);
     return o;
 }
 
 static flt_sim *make_sim(unsigned seed) {
     flt_calib *calib = NULL;
-    assert_int_equal(flt_calib_create_reference(0, 2048, -0.5 * PITCH * (FIBERS - 1), PITCH,
-                                                FIBERS, &calib),
-                     FLT_OK);
+    assert_int_equal(
+        flt_calib_create_reference(0, 2048, -0.5 * PITCH * (FIBERS - 1), PITCH, FIBERS, &calib),
+        FLT_OK);
     const flt_option keys[5] = {FLT_OPT_SIM_SEED, FLT_OPT_SIM_HEAVE_SIGMA,
-                                FLT_OPT_SIM_ECCENTRICITY_AMPLITUDE,
-                                FLT_OPT_SIM_ECCENTRICITY_PERIOD, FLT_OPT_SIM_PEAK_SIGMA};
+                                FLT_OPT_SIM_ECCENTRICITY_AMPLITUDE, FLT_OPT_SIM_ECCENTRICITY_PERIOD,
+                                FLT_OPT_SIM_PEAK_SIGMA};
     const double values[5] = {seed, 2.5, 0.5, 50.0, 1.0 / 16.0};
     flt_options *o = options_with(5, keys, values);
     flt_sim *sim = NULL;
@@ -103,41 +103,62 @@ static flt_sim *make_sim(unsigned seed) {
 static void add_defects(flt_sim *sim, int c, int i) {
     const double A = 5.0 + 0.5 * i, P = 800.0 + 250.0 * i;
     switch (c) {
-    case C_FLAT: break;
-    case C_CENTRE: assert_int_equal(flt_sim_add_defect(sim, FLT_SIM_CENTRE_BUCKLE, A, P), FLT_OK); break;
-    case C_EDGE_LEFT: assert_int_equal(flt_sim_add_defect(sim, FLT_SIM_WAVY_EDGE_LEFT, A, P), FLT_OK); break;
-    case C_EDGE_RIGHT: assert_int_equal(flt_sim_add_defect(sim, FLT_SIM_WAVY_EDGE_RIGHT, A, P), FLT_OK); break;
-    case C_EDGE_BOTH: assert_int_equal(flt_sim_add_defect(sim, FLT_SIM_WAVY_EDGE_BOTH, A, P), FLT_OK); break;
-    case C_QUARTER: assert_int_equal(flt_sim_add_defect(sim, FLT_SIM_QUARTER_BUCKLE, A, P), FLT_OK); break;
-    case C_MIX:
-        assert_int_equal(flt_sim_add_defect(sim, FLT_SIM_CENTRE_BUCKLE, A, P), FLT_OK);
-        assert_int_equal(flt_sim_add_defect(sim, FLT_SIM_WAVY_EDGE_BOTH, -A, P), FLT_OK);
-        break;
-    case C_BOW:
-        /* Coil set: half a sine over the 3300 mm sheet, a hump of A mm. */
-        assert_int_equal(flt_sim_add_defect(sim, FLT_SIM_BOW, A, 6600.0), FLT_OK);
-        break;
-    case C_CROSSBOW:
-        /* Edges A mm above the centre, constant along the sheet. */
-        assert_int_equal(flt_sim_add_defect(sim, FLT_SIM_CROSSBOW, A - 1.5, 0.0), FLT_OK);
-        break;
-    default: fail();
+        case C_FLAT:
+            break;
+        case C_CENTRE:
+            assert_int_equal(flt_sim_add_defect(sim, FLT_SIM_CENTRE_BUCKLE, A, P), FLT_OK);
+            break;
+        case C_EDGE_LEFT:
+            assert_int_equal(flt_sim_add_defect(sim, FLT_SIM_WAVY_EDGE_LEFT, A, P), FLT_OK);
+            break;
+        case C_EDGE_RIGHT:
+            assert_int_equal(flt_sim_add_defect(sim, FLT_SIM_WAVY_EDGE_RIGHT, A, P), FLT_OK);
+            break;
+        case C_EDGE_BOTH:
+            assert_int_equal(flt_sim_add_defect(sim, FLT_SIM_WAVY_EDGE_BOTH, A, P), FLT_OK);
+            break;
+        case C_QUARTER:
+            assert_int_equal(flt_sim_add_defect(sim, FLT_SIM_QUARTER_BUCKLE, A, P), FLT_OK);
+            break;
+        case C_MIX:
+            assert_int_equal(flt_sim_add_defect(sim, FLT_SIM_CENTRE_BUCKLE, A, P), FLT_OK);
+            assert_int_equal(flt_sim_add_defect(sim, FLT_SIM_WAVY_EDGE_BOTH, -A, P), FLT_OK);
+            break;
+        case C_BOW:
+            /* Coil set: half a sine over the 3300 mm sheet, a hump of A mm. */
+            assert_int_equal(flt_sim_add_defect(sim, FLT_SIM_BOW, A, 6600.0), FLT_OK);
+            break;
+        case C_CROSSBOW:
+            /* Edges A mm above the centre, constant along the sheet. */
+            assert_int_equal(flt_sim_add_defect(sim, FLT_SIM_CROSSBOW, A - 1.5, 0.0), FLT_OK);
+            break;
+        default:
+            fail();
     }
 }
 
 static int label_of(flt_shape shape, unsigned components) {
     switch (shape) {
-    case FLT_SHAPE_FLAT:
-        if (components & FLT_SHAPE_HAS_BOW) return C_BOW;
-        if (components & FLT_SHAPE_HAS_CROSSBOW) return C_CROSSBOW;
-        return C_FLAT;
-    case FLT_SHAPE_CENTRE_BUCKLE: return C_CENTRE;
-    case FLT_SHAPE_WAVY_EDGE_LEFT: return C_EDGE_LEFT;
-    case FLT_SHAPE_WAVY_EDGE_RIGHT: return C_EDGE_RIGHT;
-    case FLT_SHAPE_WAVY_EDGE_BOTH: return C_EDGE_BOTH;
-    case FLT_SHAPE_QUARTER_BUCKLE: return C_QUARTER;
-    case FLT_SHAPE_MIX: return C_MIX;
-    default: return C_OTHER;
+        case FLT_SHAPE_FLAT:
+            if (components & FLT_SHAPE_HAS_BOW)
+                return C_BOW;
+            if (components & FLT_SHAPE_HAS_CROSSBOW)
+                return C_CROSSBOW;
+            return C_FLAT;
+        case FLT_SHAPE_CENTRE_BUCKLE:
+            return C_CENTRE;
+        case FLT_SHAPE_WAVY_EDGE_LEFT:
+            return C_EDGE_LEFT;
+        case FLT_SHAPE_WAVY_EDGE_RIGHT:
+            return C_EDGE_RIGHT;
+        case FLT_SHAPE_WAVY_EDGE_BOTH:
+            return C_EDGE_BOTH;
+        case FLT_SHAPE_QUARTER_BUCKLE:
+            return C_QUARTER;
+        case FLT_SHAPE_MIX:
+            return C_MIX;
+        default:
+            return C_OTHER;
     }
 }
 
@@ -146,8 +167,8 @@ static sheet_result run_sheet(int c, int i, unsigned seed, int rigid_motion) {
     flt_sim *sim = make_sim(seed);
     add_defects(sim, c, i);
     const size_t n = (size_t)ROWS * FIBERS;
-    double *s = malloc(ROWS * sizeof *s), *h = malloc(n * sizeof *h),
-           *g = malloc(n * sizeof *g), *z = malloc(n * sizeof *z);
+    double *s = malloc(ROWS * sizeof *s), *h = malloc(n * sizeof *h), *g = malloc(n * sizeof *g),
+           *z = malloc(n * sizeof *z);
     uint8_t *flags = malloc(n);
     assert_int_equal(flt_sim_next_rows(sim, ROWS, FIBERS, NULL, s, h, g, NULL, NULL), FLT_OK);
     const flt_option key = FLT_OPT_RIGID_MOTION;
@@ -157,14 +178,14 @@ static sheet_result run_sheet(int c, int i, unsigned seed, int rigid_motion) {
     flt_options_destroy(o);
 
     double x[FIBERS];
-    for (int k = 0; k < FIBERS; ++k) x[k] = -0.5 * PITCH * (FIBERS - 1) + PITCH * k;
+    for (int k = 0; k < FIBERS; ++k)
+        x[k] = -0.5 * PITCH * (FIBERS - 1) + PITCH * k;
     flt_flatness *f = NULL;
     assert_int_equal(flt_flatness_create(FIBERS, x, NULL, &f), FLT_OK);
     assert_int_equal(flt_flatness_evaluate(f, ROWS, FIBERS, s, z, flags), FLT_OK);
     sheet_result r;
-    assert_int_equal(flt_flatness_shape(f, &r.shape, &r.confidence, &r.components, &r.bow,
-                                        &r.crossbow),
-                     FLT_OK);
+    assert_int_equal(
+        flt_flatness_shape(f, &r.shape, &r.confidence, &r.components, &r.bow, &r.crossbow), FLT_OK);
     size_t zones = 0;
     assert_int_equal(flt_flatness_zones(f, &zones), FLT_OK);
     double *ziu = malloc(zones * sizeof *ziu);
@@ -197,8 +218,10 @@ static void simulated_sheets_are_classified(void **state) {
             const sheet_result r = run_sheet(c, i, 1000u * (unsigned)c + 17u * (unsigned)i + 1u, 1);
             ++confusion[c][r.label];
             /* Bow and crossbow are reported only where they are. */
-            if (c != C_BOW) assert_false(r.components & FLT_SHAPE_HAS_BOW);
-            if (c != C_CROSSBOW) assert_false(r.components & FLT_SHAPE_HAS_CROSSBOW);
+            if (c != C_BOW)
+                assert_false(r.components & FLT_SHAPE_HAS_BOW);
+            if (c != C_CROSSBOW)
+                assert_false(r.components & FLT_SHAPE_HAS_CROSSBOW);
             print_message("%-8s seed %d: %-15s conf %.2f  zone span %7.2f IU  bow %6.2f mm  "
                           "crossbow %6.2f mm  components 0x%02x\n",
                           class_name[c], i, flt_shape_string(r.shape), r.confidence, r.peak_i,
@@ -207,14 +230,17 @@ static void simulated_sheets_are_classified(void **state) {
     }
     char line[256];
     int at = snprintf(line, sizeof line, "%-8s", "true \\ got");
-    for (int p = 0; p < C_COUNT; ++p) at += snprintf(line + at, sizeof line - at, "%8s", class_name[p]);
+    for (int p = 0; p < C_COUNT; ++p)
+        at += snprintf(line + at, sizeof line - at, "%8s", class_name[p]);
     print_message("%s\n", line);
     for (int c = 0; c <= C_CROSSBOW; ++c) {
         at = snprintf(line, sizeof line, "%-10s", class_name[c]);
-        for (int p = 0; p < C_COUNT; ++p) at += snprintf(line + at, sizeof line - at, "%8d", confusion[c][p]);
+        for (int p = 0; p < C_COUNT; ++p)
+            at += snprintf(line + at, sizeof line - at, "%8d", confusion[c][p]);
         print_message("%s\n", line);
     }
-    for (int c = 0; c <= C_CROSSBOW; ++c) assert_int_equal(confusion[c][c], SEEDS);
+    for (int c = 0; c <= C_CROSSBOW; ++c)
+        assert_int_equal(confusion[c][c], SEEDS);
 }
 
 /* The noise floor: flat sheets under the reference noise span far less
@@ -265,10 +291,12 @@ static void streamed_windows_agree_with_whole_sheet(void **state) {
     const flt_option key = FLT_OPT_RIGID_MOTION;
     const double one = 1.0;
     flt_options *o = options_with(1, &key, &one);
-    assert_int_equal(flt_reconstruct(o, STRIP_ROWS, FIBERS, s, h, g, NULL, z_whole, fl_whole), FLT_OK);
+    assert_int_equal(flt_reconstruct(o, STRIP_ROWS, FIBERS, s, h, g, NULL, z_whole, fl_whole),
+                     FLT_OK);
 
     double x[FIBERS];
-    for (int k = 0; k < FIBERS; ++k) x[k] = -0.5 * PITCH * (FIBERS - 1) + PITCH * k;
+    for (int k = 0; k < FIBERS; ++k)
+        x[k] = -0.5 * PITCH * (FIBERS - 1) + PITCH * k;
     flt_flatness *stream = NULL, *whole = NULL;
     assert_int_equal(flt_flatness_create(FIBERS, x, NULL, &stream), FLT_OK);
     assert_int_equal(flt_flatness_create(FIBERS, x, NULL, &whole), FLT_OK);
@@ -286,7 +314,8 @@ static void streamed_windows_agree_with_whole_sheet(void **state) {
             assert_int_equal(flt_recon_push(recon, BLOCK, FIBERS, s + pushed, h + pushed * FIBERS,
                                             g + pushed * FIBERS, NULL),
                              FLT_OK);
-            if (pushed + BLOCK == STRIP_ROWS) assert_int_equal(flt_recon_end_sheet(recon), FLT_OK);
+            if (pushed + BLOCK == STRIP_ROWS)
+                assert_int_equal(flt_recon_end_sheet(recon), FLT_OK);
         }
         size_t got = 0;
         assert_int_equal(flt_recon_pull(recon, STRIP_ROWS - pulled, FIBERS, s_stream + pulled,
@@ -309,7 +338,8 @@ static void streamed_windows_agree_with_whole_sheet(void **state) {
                 last_round = 0;
             }
             if (!evaluated) {
-                if (fed == pulled && !last_round) break;
+                if (fed == pulled && !last_round)
+                    break;
                 continue;
             }
             ++windows;
@@ -317,7 +347,8 @@ static void streamed_windows_agree_with_whole_sheet(void **state) {
             size_t rows;
             assert_int_equal(flt_flatness_window(stream, &first, &last, &rows, NULL, NULL), FLT_OK);
             size_t r0 = 0;
-            while (s[r0] < first) ++r0;
+            while (s[r0] < first)
+                ++r0;
             assert_near(s[r0 + rows - 1], last, 0.0);
             assert_int_equal(flt_flatness_evaluate(whole, rows, FIBERS, s + r0,
                                                    z_whole + r0 * FIBERS, fl_whole + r0 * FIBERS),
@@ -335,7 +366,8 @@ static void streamed_windows_agree_with_whole_sheet(void **state) {
                           windows, first, last, hi - lo, diff, 100 * diff / (hi - lo));
             worst = fmax(worst, diff / (hi - lo));
         }
-        if (pushed >= STRIP_ROWS) break;
+        if (pushed >= STRIP_ROWS)
+            break;
     }
     /* Windows end every 1000 mm from 3000 mm to the strip's 14997 mm (12),
      * and finish() adds the last 2997 mm: 13 windows. */

@@ -19,15 +19,15 @@
 
 #include "sheet.h"
 
-#define REF_ROWS 3000 /* 9000 mm at 3 mm */
-#define REF_DX 3.0
-#define REF_PITCH 10.0
+#define REF_ROWS   3000 /* 9000 mm at 3 mm */
+#define REF_DX     3.0
+#define REF_PITCH  10.0
 #define REF_FIBERS 151
-#define LASER 100.0
+#define LASER      100.0
 /* 1/16 px of peak-detection noise at about 0.8 mm/px of height resolution
  * (2048 px over the reference field of view at 45 degrees). */
 #define PEAK_SIGMA 0.05
-#define VIB_SIGMA 2.5
+#define VIB_SIGMA  2.5
 
 static double *alloc_rows(size_t rows, size_t fibers) {
     double *p = malloc(rows * fibers * sizeof(double));
@@ -46,19 +46,20 @@ static flt_recon *make_recon(size_t fibers, flt_options *opts) {
  * at their row index (positions are checked to come back in order). Returns
  * the number of rows pulled. */
 static size_t stream_rows(flt_recon *rc, const test_sheet *t, size_t r0, size_t r1,
-                          const uint8_t *valid, double *z, uint8_t *flags,
-                          size_t *pulled) {
+                          const uint8_t *valid, double *z, uint8_t *flags, size_t *pulled) {
     size_t K = t->fibers, n = 0;
     double s_out[512];
     for (size_t r = r0; r < r1; ++r) {
         flt_status st = flt_recon_push(rc, 1, K, &t->s[r], t->height + r * K, t->slope + r * K,
                                        valid ? valid + r * K : NULL);
-        if (st != FLT_OK) fail_msg("push of row %zu: %s", r, flt_last_error_message());
+        if (st != FLT_OK)
+            fail_msg("push of row %zu: %s", r, flt_last_error_message());
         do {
             assert_int_equal(flt_recon_pull(rc, 512, K, s_out, z + *pulled * K,
                                             flags ? flags + *pulled * K : NULL, &n),
                              FLT_OK);
-            for (size_t i = 0; i < n; ++i) assert_true(s_out[i] == t->s[*pulled + i]);
+            for (size_t i = 0; i < n; ++i)
+                assert_true(s_out[i] == t->s[*pulled + i]);
             *pulled += n;
         } while (n == 512);
     }
@@ -73,14 +74,16 @@ static void finish_sheet(flt_recon *rc, const test_sheet *t, double *z, uint8_t 
     assert_int_equal(flt_recon_pull(rc, t->rows, K, s_out, z + *pulled * K,
                                     flags ? flags + *pulled * K : NULL, &n),
                      FLT_OK);
-    for (size_t i = 0; i < n; ++i) assert_true(s_out[i] == t->s[*pulled + i]);
+    for (size_t i = 0; i < n; ++i)
+        assert_true(s_out[i] == t->s[*pulled + i]);
     *pulled += n;
     free(s_out);
 }
 
 static double max_abs_diff(const double *a, const double *b, size_t n) {
     double m = 0;
-    for (size_t i = 0; i < n; ++i) m = fmax(m, fabs(a[i] - b[i]));
+    for (size_t i = 0; i < n; ++i)
+        m = fmax(m, fabs(a[i] - b[i]));
     return m;
 }
 
@@ -91,16 +94,17 @@ static void noise_free_reference_sheet_within_1um(void **state) {
     test_sheet *t = test_sheet_make(REF_ROWS, REF_FIBERS, 0.0, REF_DX, 0.0, REF_PITCH, LASER, 1);
     double *z = alloc_rows(t->rows, t->fibers);
     uint8_t *flags = malloc(t->rows * t->fibers);
-    assert_int_equal(flt_reconstruct(NULL, t->rows, t->fibers, t->s, t->height,
-                                     t->slope, NULL, z, flags),
-                     FLT_OK);
+    assert_int_equal(
+        flt_reconstruct(NULL, t->rows, t->fibers, t->s, t->height, t->slope, NULL, z, flags),
+        FLT_OK);
     double mx, rms;
     test_error(t, z, 0, t->rows, &mx, &rms);
-    print_message("batch, noise-free reference sheet: max %.3g um, rms %.3g um\n",
-                  mx * 1e3, rms * 1e3);
+    print_message("batch, noise-free reference sheet: max %.3g um, rms %.3g um\n", mx * 1e3,
+                  rms * 1e3);
     /* Issue 2: <= 1 um (the reference reached 0.64 um with ideal point data). */
     assert_true(mx <= 1e-3);
-    for (size_t i = 0; i < t->rows * t->fibers; ++i) assert_int_equal(flags[i], 0);
+    for (size_t i = 0; i < t->rows * t->fibers; ++i)
+        assert_int_equal(flags[i], 0);
     free(z);
     free(flags);
     test_sheet_free(t);
@@ -111,9 +115,9 @@ static void irregular_encoder_jitter_within_1um(void **state) {
     /* +-20% jitter of every row position; the true positions are given. */
     test_sheet *t = test_sheet_make(REF_ROWS, 21, 0.0, REF_DX, 0.2, 75.0, LASER, 3);
     double *z = alloc_rows(t->rows, t->fibers), *zs = alloc_rows(t->rows, t->fibers);
-    assert_int_equal(flt_reconstruct(NULL, t->rows, t->fibers, t->s, t->height,
-                                     t->slope, NULL, z, NULL),
-                     FLT_OK);
+    assert_int_equal(
+        flt_reconstruct(NULL, t->rows, t->fibers, t->s, t->height, t->slope, NULL, z, NULL),
+        FLT_OK);
     double mx, rms;
     test_error(t, z, 0, t->rows, &mx, &rms);
     flt_recon *rc = make_recon(t->fibers, NULL);
@@ -123,8 +127,8 @@ static void irregular_encoder_jitter_within_1um(void **state) {
     assert_int_equal(pulled, t->rows);
     double mxs, rmss;
     test_error(t, zs, 0, t->rows, &mxs, &rmss);
-    print_message("jittered encoder: batch max %.3g um, streaming max %.3g um\n",
-                  mx * 1e3, mxs * 1e3);
+    print_message("jittered encoder: batch max %.3g um, streaming max %.3g um\n", mx * 1e3,
+                  mxs * 1e3);
     assert_true(mx <= 1e-3);
     assert_true(mxs <= 1e-3);
     flt_recon_destroy(rc);
@@ -140,9 +144,9 @@ static void streaming_equals_batch_noise_free(void **state) {
     test_sheet *t = test_sheet_make(REF_ROWS, REF_FIBERS, 0.0, REF_DX, 0.0, REF_PITCH, LASER, 1);
     size_t N = t->rows * t->fibers;
     double *zb = alloc_rows(t->rows, t->fibers), *zs = alloc_rows(t->rows, t->fibers);
-    assert_int_equal(flt_reconstruct(NULL, t->rows, t->fibers, t->s, t->height,
-                                     t->slope, NULL, zb, NULL),
-                     FLT_OK);
+    assert_int_equal(
+        flt_reconstruct(NULL, t->rows, t->fibers, t->s, t->height, t->slope, NULL, zb, NULL),
+        FLT_OK);
     flt_recon *rc = make_recon(t->fibers, NULL);
     size_t pulled = 0;
     stream_rows(rc, t, 0, t->rows, NULL, zs, NULL, &pulled);
@@ -171,9 +175,9 @@ static void streaming_rms_within_5pct_of_batch_noisy(void **state) {
         test_sheet *t = test_sheet_make(10000, 11, 0.0, REF_DX, 0.0, 150.0, LASER, seed);
         test_sheet_add_noise(t, VIB_SIGMA, PEAK_SIGMA, 100 + seed);
         double *zb = alloc_rows(t->rows, t->fibers), *zs = alloc_rows(t->rows, t->fibers);
-        assert_int_equal(flt_reconstruct(NULL, t->rows, t->fibers, t->s, t->height,
-                                         t->slope, NULL, zb, NULL),
-                         FLT_OK);
+        assert_int_equal(
+            flt_reconstruct(NULL, t->rows, t->fibers, t->s, t->height, t->slope, NULL, zb, NULL),
+            FLT_OK);
         flt_recon *rc = make_recon(t->fibers, NULL);
         size_t pulled = 0;
         stream_rows(rc, t, 0, t->rows, NULL, zs, NULL, &pulled);
@@ -207,8 +211,7 @@ static void quad_extrapolate(const double z[3], double d, double *value, double 
 
 /* Pulls every finished row of rc and copies the rows at the probe positions
  * into probe_z. Returns how many probes were found. */
-static int pull_probes(flt_recon *rc, size_t K, const double probe_s[6],
-                       double probe_z[6][8]) {
+static int pull_probes(flt_recon *rc, size_t K, const double probe_s[6], double probe_z[6][8]) {
     double *s = malloc(4096 * sizeof(double));
     double *z = alloc_rows(4096, K);
     size_t got = 0;
@@ -240,85 +243,90 @@ static void carry_over_sheets_join_c1(void **state) {
     assert_int_equal(flt_options_create(&o), FLT_OK);
     assert_int_equal(flt_options_set(o, FLT_OPT_LAG_KNOTS, 8), FLT_OK);
     for (int mode = 0; mode < 3; ++mode) {
-    /* mode 0: per-fiber fit; 1: rigid_motion (three channels, each carried);
-     * 2: per-fiber fit without carry-over (the control). */
-    const int control = mode == 2;
-    assert_int_equal(flt_options_set(o, FLT_OPT_RIGID_MOTION, mode == 1), FLT_OK);
-    {
-        flt_recon *rc = make_recon(K, o);
-        double worst_dz = 0, worst_dg = 0;
-        size_t next = 0;
-        for (int sheet = 0; sheet < 3; ++sheet) {
-            size_t end = (size_t)(sheet + 1) * rows_per_sheet;
-            for (; next < end; ++next)
-                assert_int_equal(flt_recon_push(rc, 1, K, &t->s[next], t->height + next * K,
-                                                t->slope + next * K, NULL),
-                                 FLT_OK);
-            assert_int_equal(flt_recon_end_sheet(rc), FLT_OK);
-            double none[6] = {0}, unused[6][8];
-            (void)pull_probes(rc, K, none, unused); /* drain the sheet */
-            if (sheet == 2) break;
-            double bs, bz[8], bg[8];
-            assert_int_equal(flt_recon_boundary(rc, K, &bs, bz, bg), FLT_OK);
-            /* The boundary knot lies past the last row, within one knot. */
-            assert_true(bs > t->s[end - 1] + 0.01 && bs <= t->s[end - 1] + LASER + 1e-9);
-            flt_recon *left = rc, *right = control ? make_recon(K, o) : rc;
-            const double d = 1e-3;
-            double probe_s[6] = {bs - 3 * d, bs - 2 * d, bs - d, bs + d, bs + 2 * d, bs + 3 * d};
-            double probe_z[6][8];
-            uint8_t masked[8] = {0};
-            double zeros[8] = {0};
-            int p = 0;
-            while (p < 6) {
-                if (probe_s[p] < t->s[next]) {
-                    flt_recon *to = p < 3 ? left : right;
-                    assert_int_equal(flt_recon_push(to, 1, K, &probe_s[p], zeros, zeros, masked), FLT_OK);
-                    ++p;
-                } else {
+        /* mode 0: per-fiber fit; 1: rigid_motion (three channels, each carried);
+         * 2: per-fiber fit without carry-over (the control). */
+        const int control = mode == 2;
+        assert_int_equal(flt_options_set(o, FLT_OPT_RIGID_MOTION, mode == 1), FLT_OK);
+        {
+            flt_recon *rc = make_recon(K, o);
+            double worst_dz = 0, worst_dg = 0;
+            size_t next = 0;
+            for (int sheet = 0; sheet < 3; ++sheet) {
+                size_t end = (size_t)(sheet + 1) * rows_per_sheet;
+                for (; next < end; ++next)
+                    assert_int_equal(flt_recon_push(rc, 1, K, &t->s[next], t->height + next * K,
+                                                    t->slope + next * K, NULL),
+                                     FLT_OK);
+                assert_int_equal(flt_recon_end_sheet(rc), FLT_OK);
+                double none[6] = {0}, unused[6][8];
+                (void)pull_probes(rc, K, none, unused); /* drain the sheet */
+                if (sheet == 2)
+                    break;
+                double bs, bz[8], bg[8];
+                assert_int_equal(flt_recon_boundary(rc, K, &bs, bz, bg), FLT_OK);
+                /* The boundary knot lies past the last row, within one knot. */
+                assert_true(bs > t->s[end - 1] + 0.01 && bs <= t->s[end - 1] + LASER + 1e-9);
+                flt_recon *left = rc, *right = control ? make_recon(K, o) : rc;
+                const double d = 1e-3;
+                double probe_s[6] = {bs - 3 * d, bs - 2 * d, bs - d,
+                                     bs + d,     bs + 2 * d, bs + 3 * d};
+                double probe_z[6][8];
+                uint8_t masked[8] = {0};
+                double zeros[8] = {0};
+                int p = 0;
+                while (p < 6) {
+                    if (probe_s[p] < t->s[next]) {
+                        flt_recon *to = p < 3 ? left : right;
+                        assert_int_equal(
+                            flt_recon_push(to, 1, K, &probe_s[p], zeros, zeros, masked), FLT_OK);
+                        ++p;
+                    } else {
+                        assert_int_equal(flt_recon_push(right, 1, K, &t->s[next],
+                                                        t->height + next * K, t->slope + next * K,
+                                                        NULL),
+                                         FLT_OK);
+                        ++next;
+                    }
+                }
+                /* Far enough into the next sheet that the probes are finished. */
+                for (size_t stop = next + 600; next < stop; ++next)
                     assert_int_equal(flt_recon_push(right, 1, K, &t->s[next], t->height + next * K,
                                                     t->slope + next * K, NULL),
                                      FLT_OK);
-                    ++next;
+                int found = pull_probes(right, K, probe_s, probe_z);
+                if (control) {
+                    found += pull_probes(left, K, probe_s, probe_z);
+                    flt_recon_destroy(left);
+                    rc = right;
+                }
+                assert_int_equal(found, 6);
+                for (size_t k = 0; k < K; ++k) {
+                    double lz[3] = {probe_z[2][k], probe_z[1][k], probe_z[0][k]};
+                    double rz[3] = {probe_z[3][k], probe_z[4][k], probe_z[5][k]};
+                    double zl, gl, zr, gr;
+                    quad_extrapolate(lz, d, &zl, &gl);
+                    quad_extrapolate(rz, -d, &zr, &gr);
+                    worst_dz = fmax(worst_dz, fabs(zl - zr));
+                    worst_dg = fmax(worst_dg, fabs(gl - gr));
+                    /* The carried values are the left spline's end. */
+                    assert_true(fabs(zl - bz[k]) <= 1e-9);
+                    assert_true(fabs(gl - bg[k]) <= 1e-9);
                 }
             }
-            /* Far enough into the next sheet that the probes are finished. */
-            for (size_t stop = next + 600; next < stop; ++next)
-                assert_int_equal(flt_recon_push(right, 1, K, &t->s[next], t->height + next * K,
-                                                t->slope + next * K, NULL),
-                                 FLT_OK);
-            int found = pull_probes(right, K, probe_s, probe_z);
-            if (control) {
-                found += pull_probes(left, K, probe_s, probe_z);
-                flt_recon_destroy(left);
-                rc = right;
+            print_message("%s: worst height jump %.3g mm, slope jump %.3g at the joins\n",
+                          control     ? "no carry-over (control)"
+                          : mode == 1 ? "carry-over, rigid_motion"
+                                      : "carry-over",
+                          worst_dz, worst_dg);
+            if (!control) {
+                assert_true(worst_dz <= 1e-9);
+                assert_true(worst_dg <= 1e-9);
+            } else {
+                /* Independent sheets under 2.5 mm vibration disagree by far more. */
+                assert_true(worst_dz > 1e-3);
             }
-            assert_int_equal(found, 6);
-            for (size_t k = 0; k < K; ++k) {
-                double lz[3] = {probe_z[2][k], probe_z[1][k], probe_z[0][k]};
-                double rz[3] = {probe_z[3][k], probe_z[4][k], probe_z[5][k]};
-                double zl, gl, zr, gr;
-                quad_extrapolate(lz, d, &zl, &gl);
-                quad_extrapolate(rz, -d, &zr, &gr);
-                worst_dz = fmax(worst_dz, fabs(zl - zr));
-                worst_dg = fmax(worst_dg, fabs(gl - gr));
-                /* The carried values are the left spline's end. */
-                assert_true(fabs(zl - bz[k]) <= 1e-9);
-                assert_true(fabs(gl - bg[k]) <= 1e-9);
-            }
+            flt_recon_destroy(rc);
         }
-        print_message("%s: worst height jump %.3g mm, slope jump %.3g at the joins\n",
-                      control ? "no carry-over (control)"
-                              : mode == 1 ? "carry-over, rigid_motion" : "carry-over",
-                      worst_dz, worst_dg);
-        if (!control) {
-            assert_true(worst_dz <= 1e-9);
-            assert_true(worst_dg <= 1e-9);
-        } else {
-            /* Independent sheets under 2.5 mm vibration disagree by far more. */
-            assert_true(worst_dz > 1e-3);
-        }
-        flt_recon_destroy(rc);
-    }
     }
     flt_options_destroy(o);
     test_sheet_free(t);
@@ -334,11 +342,13 @@ static void invalid_samples_and_gap_are_bridged_and_flagged(void **state) {
     uint8_t *valid = malloc(N);
     test_rng rng;
     test_rng_seed(&rng, 99);
-    for (size_t i = 0; i < N; ++i) valid[i] = test_rng_uniform(&rng) >= 0.10;
+    for (size_t i = 0; i < N; ++i)
+        valid[i] = test_rng_uniform(&rng) >= 0.10;
     /* A 300 mm gap in every fiber: rows with s in [4000, 4300). */
     const double gap_a = 4000.0, gap_b = 4300.0;
     for (size_t r = 0; r < t->rows; ++r)
-        if (t->s[r] >= gap_a && t->s[r] < gap_b) memset(valid + r * K, 0, K);
+        if (t->s[r] >= gap_a && t->s[r] < gap_b)
+            memset(valid + r * K, 0, K);
     /* NaN where the mask says valid: counted as invalid too. */
     t->height[5 * K + 3] = NAN;
     t->slope[5 * K + 3] = NAN;
@@ -360,14 +370,18 @@ static void invalid_samples_and_gap_are_bridged_and_flagged(void **state) {
     for (size_t k = 0; k < K; ++k) {
         size_t r = 0;
         while (r < t->rows) {
-            if (valid[r * K + k]) { ++r; continue; }
+            if (valid[r * K + k]) {
+                ++r;
+                continue;
+            }
             size_t a = r;
-            while (r < t->rows && !valid[r * K + k]) ++r;
+            while (r < t->rows && !valid[r * K + k])
+                ++r;
             double before = a > 0 ? t->s[a - 1] : t->s[0];
             double after = r < t->rows ? t->s[r] : t->s[t->rows - 1];
             for (size_t q = a; q < r; ++q)
-                expect[q * K + k] = (uint8_t)(FLT_FLAG_INVALID_INPUT |
-                                              (after - before > 200.0 ? FLT_FLAG_GAP : 0));
+                expect[q * K + k] =
+                    (uint8_t)(FLT_FLAG_INVALID_INPUT | (after - before > 200.0 ? FLT_FLAG_GAP : 0));
         }
     }
     double worst_out = 0, worst_gap = 0;
@@ -379,9 +393,12 @@ static void invalid_samples_and_gap_are_bridged_and_flagged(void **state) {
             size_t i = r * K + k;
             assert_true(isfinite(z[i]) && isfinite(zs[i]));
             double e = fabs(z[i] - t->truth[i]);
-            if (in_gap) worst_gap = fmax(worst_gap, e);
-            else worst_out = fmax(worst_out, e);
-            if (in_gap) assert_true(flags[i] & FLT_FLAG_GAP);
+            if (in_gap)
+                worst_gap = fmax(worst_gap, e);
+            else
+                worst_out = fmax(worst_out, e);
+            if (in_gap)
+                assert_true(flags[i] & FLT_FLAG_GAP);
             gap_flags += (flags[i] & FLT_FLAG_GAP) != 0;
             wrong_flags += flags[i] != expect[i];
             wrong_flags += flags_s[i] != expect[i];
@@ -419,7 +436,8 @@ static void dead_fiber_is_nan_and_does_not_touch_others(void **state) {
     size_t N = t->rows * K;
     uint8_t *valid = malloc(N);
     memset(valid, 1, N);
-    for (size_t r = 0; r < t->rows; ++r) valid[r * K + 2] = 0; /* fiber 2 never seen */
+    for (size_t r = 0; r < t->rows; ++r)
+        valid[r * K + 2] = 0; /* fiber 2 never seen */
     double *z1 = alloc_rows(t->rows, K), *z2 = alloc_rows(t->rows, K);
     uint8_t *flags = malloc(N);
     assert_int_equal(flt_reconstruct(NULL, t->rows, K, t->s, t->height, t->slope, NULL, z1, NULL),
@@ -453,8 +471,10 @@ static void height_only_or_slope_only_samples_are_used(void **state) {
     test_sheet *t = test_sheet_make(REF_ROWS, K, 0.0, REF_DX, 0.0, 300.0, LASER, 4);
     for (size_t r = 0; r < t->rows; ++r)
         for (size_t k = 0; k < K; ++k) {
-            if (r % 2 == 0) t->slope[r * K + k] = NAN;
-            else if (r % 3 == 0) t->height[r * K + k] = INFINITY;
+            if (r % 2 == 0)
+                t->slope[r * K + k] = NAN;
+            else if (r % 3 == 0)
+                t->height[r * K + k] = INFINITY;
         }
     double *z = alloc_rows(t->rows, K);
     uint8_t *flags = malloc(t->rows * K);
@@ -463,7 +483,8 @@ static void height_only_or_slope_only_samples_are_used(void **state) {
     double mx, rms;
     test_error(t, z, 0, t->rows, &mx, &rms);
     assert_true(mx <= 1e-3);
-    for (size_t i = 0; i < t->rows * K; ++i) assert_int_equal(flags[i], 0);
+    for (size_t i = 0; i < t->rows * K; ++i)
+        assert_int_equal(flags[i], 0);
     free(z);
     free(flags);
     test_sheet_free(t);
@@ -514,11 +535,13 @@ static void buffer_full_then_pull_recovers(void **state) {
     flt_recon *rc = make_recon(K, o);
     flt_options_destroy(o);
     /* 101 rows into 100 slots: refused whole, nothing pushed. */
-    assert_int_equal(flt_recon_push(rc, 101, K, t->s, t->height, t->slope, NULL), FLT_ERR_BUFFER_FULL);
+    assert_int_equal(flt_recon_push(rc, 101, K, t->s, t->height, t->slope, NULL),
+                     FLT_ERR_BUFFER_FULL);
     assert_non_null(strstr(flt_last_error_message(), "row_capacity"));
     assert_int_equal(flt_recon_push(rc, 100, K, t->s, t->height, t->slope, NULL), FLT_OK);
-    assert_int_equal(flt_recon_push(rc, 1, K, &t->s[100], t->height + 100 * K, t->slope + 100 * K, NULL),
-                     FLT_ERR_BUFFER_FULL);
+    assert_int_equal(
+        flt_recon_push(rc, 1, K, &t->s[100], t->height + 100 * K, t->slope + 100 * K, NULL),
+        FLT_ERR_BUFFER_FULL);
     size_t ready = 0, n = 0;
     assert_int_equal(flt_recon_ready(rc, &ready), FLT_OK);
     /* lag 0: 100 rows reach s = 297 mm, so s - 50 mm has closed knots 0 and
@@ -528,8 +551,9 @@ static void buffer_full_then_pull_recovers(void **state) {
     double s_out[100], z_out[200];
     assert_int_equal(flt_recon_pull(rc, 100, K, s_out, z_out, NULL, &n), FLT_OK);
     assert_int_equal(n, ready);
-    assert_int_equal(flt_recon_push(rc, 1, K, &t->s[100], t->height + 100 * K, t->slope + 100 * K, NULL),
-                     FLT_OK);
+    assert_int_equal(
+        flt_recon_push(rc, 1, K, &t->s[100], t->height + 100 * K, t->slope + 100 * K, NULL),
+        FLT_OK);
     flt_recon_destroy(rc);
     test_sheet_free(t);
 }
@@ -538,12 +562,11 @@ static void buffer_full_then_pull_recovers(void **state) {
 
 /* Expects `call` to fail with `status` and a message containing `needle`. */
 #define EXPECT_FAIL(call, status, needle)                                      \
-    do {                                                                       \
-        assert_int_equal((call), (status));                                    \
-        if (strstr(flt_last_error_message(), (needle)) == NULL)                \
-            fail_msg("message '%s' lacks '%s'", flt_last_error_message(),     \
-                     (needle));                                                \
-    } while (0)
+  do {                                                                         \
+    assert_int_equal((call), (status));                                        \
+    if (strstr(flt_last_error_message(), (needle)) == NULL)                    \
+      fail_msg("message '%s' lacks '%s'", flt_last_error_message(), (needle)); \
+  } while (0)
 
 static void bad_input_is_rejected_and_handle_stays_usable(void **state) {
     (void)state;
@@ -559,8 +582,10 @@ static void bad_input_is_rejected_and_handle_stays_usable(void **state) {
     EXPECT_FAIL(flt_recon_create(K, NULL, NULL), FLT_ERR_INVALID_ARGUMENT, "'out'");
     flt_options *o = NULL;
     assert_int_equal(flt_options_create(&o), FLT_OK);
-    EXPECT_FAIL(flt_options_set(o, FLT_OPT_KNOT_SPACING, -5.0), FLT_ERR_INVALID_ARGUMENT, "knot_spacing");
-    EXPECT_FAIL(flt_options_set(o, FLT_OPT_SLOPE_SIGMA, NAN), FLT_ERR_INVALID_ARGUMENT, "slope_sigma");
+    EXPECT_FAIL(flt_options_set(o, FLT_OPT_KNOT_SPACING, -5.0), FLT_ERR_INVALID_ARGUMENT,
+                "knot_spacing");
+    EXPECT_FAIL(flt_options_set(o, FLT_OPT_SLOPE_SIGMA, NAN), FLT_ERR_INVALID_ARGUMENT,
+                "slope_sigma");
     assert_int_equal(flt_options_set(o, FLT_OPT_KNOT_SPACING, 1.0), FLT_OK);
     EXPECT_FAIL(flt_recon_create(K, o, &rc), FLT_ERR_INVALID_ARGUMENT, "knot_spacing = 1");
     flt_options_destroy(o);
@@ -568,45 +593,56 @@ static void bad_input_is_rejected_and_handle_stays_usable(void **state) {
 
     rc = make_recon(K, NULL);
     /* pull before push */
-    EXPECT_FAIL(flt_recon_pull(rc, 10, K, s_out, z_out, NULL, &n), FLT_ERR_STATE, "nothing was pushed");
+    EXPECT_FAIL(flt_recon_pull(rc, 10, K, s_out, z_out, NULL, &n), FLT_ERR_STATE,
+                "nothing was pushed");
     /* end_sheet with nothing pushed */
     EXPECT_FAIL(flt_recon_end_sheet(rc), FLT_ERR_STATE, "no row was pushed");
     /* NULL handle and buffers */
-    EXPECT_FAIL(flt_recon_push(NULL, 1, K, t->s, t->height, t->slope, NULL), FLT_ERR_INVALID_ARGUMENT, "'recon'");
-    EXPECT_FAIL(flt_recon_push(rc, 1, K, NULL, t->height, t->slope, NULL), FLT_ERR_INVALID_ARGUMENT, "'s'");
-    EXPECT_FAIL(flt_recon_push(rc, 1, K, t->s, NULL, t->slope, NULL), FLT_ERR_INVALID_ARGUMENT, "'height'");
-    EXPECT_FAIL(flt_recon_push(rc, 1, K, t->s, t->height, NULL, NULL), FLT_ERR_INVALID_ARGUMENT, "'slope'");
-    EXPECT_FAIL(flt_recon_pull(rc, 1, K, s_out, z_out, NULL, NULL), FLT_ERR_INVALID_ARGUMENT, "'rows_out'");
+    EXPECT_FAIL(flt_recon_push(NULL, 1, K, t->s, t->height, t->slope, NULL),
+                FLT_ERR_INVALID_ARGUMENT, "'recon'");
+    EXPECT_FAIL(flt_recon_push(rc, 1, K, NULL, t->height, t->slope, NULL), FLT_ERR_INVALID_ARGUMENT,
+                "'s'");
+    EXPECT_FAIL(flt_recon_push(rc, 1, K, t->s, NULL, t->slope, NULL), FLT_ERR_INVALID_ARGUMENT,
+                "'height'");
+    EXPECT_FAIL(flt_recon_push(rc, 1, K, t->s, t->height, NULL, NULL), FLT_ERR_INVALID_ARGUMENT,
+                "'slope'");
+    EXPECT_FAIL(flt_recon_pull(rc, 1, K, s_out, z_out, NULL, NULL), FLT_ERR_INVALID_ARGUMENT,
+                "'rows_out'");
     EXPECT_FAIL(flt_recon_ready(NULL, &n), FLT_ERR_INVALID_ARGUMENT, "'recon'");
     EXPECT_FAIL(flt_recon_end_sheet(NULL), FLT_ERR_INVALID_ARGUMENT, "'recon'");
     EXPECT_FAIL(flt_recon_reset(NULL), FLT_ERR_INVALID_ARGUMENT, "'recon'");
     EXPECT_FAIL(flt_recon_fibers(rc, NULL), FLT_ERR_INVALID_ARGUMENT, "'out'");
     EXPECT_FAIL(flt_recon_get_option(rc, (flt_option)9999, &one), FLT_ERR_NOT_FOUND, "9999");
     /* wrong sizes */
-    EXPECT_FAIL(flt_recon_push(rc, 1, K + 1, t->s, t->height, t->slope, NULL), FLT_ERR_INVALID_ARGUMENT,
-                "'fibers' = 4 but the reconstructor has 3");
-    EXPECT_FAIL(flt_recon_push(rc, 0, K, t->s, t->height, t->slope, NULL), FLT_ERR_INVALID_ARGUMENT, "'rows' is 0");
+    EXPECT_FAIL(flt_recon_push(rc, 1, K + 1, t->s, t->height, t->slope, NULL),
+                FLT_ERR_INVALID_ARGUMENT, "'fibers' = 4 but the reconstructor has 3");
+    EXPECT_FAIL(flt_recon_push(rc, 0, K, t->s, t->height, t->slope, NULL), FLT_ERR_INVALID_ARGUMENT,
+                "'rows' is 0");
     EXPECT_FAIL(flt_recon_push(rc, (size_t)-1 / 2, K, t->s, t->height, t->slope, NULL),
                 FLT_ERR_INVALID_ARGUMENT, "overflows");
-    EXPECT_FAIL(flt_recon_pull(rc, 10, K - 1, s_out, z_out, NULL, &n), FLT_ERR_INVALID_ARGUMENT, "'fibers'");
+    EXPECT_FAIL(flt_recon_pull(rc, 10, K - 1, s_out, z_out, NULL, &n), FLT_ERR_INVALID_ARGUMENT,
+                "'fibers'");
     /* positions: NaN, non-increasing within a block and across calls */
     double bad_s[3] = {0.0, NAN, 6.0};
-    EXPECT_FAIL(flt_recon_push(rc, 3, K, bad_s, t->height, t->slope, NULL), FLT_ERR_INVALID_ARGUMENT, "s[1]");
+    EXPECT_FAIL(flt_recon_push(rc, 3, K, bad_s, t->height, t->slope, NULL),
+                FLT_ERR_INVALID_ARGUMENT, "s[1]");
     double flat_s[3] = {0.0, 3.0, 3.0};
-    EXPECT_FAIL(flt_recon_push(rc, 3, K, flat_s, t->height, t->slope, NULL), FLT_ERR_INVALID_ARGUMENT,
-                "does not increase");
+    EXPECT_FAIL(flt_recon_push(rc, 3, K, flat_s, t->height, t->slope, NULL),
+                FLT_ERR_INVALID_ARGUMENT, "does not increase");
     /* The failed blocks pushed nothing: the next push starts the strip. */
     assert_int_equal(flt_recon_push(rc, 300, K, t->s, t->height, t->slope, NULL), FLT_OK);
-    EXPECT_FAIL(flt_recon_push(rc, 1, K, &t->s[299], t->height, t->slope, NULL), FLT_ERR_INVALID_ARGUMENT,
-                "does not increase");
+    EXPECT_FAIL(flt_recon_push(rc, 1, K, &t->s[299], t->height, t->slope, NULL),
+                FLT_ERR_INVALID_ARGUMENT, "does not increase");
     double far = t->s[299] + 2e6;
-    EXPECT_FAIL(flt_recon_push(rc, 1, K, &far, t->height, t->slope, NULL), FLT_ERR_INVALID_ARGUMENT, "reset");
+    EXPECT_FAIL(flt_recon_push(rc, 1, K, &far, t->height, t->slope, NULL), FLT_ERR_INVALID_ARGUMENT,
+                "reset");
     /* end_sheet twice */
     assert_int_equal(flt_recon_end_sheet(rc), FLT_OK);
     EXPECT_FAIL(flt_recon_end_sheet(rc), FLT_ERR_STATE, "no row was pushed");
     /* After all that the handle still reconstructs correctly. */
-    assert_int_equal(flt_recon_push(rc, 300, K, t->s + 300, t->height + 300 * K, t->slope + 300 * K, NULL),
-                     FLT_OK);
+    assert_int_equal(
+        flt_recon_push(rc, 300, K, t->s + 300, t->height + 300 * K, t->slope + 300 * K, NULL),
+        FLT_OK);
     assert_int_equal(flt_recon_end_sheet(rc), FLT_OK);
     assert_int_equal(flt_recon_pull(rc, 600, K, s_out, z_out, NULL, &n), FLT_OK);
     assert_int_equal(n, 600);
@@ -639,8 +675,7 @@ static void bad_input_is_rejected_and_handle_stays_usable(void **state) {
     flt_options_destroy(fine);
     double js[2] = {0.0, 12000.0}, jh[2 * 5] = {0}, jg[2 * 5] = {0};
     assert_true(K <= 5);
-    EXPECT_FAIL(flt_recon_push(rf, 2, K, js, jh, jg, NULL), FLT_ERR_INVALID_ARGUMENT,
-                "1000 knots");
+    EXPECT_FAIL(flt_recon_push(rf, 2, K, js, jh, jg, NULL), FLT_ERR_INVALID_ARGUMENT, "1000 knots");
     js[1] = 8000.0;
     assert_int_equal(flt_recon_push(rf, 2, K, js, jh, jg, NULL), FLT_OK);
     flt_recon_destroy(rf);
@@ -671,7 +706,8 @@ static void buffer_full_with_nothing_finished_says_why(void **state) {
     flt_status st = FLT_OK;
     for (; r < t->rows; ++r) {
         st = flt_recon_push(rc, 1, K, &t->s[r], t->height + r * K, t->slope + r * K, NULL);
-        if (st != FLT_OK) break;
+        if (st != FLT_OK)
+            break;
     }
     assert_int_equal(st, FLT_ERR_BUFFER_FULL);
     print_message("full after %zu rows: %s\n", r, flt_last_error_message());
@@ -716,7 +752,8 @@ static void robust_streaming_with_rows_sparser_than_knots(void **state) {
     size_t n = 0;
     assert_int_equal(flt_recon_pull(rc, 5, K, s_out, z, NULL, &n), FLT_OK);
     assert_int_equal(n, 5);
-    for (int i = 0; i < 10; ++i) assert_true(isfinite(z[i]));
+    for (int i = 0; i < 10; ++i)
+        assert_true(isfinite(z[i]));
     flt_recon_destroy(rc);
 }
 
@@ -817,10 +854,10 @@ static void options_are_reported_back(void **state) {
     flt_recon_destroy(rc);
     assert_int_equal(flt_options_create(&o), FLT_OK);
     assert_int_equal(flt_options_set(o, FLT_OPT_ROBUST_LINE_ITERATIONS, 5.0), FLT_OK);
-    EXPECT_FAIL(flt_options_set(o, FLT_OPT_ROBUST_LINE_ITERATIONS, 0.0),
-                FLT_ERR_INVALID_ARGUMENT, "robust_line_iterations");
-    EXPECT_FAIL(flt_options_set(o, FLT_OPT_ROBUST_LINE_ITERATIONS, 33.0),
-                FLT_ERR_INVALID_ARGUMENT, "robust_line_iterations");
+    EXPECT_FAIL(flt_options_set(o, FLT_OPT_ROBUST_LINE_ITERATIONS, 0.0), FLT_ERR_INVALID_ARGUMENT,
+                "robust_line_iterations");
+    EXPECT_FAIL(flt_options_set(o, FLT_OPT_ROBUST_LINE_ITERATIONS, 33.0), FLT_ERR_INVALID_ARGUMENT,
+                "robust_line_iterations");
     rc = make_recon(5, o);
     flt_options_destroy(o);
     assert_int_equal(flt_recon_get_option(rc, FLT_OPT_ROBUST_LINE_ITERATIONS, &v), FLT_OK);
@@ -836,8 +873,8 @@ static void finer_knots_than_laser_spacing_stay_exact(void **state) {
     assert_int_equal(flt_options_create(&o), FLT_OK);
     assert_int_equal(flt_options_set(o, FLT_OPT_KNOT_SPACING, 50.0), FLT_OK);
     double *z = alloc_rows(t->rows, t->fibers);
-    assert_int_equal(flt_reconstruct(o, t->rows, t->fibers, t->s, t->height, t->slope, NULL, z, NULL),
-                     FLT_OK);
+    assert_int_equal(
+        flt_reconstruct(o, t->rows, t->fibers, t->s, t->height, t->slope, NULL, z, NULL), FLT_OK);
     double mx, rms;
     test_error(t, z, 0, t->rows, &mx, &rms);
     print_message("knots every 50 mm: max error %.3g um\n", mx * 1e3);
@@ -855,7 +892,8 @@ static void error_minus_constant(const test_sheet *t, const double *z, double *m
                                  double *std_out) {
     size_t n = t->rows * t->fibers;
     double mean = 0, sq = 0, mx = 0;
-    for (size_t i = 0; i < n; ++i) mean += z[i] - t->truth[i];
+    for (size_t i = 0; i < n; ++i)
+        mean += z[i] - t->truth[i];
     mean /= (double)n;
     for (size_t i = 0; i < n; ++i) {
         double e = z[i] - t->truth[i] - mean;
@@ -871,8 +909,8 @@ static double *reconstruct_with(const test_sheet *t, const uint8_t *valid, int r
     assert_int_equal(flt_options_create(&o), FLT_OK);
     assert_int_equal(flt_options_set(o, FLT_OPT_RIGID_MOTION, rigid), FLT_OK);
     double *z = alloc_rows(t->rows, t->fibers);
-    assert_int_equal(flt_reconstruct(o, t->rows, t->fibers, t->s, t->height, t->slope, valid, z, NULL),
-                     FLT_OK);
+    assert_int_equal(
+        flt_reconstruct(o, t->rows, t->fibers, t->s, t->height, t->slope, valid, z, NULL), FLT_OK);
     flt_options_destroy(o);
     return z;
 }
@@ -891,8 +929,9 @@ static void rigid_motion_removes_the_vibration(void **state) {
         error_minus_constant(t, plain, &mp, &sp);
         error_minus_constant(t, rigid, &mr, &sr);
         print_message("seed %u, vibration 2.5 mm: per-fiber std %.4f max %.4f mm; "
-                      "rigid_motion std %.4f max %.4f mm\n", seed, sp, mp, sr, mr);
-        assert_true(sr <= 0.6 * sp);  /* measured 0.27 and 0.44 times */
+                      "rigid_motion std %.4f max %.4f mm\n",
+                      seed, sp, mp, sr, mr);
+        assert_true(sr <= 0.6 * sp); /* measured 0.27 and 0.44 times */
         assert_true(mr <= 0.5 * mp);
         /* The reference's experiment 2 reached sigma 0.12 mm, max 0.35 mm. */
         assert_true(sr < 0.03 && mr < 0.15);
@@ -939,13 +978,15 @@ static void rigid_motion_tolerates_missing_samples(void **state) {
     uint8_t *valid = malloc(t->rows * K);
     test_rng rng;
     test_rng_seed(&rng, 12);
-    for (size_t i = 0; i < t->rows * K; ++i) valid[i] = test_rng_uniform(&rng) >= 0.10;
+    for (size_t i = 0; i < t->rows * K; ++i)
+        valid[i] = test_rng_uniform(&rng) >= 0.10;
     double *z = reconstruct_with(t, valid, 1);
     double mx, rms;
     test_error(t, z, 0, t->rows, &mx, &rms);
     print_message("rigid_motion, 10%% missing, noise-free: max %.4f mm, rms %.4f mm\n", mx, rms);
     assert_true(mx <= 0.03);
-    for (size_t i = 0; i < t->rows * K; ++i) assert_true(isfinite(z[i]));
+    for (size_t i = 0; i < t->rows * K; ++i)
+        assert_true(isfinite(z[i]));
     free(valid);
     free(z);
     test_sheet_free(t);
@@ -959,8 +1000,8 @@ static double *reconstruct_modes(const test_sheet *t, int rigid, int robust) {
     assert_int_equal(flt_options_set(o, FLT_OPT_RIGID_MOTION, rigid), FLT_OK);
     assert_int_equal(flt_options_set(o, FLT_OPT_ROBUST, robust), FLT_OK);
     double *z = alloc_rows(t->rows, t->fibers);
-    assert_int_equal(flt_reconstruct(o, t->rows, t->fibers, t->s, t->height, t->slope, NULL, z, NULL),
-                     FLT_OK);
+    assert_int_equal(
+        flt_reconstruct(o, t->rows, t->fibers, t->s, t->height, t->slope, NULL, z, NULL), FLT_OK);
     flt_options_destroy(o);
     return z;
 }
@@ -985,8 +1026,9 @@ static void robust_mode_removes_shear_transients(void **state) {
         error_minus_constant(t, plain, &mp, &sp);
         error_minus_constant(t, robust, &mr, &sr);
         print_message("seed %u, shear transients: plain MaxAE %.3f STD %.4f mm; "
-                      "rigid_motion + robust MaxAE %.3f STD %.4f mm\n", seed, mp, sp, mr, sr);
-        assert_true(mp > 0.5);  /* the control: least squares follows the ringing */
+                      "rigid_motion + robust MaxAE %.3f STD %.4f mm\n",
+                      seed, mp, sp, mr, sr);
+        assert_true(mp > 0.5); /* the control: least squares follows the ringing */
         assert_true(mr <= 0.30);
         assert_true(sr <= 0.06);
         if (seed == 1) {
@@ -1046,7 +1088,8 @@ static void robust_mode_is_exact_and_streams_like_batch(void **state) {
     assert_int_equal(pulled, t->rows);
     double d = max_abs_diff(zs, zb, t->rows * t->fibers);
     print_message("robust, noise-free: max error %.3g um, streaming vs batch %.3g um, "
-                  "%zu rows out before end_sheet\n", mx * 1e3, d * 1e3, before_end);
+                  "%zu rows out before end_sheet\n",
+                  mx * 1e3, d * 1e3, before_end);
     assert_true(mx <= 1e-3);
     assert_true(d <= 1e-3);
     /* Latency about 8+2+3 knots per reweighted stage plus 64+9+3: rows
@@ -1069,7 +1112,8 @@ static void robust_mode_with_invalid_samples_and_carry_over(void **state) {
     uint8_t *valid = malloc(t->rows * K);
     test_rng rng;
     test_rng_seed(&rng, 16);
-    for (size_t i = 0; i < t->rows * K; ++i) valid[i] = test_rng_uniform(&rng) >= 0.10;
+    for (size_t i = 0; i < t->rows * K; ++i)
+        valid[i] = test_rng_uniform(&rng) >= 0.10;
     flt_options *o = NULL;
     assert_int_equal(flt_options_create(&o), FLT_OK);
     assert_int_equal(flt_options_set(o, FLT_OPT_ROBUST, 2), FLT_OK); /* Tukey */
@@ -1078,7 +1122,8 @@ static void robust_mode_with_invalid_samples_and_carry_over(void **state) {
     double *z = alloc_rows(t->rows, K);
     size_t pulled = 0;
     for (int sheet = 0; sheet < 3; ++sheet) {
-        stream_rows(rc, t, (size_t)sheet * 1000, (size_t)(sheet + 1) * 1000, valid, z, NULL, &pulled);
+        stream_rows(rc, t, (size_t)sheet * 1000, (size_t)(sheet + 1) * 1000, valid, z, NULL,
+                    &pulled);
         finish_sheet(rc, t, z, NULL, &pulled);
     }
     assert_int_equal(pulled, t->rows);
@@ -1110,8 +1155,10 @@ static void robust_mode_takes_out_spurious_peaks(void **state) {
         test_rng_seed(&rng, 60 + seed);
         size_t peaks = 0;
         for (size_t i = 0; i < t->rows * t->fibers; ++i) {
-            if (test_rng_uniform(&rng) >= 0.01) continue;
-            double e = (2.5 + 2.5 * test_rng_uniform(&rng)) * (test_rng_uniform(&rng) < 0.5 ? -1 : 1);
+            if (test_rng_uniform(&rng) >= 0.01)
+                continue;
+            double e =
+                (2.5 + 2.5 * test_rng_uniform(&rng)) * (test_rng_uniform(&rng) < 0.5 ? -1 : 1);
             double laser = test_rng_uniform(&rng) < 0.5 ? -1.0 : 1.0; /* rear or front */
             t->height[i] += 0.5 * e;
             t->slope[i] += laser * e / LASER;
@@ -1122,10 +1169,11 @@ static void robust_mode_takes_out_spurious_peaks(void **state) {
         error_minus_constant(t, plain, &mp, &sp);
         error_minus_constant(t, robust, &mr, &sr);
         print_message("seed %u, %zu spurious peaks: rigid_motion MaxAE %.3f STD %.4f mm; "
-                      "+ robust MaxAE %.3f STD %.4f mm\n", seed, peaks, mp, sp, mr, sr);
+                      "+ robust MaxAE %.3f STD %.4f mm\n",
+                      seed, peaks, mp, sp, mr, sr);
         assert_true(mr <= 0.5 * mp);
         assert_true(mr <= 0.2);
-        assert_true(sr <= 0.6 * sp);  /* measured 0.27 and 0.44 times */
+        assert_true(sr <= 0.6 * sp); /* measured 0.27 and 0.44 times */
         free(plain);
         free(robust);
         test_sheet_free(t);
@@ -1147,15 +1195,15 @@ static void robust_batch_with_a_mask_is_exact(void **state) {
     assert_non_null(flags);
     test_rng rng;
     test_rng_seed(&rng, 18);
-    for (size_t i = 0; i < t->rows * K; ++i) valid[i] = test_rng_uniform(&rng) >= 0.10;
+    for (size_t i = 0; i < t->rows * K; ++i)
+        valid[i] = test_rng_uniform(&rng) >= 0.10;
     for (int rigid = 0; rigid <= 1; ++rigid) {
         flt_options *o = NULL;
         assert_int_equal(flt_options_create(&o), FLT_OK);
         assert_int_equal(flt_options_set(o, FLT_OPT_ROBUST, 1), FLT_OK);
         assert_int_equal(flt_options_set(o, FLT_OPT_RIGID_MOTION, rigid), FLT_OK);
         double *z = alloc_rows(t->rows, K);
-        assert_int_equal(flt_reconstruct(o, t->rows, K, t->s, t->height, t->slope, valid, z,
-                                         flags),
+        assert_int_equal(flt_reconstruct(o, t->rows, K, t->s, t->height, t->slope, valid, z, flags),
                          FLT_OK);
         flt_options_destroy(o);
         double mx, rms;
@@ -1164,7 +1212,8 @@ static void robust_batch_with_a_mask_is_exact(void **state) {
         for (size_t i = 0; i < t->rows * K; ++i)
             wrong += ((flags[i] & FLT_FLAG_INVALID_INPUT) != 0) != (valid[i] == 0);
         print_message("robust batch, rigid_motion %d, 10%% masked: max error %.3g um, "
-                      "%zu wrong flags\n", rigid, mx * 1e3, wrong);
+                      "%zu wrong flags\n",
+                      rigid, mx * 1e3, wrong);
         assert_true(mx <= (rigid ? 0.03 : 1e-3));
         assert_int_equal(wrong, 0);
         free(z);

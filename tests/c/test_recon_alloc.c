@@ -25,18 +25,23 @@ static int g_counting;
 static size_t g_allocations;
 
 void *malloc(size_t n) {
-    if (g_counting) ++g_allocations;
+    if (g_counting)
+        ++g_allocations;
     return __libc_malloc(n);
 }
 void *calloc(size_t n, size_t size) {
-    if (g_counting) ++g_allocations;
+    if (g_counting)
+        ++g_allocations;
     return __libc_calloc(n, size);
 }
 void *realloc(void *p, size_t n) {
-    if (g_counting) ++g_allocations;
+    if (g_counting)
+        ++g_allocations;
     return __libc_realloc(p, n);
 }
-void free(void *p) { __libc_free(p); }
+void free(void *p) {
+    __libc_free(p);
+}
 
 static void stream_and_count(const flt_options *options);
 
@@ -62,8 +67,10 @@ static void stream_and_count(const flt_options *options) {
     /* Some invalid samples and a gap, so the slow paths run as well. */
     uint8_t *valid = malloc(t->rows * K);
     memset(valid, 1, t->rows * K);
-    for (size_t r = 1000; r < 1150; ++r) memset(valid + r * K, 0, K / 2);
-    for (size_t i = 7; i < t->rows * K; i += 13) valid[i] = 0;
+    for (size_t r = 1000; r < 1150; ++r)
+        memset(valid + r * K, 0, K / 2);
+    for (size_t i = 7; i < t->rows * K; i += 13)
+        valid[i] = 0;
     double *s_out = malloc(8192 * sizeof(double)), *z_out = malloc(8192 * K * sizeof(double));
     uint8_t *flags = malloc(8192 * K);
     flt_recon *rc = NULL;
@@ -79,11 +86,14 @@ static void stream_and_count(const flt_options *options) {
     size_t pulled = 0, n = 0;
     for (size_t r = 0; r < t->rows; ++r) {
         const uint8_t *v = r < 3000 ? valid + r * K : NULL;
-        if (flt_recon_push(rc, 1, K, &t->s[r], t->height + r * K, t->slope + r * K, v) != FLT_OK) break;
-        if (flt_recon_pull(rc, 8192, K, s_out, z_out, flags, &n) != FLT_OK) break;
+        if (flt_recon_push(rc, 1, K, &t->s[r], t->height + r * K, t->slope + r * K, v) != FLT_OK)
+            break;
+        if (flt_recon_pull(rc, 8192, K, s_out, z_out, flags, &n) != FLT_OK)
+            break;
         pulled += n;
         if (r == 2999 || r == 4999) {
-            if (flt_recon_end_sheet(rc) != FLT_OK) break;
+            if (flt_recon_end_sheet(rc) != FLT_OK)
+                break;
         }
     }
     flt_status end = flt_recon_end_sheet(rc);

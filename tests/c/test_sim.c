@@ -19,17 +19,16 @@
 #define PI 3.14159265358979323846
 
 #define assert_near(a, b, tol)                                                 \
-    do {                                                                       \
-        const double a_ = (a), b_ = (b);                                       \
-        if (!(fabs(a_ - b_) <= (tol)))                                         \
-            fail_msg("%s = %.17g, expected %.17g +- %g", #a, a_, b_,           \
-                     (double)(tol));                                           \
-    } while (0)
+  do {                                                                         \
+    const double a_ = (a), b_ = (b);                                           \
+    if (!(fabs(a_ - b_) <= (tol)))                                             \
+      fail_msg("%s = %.17g, expected %.17g +- %g", #a, a_, b_, (double)(tol)); \
+  } while (0)
 
 /* The reference sensor's rows 892..1147: both lines and +-50 mm of height
  * (0.48 px/mm) fit, and a frame costs an eighth of the full sensor's. */
 #define ROI_FIRST 892
-#define ROI_ROWS 256
+#define ROI_ROWS  256
 
 static flt_calib *reference(size_t fibers, double pitch, uint32_t first, uint32_t rows) {
     flt_calib *calib = NULL;
@@ -42,12 +41,12 @@ static flt_calib *reference(size_t fibers, double pitch, uint32_t first, uint32_
 static flt_options *options_with(int n, const flt_option *keys, const double *values) {
     flt_options *o = NULL;
     assert_int_equal(flt_options_create(&o), FLT_OK);
-    for (int i = 0; i < n; ++i) assert_int_equal(flt_options_set(o, keys[i], values[i]), FLT_OK);
+    for (int i = 0; i < n; ++i)
+        assert_int_equal(flt_options_set(o, keys[i], values[i]), FLT_OK);
     return o;
 }
 
-static flt_sim *make_sim(flt_calib *calib, int n, const flt_option *keys,
-                         const double *values) {
+static flt_sim *make_sim(flt_calib *calib, int n, const flt_option *keys, const double *values) {
     flt_options *o = options_with(n, keys, values);
     flt_sim *sim = NULL;
     assert_int_equal(flt_sim_create(calib, o, &sim), FLT_OK);
@@ -72,8 +71,7 @@ static rows_t next_rows(flt_sim *sim, size_t rows) {
     r.g = malloc(n * sizeof(double));
     r.truth = malloc(n * sizeof(double));
     r.valid = malloc(n);
-    assert_int_equal(flt_sim_next_rows(sim, rows, r.fibers, r.e, r.s, r.h, r.g, r.valid,
-                                       r.truth),
+    assert_int_equal(flt_sim_next_rows(sim, rows, r.fibers, r.e, r.s, r.h, r.g, r.valid, r.truth),
                      FLT_OK);
     return r;
 }
@@ -99,13 +97,20 @@ static void defect_shapes_match_their_definition(void **state) {
         flt_sim_defect kind;
         double x, expect; /* at s = P/4 (sine = 1) */
     } cases[] = {
-        {FLT_SIM_CENTRE_BUCKLE, 0, A},       {FLT_SIM_CENTRE_BUCKLE, 1000, 0},
-        {FLT_SIM_WAVY_EDGE_LEFT, -1000, A},  {FLT_SIM_WAVY_EDGE_LEFT, 1000, 0},
-        {FLT_SIM_WAVY_EDGE_RIGHT, 1000, A},  {FLT_SIM_WAVY_EDGE_RIGHT, -500, 0},
-        {FLT_SIM_WAVY_EDGE_BOTH, -1000, A},  {FLT_SIM_WAVY_EDGE_BOTH, 500, A / 16},
-        {FLT_SIM_QUARTER_BUCKLE, 500, A},    {FLT_SIM_QUARTER_BUCKLE, -500, A},
-        {FLT_SIM_BOW, 123, A},               {FLT_SIM_CROSSBOW, 1000, A},
-        {FLT_SIM_CROSSBOW, 500, A / 4},      {FLT_SIM_FLAT, 10, 0},
+        {FLT_SIM_CENTRE_BUCKLE, 0, A},
+        {FLT_SIM_CENTRE_BUCKLE, 1000, 0},
+        {FLT_SIM_WAVY_EDGE_LEFT, -1000, A},
+        {FLT_SIM_WAVY_EDGE_LEFT, 1000, 0},
+        {FLT_SIM_WAVY_EDGE_RIGHT, 1000, A},
+        {FLT_SIM_WAVY_EDGE_RIGHT, -500, 0},
+        {FLT_SIM_WAVY_EDGE_BOTH, -1000, A},
+        {FLT_SIM_WAVY_EDGE_BOTH, 500, A / 16},
+        {FLT_SIM_QUARTER_BUCKLE, 500, A},
+        {FLT_SIM_QUARTER_BUCKLE, -500, A},
+        {FLT_SIM_BOW, 123, A},
+        {FLT_SIM_CROSSBOW, 1000, A},
+        {FLT_SIM_CROSSBOW, 500, A / 4},
+        {FLT_SIM_FLAT, 10, 0},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
         assert_int_equal(flt_sim_clear_sheet(sim), FLT_OK);
@@ -130,7 +135,8 @@ static void height_map_is_bilinear(void **state) {
     enum { R = 4, C = 5 };
     double map[R * C];
     for (int r = 0; r < R; ++r)
-        for (int c = 0; c < C; ++c) map[r * C + c] = 0.5 * r - 0.25 * c + 0.1 * r * c;
+        for (int c = 0; c < C; ++c)
+            map[r * C + c] = 0.5 * r - 0.25 * c + 0.1 * r * c;
     assert_int_equal(flt_sim_set_height_map(sim, R, C, 100, 10, -20, 5, map), FLT_OK);
     for (double s = 100; s <= 130; s += 2.5)
         for (double x = -20; x <= 0; x += 1.25) {
@@ -205,16 +211,15 @@ static void motion_is_rigid_and_has_the_set_statistics(void **state) {
     free_rows(&a), free_rows(&b);
     flt_sim_destroy(moving);
 
-    const flt_option ekeys[] = {FLT_OPT_SIM_ECCENTRICITY_AMPLITUDE,
-                                FLT_OPT_SIM_ECCENTRICITY_PERIOD, FLT_OPT_SIM_START};
+    const flt_option ekeys[] = {FLT_OPT_SIM_ECCENTRICITY_AMPLITUDE, FLT_OPT_SIM_ECCENTRICITY_PERIOD,
+                                FLT_OPT_SIM_START};
     const double evalues[] = {0.5, 50, 7};
     flt_sim *ecc = make_sim(calib, 3, ekeys, evalues);
     flt_sim *ref = make_sim(calib, 1, ekeys + 2, evalues + 2);
     a = next_rows(ref, 300), b = next_rows(ecc, 300);
     for (size_t i = 0; i < 300; ++i)
         for (size_t k = 0; k < n; ++k) {
-            assert_near(b.h[i * n + k] - a.h[i * n + k], 0.5 * sin(2 * PI * b.e[i] / 50),
-                        1e-12);
+            assert_near(b.h[i * n + k] - a.h[i * n + k], 0.5 * sin(2 * PI * b.e[i] / 50), 1e-12);
             assert_near(b.g[i * n + k], a.g[i * n + k], 1e-15);
         }
     free_rows(&a), free_rows(&b);
@@ -248,7 +253,8 @@ static void shear_transient_is_seen_at_each_lasers_material_position(void **stat
         const double ahead = shear_formula(r.s[i] + 50), behind = shear_formula(r.s[i] - 50);
         assert_near(r.h[i * r.fibers + 3], 0.5 * (ahead + behind), 1e-10);
         assert_near(r.g[i * r.fibers + 3], (ahead - behind) / 100, 1e-12);
-        if (fabs(r.h[i * r.fibers]) > biggest) biggest = fabs(r.h[i * r.fibers]);
+        if (fabs(r.h[i * r.fibers]) > biggest)
+            biggest = fabs(r.h[i * r.fibers]);
     }
     /* It is really there: half of an envelope of 50 mm near a cut. */
     assert_true(biggest > 15);
@@ -313,8 +319,7 @@ static void frames_draw_the_lines_where_the_calibration_says(void **state) {
     uint8_t *frame = malloc((size_t)w * h);
     double *peaks = malloc(2 * w * sizeof(double));
     double e;
-    assert_int_equal(flt_sim_next_frame(sim, frame, (size_t)w * h, w, &e, 0, NULL, peaks),
-                     FLT_OK);
+    assert_int_equal(flt_sim_next_frame(sim, frame, (size_t)w * h, w, &e, 0, NULL, peaks), FLT_OK);
     assert_near(e, 321, 1e-12);
     size_t checked = 0;
     for (unsigned laser = 0; laser < 2; ++laser) {
@@ -355,15 +360,12 @@ static void same_seed_same_bytes(void **state) {
         const size_t bytes = 2048 * ROI_ROWS * (depth / 8);
         uint8_t *fa = malloc(bytes), *fb = malloc(bytes), *fc = malloc(bytes);
         for (int f = 0; f < 3; ++f) {
-            assert_int_equal(flt_sim_next_frame(a, fa, bytes, 2048 * (depth / 8), NULL, 0,
-                                                NULL, NULL),
-                             FLT_OK);
-            assert_int_equal(flt_sim_next_frame(b, fb, bytes, 2048 * (depth / 8), NULL, 0,
-                                                NULL, NULL),
-                             FLT_OK);
-            assert_int_equal(flt_sim_next_frame(c, fc, bytes, 2048 * (depth / 8), NULL, 0,
-                                                NULL, NULL),
-                             FLT_OK);
+            assert_int_equal(
+                flt_sim_next_frame(a, fa, bytes, 2048 * (depth / 8), NULL, 0, NULL, NULL), FLT_OK);
+            assert_int_equal(
+                flt_sim_next_frame(b, fb, bytes, 2048 * (depth / 8), NULL, 0, NULL, NULL), FLT_OK);
+            assert_int_equal(
+                flt_sim_next_frame(c, fc, bytes, 2048 * (depth / 8), NULL, 0, NULL, NULL), FLT_OK);
             assert_memory_equal(fa, fb, bytes);
             assert_memory_not_equal(fa, fc, bytes);
         }
@@ -373,12 +375,10 @@ static void same_seed_same_bytes(void **state) {
         /* rewind: frame 0 again */
         assert_int_equal(flt_sim_rewind(a), FLT_OK);
         assert_int_equal(flt_sim_rewind(b), FLT_OK);
-        assert_int_equal(flt_sim_next_frame(a, fa, bytes, 2048 * (depth / 8), NULL, 0, NULL,
-                                            NULL),
+        assert_int_equal(flt_sim_next_frame(a, fa, bytes, 2048 * (depth / 8), NULL, 0, NULL, NULL),
                          FLT_OK);
         assert_int_equal(flt_sim_rewind(b), FLT_OK);
-        assert_int_equal(flt_sim_next_frame(b, fb, bytes, 2048 * (depth / 8), NULL, 0, NULL,
-                                            NULL),
+        assert_int_equal(flt_sim_next_frame(b, fb, bytes, 2048 * (depth / 8), NULL, 0, NULL, NULL),
                          FLT_OK);
         assert_memory_equal(fa, fb, bytes);
         free_rows(&ra), free_rows(&rb);
@@ -404,18 +404,17 @@ static void bad_input_is_rejected_by_name(void **state) {
     double d[16];
     uint8_t frame[64];
     expect_error(flt_sim_create(calib, NULL, NULL), FLT_ERR_INVALID_ARGUMENT, "'out'");
-    expect_error(flt_sim_add_defect(NULL, FLT_SIM_BOW, 1, 1), FLT_ERR_INVALID_ARGUMENT,
-                 "'sim'");
-    expect_error(flt_sim_add_defect(sim, (flt_sim_defect)99, 1, 1),
-                 FLT_ERR_INVALID_ARGUMENT, "'kind' = 99");
+    expect_error(flt_sim_add_defect(NULL, FLT_SIM_BOW, 1, 1), FLT_ERR_INVALID_ARGUMENT, "'sim'");
+    expect_error(flt_sim_add_defect(sim, (flt_sim_defect)99, 1, 1), FLT_ERR_INVALID_ARGUMENT,
+                 "'kind' = 99");
     expect_error(flt_sim_add_defect(sim, FLT_SIM_BOW, NAN, 1), FLT_ERR_INVALID_ARGUMENT,
                  "'amplitude_mm'");
     expect_error(flt_sim_add_defect(sim, FLT_SIM_BOW, 1, -5), FLT_ERR_INVALID_ARGUMENT,
                  "'period_mm' = -5");
-    expect_error(flt_sim_next_rows(sim, 1, 12, d, d, d, d, NULL, NULL),
-                 FLT_ERR_INVALID_ARGUMENT, "'fibers' = 12");
-    expect_error(flt_sim_next_rows(sim, 1, 11, d, NULL, d, d, NULL, NULL),
-                 FLT_ERR_INVALID_ARGUMENT, "'s_out'");
+    expect_error(flt_sim_next_rows(sim, 1, 12, d, d, d, d, NULL, NULL), FLT_ERR_INVALID_ARGUMENT,
+                 "'fibers' = 12");
+    expect_error(flt_sim_next_rows(sim, 1, 11, d, NULL, d, d, NULL, NULL), FLT_ERR_INVALID_ARGUMENT,
+                 "'s_out'");
     expect_error(flt_sim_next_frame(sim, frame, sizeof frame, 2047, NULL, 0, NULL, NULL),
                  FLT_ERR_INVALID_ARGUMENT, "'stride_bytes' = 2047");
     expect_error(flt_sim_next_frame(sim, frame, sizeof frame, 2048, NULL, 0, NULL, NULL),
@@ -423,24 +422,23 @@ static void bad_input_is_rejected_by_name(void **state) {
     expect_error(flt_sim_set_height_map(sim, 1, 5, 0, 1, 0, 1, d), FLT_ERR_INVALID_ARGUMENT,
                  "'rows' = 1");
     double map[4] = {0, 1, NAN, 3};
-    expect_error(flt_sim_set_height_map(sim, 2, 2, 0, 1, 0, 1, map),
-                 FLT_ERR_INVALID_ARGUMENT, "'heights[2]'");
-    expect_error(flt_sim_set_height_map(sim, 2, 2, 0, 0, 0, 1, map),
-                 FLT_ERR_INVALID_ARGUMENT, "'ds_mm' = 0");
+    expect_error(flt_sim_set_height_map(sim, 2, 2, 0, 1, 0, 1, map), FLT_ERR_INVALID_ARGUMENT,
+                 "'heights[2]'");
+    expect_error(flt_sim_set_height_map(sim, 2, 2, 0, 0, 0, 1, map), FLT_ERR_INVALID_ARGUMENT,
+                 "'ds_mm' = 0");
     flt_options *o = NULL;
     assert_int_equal(flt_options_create(&o), FLT_OK);
     expect_error(flt_options_set(o, FLT_OPT_SIM_SPECKLE, NAN), FLT_ERR_INVALID_ARGUMENT,
                  "'sim_speckle' is NaN");
     assert_int_equal(flt_options_set(o, FLT_OPT_SIM_BIT_DEPTH, 9), FLT_OK);
-    expect_error(flt_sim_create(calib, o, &none), FLT_ERR_INVALID_ARGUMENT,
-                 "'sim_bit_depth' = 9");
+    expect_error(flt_sim_create(calib, o, &none), FLT_ERR_INVALID_ARGUMENT, "'sim_bit_depth' = 9");
     assert_null(none);
     flt_options_destroy(o);
     flt_calib *cnone = NULL;
-    expect_error(flt_calib_create_reference(2000, 100, 0, 1, 1, &cnone),
-                 FLT_ERR_INVALID_ARGUMENT, "'first_row' = 2000");
-    expect_error(flt_calib_create_reference(0, 100, 0, NAN, 1, &cnone),
-                 FLT_ERR_INVALID_ARGUMENT, "'pitch_mm'");
+    expect_error(flt_calib_create_reference(2000, 100, 0, 1, 1, &cnone), FLT_ERR_INVALID_ARGUMENT,
+                 "'first_row' = 2000");
+    expect_error(flt_calib_create_reference(0, 100, 0, NAN, 1, &cnone), FLT_ERR_INVALID_ARGUMENT,
+                 "'pitch_mm'");
     assert_null(cnone);
     /* still usable, and the message clears on success */
     assert_int_equal(flt_sim_add_defect(sim, FLT_SIM_BOW, 1, 1000), FLT_OK);

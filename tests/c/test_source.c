@@ -36,7 +36,10 @@ static void assert_error(flt_status got, flt_status want, const char *needle) {
 /* --- tiny image writers (PNG through zlib, uncompressed TIFF) ------------- */
 
 static void put32be(uint8_t *p, uint32_t v) {
-    p[0] = (uint8_t)(v >> 24); p[1] = (uint8_t)(v >> 16); p[2] = (uint8_t)(v >> 8); p[3] = (uint8_t)v;
+    p[0] = (uint8_t)(v >> 24);
+    p[1] = (uint8_t)(v >> 16);
+    p[2] = (uint8_t)(v >> 8);
+    p[3] = (uint8_t)v;
 }
 
 static void png_chunk(FILE *f, const char *type, const uint8_t *body, uint32_t n) {
@@ -44,9 +47,11 @@ static void png_chunk(FILE *f, const char *type, const uint8_t *body, uint32_t n
     put32be(head, n);
     memcpy(head + 4, type, 4);
     fwrite(head, 1, 8, f);
-    if (n) fwrite(body, 1, n, f);
+    if (n)
+        fwrite(body, 1, n, f);
     uLong crc = crc32(0, (const Bytef *)type, 4);
-    if (n) crc = crc32(crc, body, n);
+    if (n)
+        crc = crc32(crc, body, n);
     uint8_t tail[4];
     put32be(tail, (uint32_t)crc);
     fwrite(tail, 1, 4, f);
@@ -83,9 +88,13 @@ static void write_png(const char *path, uint32_t w, uint32_t h, int channels,
     free(packed);
 }
 
-static void put16le(uint8_t *p, uint16_t v) { p[0] = (uint8_t)v; p[1] = (uint8_t)(v >> 8); }
+static void put16le(uint8_t *p, uint16_t v) {
+    p[0] = (uint8_t)v;
+    p[1] = (uint8_t)(v >> 8);
+}
 static void put32le(uint8_t *p, uint32_t v) {
-    for (int i = 0; i < 4; ++i) p[i] = (uint8_t)(v >> (8 * i));
+    for (int i = 0; i < 4; ++i)
+        p[i] = (uint8_t)(v >> (8 * i));
 }
 
 /* 16-bit grey baseline TIFF, one uncompressed strip. */
@@ -94,20 +103,23 @@ static void write_tiff16(const char *path, uint32_t w, uint32_t h, const uint16_
     const uint32_t ifd = 8, data = ifd + 2 + entries * 12 + 4;
     uint8_t head[8 + 2 + entries * 12 + 4];
     memset(head, 0, sizeof head);
-    head[0] = 'I'; head[1] = 'I';
+    head[0] = 'I';
+    head[1] = 'I';
     put16le(head + 2, 42);
     put32le(head + 4, ifd);
     put16le(head + 8, entries);
-    const uint32_t tags[entries][3] = {
-        {256, 4, w}, {257, 4, h}, {258, 3, 16}, {259, 3, 1}, {262, 3, 1},
-        {273, 4, data}, {277, 3, 1}, {278, 4, h}, {279, 4, w * h * 2}};
+    const uint32_t tags[entries][3] = {{256, 4, w}, {257, 4, h}, {258, 3, 16},
+                                       {259, 3, 1}, {262, 3, 1}, {273, 4, data},
+                                       {277, 3, 1}, {278, 4, h}, {279, 4, w * h * 2}};
     for (int i = 0; i < entries; ++i) {
         uint8_t *e = head + 10 + 12 * i;
         put16le(e, (uint16_t)tags[i][0]);
         put16le(e + 2, (uint16_t)tags[i][1]);
         put32le(e + 4, 1);
-        if (tags[i][1] == 3) put16le(e + 8, (uint16_t)tags[i][2]);
-        else put32le(e + 8, tags[i][2]);
+        if (tags[i][1] == 3)
+            put16le(e + 8, (uint16_t)tags[i][2]);
+        else
+            put32le(e + 8, tags[i][2]);
     }
     FILE *f = fopen(path, "wb");
     assert_non_null(f);
@@ -127,7 +139,9 @@ static void write_text(const char *path, const char *text) {
     fclose(f);
 }
 
-static uint8_t grey(int frame, uint32_t x, uint32_t y) { return (uint8_t)(frame * 40 + x * 3 + y * 5); }
+static uint8_t grey(int frame, uint32_t x, uint32_t y) {
+    return (uint8_t)(frame * 40 + x * 3 + y * 5);
+}
 
 static char g_dir[256];
 
@@ -183,8 +197,8 @@ static void test_sim_source_gives_the_simulator_frames(void **state) {
         assert_int_equal(format, FLT_PIXEL_MONO8);
         assert_int_equal(block, (uint64_t)k);
         ok(flt_sim_next_frame(b, expected, 2048 * 256, 2048, &enc_b, 0, NULL, NULL));
-        assert_true(enc == enc_b);          /* the simulator's own position */
-        assert_true(enc == 3.0 * k);        /* frame spacing 3 mm */
+        assert_true(enc == enc_b);   /* the simulator's own position */
+        assert_true(enc == 3.0 * k); /* frame spacing 3 mm */
         assert_memory_equal(pixels, expected, 2048 * 256);
     }
     uint64_t n = 0;
@@ -213,8 +227,7 @@ static void test_sim_source_gives_the_simulator_frames(void **state) {
     ok(flt_source_next(src, 0, &f));
     ok(flt_frame_info(f, NULL, NULL, NULL, NULL, NULL, NULL, NULL, &enc));
     assert_true(enc == 123.5);
-    assert_error(flt_source_set_encoder(src, NAN), FLT_ERR_INVALID_ARGUMENT,
-                 "'encoder_mm' = nan");
+    assert_error(flt_source_set_encoder(src, NAN), FLT_ERR_INVALID_ARGUMENT, "'encoder_mm' = nan");
     flt_source_destroy(src);
 
     /* fixed step: start + step * frame */
@@ -254,7 +267,8 @@ static void test_png_directory_with_encoder_csv(void **state) {
     /* written out of order: the directory is read sorted by name */
     for (int k = 2; k >= 0; --k) {
         for (uint32_t y = 0; y < H; ++y)
-            for (uint32_t x = 0; x < W; ++x) pixels[y * W + x] = grey(k, x, y);
+            for (uint32_t x = 0; x < W; ++x)
+                pixels[y * W + x] = grey(k, x, y);
         snprintf(path, sizeof path, "%s/frame_%02d.png", g_dir, k);
         write_png(path, W, H, 1, pixels);
     }
@@ -318,7 +332,8 @@ static void test_tiff16_list_with_fixed_step(void **state) {
     char names[3][512];
     const char *paths[3];
     for (int k = 0; k < 3; ++k) {
-        for (int i = 0; i < W * H; ++i) pixels[i] = (uint16_t)((k * 997 + i * 13) & 0x0FFF);
+        for (int i = 0; i < W * H; ++i)
+            pixels[i] = (uint16_t)((k * 997 + i * 13) & 0x0FFF);
         snprintf(names[k], sizeof names[k], "%s/t%d.tif", g_dir, k);
         write_tiff16(names[k], W, H, pixels);
         paths[k] = names[k];
@@ -343,7 +358,8 @@ static void test_tiff16_list_with_fixed_step(void **state) {
         assert_true(enc == 1.5 * k);
         const uint16_t *px = p;
         for (int i = 0; i < W * H; ++i)
-            if (px[i] != ((k * 997 + i * 13) & 0x0FFF)) fail_msg("tiff %d pixel %d", k, i);
+            if (px[i] != ((k * 997 + i * 13) & 0x0FFF))
+                fail_msg("tiff %d pixel %d", k, i);
     }
     flt_source_destroy(src);
 
@@ -381,8 +397,8 @@ static void test_tiff16_list_with_fixed_step(void **state) {
     assert_error(flt_source_create_images(paths, 0, NULL, NULL, &src), FLT_ERR_INVALID_ARGUMENT,
                  "'count' is 0");
     const char *with_null[2] = {paths[0], NULL};
-    assert_error(flt_source_create_images(with_null, 2, NULL, NULL, &src),
-                 FLT_ERR_INVALID_ARGUMENT, "'paths[1]' is NULL");
+    assert_error(flt_source_create_images(with_null, 2, NULL, NULL, &src), FLT_ERR_INVALID_ARGUMENT,
+                 "'paths[1]' is NULL");
     assert_error(flt_source_create_image_dir("/nonexistent-dir", NULL, NULL, &src), FLT_ERR_IO,
                  "cannot be opened");
     assert_error(flt_source_create_image_dir("/proc/self", NULL, NULL, &src), FLT_ERR_NOT_FOUND,

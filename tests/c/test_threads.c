@@ -53,18 +53,17 @@ typedef struct result {
     char message[256];
 } result;
 
-static flt_calib *g_calib;  /* shared, finished, read by every thread */
+static flt_calib *g_calib; /* shared, finished, read by every thread */
 
-#define TRY(call)                                                               \
-    do {                                                                        \
-        flt_status st_ = (call);                                                \
-        if (st_ != FLT_OK) {                                                    \
-            out->status = st_;                                                  \
-            snprintf(out->message, sizeof out->message, "%s: %s", #call,        \
-                     flt_last_error_message());                                 \
-            goto done;                                                          \
-        }                                                                       \
-    } while (0)
+#define TRY(call)                                                                             \
+  do {                                                                                        \
+    flt_status st_ = (call);                                                                  \
+    if (st_ != FLT_OK) {                                                                      \
+      out->status = st_;                                                                      \
+      snprintf(out->message, sizeof out->message, "%s: %s", #call, flt_last_error_message()); \
+      goto done;                                                                              \
+    }                                                                                         \
+  } while (0)
 
 static void run_line(result *out) {
     flt_sim *sim = NULL;
@@ -90,10 +89,10 @@ static void run_line(result *out) {
 
     for (int f = 0; f < FRAMES; ++f) {
         double encoder;
-        TRY(flt_sim_next_frame(sim, frame, (size_t)WIDTH * ROI_ROWS, WIDTH, &encoder, 0,
-                               NULL, NULL));
-        TRY(flt_extractor_process(ex, frame, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH,
-                                  encoder, FIBERS, &s, h, k, v));
+        TRY(flt_sim_next_frame(sim, frame, (size_t)WIDTH * ROI_ROWS, WIDTH, &encoder, 0, NULL,
+                               NULL));
+        TRY(flt_extractor_process(ex, frame, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, encoder,
+                                  FIBERS, &s, h, k, v));
         memcpy(out->height + (size_t)f * FIBERS, h, sizeof h);
         /* Map 8 of the frame's peaks of each laser through the shared
          * calibration directly (the mapping functions on a finished model
@@ -109,7 +108,8 @@ static void run_line(result *out) {
                                          out->plane + ((size_t)f * 2 + laser) * 16));
         }
         TRY(flt_recon_push(rec, 1, FIBERS, &s, h, k, v));
-        if ((f + 1) % FRAMES_PER_SHEET == 0) TRY(flt_recon_end_sheet(rec));
+        if ((f + 1) % FRAMES_PER_SHEET == 0)
+            TRY(flt_recon_end_sheet(rec));
         size_t got = 0;
         TRY(flt_recon_pull(rec, FRAMES - out->rows, FIBERS, out->s + out->rows,
                            out->z + out->rows * FIBERS, NULL, &got));
@@ -151,9 +151,10 @@ int main(void) {
     /* The reference itself must be a real reconstruction: every row out,
      * finite heights where the extractor saw both lines. */
     size_t valid = 0;
-    for (size_t i = 0; i < (size_t)FRAMES * FIBERS; ++i) valid += isfinite(reference->height[i]);
-    printf("reference: %zu rows pulled of %d, %zu of %d extracted samples valid\n",
-           reference->rows, FRAMES, valid, FRAMES * FIBERS);
+    for (size_t i = 0; i < (size_t)FRAMES * FIBERS; ++i)
+        valid += isfinite(reference->height[i]);
+    printf("reference: %zu rows pulled of %d, %zu of %d extracted samples valid\n", reference->rows,
+           FRAMES, valid, FRAMES * FIBERS);
     if (reference->rows != FRAMES || valid < (size_t)FRAMES * FIBERS * 9 / 10) {
         fprintf(stderr, "reference run is not a usable reconstruction\n");
         return 1;
@@ -165,7 +166,8 @@ int main(void) {
             fprintf(stderr, "pthread_create failed\n");
             return 1;
         }
-    for (int t = 0; t < THREADS; ++t) pthread_join(threads[t], NULL);
+    for (int t = 0; t < THREADS; ++t)
+        pthread_join(threads[t], NULL);
 
     for (int t = 0; t < THREADS; ++t) {
         const result *r = &results[t];

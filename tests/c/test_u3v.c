@@ -40,11 +40,11 @@ static flt_u3v_sim *make_bus(void) {
     flt_u3v_sim *bus = NULL;
     ok(flt_u3v_sim_create(&bus));
     size_t index = 99;
-    ok(flt_u3v_sim_add_camera(bus, "Flatline Vision", "Sim-100", "SN0001", 100, 30,
-                              FLT_PIXEL_MONO8, &index));
+    ok(flt_u3v_sim_add_camera(bus, "Flatline Vision", "Sim-100", "SN0001", 100, 30, FLT_PIXEL_MONO8,
+                              &index));
     assert_int_equal(index, 0);
-    ok(flt_u3v_sim_add_camera(bus, "Other Optics", "Sim-64", "SN0002", 64, 32,
-                              FLT_PIXEL_MONO16, &index));
+    ok(flt_u3v_sim_add_camera(bus, "Other Optics", "Sim-64", "SN0002", 64, 32, FLT_PIXEL_MONO16,
+                              &index));
     assert_int_equal(index, 1);
     return bus;
 }
@@ -52,7 +52,8 @@ static flt_u3v_sim *make_bus(void) {
 static flt_source *open_camera(flt_u3v_sim *bus, const char *serial, flt_options *options) {
     flt_source *src = NULL;
     flt_status st = flt_source_open_u3v(bus, serial, options, &src);
-    if (st != FLT_OK) fail_msg("open: %s", flt_last_error_message());
+    if (st != FLT_OK)
+        fail_msg("open: %s", flt_last_error_message());
     return src;
 }
 
@@ -186,7 +187,8 @@ static void test_gencp_chunks_to_the_device_limits(void **state) {
     assert_true(commands >= (xml_bytes + 63) / 64);
     /* a 100-byte write goes out as 44 + 44 + 12 bytes */
     uint8_t name[100], back[100];
-    for (int i = 0; i < 60; ++i) name[i] = (uint8_t)('a' + i % 26);
+    for (int i = 0; i < 60; ++i)
+        name[i] = (uint8_t)('a' + i % 26);
     name[60] = 0;
     const uint64_t before = sim_value(bus, 0, FLT_U3V_SIM_COMMANDS);
     ok(flt_source_write_memory(src, 0x184, name, 61));
@@ -223,8 +225,7 @@ static void test_features_resolve_from_the_xml(void **state) {
     assert_int_equal(peek(bus, 0, 0x1000C), 6);
     ok(flt_source_get_int(src, "OffsetY", &v));
     assert_int_equal(v, 6);
-    assert_error(flt_source_set_int(src, "OffsetY", 70000), FLT_ERR_INVALID_ARGUMENT,
-                 "16-bit");
+    assert_error(flt_source_set_int(src, "OffsetY", 70000), FLT_ERR_INVALID_ARGUMENT, "16-bit");
     ok(flt_source_set_enum(src, "PixelFormat", "Mono12"));
     assert_int_equal(peek(bus, 0, 0x10008), 0x01100005);
     ok(flt_source_set_enum(src, "PixelFormat", "Mono8"));
@@ -323,7 +324,8 @@ static void test_streams_1000_frames_byte_exact(void **state) {
         assert_true(enc == 100.0 + 2.5 * (double)(k - 1));
         const uint8_t *p = pixels;
         for (size_t i = 0; i < 3000; ++i)
-            if (p[i] != pattern(k, i)) fail_msg("frame %llu byte %zu", (unsigned long long)k, i);
+            if (p[i] != pattern(k, i))
+                fail_msg("frame %llu byte %zu", (unsigned long long)k, i);
     }
     assert_int_equal(count(src, FLT_COUNT_FRAMES), 1000);
     assert_int_equal(count(src, FLT_COUNT_DROPPED), 0);
@@ -377,7 +379,8 @@ static void test_stream_with_fine_alignment_and_encoder_chunk(void **state) {
         assert_true(fabs(enc - 3.0 * (double)k) < 1e-9);
         const uint8_t *p = pixels;
         for (size_t i = 0; i < 64 * 32 * 2; ++i)
-            if (p[i] != pattern(k, i)) fail_msg("frame %llu byte %zu", (unsigned long long)k, i);
+            if (p[i] != pattern(k, i))
+                fail_msg("frame %llu byte %zu", (unsigned long long)k, i);
     }
     assert_int_equal(count(src, FLT_COUNT_DROPPED), 0);
     flt_source_destroy(src);
@@ -392,10 +395,10 @@ typedef struct fault_case {
     uint32_t count;
     flt_source_counter counter; /* the counter that must grow by `grows` */
     uint64_t grows;
-    uint64_t dropped;           /* DROPPED grows by this */
-    int frames_missing;         /* frames at `at` .. not delivered */
-    int timeouts;               /* next() calls that time out */
-    const char *message;        /* in flt_source_stream_error() */
+    uint64_t dropped;    /* DROPPED grows by this */
+    int frames_missing;  /* frames at `at` .. not delivered */
+    int timeouts;        /* next() calls that time out */
+    const char *message; /* in flt_source_stream_error() */
 } fault_case;
 
 static void test_each_failure_mode_is_counted_and_recovers(void **state) {
@@ -452,20 +455,23 @@ static void test_each_failure_mode_is_counted_and_recovers(void **state) {
                 ++timeouts;
                 continue;
             }
-            if (st != FLT_OK) fail_msg("case %zu: %s", c, flt_last_error_message());
+            if (st != FLT_OK)
+                fail_msg("case %zu: %s", c, flt_last_error_message());
             const void *pixels;
             ok(flt_frame_info(f, &pixels, NULL, NULL, NULL, NULL, &block, NULL, NULL));
             const uint8_t *p = pixels;
             for (size_t i = 0; i < 3000; ++i)
-                if (p[i] != pattern(block, i)) fail_msg("case %zu block %llu byte %zu", c,
-                                                        (unsigned long long)block, i);
+                if (p[i] != pattern(block, i))
+                    fail_msg("case %zu block %llu byte %zu", c, (unsigned long long)block, i);
             seen[block % 4096] = 1;
             ++delivered;
-            if (block >= fault_at + 4) break;
+            if (block >= fault_at + 4)
+                break;
         }
         /* the frames after the damaged one arrive, the damaged one not */
         int missing = 0;
-        for (uint64_t b = fault_at; b <= fault_at + 4; ++b) missing += !seen[b % 4096];
+        for (uint64_t b = fault_at; b <= fault_at + 4; ++b)
+            missing += !seen[b % 4096];
         if (missing != fc->frames_missing)
             fail_msg("case %zu: %d frames missing, expected %d", c, missing, fc->frames_missing);
         assert_true(seen[(fault_at + fc->frames_missing) % 4096]); /* next good frame */
@@ -504,7 +510,8 @@ static void test_unplug_mid_stream(void **state) {
     for (int i = 0; i < 10 && st == FLT_OK; ++i) {
         const flt_frame *f = NULL;
         st = flt_source_next(src, 100, &f);
-        if (st == FLT_OK) ++frames;
+        if (st == FLT_OK)
+            ++frames;
     }
     assert_int_equal(frames, 4); /* blocks 1..4 */
     assert_error(st, FLT_ERR_DEVICE, "unplugged");
@@ -635,8 +642,8 @@ static void test_bad_input_names_the_problem(void **state) {
     uint64_t v;
     assert_error(flt_source_count(src, (flt_source_counter)99, &v), FLT_ERR_INVALID_ARGUMENT,
                  "'counter' = 99");
-    assert_error(flt_source_camera_value(src, (flt_camera_value)99, &v),
-                 FLT_ERR_INVALID_ARGUMENT, "'which' = 99");
+    assert_error(flt_source_camera_value(src, (flt_camera_value)99, &v), FLT_ERR_INVALID_ARGUMENT,
+                 "'which' = 99");
     assert_error(flt_frame_info(NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL),
                  FLT_ERR_INVALID_ARGUMENT, "'frame' is NULL");
     ok(flt_source_start(src));

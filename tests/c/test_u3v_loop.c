@@ -22,11 +22,12 @@
 #include "flatline/flatline.h"
 #include "flatline/source.h"
 
-#define ok(call)                                                                 \
-    do {                                                                         \
-        flt_status st_ = (call);                                                 \
-        if (st_ != FLT_OK) fail_msg("%s: %s", #call, flt_last_error_message());  \
-    } while (0)
+#define ok(call)                                           \
+  do {                                                     \
+    flt_status st_ = (call);                               \
+    if (st_ != FLT_OK)                                     \
+      fail_msg("%s: %s", #call, flt_last_error_message()); \
+  } while (0)
 
 enum { FRAMES = 120, FIBERS = 201, WIDTH = 2048, ROWS = 256 };
 
@@ -123,7 +124,11 @@ static void test_camera_path_gives_the_direct_path_rows(void **state) {
     ok(flt_source_count(src, FLT_COUNT_DROPPED, &dropped));
     assert_int_equal(dropped, 0);
 
-    free(sa); free(sb); free(za); free(zb); free(frame);
+    free(sa);
+    free(sb);
+    free(za);
+    free(zb);
+    free(frame);
     flt_recon_destroy(rc_direct);
     flt_recon_destroy(rc_camera);
     flt_extractor_destroy(ex_direct);

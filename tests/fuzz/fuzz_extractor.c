@@ -30,8 +30,7 @@ static void init(void) {
     double cam[4], dist[8], h[2][9], offset[2], scale, x0, pitch;
     size_t count;
     if (flt_calib_create_reference(ROI_FIRST, ROWS, -200.0, 20.0, FIBERS, &full) ||
-        flt_calib_get_intrinsics(full, cam, dist) ||
-        flt_calib_get_encoder_scale(full, &scale) ||
+        flt_calib_get_intrinsics(full, cam, dist) || flt_calib_get_encoder_scale(full, &scale) ||
         flt_calib_get_fiber_grid(full, &x0, &pitch, &count))
         abort();
     /* Moving the window right by COL_FIRST px moves the principal point
@@ -44,7 +43,8 @@ static void init(void) {
         if (flt_calib_get_homography(full, l, h[l]) ||
             flt_calib_get_laser_offset(full, l, &offset[l]))
             abort();
-        for (int r = 0; r < 3; ++r) h[l][3 * r + 2] += COL_FIRST * h[l][3 * r];
+        for (int r = 0; r < 3; ++r)
+            h[l][3 * r + 2] += COL_FIRST * h[l][3 * r];
         if (flt_calib_set_homography(c, l, h[l]) || flt_calib_set_laser_offset(c, l, offset[l]))
             abort();
     }
@@ -61,35 +61,39 @@ static void init(void) {
 }
 
 static void expect(flt_status st) {
-    if (st != FLT_OK && flt_last_error_message()[0] == 0) abort();
-    if (st == FLT_ERR_INTERNAL) abort();
+    if (st != FLT_OK && flt_last_error_message()[0] == 0)
+        abort();
+    if (st == FLT_ERR_INTERNAL)
+        abort();
 }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     static uint16_t frame16[WIDTH * ROWS];
     static uint8_t frame8[WIDTH * ROWS];
-    if (!g_calib) init();
+    if (!g_calib)
+        init();
     fuzz_input in = {data, size};
 
     flt_options *opt = NULL;
-    if (flt_options_create(&opt) != FLT_OK) abort();
-    static const flt_option keys[] = {
-        FLT_OPT_EXTRACT_LASER0_FIRST_ROW, FLT_OPT_EXTRACT_LASER0_ROWS,
-        FLT_OPT_EXTRACT_LASER1_FIRST_ROW, FLT_OPT_EXTRACT_LASER1_ROWS,
-        FLT_OPT_EXTRACT_SG_WINDOW,        FLT_OPT_EXTRACT_SG_ORDER,
-        FLT_OPT_EXTRACT_MIN_PEAK,         FLT_OPT_EXTRACT_MAX_WIDTH};
+    if (flt_options_create(&opt) != FLT_OK)
+        abort();
+    static const flt_option keys[] = {FLT_OPT_EXTRACT_LASER0_FIRST_ROW, FLT_OPT_EXTRACT_LASER0_ROWS,
+                                      FLT_OPT_EXTRACT_LASER1_FIRST_ROW, FLT_OPT_EXTRACT_LASER1_ROWS,
+                                      FLT_OPT_EXTRACT_SG_WINDOW,        FLT_OPT_EXTRACT_SG_ORDER,
+                                      FLT_OPT_EXTRACT_MIN_PEAK,         FLT_OPT_EXTRACT_MAX_WIDTH};
     const int n_opts = fuzz_u8(&in) % 6;
     for (int i = 0; i < n_opts; ++i) {
         const int which = fuzz_u8(&in) % 8;
-        const double v = which < 6 ? (double)(fuzz_u8(&in) % (which < 4 ? 140 : 35))
-                                   : fuzz_double(&in, 1.5);
+        const double v =
+            which < 6 ? (double)(fuzz_u8(&in) % (which < 4 ? 140 : 35)) : fuzz_double(&in, 1.5);
         expect(flt_options_set(opt, keys[which], v));
     }
     flt_extractor *ex = NULL;
     flt_status st = flt_extractor_create(g_calib, opt, &ex);
     expect(st);
     flt_options_destroy(opt);
-    if (st != FLT_OK) return 0;
+    if (st != FLT_OK)
+        return 0;
 
     const int frames = 1 + fuzz_u8(&in) % 3;
     for (int f = 0; f < frames; ++f) {
@@ -101,7 +105,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
         for (int p = 0; p < patches && in.n > 0; ++p) {
             const uint32_t at = fuzz_u32(&in) % (WIDTH * ROWS);
             uint32_t len = 1 + fuzz_u8(&in) * (1u + fuzz_u8(&in) % 64);
-            if (len > WIDTH * ROWS - at) len = WIDTH * ROWS - at;
+            if (len > WIDTH * ROWS - at)
+                len = WIDTH * ROWS - at;
             const uint8_t kind = fuzz_u8(&in), value = fuzz_u8(&in);
             for (uint32_t i = 0; i < len; ++i)
                 frame8[at + i] = kind & 1 ? value : (uint8_t)(fuzz_u8(&in) ^ frame8[at + i]);
@@ -114,7 +119,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
         flt_pixel_format format = FLT_PIXEL_MONO8;
         if (bits != 8) {
             /* 16-bit words; the high bits beyond the format may be garbage. */
-            const uint16_t junk = mode & 8 ? (uint16_t)(0xF000u & ((unsigned)fuzz_u8(&in) << 8)) : 0;
+            const uint16_t junk =
+                mode & 8 ? (uint16_t)(0xF000u & ((unsigned)fuzz_u8(&in) << 8)) : 0;
             for (size_t i = 0; i < sizeof frame8; ++i)
                 frame16[i] = (uint16_t)((frame8[i] << (bits - 8)) | (bits == 12 ? junk : 0));
             frame = frame16;
@@ -126,7 +132,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
         expect(st);
         if (st == FLT_OK)
             for (int i = 0; i < FIBERS; ++i)
-                if (v[i] && (!isfinite(h[i]) || !isfinite(k[i]))) abort();
+                if (v[i] && (!isfinite(h[i]) || !isfinite(k[i])))
+                    abort();
         uint32_t first, rows;
         expect(flt_extractor_band(ex, 0, &first, &rows));
     }

@@ -18,21 +18,23 @@
 namespace {
 
 void resolve_all(const flt::u3v::genicam_map &map, const std::string &extra) {
-    static const char *const names[] = {"Width", "Height", "PixelFormat", "OffsetY",
-                                        "AcquisitionMode", "AcquisitionStart",
-                                        "AcquisitionStop", "ExposureTime", "Gain",
-                                        "TriggerMode", "TriggerSource", ""};
+    static const char *const names[] = {"Width",           "Height",          "PixelFormat",
+                                        "OffsetY",         "AcquisitionMode", "AcquisitionStart",
+                                        "AcquisitionStop", "ExposureTime",    "Gain",
+                                        "TriggerMode",     "TriggerSource",   ""};
     for (const char *name : names) {
         try {
             (void)map.resolve(name);
         } catch (const flt::error &e) {
-            if (e.status != FLT_ERR_NOT_FOUND && e.status != FLT_ERR_FORMAT) std::abort();
+            if (e.status != FLT_ERR_NOT_FOUND && e.status != FLT_ERR_FORMAT)
+                std::abort();
         }
     }
     try {
         (void)map.resolve(extra);
     } catch (const flt::error &e) {
-        if (e.status != FLT_ERR_NOT_FOUND && e.status != FLT_ERR_FORMAT) std::abort();
+        if (e.status != FLT_ERR_NOT_FOUND && e.status != FLT_ERR_FORMAT)
+            std::abort();
     }
 }
 
@@ -41,7 +43,8 @@ void parse_and_resolve(const std::string &xml, const std::string &extra) {
     try {
         map.parse(xml);
     } catch (const flt::error &e) {
-        if (e.status != FLT_ERR_FORMAT) std::abort();
+        if (e.status != FLT_ERR_FORMAT)
+            std::abort();
         return;
     }
     resolve_all(map, extra);
@@ -50,7 +53,8 @@ void parse_and_resolve(const std::string &xml, const std::string &extra) {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t *data, std::size_t size) {
-    if (size < 1) return 0;
+    if (size < 1)
+        return 0;
     const std::uint8_t mode = data[0];
     ++data, --size;
     // The last up to 16 bytes name one more feature to resolve.
@@ -62,7 +66,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t *data, std::size_t size
             try {
                 inflated = flt::u3v::unzip_single(data, size);
             } catch (const flt::error &e) {
-                if (e.status != FLT_ERR_FORMAT) std::abort();
+                if (e.status != FLT_ERR_FORMAT)
+                    std::abort();
                 return 0;
             }
             parse_and_resolve(inflated, extra);

@@ -39,7 +39,7 @@ struct input {
 };
 
 class fuzz_device final : public usb_device {
-public:
+  public:
     fuzz_device(std::unique_ptr<usb_device> inner, input &in, bool fuzz_control)
         : inner_(std::move(inner)), in_(in), fuzz_control_(fuzz_control) {}
     bool fuzzing = false;
@@ -50,11 +50,12 @@ public:
     usb_status string_descriptor(std::uint8_t i, std::string &out) override {
         return inner_->string_descriptor(i, out);
     }
-    usb_status bulk_write(std::uint8_t ep, const std::uint8_t *d, std::size_t n,
-                          std::size_t &sent, unsigned t) override {
+    usb_status bulk_write(std::uint8_t ep, const std::uint8_t *d, std::size_t n, std::size_t &sent,
+                          unsigned t) override {
         if (fuzzing && fuzz_control_) {
             // Keep the request id the client expects in the ack template.
-            if (n >= 12) last_request_id_ = get_u16(d + 10), last_command_ = get_u16(d + 6);
+            if (n >= 12)
+                last_request_id_ = get_u16(d + 10), last_command_ = get_u16(d + 6);
             sent = n;
             return usb_status::ok;
         }
@@ -62,13 +63,18 @@ public:
     }
     usb_status bulk_read(std::uint8_t ep, std::uint8_t *d, std::size_t cap, std::size_t &got,
                          unsigned t) override {
-        if (!(fuzzing && fuzz_control_)) return inner_->bulk_read(ep, d, cap, got, t);
-        if (in_.n == 0) return usb_status::timeout;
+        if (!(fuzzing && fuzz_control_))
+            return inner_->bulk_read(ep, d, cap, got, t);
+        if (in_.n == 0)
+            return usb_status::timeout;
         const std::uint8_t kind = in_.u8();
-        if (kind == 0xFF) return usb_status::no_device;
-        if (kind >= 0xF0) return usb_status::timeout;
+        if (kind == 0xFF)
+            return usb_status::no_device;
+        if (kind >= 0xF0)
+            return usb_status::timeout;
         std::size_t n = std::min<std::size_t>(cap, in_.u16() % (cap + 16));
-        for (std::size_t i = 0; i < n; ++i) d[i] = in_.u8();
+        for (std::size_t i = 0; i < n; ++i)
+            d[i] = in_.u8();
         if ((kind & 3) != 0 && n >= 12) {  // an ack-shaped packet with fuzzed fields
             put_u32(d, k_prefix_control);
             put_u16(d + 4, kind & 4 ? std::uint16_t(0x8000 | in_.u8()) : 0);
@@ -91,16 +97,21 @@ public:
         return fuzzing ? usb_status::ok : inner_->async_submit(slot);
     }
     usb_status async_reap(unsigned t, usb_completion &out) override {
-        if (!fuzzing) return inner_->async_reap(t, out);
-        if (in_.n == 0 || queue_.empty()) return usb_status::timeout;
+        if (!fuzzing)
+            return inner_->async_reap(t, out);
+        if (in_.n == 0 || queue_.empty())
+            return usb_status::timeout;
         out.slot = queue_.front();
         queue_.pop_front();
         std::uint8_t *d = buffers_[out.slot];
         const std::uint8_t kind = in_.u8();
         out.status = usb_status::ok;
-        if (kind == 0xFF) out.status = usb_status::no_device;
-        else if (kind == 0xFE) out.status = usb_status::stall;
-        else if (kind == 0xFD) out.status = usb_status::overflow;
+        if (kind == 0xFF)
+            out.status = usb_status::no_device;
+        else if (kind == 0xFE)
+            out.status = usb_status::stall;
+        else if (kind == 0xFD)
+            out.status = usb_status::overflow;
         std::size_t n = in_.u16() % (capacity_ + 1);
         if (kind % 4 == 1) {  // a leader with fuzzed fields
             n = std::max<std::size_t>(n, 52);
@@ -109,31 +120,35 @@ public:
             put_u16(d + 6, kind & 16 ? in_.u16() : 52);        // leader size
             put_u64(d + 8, kind & 32 ? in_.u64() : ++block_);  // block id
             put_u16(d + 18, kind & 64 ? in_.u16() : k_payload_image);
-            put_u64(d + 20, in_.u64());                         // timestamp
+            put_u64(d + 20, in_.u64());  // timestamp
             put_u32(d + 28, kind & 128 ? in_.u32() : k_pfnc_mono8);
             put_u32(d + 32, kind & 8 ? in_.u32() : 64);  // width
             put_u32(d + 36, kind & 8 ? in_.u32() : 32);  // height
             put_u16(d + 48, in_.u8() % 4);               // padding x
-        } else if (kind % 4 == 2) {  // a trailer with fuzzed fields
+        } else if (kind % 4 == 2) {                      // a trailer with fuzzed fields
             n = std::max<std::size_t>(n, 32);
             std::memset(d, 0, n);
             put_u32(d, k_magic_trailer);
             put_u16(d + 6, kind & 16 ? in_.u16() : 32);
             put_u64(d + 8, kind & 32 ? in_.u64() : block_);
-            put_u16(d + 16, kind & 64 ? in_.u16() : 0);  // status
+            put_u16(d + 16, kind & 64 ? in_.u16() : 0);         // status
             put_u64(d + 20, kind & 128 ? in_.u64() : 64 * 32);  // valid payload size
-            put_u32(d + 28, in_.u32());  // size y
-        } else {  // raw bytes (payload, garbage)
+            put_u32(d + 28, in_.u32());                         // size y
+        } else {                                                // raw bytes (payload, garbage)
             const std::uint8_t fill = in_.u8();
-            for (std::size_t i = 0; i < n; ++i) d[i] = kind & 4 ? in_.u8() : fill;
+            for (std::size_t i = 0; i < n; ++i)
+                d[i] = kind & 4 ? in_.u8() : fill;
         }
         n = std::min(n, capacity_);
         out.length = n;
         return usb_status::ok;
     }
-    void async_release() override { queue_.clear(); inner_->async_release(); }
+    void async_release() override {
+        queue_.clear();
+        inner_->async_release();
+    }
 
-private:
+  private:
     std::unique_ptr<usb_device> inner_;
     input &in_;
     bool fuzz_control_;
@@ -145,7 +160,7 @@ private:
 };
 
 class fuzz_backend final : public usb_backend {
-public:
+  public:
     fuzz_backend(sim_bus &bus, input &in, bool fuzz_control)
         : bus_(bus), in_(in), fuzz_control_(fuzz_control) {}
     fuzz_device *device = nullptr;
@@ -153,14 +168,15 @@ public:
     usb_status open(const usb_device_desc &desc, std::unique_ptr<usb_device> &out) override {
         std::unique_ptr<usb_device> inner;
         const usb_status st = bus_.open(desc, inner);
-        if (st != usb_status::ok) return st;
+        if (st != usb_status::ok)
+            return st;
         auto dev = std::make_unique<fuzz_device>(std::move(inner), in_, fuzz_control_);
         device = dev.get();
         out = std::move(dev);
         return usb_status::ok;
     }
 
-private:
+  private:
     sim_bus &bus_;
     input &in_;
     bool fuzz_control_;
@@ -180,7 +196,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t *data, std::size_t size
     const bool fuzz_control = mode & 1;
     sim_bus bus;
     const std::size_t index = bus.add_camera("Vendor", "Model", "S1", 64, 32, 8);
-    if (mode & 2) sim_set(bus.camera(index), FLT_U3V_SIM_ENCODER_CHUNK, 1);
+    if (mode & 2)
+        sim_set(bus.camera(index), FLT_U3V_SIM_ENCODER_CHUNK, 1);
     fuzz_backend backend(bus, in, fuzz_control);
     camera_config config;
     config.transfers = 2 + (mode >> 4) % 4;
@@ -196,15 +213,23 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t *data, std::size_t size
             try {
                 if (fuzz_control) {
                     switch (in.u8() % 5) {
-                    case 0: (void)cam.get_int("Width"); break;
-                    case 1: cam.set_int("Height", 16); break;
-                    case 2: {
-                        std::uint8_t buf[600];
-                        cam.read_memory(0x1000 + in.u8(), buf, 1 + in.u16() % sizeof buf);
-                        break;
-                    }
-                    case 3: cam.execute("AcquisitionStop"); break;
-                    default: (void)cam.get_float("Gain"); break;
+                        case 0:
+                            (void)cam.get_int("Width");
+                            break;
+                        case 1:
+                            cam.set_int("Height", 16);
+                            break;
+                        case 2: {
+                            std::uint8_t buf[600];
+                            cam.read_memory(0x1000 + in.u8(), buf, 1 + in.u16() % sizeof buf);
+                            break;
+                        }
+                        case 3:
+                            cam.execute("AcquisitionStop");
+                            break;
+                        default:
+                            (void)cam.get_float("Gain");
+                            break;
                     }
                 } else {
                     frame_view f;
@@ -212,20 +237,25 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t *data, std::size_t size
                         // Read the whole image: ASan catches a frame that
                         // claims more than its buffer holds.
                         const std::size_t row = std::size_t(f.width) * (f.bits > 8 ? 2 : 1);
-                        if (f.stride < row || f.pixels == nullptr) std::abort();
+                        if (f.stride < row || f.pixels == nullptr)
+                            std::abort();
                         unsigned sum = 0;
                         for (std::uint32_t r = 0; r < f.height; ++r)
-                            for (std::size_t b = 0; b < row; ++b) sum += f.pixels[r * f.stride + b];
-                        if (sum == 0xFFFFFFFFu) std::abort();  // keeps the loop
+                            for (std::size_t b = 0; b < row; ++b)
+                                sum += f.pixels[r * f.stride + b];
+                        if (sum == 0xFFFFFFFFu)
+                            std::abort();  // keeps the loop
                     }
                 }
             } catch (const flt::error &e) {
-                if (!expected(e.status)) std::abort();
+                if (!expected(e.status))
+                    std::abort();
             }
         }
         cam.stop();
     } catch (const flt::error &e) {
-        if (!expected(e.status)) std::abort();
+        if (!expected(e.status))
+            std::abort();
     } catch (const std::bad_alloc &) {
     }
     return 0;

@@ -35,7 +35,10 @@ static void check(flt_status st) {
     }
 }
 
-static void le16(uint8_t *p, unsigned v) { p[0] = (uint8_t)v; p[1] = (uint8_t)(v >> 8); }
+static void le16(uint8_t *p, unsigned v) {
+    p[0] = (uint8_t)v;
+    p[1] = (uint8_t)(v >> 8);
+}
 
 int main(int argc, char **argv) {
     if (argc != 2) {
@@ -77,7 +80,8 @@ int main(int argc, char **argv) {
         check(flt_source_camera_value(src, FLT_CAMERA_MANIFEST_ADDRESS, &address));
         check(flt_source_read_memory(src, address + 8 + 8, entry, 8));
         uint64_t file_address = 0;
-        for (int i = 7; i >= 0; --i) file_address = file_address << 8 | entry[i];
+        for (int i = 7; i >= 0; --i)
+            file_address = file_address << 8 | entry[i];
         uint8_t *buf = malloc(bytes + 1);
         buf[0] = (uint8_t)zipped;
         check(flt_source_read_memory(src, file_address, buf + 1, bytes));
@@ -94,18 +98,26 @@ int main(int argc, char **argv) {
     uint8_t s[64];
     size_t k = 0;
     uint8_t stream[256];
-    s[k++] = 0;  /* mode: stream, no chunk, 512-byte transfers, 2 slots */
+    s[k++] = 0; /* mode: stream, no chunk, 512-byte transfers, 2 slots */
     memcpy(stream, s, k);
     n = k;
     for (int frame = 0; frame < 2; ++frame) {
-        stream[n++] = 1;  le16(stream + n, 52); n += 2;      /* leader */
-        memset(stream + n, 0, 8 + 4 + 1); n += 13;          /* timestamp, (pfnc), pad */
+        stream[n++] = 1;
+        le16(stream + n, 52);
+        n += 2; /* leader */
+        memset(stream + n, 0, 8 + 4 + 1);
+        n += 13; /* timestamp, (pfnc), pad */
         for (int t = 0; t < 4; ++t) {
-            stream[n++] = 0; le16(stream + n, 512); n += 2; /* payload */
+            stream[n++] = 0;
+            le16(stream + n, 512);
+            n += 2; /* payload */
             stream[n++] = (uint8_t)(17 * t + frame);
         }
-        stream[n++] = 2; le16(stream + n, 32); n += 2;      /* trailer */
-        memset(stream + n, 0, 4); n += 4;                  /* size y */
+        stream[n++] = 2;
+        le16(stream + n, 32);
+        n += 2; /* trailer */
+        memset(stream + n, 0, 4);
+        n += 4; /* size y */
     }
     put("u3v", "two_frames", stream, n);
     /* mode 1: control acks; get_int("Width") answered by a well-formed ack
@@ -117,16 +129,16 @@ int main(int argc, char **argv) {
 
     /* recon: fibers, options, then operations (push with increasing rows,
      * pull, end_sheet, boundary, reset). */
-    const uint8_t recon1[] = {3, 0, 1, 40, 1, 6, 0, 9, 5, 1, 2, 3, 4, 5, 6, 7, 8, 9, 3, 20,
-                              4, 6, 0, 9, 5, 9, 8, 7, 6, 5, 4, 3, 2, 1, 3, 40, 5, 7};
+    const uint8_t recon1[] = {3,  0, 1, 40, 1, 6, 0, 9, 5, 1, 2, 3, 4, 5, 6, 7, 8,  9, 3,
+                              20, 4, 6, 0,  9, 5, 9, 8, 7, 6, 5, 4, 3, 2, 1, 3, 40, 5, 7};
     put("recon", "push_pull_sheet", recon1, sizeof recon1);
     const uint8_t recon2[] = {5, 2, 7, 1, 0x40, 11, 1, 2, 0, 39, 0, 0, 1, 2, 3, 4, 0, 0, 0, 0};
     put("recon", "options_nan", recon2, sizeof recon2);
 
     /* extractor: no options, one Mono8 frame with two patches; a Mono12
      * frame; a 16-bit frame with a NaN encoder. */
-    const uint8_t ex1[] = {0, 0, 2, 2, 0x10, 0x20, 0x30, 0, 40, 2, 1, 255,
-                           0x00, 0x90, 0x01, 0, 10, 1, 0, 0};
+    const uint8_t ex1[] = {0, 0,   2,    2,    0x10, 0x20, 0x30, 0, 40, 2,
+                           1, 255, 0x00, 0x90, 0x01, 0,    10,   1, 0,  0};
     put("extractor", "mono8_patches", ex1, sizeof ex1);
     const uint8_t ex2[] = {2, 4, 9, 5, 2, 0, 0};
     put("extractor", "mono12_window9", ex2, sizeof ex2);

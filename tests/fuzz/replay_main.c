@@ -30,7 +30,7 @@ static int run_file(const char *path) {
         free(data);
         return 1;
     }
-    LLVMFuzzerTestOneInput(data, got);  /* a failure aborts */
+    LLVMFuzzerTestOneInput(data, got); /* a failure aborts */
     free(data);
     return 0;
 }
@@ -39,7 +39,8 @@ int main(int argc, char **argv) {
     int files = 0, errors = 0;
     for (int i = 1; i < argc; ++i) {
         struct stat st;
-        if (stat(argv[i], &st) != 0) continue;  /* an absent folder: nothing to replay */
+        if (stat(argv[i], &st) != 0)
+            continue; /* an absent folder: nothing to replay */
         if (!S_ISDIR(st.st_mode)) {
             errors += run_file(argv[i]);
             ++files;
@@ -48,13 +49,15 @@ int main(int argc, char **argv) {
         DIR *d = opendir(argv[i]);
         struct dirent *e;
         while (d && (e = readdir(d)) != NULL) {
-            if (e->d_name[0] == '.') continue;
+            if (e->d_name[0] == '.')
+                continue;
             char path[4096];
             snprintf(path, sizeof path, "%s/%s", argv[i], e->d_name);
             errors += run_file(path);
             ++files;
         }
-        if (d) closedir(d);
+        if (d)
+            closedir(d);
     }
     printf("replayed %d inputs without a crash\n", files);
     return errors ? 1 : (files ? 0 : 1);

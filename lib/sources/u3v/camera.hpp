@@ -49,7 +49,7 @@ struct frame_view {
 };
 
 class camera {
-public:
+  public:
     // Opens the camera with `serial` (or the first), reads the bootstrap
     // registers and the XML, and stops a stream a dead process left running.
     camera(usb_backend &bus, const char *serial, const camera_config &config);
@@ -78,7 +78,7 @@ public:
     // FLT_OK with `out` filled, FLT_ERR_TIMEOUT, or throws (FLT_ERR_DEVICE).
     flt_status next(unsigned timeout_ms, frame_view &out);
 
-private:
+  private:
     using clock = std::chrono::steady_clock;
     void transact(std::uint16_t command, const std::uint8_t *body, std::size_t body_bytes,
                   std::uint8_t *ack_body, std::size_t ack_bytes, std::uint64_t address);
@@ -133,7 +133,7 @@ private:
     std::size_t slot_bytes_ = 0;
     std::vector<std::uint8_t> waiting_;  // slots whose submission was refused
     std::size_t in_flight_ = 0;
-    std::vector<std::uint8_t> frame_;     // payload of the frame being assembled
+    std::vector<std::uint8_t> frame_;  // payload of the frame being assembled
     bool frame_open_ = false, frame_damaged_ = false;
     bool discarding_ = false;  // dropping the rest of a frame until a leader
     std::size_t received_ = 0;

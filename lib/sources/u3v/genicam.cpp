@@ -26,7 +26,8 @@ namespace {
 
 bool parse_int(const std::string &text, std::int64_t &out) {
     std::size_t b = text.find_first_not_of(" \t\r\n");
-    if (b == std::string::npos) return false;
+    if (b == std::string::npos)
+        return false;
     std::size_t e = text.find_last_not_of(" \t\r\n");
     const std::string t = text.substr(b, e - b + 1);
     char *end = nullptr;
@@ -42,29 +43,34 @@ bool parse_int(const std::string &text, std::int64_t &out) {
 // int64's range (or NaN) is undefined behaviour, and a camera file may say
 // anything (fuzz_genicam found <Value>0xfff...f2</Value>, 5e92).
 std::int64_t saturated_int64(double f) {
-    if (!(f == f)) return 0;
-    if (f >= 9223372036854775808.0) return std::numeric_limits<std::int64_t>::max();
-    if (f < -9223372036854775808.0) return std::numeric_limits<std::int64_t>::min();
+    if (!(f == f))
+        return 0;
+    if (f >= 9223372036854775808.0)
+        return std::numeric_limits<std::int64_t>::max();
+    if (f < -9223372036854775808.0)
+        return std::numeric_limits<std::int64_t>::min();
     return std::int64_t(f);
 }
 
 bool parse_float(const std::string &text, double &out) {
     char *end = nullptr;
     out = std::strtod(text.c_str(), &end);
-    while (end && (*end == ' ' || *end == '\n' || *end == '\r' || *end == '\t')) ++end;
+    while (end && (*end == ' ' || *end == '\n' || *end == '\r' || *end == '\t'))
+        ++end;
     return end && *end == '\0' && end != text.c_str();
 }
 
 // The node kinds whose elements carry a Name attribute and start a node.
 bool is_node_kind(const char *tag) {
     static const char *kinds[] = {
-        "Node", "Category", "Integer", "IntReg", "MaskedIntReg", "Float", "FloatReg",
-        "Enumeration", "EnumEntry", "Command", "Boolean", "String", "StringReg",
-        "Register", "Converter", "IntConverter", "SwissKnife", "IntSwissKnife",
-        "Port", "ConfRom", "TextDesc", "IntKey", "AdvFeatureLock", "SmartFeature",
+        "Node",      "Category",    "Integer",   "IntReg",       "MaskedIntReg",   "Float",
+        "FloatReg",  "Enumeration", "EnumEntry", "Command",      "Boolean",        "String",
+        "StringReg", "Register",    "Converter", "IntConverter", "SwissKnife",     "IntSwissKnife",
+        "Port",      "ConfRom",     "TextDesc",  "IntKey",       "AdvFeatureLock", "SmartFeature",
         "StructReg", "StructEntry"};
     for (const char *k : kinds)
-        if (std::strcmp(k, tag) == 0) return true;
+        if (std::strcmp(k, tag) == 0)
+            return true;
     return false;
 }
 
@@ -73,15 +79,16 @@ struct parser_state {
     std::vector<std::string> open_nodes;  // names of the nodes being parsed
     std::vector<bool> element_is_node;
     std::string text;
-    std::string enum_entry;               // the EnumEntry being parsed
+    std::string enum_entry;  // the EnumEntry being parsed
     std::int64_t enum_entry_value = 0;
-    genicam_node struct_reg;              // the StructReg being parsed
+    genicam_node struct_reg;  // the StructReg being parsed
     std::vector<std::string> struct_entries;
     std::string error;
 };
 
 genicam_node *current(parser_state &s) {
-    if (s.open_nodes.empty()) return nullptr;
+    if (s.open_nodes.empty())
+        return nullptr;
     auto it = s.nodes->find(s.open_nodes.back());
     return it == s.nodes->end() ? nullptr : &it->second;
 }
@@ -91,10 +98,12 @@ void XMLCALL on_start(void *user, const XML_Char *tag, const XML_Char **attribut
     s.text.clear();
     const char *name = nullptr;
     for (int i = 0; attributes[i]; i += 2)
-        if (std::strcmp(attributes[i], "Name") == 0) name = attributes[i + 1];
+        if (std::strcmp(attributes[i], "Name") == 0)
+            name = attributes[i + 1];
     const bool node = name && is_node_kind(tag);
     s.element_is_node.push_back(node);
-    if (!node) return;
+    if (!node)
+        return;
     if (std::strcmp(tag, "EnumEntry") == 0) {
         s.enum_entry = name;
         s.enum_entry_value = 0;
@@ -108,7 +117,8 @@ void XMLCALL on_start(void *user, const XML_Char *tag, const XML_Char **attribut
         n.kind = "MaskedIntReg";  // a bit field of the enclosing StructReg
         s.struct_entries.push_back(name);
     }
-    if (std::strcmp(tag, "StructReg") == 0) s.struct_entries.clear();
+    if (std::strcmp(tag, "StructReg") == 0)
+        s.struct_entries.clear();
     (*s.nodes)[name] = n;
     s.open_nodes.push_back(name);
 }
@@ -123,12 +133,13 @@ void set_property(parser_state &s, genicam_node &n, const std::string &tag,
         }
         n.address += std::uint64_t(v);  // several Address elements add up
         n.has_address = true;
-    } else if (tag == "pAddress" || tag == "IntSwissKnife" || tag == "pIndex" ||
-               tag == "pLength") {
+    } else if (tag == "pAddress" || tag == "IntSwissKnife" || tag == "pIndex" || tag == "pLength") {
         n.unsupported = "its register address or length is computed (" + tag + ")";
     } else if (tag == "Length") {
-        if (parse_int(text, v) && v > 0 && v <= 8) n.length = std::uint32_t(v);
-        else if (parse_int(text, v)) n.length = std::uint32_t(v);  // StringReg etc.
+        if (parse_int(text, v) && v > 0 && v <= 8)
+            n.length = std::uint32_t(v);
+        else if (parse_int(text, v))
+            n.length = std::uint32_t(v);  // StringReg etc.
     } else if (tag == "Endianess") {
         n.little_endian = text.find("Big") == std::string::npos;
     } else if (tag == "Sign") {
@@ -160,7 +171,8 @@ void set_property(parser_state &s, genicam_node &n, const std::string &tag,
     } else if (tag == "OffValue" && parse_int(text, v)) {
         n.off_value = v;
     } else if (tag == "Formula" || tag == "FormulaFrom" || tag == "FormulaTo") {
-        if (n.formula.empty()) n.formula = text;
+        if (n.formula.empty())
+            n.formula = text;
     }
 }
 
@@ -184,7 +196,8 @@ void XMLCALL on_end(void *user, const XML_Char *tag) {
                     entry.has_address = reg.has_address;
                     entry.length = reg.length;
                     entry.little_endian = reg.little_endian;
-                    if (entry.unsupported.empty()) entry.unsupported = reg.unsupported;
+                    if (entry.unsupported.empty())
+                        entry.unsupported = reg.unsupported;
                 }
             }
             s.open_nodes.pop_back();
@@ -194,7 +207,8 @@ void XMLCALL on_end(void *user, const XML_Char *tag) {
     }
     if (!s.enum_entry.empty() && !s.open_nodes.empty() && s.open_nodes.back().empty()) {
         std::int64_t v = 0;
-        if (std::strcmp(tag, "Value") == 0 && parse_int(s.text, v)) s.enum_entry_value = v;
+        if (std::strcmp(tag, "Value") == 0 && parse_int(s.text, v))
+            s.enum_entry_value = v;
         s.text.clear();
         return;
     }
@@ -204,7 +218,8 @@ void XMLCALL on_end(void *user, const XML_Char *tag) {
         const std::size_t e = text.find_last_not_of(" \t\r\n");
         text = b == std::string::npos ? std::string() : text.substr(b, e - b + 1);
         set_property(s, *n, tag, text);
-        if (!s.error.empty()) return;
+        if (!s.error.empty())
+            return;
         // a StructReg's own register properties also go to the parent node
     }
     s.text.clear();
@@ -229,11 +244,14 @@ std::string unzip_single(const std::uint8_t *zip, std::size_t bytes) {
     const std::uint32_t crc = get_u32(zip + 14);
     std::size_t packed = get_u32(zip + 18), size = get_u32(zip + 22);
     const std::size_t header = 30 + std::size_t(get_u16(zip + 26)) + get_u16(zip + 28);
-    if (header > bytes) raise(FLT_ERR_FORMAT, "the GenICam ZIP header runs past the file");
-    if (flags & 1) raise(FLT_ERR_FORMAT, "the GenICam ZIP entry is encrypted");
+    if (header > bytes)
+        raise(FLT_ERR_FORMAT, "the GenICam ZIP header runs past the file");
+    if (flags & 1)
+        raise(FLT_ERR_FORMAT, "the GenICam ZIP entry is encrypted");
     // With flag bit 3 the sizes follow the data; inflate finds the end itself.
     const bool sizes_known = !(flags & 8);
-    if (!sizes_known) packed = bytes - header;
+    if (!sizes_known)
+        packed = bytes - header;
     if (packed > bytes - header)
         raise(FLT_ERR_FORMAT, "the GenICam ZIP entry's compressed size " + std::to_string(packed) +
                                   " runs past the file (" + std::to_string(bytes) + " bytes)");
@@ -245,11 +263,13 @@ std::string unzip_single(const std::uint8_t *zip, std::size_t bytes) {
                                   " a GenICam file may have");
     std::string out;
     if (method == 0) {
-        if (!sizes_known) raise(FLT_ERR_FORMAT, "a stored ZIP entry without sizes");
+        if (!sizes_known)
+            raise(FLT_ERR_FORMAT, "a stored ZIP entry without sizes");
         out.assign(reinterpret_cast<const char *>(zip + header), packed);
     } else if (method == 8) {
         z_stream z{};
-        if (inflateInit2(&z, -15) != Z_OK) raise(FLT_ERR_INTERNAL, "inflateInit2 failed");
+        if (inflateInit2(&z, -15) != Z_OK)
+            raise(FLT_ERR_INTERNAL, "inflateInit2 failed");
         z.next_in = const_cast<Bytef *>(zip + header);
         z.avail_in = uInt(packed);
         out.resize(sizes_known && size ? size : packed * 4 + 1024);
@@ -258,8 +278,10 @@ std::string unzip_single(const std::uint8_t *zip, std::size_t bytes) {
             z.next_out = reinterpret_cast<Bytef *>(&out[z.total_out]);
             z.avail_out = uInt(out.size() - z.total_out);
             rc = inflate(&z, Z_FINISH);
-            if (rc == Z_STREAM_END) break;
-            if ((rc == Z_BUF_ERROR || rc == Z_OK) && z.avail_out == 0 && out.size() < k_max_xml_bytes) {
+            if (rc == Z_STREAM_END)
+                break;
+            if ((rc == Z_BUF_ERROR || rc == Z_OK) && z.avail_out == 0 &&
+                out.size() < k_max_xml_bytes) {
                 out.resize(out.size() * 2);
                 continue;
             }
@@ -271,14 +293,16 @@ std::string unzip_single(const std::uint8_t *zip, std::size_t bytes) {
         inflateEnd(&z);
     } else {
         raise(FLT_ERR_FORMAT, "the GenICam ZIP entry uses compression method " +
-                                  std::to_string(method) + "; only 0 (stored) and 8 (deflate) exist here");
+                                  std::to_string(method) +
+                                  "; only 0 (stored) and 8 (deflate) exist here");
     }
     if (sizes_known) {
         if (out.size() != size)
-            raise(FLT_ERR_FORMAT, "the GenICam ZIP entry inflates to " + std::to_string(out.size()) +
-                                      " bytes, its header says " + std::to_string(size));
-        const std::uint32_t actual = std::uint32_t(
-            crc32(0, reinterpret_cast<const Bytef *>(out.data()), uInt(out.size())));
+            raise(FLT_ERR_FORMAT, "the GenICam ZIP entry inflates to " +
+                                      std::to_string(out.size()) + " bytes, its header says " +
+                                      std::to_string(size));
+        const std::uint32_t actual =
+            std::uint32_t(crc32(0, reinterpret_cast<const Bytef *>(out.data()), uInt(out.size())));
         if (actual != crc)
             raise(FLT_ERR_FORMAT, "the GenICam ZIP entry fails its CRC-32 check");
     }
@@ -290,7 +314,8 @@ void genicam_map::parse(const std::string &xml) {
     parser_state s;
     s.nodes = &nodes_;
     XML_Parser p = XML_ParserCreate(nullptr);
-    if (!p) throw std::bad_alloc();
+    if (!p)
+        throw std::bad_alloc();
     XML_SetUserData(p, &s);
     XML_SetElementHandler(p, on_start, on_end);
     XML_SetCharacterDataHandler(p, on_text);
@@ -301,9 +326,12 @@ void genicam_map::parse(const std::string &xml) {
                   XML_ErrorString(XML_GetErrorCode(p)) + " at line " +
                   std::to_string(XML_GetCurrentLineNumber(p));
     XML_ParserFree(p);
-    if (!message.empty()) raise(FLT_ERR_FORMAT, message);
-    if (!s.error.empty()) raise(FLT_ERR_FORMAT, "the GenICam XML: " + s.error);
-    if (nodes_.empty()) raise(FLT_ERR_FORMAT, "the GenICam XML has no feature nodes");
+    if (!message.empty())
+        raise(FLT_ERR_FORMAT, message);
+    if (!s.error.empty())
+        raise(FLT_ERR_FORMAT, "the GenICam XML: " + s.error);
+    if (nodes_.empty())
+        raise(FLT_ERR_FORMAT, "the GenICam XML has no feature nodes");
 }
 
 const genicam_node *genicam_map::find(const std::string &name) const {
@@ -314,23 +342,28 @@ const genicam_node *genicam_map::find(const std::string &name) const {
 feature_access genicam_map::resolve(const std::string &feature) const {
     const genicam_node *n = find(feature);
     if (!n)
-        raise(FLT_ERR_NOT_FOUND, "feature '" + feature + "' is not in the camera's GenICam XML; "
-                                 "give its register with flt_source_map_feature()");
+        raise(FLT_ERR_NOT_FOUND, "feature '" + feature +
+                                     "' is not in the camera's GenICam XML; "
+                                     "give its register with flt_source_map_feature()");
     const genicam_node *top = n;
     std::string path = feature;
     for (int depth = 0; depth < 16; ++depth) {
         auto cannot = [&](const std::string &why) {
-            raise(FLT_ERR_NOT_FOUND,
-                  "feature '" + feature + "' cannot be resolved: node '" + n->name + "' (" +
-                      n->kind + ") " + why + "; give its register with flt_source_map_feature()");
+            raise(FLT_ERR_NOT_FOUND, "feature '" + feature + "' cannot be resolved: node '" +
+                                         n->name + "' (" + n->kind + ") " + why +
+                                         "; give its register with flt_source_map_feature()");
         };
-        if (!n->unsupported.empty()) cannot(n->unsupported);
+        if (!n->unsupported.empty())
+            cannot(n->unsupported);
         const std::string &k = n->kind;
         if (k == "IntReg" || k == "MaskedIntReg" || k == "FloatReg") {
-            if (!n->has_address) cannot("has no constant Address");
-            if (n->length == 0 || n->length > 8) cannot("has a Length other than 1..8");
+            if (!n->has_address)
+                cannot("has no constant Address");
+            if (n->length == 0 || n->length > 8)
+                cannot("has a Length other than 1..8");
             feature_access a;
-            a.kind = k == "FloatReg" ? feature_access::float_register : feature_access::int_register;
+            a.kind =
+                k == "FloatReg" ? feature_access::float_register : feature_access::int_register;
             if (a.kind == feature_access::float_register && n->length != 4 && n->length != 8)
                 cannot("is a float of " + std::to_string(n->length) + " bytes");
             a.address = n->address;
@@ -340,7 +373,8 @@ feature_access genicam_map::resolve(const std::string &feature) const {
             a.lsb = 0;
             a.msb = int(8 * n->length) - 1;
             if (k == "MaskedIntReg") {
-                if (n->lsb < 0) cannot("has no LSB/MSB or Bit");
+                if (n->lsb < 0)
+                    cannot("has no LSB/MSB or Bit");
                 a.lsb = std::min(n->lsb, n->msb < 0 ? n->lsb : n->msb);
                 a.msb = std::max(n->lsb, n->msb);
                 if (!n->little_endian) {
@@ -350,7 +384,8 @@ feature_access genicam_map::resolve(const std::string &feature) const {
                     a.lsb = lo;
                     a.msb = hi;
                 }
-                if (a.msb >= int(8 * n->length)) cannot("has bits beyond its Length");
+                if (a.msb >= int(8 * n->length))
+                    cannot("has bits beyond its Length");
             }
             a.node = top;
             return a;
@@ -359,7 +394,8 @@ feature_access genicam_map::resolve(const std::string &feature) const {
             k == "Boolean") {
             if (!n->p_value.empty()) {
                 const genicam_node *next = find(n->p_value);
-                if (!next) cannot("points to '" + n->p_value + "', which is not in the XML");
+                if (!next)
+                    cannot("points to '" + n->p_value + "', which is not in the XML");
                 n = next;
                 continue;
             }
@@ -373,13 +409,13 @@ feature_access genicam_map::resolve(const std::string &feature) const {
             }
             cannot("has neither pValue nor Value");
         }
-        if (k == "Converter" || k == "IntConverter" || k == "SwissKnife" ||
-            k == "IntSwissKnife")
+        if (k == "Converter" || k == "IntConverter" || k == "SwissKnife" || k == "IntSwissKnife")
             cannot("is a formula ('" + n->formula + "'), which this client does not evaluate");
         cannot("is of a kind this client does not read");
     }
-    raise(FLT_ERR_NOT_FOUND, "feature '" + feature + "' cannot be resolved: its pValue chain is "
-                             "longer than 16 nodes (a loop?)");
+    raise(FLT_ERR_NOT_FOUND, "feature '" + feature +
+                                 "' cannot be resolved: its pValue chain is "
+                                 "longer than 16 nodes (a loop?)");
 }
 
 }  // namespace flt::u3v

@@ -31,7 +31,7 @@ struct genicam_node {
     std::int64_t command_value = 1;
     std::int64_t on_value = 1, off_value = 0;
     std::vector<std::pair<std::string, std::int64_t>> entries;  // EnumEntry
-    std::string formula;  // Converter / SwissKnife, for the message
+    std::string formula;      // Converter / SwissKnife, for the message
     std::string unsupported;  // why this node cannot be resolved, if so
 };
 
@@ -49,7 +49,7 @@ struct feature_access {
 };
 
 class genicam_map {
-public:
+  public:
     // Throws flt::error(FLT_ERR_FORMAT) with expat's message and line.
     void parse(const std::string &xml);
     const genicam_node *find(const std::string &name) const;
@@ -59,7 +59,7 @@ public:
     // that stopped the resolution.
     feature_access resolve(const std::string &feature) const;
 
-private:
+  private:
     std::map<std::string, genicam_node> nodes_;
 };
 

@@ -15,8 +15,8 @@ inline std::uint16_t get_u16(const std::uint8_t *p) {
     return std::uint16_t(p[0] | (p[1] << 8));
 }
 inline std::uint32_t get_u32(const std::uint8_t *p) {
-    return std::uint32_t(p[0]) | (std::uint32_t(p[1]) << 8) |
-           (std::uint32_t(p[2]) << 16) | (std::uint32_t(p[3]) << 24);
+    return std::uint32_t(p[0]) | (std::uint32_t(p[1]) << 8) | (std::uint32_t(p[2]) << 16) |
+           (std::uint32_t(p[3]) << 24);
 }
 inline std::uint64_t get_u64(const std::uint8_t *p) {
     return std::uint64_t(get_u32(p)) | (std::uint64_t(get_u32(p + 4)) << 32);
@@ -26,19 +26,23 @@ inline void put_u16(std::uint8_t *p, std::uint16_t v) {
     p[1] = std::uint8_t(v >> 8);
 }
 inline void put_u32(std::uint8_t *p, std::uint32_t v) {
-    for (int i = 0; i < 4; ++i) p[i] = std::uint8_t(v >> (8 * i));
+    for (int i = 0; i < 4; ++i)
+        p[i] = std::uint8_t(v >> (8 * i));
 }
 inline void put_u64(std::uint8_t *p, std::uint64_t v) {
-    for (int i = 0; i < 8; ++i) p[i] = std::uint8_t(v >> (8 * i));
+    for (int i = 0; i < 8; ++i)
+        p[i] = std::uint8_t(v >> (8 * i));
 }
 // An unsigned little-endian integer of 1..8 bytes.
 inline std::uint64_t get_uint(const std::uint8_t *p, std::size_t length) {
     std::uint64_t v = 0;
-    for (std::size_t i = 0; i < length && i < 8; ++i) v |= std::uint64_t(p[i]) << (8 * i);
+    for (std::size_t i = 0; i < length && i < 8; ++i)
+        v |= std::uint64_t(p[i]) << (8 * i);
     return v;
 }
 inline void put_uint(std::uint8_t *p, std::size_t length, std::uint64_t v) {
-    for (std::size_t i = 0; i < length && i < 8; ++i) p[i] = std::uint8_t(v >> (8 * i));
+    for (std::size_t i = 0; i < length && i < 8; ++i)
+        p[i] = std::uint8_t(v >> (8 * i));
 }
 
 // --- USB class codes --------------------------------------------------------
@@ -62,7 +66,7 @@ constexpr std::uint16_t k_ack_readmem = 0x0801;
 constexpr std::uint16_t k_cmd_writemem = 0x0802;
 constexpr std::uint16_t k_ack_writemem = 0x0803;
 constexpr std::uint16_t k_ack_pending = 0x0805;
-constexpr std::size_t k_readmem_body = 12;  // u64 address, u16 0, u16 count
+constexpr std::size_t k_readmem_body = 12;       // u64 address, u16 0, u16 count
 constexpr std::size_t k_writemem_overhead = 20;  // header + u64 address
 
 enum gencp_status : std::uint16_t {
@@ -88,24 +92,42 @@ enum gencp_status : std::uint16_t {
 
 inline const char *gencp_status_name(std::uint16_t status) {
     switch (status) {
-    case gencp_ok: return "ok";
-    case gencp_not_implemented: return "not implemented";
-    case gencp_invalid_parameter: return "invalid parameter";
-    case gencp_invalid_address: return "invalid address";
-    case gencp_write_protect: return "write protect";
-    case gencp_bad_alignment: return "bad alignment";
-    case gencp_access_denied: return "access denied";
-    case gencp_busy: return "busy";
-    case gencp_timeout: return "timeout";
-    case gencp_invalid_header: return "invalid header";
-    case gencp_wrong_config: return "wrong config";
-    case gencp_generic: return "generic error";
-    case u3v_resend_not_supported: return "resend not supported";
-    case u3v_stream_halted: return "stream endpoint halted";
-    case u3v_payload_not_aligned: return "payload size not aligned";
-    case u3v_si_inconsistent: return "SI registers inconsistent";
-    case u3v_data_discarded: return "data discarded";
-    case u3v_data_overrun: return "data overrun";
+        case gencp_ok:
+            return "ok";
+        case gencp_not_implemented:
+            return "not implemented";
+        case gencp_invalid_parameter:
+            return "invalid parameter";
+        case gencp_invalid_address:
+            return "invalid address";
+        case gencp_write_protect:
+            return "write protect";
+        case gencp_bad_alignment:
+            return "bad alignment";
+        case gencp_access_denied:
+            return "access denied";
+        case gencp_busy:
+            return "busy";
+        case gencp_timeout:
+            return "timeout";
+        case gencp_invalid_header:
+            return "invalid header";
+        case gencp_wrong_config:
+            return "wrong config";
+        case gencp_generic:
+            return "generic error";
+        case u3v_resend_not_supported:
+            return "resend not supported";
+        case u3v_stream_halted:
+            return "stream endpoint halted";
+        case u3v_payload_not_aligned:
+            return "payload size not aligned";
+        case u3v_si_inconsistent:
+            return "SI registers inconsistent";
+        case u3v_data_discarded:
+            return "data discarded";
+        case u3v_data_overrun:
+            return "data overrun";
     }
     return "unknown status";
 }
@@ -173,19 +195,27 @@ constexpr std::uint32_t k_pfnc_mono16 = 0x01100007u;
 // The flt_pixel_format bits of a PFNC value, 0 if unsupported.
 inline int pfnc_bits(std::uint32_t pfnc) {
     switch (pfnc) {
-    case k_pfnc_mono8: return 8;
-    case k_pfnc_mono10: return 10;
-    case k_pfnc_mono12: return 12;
-    case k_pfnc_mono16: return 16;
+        case k_pfnc_mono8:
+            return 8;
+        case k_pfnc_mono10:
+            return 10;
+        case k_pfnc_mono12:
+            return 12;
+        case k_pfnc_mono16:
+            return 16;
     }
     return 0;
 }
 inline std::uint32_t pfnc_of_bits(int bits) {
     switch (bits) {
-    case 8: return k_pfnc_mono8;
-    case 10: return k_pfnc_mono10;
-    case 12: return k_pfnc_mono12;
-    case 16: return k_pfnc_mono16;
+        case 8:
+            return k_pfnc_mono8;
+        case 10:
+            return k_pfnc_mono10;
+        case 12:
+            return k_pfnc_mono12;
+        case 16:
+            return k_pfnc_mono16;
     }
     return 0;
 }

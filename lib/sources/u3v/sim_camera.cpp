@@ -21,8 +21,8 @@ namespace flt::u3v {
 namespace {
 
 constexpr std::uint16_t k_sim_vendor_id = 0xF1A7;  // not a registered id
-constexpr std::uint8_t k_ep_control_in = 0x81, k_ep_control_out = 0x01,
-                       k_ep_event = 0x82, k_ep_stream = 0x83;
+constexpr std::uint8_t k_ep_control_in = 0x81, k_ep_control_out = 0x01, k_ep_event = 0x82,
+                       k_ep_stream = 0x83;
 constexpr std::uint32_t k_image_chunk_id = 0x00000001u;
 
 // The camera's GenICam XML. ExposureTime goes through a Converter (a
@@ -44,8 +44,8 @@ std::string make_xml(const std::string &vendor, const std::string &model) {
     };
     auto enumeration = [&](const char *name, const char *reg,
                            std::vector<std::pair<const char *, std::uint32_t>> entries) {
-        std::string s = std::string("    <Enumeration Name=\"") + name + "\" NameSpace=\"Standard\">\n" +
-                        "      <ToolTip>" + name + "</ToolTip>\n";
+        std::string s = std::string("    <Enumeration Name=\"") + name +
+                        "\" NameSpace=\"Standard\">\n" + "      <ToolTip>" + name + "</ToolTip>\n";
         for (auto &e : entries) {
             char text[256];
             std::snprintf(text, sizeof text,
@@ -93,8 +93,10 @@ std::string make_xml(const std::string &vendor, const std::string &model) {
                   (unsigned long long)sim_map::offset_y);
     x += masked;
     x += enumeration("PixelFormat", "PixelFormatReg",
-                     {{"Mono8", k_pfnc_mono8}, {"Mono10", k_pfnc_mono10},
-                      {"Mono12", k_pfnc_mono12}, {"Mono16", k_pfnc_mono16}});
+                     {{"Mono8", k_pfnc_mono8},
+                      {"Mono10", k_pfnc_mono10},
+                      {"Mono12", k_pfnc_mono12},
+                      {"Mono16", k_pfnc_mono16}});
     x += int_reg("PixelFormatReg", sim_map::pixel_format);
     x += "  </Group>\n";
     x += enumeration("AcquisitionMode", "AcquisitionModeReg",
@@ -116,8 +118,8 @@ std::string make_xml(const std::string &vendor, const std::string &model) {
          "    <Unit>us</Unit>\n  </Converter>\n";
     x += "  <Integer Name=\"ExposureTimeOffset\">\n    <Value>0</Value>\n  </Integer>\n";
     x += int_reg("ExposureTimeRaw", sim_map::exposure_raw);
-    x += enumeration("TriggerSelector", "TriggerSelectorReg",
-                     {{"FrameStart", 0}, {"LineStart", 1}});
+    x +=
+        enumeration("TriggerSelector", "TriggerSelectorReg", {{"FrameStart", 0}, {"LineStart", 1}});
     x += int_reg("TriggerSelectorReg", sim_map::trigger_selector);
     x += enumeration("TriggerMode", "TriggerModeReg", {{"Off", 0}, {"On", 1}});
     x += int_reg("TriggerModeReg", sim_map::trigger_mode);
@@ -251,12 +253,9 @@ struct sim_camera {
 
     int bits() const { return pfnc_bits(reg32(sim_map::pixel_format)); }
     std::size_t image_bytes() const {
-        return std::size_t(reg32(sim_map::width)) * (bits() > 8 ? 2 : 1) *
-               reg32(sim_map::height);
+        return std::size_t(reg32(sim_map::width)) * (bits() > 8 ? 2 : 1) * reg32(sim_map::height);
     }
-    std::size_t payload_bytes() const {
-        return image_bytes() + (encoder_chunk ? 8 + 8 + 8 : 0);
-    }
+    std::size_t payload_bytes() const { return image_bytes() + (encoder_chunk ? 8 + 8 + 8 : 0); }
     void refresh_sirm() {
         put_u64(&regs[sirm(sirm::required_payload)], payload_bytes());
         set_reg32(sirm(sirm::info), alignment_log2 << 24);
@@ -309,7 +308,10 @@ struct sim_camera {
     // Which register ranges exist: [start, end) and whether the host may
     // write them.
     int range_of(std::uint64_t a, std::size_t n, bool &writable) const {
-        struct range { std::uint64_t start, size; bool writable; };
+        struct range {
+            std::uint64_t start, size;
+            bool writable;
+        };
         const range ranges[] = {
             {0, abrm::size, false},
             {abrm::user_name, abrm::string_length, true},
@@ -335,7 +337,8 @@ struct sim_camera {
     std::uint16_t read_mem(std::uint64_t a, std::size_t n, std::uint8_t *out) {
         bool w = false;
         int r = range_of(a, n, w);
-        if (r == 0) return gencp_invalid_address;
+        if (r == 0)
+            return gencp_invalid_address;
         if (r == 2) {
             std::memcpy(out, &xml_file[a - sim_map::xml], n);
             return gencp_ok;
@@ -352,25 +355,33 @@ struct sim_camera {
         int r = range_of(a, n, writable);
         if (a >= sim_map::sirm + sirm::max_leader && a + n <= sim_map::sirm + sirm::size)
             writable = true, r = 1;
-        if (a == sim_map::sirm + sirm::control && n == 4) writable = true, r = 1;
+        if (a == sim_map::sirm + sirm::control && n == 4)
+            writable = true, r = 1;
         if (a >= abrm::user_name && a + n <= abrm::user_name + abrm::string_length)
             writable = true, r = 1;
-        if (r == 0) return gencp_invalid_address;
-        if (!writable) return gencp_write_protect;
+        if (r == 0)
+            return gencp_invalid_address;
+        if (!writable)
+            return gencp_write_protect;
         const bool si_on = reg32(sirm(sirm::control)) & sirm::control_enable;
         if (a >= sirm(sirm::max_leader) && a < sirm(sirm::size) && si_on)
             return gencp_access_denied;  // stream set-up while streaming
         if (a >= sim_map::features && a < sim_map::features + sim_map::features_size) {
-            if (n != 4 || (a - sim_map::features) % 4) return gencp_bad_alignment;
+            if (n != 4 || (a - sim_map::features) % 4)
+                return gencp_bad_alignment;
             const std::uint32_t v = get_u32(in);
             if (a == sim_map::width || a == sim_map::height || a == sim_map::pixel_format ||
                 a == sim_map::offset_y) {
-                if (acquiring) return gencp_access_denied;
+                if (acquiring)
+                    return gencp_access_denied;
                 std::uint32_t width = reg32(sim_map::width), height = reg32(sim_map::height),
                               offset = reg32(sim_map::offset_y);
-                if (a == sim_map::width) width = v;
-                if (a == sim_map::height) height = v;
-                if (a == sim_map::offset_y) offset = v;
+                if (a == sim_map::width)
+                    width = v;
+                if (a == sim_map::height)
+                    height = v;
+                if (a == sim_map::offset_y)
+                    offset = v;
                 if (a == sim_map::pixel_format && pfnc_bits(v) == 0)
                     return gencp_invalid_parameter;
                 if (frames && (a == sim_map::width || a == sim_map::height) && v != reg32(a))
@@ -379,9 +390,12 @@ struct sim_camera {
                     std::uint64_t(offset) + height > sensor_height)
                     return gencp_invalid_parameter;
             }
-            if (a == sim_map::acquisition_start && v == 1) acquiring = true;
-            if (a == sim_map::acquisition_stop && v == 1) acquiring = false;
-            if (a == sim_map::acquisition_start || a == sim_map::acquisition_stop) return gencp_ok;
+            if (a == sim_map::acquisition_start && v == 1)
+                acquiring = true;
+            if (a == sim_map::acquisition_stop && v == 1)
+                acquiring = false;
+            if (a == sim_map::acquisition_start || a == sim_map::acquisition_stop)
+                return gencp_ok;
         }
         std::memcpy(&regs[a], in, n);
         if (a == sirm(sirm::control) && !(reg32(a) & sirm::control_enable))
@@ -413,13 +427,13 @@ struct sim_camera {
             put_u16(&a[6], id);
             put_u16(&a[8], std::uint16_t(body_n));
             put_u16(&a[10], request);
-            if (body_n) std::memcpy(&a[12], body, body_n);
+            if (body_n)
+                std::memcpy(&a[12], body, body_n);
             return a;
         };
         if (n < k_gencp_header || get_u32(p) != k_prefix_control ||
             get_u16(p + 8) != n - k_gencp_header) {
-            answer(ack_of(gencp_invalid_header, 0x0801, n >= 12 ? get_u16(p + 10) : 0,
-                          nullptr, 0));
+            answer(ack_of(gencp_invalid_header, 0x0801, n >= 12 ? get_u16(p + 10) : 0, nullptr, 0));
             return;
         }
         const std::uint16_t cmd = get_u16(p + 6), request = get_u16(p + 10);
@@ -467,7 +481,8 @@ struct sim_camera {
 
     const stream_fault *fault_at(flt_u3v_fault kind, std::uint64_t block) const {
         for (const stream_fault &f : faults)
-            if (f.kind == kind && f.at == block) return &f;
+            if (f.kind == kind && f.at == block)
+                return &f;
         return nullptr;
     }
 
@@ -508,7 +523,8 @@ struct sim_camera {
         }
         if (fault_at(FLT_U3V_FAULT_GARBAGE, block)) {
             std::vector<std::uint8_t> junk(100);
-            for (std::size_t i = 0; i < junk.size(); ++i) junk[i] = std::uint8_t(i * 37 + 11);
+            for (std::size_t i = 0; i < junk.size(); ++i)
+                junk[i] = std::uint8_t(i * 37 + 11);
             push(std::move(junk));
         }
         std::vector<std::uint8_t> leader(sim_map::leader_size, 0);
@@ -555,17 +571,21 @@ struct sim_camera {
         }
         if (fault_at(FLT_U3V_FAULT_OVERFLOW, block) && !parts.empty())
             parts.back().resize(parts.back().size() + sim_map::packet, 0xEE);
-        if (fault_at(FLT_U3V_FAULT_SHORT_FRAME, block) && !parts.empty()) parts.pop_back();
+        if (fault_at(FLT_U3V_FAULT_SHORT_FRAME, block) && !parts.empty())
+            parts.pop_back();
         const bool mid = fault_at(FLT_U3V_FAULT_LEADER_MID_FRAME, block) != nullptr;
-        if (mid) parts.resize(parts.size() / 2);
-        for (auto &p : parts) push(std::move(p));
-        if (mid) return;  // no trailer: the next leader arrives mid-frame
+        if (mid)
+            parts.resize(parts.size() / 2);
+        for (auto &p : parts)
+            push(std::move(p));
+        if (mid)
+            return;  // no trailer: the next leader arrives mid-frame
         std::vector<std::uint8_t> trailer(sim_map::trailer_size, 0);
         put_u32(&trailer[0], k_magic_trailer);
         put_u16(&trailer[6], std::uint16_t(sim_map::trailer_size));
         put_u64(&trailer[8], block);
-        put_u16(&trailer[16], fault_at(FLT_U3V_FAULT_TRAILER_STATUS, block) ? u3v_data_overrun
-                                                                             : gencp_ok);
+        put_u16(&trailer[16],
+                fault_at(FLT_U3V_FAULT_TRAILER_STATUS, block) ? u3v_data_overrun : gencp_ok);
         put_u64(&trailer[20], payload);
         put_u32(&trailer[28], height);
         push(std::move(trailer));
@@ -579,7 +599,8 @@ struct sim_camera {
         std::size_t &filled = slot_fill[slot];
         for (;;) {
             if (fifo.empty()) {
-                if (!streaming()) return false;
+                if (!streaming())
+                    return false;
                 emit_frame();
                 continue;
             }
@@ -601,7 +622,8 @@ struct sim_camera {
                 std::memcpy(buffer + filled, t.bytes.data() + t.offset, space);
                 filled += space;
                 t.offset += packet;
-                if (t.offset >= t.bytes.size()) fifo.pop_front();
+                if (t.offset >= t.bytes.size())
+                    fifo.pop_front();
                 st = usb_status::overflow;
                 return true;
             }
@@ -615,7 +637,8 @@ struct sim_camera {
             filled += n;
             t.offset += n;
             const bool short_packet = (n % sim_map::packet) != 0 || t.bytes.empty();
-            if (t.offset >= t.bytes.size()) fifo.pop_front();
+            if (t.offset >= t.bytes.size())
+                fifo.pop_front();
             if (short_packet || filled == slot_capacity) {
                 st = usb_status::ok;
                 return true;
@@ -638,14 +661,15 @@ struct sim_camera {
 
 // The host's handle on one camera.
 class sim_device final : public usb_device {
-public:
+  public:
     explicit sim_device(sim_camera &cam) : cam_(cam) { cam_.open = true; }
     ~sim_device() override {
         async_release();
         cam_.open = false;
     }
     usb_status claim_interface(int number) override {
-        if (cam_.unplugged) return usb_status::no_device;
+        if (cam_.unplugged)
+            return usb_status::no_device;
         return number >= 0 && number <= 2 ? usb_status::ok : usb_status::not_found;
     }
     usb_status release_interface(int) override {
@@ -655,21 +679,33 @@ public:
         return cam_.unplugged ? usb_status::no_device : usb_status::ok;
     }
     usb_status string_descriptor(std::uint8_t index, std::string &out) override {
-        if (cam_.unplugged) return usb_status::no_device;
+        if (cam_.unplugged)
+            return usb_status::no_device;
         switch (index) {
-        case 2: out = cam_.vendor; break;
-        case 3: out = cam_.model; break;
-        case 4: out = "Sim"; break;
-        case 7: out = cam_.serial; break;
-        default: out.clear();
+            case 2:
+                out = cam_.vendor;
+                break;
+            case 3:
+                out = cam_.model;
+                break;
+            case 4:
+                out = "Sim";
+                break;
+            case 7:
+                out = cam_.serial;
+                break;
+            default:
+                out.clear();
         }
         return usb_status::ok;
     }
     usb_status bulk_write(std::uint8_t endpoint, const std::uint8_t *data, std::size_t length,
                           std::size_t &sent, unsigned) override {
         sent = 0;
-        if (cam_.unplugged) return usb_status::no_device;
-        if (endpoint != k_ep_control_out) return usb_status::io;
+        if (cam_.unplugged)
+            return usb_status::no_device;
+        if (endpoint != k_ep_control_out)
+            return usb_status::io;
         cam_.command(data, length);
         sent = length;
         return usb_status::ok;
@@ -677,10 +713,13 @@ public:
     usb_status bulk_read(std::uint8_t endpoint, std::uint8_t *data, std::size_t capacity,
                          std::size_t &received, unsigned timeout_ms) override {
         received = 0;
-        if (cam_.unplugged) return usb_status::no_device;
-        if (endpoint != k_ep_control_in) return usb_status::io;
+        if (cam_.unplugged)
+            return usb_status::no_device;
+        if (endpoint != k_ep_control_in)
+            return usb_status::io;
         cam_.last_read_timeout = timeout_ms;
-        if (cam_.acks.empty()) return usb_status::timeout;
+        if (cam_.acks.empty())
+            return usb_status::timeout;
         std::vector<std::uint8_t> ack = std::move(cam_.acks.front());
         cam_.acks.pop_front();
         const std::size_t n = std::min(capacity, ack.size());
@@ -688,10 +727,12 @@ public:
         received = n;
         return ack.size() > capacity ? usb_status::overflow : usb_status::ok;
     }
-    usb_status async_prepare(std::uint8_t endpoint, std::size_t slots,
-                             std::uint8_t *const *buffers, std::size_t capacity) override {
-        if (cam_.unplugged) return usb_status::no_device;
-        if (endpoint != k_ep_stream) return usb_status::io;
+    usb_status async_prepare(std::uint8_t endpoint, std::size_t slots, std::uint8_t *const *buffers,
+                             std::size_t capacity) override {
+        if (cam_.unplugged)
+            return usb_status::no_device;
+        if (endpoint != k_ep_stream)
+            return usb_status::io;
         cam_.slot_buffers.assign(buffers, buffers + slots);
         cam_.slot_capacity = capacity;
         cam_.slot_fill.assign(slots, 0);
@@ -699,7 +740,8 @@ public:
         return usb_status::ok;
     }
     usb_status async_submit(std::size_t slot) override {
-        if (cam_.unplugged) return usb_status::no_device;
+        if (cam_.unplugged)
+            return usb_status::no_device;
         if (cam_.refuse_submits > 0) {
             --cam_.refuse_submits;
             return usb_status::no_memory;
@@ -709,7 +751,8 @@ public:
         return usb_status::ok;
     }
     usb_status async_reap(unsigned, usb_completion &out) override {
-        if (cam_.submitted.empty()) return usb_status::timeout;
+        if (cam_.submitted.empty())
+            return usb_status::timeout;
         const std::size_t slot = cam_.submitted.front();
         usb_status st = usb_status::ok;
         if (cam_.unplugged) {
@@ -729,7 +772,7 @@ public:
         cam_.slot_fill.clear();
     }
 
-private:
+  private:
     sim_camera &cam_;
 };
 
@@ -772,7 +815,8 @@ usb_status sim_bus::list(std::vector<usb_device_desc> &out) {
     out.push_back(keyboard);
     for (std::size_t i = 0; i < cameras_.size(); ++i) {
         const sim_camera &cam = *cameras_[i];
-        if (cam.unplugged) continue;
+        if (cam.unplugged)
+            continue;
         usb_device_desc d;
         d.vendor_id = k_sim_vendor_id;
         d.product_id = std::uint16_t(0x0100 + i);
@@ -795,7 +839,8 @@ usb_status sim_bus::list(std::vector<usb_device_desc> &out) {
         e[2] = k_desc_subtype_info;
         put_u32(e + 3, 0x00010000u);
         put_u32(e + 7, 0x00010000u);
-        for (int s = 0; s < 8; ++s) e[11 + s] = std::uint8_t(1 + s);  // GUID=1 .. user=8
+        for (int s = 0; s < 8; ++s)
+            e[11 + s] = std::uint8_t(1 + s);  // GUID=1 .. user=8
         e[19] = 0x0F;
         usb_interface_desc event;
         event.number = 1;
@@ -816,10 +861,13 @@ usb_status sim_bus::list(std::vector<usb_device_desc> &out) {
 }
 
 usb_status sim_bus::open(const usb_device_desc &desc, std::unique_ptr<usb_device> &out) {
-    if (desc.vendor_id != k_sim_vendor_id) return usb_status::access;
+    if (desc.vendor_id != k_sim_vendor_id)
+        return usb_status::access;
     const std::size_t i = desc.product_id - 0x0100u;
-    if (i >= cameras_.size() || cameras_[i]->unplugged) return usb_status::no_device;
-    if (cameras_[i]->open) return usb_status::busy;
+    if (i >= cameras_.size() || cameras_[i]->unplugged)
+        return usb_status::no_device;
+    if (cameras_[i]->open)
+        return usb_status::busy;
     out = std::make_unique<sim_device>(*cameras_[i]);
     return usb_status::ok;
 }
@@ -839,89 +887,148 @@ void sim_set(sim_camera &cam, flt_u3v_sim_param param, std::uint64_t value) {
         }
     };
     switch (param) {
-    case FLT_U3V_SIM_RESPONSE_TIME_MS: need_closed(); in_range(1, 60000);
-        cam.response_ms = std::uint32_t(value); break;
-    case FLT_U3V_SIM_MAX_COMMAND_BYTES: need_closed(); in_range(64, 65536);
-        cam.max_cmd = std::uint32_t(value); break;
-    case FLT_U3V_SIM_MAX_ACK_BYTES: need_closed(); in_range(76, 65536);
-        cam.max_ack = std::uint32_t(value); break;
-    case FLT_U3V_SIM_ALIGNMENT_LOG2: need_closed(); in_range(0, 12);
-        cam.alignment_log2 = std::uint32_t(value); break;
-    case FLT_U3V_SIM_XML_ZIPPED: need_closed(); in_range(0, 1);
-        cam.xml_zipped = value != 0; break;
-    case FLT_U3V_SIM_ENCODER_CHUNK: need_closed(); in_range(0, 1);
-        cam.encoder_chunk = value != 0; break;
-    case FLT_U3V_SIM_ENCODER_CHUNK_ID: need_closed(); in_range(0, 0xFFFFFFFFu);
-        cam.encoder_chunk_id = std::uint32_t(value); break;
-    case FLT_U3V_SIM_ENCODER_MM_PER_COUNT_UM: need_closed(); in_range(1, 1000000);
-        cam.um_per_count = std::uint32_t(value); break;
-    case FLT_U3V_SIM_SPEED_MBPS: need_closed(); in_range(480, 20000);
-        cam.speed_mbps = std::uint32_t(value); break;
-    case FLT_U3V_SIM_LEFT_STREAMING: need_closed(); in_range(1, 1);
-        cam.left_streaming(); return;
-    default:
-        throw error(FLT_ERR_INVALID_ARGUMENT, "the parameter is unknown or read-only");
+        case FLT_U3V_SIM_RESPONSE_TIME_MS:
+            need_closed();
+            in_range(1, 60000);
+            cam.response_ms = std::uint32_t(value);
+            break;
+        case FLT_U3V_SIM_MAX_COMMAND_BYTES:
+            need_closed();
+            in_range(64, 65536);
+            cam.max_cmd = std::uint32_t(value);
+            break;
+        case FLT_U3V_SIM_MAX_ACK_BYTES:
+            need_closed();
+            in_range(76, 65536);
+            cam.max_ack = std::uint32_t(value);
+            break;
+        case FLT_U3V_SIM_ALIGNMENT_LOG2:
+            need_closed();
+            in_range(0, 12);
+            cam.alignment_log2 = std::uint32_t(value);
+            break;
+        case FLT_U3V_SIM_XML_ZIPPED:
+            need_closed();
+            in_range(0, 1);
+            cam.xml_zipped = value != 0;
+            break;
+        case FLT_U3V_SIM_ENCODER_CHUNK:
+            need_closed();
+            in_range(0, 1);
+            cam.encoder_chunk = value != 0;
+            break;
+        case FLT_U3V_SIM_ENCODER_CHUNK_ID:
+            need_closed();
+            in_range(0, 0xFFFFFFFFu);
+            cam.encoder_chunk_id = std::uint32_t(value);
+            break;
+        case FLT_U3V_SIM_ENCODER_MM_PER_COUNT_UM:
+            need_closed();
+            in_range(1, 1000000);
+            cam.um_per_count = std::uint32_t(value);
+            break;
+        case FLT_U3V_SIM_SPEED_MBPS:
+            need_closed();
+            in_range(480, 20000);
+            cam.speed_mbps = std::uint32_t(value);
+            break;
+        case FLT_U3V_SIM_LEFT_STREAMING:
+            need_closed();
+            in_range(1, 1);
+            cam.left_streaming();
+            return;
+        default:
+            throw error(FLT_ERR_INVALID_ARGUMENT, "the parameter is unknown or read-only");
     }
     cam.build();
 }
 
 std::uint64_t sim_get(const sim_camera &cam, flt_u3v_sim_param param) {
     switch (param) {
-    case FLT_U3V_SIM_RESPONSE_TIME_MS: return cam.response_ms;
-    case FLT_U3V_SIM_MAX_COMMAND_BYTES: return cam.max_cmd;
-    case FLT_U3V_SIM_MAX_ACK_BYTES: return cam.max_ack;
-    case FLT_U3V_SIM_ALIGNMENT_LOG2: return cam.alignment_log2;
-    case FLT_U3V_SIM_XML_ZIPPED: return cam.xml_zipped;
-    case FLT_U3V_SIM_ENCODER_CHUNK: return cam.encoder_chunk;
-    case FLT_U3V_SIM_ENCODER_CHUNK_ID: return cam.encoder_chunk_id;
-    case FLT_U3V_SIM_ENCODER_MM_PER_COUNT_UM: return cam.um_per_count;
-    case FLT_U3V_SIM_SPEED_MBPS: return cam.speed_mbps;
-    case FLT_U3V_SIM_LEFT_STREAMING:
-    case FLT_U3V_SIM_SI_CONTROL: return cam.reg32(cam.sirm(sirm::control));
-    case FLT_U3V_SIM_ACQUIRING: return cam.acquiring;
-    case FLT_U3V_SIM_COMMANDS: return cam.commands;
-    case FLT_U3V_SIM_LAST_READ_TIMEOUT_MS: return cam.last_read_timeout;
-    case FLT_U3V_SIM_FRAMES_SENT: return cam.frames_sent;
-    case FLT_U3V_SIM_OPEN: return cam.open;
-    default: break;
+        case FLT_U3V_SIM_RESPONSE_TIME_MS:
+            return cam.response_ms;
+        case FLT_U3V_SIM_MAX_COMMAND_BYTES:
+            return cam.max_cmd;
+        case FLT_U3V_SIM_MAX_ACK_BYTES:
+            return cam.max_ack;
+        case FLT_U3V_SIM_ALIGNMENT_LOG2:
+            return cam.alignment_log2;
+        case FLT_U3V_SIM_XML_ZIPPED:
+            return cam.xml_zipped;
+        case FLT_U3V_SIM_ENCODER_CHUNK:
+            return cam.encoder_chunk;
+        case FLT_U3V_SIM_ENCODER_CHUNK_ID:
+            return cam.encoder_chunk_id;
+        case FLT_U3V_SIM_ENCODER_MM_PER_COUNT_UM:
+            return cam.um_per_count;
+        case FLT_U3V_SIM_SPEED_MBPS:
+            return cam.speed_mbps;
+        case FLT_U3V_SIM_LEFT_STREAMING:
+        case FLT_U3V_SIM_SI_CONTROL:
+            return cam.reg32(cam.sirm(sirm::control));
+        case FLT_U3V_SIM_ACQUIRING:
+            return cam.acquiring;
+        case FLT_U3V_SIM_COMMANDS:
+            return cam.commands;
+        case FLT_U3V_SIM_LAST_READ_TIMEOUT_MS:
+            return cam.last_read_timeout;
+        case FLT_U3V_SIM_FRAMES_SENT:
+            return cam.frames_sent;
+        case FLT_U3V_SIM_OPEN:
+            return cam.open;
+        default:
+            break;
     }
     throw error(FLT_ERR_INVALID_ARGUMENT, "the parameter is unknown");
 }
 
 void sim_inject(sim_camera &cam, flt_u3v_fault fault, std::uint64_t at, std::uint32_t count) {
     switch (fault) {
-    case FLT_U3V_FAULT_SHORT_FRAME:
-    case FLT_U3V_FAULT_LEADER_MID_FRAME:
-    case FLT_U3V_FAULT_OVERFLOW:
-    case FLT_U3V_FAULT_STREAM_TIMEOUT:
-    case FLT_U3V_FAULT_UNPLUG:
-    case FLT_U3V_FAULT_GARBAGE:
-    case FLT_U3V_FAULT_TRAILER_STATUS:
-        cam.faults.push_back({fault, at, count});
-        return;
-    case FLT_U3V_FAULT_SKIP_BLOCK_IDS:
-        if (count == 0) throw error(FLT_ERR_INVALID_ARGUMENT, "count is 0: nothing to skip");
-        cam.faults.push_back({fault, at, count});
-        return;
-    case FLT_U3V_FAULT_SUBMIT_REFUSED: cam.refuse_submits += count; return;
-    case FLT_U3V_FAULT_PENDING_ACK: cam.pending_acks_next = count; return;
-    case FLT_U3V_FAULT_CONTROL_TIMEOUT: cam.drop_answers += count; return;
-    case FLT_U3V_FAULT_LATE_ACK: cam.hold_next_ack = true; return;
-    default: break;
+        case FLT_U3V_FAULT_SHORT_FRAME:
+        case FLT_U3V_FAULT_LEADER_MID_FRAME:
+        case FLT_U3V_FAULT_OVERFLOW:
+        case FLT_U3V_FAULT_STREAM_TIMEOUT:
+        case FLT_U3V_FAULT_UNPLUG:
+        case FLT_U3V_FAULT_GARBAGE:
+        case FLT_U3V_FAULT_TRAILER_STATUS:
+            cam.faults.push_back({fault, at, count});
+            return;
+        case FLT_U3V_FAULT_SKIP_BLOCK_IDS:
+            if (count == 0)
+                throw error(FLT_ERR_INVALID_ARGUMENT, "count is 0: nothing to skip");
+            cam.faults.push_back({fault, at, count});
+            return;
+        case FLT_U3V_FAULT_SUBMIT_REFUSED:
+            cam.refuse_submits += count;
+            return;
+        case FLT_U3V_FAULT_PENDING_ACK:
+            cam.pending_acks_next = count;
+            return;
+        case FLT_U3V_FAULT_CONTROL_TIMEOUT:
+            cam.drop_answers += count;
+            return;
+        case FLT_U3V_FAULT_LATE_ACK:
+            cam.hold_next_ack = true;
+            return;
+        default:
+            break;
     }
     throw error(FLT_ERR_INVALID_ARGUMENT, "the fault is unknown");
 }
 
 bool sim_peek(const sim_camera &cam, std::uint64_t address, std::uint32_t &out) {
-    if (address > cam.regs.size() || cam.regs.size() - address < 4) return false;  // no wrap
+    if (address > cam.regs.size() || cam.regs.size() - address < 4)
+        return false;  // no wrap
     out = cam.reg32(address);
     return true;
 }
 
 void sim_set_frames(sim_camera &cam, flt_sim *sim) {
-    if (cam.open) throw error(FLT_ERR_STATE, "the camera is open");
+    if (cam.open)
+        throw error(FLT_ERR_STATE, "the camera is open");
     cam.frames = sim;
-    if (!sim) return;
+    if (!sim)
+        return;
     std::uint32_t w = 0, h = 0;
     flt_pixel_format format = FLT_PIXEL_MONO8;
     if (flt_sim_frame_size(sim, &w, &h) != FLT_OK || flt_sim_pixel_format(sim, &format) != FLT_OK)

@@ -19,15 +19,15 @@ namespace flt::u3v {
 enum class usb_status {
     ok = 0,
     timeout,
-    overflow,    // the device sent more than the buffer could hold
-    no_device,   // unplugged
-    stall,       // endpoint halted
+    overflow,   // the device sent more than the buffer could hold
+    no_device,  // unplugged
+    stall,      // endpoint halted
     cancelled,
-    no_memory,   // e.g. usbfs memory exhausted on Linux (submit refused)
-    access,      // permission denied (udev rule / WinUSB driver missing)
-    busy,        // claimed by another process
+    no_memory,  // e.g. usbfs memory exhausted on Linux (submit refused)
+    access,     // permission denied (udev rule / WinUSB driver missing)
+    busy,       // claimed by another process
     not_found,
-    io,          // anything else
+    io,  // anything else
 };
 
 const char *usb_status_name(usb_status status);
@@ -66,25 +66,22 @@ struct usb_completion {
 // An open device. Synchronous bulk calls for the control channel, a pool of
 // asynchronous bulk IN transfers ("slots") for the stream.
 class usb_device {
-public:
+  public:
     virtual ~usb_device() = default;
     virtual usb_status claim_interface(int number) = 0;
     virtual usb_status release_interface(int number) = 0;
     virtual usb_status clear_halt(std::uint8_t endpoint) = 0;
     virtual usb_status string_descriptor(std::uint8_t index, std::string &out) = 0;
     virtual usb_status bulk_write(std::uint8_t endpoint, const std::uint8_t *data,
-                                  std::size_t length, std::size_t &sent,
-                                  unsigned timeout_ms) = 0;
-    virtual usb_status bulk_read(std::uint8_t endpoint, std::uint8_t *data,
-                                 std::size_t capacity, std::size_t &received,
-                                 unsigned timeout_ms) = 0;
+                                  std::size_t length, std::size_t &sent, unsigned timeout_ms) = 0;
+    virtual usb_status bulk_read(std::uint8_t endpoint, std::uint8_t *data, std::size_t capacity,
+                                 std::size_t &received, unsigned timeout_ms) = 0;
 
     // Prepares `slots` transfers on `endpoint`; slot i reads into
     // buffers[i] (capacity bytes each, owned by the caller, alive until
     // async_release()). Allocates; called once per stream start.
     virtual usb_status async_prepare(std::uint8_t endpoint, std::size_t slots,
-                                     std::uint8_t *const *buffers,
-                                     std::size_t capacity) = 0;
+                                     std::uint8_t *const *buffers, std::size_t capacity) = 0;
     // Submits slot (must not be in flight). Completions come back in
     // submission order on the one endpoint.
     virtual usb_status async_submit(std::size_t slot) = 0;
@@ -98,11 +95,10 @@ public:
 
 // The bus: enumeration and opening.
 class usb_backend {
-public:
+  public:
     virtual ~usb_backend() = default;
     virtual usb_status list(std::vector<usb_device_desc> &out) = 0;
-    virtual usb_status open(const usb_device_desc &desc,
-                            std::unique_ptr<usb_device> &out) = 0;
+    virtual usb_status open(const usb_device_desc &desc, std::unique_ptr<usb_device> &out) = 0;
 };
 
 // libusb-1.0 (a fresh context per backend). Throws flt::error(FLT_ERR_DEVICE)

@@ -12,17 +12,28 @@ namespace flt::u3v {
 
 const char *usb_status_name(usb_status status) {
     switch (status) {
-    case usb_status::ok: return "ok";
-    case usb_status::timeout: return "timeout";
-    case usb_status::overflow: return "overflow";
-    case usb_status::no_device: return "no device (unplugged)";
-    case usb_status::stall: return "endpoint stalled";
-    case usb_status::cancelled: return "cancelled";
-    case usb_status::no_memory: return "out of memory (usbfs limit?)";
-    case usb_status::access: return "access denied (udev rule or WinUSB driver missing?)";
-    case usb_status::busy: return "busy (claimed by another process)";
-    case usb_status::not_found: return "not found";
-    case usb_status::io: return "I/O error";
+        case usb_status::ok:
+            return "ok";
+        case usb_status::timeout:
+            return "timeout";
+        case usb_status::overflow:
+            return "overflow";
+        case usb_status::no_device:
+            return "no device (unplugged)";
+        case usb_status::stall:
+            return "endpoint stalled";
+        case usb_status::cancelled:
+            return "cancelled";
+        case usb_status::no_memory:
+            return "out of memory (usbfs limit?)";
+        case usb_status::access:
+            return "access denied (udev rule or WinUSB driver missing?)";
+        case usb_status::busy:
+            return "busy (claimed by another process)";
+        case usb_status::not_found:
+            return "not found";
+        case usb_status::io:
+            return "I/O error";
     }
     return "unknown";
 }
@@ -31,46 +42,69 @@ namespace {
 
 usb_status from_error(int code) {
     switch (code) {
-    case LIBUSB_SUCCESS: return usb_status::ok;
-    case LIBUSB_ERROR_TIMEOUT: return usb_status::timeout;
-    case LIBUSB_ERROR_OVERFLOW: return usb_status::overflow;
-    case LIBUSB_ERROR_NO_DEVICE: return usb_status::no_device;
-    case LIBUSB_ERROR_PIPE: return usb_status::stall;
-    case LIBUSB_ERROR_NO_MEM: return usb_status::no_memory;
-    case LIBUSB_ERROR_ACCESS: return usb_status::access;
-    case LIBUSB_ERROR_BUSY: return usb_status::busy;
-    case LIBUSB_ERROR_NOT_FOUND: return usb_status::not_found;
-    default: return usb_status::io;
+        case LIBUSB_SUCCESS:
+            return usb_status::ok;
+        case LIBUSB_ERROR_TIMEOUT:
+            return usb_status::timeout;
+        case LIBUSB_ERROR_OVERFLOW:
+            return usb_status::overflow;
+        case LIBUSB_ERROR_NO_DEVICE:
+            return usb_status::no_device;
+        case LIBUSB_ERROR_PIPE:
+            return usb_status::stall;
+        case LIBUSB_ERROR_NO_MEM:
+            return usb_status::no_memory;
+        case LIBUSB_ERROR_ACCESS:
+            return usb_status::access;
+        case LIBUSB_ERROR_BUSY:
+            return usb_status::busy;
+        case LIBUSB_ERROR_NOT_FOUND:
+            return usb_status::not_found;
+        default:
+            return usb_status::io;
     }
 }
 
 usb_status from_transfer(libusb_transfer_status status) {
     switch (status) {
-    case LIBUSB_TRANSFER_COMPLETED: return usb_status::ok;
-    case LIBUSB_TRANSFER_TIMED_OUT: return usb_status::timeout;
-    case LIBUSB_TRANSFER_CANCELLED: return usb_status::cancelled;
-    case LIBUSB_TRANSFER_STALL: return usb_status::stall;
-    case LIBUSB_TRANSFER_NO_DEVICE: return usb_status::no_device;
-    case LIBUSB_TRANSFER_OVERFLOW: return usb_status::overflow;
-    default: return usb_status::io;
+        case LIBUSB_TRANSFER_COMPLETED:
+            return usb_status::ok;
+        case LIBUSB_TRANSFER_TIMED_OUT:
+            return usb_status::timeout;
+        case LIBUSB_TRANSFER_CANCELLED:
+            return usb_status::cancelled;
+        case LIBUSB_TRANSFER_STALL:
+            return usb_status::stall;
+        case LIBUSB_TRANSFER_NO_DEVICE:
+            return usb_status::no_device;
+        case LIBUSB_TRANSFER_OVERFLOW:
+            return usb_status::overflow;
+        default:
+            return usb_status::io;
     }
 }
 
 std::uint32_t speed_mbps(int speed) {
     switch (speed) {
-    case LIBUSB_SPEED_LOW: return 1;
-    case LIBUSB_SPEED_FULL: return 12;
-    case LIBUSB_SPEED_HIGH: return 480;
-    case LIBUSB_SPEED_SUPER: return 5000;
+        case LIBUSB_SPEED_LOW:
+            return 1;
+        case LIBUSB_SPEED_FULL:
+            return 12;
+        case LIBUSB_SPEED_HIGH:
+            return 480;
+        case LIBUSB_SPEED_SUPER:
+            return 5000;
 #if defined(LIBUSB_API_VERSION) && LIBUSB_API_VERSION >= 0x01000106
-    case LIBUSB_SPEED_SUPER_PLUS: return 10000;
+        case LIBUSB_SPEED_SUPER_PLUS:
+            return 10000;
 #endif
-    default: return 0;
+        default:
+            return 0;
     }
 }
 
 class libusb_device_impl final : public usb_device {
-public:
+  public:
     libusb_device_impl(libusb_context *ctx, libusb_device_handle *handle)
         : ctx_(ctx), handle_(handle) {}
     ~libusb_device_impl() override {
@@ -91,34 +125,32 @@ public:
     }
     usb_status string_descriptor(std::uint8_t index, std::string &out) override {
         out.clear();
-        if (index == 0) return usb_status::ok;
+        if (index == 0)
+            return usb_status::ok;
         unsigned char text[256];
         int n = libusb_get_string_descriptor_ascii(handle_, index, text, sizeof text);
-        if (n < 0) return from_error(n);
+        if (n < 0)
+            return from_error(n);
         out.assign(reinterpret_cast<char *>(text), std::size_t(n));
         return usb_status::ok;
     }
-    usb_status bulk_write(std::uint8_t endpoint, const std::uint8_t *data,
-                          std::size_t length, std::size_t &sent,
-                          unsigned timeout_ms) override {
+    usb_status bulk_write(std::uint8_t endpoint, const std::uint8_t *data, std::size_t length,
+                          std::size_t &sent, unsigned timeout_ms) override {
         int done = 0;
         int rc = libusb_bulk_transfer(handle_, endpoint, const_cast<std::uint8_t *>(data),
                                       int(length), &done, timeout_ms);
         sent = std::size_t(done);
         return from_error(rc);
     }
-    usb_status bulk_read(std::uint8_t endpoint, std::uint8_t *data,
-                         std::size_t capacity, std::size_t &received,
-                         unsigned timeout_ms) override {
+    usb_status bulk_read(std::uint8_t endpoint, std::uint8_t *data, std::size_t capacity,
+                         std::size_t &received, unsigned timeout_ms) override {
         int done = 0;
-        int rc = libusb_bulk_transfer(handle_, endpoint, data, int(capacity), &done,
-                                      timeout_ms);
+        int rc = libusb_bulk_transfer(handle_, endpoint, data, int(capacity), &done, timeout_ms);
         received = std::size_t(done);
         return from_error(rc);
     }
 
-    usb_status async_prepare(std::uint8_t endpoint, std::size_t slots,
-                             std::uint8_t *const *buffers,
+    usb_status async_prepare(std::uint8_t endpoint, std::size_t slots, std::uint8_t *const *buffers,
                              std::size_t capacity) override {
         async_release();
         slots_.resize(slots);
@@ -136,16 +168,16 @@ public:
             }
             // Timeout 0: a stream transfer waits for the camera as long as it
             // takes; flt_source_next()'s timeout bounds the wait instead.
-            libusb_fill_bulk_transfer(s.transfer, handle_, endpoint, buffers[i],
-                                      int(capacity), &libusb_device_impl::on_done,
-                                      &s, 0);
+            libusb_fill_bulk_transfer(s.transfer, handle_, endpoint, buffers[i], int(capacity),
+                                      &libusb_device_impl::on_done, &s, 0);
         }
         return usb_status::ok;
     }
     usb_status async_submit(std::size_t index) override {
         slot &s = slots_.at(index);
         int rc = libusb_submit_transfer(s.transfer);
-        if (rc == 0) s.in_flight = true;
+        if (rc == 0)
+            s.in_flight = true;
         return from_error(rc);
     }
     usb_status async_reap(unsigned timeout_ms, usb_completion &out) override {
@@ -153,14 +185,15 @@ public:
         const auto deadline = clock::now() + std::chrono::milliseconds(timeout_ms);
         while (count_ == 0) {
             const auto now = clock::now();
-            if (now >= deadline) return usb_status::timeout;
-            const auto left =
-                std::chrono::duration_cast<std::chrono::microseconds>(deadline - now);
+            if (now >= deadline)
+                return usb_status::timeout;
+            const auto left = std::chrono::duration_cast<std::chrono::microseconds>(deadline - now);
             timeval tv;
             tv.tv_sec = long(left.count() / 1000000);
             tv.tv_usec = long(left.count() % 1000000);
             int rc = libusb_handle_events_timeout_completed(ctx_, &tv, nullptr);
-            if (rc < 0 && rc != LIBUSB_ERROR_INTERRUPTED) return from_error(rc);
+            if (rc < 0 && rc != LIBUSB_ERROR_INTERRUPTED)
+                return from_error(rc);
         }
         const std::size_t index = queue_[head_];
         head_ = (head_ + 1) % queue_.size();
@@ -185,15 +218,17 @@ public:
             timeval tv{0, 10000};
             libusb_handle_events_timeout_completed(ctx_, &tv, nullptr);
             any = false;
-            for (slot &s : slots_) any = any || s.in_flight;
+            for (slot &s : slots_)
+                any = any || s.in_flight;
         }
         for (slot &s : slots_)
-            if (s.transfer && !s.in_flight) libusb_free_transfer(s.transfer);
+            if (s.transfer && !s.in_flight)
+                libusb_free_transfer(s.transfer);
         slots_.clear();
         head_ = tail_ = count_ = 0;
     }
 
-private:
+  private:
     struct slot {
         libusb_device_impl *owner = nullptr;
         std::size_t index = 0;
@@ -220,12 +255,12 @@ private:
 };
 
 class libusb_backend final : public usb_backend {
-public:
+  public:
     libusb_backend() {
         int rc = libusb_init(&ctx_);
         if (rc != 0)
-            throw error(FLT_ERR_DEVICE, (std::string("libusb_init failed: ") +
-                                         libusb_error_name(rc)).c_str());
+            throw error(FLT_ERR_DEVICE,
+                        (std::string("libusb_init failed: ") + libusb_error_name(rc)).c_str());
     }
     ~libusb_backend() override { libusb_exit(ctx_); }
 
@@ -233,17 +268,19 @@ public:
         out.clear();
         libusb_device **devices = nullptr;
         ssize_t n = libusb_get_device_list(ctx_, &devices);
-        if (n < 0) return from_error(int(n));
-        for (ssize_t i = 0; i < n; ++i) out.push_back(describe(devices[i]));
+        if (n < 0)
+            return from_error(int(n));
+        for (ssize_t i = 0; i < n; ++i)
+            out.push_back(describe(devices[i]));
         libusb_free_device_list(devices, 1);
         return usb_status::ok;
     }
 
-    usb_status open(const usb_device_desc &desc,
-                    std::unique_ptr<usb_device> &out) override {
+    usb_status open(const usb_device_desc &desc, std::unique_ptr<usb_device> &out) override {
         libusb_device **devices = nullptr;
         ssize_t n = libusb_get_device_list(ctx_, &devices);
-        if (n < 0) return from_error(int(n));
+        if (n < 0)
+            return from_error(int(n));
         usb_status st = usb_status::not_found;
         for (ssize_t i = 0; i < n; ++i) {
             libusb_device *d = devices[i];
@@ -252,14 +289,15 @@ public:
                 continue;
             libusb_device_handle *h = nullptr;
             st = from_error(libusb_open(d, &h));
-            if (st == usb_status::ok) out = std::make_unique<libusb_device_impl>(ctx_, h);
+            if (st == usb_status::ok)
+                out = std::make_unique<libusb_device_impl>(ctx_, h);
             break;
         }
         libusb_free_device_list(devices, 1);
         return st;
     }
 
-private:
+  private:
     static usb_device_desc describe(libusb_device *d) {
         usb_device_desc desc;
         desc.bus = libusb_get_bus_number(d);
@@ -293,8 +331,8 @@ private:
                 out.protocol = id.bInterfaceProtocol;
                 for (int e = 0; e < id.bNumEndpoints; ++e) {
                     const libusb_endpoint_descriptor &ed = id.endpoint[e];
-                    out.endpoints.push_back({ed.bEndpointAddress, ed.bmAttributes,
-                                             ed.wMaxPacketSize});
+                    out.endpoints.push_back(
+                        {ed.bEndpointAddress, ed.bmAttributes, ed.wMaxPacketSize});
                 }
                 if (id.extra && id.extra_length > 0)
                     out.extra.assign(id.extra, id.extra + id.extra_length);

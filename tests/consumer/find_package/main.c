@@ -5,7 +5,7 @@
 
 #include <flatline/flatline.h>
 
-#define ROWS 200
+#define ROWS   200
 #define FIBERS 3
 
 int main(void) {
