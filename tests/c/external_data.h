@@ -19,8 +19,7 @@
 /* Writes FLT_EXTERNAL_DATA/relative into path[size] and returns 1 when that
  * file can be opened for reading; otherwise prints why on stderr and
  * returns 0 (the caller skips). */
-static inline int flt_external_path(const char *relative, char *path, size_t size)
-{
+static inline int flt_external_path(const char *relative, char *path, size_t size) {
     const char *root = getenv("FLT_EXTERNAL_DATA");
     if (root == NULL || root[0] == '\0') {
         fprintf(stderr, "skipped: FLT_EXTERNAL_DATA is not set (needed for %s)\n", relative);
