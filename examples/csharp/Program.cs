@@ -48,9 +48,8 @@ internal static class Program
         line.AddDefect(DefectKind.CentreBuckle, 12, 1800);
         line.AddDefect(DefectKind.WavyEdgeBoth, 4, 900);
         using var extractor = new Extractor(calibration);
-        // The reconstructor's laser spacing comes from the calibration.
-        using var reconOptions = new FlatlineOptions { LaserSpacing = calibration.LaserSpacing };
-        using var recon = new Reconstructor(extractor.Fibers, reconOptions);
+        // The reconstructor takes the fibers and the laser spacing from the calibration.
+        using var recon = new Reconstructor(calibration);
         // One flatness window per sheet: no automatic windows, Finish()
         // evaluates the sheet (800 rows, within the 4096-row capacity).
         using var flatOptions = new FlatlineOptions { FlatWindowLength = 0, FlatZoneWidth = ZoneWidth };

@@ -486,7 +486,8 @@ int main(int argc, char **argv) {
     // (tests/c/test_recon.c; examples/python/compare_filters.py).
     flt_options *recon_opt = make_options({{FLT_OPT_RIGID_MOTION, 1}, {FLT_OPT_ROBUST, 1}});
     flt_recon *recon = nullptr;
-    CHECK(flt_recon_create(fibers, recon_opt, &recon));
+    // Fibers and laser spacing from the calibration, as the extractor's.
+    CHECK(flt_recon_create_from_calib(calib, recon_opt, &recon));
     // One window per sheet: the sheet is what the operator judges.
     flt_options *flat_opt = make_options(
         {{FLT_OPT_FLAT_WINDOW_LENGTH, 0}, {FLT_OPT_FLAT_ROW_CAPACITY, st.sheet_length / 3 + 64}});

@@ -67,10 +67,12 @@ def simulate(seed):
     return calib, rows, frame, peaks
 
 
-def stream(s, height, slope, laser_spacing, block=100):
-    """The on-line way: frames arrive in blocks, finished rows come out later."""
+def stream(calib, s, height, slope, block=100):
+    """The on-line way: frames arrive in blocks, finished rows come out later.
+    The reconstructor takes the fibers and the laser spacing from the
+    calibration."""
     parts = []
-    with flatline.Reconstructor(height.shape[1], laser_spacing=laser_spacing) as recon:
+    with flatline.Reconstructor(calib) as recon:
         for start in range(0, len(s), block):
             rows = slice(start, start + block)
             recon.push(s[rows], height[rows], slope[rows])
@@ -168,7 +170,7 @@ def main():
     z = flatline.reconstruct(s, height, slope, laser_spacing=calib.laser_spacing)
     print(f"whole sheet reconstructed in {time.perf_counter() - start:.2f} s")
     start = time.perf_counter()
-    z_stream = stream(s, height, slope, calib.laser_spacing)
+    z_stream = stream(calib, s, height, slope)
     print(f"streamed in {time.perf_counter() - start:.2f} s")
 
     print(f"raw heights   vs true: {stats(height - z_true)}")

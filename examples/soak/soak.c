@@ -120,7 +120,7 @@ int main(int argc, char **argv) {
     if (frames)
         check(flt_extractor_create(calib, opt, &ex), "extractor");
     flt_recon *rec = NULL;
-    check(flt_recon_create(fibers, NULL, &rec), "reconstructor");
+    check(flt_recon_create_from_calib(calib, NULL, &rec), "reconstructor");
 
     /* Everything per row is allocated here, once: the rows of the block
      * being pushed, and a ring of truth rows waiting for their output (the

@@ -97,6 +97,7 @@
 #ifndef FLATLINE_RECON_H
 #define FLATLINE_RECON_H
 
+#include "flatline/calib.h"
 #include "flatline/common.h"
 
 #ifdef __cplusplus
@@ -118,7 +119,9 @@ enum {
 
 typedef struct flt_recon flt_recon;
 
-/* Creates a streaming reconstructor for `fibers` fibers (>= 1).
+/* Creates a streaming reconstructor for `fibers` fibers (>= 1), for lasers
+ * laser_spacing mm apart (default 100 mm: the reference sensor's). With a
+ * calibration, use flt_recon_create_from_calib(), which takes both from it.
  * options: NULL for the defaults, else read for the FLT_OPT_* keys of the
  * reconstructor (knot_spacing, laser_spacing, height_sigma, slope_sigma,
  * curvature_weight, curvature_jump_weight, lag_knots, max_gap, row_capacity,
@@ -129,6 +132,37 @@ typedef struct flt_recon flt_recon;
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_create(size_t fibers,
                                                            const flt_options *options,
                                                            flt_recon **out);
+
+/**
+ * Creates a streaming reconstructor for the sensor a calibration describes:
+ * the way to create one for a real sensor.
+ *
+ * The fiber count is the calibration's fiber grid (flt_calib_get_fiber_grid)
+ * and the laser spacing Delta-d is the distance between its two laser lines,
+ * |offset_1 - offset_0| (the magnitude of flt_calib_laser_spacing; either
+ * laser may lead), the same distance the
+ * extractor divides by when it measures a slope. The laser_spacing option
+ * would otherwise default to 100 mm, which gives wrong shapes without a word
+ * on any other sensor.
+ *
+ * @param calib    a finished calibration; only read during the call.
+ * @param options  NULL for the defaults, else read as for flt_recon_create().
+ *                 knot_spacing 0 (the default) follows the calibration's
+ *                 spacing. Leave laser_spacing unset: if it is set, it must
+ *                 equal the calibration's spacing (to 1e-9 relative, i.e.
+ *                 up to rounding), else the call fails with
+ *                 FLT_ERR_INVALID_ARGUMENT naming both values, because a
+ *                 disagreement is a mistake in one of them and neither
+ *                 choice would be safe to make silently.
+ * @param out      receives the handle; NULL on failure.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL or dead argument, a
+ *         disagreeing laser_spacing, a spacing outside laser_spacing's
+ *         bounds or inconsistent options; FLT_ERR_STATE if calib is not
+ *         finished; FLT_ERR_OUT_OF_MEMORY if the buffers do not fit.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_create_from_calib(const flt_calib *calib,
+                                                                      const flt_options *options,
+                                                                      flt_recon **out);
 
 /* Frees everything. NULL is a no-op. */
 FLT_API void FLT_CALL flt_recon_destroy(flt_recon *recon);

@@ -122,6 +122,13 @@ double option_value(const flt_options *options, flt_option key) {
     return options ? options->value[i] : k_options[i].default_value;
 }
 
+bool option_is_set(const flt_options *options, flt_option key) {
+    std::size_t i = slot_of(key);
+    if (i == k_option_count)
+        throw error(FLT_ERR_INTERNAL, "unregistered option key");
+    return options != nullptr && options->is_set[i];
+}
+
 }  // namespace flt
 
 using namespace flt;
@@ -133,8 +140,10 @@ FLT_API flt_status FLT_CALL flt_options_create(flt_options **out) {
         FLT_CHECK_NOT_NULL("flt_options_create", out);
         *out = nullptr;
         auto *bag = new flt_options;
-        for (std::size_t i = 0; i < k_option_count; ++i)
+        for (std::size_t i = 0; i < k_option_count; ++i) {
             bag->value[i] = k_options[i].default_value;
+            bag->is_set[i] = false;
+        }
         *out = bag;
         return FLT_OK;
     });
@@ -160,6 +169,7 @@ FLT_API flt_status FLT_CALL flt_options_set(flt_options *options, flt_option key
             return fail(FLT_ERR_INVALID_ARGUMENT, "%s: option '%s' = %g must be a whole number", fn,
                         spec->name, value);
         options->value[slot_of(key)] = value;
+        options->is_set[slot_of(key)] = true;
         return FLT_OK;
     });
 }

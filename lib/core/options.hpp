@@ -28,10 +28,15 @@ const option_spec *find_option(flt_option key);
 // The value of key in options (its default if options is NULL).
 double option_value(const flt_options *options, flt_option key);
 
+// True if key was set in options with flt_options_set (false for a NULL
+// bag): a value the caller chose, not a default.
+bool option_is_set(const flt_options *options, flt_option key);
+
 }  // namespace flt
 
 // Exposed only so option_value() can read it; callers see an opaque type.
 struct flt_options {
     static constexpr std::size_t max_keys = 128;
     double value[max_keys];
+    bool is_set[max_keys];  // set by flt_options_set, not a default
 };

@@ -9,6 +9,7 @@
 
 #include "core/error.hpp"
 #include "core/options.hpp"
+#include "flatline/calib.h"
 #include "flatline/recon.h"
 #include "reconstruction/pipeline.hpp"
 
@@ -39,10 +40,13 @@ struct flt_recon {
 
 namespace {
 
-flt_status read_params(const char *fn, const flt_options *options, recon_config *out) {
+// laser_spacing: the sensor's, from a calibration, or 0 to read the option.
+flt_status read_params(const char *fn, const flt_options *options, recon_config *out,
+                       double laser_spacing = 0.0) {
     recon_config config;
     recon_params &p = config.params;
-    p.laser_spacing = option_value(options, FLT_OPT_LASER_SPACING);
+    p.laser_spacing =
+        laser_spacing > 0.0 ? laser_spacing : option_value(options, FLT_OPT_LASER_SPACING);
     const double knot = option_value(options, FLT_OPT_KNOT_SPACING);
     p.knot_spacing = knot > 0.0 ? knot : p.laser_spacing;
     p.height_sigma = option_value(options, FLT_OPT_HEIGHT_SIGMA);
@@ -134,6 +138,35 @@ flt_status check_push_arrays(const char *fn, const double *s, const double *heig
     return FLT_OK;
 }
 
+// Two values of one length agree when they differ by rounding only: the
+// calibration's spacing is a difference of two offsets, each exact to a few
+// ulps (written and read back with 17 digits), so 1e-9 relative is far above
+// rounding and far below any real disagreement (1 um in 1 m).
+bool same_length(double a, double b) {
+    return std::fabs(a - b) <= 1e-9 * std::max(std::fabs(a), std::fabs(b));
+}
+
+flt_status create(const char *fn, std::size_t fibers, const flt_options *options,
+                  double laser_spacing, flt_recon **out) {
+    if (fibers == 0)
+        return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'fibers' is 0", fn);
+    if (fibers > k_max_fibers)
+        return fail(FLT_ERR_INVALID_ARGUMENT,
+                    "%s: argument 'fibers' = %zu is too large (at most %zu)", fn, fibers,
+                    k_max_fibers);
+    recon_config config;
+    if (flt_status st = read_params(fn, options, &config, laser_spacing))
+        return st;
+    const recon_params &p = config.params;
+    if (check_shape(fn, p.row_capacity, fibers) != FLT_OK)
+        return fail(FLT_ERR_INVALID_ARGUMENT, "%s: row_capacity * fibers = %zu * %zu is too large",
+                    fn, p.row_capacity, fibers);
+    auto handle = std::make_unique<flt_recon>();
+    handle->engine = std::make_unique<recon_pipeline>(fibers, config, p.knot_capacity());
+    *out = handle.release();
+    return FLT_OK;
+}
+
 }  // namespace
 
 extern "C" {
@@ -144,24 +177,52 @@ FLT_API flt_status FLT_CALL flt_recon_create(size_t fibers, const flt_options *o
     return guard(fn, [&] {
         FLT_CHECK_NOT_NULL(fn, out);
         *out = nullptr;
-        if (fibers == 0)
-            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'fibers' is 0", fn);
-        if (fibers > k_max_fibers)
+        return create(fn, fibers, options, 0.0, out);
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_recon_create_from_calib(const flt_calib *calib,
+                                                        const flt_options *options,
+                                                        flt_recon **out) {
+    const char *fn = "flt_recon_create_from_calib";
+    return guard(fn, [&] {
+        FLT_CHECK_NOT_NULL(fn, out);
+        *out = nullptr;
+        FLT_CHECK_NOT_NULL(fn, calib);
+        int finished = 0;
+        if (flt_calib_is_finished(calib, &finished) != FLT_OK)
             return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'fibers' = %zu is too large (at most %zu)", fn, fibers,
-                        k_max_fibers);
-        recon_config config;
-        if (flt_status st = read_params(fn, options, &config))
-            return st;
-        const recon_params &p = config.params;
-        if (check_shape(fn, p.row_capacity, fibers) != FLT_OK)
+                        "%s: argument 'calib' is not a live flt_calib handle", fn);
+        if (!finished)
+            return fail(FLT_ERR_STATE, "%s: argument 'calib' is not finished", fn);
+        // A finished calibration has both offsets, distinct, and a grid.
+        double offset[FLT_CALIB_LASERS] = {0.0, 0.0}, first = 0.0, pitch = 0.0;
+        std::size_t fibers = 0;
+        if (flt_calib_get_laser_offset(calib, 0, &offset[0]) != FLT_OK ||
+            flt_calib_get_laser_offset(calib, 1, &offset[1]) != FLT_OK ||
+            flt_calib_get_fiber_grid(calib, &first, &pitch, &fibers) != FLT_OK)
+            return fail(FLT_ERR_INTERNAL, "%s: a finished calibration lacks its geometry", fn);
+        // The distance between the lines, whichever laser leads: the
+        // extractor measures the slope over the same distance.
+        const double spacing = std::fabs(offset[1] - offset[0]);
+        const option_spec *spec = find_option(FLT_OPT_LASER_SPACING);
+        if (!(spacing >= spec->min_value && spacing <= spec->max_value))
             return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: row_capacity * fibers = %zu * %zu is too large", fn, p.row_capacity,
-                        fibers);
-        auto handle = std::make_unique<flt_recon>();
-        handle->engine = std::make_unique<recon_pipeline>(fibers, config, p.knot_capacity());
-        *out = handle.release();
-        return FLT_OK;
+                        "%s: argument 'calib' has %g mm between its lasers, outside "
+                        "laser_spacing's [%g, %g] mm",
+                        fn, spacing, spec->min_value, spec->max_value);
+        // The sensor decides. A laser_spacing option the caller set must say
+        // the same: a disagreement is a mistake in one or the other, and
+        // either choice would give wrong shapes without a word.
+        if (option_is_set(options, FLT_OPT_LASER_SPACING)) {
+            const double asked = option_value(options, FLT_OPT_LASER_SPACING);
+            if (!same_length(asked, spacing))
+                return fail(FLT_ERR_INVALID_ARGUMENT,
+                            "%s: option 'laser_spacing' = %.17g mm disagrees with the %.17g mm "
+                            "between the lasers of argument 'calib'; leave the option unset",
+                            fn, asked, spacing);
+        }
+        return create(fn, fibers, options, spacing, out);
     });
 }
 

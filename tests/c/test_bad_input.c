@@ -1714,6 +1714,56 @@ static void row_flatness_create_from_calib(void) {
     flt_calib_destroy(c);
 }
 
+static void row_recon_create_from_calib(void) {
+    flt_recon *r = NULL;
+    flt_calib *c = new_unfinished();
+    uint64_t junk[16] = {0};
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_recon_create_from_calib(g_calib, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'calib' is NULL", flt_recon_create_from_calib(NULL, NULL, &r));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "not a live",
+        flt_recon_create_from_calib((const flt_calib *)junk, NULL, &r));
+    BAD(FLT_ERR_STATE, "not finished", flt_recon_create_from_calib(c, NULL, &r));
+    flt_calib_destroy(c);
+    ++g_checks;
+    if (r != NULL)
+        ERR("*out not NULL after a failure");
+    /* The sensor has 100 mm between its lasers: a laser_spacing option
+     * that says otherwise is a mistake, not a choice. */
+    flt_options *o = options_with(FLT_OPT_LASER_SPACING, 80.0);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "disagrees", flt_recon_create_from_calib(g_calib, o, &r));
+    GOOD(flt_options_set(o, FLT_OPT_LASER_SPACING, 100.0 + 1e-6));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'laser_spacing' = 100.000001",
+        flt_recon_create_from_calib(g_calib, o, &r));
+    GOOD(flt_options_set(o, FLT_OPT_LASER_SPACING, 100.0)); /* agrees: fine */
+    GOOD(flt_recon_create_from_calib(g_calib, o, &r));
+    flt_recon_destroy(r);
+    r = NULL;
+    flt_options_destroy(o);
+    /* Inconsistent options, as for flt_recon_create. */
+    o = options_with(FLT_OPT_KNOT_SPACING, 0.001);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "knot_spacing", flt_recon_create_from_calib(g_calib, o, &r));
+    flt_options_destroy(o);
+    /* Lasers 1 nm apart: finished (the offsets differ) but no spacing the
+     * reconstructor can work with. */
+    c = almost_finished();
+    if (flt_calib_set_laser_offset(c, 1, -50.0 + 1e-6) ||
+        flt_calib_set_fiber_grid(c, FIRST_X, PITCH, FIBERS) || flt_calib_finish(c)) {
+        fprintf(stderr, "fixture: %s\n", flt_last_error_message());
+        exit(2);
+    }
+    BAD(FLT_ERR_INVALID_ARGUMENT, "between its lasers", flt_recon_create_from_calib(c, NULL, &r));
+    flt_calib_destroy(c);
+    GOOD(flt_recon_create_from_calib(g_calib, NULL, &r));
+    size_t n = 0;
+    double spacing = 0;
+    GOOD(flt_recon_fibers(r, &n));
+    GOOD(flt_recon_get_option(r, FLT_OPT_LASER_SPACING, &spacing));
+    ++g_checks;
+    if (n != FIBERS || spacing != 100.0)
+        ERR("from the calibration: %zu fibers, %g mm; expected %d, 100", n, spacing, FIBERS);
+    flt_recon_destroy(r);
+}
+
 static void row_flatness_destroy(void) {
     flt_flatness_destroy(NULL);
     ++g_checks;
@@ -2487,6 +2537,7 @@ static const row k_rows[] = {
     ROW(option_at),
     /* recon.h */
     ROW(recon_create),
+    ROW(recon_create_from_calib),
     ROW(recon_destroy),
     ROW(recon_fibers),
     ROW(recon_get_option),

@@ -96,6 +96,31 @@ namespace Flatline
             handle.Track(NativeBytes());
         }
 
+        /// <summary>Creates a reconstructor for the sensor
+        /// <paramref name="calibration"/> describes (finished): its fiber
+        /// grid gives the fiber count and the distance between its lasers the
+        /// laser spacing, which the "laser_spacing" option would otherwise
+        /// leave at 100 mm. The way to create one for a real sensor.
+        /// <paramref name="options"/> (null for the defaults) is copied, not
+        /// kept; leave "laser_spacing" unset in it, or equal to the
+        /// calibration's: a disagreement throws
+        /// <see cref="InvalidArgumentException"/> naming both values.
+        /// <see cref="FlatlineStateException"/> if the calibration is not
+        /// finished. The calibration is only read during the call.</summary>
+        public Reconstructor(Calibration calibration, FlatlineOptions options = null)
+        {
+            if (calibration == null)
+                throw new ArgumentNullException(nameof(calibration));
+            using (var scope = FlatlineOptions.Borrow(options))
+            {
+                FlatlineNative.flt_recon_create_from_calib(calibration.LiveHandle, scope.Handle, out handle);
+            }
+            GC.KeepAlive(calibration);
+            FlatlineNative.flt_recon_fibers(handle, out UIntPtr fibers);
+            Fibers = checked((int)fibers.ToUInt64());
+            handle.Track(NativeBytes());
+        }
+
         /// <summary>The number of fibers.</summary>
         public int Fibers { get; }
 

@@ -18,15 +18,15 @@
  *     `fixed`, so double[,] passes without a copy;
  *   - size_t is ulong, strings are UTF-8 in both directions.
  *
- * One .i per component, in dependency order (extractor.h uses calib.h,
- * sim.h both; flatness.h calib.h; source.h extractor.h and sim.h, and
+ * One .i per component, in dependency order (recon.h uses calib.h, as do
+ * extractor.h, sim.h and flatness.h; source.h extractor.h and sim.h, and
  * flatness.i defines FLT_CS_OUT_POINTER, which source.i uses).
  */
 %module FlatlineNative
 
 %include "common.i"
-%include "recon.i"
 %include "calib.i"
+%include "recon.i"
 %include "extractor.i"
 %include "sim.i"
 %include "flatness.i"

@@ -164,6 +164,87 @@ namespace Flatline.Tests
             Assert.Throws<FlatlineStateException>(() => recon.Pull());
         }
 
+        // The reference camera with its lasers 80 mm apart (offsets -40, +40
+        // mm), 41 fibers 50 mm apart. The simulator's profile rows use only
+        // the offsets (the homographies scale the peak noise, off here), so
+        // the reference homographies serve.
+        private static Calibration Sensor80mm()
+        {
+            using var reference = Calibration.Reference(892, 256, -1000, 50, 41);
+            var calib = new Calibration();
+            calib.SetFrameSize(reference.FrameWidth, reference.FrameHeight);
+            calib.Intrinsics = reference.Intrinsics;
+            for (int laser = 0; laser < 2; ++laser)
+                calib.SetHomography(laser, reference.GetHomography(laser));
+            calib.SetLaserOffset(0, -40);
+            calib.SetLaserOffset(1, 40);
+            calib.EncoderScale = reference.EncoderScale;
+            calib.FiberGrid = reference.FiberGrid;
+            calib.Finish();
+            return calib;
+        }
+
+        [Fact]
+        public void FromACalibrationTakesItsSpacingAndFibers()
+        {
+            using var calib = Sensor80mm();
+            Assert.Equal(80.0, calib.LaserSpacing);
+            using (var options = new FlatlineOptions { LagKnots = 8 })
+            using (var recon = new Reconstructor(calib, options))
+            {
+                Assert.Equal(41, recon.Fibers);
+                Assert.Equal(80.0, recon.GetOption("laser_spacing"));
+                Assert.Equal(80.0, recon.GetOption("knot_spacing"));  // follows the sensor
+                Assert.Equal(8.0, recon.GetOption("lag_knots"));
+            }
+            using (var agree = new FlatlineOptions { LaserSpacing = 80 })
+            using (var recon = new Reconstructor(calib, agree))
+                Assert.Equal(80.0, recon.GetOption("laser_spacing"));
+            using (var disagree = new FlatlineOptions { LaserSpacing = 100 })
+            {
+                var e = Assert.Throws<InvalidArgumentException>(() => new Reconstructor(calib, disagree));
+                Assert.Contains("'laser_spacing' = 100 mm disagrees with the 80 mm", e.Message);
+            }
+            using var unfinished = new Calibration();
+            Assert.Throws<FlatlineStateException>(() => new Reconstructor(unfinished));
+            Assert.Throws<ArgumentNullException>(() => new Reconstructor((Calibration)null));
+        }
+
+        // Noise-free simulated rows of the 80 mm sensor (5 mm waves at 400 mm
+        // on the edges, an 8 mm buckle at 1600 mm in the centre): made from
+        // the calibration the reconstructor is within what a cubic spline
+        // with knots h = 80 mm apart can follow of a 400 mm wave,
+        // h^4 / 384 max|z''''| = 0.032 mm (measured 0.016); left at the
+        // 100 mm default it misreads the 400 mm waves' slopes by
+        // sinc(pi 80/400) / sinc(pi 100/400) - 1 = 4 %, about 0.2 mm.
+        [Fact]
+        public void An80mmSensorIsReconstructedRightOnlyWithItsSpacing()
+        {
+            using var calib = Sensor80mm();
+            SimulatedRows rows;
+            using (var options = new FlatlineOptions().Set("sim_seed", 3))
+            using (var line = new SimulatedLine(calib, options))
+            {
+                line.AddDefect(DefectKind.CentreBuckle, 8, 1600);
+                line.AddDefect(DefectKind.WavyEdgeBoth, 5, 400);
+                rows = line.NextRows(1200);
+            }
+            double Error(Reconstructor recon)
+            {
+                recon.Push(rows.S, rows.Height, rows.Slope, rows.Valid);
+                recon.EndSheet();
+                var result = recon.Pull();
+                Assert.Equal(rows.S, result.S);
+                return Sheet.MaxError(result.Z, rows.Truth);
+            }
+            using var fromCalib = new Reconstructor(calib);
+            using var byDefault = new Reconstructor(calib.FiberGrid.Count);
+            double right = Error(fromCalib), wrong = Error(byDefault);
+            output.WriteLine($"80 mm sensor: max error {right:F4} mm; with the 100 mm default {wrong:F4} mm");
+            Assert.True(right <= 0.032, $"max error {right} mm");
+            Assert.True(wrong >= 0.1, $"max error with 100 mm {wrong} mm");
+        }
+
         [Fact]
         public void DisposeIsImmediateIdempotentAndFinal()
         {

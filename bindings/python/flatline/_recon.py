@@ -4,12 +4,13 @@
 from __future__ import annotations
 
 import threading
-from typing import Any, Dict, Optional, Tuple
+from typing import Any, Dict, Optional, Tuple, Union
 
 import numpy as np
 
 from . import capi as _capi
 from ._arrays import as_float64, block, check_shape
+from ._calib import Calibration
 from ._errors import NotFoundError, StateError
 from ._options import make_options, option_info, options
 
@@ -104,7 +105,13 @@ class Reconstructor:
     consecutive sheets join smoothly; :meth:`reset` starts a new strip.
 
     Args:
-        fibers: number of fibers K (>= 1).
+        fibers: a finished :class:`Calibration`, the way to create one for a
+            real sensor: the fiber count is its fiber grid's and the laser
+            spacing the distance between its lasers (laser_spacing must then
+            be left out, or equal it: a disagreement raises
+            InvalidArgumentError). Or the number of fibers K (>= 1), for
+            lasers laser_spacing mm apart (default 100 mm, the reference
+            sensor's).
         **options: reconstructor options by their C name (see below).
 
     Use it as a context manager, or call :meth:`close`, to free the C
@@ -117,17 +124,24 @@ class Reconstructor:
 {options}
     """
 
-    def __init__(self, fibers: int, **options: float) -> None:
+    def __init__(self, fibers: Union[int, Calibration], **options: float) -> None:
         fn = "Reconstructor"
-        if isinstance(fibers, bool) or not isinstance(fibers, (int, np.integer)):
-            raise TypeError(
-                f"{fn}() argument 'fibers' must be an int, not {type(fibers).__name__}"
-            )
-        if fibers < 1:
-            raise ValueError(f"{fn}() argument 'fibers' must be >= 1, got {fibers}")
-        bag = make_options(fn, options)
+        if isinstance(fibers, Calibration):
+            bag = make_options(fn, options)
+            with fibers._reading():
+                handle = _capi.flt_recon_create_from_calib(fibers._live(), bag)
+        else:
+            if isinstance(fibers, bool) or not isinstance(fibers, (int, np.integer)):
+                raise TypeError(
+                    f"{fn}() argument 'fibers' must be an int or a Calibration, "
+                    f"not {type(fibers).__name__}"
+                )
+            if fibers < 1:
+                raise ValueError(f"{fn}() argument 'fibers' must be >= 1, got {fibers}")
+            bag = make_options(fn, options)
+            handle = _capi.flt_recon_create(int(fibers), bag)
         self._lock = threading.Lock()
-        self._handle: Optional[_capi.flt_recon] = _capi.flt_recon_create(int(fibers), bag)
+        self._handle: Optional[_capi.flt_recon] = handle
         self._fibers = int(_capi.flt_recon_fibers(self._handle))
 
     # -- lifetime ----------------------------------------------------------
