@@ -1,12 +1,13 @@
 // SPDX-License-Identifier: Apache-2.0
 // libFuzzer harness: the USB3 Vision packet parsers of the client
-// (lib/sources/u3v/camera.cpp, internal: flt::u3v::camera). The real client
+// (lib/sources/u3v/, internal: flt::u3v::u3v_camera and its control and
+// stream layers). The real client
 // opens a simulated camera (lib/sources/u3v/sim_camera.cpp) through a
 // transport that passes everything through until the stream is started;
 // from then on the transport answers with the input's bytes:
 //   - stream transfers (async_reap): leaders, payload, trailers, built from
 //     templates with fuzzed fields or raw, with fuzzed lengths and transfer
-//     statuses (overflow, stall, unplug), reaped by camera::next();
+//     statuses (overflow, stall, unplug), reaped by u3v_camera::next();
 //   - control acknowledges (bulk_read), when the first byte says so: the
 //     GenCP acks of get_int / set_int / read_memory / execute.
 // Expected failures are flt::error with a status (TIMEOUT, DEVICE, FORMAT,
@@ -21,9 +22,9 @@
 #include <vector>
 
 #include "core/error.hpp"
-#include "sources/u3v/camera.hpp"
 #include "sources/u3v/protocol.hpp"
 #include "sources/u3v/sim_camera.hpp"
+#include "sources/u3v/u3v_source.hpp"
 
 using namespace flt::u3v;
 
@@ -200,13 +201,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t *data, std::size_t size
         sim_set(bus.camera(index), FLT_U3V_SIM_ENCODER_CHUNK, 1);
     fuzz_backend backend(bus, in, fuzz_control);
     camera_config config;
-    config.transfers = 2 + (mode >> 4) % 4;
-    config.max_transfer_bytes = 512u << ((mode >> 2) & 3);  // several transfers per frame
-    config.want_chunk = mode & 2;
-    config.chunk_id = 0x4E434445u;
-    config.command_attempts = 1;
+    config.stream.transfers = 2 + (mode >> 4) % 4;
+    config.stream.max_transfer_bytes = 512u << ((mode >> 2) & 3);  // several transfers per frame
+    config.stream.want_chunk = mode & 2;
+    config.stream.chunk_id = 0x4E434445u;
+    config.control.command_attempts = 1;
     try {
-        camera cam(backend, "S1", config);
+        u3v_camera cam(backend, "S1", config);
         cam.start();
         backend.device->fuzzing = true;
         for (int i = 0; i < 64 && in.n > 0; ++i) {
@@ -232,17 +233,18 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t *data, std::size_t size
                             break;
                     }
                 } else {
-                    frame_view f;
-                    if (cam.next(0, f) == FLT_OK) {
+                    flt::sources::raw_frame f;
+                    if (cam.next(0, f)) {
                         // Read the whole image: ASan catches a frame that
                         // claims more than its buffer holds.
-                        const std::size_t row = std::size_t(f.width) * (f.bits > 8 ? 2 : 1);
+                        const std::size_t row = std::size_t(f.width) * (f.format > 8 ? 2 : 1);
                         if (f.stride < row || f.pixels == nullptr)
                             std::abort();
+                        const auto *pixels = static_cast<const std::uint8_t *>(f.pixels);
                         unsigned sum = 0;
                         for (std::uint32_t r = 0; r < f.height; ++r)
                             for (std::size_t b = 0; b < row; ++b)
-                                sum += f.pixels[r * f.stride + b];
+                                sum += pixels[r * f.stride + b];
                         if (sum == 0xFFFFFFFFu)
                             std::abort();  // keeps the loop
                     }

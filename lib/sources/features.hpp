@@ -1,0 +1,104 @@
+// SPDX-License-Identifier: Apache-2.0
+// Internal: GenICam features by name over a camera's register space, for
+// every transport. Three pieces:
+//
+//   register_port    the device's registers as GenICam's Port node sees
+//                    them; each transport's control channel implements it
+//                    (u3v/control.hpp: GenCP READMEM/WRITEMEM; GigE Vision:
+//                    GVCP READMEM/WRITEMEM).
+//   feature_engine   the GenICam engine: parses the camera's description
+//                    and evaluates features through a register_port. THIS
+//                    IS THE SEAM where a GenICam engine plugs in:
+//                    make_feature_engine() picks the implementation.
+//   feature_layer    what a camera's feature calls go through: registers
+//                    the user mapped by address (flt_source_map_feature)
+//                    first, then the engine.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+
+namespace flt::sources {
+
+// A device's register space. Both calls throw flt::error with the status
+// and the reason (timeout, a device status, an unplug...).
+class register_port {
+  public:
+    virtual ~register_port() = default;
+    virtual void read(std::uint64_t address, std::uint8_t *out, std::size_t bytes) = 0;
+    virtual void write(std::uint64_t address, const std::uint8_t *in, std::size_t bytes) = 0;
+};
+
+enum class feature_kind { integer, floating, enumeration, command, boolean, other };
+
+// A GenICam engine bound to one device's description and port. Every call
+// throws flt::error: FLT_ERR_NOT_FOUND naming the feature (and the node
+// chain that stopped it) when it cannot be evaluated, FLT_ERR_INVALID_
+// ARGUMENT for a value or entry the feature cannot take, and whatever the
+// port throws.
+class feature_engine {
+  public:
+    virtual ~feature_engine() = default;
+    virtual feature_kind kind_of(const std::string &feature) = 0;
+    virtual std::int64_t get_int(const std::string &feature) = 0;
+    virtual void set_int(const std::string &feature, std::int64_t value) = 0;
+    virtual double get_float(const std::string &feature) = 0;
+    virtual void set_float(const std::string &feature, double value) = 0;
+    virtual void set_enum(const std::string &feature, const std::string &entry) = 0;
+    virtual void execute(const std::string &feature) = 0;
+};
+
+// The engine for the description `xml` (already unzipped), reading and
+// writing through `port` (which must outlive it). Throws FLT_ERR_FORMAT
+// for a description that cannot be parsed.
+std::unique_ptr<feature_engine> make_feature_engine(const std::string &xml, register_port &port);
+
+// A register holding a feature's value: `length` bytes at `address`, the
+// value in bits lsb..msb, an IEEE float when is_float (4 or 8 bytes).
+struct register_view {
+    std::uint64_t address = 0;
+    std::uint32_t length = 4;
+    bool little_endian = true, is_signed = false, is_float = false;
+    int lsb = 0, msb = 31;
+};
+
+// Integer and float access to a register_view (also what the engine of
+// this release uses for the register nodes it resolves).
+std::int64_t read_int(register_port &port, const register_view &r, const std::string &feature);
+void write_int(register_port &port, const register_view &r, const std::string &feature,
+               std::int64_t value);
+double read_float(register_port &port, const register_view &r, const std::string &feature);
+void write_float(register_port &port, const register_view &r, const std::string &feature,
+                 double value);
+
+class feature_layer {
+  public:
+    feature_layer(register_port &port, std::unique_ptr<feature_engine> engine)
+        : port_(port), engine_(std::move(engine)) {}
+
+    std::int64_t get_int(const std::string &feature);
+    void set_int(const std::string &feature, std::int64_t value);
+    double get_float(const std::string &feature);
+    void set_float(const std::string &feature, double value);
+    void set_enum(const std::string &feature, const std::string &entry);
+    void execute(const std::string &feature);
+    // `length` bytes (1, 2, 4, 8; 4 or 8 for a float) at `address`,
+    // little-endian. A mapped command writes 1; a mapped enumeration takes
+    // its integer value.
+    void map_feature(const std::string &feature, std::uint64_t address, std::uint32_t length,
+                     bool is_float);
+    bool is_mapped(const std::string &feature) const { return mapped_.count(feature) != 0; }
+    // The kind of an XML feature (a mapped one is an integer or a float).
+    feature_kind kind_of(const std::string &feature);
+
+  private:
+    const register_view *mapped(const std::string &feature) const;
+    register_port &port_;
+    std::unique_ptr<feature_engine> engine_;
+    std::map<std::string, register_view> mapped_;
+};
+
+}  // namespace flt::sources

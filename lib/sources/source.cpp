@@ -1,0 +1,25 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "sources/source.hpp"
+
+#include <cstdarg>
+#include <cstdio>
+
+#include "core/error.hpp"
+
+namespace flt::sources {
+
+void raise(flt_status status, const char *format, ...) {
+    char text[400];
+    va_list args;
+    va_start(args, format);
+    std::vsnprintf(text, sizeof text, format, args);
+    va_end(args);
+    throw error(status, text);
+}
+
+const std::string &source_impl::stream_error() const {
+    static const std::string none;
+    return none;
+}
+
+}  // namespace flt::sources
