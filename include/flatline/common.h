@@ -419,6 +419,47 @@ typedef enum flt_option {
     /* "u3v_command_attempts": times a command is sent when no acknowledge
      * comes (integer). Default 3. */
     FLT_OPT_U3V_COMMAND_ATTEMPTS = 610,
+    /* --- the gauge (flatline/gauge.h) --- */
+    /* "gauge_workers": threads that process the frames (integer 0..64); 0
+     * processes each frame on the thread that delivers it. Default 2. */
+    FLT_OPT_GAUGE_WORKERS = 700,
+    /* "gauge_queue_frames": frames the queue between acquisition and
+     * processing holds (integer 1..4096); it costs width x height x 2 bytes
+     * each. Default 64 (32 ms at 2000 frames/s). */
+    FLT_OPT_GAUGE_QUEUE_FRAMES = 701,
+    /* "gauge_overflow": what a full queue does with the next frame
+     * (integer): 0 drops it and counts it (a live camera cannot wait), 1
+     * makes the pushing thread wait for room (recorded frames). Default 0. */
+    FLT_OPT_GAUGE_OVERFLOW = 702,
+    /* "gauge_frame_spacing": the least encoder advance past the furthest
+     * frame taken for a frame to be taken, mm; closer frames are a line
+     * stop and skipped. It sizes the buffers (rows per mm of strip), so set
+     * it near the real spacing. Default 1 (1 mm frames at 120 m/min are
+     * 2000 frames/s). */
+    FLT_OPT_GAUGE_FRAME_SPACING = 703,
+    /* "gauge_reversal_length": a strip that backs up by more than this, mm,
+     * behind its furthest position starts a new strip (an encoder reset for
+     * a new coil is such a reversal); a shorter reversal is skipped until
+     * the strip is past its furthest position again. Default 500. */
+    FLT_OPT_GAUGE_REVERSAL_LENGTH = 704,
+    /* "gauge_strip_min_width": a frame shows the strip when its valid
+     * fibers span at least this, mm. Default 100. */
+    FLT_OPT_GAUGE_STRIP_MIN_WIDTH = 705,
+    /* "gauge_tail_length": the strip has left (its tail passed) when no
+     * frame showed it over this much travel, mm; shorter runs of frames
+     * without it are a gap inside the strip. Default 300 (more than the
+     * reconstructor's max_gap, 200). */
+    FLT_OPT_GAUGE_TAIL_LENGTH = 706,
+    /* "gauge_max_sheet_length": a sheet that grows this long without a cut
+     * is ended there, mm. It sizes the sheet buffers. Default 6000. */
+    FLT_OPT_GAUGE_MAX_SHEET_LENGTH = 707,
+    /* "gauge_keep_maps": what each sheet keeps of its rows (integer): 0
+     * nothing (the default), 1 the reconstructed height map, 2 that and the
+     * measured heights. */
+    FLT_OPT_GAUGE_KEEP_MAPS = 708,
+    /* "gauge_sheet_slots": sheets that can exist at once, waiting for the
+     * caller or held by it (integer 1..1024). Default 4. */
+    FLT_OPT_GAUGE_SHEET_SLOTS = 709,
     /* Not an option: keeps the type int-sized whatever is added. Any int
      * can be passed as a key (the library reads an enum argument as the int
      * it is) and an unknown one is refused with a message. New keys go

@@ -14,5 +14,6 @@
 #include "flatline/sim.h"
 #include "flatline/flatness.h"
 #include "flatline/source.h"
+#include "flatline/gauge.h"
 
 #endif /* FLATLINE_FLATLINE_H */

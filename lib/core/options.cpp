@@ -92,6 +92,17 @@ const option_spec k_options[] = {
     {FLT_OPT_U3V_COMMAND_ATTEMPTS, "u3v_command_attempts", 1.0, 10.0, 3.0, true},
     // reconstructor (appended: a key's slot is its position in this table)
     {FLT_OPT_ROBUST_LINE_ITERATIONS, "robust_line_iterations", 1.0, 32.0, 8.0, true},
+    // the gauge
+    {FLT_OPT_GAUGE_WORKERS, "gauge_workers", 0.0, 64.0, 2.0, true},
+    {FLT_OPT_GAUGE_QUEUE_FRAMES, "gauge_queue_frames", 1.0, 4096.0, 64.0, true},
+    {FLT_OPT_GAUGE_OVERFLOW, "gauge_overflow", 0.0, 1.0, 0.0, true},
+    {FLT_OPT_GAUGE_FRAME_SPACING, "gauge_frame_spacing", 1.0e-3, 1.0e4, 1.0, false},
+    {FLT_OPT_GAUGE_REVERSAL_LENGTH, "gauge_reversal_length", 0.0, 1.0e9, 500.0, false},
+    {FLT_OPT_GAUGE_STRIP_MIN_WIDTH, "gauge_strip_min_width", 0.0, 1.0e6, 100.0, false},
+    {FLT_OPT_GAUGE_TAIL_LENGTH, "gauge_tail_length", 1.0e-3, 1.0e6, 300.0, false},
+    {FLT_OPT_GAUGE_MAX_SHEET_LENGTH, "gauge_max_sheet_length", 1.0, 1.0e7, 6000.0, false},
+    {FLT_OPT_GAUGE_KEEP_MAPS, "gauge_keep_maps", 0.0, 2.0, 0.0, true},
+    {FLT_OPT_GAUGE_SHEET_SLOTS, "gauge_sheet_slots", 1.0, 1024.0, 4.0, true},
 };
 constexpr std::size_t k_option_count = sizeof k_options / sizeof k_options[0];
 static_assert(k_option_count <= flt_options::max_keys,

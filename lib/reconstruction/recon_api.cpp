@@ -12,6 +12,7 @@
 #include "flatline/calib.h"
 #include "flatline/recon.h"
 #include "reconstruction/pipeline.hpp"
+#include "reconstruction/recon_internal.hpp"
 
 using namespace flt;
 
@@ -465,3 +466,7 @@ FLT_API flt_status FLT_CALL flt_reconstruct(const flt_options *options, size_t r
 }
 
 }  // extern "C"
+
+long flt::recon_latency_knots(const flt_recon *recon) {
+    return recon->engine->latency_knots();
+}

@@ -2511,6 +2511,401 @@ static void row_u3v_sim_peek(void) {
 }
 
 /* ---------------------------------------------------------------------- */
+/* gauge.h                                                                 */
+/* ---------------------------------------------------------------------- */
+
+/* A gauge over the fixture calibration; workers 0 (every call finishes its
+ * work before returning) unless options say otherwise. */
+static flt_gauge *new_gauge(int keep_maps) {
+    flt_options *o = options_with(FLT_OPT_GAUGE_WORKERS, 0);
+    flt_gauge *g = NULL;
+    if (flt_options_set(o, FLT_OPT_GAUGE_KEEP_MAPS, keep_maps) ||
+        flt_options_set(o, FLT_OPT_GAUGE_FRAME_SPACING, 3) || flt_gauge_create(g_calib, o, &g)) {
+        fprintf(stderr, "fixture: %s\n", flt_last_error_message());
+        exit(2);
+    }
+    flt_options_destroy(o);
+    return g;
+}
+
+/* One flat sheet of 300 rows (900 mm from `start`) through a gauge, left
+ * waiting for the caller. */
+static void make_waiting_sheet(flt_gauge *g, double start) {
+    double h[FIBERS] = {0}, k[FIBERS] = {0};
+    for (int r = 0; r < 300; ++r)
+        if (flt_gauge_push_row(g, start + 3.0 * r, FIBERS, h, k, NULL)) {
+            fprintf(stderr, "fixture: %s\n", flt_last_error_message());
+            exit(2);
+        }
+    if (flt_gauge_flush(g)) {
+        fprintf(stderr, "fixture: %s\n", flt_last_error_message());
+        exit(2);
+    }
+}
+
+/* The same, taken by polling. */
+static flt_sheet *new_sheet(flt_gauge *g) {
+    flt_sheet *sh = NULL;
+    make_waiting_sheet(g, 0.0);
+    if (flt_gauge_next_sheet(g, 0, &sh) || !sh) {
+        fprintf(stderr, "fixture: no sheet: %s\n", flt_last_error_message());
+        exit(2);
+    }
+    return sh;
+}
+
+static void row_gauge_create(void) {
+    flt_gauge *g = NULL;
+    flt_calib *c = almost_finished();
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_gauge_create(g_calib, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'calib'", flt_gauge_create(NULL, NULL, &g));
+    BAD(FLT_ERR_STATE, "not finished", flt_gauge_create(c, NULL, &g));
+    uint64_t junk[32] = {0};
+    BAD(FLT_ERR_INVALID_ARGUMENT, "not a live",
+        flt_gauge_create((const flt_calib *)junk, NULL, &g));
+    /* Options a part refuses: named, with the part. */
+    flt_options *o = options_with(FLT_OPT_EXTRACT_SG_WINDOW, 10);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "extract_sg_window", flt_gauge_create(g_calib, o, &g));
+    flt_options_destroy(o);
+    o = options_with(FLT_OPT_KNOT_SPACING, 1);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "knot_spacing", flt_gauge_create(g_calib, o, &g));
+    flt_options_destroy(o);
+    /* Geometry is the calibration's: a laser spacing set otherwise. */
+    o = options_with(FLT_OPT_LASER_SPACING, 80);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "laser_spacing", flt_gauge_create(g_calib, o, &g));
+    flt_options_destroy(o);
+    /* A key of a component the gauge does not run would be ignored. */
+    o = options_with(FLT_OPT_SIM_SEED, 7);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "sim_seed", flt_gauge_create(g_calib, o, &g));
+    flt_options_destroy(o);
+    /* Absurd but in bounds: a reconstructor latency of 6.4 m at 1 um
+     * frames, and sheets of 10 km at 1 um. */
+    o = options_with(FLT_OPT_GAUGE_FRAME_SPACING, 1e-3);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "gauge_frame_spacing", flt_gauge_create(g_calib, o, &g));
+    GOOD(flt_options_set(o, FLT_OPT_LAG_KNOTS, 0));
+    GOOD(flt_options_set(o, FLT_OPT_GAUGE_MAX_SHEET_LENGTH, 1e7));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "gauge_max_sheet_length", flt_gauge_create(g_calib, o, &g));
+    flt_options_destroy(o);
+    ++g_checks;
+    if (g != NULL)
+        ERR("*out not NULL after a failure");
+    GOOD(flt_gauge_create(g_calib, NULL, &g));
+    flt_gauge_destroy(g);
+    flt_calib_destroy(c);
+}
+
+static void row_gauge_destroy(void) {
+    flt_gauge_destroy(NULL);
+    uint64_t junk[32] = {0};
+    flt_gauge_destroy((flt_gauge *)junk); /* not a gauge: left alone */
+    g_checks += 2;
+}
+
+static void row_gauge_get_option(void) {
+    flt_gauge *g = new_gauge(0);
+    double v;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'gauge'", flt_gauge_get_option(NULL, FLT_OPT_GAUGE_WORKERS, &v));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_gauge_get_option(g, FLT_OPT_GAUGE_WORKERS, NULL));
+    BAD(FLT_ERR_NOT_FOUND, "99999", flt_gauge_get_option(g, (flt_option)99999, &v));
+    ENUM_UB_BAD(FLT_ERR_NOT_FOUND, "-3", flt_gauge_get_option(g, (flt_option)-3, &v));
+    GOOD(flt_gauge_get_option(g, FLT_OPT_LASER_SPACING, &v));
+    ++g_checks;
+    if (v != 100.0)
+        ERR("laser_spacing %g is not the calibration's 100 mm", v);
+    flt_gauge_destroy(g);
+}
+
+static void row_gauge_push_frame(void) {
+    flt_gauge *g = new_gauge(0);
+    const void *f = g_frame;
+    const flt_pixel_format M8 = FLT_PIXEL_MONO8;
+    const double e = g_frame_encoder;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'gauge'",
+        flt_gauge_push_frame(NULL, f, M8, WIDTH, ROI_ROWS, WIDTH, e));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'pixels'",
+        flt_gauge_push_frame(g, NULL, M8, WIDTH, ROI_ROWS, WIDTH, e));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'format' = 7",
+        flt_gauge_push_frame(g, f, (flt_pixel_format)7, WIDTH, ROI_ROWS, WIDTH, e));
+    ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "'format' = -8",
+                flt_gauge_push_frame(g, f, (flt_pixel_format)-8, WIDTH, ROI_ROWS, WIDTH, e));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'width'",
+        flt_gauge_push_frame(g, f, M8, WIDTH - 1, ROI_ROWS, WIDTH, e));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'height'", flt_gauge_push_frame(g, f, M8, WIDTH, 0, WIDTH, e));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'stride_bytes'",
+        flt_gauge_push_frame(g, f, M8, WIDTH, ROI_ROWS, WIDTH - 1, e));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "overflows",
+        flt_gauge_push_frame(g, f, M8, WIDTH, ROI_ROWS, SIZE_MAX / 2, e));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'stride_bytes'",
+        flt_gauge_push_frame(g, f, FLT_PIXEL_MONO16, WIDTH, ROI_ROWS, 2 * WIDTH + 1, e));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'encoder_mm'",
+        flt_gauge_push_frame(g, f, M8, WIDTH, ROI_ROWS, WIDTH, NaN_));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'encoder_mm'",
+        flt_gauge_push_frame(g, f, M8, WIDTH, ROI_ROWS, WIDTH, Inf_));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'encoder_mm'",
+        flt_gauge_push_frame(g, f, M8, WIDTH, ROI_ROWS, WIDTH, 1e300));
+    uint64_t n = 1;
+    GOOD(flt_gauge_count(g, FLT_GAUGE_COUNT_FRAMES, &n));
+    ++g_checks;
+    if (n != 0)
+        ERR("refused frames were counted: %llu", (unsigned long long)n);
+    GOOD(flt_gauge_push_frame(g, f, M8, WIDTH, ROI_ROWS, WIDTH, e));
+    /* Wrong order: frames while a source acquires. */
+    flt_source *s = new_sim_source();
+    GOOD(flt_gauge_attach_source(g, s));
+    GOOD(flt_gauge_start(g));
+    BAD(FLT_ERR_STATE, "acquiring", flt_gauge_push_frame(g, f, M8, WIDTH, ROI_ROWS, WIDTH, e));
+    GOOD(flt_gauge_stop(g));
+    GOOD(flt_gauge_attach_source(g, NULL));
+    flt_source_destroy(s);
+    GOOD(flt_gauge_push_frame(g, f, M8, WIDTH, ROI_ROWS, WIDTH, 1e6));
+    flt_gauge_destroy(g);
+}
+
+static void row_gauge_push_row(void) {
+    flt_gauge *g = new_gauge(0);
+    double h[FIBERS] = {0}, k[FIBERS] = {0}, nan_row[FIBERS];
+    for (size_t i = 0; i < FIBERS; ++i)
+        nan_row[i] = NAN;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'gauge'", flt_gauge_push_row(NULL, 0.0, FIBERS, h, k, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'height'", flt_gauge_push_row(g, 0.0, FIBERS, NULL, k, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'slope'", flt_gauge_push_row(g, 0.0, FIBERS, h, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'", flt_gauge_push_row(g, 0.0, FIBERS + 1, h, k, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'", flt_gauge_push_row(g, 0.0, NEG, h, k, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'encoder_mm'", flt_gauge_push_row(g, NaN_, FIBERS, h, k, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'encoder_mm'", flt_gauge_push_row(g, -Inf_, FIBERS, h, k, NULL));
+    /* NaN data is not a bad call: an invalid row (no strip). */
+    GOOD(flt_gauge_push_row(g, 0.0, FIBERS, nan_row, nan_row, NULL));
+    GOOD(flt_gauge_push_row(g, 3.0, FIBERS, h, k, NULL));
+    flt_gauge_destroy(g);
+}
+
+static void row_gauge_cut(void) {
+    flt_gauge *g = new_gauge(0);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'gauge'", flt_gauge_cut(NULL, 1.0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'encoder_mm'", flt_gauge_cut(g, NaN_));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'encoder_mm'", flt_gauge_cut(g, Inf_));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'encoder_mm'", flt_gauge_cut(g, -2e12));
+    GOOD(flt_gauge_cut(g, 1000.0));
+    /* Wrong order: cuts go forward. */
+    BAD(FLT_ERR_INVALID_ARGUMENT, "previous cut", flt_gauge_cut(g, 1000.0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "previous cut", flt_gauge_cut(g, 999.0));
+    /* Too many cuts the strip never reaches. */
+    flt_status st = FLT_OK;
+    for (int i = 1; i <= 300 && st == FLT_OK; ++i)
+        st = flt_gauge_cut(g, 1000.0 + i);
+    BAD(FLT_ERR_BUFFER_FULL, "wait", st);
+    flt_gauge_destroy(g);
+    g = new_gauge(0);
+    GOOD(flt_gauge_cut(g, 1000.0));
+    flt_gauge_destroy(g);
+}
+
+static void row_gauge_flush(void) {
+    flt_gauge *g = new_gauge(0);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'gauge'", flt_gauge_flush(NULL));
+    GOOD(flt_gauge_flush(g)); /* nothing pushed: nothing to end */
+    flt_source *s = new_sim_source();
+    GOOD(flt_gauge_attach_source(g, s));
+    GOOD(flt_gauge_start(g));
+    BAD(FLT_ERR_STATE, "acquiring", flt_gauge_flush(g));
+    GOOD(flt_gauge_stop(g));
+    GOOD(flt_gauge_flush(g));
+    flt_gauge_destroy(g);
+    flt_source_destroy(s);
+}
+
+static void row_gauge_attach_source(void) {
+    flt_gauge *g = new_gauge(0);
+    flt_source *s = new_sim_source();
+    uint64_t junk[32] = {0};
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'gauge'", flt_gauge_attach_source(NULL, s));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "not a live", flt_gauge_attach_source(g, (flt_source *)junk));
+    GOOD(flt_gauge_attach_source(g, s));
+    GOOD(flt_gauge_start(g));
+    BAD(FLT_ERR_STATE, "acquiring", flt_gauge_attach_source(g, NULL));
+    GOOD(flt_gauge_stop(g));
+    GOOD(flt_gauge_attach_source(g, NULL));
+    flt_gauge_destroy(g);
+    flt_source_destroy(s);
+}
+
+static void row_gauge_start(void) {
+    flt_gauge *g = new_gauge(0);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'gauge'", flt_gauge_start(NULL));
+    BAD(FLT_ERR_STATE, "no source", flt_gauge_start(g));
+    /* A source of frames of another size: the acquisition ends, stop says
+     * why. */
+    flt_sim *other = NULL;
+    flt_source *s = NULL;
+    GOOD(flt_sim_create(NULL, NULL, &other)); /* the 2048 x 2048 reference */
+    GOOD(flt_source_create_sim(other, NULL, &s));
+    GOOD(flt_gauge_attach_source(g, s));
+    GOOD(flt_gauge_start(g));
+    uint64_t acquiring = 1;
+    for (int i = 0; i < 5000 && acquiring; ++i) {
+        GOOD(flt_gauge_count(g, FLT_GAUGE_COUNT_ACQUIRING, &acquiring));
+        struct timespec ms = {0, 1000000};
+        nanosleep(&ms, NULL);
+    }
+    g_fn = "flt_gauge_stop";
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'width'", flt_gauge_stop(g));
+    g_fn = "flt_gauge_start";
+    GOOD(flt_gauge_attach_source(g, NULL));
+    flt_source_destroy(s);
+    flt_sim_destroy(other);
+    s = new_sim_source();
+    GOOD(flt_gauge_attach_source(g, s));
+    GOOD(flt_gauge_start(g));
+    BAD(FLT_ERR_STATE, "already", flt_gauge_start(g));
+    GOOD(flt_gauge_stop(g));
+    flt_gauge_destroy(g);
+    flt_source_destroy(s);
+}
+
+static void row_gauge_stop(void) {
+    flt_gauge *g = new_gauge(0);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'gauge'", flt_gauge_stop(NULL));
+    GOOD(flt_gauge_stop(g)); /* stopping a stopped gauge is a no-op */
+    flt_gauge_destroy(g);
+}
+
+static int g_callback_calls;
+static void count_callback(const flt_sheet *sheet, void *user) {
+    (void)sheet;
+    (void)user;
+    ++g_callback_calls;
+}
+
+static void row_gauge_next_sheet(void) {
+    flt_gauge *g = new_gauge(0);
+    flt_sheet *sh = (flt_sheet *)g;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_gauge_next_sheet(g, 0, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'gauge'", flt_gauge_next_sheet(NULL, 0, &sh));
+    ++g_checks;
+    if (sh != NULL)
+        ERR("*out not NULL after a failure");
+    GOOD(flt_gauge_set_callback(g, count_callback, NULL));
+    BAD(FLT_ERR_STATE, "callback", flt_gauge_next_sheet(g, 0, &sh));
+    GOOD(flt_gauge_set_callback(g, NULL, NULL));
+    GOOD(flt_gauge_next_sheet(g, 0, &sh)); /* none: NULL after the timeout */
+    ++g_checks;
+    if (sh != NULL)
+        ERR("a sheet from nothing");
+    flt_gauge_destroy(g);
+}
+
+static void row_gauge_set_callback(void) {
+    flt_gauge *g = new_gauge(0);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'gauge'", flt_gauge_set_callback(NULL, count_callback, NULL));
+    make_waiting_sheet(g, 0.0); /* waiting: handed to the callback when it is set */
+    g_callback_calls = 0;
+    GOOD(flt_gauge_set_callback(g, count_callback, NULL));
+    ++g_checks;
+    if (g_callback_calls != 1)
+        ERR("the waiting sheet went to the callback %d times", g_callback_calls);
+    GOOD(flt_gauge_set_callback(g, NULL, NULL));
+    flt_gauge_destroy(g);
+}
+
+static void row_gauge_count(void) {
+    flt_gauge *g = new_gauge(0);
+    uint64_t v;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'gauge'", flt_gauge_count(NULL, FLT_GAUGE_COUNT_FRAMES, &v));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_gauge_count(g, FLT_GAUGE_COUNT_FRAMES, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'counter' = 16", flt_gauge_count(g, (flt_gauge_counter)16, &v));
+    ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "'counter' = -1",
+                flt_gauge_count(g, (flt_gauge_counter)-1, &v));
+    GOOD(flt_gauge_count(g, FLT_GAUGE_COUNT_SHEETS_WAITING, &v));
+    flt_gauge_destroy(g);
+}
+
+static void row_sheet_destroy(void) {
+    flt_sheet_destroy(NULL);
+    uint64_t junk[32] = {0};
+    flt_sheet_destroy((flt_sheet *)junk); /* not a sheet: left alone */
+    g_checks += 2;
+}
+
+static void row_sheet_get(void) {
+    flt_gauge *g = new_gauge(0);
+    flt_sheet *sh = new_sheet(g);
+    double v;
+    uint64_t junk[64] = {0};
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'sheet'", flt_sheet_get(NULL, FLT_SHEET_ID, &v));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "not a live", flt_sheet_get((flt_sheet *)junk, FLT_SHEET_ID, &v));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_sheet_get(sh, FLT_SHEET_ID, NULL));
+    BAD(FLT_ERR_NOT_FOUND, "'key' = 32", flt_sheet_get(sh, (flt_sheet_value)32, &v));
+    ENUM_UB_BAD(FLT_ERR_NOT_FOUND, "'key' = -1", flt_sheet_get(sh, (flt_sheet_value)-1, &v));
+    GOOD(flt_sheet_get(sh, FLT_SHEET_ROWS, &v));
+    ++g_checks;
+    if (v != 300.0)
+        ERR("the fixture sheet has %g rows, not 300", v);
+    /* A destroyed sheet is no longer live (until its slot is reused). */
+    flt_sheet_destroy(sh);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "not a live", flt_sheet_get(sh, FLT_SHEET_ID, &v));
+    flt_gauge_destroy(g);
+}
+
+static void row_sheet_get_array(void) {
+    flt_gauge *g = new_gauge(0);
+    flt_sheet *sh = new_sheet(g);
+    double a[FIBERS];
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'sheet'",
+        flt_sheet_get_array(NULL, FLT_SHEET_FIBER_I_UNITS, FIBERS, a));
+    BAD(FLT_ERR_NOT_FOUND, "'key' = 10", flt_sheet_get_array(sh, (flt_sheet_array)10, FIBERS, a));
+    ENUM_UB_BAD(FLT_ERR_NOT_FOUND, "'key' = -2",
+                flt_sheet_get_array(sh, (flt_sheet_array)-2, FIBERS, a));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'",
+        flt_sheet_get_array(sh, FLT_SHEET_FIBER_I_UNITS, FIBERS, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'count'",
+        flt_sheet_get_array(sh, FLT_SHEET_FIBER_I_UNITS, FIBERS - 1, a));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "FLT_SHEET_ZONES",
+        flt_sheet_get_array(sh, FLT_SHEET_ZONE_I_UNITS, FIBERS, a));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'count'", flt_sheet_get_array(sh, FLT_SHEET_FIBER_X, NEG, a));
+    GOOD(flt_sheet_get_array(sh, FLT_SHEET_FIBER_I_UNITS, FIBERS, a));
+    flt_sheet_destroy(sh);
+    flt_gauge_destroy(g);
+}
+
+static void row_sheet_height_map(void) {
+    flt_gauge *g = new_gauge(0);
+    flt_sheet *sh = new_sheet(g);
+    static double s[300], z[300 * FIBERS];
+    static uint8_t f[300 * FIBERS];
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'sheet'", flt_sheet_height_map(NULL, 300, FIBERS, s, z, f));
+    /* Wrong state: the gauge keeps no maps. */
+    BAD(FLT_ERR_STATE, "gauge_keep_maps", flt_sheet_height_map(sh, 300, FIBERS, s, z, f));
+    flt_sheet_destroy(sh);
+    flt_gauge_destroy(g);
+    g = new_gauge(1);
+    sh = new_sheet(g);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'rows'", flt_sheet_height_map(sh, 299, FIBERS, s, z, f));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'", flt_sheet_height_map(sh, 300, FIBERS + 1, s, z, f));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'rows'", flt_sheet_height_map(sh, NEG, FIBERS, s, z, f));
+    GOOD(flt_sheet_height_map(sh, 300, FIBERS, NULL, NULL, NULL));
+    GOOD(flt_sheet_height_map(sh, 300, FIBERS, s, z, f));
+    flt_sheet_destroy(sh);
+    flt_gauge_destroy(g);
+}
+
+static void row_sheet_measured_map(void) {
+    flt_gauge *g = new_gauge(1);
+    flt_sheet *sh = new_sheet(g);
+    static double h[300 * FIBERS];
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'sheet'", flt_sheet_measured_map(NULL, 300, FIBERS, h));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'height_out'", flt_sheet_measured_map(sh, 300, FIBERS, NULL));
+    BAD(FLT_ERR_STATE, "gauge_keep_maps", flt_sheet_measured_map(sh, 300, FIBERS, h));
+    flt_sheet_destroy(sh);
+    flt_gauge_destroy(g);
+    g = new_gauge(2);
+    sh = new_sheet(g);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'rows'", flt_sheet_measured_map(sh, 1, FIBERS, h));
+    GOOD(flt_sheet_measured_map(sh, 300, FIBERS, h));
+    flt_sheet_destroy(sh);
+    flt_gauge_destroy(g);
+}
+
+/* ---------------------------------------------------------------------- */
 /* The table                                                               */
 /* ---------------------------------------------------------------------- */
 
@@ -2650,6 +3045,25 @@ static const row k_rows[] = {
     ROW(u3v_sim_get),
     ROW(u3v_sim_inject),
     ROW(u3v_sim_peek),
+    /* gauge.h */
+    ROW(gauge_create),
+    ROW(gauge_destroy),
+    ROW(gauge_get_option),
+    ROW(gauge_push_frame),
+    ROW(gauge_push_row),
+    ROW(gauge_cut),
+    ROW(gauge_flush),
+    ROW(gauge_attach_source),
+    ROW(gauge_start),
+    ROW(gauge_stop),
+    ROW(gauge_next_sheet),
+    ROW(gauge_set_callback),
+    ROW(gauge_count),
+    ROW(sheet_destroy),
+    ROW(sheet_get),
+    ROW(sheet_get_array),
+    ROW(sheet_height_map),
+    ROW(sheet_measured_map),
 };
 #define N_ROWS (sizeof k_rows / sizeof k_rows[0])
 

@@ -1,0 +1,456 @@
+// SPDX-License-Identifier: Apache-2.0
+/*
+ * libflatline - the gauge: one handle that runs a measuring line. Camera
+ * frames and the shear's cut signal go in, measured sheets come out.
+ *
+ * What it does
+ *   A gauge owns the chain an integrator would otherwise wire by hand:
+ *   extractors (frame -> profile row, flatline/extractor.h), the streaming
+ *   reconstructor (rows -> the strip's shape, flatline/recon.h) and the
+ *   flatness metrics (a sheet's shape -> I-Units, waves, shape class, bow,
+ *   crossbow, flatline/flatness.h). It is created from a finished
+ *   calibration, which gives every geometric constant: the frame size, the
+ *   laser offsets (the reconstructor's laser_spacing) and the fiber grid.
+ *   One options bag configures the parts (extract_*, the reconstructor's
+ *   keys, flat_*) and the gauge (gauge_*).
+ *
+ * Input
+ *   Frames, in the order they were taken, either pushed by the caller
+ *   (flt_gauge_push_frame: pixels, format, size, stride and the encoder
+ *   position) or acquired by the gauge itself from an attached flt_source
+ *   on a thread of its own (flt_gauge_attach_source, flt_gauge_start,
+ *   flt_gauge_stop). A sensor that measures profiles itself can push
+ *   profile rows instead (flt_gauge_push_row). Pushed pixels are copied;
+ *   the caller's buffer is free when the call returns.
+ *
+ * Positions
+ *   encoder_mm is the strip's position when the frame was taken (mm, the
+ *   frame's encoder reading, as in flatline/source.h). A frame's profile row
+ *   lies at s = encoder_mm - (offset_0 + offset_1) / 2 on the strip (the
+ *   point midway between the lasers; flatline/extractor.h). Sheets are
+ *   reported in s.
+ *
+ * Line stops and reversals
+ *   A frame whose encoder position is not at least gauge_frame_spacing past
+ *   the furthest frame the gauge took is skipped and counted: a line stop
+ *   (the encoder did not advance) or a short reversal (the strip backed up:
+ *   every frame is skipped until the strip passes its furthest position
+ *   again, so the reconstructor sees each stretch of strip once, in order).
+ *   A reversal of more than gauge_reversal_length mm behind the furthest
+ *   position, or a jump forward farther than the reconstructor can bridge
+ *   (1000 knots, 100 m at the default spacing), ends the strip: what was
+ *   measured is finished as it stands (its last sheet flagged
+ *   FLT_SHEET_FLAG_NEW_STRIP) and a new strip starts from the frame, as
+ *   after a new coil's head (an encoder reset for a new coil is such a
+ *   reversal).
+ *
+ * Head and tail
+ *   The strip begins when it appears under the sensor: the first frame whose
+ *   valid fibers span at least gauge_strip_min_width mm (both lasers must
+ *   see a fiber for it to be valid). It ends when no frame has shown it over
+ *   gauge_tail_length mm of travel: frames without it inside the strip (a
+ *   burst of lost lines) are a gap the reconstructor bridges and flags, and
+ *   the last ones, after the tail, are dropped. A new strip starts afresh:
+ *   nothing carries over from one coil to the next. Every strip has a coil
+ *   number; sheets are numbered along the gauge's life and within their
+ *   coil. (The strip's presence is judged from the fraction of valid
+ *   fibers until the extractor reports the strip's edges itself.)
+ *
+ * Cuts
+ *   flt_gauge_cut(encoder_mm) tells the gauge where the shear cut: the
+ *   encoder reading at which the cut line lies midway between the lasers
+ *   (a shear D mm downstream of the sensor that fires at encoder reading e
+ *   cut at e - D; one upstream at e + D). A cut may be given before the
+ *   strip reaches it or after it passed (as long as its sheet is still
+ *   open, see below). A sheet ends exactly at its cut: it holds the rows
+ *   with s before the cut, the next sheet those at or after it. The
+ *   reconstructor runs on across cuts, so a sheet's rows are finished only
+ *   once the reconstructor has seen as much strip beyond the cut as inside
+ *   a sheet (its latency, FLT_SHEET_LOOKAHEAD): a join is as accurate as
+ *   the inside of a sheet. (flt_recon_end_sheet() instead finishes at once
+ *   without that look-ahead; tests/c/test_gauge.c measures the difference.)
+ *   Cuts are given in increasing order; after a long reversal (an encoder
+ *   reset) the order starts again. A cut at or before the start of the
+ *   open sheet (its sheet is already finished, or no strip reached it) is
+ *   ignored and counted. A sheet that grows to gauge_max_sheet_length
+ *   without a cut is ended there (FLT_SHEET_FLAG_SPLIT); the strip's tail,
+ *   a long reversal and flt_gauge_flush() end the last sheet of a strip.
+ *
+ * Sheets
+ *   Each sheet is an opaque flt_sheet: its id, coil, s range, the strip's
+ *   width and position, zone and per-fiber I-Units, the largest wave, shape
+ *   class and confidence, bow, crossbow, flags and counters (frames,
+ *   skipped, dropped, saturated, invalid), and with gauge_keep_maps its
+ *   reconstructed (and measured) height map. Read them with
+ *   flt_sheet_get() (scalars by key), flt_sheet_get_array() (per fiber and
+ *   per zone) and flt_sheet_height_map(). They arrive in order, either by
+ *   polling (flt_gauge_next_sheet) or through a callback
+ *   (flt_gauge_set_callback). A NaN value always comes with its flag.
+ *
+ * Threads
+ *   gauge_workers threads process the frames (0: the thread that pushes a
+ *   frame, or the acquisition thread, processes it before the call
+ *   returns). Each worker has its own extractor (frames are independent);
+ *   the reconstructor and the flatness metrics take the rows in order, one
+ *   worker at a time, and a finished sheet is evaluated while the next one
+ *   is being built. Between acquisition and processing sits a queue of
+ *   gauge_queue_frames frames: when it is full, a frame is dropped and
+ *   counted (gauge_overflow = 0, for a live camera), or the pushing thread
+ *   waits for room (gauge_overflow = 1, for recorded frames). Results do
+ *   not depend on the number of workers: with no frame dropped, every
+ *   sheet is identical bit for bit (tests/c/test_gauge.c checks 0, 1 and 2
+ *   workers).
+ *   The calls of one gauge may come from any threads, except that frames
+ *   (push_frame, push_row, or the attached source) must come from one
+ *   thread at a time, in order; cut() may come from another thread.
+ *   The callback runs on a gauge thread; it must not call
+ *   flt_gauge_flush, flt_gauge_stop or flt_gauge_destroy of its gauge
+ *   (FLT_ERR_STATE).
+ *
+ * Memory
+ *   Everything is allocated by flt_gauge_create(), except the workers'
+ *   extractors when the bands are automatic (created once, when the first
+ *   frame has shown the two lines). Frames, cuts and sheets allocate
+ *   nothing. The big parts, with K fibers and F = gauge_frame_spacing:
+ *   the frame queue, gauge_queue_frames x width x height x 2 bytes; the
+ *   reconstructor, about 9 bytes x K x its latency / F (rigid_motion and
+ *   robust: about 17 m of strip); two sheet buffers and the sheet slots'
+ *   maps, 9 (17 with measured heights) bytes x K x gauge_max_sheet_length
+ *   / F each.
+ */
+#ifndef FLATLINE_GAUGE_H
+#define FLATLINE_GAUGE_H
+
+#include "flatline/calib.h"
+#include "flatline/common.h"
+#include "flatline/extractor.h"
+#include "flatline/source.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct flt_gauge flt_gauge;
+/** One measured sheet (see "Sheets"). */
+typedef struct flt_sheet flt_sheet;
+
+/** Scalar results of a sheet, read with flt_sheet_get(). Values are doubles;
+ * counts and ids are whole numbers (exact up to 2^53). */
+typedef enum flt_sheet_value {
+    /** The sheet's number along the gauge's life, 1, 2, ... */
+    FLT_SHEET_ID = 0,
+    /** The number of its strip (coil), 1, 2, ... */
+    FLT_SHEET_COIL = 1,
+    /** Its number within the coil, 1, 2, ... */
+    FLT_SHEET_INDEX = 2,
+    /** Where it starts and ends along the strip, s in mm: its cuts, or the
+     * first row of its strip (FLT_SHEET_FLAG_HEAD), or the last row of its
+     * strip (TAIL, NEW_STRIP, FLUSHED), or where it was split (SPLIT). */
+    FLT_SHEET_S_START = 3,
+    FLT_SHEET_S_END = 4,
+    /** Rows (frames) in the sheet, and the s of its first and last row, mm
+     * (NaN with FLT_SHEET_FLAG_EMPTY when it has none). */
+    FLT_SHEET_ROWS = 5,
+    FLT_SHEET_S_FIRST = 6,
+    FLT_SHEET_S_LAST = 7,
+    /** The strip's edges, width and centre across the sensor, mm (x of the
+     * fiber grid): the outer fibers with enough valid data, plus half a
+     * pitch. NaN with FLT_SHEET_FLAG_NO_EDGES. */
+    FLT_SHEET_STRIP_LEFT = 8,
+    FLT_SHEET_STRIP_RIGHT = 9,
+    FLT_SHEET_STRIP_WIDTH = 10,
+    FLT_SHEET_STRIP_CENTRE = 11,
+    /** Shape class (an flt_shape value), its confidence in [0, 1] and its
+     * FLT_SHAPE_HAS_* component bits (flatline/flatness.h). */
+    FLT_SHEET_SHAPE = 12,
+    FLT_SHEET_CONFIDENCE = 13,
+    FLT_SHEET_COMPONENTS = 14,
+    /** Bow (coil set) and crossbow sagittas, mm (flatline/flatness.h); NaN
+     * with FLT_WINDOW_NO_BOW / FLT_WINDOW_NO_CROSSBOW in the window flags. */
+    FLT_SHEET_BOW = 15,
+    FLT_SHEET_CROSSBOW = 16,
+    /** The largest wave over the fibers: peak-to-peak height (mm), period
+     * (mm), steepness (%) and the x of its fiber (mm). NaN with
+     * FLT_SHEET_FLAG_NO_WAVE. */
+    FLT_SHEET_WAVE_HEIGHT = 17,
+    FLT_SHEET_WAVE_PERIOD = 18,
+    FLT_SHEET_WAVE_STEEPNESS = 19,
+    FLT_SHEET_WAVE_X = 20,
+    /** The largest zone I-Units (NaN with FLT_WINDOW_NO_VALID_FIBER). */
+    FLT_SHEET_MAX_I_UNITS = 21,
+    /** FLT_SHEET_FLAG_* bits, and the flatness window's FLT_WINDOW_* bits. */
+    FLT_SHEET_FLAGS = 22,
+    FLT_SHEET_WINDOW_FLAGS = 23,
+    /** Counters over the sheet's stretch of strip: frames measured (its
+     * rows), frames skipped (line stops, short reversals), frames dropped
+     * (the queue was full), saturated peaks (reported by the extractor;
+     * 0 until it counts them) and invalid samples (row and fiber without a
+     * measurement, fibers outside a narrower strip included). */
+    FLT_SHEET_FRAMES = 24,
+    FLT_SHEET_SKIPPED = 25,
+    FLT_SHEET_DROPPED = 26,
+    FLT_SHEET_SATURATED = 27,
+    FLT_SHEET_INVALID = 28,
+    /** Strip the reconstructor had taken beyond S_END when the sheet's last
+     * row was finished, mm (0 when the strip ended there). */
+    FLT_SHEET_LOOKAHEAD = 29,
+    /** The sizes of the per-fiber and per-zone arrays. */
+    FLT_SHEET_FIBERS = 30,
+    FLT_SHEET_ZONES = 31,
+    /* Not a key: keeps the type int-sized whatever is added. */
+    FLT_SHEET_VALUE_MAX_ENUM_ = 0x7FFFFFFF
+} flt_sheet_value;
+
+/** Per-fiber and per-zone results, read with flt_sheet_get_array(). */
+typedef enum flt_sheet_array {
+    /** Per fiber (FLT_SHEET_FIBERS values): x (mm), I-Units, arc length
+     * (mm), largest wave height (mm), period (mm), steepness (%), and the
+     * FLT_FIBER_* flag bits as whole numbers (flatline/flatness.h). */
+    FLT_SHEET_FIBER_X = 0,
+    FLT_SHEET_FIBER_I_UNITS = 1,
+    FLT_SHEET_FIBER_ARC_LENGTH = 2,
+    FLT_SHEET_FIBER_WAVE_HEIGHT = 3,
+    FLT_SHEET_FIBER_WAVE_PERIOD = 4,
+    FLT_SHEET_FIBER_STEEPNESS = 5,
+    FLT_SHEET_FIBER_FLAGS = 6,
+    /** Per zone (FLT_SHEET_ZONES values): centre x (mm), I-Units, and the
+     * FLT_ZONE_* flag bits as whole numbers. */
+    FLT_SHEET_ZONE_CENTRE_X = 7,
+    FLT_SHEET_ZONE_I_UNITS = 8,
+    FLT_SHEET_ZONE_FLAGS = 9,
+    FLT_SHEET_ARRAY_MAX_ENUM_ = 0x7FFFFFFF
+} flt_sheet_array;
+
+/** Sheet flags (FLT_SHEET_FLAGS; bits combine). */
+enum {
+    /** Starts at the head of its strip, not at a cut. */
+    FLT_SHEET_FLAG_HEAD = 1,
+    /** Ends at the tail of its strip (the strip left the sensor). */
+    FLT_SHEET_FLAG_TAIL = 2,
+    /** Ended by flt_gauge_flush() (the end of the input). */
+    FLT_SHEET_FLAG_FLUSHED = 4,
+    /** Ended by the gauge at gauge_max_sheet_length: no cut came. */
+    FLT_SHEET_FLAG_SPLIT = 8,
+    /** Ended because the encoder reversed or jumped: a new strip began. */
+    FLT_SHEET_FLAG_NEW_STRIP = 16,
+    /** The strip's edges are unknown: FLT_SHEET_STRIP_* are NaN. */
+    FLT_SHEET_FLAG_NO_EDGES = 32,
+    /** No fiber has a wave: FLT_SHEET_WAVE_* are NaN. */
+    FLT_SHEET_FLAG_NO_WAVE = 64,
+    /** No row: every result is NaN and flagged (two cuts with no frame
+     * between them). */
+    FLT_SHEET_FLAG_EMPTY = 128
+};
+
+/** Gauge counters, since it was created (flt_gauge_count()). */
+typedef enum flt_gauge_counter {
+    /** Frames (and rows) pushed or acquired. */
+    FLT_GAUGE_COUNT_FRAMES = 0,
+    /** Frames turned into profile rows. */
+    FLT_GAUGE_COUNT_EXTRACTED = 1,
+    /** Frames skipped: the encoder did not advance (line stop) ... */
+    FLT_GAUGE_COUNT_SKIPPED_STOP = 2,
+    /** ... or went back (short reversal). */
+    FLT_GAUGE_COUNT_SKIPPED_REVERSAL = 3,
+    /** Frames dropped because the queue was full. */
+    FLT_GAUGE_COUNT_DROPPED = 4,
+    /** Frames without the strip (before a head, after a tail). */
+    FLT_GAUGE_COUNT_NO_STRIP = 5,
+    /** Strips (coils) begun. */
+    FLT_GAUGE_COUNT_STRIPS = 6,
+    /** Sheets finished. */
+    FLT_GAUGE_COUNT_SHEETS = 7,
+    /** Sheets lost because every sheet slot was taken (the caller polls too
+     * rarely or holds too many sheets). */
+    FLT_GAUGE_COUNT_SHEETS_DROPPED = 8,
+    /** Cuts given, and those ignored (at or before the open sheet's start). */
+    FLT_GAUGE_COUNT_CUTS = 9,
+    FLT_GAUGE_COUNT_CUTS_IGNORED = 10,
+    /** Strips ended by a long reversal or a jump of the encoder. */
+    FLT_GAUGE_COUNT_REVERSALS = 11,
+    /** Frames the extractor refused (their rows count as invalid). */
+    FLT_GAUGE_COUNT_EXTRACT_ERRORS = 12,
+    /** Frames waiting in the queue now. */
+    FLT_GAUGE_COUNT_QUEUED = 13,
+    /** 1 while the acquisition thread runs, else 0. */
+    FLT_GAUGE_COUNT_ACQUIRING = 14,
+    /** Sheets waiting for flt_gauge_next_sheet(). */
+    FLT_GAUGE_COUNT_SHEETS_WAITING = 15,
+    FLT_GAUGE_COUNT_MAX_ENUM_ = 0x7FFFFFFF
+} flt_gauge_counter;
+
+/** Called once per sheet, in order, on a gauge thread. `sheet` is borrowed:
+ * valid until the callback returns (read what you need, do not destroy
+ * it). `user` is the pointer given to flt_gauge_set_callback(). */
+typedef void(FLT_CALL *flt_sheet_callback)(const flt_sheet *sheet, void *user);
+
+/* ---------------------------------------------------------------------- */
+/* Life cycle                                                              */
+/* ---------------------------------------------------------------------- */
+
+/** Creates a gauge for the sensor of a finished calibration.
+ * @param calib    finished calibration (FLT_ERR_STATE otherwise); copied.
+ * @param options  NULL for the defaults; read for the extract_*, the
+ *                 reconstructor's, the flat_* and the gauge_* keys (each part
+ *                 gets its own); copied. A key set for another component
+ *                 (the simulator's, a source's) is refused: it would be
+ *                 ignored. The reconstructor is made with
+ *                 flt_recon_create_from_calib (a laser_spacing set otherwise
+ *                 is refused); its row_capacity is raised to hold its latency
+ *                 at gauge_frame_spacing; flat_window_length and
+ *                 flat_row_capacity are the gauge's (one window per sheet).
+ * @param out      the gauge; NULL on failure.
+ * @return FLT_ERR_INVALID_ARGUMENT for inconsistent options (naming the
+ *         part that refused them) or buffers beyond 8 GiB (naming what to
+ *         change), FLT_ERR_OUT_OF_MEMORY when they do not fit. The worker
+ *         threads start here. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_create(const flt_calib *calib,
+                                                           const flt_options *options,
+                                                           flt_gauge **out);
+
+/** Stops the acquisition thread and the workers, drops what is not
+ * finished, and frees everything. Sheets the caller holds stay valid until
+ * destroyed. NULL is a no-op. */
+FLT_API void FLT_CALL flt_gauge_destroy(flt_gauge *gauge);
+
+/** The effective value of an option: the gauge's keys, and the
+ * reconstructor's as the gauge set them (laser_spacing, row_capacity).
+ * FLT_ERR_NOT_FOUND for an unknown key. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_get_option(const flt_gauge *gauge,
+                                                               flt_option key, double *out);
+
+/* ---------------------------------------------------------------------- */
+/* Input                                                                   */
+/* ---------------------------------------------------------------------- */
+
+/** Pushes one frame.
+ * @param frame         height rows of stride_bytes, `format` pixels (as in
+ *                      flt_extractor_process); copied.
+ * @param width, height must equal the calibration's frame size.
+ * @param encoder_mm    the strip position of the frame, mm (finite, at
+ *                      most 1e12 in magnitude).
+ * @return FLT_OK also when the frame was skipped (line stop, reversal) or
+ *         dropped (full queue): the counters say so. FLT_ERR_INVALID_ARGUMENT
+ *         for a frame the gauge cannot take (nothing is counted);
+ *         FLT_ERR_STATE while an attached source is acquiring; a failure
+ *         of processing (which stops the gauge) is returned by every later
+ *         call. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_push_frame(flt_gauge *gauge, const void *frame,
+                                                               flt_pixel_format format,
+                                                               uint32_t width, uint32_t height,
+                                                               size_t stride_bytes,
+                                                               double encoder_mm);
+
+/** Pushes one profile row instead of a frame (a sensor that extracts its
+ * own profiles, or recorded rows): what flt_extractor_process() gives for
+ * a frame taken at encoder_mm.
+ * @param fibers  must equal the calibration's fiber count.
+ * @param height, slope  [fibers] mm and mm/mm (NaN where not measured).
+ * @param valid   [fibers] non-zero where valid, or NULL (then finite values
+ *                are valid).
+ * Counted, skipped and dropped like a frame. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_push_row(flt_gauge *gauge, double encoder_mm,
+                                                             size_t fibers, const double *height,
+                                                             const double *slope,
+                                                             const uint8_t *valid);
+
+/** The shear cut the strip at encoder_mm (see "Cuts"): finite, at most
+ * 1e12 in magnitude, beyond the previous cut unless the encoder went back
+ * since. FLT_ERR_BUFFER_FULL when 256 cuts wait for strip (the strip has
+ * not reached them). */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_cut(flt_gauge *gauge, double encoder_mm);
+
+/** The end of the input so far: waits until every frame pushed before the
+ * call is processed, then ends the strip under the sensor (its last sheet
+ * is finished at its last row, FLT_SHEET_FLAG_FLUSHED) and waits until that
+ * sheet is delivered. The next frame may begin a new strip. FLT_ERR_STATE
+ * while an attached source is acquiring (stop it first) or from inside the
+ * callback. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_flush(flt_gauge *gauge);
+
+/** Attaches a frame source (borrowed: it must outlive the gauge or be
+ * detached with NULL first). FLT_ERR_STATE while acquiring. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_attach_source(flt_gauge *gauge,
+                                                                  flt_source *source);
+
+/** Starts the attached source (flt_source_start) and the acquisition
+ * thread, which takes every frame the source delivers as push_frame would
+ * (frames the source dropped on the way are counted by the source,
+ * flt_source_count). The thread ends by itself at the end of an image
+ * sequence or when the source fails. FLT_ERR_STATE without a source or
+ * while acquiring; the source's own error if it does not start. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_start(flt_gauge *gauge);
+
+/** Stops the acquisition thread and the source (flt_source_stop), and waits
+ * until the frames it queued are processed (the strip stays open: flush
+ * ends it). Stopping a stopped gauge is a no-op. Returns the error that
+ * ended the acquisition by itself (e.g. FLT_ERR_DEVICE for an unplugged
+ * camera, with its message), else FLT_OK. FLT_ERR_STATE from inside the
+ * callback. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_stop(flt_gauge *gauge);
+
+/* ---------------------------------------------------------------------- */
+/* Output                                                                  */
+/* ---------------------------------------------------------------------- */
+
+/** Takes the next finished sheet, waiting up to timeout_ms for one.
+ * *out is the sheet (the caller owns it: flt_sheet_destroy), or NULL when
+ * none came in time (FLT_OK). At most gauge_sheet_slots sheets exist at
+ * once (waiting and held together): when the next sheet finds none free,
+ * the oldest waiting one is dropped (FLT_GAUGE_COUNT_SHEETS_DROPPED).
+ * FLT_ERR_STATE while a callback is set. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_next_sheet(flt_gauge *gauge,
+                                                               uint32_t timeout_ms,
+                                                               flt_sheet **out);
+
+/** Sets (or, with NULL, removes) the callback that receives every sheet
+ * instead of flt_gauge_next_sheet(); sheets already waiting are handed to
+ * it first. The callback must not block for long: the next sheet waits. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_set_callback(flt_gauge *gauge,
+                                                                 flt_sheet_callback callback,
+                                                                 void *user);
+
+/** A counter (flt_gauge_counter). */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_count(const flt_gauge *gauge,
+                                                          flt_gauge_counter counter, uint64_t *out);
+
+/* ---------------------------------------------------------------------- */
+/* Sheets                                                                  */
+/* ---------------------------------------------------------------------- */
+
+/** Gives a sheet from flt_gauge_next_sheet() back. NULL is a no-op; a
+ * borrowed sheet (inside the callback) is left alone. */
+FLT_API void FLT_CALL flt_sheet_destroy(flt_sheet *sheet);
+
+/** One scalar result (flt_sheet_value). FLT_ERR_NOT_FOUND for an unknown
+ * key. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sheet_get(const flt_sheet *sheet, flt_sheet_value key,
+                                                        double *out);
+
+/** One array (flt_sheet_array) into out[count]; count must equal its size
+ * (FLT_SHEET_FIBERS or FLT_SHEET_ZONES). */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sheet_get_array(const flt_sheet *sheet,
+                                                              flt_sheet_array key, size_t count,
+                                                              double *out);
+
+/** The reconstructed height map (gauge_keep_maps >= 1): rows = FLT_SHEET_ROWS
+ * and fibers = FLT_SHEET_FIBERS must match; s_out [rows] (mm), z_out
+ * [rows * fibers] (mm, NaN only where FLT_FLAG_NO_DATA), flags_out
+ * [rows * fibers] FLT_FLAG_* bits. Any output may be NULL. FLT_ERR_STATE
+ * when the gauge keeps no maps. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sheet_height_map(const flt_sheet *sheet, size_t rows,
+                                                               size_t fibers, double *s_out,
+                                                               double *z_out, uint8_t *flags_out);
+
+/** The measured heights of the same rows (gauge_keep_maps = 2): what the
+ * extractor gave, height_out [rows * fibers] mm, NaN where the sample was
+ * invalid. FLT_ERR_STATE unless the gauge keeps them. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sheet_measured_map(const flt_sheet *sheet,
+                                                                 size_t rows, size_t fibers,
+                                                                 double *height_out);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* FLATLINE_GAUGE_H */

@@ -1,0 +1,1528 @@
+// SPDX-License-Identifier: Apache-2.0
+// The gauge: the producer (frames in), the workers (extraction), the
+// sequencer (reconstructor and sheets, in frame order) and the evaluation
+// (flatness per sheet, in sheet order). lib/gauge/README.md has the picture.
+#include "gauge/gauge.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+
+#include "core/error.hpp"
+#include "flatline/extractor.h"
+#include "flatline/source.h"
+#include "reconstruction/recon_internal.hpp"
+
+namespace flt {
+namespace {
+
+constexpr double k_nan = std::numeric_limits<double>::quiet_NaN();
+// The reconstructor refuses larger jumps between rows (recon_api.cpp): it
+// would have to bridge them knot by knot.
+constexpr double k_recon_max_jump_mm = 1.0e6, k_recon_max_jump_knots = 1000.0;
+
+thread_local const void *t_in_callback = nullptr;  // the gauge whose callback runs
+
+// A failed call of another component: its status and message, as an
+// exception the gauge's guards turn back into them.
+void check(flt_status st) {
+    if (st != FLT_OK)
+        throw error(st, flt_last_error_message());
+}
+
+flt_options make_defaults() {
+    flt_options *bag = nullptr;
+    check(flt_options_create(&bag));
+    flt_options copy = *bag;
+    flt_options_destroy(bag);
+    return copy;
+}
+
+void set_option(flt_options &bag, flt_option key, double value) {
+    check(flt_options_set(&bag, key, value));
+}
+
+// The components whose keys the gauge reads, by the hundreds of the key
+// numbers (common.h): the reconstructor, the extractor, the flatness
+// metrics and its own.
+bool gauge_reads(int hundreds) {
+    return hundreds == 1 || hundreds == 4 || hundreds == 5 || hundreds == 7;
+}
+
+const char *component_of(int hundreds) {
+    static const char *const names[] = {"?",
+                                        "reconstructor",
+                                        "calibration",
+                                        "simulator",
+                                        "extractor",
+                                        "flatness metrics",
+                                        "frame source",
+                                        "gauge",
+                                        "tolerance verdicts",
+                                        "leveler advisor"};
+    return hundreds >= 0 && hundreds <= 9 ? names[hundreds] : "?";
+}
+
+// A key set in the gauge's bag that belongs to a component the gauge does
+// not run (the simulator's, a source's) is a mistake: it would be ignored.
+void refuse_foreign_options(const flt_options *options) {
+    if (!options)
+        return;
+    flt_option key;
+    for (std::size_t i = 0; flt_option_at(i, &key) == FLT_OK; ++i) {
+        const int hundreds = int(key) / 100;
+        if (gauge_reads(hundreds) || !option_is_set(options, key))
+            continue;
+        const char *name = "";
+        check(flt_option_info(key, &name, nullptr, nullptr, nullptr, nullptr));
+        char why[300];
+        std::snprintf(why, sizeof why,
+                      "option '%s' (key %d) belongs to the %s, which the gauge does not run; "
+                      "the gauge reads the reconstructor's, the extractor's, the flatness "
+                      "metrics' and its own keys (give the %s its own bag)",
+                      name, int(key), component_of(hundreds), component_of(hundreds));
+        throw error(FLT_ERR_INVALID_ARGUMENT, why);
+    }
+    clear_error();  // flt_option_at's FLT_ERR_NOT_FOUND past the last key
+}
+
+// One component's keys (by the hundreds of their numbers) from the
+// caller's bag, set where the caller set them; every other key at its
+// default: each part gets only what is its own.
+flt_options part_options(const flt_options *from, int hundreds) {
+    flt_options bag = make_defaults();
+    if (!from)
+        return bag;
+    flt_option key;
+    for (std::size_t i = 0; flt_option_at(i, &key) == FLT_OK; ++i)
+        if (int(key) / 100 == hundreds && option_is_set(from, key))
+            set_option(bag, key, option_value(from, key));
+    clear_error();
+    return bag;
+}
+
+int bytes_per_pixel(flt_pixel_format format) {
+    return format == FLT_PIXEL_MONO8 ? 1 : 2;
+}
+
+}  // namespace
+
+bool in_gauge_callback(const gauge *g) {
+    return t_in_callback == g;
+}
+
+sheet_pool::~sheet_pool() {
+    for (flt_sheet *s : free)
+        delete s;
+}
+
+// ---------------------------------------------------------------- create
+
+gauge::gauge(const flt_calib *calib, const flt_options *options) {
+    // A part that refuses its options throws half way: free what was made
+    // (the destructor does not run for an object whose constructor threw).
+    try {
+        init(calib, options);
+    } catch (...) {
+        {
+            std::lock_guard<std::mutex> lock(m_);
+            stopping_ = true;  // a thread that did start (a later one failed)
+        }
+        work_cv_.notify_all();
+        for (std::thread &t : workers_)
+            t.join();
+        release_parts();
+        throw;
+    }
+}
+
+void gauge::init(const flt_calib *calib, const flt_options *options) {
+    refuse_foreign_options(options);
+    effective_ = options ? *options : make_defaults();
+    flt_options &eff = effective_;
+    cfg_.workers = unsigned(option_value(&eff, FLT_OPT_GAUGE_WORKERS));
+    cfg_.queue_frames = std::size_t(option_value(&eff, FLT_OPT_GAUGE_QUEUE_FRAMES));
+    cfg_.overflow_wait = option_value(&eff, FLT_OPT_GAUGE_OVERFLOW) != 0.0;
+    cfg_.frame_spacing = option_value(&eff, FLT_OPT_GAUGE_FRAME_SPACING);
+    cfg_.reversal_length = option_value(&eff, FLT_OPT_GAUGE_REVERSAL_LENGTH);
+    cfg_.strip_min_width = option_value(&eff, FLT_OPT_GAUGE_STRIP_MIN_WIDTH);
+    cfg_.tail_length = option_value(&eff, FLT_OPT_GAUGE_TAIL_LENGTH);
+    cfg_.max_sheet_length = option_value(&eff, FLT_OPT_GAUGE_MAX_SHEET_LENGTH);
+    cfg_.keep_maps = int(option_value(&eff, FLT_OPT_GAUGE_KEEP_MAPS));
+    cfg_.sheet_slots = std::size_t(option_value(&eff, FLT_OPT_GAUGE_SHEET_SLOTS));
+
+    // Geometry: the calibration's, never a default.
+    check(flt_calib_get_frame_size(calib, &width_, &height_));
+    double offset[2];
+    for (unsigned laser = 0; laser < 2; ++laser)
+        check(flt_calib_get_laser_offset(calib, laser, &offset[laser]));
+    mean_offset_ = 0.5 * (offset[0] + offset[1]);
+    check(flt_calib_get_fiber_grid(calib, &first_x_, &pitch_, &K_));
+    fiber_x_.resize(K_);
+    for (std::size_t k = 0; k < K_; ++k)
+        fiber_x_[k] = first_x_ + double(k) * pitch_;
+
+    // The reconstructor (its fibers and laser spacing from the calibration)
+    // must hold every row until it is finished: its latency in rows at the
+    // closest frame spacing the gauge takes. A probe with the smallest
+    // capacity tells the latency (it does not depend on the capacity).
+    flt_options recon_options = part_options(options, 1);
+    {
+        flt_options probe_options = recon_options;
+        set_option(probe_options, FLT_OPT_ROW_CAPACITY, 16);
+        flt_recon *probe = nullptr;
+        check(flt_recon_create_from_calib(calib, &probe_options, &probe));
+        const long latency = recon_latency_knots(probe);
+        double knot = 0.0, spacing = 0.0;
+        flt_status st = flt_recon_get_option(probe, FLT_OPT_KNOT_SPACING, &knot);
+        if (st == FLT_OK)
+            st = flt_recon_get_option(probe, FLT_OPT_LASER_SPACING, &spacing);
+        flt_recon_destroy(probe);
+        check(st);
+        // A quarter more than the latency (rows arrive unevenly), the rows of
+        // one emission group, and a fixed margin.
+        const double needed =
+            std::ceil(1.25 * double(latency + 4) * knot / cfg_.frame_spacing) + 256.0;
+        const double given = option_value(&recon_options, FLT_OPT_ROW_CAPACITY);
+        if (needed > 1.0e8)
+            throw error(FLT_ERR_INVALID_ARGUMENT,
+                        "the reconstructor would have to hold more than 1e8 rows (its latency "
+                        "at gauge_frame_spacing); raise gauge_frame_spacing or shorten the lag");
+        set_option(recon_options, FLT_OPT_ROW_CAPACITY, std::max(given, needed));
+        set_option(eff, FLT_OPT_ROW_CAPACITY, std::max(given, needed));
+        set_option(eff, FLT_OPT_LASER_SPACING, spacing);
+        max_jump_ = std::min(k_recon_max_jump_mm, k_recon_max_jump_knots * knot);
+    }
+    row_capacity_ = std::size_t(option_value(&eff, FLT_OPT_ROW_CAPACITY));
+    // A tail longer than the reconstructor can bridge would never be seen.
+    cfg_.tail_length = std::min(cfg_.tail_length, 0.5 * max_jump_);
+
+    // Buffers in rows: every taken frame is at least frame_spacing past the
+    // one before, so a stretch of L mm holds at most L / spacing + 1 rows.
+    const double sheet_rows = std::ceil(cfg_.max_sheet_length / cfg_.frame_spacing) + 2.0;
+    // What the buffers will take, before anything is allocated: an absurd
+    // configuration (micrometre frames, kilometre sheets) is refused with
+    // its cost instead of exhausting the machine.
+    {
+        const double K = double(K_), rows = double(row_capacity_);
+        const double robust_stages = option_value(&eff, FLT_OPT_ROBUST) != 0.0
+                                         ? option_value(&eff, FLT_OPT_ROBUST_ITERATIONS)
+                                         : 0.0;
+        const double per_sample = cfg_.keep_maps >= 2 ? 17.0 : 9.0;
+        double bytes = rows * K * (9.0 + 4.0 * robust_stages);  // reconstructor
+        bytes += 2.0 * sheet_rows * K * per_sample;             // sheet buffers
+        if (cfg_.keep_maps >= 1)
+            bytes += double(cfg_.sheet_slots) * sheet_rows * K * per_sample;
+        if (cfg_.keep_maps >= 2)
+            bytes += rows * K * 8.0;
+        if (cfg_.workers > 0)
+            bytes += double(cfg_.queue_frames) * double(width_) * double(height_) * 2.0;
+        constexpr double limit = 8.0 * 1024 * 1024 * 1024;
+        if (bytes > limit) {
+            char why[400];
+            std::snprintf(why, sizeof why,
+                          "the gauge's buffers would take %.1f GB (more than 8 GiB): the "
+                          "reconstructor holds %zu rows (its latency at gauge_frame_spacing = "
+                          "%g mm), a sheet %.0f rows (gauge_max_sheet_length / "
+                          "gauge_frame_spacing); raise gauge_frame_spacing or lower "
+                          "gauge_max_sheet_length, gauge_sheet_slots, gauge_keep_maps or "
+                          "gauge_queue_frames",
+                          bytes / 1.0e9, row_capacity_, cfg_.frame_spacing, sheet_rows);
+            throw error(FLT_ERR_INVALID_ARGUMENT, why);
+        }
+    }
+    sheet_capacity_ = std::size_t(sheet_rows);
+    hold_capacity_ = std::size_t(std::ceil(cfg_.tail_length / cfg_.frame_spacing)) + 2;
+    check(flt_recon_create_from_calib(calib, &recon_options, &recon_));
+
+    // Flatness: one window per sheet. flat_ evaluates whole sheets from the
+    // gauge's buffer; flat_short_ the sheets shorter than one wave (streamed
+    // push + finish, which reports them flagged where evaluate refuses).
+    min_length_ = option_value(&eff, FLT_OPT_FLAT_MIN_LENGTH);
+    {
+        flt_options fo = part_options(options, 5);
+        set_option(fo, FLT_OPT_FLAT_WINDOW_LENGTH, 0.0);
+        set_option(fo, FLT_OPT_FLAT_UPDATE_INTERVAL, 0.0);
+        set_option(fo, FLT_OPT_FLAT_ROW_CAPACITY, 16.0);
+        check(flt_flatness_create(K_, fiber_x_.data(), &fo, &flat_));
+        set_option(fo, FLT_OPT_FLAT_ROW_CAPACITY,
+                   std::max(16.0, std::ceil(min_length_ / cfg_.frame_spacing) + 2.0));
+        check(flt_flatness_create(K_, fiber_x_.data(), &fo, &flat_short_));
+        check(flt_flatness_zones(flat_, &zones_));
+        zone_x_.resize(zones_);
+        check(flt_flatness_zone_layout(flat_, zones_, nullptr, zone_x_.data(), nullptr));
+        set_option(eff, FLT_OPT_FLAT_WINDOW_LENGTH, 0.0);
+        set_option(eff, FLT_OPT_FLAT_UPDATE_INTERVAL, 0.0);
+        set_option(eff, FLT_OPT_FLAT_ROW_CAPACITY, double(sheet_capacity_));
+    }
+
+    // Extractors: one per worker. With automatic bands the producer finds
+    // the band on the first frames (band_extractor_), and the workers'
+    // extractors are made with it then, so every frame is extracted with
+    // the same band whichever thread takes it.
+    {
+        flt_options *xo = nullptr;
+        check(flt_options_create(&xo));
+        *xo = part_options(options, 4);
+        extract_options_ = xo;
+    }
+    const bool automatic = option_value(&eff, FLT_OPT_EXTRACT_LASER0_ROWS) == 0.0 &&
+                           option_value(&eff, FLT_OPT_EXTRACT_LASER1_ROWS) == 0.0;
+    const std::size_t n_extractors = std::max<std::size_t>(1, cfg_.workers);
+    extractors_.assign(n_extractors, nullptr);
+    if (cfg_.workers == 0 || !automatic) {
+        // Inline, one extractor finds its own band; explicit bands need no
+        // finding.
+        for (flt_extractor *&ex : extractors_)
+            check(flt_extractor_create(calib, extract_options_, &ex));
+        band_known_ = true;
+    } else {
+        check(flt_extractor_create(calib, extract_options_, &band_extractor_));
+    }
+    {
+        // Kept (copied) for the workers' extractors made at the first frame.
+        std::size_t length = 0;
+        flt_status st = flt_calib_save_text(calib, nullptr, 0, &length);
+        if (st != FLT_OK && st != FLT_ERR_BUFFER_FULL)
+            check(st);
+        std::string text(length + 1, '\0');
+        check(flt_calib_save_text(calib, &text[0], text.size(), &length));
+        check(flt_calib_load_text(text.data(), length, &calib_for_extractors_));
+        clear_error();  // the size query left a BUFFER_FULL message
+    }
+
+    // The queue: inline, one slot for the row; else queue_frames slots with
+    // room for the largest pixels (2 bytes).
+    const std::size_t n_slots = cfg_.workers == 0 ? 1 : cfg_.queue_frames;
+    slots_.resize(n_slots);
+    for (frame_slot &slot : slots_) {
+        if (cfg_.workers > 0)
+            slot.pixels.reset(new std::uint8_t[std::size_t(width_) * height_ * 2]);
+        slot.height.assign(K_, 0.0);
+        slot.slope.assign(K_, 0.0);
+        slot.valid.assign(K_, 0);
+    }
+
+    // Sequencer state.
+    meta_ring_.resize(row_capacity_);
+    if (cfg_.keep_maps >= 2)
+        measured_ring_.assign(row_capacity_ * K_, 0.0);
+    held_s_.assign(hold_capacity_, 0.0);
+    held_height_.assign(hold_capacity_ * K_, 0.0);
+    held_slope_.assign(hold_capacity_ * K_, 0.0);
+    held_valid_.assign(hold_capacity_ * K_, 0);
+    held_meta_.resize(hold_capacity_);
+    pull_s_.assign(k_pull_rows, 0.0);
+    pull_z_.assign(k_pull_rows * K_, 0.0);
+    pull_flags_.assign(k_pull_rows * K_, 0);
+    for (sheet_buffer &b : buffers_) {
+        b.s.assign(sheet_capacity_, 0.0);
+        b.z.assign(sheet_capacity_ * K_, 0.0);
+        b.flags.assign(sheet_capacity_ * K_, 0);
+        b.meta.resize(sheet_capacity_);
+        if (cfg_.keep_maps >= 2)
+            b.measured.assign(sheet_capacity_ * K_, 0.0);
+    }
+    buffer_busy_[0] = 1;  // the first sheet fills buffer 0
+    current_ = 0;
+
+    // Sheet slots.
+    pool_ = std::make_shared<sheet_pool>();
+    pool_->free.reserve(cfg_.sheet_slots);
+    ready_.assign(cfg_.sheet_slots, nullptr);
+    for (std::size_t i = 0; i < cfg_.sheet_slots; ++i) {
+        auto *sh = new flt_sheet;
+        pool_->free.push_back(sh);
+        sh->pool = pool_;
+        sh->fibers = K_;
+        sh->maps = cfg_.keep_maps;
+        for (int a = 0; a < k_sheet_arrays; ++a)
+            sh->array[a].assign(a < FLT_SHEET_ZONE_CENTRE_X ? K_ : zones_, 0.0);
+        if (cfg_.keep_maps >= 1) {
+            sh->map_s.assign(sheet_capacity_, 0.0);
+            sh->map_z.assign(sheet_capacity_ * K_, 0.0);
+            sh->map_flags.assign(sheet_capacity_ * K_, 0);
+        }
+        if (cfg_.keep_maps >= 2)
+            sh->map_measured.assign(sheet_capacity_ * K_, 0.0);
+    }
+    jobs_.reserve(4);
+    flag_scratch_.assign(std::max(K_, zones_), 0);
+
+    for (unsigned i = 0; i < cfg_.workers; ++i)
+        workers_.emplace_back([this, i] { worker_main(i); });
+}
+
+gauge::~gauge() {
+    {
+        std::unique_lock<std::mutex> lock(m_);
+        acquisition_stop_ = true;
+        stopping_ = true;
+    }
+    room_cv_.notify_all();
+    work_cv_.notify_all();
+    idle_cv_.notify_all();
+    if (acquisition_.joinable())
+        acquisition_.join();
+    for (std::thread &t : workers_)
+        t.join();
+    if (source_ && source_started_ && flt_source_stop(source_) != FLT_OK)
+        clear_error();
+    release_parts();
+    // Waiting sheets belong to the gauge; held ones to the caller, who
+    // frees them later (the pool then deletes instead of keeping them).
+    for (std::size_t i = 0; i < ready_count_; ++i)
+        delete ready_[(ready_head_ + i) % ready_.size()];
+    std::vector<flt_sheet *> free;
+    {
+        std::lock_guard<std::mutex> lock(pool_->m);
+        pool_->alive = false;
+        free.swap(pool_->free);
+    }
+    for (flt_sheet *s : free)
+        delete s;
+}
+
+void gauge::release_parts() noexcept {
+    for (flt_extractor *&ex : extractors_) {
+        flt_extractor_destroy(ex);
+        ex = nullptr;
+    }
+    flt_extractor_destroy(band_extractor_);
+    flt_calib_destroy(calib_for_extractors_);
+    flt_options_destroy(extract_options_);
+    flt_recon_destroy(recon_);
+    flt_flatness_destroy(flat_);
+    flt_flatness_destroy(flat_short_);
+    band_extractor_ = nullptr;
+    calib_for_extractors_ = nullptr;
+    extract_options_ = nullptr;
+    recon_ = nullptr;
+    flat_ = flat_short_ = nullptr;
+}
+
+// ---------------------------------------------------------------- failures
+
+void gauge::record_failure(flt_status status, const char *message) {
+    std::lock_guard<std::mutex> lock(m_);
+    if (!failed_) {
+        failed_ = true;
+        failure_status_ = status;
+        failure_message_ = message;
+    }
+    work_cv_.notify_all();
+    room_cv_.notify_all();
+    idle_cv_.notify_all();
+    sheet_cv_.notify_all();
+}
+
+flt_status gauge::failure(const char *fn) const {
+    std::lock_guard<std::mutex> lock(m_);
+    if (!failed_)
+        return FLT_OK;
+    return fail(failure_status_, "%s: the gauge stopped processing: %s", fn,
+                failure_message_.c_str());
+}
+
+// Runs body; an exception becomes the gauge's failure. Returns false then.
+template <class Body>
+bool gauge_guarded(gauge *g, Body &&body, void (gauge::*rec)(flt_status, const char *)) {
+    try {
+        body();
+        return true;
+    } catch (const error &e) {
+        (g->*rec)(e.status, e.what());
+    } catch (const std::bad_alloc &) {
+        (g->*rec)(FLT_ERR_OUT_OF_MEMORY, "out of memory");
+    } catch (const std::exception &e) {
+        (g->*rec)(FLT_ERR_INTERNAL, e.what());
+    } catch (...) {
+        (g->*rec)(FLT_ERR_INTERNAL, "unknown exception");
+    }
+    return false;
+}
+
+// ---------------------------------------------------------------- producer
+
+void gauge::extract(frame_slot &slot, const void *pixels, flt_pixel_format format,
+                    std::size_t stride, flt_extractor *extractor, bool *error_out) {
+    const flt_status st = flt_extractor_process(extractor, pixels, format, width_, height_, stride,
+                                                slot.encoder_mm, K_, &slot.s, slot.height.data(),
+                                                slot.slope.data(), slot.valid.data());
+    if (st == FLT_OK) {
+        *error_out = false;
+        return;
+    }
+    // A frame without the two lines while the band is automatic is a frame
+    // without the strip, not an error; anything else the extractor refuses
+    // is counted. Either way the row has no valid fiber.
+    *error_out = st != FLT_ERR_NUMERIC;
+    slot.s = slot.encoder_mm - mean_offset_;
+    std::fill(slot.height.begin(), slot.height.end(), k_nan);
+    std::fill(slot.slope.begin(), slot.slope.end(), k_nan);
+    std::fill(slot.valid.begin(), slot.valid.end(), std::uint8_t(0));
+    clear_error();
+}
+
+void gauge::resolve_band(frame_slot &slot) {
+    bool error = false;
+    extract(slot, slot.pixels.get(), slot.format, slot.stride, band_extractor_, &error);
+    if (error) {
+        std::lock_guard<std::mutex> lock(m_);
+        ++n_extract_errors_;
+    }
+    std::uint32_t first[2], rows[2];
+    for (unsigned laser = 0; laser < 2; ++laser)
+        if (flt_extractor_band(band_extractor_, laser, &first[laser], &rows[laser]) != FLT_OK) {
+            clear_error();  // not found yet: the next frame tries again
+            return;
+        }
+    const flt_option first_key[2] = {FLT_OPT_EXTRACT_LASER0_FIRST_ROW,
+                                     FLT_OPT_EXTRACT_LASER1_FIRST_ROW};
+    const flt_option rows_key[2] = {FLT_OPT_EXTRACT_LASER0_ROWS, FLT_OPT_EXTRACT_LASER1_ROWS};
+    for (unsigned laser = 0; laser < 2; ++laser) {
+        set_option(*extract_options_, first_key[laser], first[laser]);
+        set_option(*extract_options_, rows_key[laser], rows[laser]);
+    }
+    // Published to the workers by the queue's mutex with the next frame.
+    for (flt_extractor *&ex : extractors_)
+        check(flt_extractor_create(calib_for_extractors_, extract_options_, &ex));
+    band_known_ = true;
+}
+
+void gauge::fill_slot(frame_slot &slot, const gauge_input &in) {
+    slot.encoder_mm = in.encoder_mm;
+    if (in.pixels == nullptr) {
+        // A profile row: what the extractor would give for this frame.
+        slot.s = in.encoder_mm - mean_offset_;
+        for (std::size_t k = 0; k < K_; ++k) {
+            const bool ok = (in.valid == nullptr || in.valid[k] != 0) &&
+                            std::isfinite(in.height[k]) && std::isfinite(in.slope[k]);
+            slot.height[k] = in.height[k];
+            slot.slope[k] = in.slope[k];
+            slot.valid[k] = ok ? 1 : 0;
+        }
+        return;
+    }
+    if (cfg_.workers == 0)
+        return;  // extracted straight from the caller's pixels
+    // Copied row by row into a packed frame (the stride may be larger).
+    const std::size_t row_bytes = std::size_t(width_) * bytes_per_pixel(in.format);
+    const auto *src = static_cast<const std::uint8_t *>(in.pixels);
+    for (std::uint32_t v = 0; v < height_; ++v)
+        std::memcpy(slot.pixels.get() + v * row_bytes, src + v * in.stride, row_bytes);
+    slot.format = in.format;
+    slot.stride = row_bytes;
+}
+
+void gauge::take(const gauge_input &in, bool from_acquisition) {
+    std::unique_lock<std::mutex> lock(m_);
+    if (failed_)
+        throw error(failure_status_, failure_message_.c_str());
+    ++n_frames_;
+    // Line stops and reversals, from the encoder alone (in frame order).
+    const double e = in.encoder_mm;
+    if (has_furthest_) {
+        const double advance = e - furthest_;
+        if (advance < cfg_.frame_spacing) {
+            if (-advance <= cfg_.reversal_length) {
+                ++(advance < -cfg_.frame_spacing ? n_skipped_rev_ : n_skipped_stop_);
+                ++pending_skipped_;
+                return;
+            }
+            // A long reversal: a new strip, and the cuts' order starts again.
+            pending_new_strip_ = true;
+            ++n_reversals_;
+            has_cut_floor_ = false;
+        }
+    }
+    has_furthest_ = true;
+    furthest_ = e;
+    while (head_ - tail_ >= slots_.size()) {
+        if (!cfg_.overflow_wait) {
+            ++n_dropped_;
+            ++pending_dropped_;
+            return;
+        }
+        room_cv_.wait(lock);
+        if (failed_)
+            throw error(failure_status_, failure_message_.c_str());
+        if (stopping_ || (from_acquisition && acquisition_stop_))
+            return;
+    }
+    frame_slot &slot = slots_[head_ % slots_.size()];
+    slot.seq = head_;
+    slot.new_strip = pending_new_strip_;
+    slot.skipped_before = pending_skipped_;
+    slot.dropped_before = pending_dropped_;
+    pending_new_strip_ = false;
+    pending_skipped_ = pending_dropped_ = 0;
+    lock.unlock();
+
+    fill_slot(slot, in);
+    bool ready = in.pixels == nullptr, extract_error = false;
+    if (!ready && cfg_.workers == 0) {
+        extract(slot, in.pixels, in.format, in.stride, extractors_[0], &extract_error);
+        ready = true;
+    } else if (!ready && !band_known_) {
+        resolve_band(slot);
+        ready = true;
+    }
+
+    lock.lock();
+    if (in.pixels != nullptr && ready)
+        ++n_extracted_;
+    if (extract_error)
+        ++n_extract_errors_;
+    slot.state = ready ? slot_extracted : slot_filled;
+    ++head_;
+    if (cfg_.workers > 0) {
+        work_cv_.notify_all();
+        return;
+    }
+    // Inline: this thread is the whole gauge.
+    lock.unlock();
+    run_inline();
+}
+
+void gauge::run_inline() {
+    frame_slot &slot = slots_[0];
+    if (!gauge_guarded(
+            this,
+            [&] {
+                if (slot.state == slot_extracted)
+                    sequence(slot);
+                run_jobs_inline();
+            },
+            &gauge::record_failure)) {
+        std::lock_guard<std::mutex> lock(m_);
+        slot.state = slot_free;
+        tail_ = head_;
+        throw error(failure_status_, failure_message_.c_str());
+    }
+    std::lock_guard<std::mutex> lock(m_);
+    slot.state = slot_free;
+    tail_ = head_;
+}
+
+void gauge::run_jobs_inline() {
+    for (;;) {
+        sheet_job job;
+        {
+            std::lock_guard<std::mutex> lock(m_);
+            if (jobs_.empty())
+                return;
+            job = jobs_.front();
+            jobs_.erase(jobs_.begin());
+            evaluating_ = true;
+        }
+        evaluate(job);
+        std::lock_guard<std::mutex> lock(m_);
+        buffer_busy_[job.buffer] = 0;
+        evaluating_ = false;
+    }
+}
+
+// ---------------------------------------------------------------- workers
+
+void gauge::worker_main(unsigned index) {
+    std::unique_lock<std::mutex> lock(m_);
+    while (!stopping_) {
+        if (failed_ || !run_one(lock, index))
+            work_cv_.wait(lock);
+    }
+}
+
+// With the lock held: one piece of work, most urgent first. Returns false
+// when there is none.
+bool gauge::run_one(std::unique_lock<std::mutex> &lock, unsigned index) {
+    const std::size_t Q = slots_.size();
+    // 1. The sequencer: rows in frame order into the reconstructor. First,
+    // because it frees queue slots and sheets wait on it.
+    if (!sequencing_ && tail_ < head_ && slots_[tail_ % Q].state == slot_extracted) {
+        sequencing_ = true;
+        bool ok = true;
+        while (ok && !failed_ && !stopping_ && tail_ < head_ &&
+               slots_[tail_ % Q].state == slot_extracted) {
+            frame_slot &slot = slots_[tail_ % Q];
+            lock.unlock();
+            ok = gauge_guarded(
+                this, [&] { sequence(slot); }, &gauge::record_failure);
+            lock.lock();
+            slot.state = slot_free;
+            ++tail_;
+            room_cv_.notify_all();
+        }
+        sequencing_ = false;
+        work_cv_.notify_all();
+        idle_cv_.notify_all();
+        return true;
+    }
+    // 2. A finished sheet's flatness (the next sheet is being built).
+    if (!evaluating_ && !jobs_.empty()) {
+        evaluating_ = true;
+        const sheet_job job = jobs_.front();
+        jobs_.erase(jobs_.begin());
+        lock.unlock();
+        gauge_guarded(
+            this, [&] { evaluate(job); }, &gauge::record_failure);
+        lock.lock();
+        buffer_busy_[job.buffer] = 0;
+        evaluating_ = false;
+        work_cv_.notify_all();
+        idle_cv_.notify_all();
+        return true;
+    }
+    // 3. Extraction, oldest frame first.
+    while (claim_ < head_ && (claim_ < tail_ || slots_[claim_ % Q].state != slot_filled))
+        ++claim_;
+    if (claim_ < head_) {
+        frame_slot &slot = slots_[claim_ % Q];
+        ++claim_;
+        slot.state = slot_extracting;
+        lock.unlock();
+        bool error = false;
+        extract(slot, slot.pixels.get(), slot.format, slot.stride, extractors_[index], &error);
+        lock.lock();
+        slot.state = slot_extracted;
+        ++n_extracted_;
+        if (error)
+            ++n_extract_errors_;
+        work_cv_.notify_all();
+        return true;
+    }
+    return false;
+}
+
+// ---------------------------------------------------------------- sequencer
+
+void gauge::activate_cuts(std::uint64_t up_to_seq) {
+    std::lock_guard<std::mutex> lock(m_);
+    while (cut_count_ > 0 && cuts_[cut_head_].seq <= up_to_seq) {
+        const double c = cuts_[cut_head_].s;
+        cut_head_ = (cut_head_ + 1) % k_cut_capacity;
+        --cut_count_;
+        if (in_strip_ && c <= sheet_start_) {
+            ++n_cuts_ignored_;
+            continue;
+        }
+        active_[(active_head_ + active_count_) % k_cut_capacity] = c;
+        ++active_count_;
+    }
+}
+
+void gauge::drop_active_cuts(double up_to, bool all) {
+    std::lock_guard<std::mutex> lock(m_);
+    while (active_count_ > 0 && (all || active_[active_head_] <= up_to)) {
+        active_head_ = (active_head_ + 1) % k_cut_capacity;
+        --active_count_;
+        ++n_cuts_ignored_;
+    }
+}
+
+void gauge::sequence(frame_slot &slot) {
+    if (slot.new_strip) {
+        // The encoder went back by more than gauge_reversal_length: what was
+        // measured is finished, and cuts given in the old numbering go.
+        end_strip(FLT_SHEET_FLAG_NEW_STRIP);
+        drop_active_cuts(0.0, true);
+    }
+    activate_cuts(slot.seq);
+    pending_row_skipped_ += slot.skipped_before;
+    pending_row_dropped_ += slot.dropped_before;
+    std::uint32_t valid = 0;
+    for (std::size_t k = 0; k < K_; ++k)
+        valid += slot.valid[k] != 0;
+    const bool present = valid > 0 && double(valid) * pitch_ >= cfg_.strip_min_width;
+    const double s = slot.s;
+
+    if (in_strip_ && present && s - last_pushed_s_ > max_jump_) {
+        // Farther than the reconstructor bridges: a new strip.
+        end_strip(FLT_SHEET_FLAG_NEW_STRIP);
+        std::lock_guard<std::mutex> lock(m_);
+        ++n_reversals_;
+    }
+    if (!in_strip_) {
+        if (!present) {
+            std::lock_guard<std::mutex> lock(m_);
+            ++n_no_strip_;
+            pending_row_skipped_ = pending_row_dropped_ = 0;
+            return;
+        }
+        begin_strip(s);
+    }
+    // Late cuts: a cut given after the strip passed it splits the open
+    // sheet now that it is known.
+    if (has_output_)
+        apply_cuts(last_output_s_);
+
+    row_meta meta;
+    meta.s = s;
+    meta.skipped = pending_row_skipped_;
+    meta.dropped = pending_row_dropped_;
+    meta.invalid = std::uint32_t(K_ - valid);
+    pending_row_skipped_ = pending_row_dropped_ = 0;
+    if (present) {
+        release_held();
+        push_row(s, slot.height.data(), slot.slope.data(), slot.valid.data(), meta);
+        return;
+    }
+    // Perhaps the tail: hold the row until the strip shows again (a gap
+    // inside it) or gauge_tail_length has passed without it (the tail).
+    held_s_[held_] = s;
+    std::memcpy(&held_height_[held_ * K_], slot.height.data(), K_ * sizeof(double));
+    std::memcpy(&held_slope_[held_ * K_], slot.slope.data(), K_ * sizeof(double));
+    std::memcpy(&held_valid_[held_ * K_], slot.valid.data(), K_);
+    held_meta_[held_] = meta;
+    ++held_;
+    if (s - held_s_[0] >= cfg_.tail_length || held_ == hold_capacity_)
+        end_strip(FLT_SHEET_FLAG_TAIL);
+}
+
+void gauge::begin_strip(double s) {
+    in_strip_ = true;
+    pushed_ = false;
+    has_output_ = false;
+    ++coil_;
+    sheet_in_coil_ = 0;
+    sheet_start_ = s;
+    sheet_flags_ = FLT_SHEET_FLAG_HEAD;
+    buffers_[current_].rows = 0;
+    {
+        std::lock_guard<std::mutex> lock(m_);
+        ++n_strips_;
+    }
+    // Cuts at or before the head were for strip that never came.
+    drop_active_cuts(s, false);
+}
+
+void gauge::release_held() {
+    for (std::size_t i = 0; i < held_; ++i)
+        push_row(held_s_[i], &held_height_[i * K_], &held_slope_[i * K_], &held_valid_[i * K_],
+                 held_meta_[i]);
+    held_ = 0;
+}
+
+void gauge::push_row(double s, const double *height, const double *slope, const std::uint8_t *valid,
+                     const row_meta &meta) {
+    if (meta_count_ == row_capacity_)
+        throw error(FLT_ERR_INTERNAL, "the gauge's row ring is full");
+    check(flt_recon_push(recon_, 1, K_, &s, height, slope, valid));
+    const std::size_t at = (meta_head_ + meta_count_) % row_capacity_;
+    meta_ring_[at] = meta;
+    if (cfg_.keep_maps >= 2)
+        for (std::size_t k = 0; k < K_; ++k)
+            measured_ring_[at * K_ + k] = valid[k] ? height[k] : k_nan;
+    ++meta_count_;
+    pushed_ = true;
+    last_pushed_s_ = s;
+    pull_all();
+}
+
+void gauge::pull_all() {
+    if (!pushed_)
+        return;
+    for (;;) {
+        std::size_t got = 0;
+        check(flt_recon_pull(recon_, k_pull_rows, K_, pull_s_.data(), pull_z_.data(),
+                             pull_flags_.data(), &got));
+        if (got == 0)
+            return;
+        for (std::size_t r = 0; r < got; ++r) {
+            if (meta_count_ == 0 || meta_ring_[meta_head_].s != pull_s_[r])
+                throw error(FLT_ERR_INTERNAL, "the reconstructor's rows and the gauge's disagree");
+            const std::size_t at = meta_head_;
+            meta_head_ = (meta_head_ + 1) % row_capacity_;
+            --meta_count_;
+            output_row(pull_s_[r], &pull_z_[r * K_], &pull_flags_[r * K_], meta_ring_[at],
+                       cfg_.keep_maps >= 2 ? &measured_ring_[at * K_] : nullptr);
+        }
+    }
+}
+
+void gauge::output_row(double s, const double *z, const std::uint8_t *flags, const row_meta &meta,
+                       const double *measured) {
+    // Cuts at or before this row end the sheet before it joins.
+    apply_cuts(s);
+    if (buffers_[current_].rows > 0 &&
+        (s - sheet_start_ >= cfg_.max_sheet_length || buffers_[current_].rows == sheet_capacity_))
+        split(s, FLT_SHEET_FLAG_SPLIT);
+    sheet_buffer &b = buffers_[current_];
+    const std::size_t r = b.rows;
+    b.s[r] = s;
+    std::memcpy(&b.z[r * K_], z, K_ * sizeof(double));
+    std::memcpy(&b.flags[r * K_], flags, K_);
+    b.meta[r] = meta;
+    if (measured)
+        std::memcpy(&b.measured[r * K_], measured, K_ * sizeof(double));
+    ++b.rows;
+    has_output_ = true;
+    last_output_s_ = s;
+}
+
+void gauge::apply_cuts(double s_limit) {
+    for (;;) {
+        double c;
+        {
+            std::lock_guard<std::mutex> lock(m_);
+            if (active_count_ == 0 || !(active_[active_head_] <= s_limit))
+                return;
+            c = active_[active_head_];
+            active_head_ = (active_head_ + 1) % k_cut_capacity;
+            --active_count_;
+            if (c <= sheet_start_) {
+                ++n_cuts_ignored_;
+                continue;
+            }
+        }
+        split(c, 0);
+    }
+}
+
+void gauge::split(double s_at, unsigned end_flags, bool all_rows) {
+    sheet_buffer &old = buffers_[current_];
+    const std::size_t i =
+        all_rows
+            ? old.rows
+            : std::size_t(std::lower_bound(old.s.begin(), old.s.begin() + long(old.rows), s_at) -
+                          old.s.begin());
+    sheet_job job;
+    job.buffer = current_;
+    job.rows = i;
+    job.s_start = sheet_start_;
+    job.s_end = s_at;
+    job.flags = sheet_flags_ | end_flags;
+    job.coil = coil_;
+    job.index = ++sheet_in_coil_;
+    job.id = ++sheet_ids_;
+    job.lookahead = std::max(0.0, last_pushed_s_ - s_at);
+    const int next = free_buffer_or_wait();
+    sheet_buffer &nb = buffers_[next];
+    const std::size_t rest = old.rows - i;
+    std::memcpy(nb.s.data(), old.s.data() + i, rest * sizeof(double));
+    std::memcpy(nb.z.data(), old.z.data() + i * K_, rest * K_ * sizeof(double));
+    std::memcpy(nb.flags.data(), old.flags.data() + i * K_, rest * K_);
+    std::copy(old.meta.begin() + long(i), old.meta.begin() + long(old.rows), nb.meta.begin());
+    if (cfg_.keep_maps >= 2)
+        std::memcpy(nb.measured.data(), old.measured.data() + i * K_, rest * K_ * sizeof(double));
+    nb.rows = rest;
+    old.rows = i;
+    {
+        std::lock_guard<std::mutex> lock(m_);
+        jobs_.push_back(job);
+    }
+    work_cv_.notify_all();
+    current_ = next;
+    sheet_start_ = s_at;
+    sheet_flags_ = 0;
+}
+
+int gauge::free_buffer_or_wait() {
+    const int other = 1 - current_;
+    std::unique_lock<std::mutex> lock(m_);
+    for (;;) {
+        if (!buffer_busy_[other]) {
+            buffer_busy_[other] = 1;
+            return other;
+        }
+        if (failed_ || stopping_)
+            throw error(failed_ ? failure_status_ : FLT_ERR_STATE, "the gauge is stopping");
+        if (!evaluating_ && !jobs_.empty()) {
+            // Nobody evaluates the waiting sheet: do it here.
+            evaluating_ = true;
+            const sheet_job job = jobs_.front();
+            jobs_.erase(jobs_.begin());
+            lock.unlock();
+            try {
+                evaluate(job);
+            } catch (...) {
+                lock.lock();
+                evaluating_ = false;
+                throw;
+            }
+            lock.lock();
+            buffer_busy_[job.buffer] = 0;
+            evaluating_ = false;
+            idle_cv_.notify_all();
+            continue;
+        }
+        idle_cv_.wait(lock);
+    }
+}
+
+void gauge::end_strip(unsigned flag) {
+    if (!in_strip_)
+        return;
+    if (pushed_) {
+        // The strip ends here: nothing lies beyond, so its last rows are
+        // finished with what there is.
+        check(flt_recon_end_sheet(recon_));
+        pull_all();
+    }
+    {
+        std::lock_guard<std::mutex> lock(m_);
+        n_no_strip_ += held_;
+    }
+    held_ = 0;
+    if (buffers_[current_].rows > 0) {
+        const sheet_buffer &b = buffers_[current_];
+        split(b.s[b.rows - 1], flag, true);
+    }
+    if (pushed_)
+        check(flt_recon_reset(recon_));
+    pushed_ = false;
+    in_strip_ = false;
+    has_output_ = false;
+    pending_row_skipped_ = pending_row_dropped_ = 0;
+}
+
+// ---------------------------------------------------------------- evaluation
+
+flt_sheet *gauge::take_slot() {
+    {
+        std::lock_guard<std::mutex> lock(pool_->m);
+        if (!pool_->free.empty()) {
+            flt_sheet *sh = pool_->free.back();
+            pool_->free.pop_back();
+            return sh;
+        }
+    }
+    std::lock_guard<std::mutex> lock(m_);
+    ++n_sheets_dropped_;
+    if (ready_count_ == 0)
+        return nullptr;  // every slot is held by the caller: this sheet is lost
+    // The oldest waiting sheet makes room for the newest.
+    flt_sheet *sh = ready_[ready_head_];
+    ready_head_ = (ready_head_ + 1) % ready_.size();
+    --ready_count_;
+    return sh;
+}
+
+void gauge::evaluate(const sheet_job &job) {
+    {
+        std::lock_guard<std::mutex> lock(m_);
+        ++n_sheets_;
+    }
+    flt_sheet *sh = take_slot();
+    if (sh == nullptr)
+        return;
+    const sheet_buffer &b = buffers_[job.buffer];
+    const std::size_t n = job.rows;
+    double *v = sh->value;
+    std::fill(v, v + k_sheet_values, 0.0);
+    v[FLT_SHEET_ID] = double(job.id);
+    v[FLT_SHEET_COIL] = double(job.coil);
+    v[FLT_SHEET_INDEX] = double(job.index);
+    v[FLT_SHEET_S_START] = job.s_start;
+    v[FLT_SHEET_S_END] = job.s_end;
+    v[FLT_SHEET_ROWS] = double(n);
+    v[FLT_SHEET_LOOKAHEAD] = job.lookahead;
+    v[FLT_SHEET_FIBERS] = double(K_);
+    v[FLT_SHEET_ZONES] = double(zones_);
+    double skipped = 0, dropped = 0, saturated = 0, invalid = 0;
+    for (std::size_t r = 0; r < n; ++r) {
+        skipped += b.meta[r].skipped;
+        dropped += b.meta[r].dropped;
+        saturated += b.meta[r].saturated;
+        invalid += b.meta[r].invalid;
+    }
+    v[FLT_SHEET_FRAMES] = double(n);
+    v[FLT_SHEET_SKIPPED] = skipped;
+    v[FLT_SHEET_DROPPED] = dropped;
+    v[FLT_SHEET_SATURATED] = saturated;
+    v[FLT_SHEET_INVALID] = invalid;
+    unsigned flags = job.flags;
+    v[FLT_SHEET_S_FIRST] = n ? b.s[0] : k_nan;
+    v[FLT_SHEET_S_LAST] = n ? b.s[n - 1] : k_nan;
+    if (n == 0)
+        flags |= FLT_SHEET_FLAG_EMPTY;
+
+    // The flatness of the rows: whole sheets through evaluate (which
+    // refuses a sheet shorter than one wave or without a valid fiber), short
+    // ones through the streamed finish (which reports them flagged).
+    flt_flatness *f = nullptr;
+    if (n >= 2 && b.s[n - 1] - b.s[0] >= min_length_) {
+        const flt_status st =
+            flt_flatness_evaluate(flat_, n, K_, b.s.data(), b.z.data(), b.flags.data());
+        if (st == FLT_OK)
+            f = flat_;
+        else if (st != FLT_ERR_INVALID_ARGUMENT)
+            check(st);
+        clear_error();
+    } else if (n >= 2) {
+        check(flt_flatness_reset(flat_short_));
+        std::size_t used = 0;
+        int evaluated = 0;
+        check(flt_flatness_push(flat_short_, n, K_, b.s.data(), b.z.data(), b.flags.data(), &used,
+                                &evaluated));
+        check(flt_flatness_finish(flat_short_, &evaluated));
+        if (used != n || !evaluated)
+            throw error(FLT_ERR_INTERNAL, "a short sheet was not evaluated whole");
+        f = flat_short_;
+    }
+    double *fx = sh->array[FLT_SHEET_FIBER_X].data();
+    double *fiu = sh->array[FLT_SHEET_FIBER_I_UNITS].data();
+    double *farc = sh->array[FLT_SHEET_FIBER_ARC_LENGTH].data();
+    double *fwh = sh->array[FLT_SHEET_FIBER_WAVE_HEIGHT].data();
+    double *fwp = sh->array[FLT_SHEET_FIBER_WAVE_PERIOD].data();
+    double *fst = sh->array[FLT_SHEET_FIBER_STEEPNESS].data();
+    double *ffl = sh->array[FLT_SHEET_FIBER_FLAGS].data();
+    double *zx = sh->array[FLT_SHEET_ZONE_CENTRE_X].data();
+    double *ziu = sh->array[FLT_SHEET_ZONE_I_UNITS].data();
+    double *zfl = sh->array[FLT_SHEET_ZONE_FLAGS].data();
+    std::copy(fiber_x_.begin(), fiber_x_.end(), fx);
+    std::copy(zone_x_.begin(), zone_x_.end(), zx);
+    unsigned window_flags = 0;
+    if (f) {
+        check(flt_flatness_window(f, nullptr, nullptr, nullptr, &window_flags, nullptr));
+        check(flt_flatness_fiber_results(f, K_, farc, fiu, fwh, fwp, fst, flag_scratch_.data()));
+        for (std::size_t k = 0; k < K_; ++k)
+            ffl[k] = flag_scratch_[k];
+        check(flt_flatness_zone_results(f, zones_, ziu, flag_scratch_.data()));
+        for (std::size_t j = 0; j < zones_; ++j)
+            zfl[j] = flag_scratch_[j];
+        flt_shape shape = FLT_SHAPE_UNDETERMINED;
+        double confidence = 0, bow = 0, crossbow = 0;
+        unsigned components = 0;
+        check(flt_flatness_shape(f, &shape, &confidence, &components, &bow, &crossbow));
+        v[FLT_SHEET_SHAPE] = double(shape);
+        v[FLT_SHEET_CONFIDENCE] = confidence;
+        v[FLT_SHEET_COMPONENTS] = double(components);
+        v[FLT_SHEET_BOW] = bow;
+        v[FLT_SHEET_CROSSBOW] = crossbow;
+    } else {
+        // No valid fiber, one row, or none: every value NaN and flagged.
+        window_flags = FLT_WINDOW_NO_VALID_FIBER | FLT_WINDOW_NO_BOW | FLT_WINDOW_NO_CROSSBOW;
+        if (n < 2 || b.s[n - 1] - b.s[0] < min_length_)
+            window_flags |= FLT_WINDOW_SHORT;
+        for (std::size_t k = 0; k < K_; ++k) {
+            fiu[k] = farc[k] = fwh[k] = fwp[k] = fst[k] = k_nan;
+            ffl[k] = double(FLT_FIBER_NO_DATA | FLT_FIBER_NO_WAVE);
+        }
+        for (std::size_t j = 0; j < zones_; ++j) {
+            ziu[j] = k_nan;
+            zfl[j] = double(FLT_ZONE_NO_DATA);
+        }
+        v[FLT_SHEET_SHAPE] = double(FLT_SHAPE_UNDETERMINED);
+        v[FLT_SHEET_CONFIDENCE] = 0.0;
+        v[FLT_SHEET_COMPONENTS] = 0.0;
+        v[FLT_SHEET_BOW] = k_nan;
+        v[FLT_SHEET_CROSSBOW] = k_nan;
+    }
+    v[FLT_SHEET_WINDOW_FLAGS] = double(window_flags);
+
+    // The strip's edges: the outer fibers with enough valid data.
+    long first = -1, last = -1;
+    for (std::size_t k = 0; k < K_; ++k)
+        if (!(unsigned(ffl[k]) & FLT_FIBER_NO_DATA)) {
+            if (first < 0)
+                first = long(k);
+            last = long(k);
+        }
+    if (first >= 0) {
+        v[FLT_SHEET_STRIP_LEFT] = fx[first] - 0.5 * pitch_;
+        v[FLT_SHEET_STRIP_RIGHT] = fx[last] + 0.5 * pitch_;
+        v[FLT_SHEET_STRIP_WIDTH] = v[FLT_SHEET_STRIP_RIGHT] - v[FLT_SHEET_STRIP_LEFT];
+        v[FLT_SHEET_STRIP_CENTRE] = 0.5 * (v[FLT_SHEET_STRIP_LEFT] + v[FLT_SHEET_STRIP_RIGHT]);
+    } else {
+        flags |= FLT_SHEET_FLAG_NO_EDGES;
+        v[FLT_SHEET_STRIP_LEFT] = v[FLT_SHEET_STRIP_RIGHT] = k_nan;
+        v[FLT_SHEET_STRIP_WIDTH] = v[FLT_SHEET_STRIP_CENTRE] = k_nan;
+    }
+    // The largest wave over the fibers.
+    long wave = -1;
+    for (std::size_t k = 0; k < K_; ++k)
+        if (!(unsigned(ffl[k]) & (FLT_FIBER_NO_DATA | FLT_FIBER_NO_WAVE)) &&
+            (wave < 0 || fwh[k] > fwh[wave]))
+            wave = long(k);
+    if (wave >= 0) {
+        v[FLT_SHEET_WAVE_HEIGHT] = fwh[wave];
+        v[FLT_SHEET_WAVE_PERIOD] = fwp[wave];
+        v[FLT_SHEET_WAVE_STEEPNESS] = fst[wave];
+        v[FLT_SHEET_WAVE_X] = fx[wave];
+    } else {
+        flags |= FLT_SHEET_FLAG_NO_WAVE;
+        v[FLT_SHEET_WAVE_HEIGHT] = v[FLT_SHEET_WAVE_PERIOD] = k_nan;
+        v[FLT_SHEET_WAVE_STEEPNESS] = v[FLT_SHEET_WAVE_X] = k_nan;
+    }
+    double max_iu = k_nan;
+    for (std::size_t j = 0; j < zones_; ++j)
+        if (!(unsigned(zfl[j]) & FLT_ZONE_NO_DATA) && !(ziu[j] <= max_iu))
+            max_iu = ziu[j];
+    v[FLT_SHEET_MAX_I_UNITS] = max_iu;
+    v[FLT_SHEET_FLAGS] = double(flags);
+
+    sh->rows = n;
+    if (cfg_.keep_maps >= 1) {
+        std::memcpy(sh->map_s.data(), b.s.data(), n * sizeof(double));
+        std::memcpy(sh->map_z.data(), b.z.data(), n * K_ * sizeof(double));
+        std::memcpy(sh->map_flags.data(), b.flags.data(), n * K_);
+    }
+    if (cfg_.keep_maps >= 2)
+        std::memcpy(sh->map_measured.data(), b.measured.data(), n * K_ * sizeof(double));
+    sh->magic = k_sheet_magic;
+    deliver(sh);
+}
+
+void gauge::deliver(flt_sheet *sheet) {
+    std::lock_guard<std::mutex> dl(deliver_m_);
+    if (callback_) {
+        sheet->borrowed = true;
+        t_in_callback = this;
+        callback_(sheet, callback_user_);
+        t_in_callback = nullptr;
+        sheet->borrowed = false;
+        sheet->magic = 0;
+        std::lock_guard<std::mutex> lock(pool_->m);
+        pool_->free.push_back(sheet);
+        return;
+    }
+    std::lock_guard<std::mutex> lock(m_);
+    ready_[(ready_head_ + ready_count_) % ready_.size()] = sheet;
+    ++ready_count_;
+    sheet_cv_.notify_all();
+}
+
+// ---------------------------------------------------------------- calls
+
+flt_status gauge::cut(const char *fn, double encoder_mm) {
+    const double c = encoder_mm - mean_offset_;
+    {
+        std::lock_guard<std::mutex> lock(m_);
+        if (failed_)
+            return fail(failure_status_, "%s: the gauge stopped processing: %s", fn,
+                        failure_message_.c_str());
+        if (has_cut_floor_ && !(c > cut_floor_))
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'encoder_mm' = %.17g does not follow the previous cut at "
+                        "%.17g mm: cuts are given in increasing order (after an encoder reset, "
+                        "push the first frame of the new numbering first)",
+                        fn, encoder_mm, cut_floor_ + mean_offset_);
+        if (cut_count_ + active_count_ >= k_cut_capacity)
+            return fail(FLT_ERR_BUFFER_FULL,
+                        "%s: %zu cuts wait for the strip to reach them; the strip has not "
+                        "come that far (check the cut positions against the encoder)",
+                        fn, cut_count_ + active_count_);
+        cuts_[(cut_head_ + cut_count_) % k_cut_capacity] = cut_entry{head_, c};
+        ++cut_count_;
+        has_cut_floor_ = true;
+        cut_floor_ = c;
+        ++n_cuts_;
+    }
+    if (cfg_.workers == 0) {
+        // Inline: a late cut splits its sheet now.
+        if (!gauge_guarded(
+                this,
+                [&] {
+                    if (in_strip_) {
+                        activate_cuts(std::numeric_limits<std::uint64_t>::max());
+                        if (has_output_)
+                            apply_cuts(last_output_s_);
+                        run_jobs_inline();
+                    }
+                },
+                &gauge::record_failure))
+            return failure(fn);
+    }
+    return FLT_OK;
+}
+
+flt_status gauge::flush(const char *fn) {
+    if (in_gauge_callback(this))
+        return fail(FLT_ERR_STATE, "%s: called from inside the gauge's callback", fn);
+    if (flt_status st = failure(fn))
+        return st;
+    std::unique_lock<std::mutex> lock(m_);
+    if (acquiring_)
+        return fail(FLT_ERR_STATE,
+                    "%s: the attached source is acquiring; call flt_gauge_stop first", fn);
+    // Every frame pushed so far through the sequencer, then this thread
+    // takes the sequencing role to end the strip.
+    idle_cv_.wait(lock, [&] { return failed_ || (tail_ == head_ && !sequencing_); });
+    if (failed_) {
+        lock.unlock();
+        return failure(fn);
+    }
+    sequencing_ = true;
+    lock.unlock();
+    const bool ok = gauge_guarded(
+        this,
+        [&] {
+            activate_cuts(std::numeric_limits<std::uint64_t>::max());
+            end_strip(FLT_SHEET_FLAG_FLUSHED);
+            if (cfg_.workers == 0)
+                run_jobs_inline();
+        },
+        &gauge::record_failure);
+    lock.lock();
+    sequencing_ = false;
+    work_cv_.notify_all();
+    if (!ok) {
+        lock.unlock();
+        return failure(fn);
+    }
+    idle_cv_.wait(lock, [&] { return failed_ || (jobs_.empty() && !evaluating_); });
+    lock.unlock();
+    return failure(fn);
+}
+
+flt_status gauge::attach(const char *fn, flt_source *source) {
+    std::lock_guard<std::mutex> lock(m_);
+    if (acquiring_ || acquisition_.joinable())
+        return fail(FLT_ERR_STATE, "%s: the gauge is acquiring; call flt_gauge_stop first", fn);
+    source_ = source;
+    return FLT_OK;
+}
+
+flt_status gauge::start(const char *fn) {
+    if (flt_status st = failure(fn))
+        return st;
+    std::unique_lock<std::mutex> lock(m_);
+    if (source_ == nullptr)
+        return fail(FLT_ERR_STATE, "%s: no source is attached (flt_gauge_attach_source)", fn);
+    if (acquiring_ || acquisition_.joinable())
+        return fail(FLT_ERR_STATE, "%s: the gauge is already acquiring", fn);
+    lock.unlock();
+    const flt_status st = flt_source_start(source_);
+    if (st != FLT_OK && st != FLT_ERR_STATE)  // STATE: the caller started it
+        return fail(st, "%s: the source does not start: %s", fn,
+                    std::string(flt_last_error_message()).c_str());
+    clear_error();
+    lock.lock();
+    source_started_ = true;
+    acquiring_ = true;
+    acquisition_stop_ = false;
+    acquisition_status_ = FLT_OK;
+    acquisition_message_.clear();
+    acquisition_ = std::thread([this] { acquisition_main(); });
+    return FLT_OK;
+}
+
+void gauge::acquisition_main() {
+    flt_status status = FLT_OK;
+    std::string message;
+    for (;;) {
+        {
+            std::lock_guard<std::mutex> lock(m_);
+            if (acquisition_stop_)
+                break;
+        }
+        const flt_frame *frame = nullptr;
+        flt_status st = flt_source_next(source_, 50, &frame);
+        if (st == FLT_ERR_TIMEOUT)
+            continue;
+        if (st != FLT_OK) {
+            status = st;
+            message = flt_last_error_message();
+            break;
+        }
+        if (frame == nullptr)
+            break;  // the end of an image sequence
+        gauge_input in;
+        std::uint32_t w = 0, h = 0;
+        st = flt_frame_info(frame, &in.pixels, &w, &h, &in.stride, &in.format, nullptr, nullptr,
+                            &in.encoder_mm);
+        if (st == FLT_OK)
+            st = check_frame("flt_gauge_start (acquisition)", in.pixels, enum_arg(in.format), w, h,
+                             in.stride, in.encoder_mm);
+        if (st != FLT_OK) {
+            status = st;
+            message = flt_last_error_message();
+            break;
+        }
+        try {
+            take(in, true);
+        } catch (const error &e) {
+            status = e.status;
+            message = e.what();
+            break;
+        } catch (const std::exception &e) {
+            status = FLT_ERR_INTERNAL;
+            message = e.what();
+            break;
+        }
+    }
+    std::lock_guard<std::mutex> lock(m_);
+    acquisition_status_ = status;
+    acquisition_message_ = message;
+    acquiring_ = false;
+    idle_cv_.notify_all();
+}
+
+flt_status gauge::stop(const char *fn) {
+    if (in_gauge_callback(this))
+        return fail(FLT_ERR_STATE, "%s: called from inside the gauge's callback", fn);
+    {
+        std::lock_guard<std::mutex> lock(m_);
+        acquisition_stop_ = true;
+    }
+    room_cv_.notify_all();
+    if (acquisition_.joinable())
+        acquisition_.join();
+    if (source_ && source_started_) {
+        if (flt_source_stop(source_) != FLT_OK)
+            clear_error();
+        source_started_ = false;
+    }
+    std::unique_lock<std::mutex> lock(m_);
+    idle_cv_.wait(lock, [&] { return failed_ || (tail_ == head_ && !sequencing_); });
+    if (failed_) {
+        lock.unlock();
+        return failure(fn);
+    }
+    const flt_status st = acquisition_status_;
+    if (st != FLT_OK) {
+        const std::string message = acquisition_message_;
+        acquisition_status_ = FLT_OK;
+        acquisition_message_.clear();
+        return fail(st, "%s: the acquisition ended with: %s", fn, message.c_str());
+    }
+    return FLT_OK;
+}
+
+flt_status gauge::next_sheet(const char *fn, std::uint32_t timeout_ms, flt_sheet **out) {
+    if (in_gauge_callback(this))
+        return fail(FLT_ERR_STATE, "%s: called from inside the gauge's callback", fn);
+    {
+        std::lock_guard<std::mutex> dl(deliver_m_);
+        if (callback_)
+            return fail(FLT_ERR_STATE,
+                        "%s: a callback receives the sheets (flt_gauge_set_callback with NULL "
+                        "removes it)",
+                        fn);
+    }
+    std::unique_lock<std::mutex> lock(m_);
+    sheet_cv_.wait_for(lock, std::chrono::milliseconds(timeout_ms),
+                       [&] { return ready_count_ > 0 || failed_; });
+    if (ready_count_ > 0) {
+        *out = ready_[ready_head_];
+        ready_head_ = (ready_head_ + 1) % ready_.size();
+        --ready_count_;
+        return FLT_OK;
+    }
+    if (failed_) {
+        lock.unlock();
+        return failure(fn);
+    }
+    return FLT_OK;
+}
+
+flt_status gauge::set_callback(const char *fn, flt_sheet_callback callback, void *user) {
+    if (in_gauge_callback(this))
+        return fail(FLT_ERR_STATE, "%s: called from inside the gauge's callback", fn);
+    std::lock_guard<std::mutex> dl(deliver_m_);
+    callback_ = callback;
+    callback_user_ = user;
+    if (!callback)
+        return FLT_OK;
+    // The sheets already waiting go to the callback first, in order.
+    for (;;) {
+        flt_sheet *sh;
+        {
+            std::lock_guard<std::mutex> lock(m_);
+            if (ready_count_ == 0)
+                break;
+            sh = ready_[ready_head_];
+            ready_head_ = (ready_head_ + 1) % ready_.size();
+            --ready_count_;
+        }
+        sh->borrowed = true;
+        t_in_callback = this;
+        callback(sh, user);
+        t_in_callback = nullptr;
+        sh->borrowed = false;
+        sh->magic = 0;
+        std::lock_guard<std::mutex> lock(pool_->m);
+        pool_->free.push_back(sh);
+    }
+    return FLT_OK;
+}
+
+std::uint64_t gauge::count(flt_gauge_counter counter) const {
+    std::lock_guard<std::mutex> lock(m_);
+    switch (counter) {
+        case FLT_GAUGE_COUNT_FRAMES:
+            return n_frames_;
+        case FLT_GAUGE_COUNT_EXTRACTED:
+            return n_extracted_;
+        case FLT_GAUGE_COUNT_SKIPPED_STOP:
+            return n_skipped_stop_;
+        case FLT_GAUGE_COUNT_SKIPPED_REVERSAL:
+            return n_skipped_rev_;
+        case FLT_GAUGE_COUNT_DROPPED:
+            return n_dropped_;
+        case FLT_GAUGE_COUNT_NO_STRIP:
+            return n_no_strip_;
+        case FLT_GAUGE_COUNT_STRIPS:
+            return n_strips_;
+        case FLT_GAUGE_COUNT_SHEETS:
+            return n_sheets_;
+        case FLT_GAUGE_COUNT_SHEETS_DROPPED:
+            return n_sheets_dropped_;
+        case FLT_GAUGE_COUNT_CUTS:
+            return n_cuts_;
+        case FLT_GAUGE_COUNT_CUTS_IGNORED:
+            return n_cuts_ignored_;
+        case FLT_GAUGE_COUNT_REVERSALS:
+            return n_reversals_;
+        case FLT_GAUGE_COUNT_EXTRACT_ERRORS:
+            return n_extract_errors_;
+        case FLT_GAUGE_COUNT_QUEUED:
+            return head_ - tail_;
+        case FLT_GAUGE_COUNT_ACQUIRING:
+            return acquiring_ ? 1 : 0;
+        case FLT_GAUGE_COUNT_SHEETS_WAITING:
+            return ready_count_;
+        default:
+            return 0;
+    }
+}
+
+bool gauge::acquiring() const {
+    std::lock_guard<std::mutex> lock(m_);
+    return acquiring_;
+}
+
+flt_status gauge::check_frame(const char *fn, const void *pixels, int format, std::uint32_t width,
+                              std::uint32_t height, std::size_t stride, double encoder_mm) const {
+    FLT_CHECK_NOT_NULL(fn, pixels);
+    const int raw = format;
+    if (raw != FLT_PIXEL_MONO8 && raw != FLT_PIXEL_MONO10 && raw != FLT_PIXEL_MONO12 &&
+        raw != FLT_PIXEL_MONO16)
+        return fail(FLT_ERR_INVALID_ARGUMENT,
+                    "%s: argument 'format' = %d is not a flt_pixel_format (8, 10, 12 or 16)", fn,
+                    raw);
+    if (width != width_ || height != height_)
+        return fail(FLT_ERR_INVALID_ARGUMENT,
+                    "%s: arguments 'width' x 'height' = %u x %u but the calibration's frames are "
+                    "%u x %u px",
+                    fn, width, height, width_, height_);
+    const int bytes = raw == FLT_PIXEL_MONO8 ? 1 : 2;
+    if (stride < std::size_t(width) * bytes)
+        return fail(FLT_ERR_INVALID_ARGUMENT,
+                    "%s: argument 'stride_bytes' = %zu is less than width %u x %d bytes per pixel",
+                    fn, stride, width, bytes);
+    if (height > 0 && stride > std::numeric_limits<std::size_t>::max() / height)
+        return fail(FLT_ERR_INVALID_ARGUMENT,
+                    "%s: argument 'stride_bytes' = %zu times height %u overflows the address space",
+                    fn, stride, height);
+    if (bytes == 2 && (stride % 2 != 0 || reinterpret_cast<std::uintptr_t>(pixels) % 2 != 0))
+        return fail(FLT_ERR_INVALID_ARGUMENT,
+                    "%s: 16-bit frames need an even 'stride_bytes' (= %zu) and a 2-byte aligned "
+                    "'frame'",
+                    fn, stride);
+    return check_encoder(fn, encoder_mm);
+}
+
+flt_status gauge::check_encoder(const char *fn, double encoder_mm) const {
+    if (!std::isfinite(encoder_mm) || std::fabs(encoder_mm) > 1.0e12)
+        return fail(FLT_ERR_INVALID_ARGUMENT,
+                    "%s: argument 'encoder_mm' = %g is not a position (finite, at most 1e12 mm)",
+                    fn, encoder_mm);
+    return FLT_OK;
+}
+
+}  // namespace flt

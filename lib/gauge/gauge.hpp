@@ -1,0 +1,281 @@
+// SPDX-License-Identifier: Apache-2.0
+// Internal: the gauge (flatline/gauge.h). lib/gauge/README.md describes the
+// stages, the threads and the invariants.
+#pragma once
+
+#include <condition_variable>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/options.hpp"
+#include "flatline/flatness.h"
+#include "flatline/gauge.h"
+#include "flatline/recon.h"
+
+namespace flt {
+
+constexpr std::uint32_t k_sheet_magic = 0x464c5453u;  // "FLTS"
+constexpr int k_sheet_values = 32;                    // flt_sheet_value keys 0..31
+constexpr int k_sheet_arrays = 10;                    // flt_sheet_array keys 0..9
+
+struct sheet_pool;
+
+}  // namespace flt
+
+// A finished sheet. Slots are allocated at create time and reused; a slot
+// the caller holds keeps the pool alive past the gauge.
+struct flt_sheet {
+    std::uint32_t magic = 0;
+    std::shared_ptr<flt::sheet_pool> pool;
+    bool borrowed = false;  // inside the callback
+    double value[flt::k_sheet_values] = {};
+    std::vector<double> array[flt::k_sheet_arrays];
+    std::size_t rows = 0, fibers = 0;
+    int maps = 0;  // gauge_keep_maps
+    std::vector<double> map_s, map_z, map_measured;
+    std::vector<std::uint8_t> map_flags;
+};
+
+namespace flt {
+
+struct sheet_pool {
+    std::mutex m;
+    std::vector<flt_sheet *> free;  // capacity reserved for every slot
+    bool alive = true;
+    ~sheet_pool();
+};
+
+struct gauge_config {
+    unsigned workers = 2;
+    std::size_t queue_frames = 64;
+    bool overflow_wait = false;
+    double frame_spacing = 1.0, reversal_length = 500.0, strip_min_width = 100.0;
+    double tail_length = 300.0, max_sheet_length = 6000.0;
+    int keep_maps = 0;
+    std::size_t sheet_slots = 4;
+};
+
+// What the producer hands to the gauge: a frame or a profile row.
+struct gauge_input {
+    // (frames: pixels, format, stride; rows: height, slope, valid)
+    const void *pixels = nullptr;  // frame, or nullptr for a row
+    flt_pixel_format format = FLT_PIXEL_MONO8;
+    std::size_t stride = 0;
+    const double *height = nullptr, *slope = nullptr;  // row
+    const std::uint8_t *valid = nullptr;
+    double encoder_mm = 0.0;
+};
+
+// Per row on its way through the reconstructor: what its sheet counts.
+struct row_meta {
+    double s = 0.0;
+    std::uint32_t skipped = 0, dropped = 0, saturated = 0, invalid = 0;
+};
+
+class gauge {
+  public:
+    gauge(const flt_calib *calib, const flt_options *options);
+    ~gauge();
+    gauge(const gauge &) = delete;
+    gauge &operator=(const gauge &) = delete;
+
+    std::size_t fibers() const { return K_; }
+    double option(flt_option key) const { return option_value(&effective_, key); }
+
+    // Argument checks of a frame and an encoder position (message set). The
+    // format comes as the int the caller passed (enum_arg): a value outside
+    // the enum must not be loaded as one.
+    flt_status check_frame(const char *fn, const void *pixels, int format, std::uint32_t width,
+                           std::uint32_t height, std::size_t stride, double encoder_mm) const;
+    flt_status check_encoder(const char *fn, double encoder_mm) const;
+    // The producer's entry (push_frame, push_row, the acquisition thread),
+    // input already checked. Throws flt::error for a failure.
+    void take(const gauge_input &in, bool from_acquisition);
+    flt_status cut(const char *fn, double encoder_mm);
+    flt_status flush(const char *fn);
+    flt_status attach(const char *fn, flt_source *source);
+    flt_status start(const char *fn);
+    flt_status stop(const char *fn);
+    flt_status next_sheet(const char *fn, std::uint32_t timeout_ms, flt_sheet **out);
+    flt_status set_callback(const char *fn, flt_sheet_callback callback, void *user);
+    std::uint64_t count(flt_gauge_counter counter) const;
+    // FLT_OK, or the failure that stopped processing (message set).
+    flt_status failure(const char *fn) const;
+    bool acquiring() const;
+    void record_failure(flt_status status, const char *message);
+
+  private:
+    void init(const flt_calib *calib, const flt_options *options);
+    void release_parts() noexcept;
+
+    // ---- the queue between acquisition and processing
+    enum slot_state { slot_free, slot_filled, slot_extracting, slot_extracted };
+    struct frame_slot {
+        std::unique_ptr<std::uint8_t[]> pixels;  // width x height x 2 bytes (workers only)
+        flt_pixel_format format = FLT_PIXEL_MONO8;
+        std::size_t stride = 0;
+        double encoder_mm = 0.0;
+        std::uint64_t seq = 0;
+        slot_state state = slot_free;
+        bool new_strip = false;  // a long reversal before this frame
+        std::uint32_t skipped_before = 0, dropped_before = 0;
+        double s = 0.0;  // the profile row
+        std::vector<double> height, slope;
+        std::vector<std::uint8_t> valid;
+    };
+    // ---- the sheets being built and evaluated
+    struct sheet_buffer {
+        std::vector<double> s, z, measured;
+        std::vector<std::uint8_t> flags;
+        std::vector<row_meta> meta;
+        std::size_t rows = 0;
+    };
+    struct sheet_job {
+        int buffer = 0;
+        std::size_t rows = 0;
+        double s_start = 0, s_end = 0, lookahead = 0;
+        unsigned flags = 0;
+        std::uint64_t id = 0, coil = 0, index = 0;
+    };
+
+    // Producer side.
+    void fill_slot(frame_slot &slot, const gauge_input &in);
+    void extract(frame_slot &slot, const void *pixels, flt_pixel_format format, std::size_t stride,
+                 flt_extractor *extractor, bool *error_out);
+    void resolve_band(frame_slot &slot);
+    // Workers.
+    void worker_main(unsigned index);
+    bool run_one(std::unique_lock<std::mutex> &lock, unsigned index);
+    void run_inline();
+    void run_jobs_inline();
+    // The sequencer (one thread at a time, frames in order).
+    void sequence(frame_slot &slot);
+    void activate_cuts(std::uint64_t up_to_seq);
+    void drop_active_cuts(double up_to, bool all);
+    void begin_strip(double s);
+    void end_strip(unsigned flag);
+    void push_row(double s, const double *height, const double *slope, const std::uint8_t *valid,
+                  const row_meta &meta);
+    void release_held();
+    void pull_all();
+    void output_row(double s, const double *z, const std::uint8_t *flags, const row_meta &meta,
+                    const double *measured);
+    void apply_cuts(double s_limit);
+    // Ends the open sheet at s_end: the rows before it (all rows with
+    // all_rows), the rest begin the next sheet.
+    void split(double s_end, unsigned end_flags, bool all_rows = false);
+    int free_buffer_or_wait();
+    // Evaluation (one thread at a time, sheets in order).
+    void evaluate(const sheet_job &job);
+    void deliver(flt_sheet *sheet);
+    flt_sheet *take_slot();
+    void acquisition_main();
+
+    // ---- configuration (immutable after create)
+    gauge_config cfg_;
+    flt_options effective_{};
+    std::size_t K_ = 0;
+    std::uint32_t width_ = 0, height_ = 0;
+    double mean_offset_ = 0.0, pitch_ = 1.0, first_x_ = 0.0;
+    double max_jump_ = 0.0;
+    std::size_t row_capacity_ = 0, sheet_capacity_ = 0, hold_capacity_ = 0;
+    std::size_t zones_ = 0;
+    std::vector<double> fiber_x_, zone_x_;
+    double min_length_ = 0.0;
+    flt_options *extract_options_ = nullptr;
+    flt_calib *calib_for_extractors_ = nullptr;
+
+    // ---- parts
+    std::vector<flt_extractor *> extractors_;  // one per worker (one inline)
+    flt_extractor *band_extractor_ = nullptr;  // automatic bands, until known
+    bool band_known_ = false;                  // producer-side
+    flt_recon *recon_ = nullptr;
+    flt_flatness *flat_ = nullptr, *flat_short_ = nullptr;
+
+    // ---- shared state, under m_
+    mutable std::mutex m_;
+    std::condition_variable work_cv_, room_cv_, idle_cv_, sheet_cv_;
+    std::vector<frame_slot> slots_;
+    std::uint64_t head_ = 0, claim_ = 0, tail_ = 0;  // seq: next to fill / extract / sequence
+    bool sequencing_ = false, evaluating_ = false, stopping_ = false;
+    bool failed_ = false;
+    flt_status failure_status_ = FLT_OK;
+    std::string failure_message_;
+    std::vector<sheet_job> jobs_;     // FIFO, at most 2
+    int buffer_busy_[2] = {0, 0};     // 1 while filled, queued or evaluated
+    std::vector<flt_sheet *> ready_;  // ring of sheets for next_sheet
+    std::size_t ready_head_ = 0, ready_count_ = 0;
+    // Cuts announced (with the seq of the next frame when given), then
+    // active (the sequencer reached them), each a ring.
+    static constexpr std::size_t k_cut_capacity = 256;
+    struct cut_entry {
+        std::uint64_t seq;
+        double s;
+    };
+    cut_entry cuts_[k_cut_capacity] = {};
+    std::size_t cut_head_ = 0, cut_count_ = 0;
+    double active_[k_cut_capacity] = {};
+    std::size_t active_head_ = 0, active_count_ = 0;
+    bool has_cut_floor_ = false;
+    double cut_floor_ = 0.0;
+    // Producer state (one producer at a time; under m_ for the counters).
+    bool has_furthest_ = false;
+    double furthest_ = 0.0;
+    std::uint32_t pending_skipped_ = 0, pending_dropped_ = 0;
+    bool pending_new_strip_ = false;
+    // counters
+    std::uint64_t n_frames_ = 0, n_extracted_ = 0, n_skipped_stop_ = 0, n_skipped_rev_ = 0,
+                  n_dropped_ = 0, n_no_strip_ = 0, n_strips_ = 0, n_sheets_ = 0,
+                  n_sheets_dropped_ = 0, n_cuts_ = 0, n_cuts_ignored_ = 0, n_reversals_ = 0,
+                  n_extract_errors_ = 0;
+
+    // ---- sequencer state (the thread holding the sequencing role)
+    bool in_strip_ = false, pushed_ = false, has_output_ = false;
+    double last_pushed_s_ = 0.0, last_output_s_ = 0.0;
+    std::uint64_t coil_ = 0, sheet_in_coil_ = 0, sheet_ids_ = 0;
+    double sheet_start_ = 0.0;
+    unsigned sheet_flags_ = 0;
+    int current_ = 0;  // the sheet buffer being filled
+    sheet_buffer buffers_[2];
+    // Rows inside the reconstructor, oldest first (ring of row_capacity_).
+    std::vector<row_meta> meta_ring_;
+    std::vector<double> measured_ring_;  // [row_capacity_ * K_], keep_maps 2
+    std::size_t meta_head_ = 0, meta_count_ = 0;
+    // Held rows: the strip may have left (always emptied whole).
+    std::vector<double> held_s_, held_height_, held_slope_;
+    std::vector<std::uint8_t> held_valid_;
+    std::vector<row_meta> held_meta_;
+    std::size_t held_ = 0;
+    std::uint32_t pending_row_skipped_ = 0, pending_row_dropped_ = 0;
+    static constexpr std::size_t k_pull_rows = 64;
+    std::vector<double> pull_s_, pull_z_;
+    std::vector<std::uint8_t> pull_flags_;
+
+    // ---- evaluation state (the thread holding the evaluating role)
+    std::shared_ptr<sheet_pool> pool_;
+    std::vector<std::uint8_t> flag_scratch_;  // max(fibers, zones)
+
+    // ---- output
+    std::mutex deliver_m_;
+    flt_sheet_callback callback_ = nullptr;
+    void *callback_user_ = nullptr;
+
+    // ---- acquisition
+    flt_source *source_ = nullptr;
+    std::thread acquisition_;
+    bool acquiring_ = false, acquisition_stop_ = false, source_started_ = false;
+    flt_status acquisition_status_ = FLT_OK;
+    std::string acquisition_message_;
+
+    std::vector<std::thread> workers_;
+};
+
+// True on a thread inside this gauge's callback (flush, stop, destroy,
+// next_sheet and set_callback refuse there).
+bool in_gauge_callback(const gauge *g);
+
+}  // namespace flt

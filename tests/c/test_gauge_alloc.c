@@ -1,0 +1,183 @@
+// SPDX-License-Identifier: Apache-2.0
+/* "Nothing allocated per frame": counts every malloc/calloc/realloc made by
+ * libflatline (and the C++ runtime under it), on every thread, while a gauge
+ * with two workers takes frames and rows, cuts sheets, evaluates them and
+ * hands them over. The counting allocator interposes the C library's (ELF
+ * symbol interposition), as in test_recon_alloc.c. Not built under
+ * sanitizers, which own malloc. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stdatomic.h>
+#include <stddef.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include <flatline/flatline.h>
+
+#include "sheet.h"
+
+extern void *__libc_malloc(size_t);
+extern void *__libc_calloc(size_t, size_t);
+extern void *__libc_realloc(void *, size_t);
+extern void __libc_free(void *);
+
+static atomic_int g_counting;
+static atomic_size_t g_allocations;
+
+void *malloc(size_t n) {
+    if (atomic_load(&g_counting))
+        atomic_fetch_add(&g_allocations, 1);
+    return __libc_malloc(n);
+}
+void *calloc(size_t n, size_t size) {
+    if (atomic_load(&g_counting))
+        atomic_fetch_add(&g_allocations, 1);
+    return __libc_calloc(n, size);
+}
+void *realloc(void *p, size_t n) {
+    if (atomic_load(&g_counting))
+        atomic_fetch_add(&g_allocations, 1);
+    return __libc_realloc(p, n);
+}
+void free(void *p) {
+    __libc_free(p);
+}
+
+#define OK(call) assert_int_equal((call), FLT_OK)
+
+static size_t take_sheets(flt_gauge *g) {
+    size_t n = 0;
+    for (;;) {
+        flt_sheet *sh = NULL;
+        if (flt_gauge_next_sheet(g, 0, &sh) != FLT_OK || !sh)
+            return n;
+        double v;
+        if (flt_sheet_get(sh, FLT_SHEET_MAX_I_UNITS, &v) == FLT_OK)
+            ++n;
+        flt_sheet_destroy(sh);
+    }
+}
+
+static void rows_and_sheets_allocate_nothing(void **state) {
+    (void)state;
+    enum { K = 51, R = 6000 };
+    const double pitch = 1500.0 / (K - 1);
+    test_sheet *t = test_sheet_make(R, K, 0.0, 3.0, 0.0, pitch, 100.0, 1);
+    flt_calib *calib = NULL;
+    OK(flt_calib_create_reference(900, 240, -750.0, pitch, K, &calib));
+    flt_options *o = NULL;
+    OK(flt_options_create(&o));
+    OK(flt_options_set(o, FLT_OPT_GAUGE_WORKERS, 2));
+    OK(flt_options_set(o, FLT_OPT_GAUGE_OVERFLOW, 1));
+    OK(flt_options_set(o, FLT_OPT_GAUGE_KEEP_MAPS, 2));
+    OK(flt_options_set(o, FLT_OPT_GAUGE_SHEET_SLOTS, 32));
+    OK(flt_options_set(o, FLT_OPT_GAUGE_FRAME_SPACING, 2.0));
+    OK(flt_options_set(o, FLT_OPT_RIGID_MOTION, 1));
+    OK(flt_options_set(o, FLT_OPT_ROBUST, 1));
+    flt_gauge *g = NULL;
+    atomic_store(&g_allocations, 0);
+    atomic_store(&g_counting, 1);
+    OK(flt_gauge_create(calib, o, &g));
+    atomic_store(&g_counting, 0);
+    assert_true(atomic_load(&g_allocations) >= 10); /* the counter sees the library */
+
+    /* Warm-up: a first strip of 1 m sheets (the flatness metrics grow their
+     * column scratch once, at the first sheet). */
+    for (double c = 1000.0; c < 6000.0; c += 1000.0)
+        OK(flt_gauge_cut(g, c));
+    for (size_t r = 0; r < 2000; ++r)
+        OK(flt_gauge_push_row(g, t->s[r], K, &t->height[r * K], &t->slope[r * K], NULL));
+    OK(flt_gauge_flush(g));
+    size_t warm = take_sheets(g);
+
+    /* Counted: a second strip (a long reversal starts it) of 1 m sheets,
+     * a line stop, a short reversal, cuts, polling, the tail. */
+    atomic_store(&g_allocations, 0);
+    atomic_store(&g_counting, 1);
+    /* The first row goes back 6 m (a new strip; the cuts' order starts
+     * again). */
+    flt_status st = flt_gauge_push_row(g, t->s[0], K, t->height, t->slope, NULL);
+    for (double c = 1000.0; c < 18000.0 && st == FLT_OK; c += 1000.0)
+        st = flt_gauge_cut(g, c);
+    size_t sheets = 0;
+    for (size_t r = 1; r < (size_t)R && st == FLT_OK; ++r) {
+        st = flt_gauge_push_row(g, t->s[r], K, &t->height[r * K], &t->slope[r * K], NULL);
+        if (r == 3000 && st == FLT_OK) /* a line stop and a short reversal */
+            st = flt_gauge_push_row(g, t->s[r] - 9.0, K, &t->height[r * K], &t->slope[r * K], NULL);
+        if (r % 500 == 0)
+            sheets += take_sheets(g);
+    }
+    if (st == FLT_OK)
+        st = flt_gauge_flush(g);
+    sheets += take_sheets(g);
+    atomic_store(&g_counting, 0);
+    OK(st);
+    print_message("%zu + %zu sheets, %zu allocations while streaming\n", warm, sheets,
+                  atomic_load(&g_allocations));
+    assert_true(sheets >= 17);
+    assert_int_equal(atomic_load(&g_allocations), 0);
+    flt_gauge_destroy(g);
+    flt_options_destroy(o);
+    flt_calib_destroy(calib);
+    test_sheet_free(t);
+}
+
+static void frames_allocate_nothing(void **state) {
+    (void)state;
+    enum { K = 151, W = 2048, H = 240, FRAMES = 60 };
+    flt_calib *calib = NULL;
+    OK(flt_calib_create_reference(900, H, -750.0, 10.0, K, &calib));
+    flt_options *o = NULL;
+    OK(flt_options_create(&o));
+    OK(flt_options_set(o, FLT_OPT_SIM_FRAME_SPACING, 10.0));
+    flt_sim *sim = NULL;
+    OK(flt_sim_create(calib, o, &sim));
+    flt_options_destroy(o);
+    OK(flt_options_create(&o));
+    OK(flt_options_set(o, FLT_OPT_GAUGE_WORKERS, 2));
+    OK(flt_options_set(o, FLT_OPT_GAUGE_OVERFLOW, 1));
+    OK(flt_options_set(o, FLT_OPT_GAUGE_FRAME_SPACING, 8.0));
+    OK(flt_sim_add_defect(sim, FLT_SIM_CENTRE_BUCKLE, 4.0, 800.0));
+    uint8_t *frames = malloc((size_t)FRAMES * W * H);
+    double e[FRAMES];
+    for (int f = 0; f < FRAMES; ++f)
+        OK(flt_sim_next_frame(sim, frames + (size_t)f * W * H, (size_t)W * H, W, &e[f], 0, NULL,
+                              NULL));
+    flt_gauge *g = NULL;
+    OK(flt_gauge_create(calib, o, &g));
+    /* The first frame shows the lines: the workers' extractors are made
+     * with their band then (once). */
+    OK(flt_gauge_push_frame(g, frames, FLT_PIXEL_MONO8, W, H, W, e[0]));
+    OK(flt_gauge_push_frame(g, frames + (size_t)W * H, FLT_PIXEL_MONO8, W, H, W, e[1]));
+    atomic_store(&g_allocations, 0);
+    atomic_store(&g_counting, 1);
+    flt_status st = flt_gauge_cut(g, 300.0);
+    for (int f = 2; f < FRAMES && st == FLT_OK; ++f)
+        st = flt_gauge_push_frame(g, frames + (size_t)f * W * H, FLT_PIXEL_MONO8, W, H, W, e[f]);
+    if (st == FLT_OK)
+        st = flt_gauge_flush(g);
+    atomic_store(&g_counting, 0);
+    OK(st);
+    uint64_t extracted = 0;
+    OK(flt_gauge_count(g, FLT_GAUGE_COUNT_EXTRACTED, &extracted));
+    print_message("%llu frames extracted by 2 workers, %zu allocations\n",
+                  (unsigned long long)extracted, atomic_load(&g_allocations));
+    assert_int_equal(extracted, FRAMES);
+    assert_int_equal(take_sheets(g), 2);
+    assert_int_equal(atomic_load(&g_allocations), 0);
+    flt_gauge_destroy(g);
+    free(frames);
+    flt_sim_destroy(sim);
+    flt_options_destroy(o);
+    flt_calib_destroy(calib);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(rows_and_sheets_allocate_nothing),
+        cmocka_unit_test(frames_allocate_nothing),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
