@@ -1,17 +1,18 @@
 // SPDX-License-Identifier: Apache-2.0
 /*
- * The simulated line, end to end: camera frames -> extractor -> streaming
- * reconstructor with carry-over across sheets -> flatness per sheet.
+ * The simulated line, end to end, on the gauge: camera frames and the
+ * shear's cuts in, measured sheets out.
  *
  * A strip with a centre buckle and wavy edges (the reference's defects)
  * passes under the reference sensor (two lasers 100 mm apart, a 2048-column
  * camera read out over rows 892..1147, a frame every 3 mm). The strip bounces
  * (rigid heave), a leveler roll's eccentricity adds a 50 mm ripple, the
  * shear station rings after every cut (every 3000 mm), and the peak detector
- * adds 1/16 px per laser. The simulator renders every camera frame; the
- * library turns frames into profile rows (flt_extractor), rows into the
- * strip's shape (flt_recon, streamed, carry-over between sheets), and each
- * sheet's shape into I-Units, a shape class, bow and crossbow (flt_flatness).
+ * adds 1/16 px per laser. The simulator renders every camera frame; one
+ * flt_gauge turns them into sheets: its workers extract profile rows, the
+ * reconstructor streams the strip's shape on across the cuts, and each
+ * sheet's shape becomes I-Units, a shape class, bow and crossbow. The
+ * pipeline is the block under "the gauge" in main(): what a vendor writes.
  *
  * It prints progress, then a summary: sheets, real-time factor at the line
  * speed (library time only: rendering frames is the simulator's work, a real
@@ -23,11 +24,11 @@
  * Run with --help for the options.
  */
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <string>
 #include <vector>
 
@@ -43,6 +44,7 @@ namespace {
 
 constexpr uint32_t k_roi_first = 892, k_roi_rows = 256;  // both lines, +-50 mm
 constexpr uint32_t k_camera_width = 2048;
+constexpr double k_frame_spacing = 3.0;  // mm of strip between frames
 
 struct settings {
     int sheets = 3;
@@ -98,9 +100,17 @@ void usage() {
       die(#call);         \
   } while (0)
 
-double now_s() {
-    using clock = std::chrono::steady_clock;
-    return std::chrono::duration<double>(clock::now().time_since_epoch()).count();
+// CPU seconds of this thread, and of the whole process (every thread).
+double thread_cpu_s() {
+    timespec t{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+}
+
+double process_cpu_s() {
+    timespec t{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+    return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
 }
 
 // One sheet's rows: positions, extractor heights (raw), reconstruction,
@@ -463,6 +473,7 @@ int main(int argc, char **argv) {
     flt_calib *calib = nullptr;
     CHECK(flt_calib_create_reference(k_roi_first, k_roi_rows, first_x, st.pitch, fibers, &calib));
     flt_options *sim_opt = make_options({{FLT_OPT_SIM_SEED, st.seed},
+                                         {FLT_OPT_SIM_FRAME_SPACING, k_frame_spacing},
                                          {FLT_OPT_SIM_STRIP_WIDTH, st.width},
                                          {FLT_OPT_SIM_HEAVE_SIGMA, st.vibration},
                                          {FLT_OPT_SIM_ECCENTRICITY_AMPLITUDE, st.eccentricity},
@@ -478,30 +489,44 @@ int main(int argc, char **argv) {
         CHECK(flt_sim_add_defect(sim, FLT_SIM_WAVY_EDGE_BOTH, -st.wavy_edges, st.period));
     if (st.quarter_buckle != 0)
         CHECK(flt_sim_add_defect(sim, FLT_SIM_QUARTER_BUCKLE, st.quarter_buckle, st.period));
-    flt_extractor *extractor = nullptr;
-    CHECK(flt_extractor_create(calib, nullptr, &extractor));
-    // rigid_motion: the heave moves every fiber of a frame together; the
-    // reconstructor takes it out of the shape. robust (Huber): the shear
-    // station's ringing after each cut is an outlier, not shape
-    // (tests/c/test_recon.c; examples/python/compare_filters.py).
-    flt_options *recon_opt = make_options({{FLT_OPT_RIGID_MOTION, 1}, {FLT_OPT_ROBUST, 1}});
-    flt_recon *recon = nullptr;
-    // Fibers and laser spacing from the calibration, as the extractor's.
-    CHECK(flt_recon_create_from_calib(calib, recon_opt, &recon));
-    // One window per sheet: the sheet is what the operator judges.
-    flt_options *flat_opt = make_options(
-        {{FLT_OPT_FLAT_WINDOW_LENGTH, 0}, {FLT_OPT_FLAT_ROW_CAPACITY, st.sheet_length / 3 + 64}});
-    flt_flatness *flatness = nullptr, *truth_flatness = nullptr;
-    CHECK(flt_flatness_create(fibers, x.data(), flat_opt, &flatness));
+
+    // ---------------------------------------------------------- the gauge
+    // What a vendor writes: one handle from the calibration and options,
+    // frames and cuts in, sheets out.
+    //   rigid_motion: the heave moves every fiber of a frame together; the
+    //   reconstructor takes it out of the shape. robust (Huber): the shear
+    //   station's ringing after each cut is an outlier, not shape
+    //   (tests/c/test_recon.c; examples/python/compare_filters.py).
+    //   gauge_overflow = 1: rendered frames can wait for the gauge (a
+    //   camera's cannot: leave it 0 and watch FLT_GAUGE_COUNT_DROPPED).
+    //   gauge_keep_maps = 2: the report draws each sheet's reconstructed and
+    //   measured heights.
+    flt_options *gauge_opt = make_options({{FLT_OPT_RIGID_MOTION, 1},
+                                           {FLT_OPT_ROBUST, 1},
+                                           {FLT_OPT_GAUGE_FRAME_SPACING, 0.8 * k_frame_spacing},
+                                           {FLT_OPT_GAUGE_OVERFLOW, 1},
+                                           {FLT_OPT_GAUGE_MAX_SHEET_LENGTH, st.sheet_length + 1000},
+                                           {FLT_OPT_GAUGE_KEEP_MAPS, 2},
+                                           {FLT_OPT_GAUGE_SHEET_SLOTS, 4}});
+    flt_gauge *gauge = nullptr;
+    CHECK(flt_gauge_create(calib, gauge_opt, &gauge));
+    // The shear cuts every sheet_length mm (given before the strip gets
+    // there; a cut signal that comes late works as well).
+    for (int i = 1; i < st.sheets; ++i)
+        CHECK(flt_gauge_cut(gauge, st.sheet_length * i));
+
+    // The report compares each sheet with the ground truth, evaluated by a
+    // flatness handle of its own.
+    flt_options *flat_opt = make_options({{FLT_OPT_FLAT_WINDOW_LENGTH, 0}});
+    flt_flatness *truth_flatness = nullptr;
     CHECK(flt_flatness_create(fibers, x.data(), flat_opt, &truth_flatness));
-    double flat_limit = 0;
-    CHECK(flt_options_get(flat_opt, FLT_OPT_FLAT_FLAT_LIMIT, &flat_limit));
+    double flat_limit = 0, zone_width = 0;
+    CHECK(flt_gauge_get_option(gauge, FLT_OPT_FLAT_FLAT_LIMIT, &flat_limit));
+    CHECK(flt_gauge_get_option(gauge, FLT_OPT_FLAT_ZONE_WIDTH, &zone_width));
     size_t zones = 0;
-    CHECK(flt_flatness_zones(flatness, &zones));
+    CHECK(flt_flatness_zones(truth_flatness, &zones));
     std::vector<double> zone_x(zones);
-    CHECK(flt_flatness_zone_layout(flatness, zones, nullptr, zone_x.data(), nullptr));
-    double zone_width = 0;
-    CHECK(flt_options_get(flat_opt, FLT_OPT_FLAT_ZONE_WIDTH, &zone_width));
+    CHECK(flt_flatness_zone_layout(truth_flatness, zones, nullptr, zone_x.data(), nullptr));
 
     std::printf(
         "libflatline %s demo: %d sheets of %.0f mm x %.0f mm, %zu fibers every %.1f mm\n"
@@ -516,39 +541,60 @@ int main(int argc, char **argv) {
 
     const size_t frame_bytes = size_t(k_camera_width) * k_roi_rows;
     std::vector<uint8_t> frame(frame_bytes);
-    std::vector<double> height(fibers), slope(fibers), truth(fibers);
-    std::vector<uint8_t> valid(fibers);
-    const size_t pull_capacity = 4096;
-    std::vector<double> s_out(pull_capacity), z_out(pull_capacity * fibers);
-    std::vector<uint8_t> flags_out(pull_capacity * fibers);
-    // Rows pushed but not pulled yet (raw heights and truth, for the report).
-    sheet_data pending, sheet;
+    std::vector<double> truth;  // every frame's true heights, [frame * fibers]
     std::vector<sheet_result> results;
     std::vector<double> fiber_plot_raw, fiber_plot_z, fiber_plot_truth, fiber_plot_s;
     const size_t plot_fiber = fibers / 2;  // the centre, where the buckle is
-    double busy = 0.0, render = 0.0;
-    size_t frames = 0, rows_done = 0, invalid_samples = 0;
+    double render = 0.0, report_time = 0.0;
+    size_t frames = 0, rows_done = 0;
+    double invalid_samples = 0;
     double max_error_all = 0, sq_all = 0;
     size_t n_all = 0;
 
-    auto finish_sheet = [&]() {
-        int evaluated = 0;
-        double t0 = now_s();
-        CHECK(flt_flatness_finish(flatness, &evaluated));
-        busy += now_s() - t0;
-        if (!evaluated)
-            return;
+    // A sheet from the gauge: its results, and the report's comparison with
+    // the ground truth.
+    auto take_sheet = [&](flt_sheet *sh) {
+        const double t0 = thread_cpu_s();
+        auto value = [&](flt_sheet_value key) {
+            double v = 0;
+            CHECK(flt_sheet_get(sh, key, &v));
+            return v;
+        };
         sheet_result r{};
-        r.index = int(results.size()) + 1;
-        CHECK(flt_flatness_window(flatness, &r.s_first, &r.s_last, nullptr, nullptr, nullptr));
-        CHECK(flt_flatness_shape(flatness, &r.shape, &r.confidence, &r.components, &r.bow,
-                                 &r.crossbow));
+        r.index = int(value(FLT_SHEET_ID));
+        r.s_first = value(FLT_SHEET_S_START);
+        r.s_last = value(FLT_SHEET_S_END);
+        r.shape = flt_shape(int(value(FLT_SHEET_SHAPE)));
+        r.confidence = value(FLT_SHEET_CONFIDENCE);
+        r.components = unsigned(value(FLT_SHEET_COMPONENTS));
+        r.bow = value(FLT_SHEET_BOW);
+        r.crossbow = value(FLT_SHEET_CROSSBOW);
         r.zone_i.resize(zones);
         r.zone_true.resize(zones);
-        CHECK(flt_flatness_zone_results(flatness, zones, r.zone_i.data(), nullptr));
-        CHECK(flt_flatness_evaluate(truth_flatness, sheet.s.size(), fibers, sheet.s.data(),
-                                    sheet.truth.data(), nullptr));
-        CHECK(flt_flatness_zone_results(truth_flatness, zones, r.zone_true.data(), nullptr));
+        CHECK(flt_sheet_get_array(sh, FLT_SHEET_ZONE_I_UNITS, zones, r.zone_i.data()));
+        invalid_samples += value(FLT_SHEET_INVALID);
+        // The sheet's rows: reconstructed and measured heights, and the
+        // truth of the frames they came from (a frame every 3 mm from 0).
+        const size_t rows = size_t(value(FLT_SHEET_ROWS));
+        rows_done += rows;
+        sheet_data sheet;
+        sheet.s.resize(rows);
+        sheet.z.resize(rows * fibers);
+        sheet.raw.resize(rows * fibers);
+        sheet.flags.resize(rows * fibers);
+        CHECK(flt_sheet_height_map(sh, rows, fibers, sheet.s.data(), sheet.z.data(),
+                                   sheet.flags.data()));
+        CHECK(flt_sheet_measured_map(sh, rows, fibers, sheet.raw.data()));
+        flt_sheet_destroy(sh);
+        for (size_t i = 0; i < rows; ++i) {
+            const size_t f = size_t(std::lround(sheet.s[i] / k_frame_spacing));
+            sheet.truth.insert(sheet.truth.end(), &truth[f * fibers], &truth[(f + 1) * fibers]);
+        }
+        if (rows >= 2) {
+            CHECK(flt_flatness_evaluate(truth_flatness, rows, fibers, sheet.s.data(),
+                                        sheet.truth.data(), nullptr));
+            CHECK(flt_flatness_zone_results(truth_flatness, zones, r.zone_true.data(), nullptr));
+        }
         for (size_t j = 0; j < zones; ++j)
             if (std::isfinite(r.zone_i[j]))
                 r.zone_error = std::max(r.zone_error, std::fabs(r.zone_i[j] - r.zone_true[j]));
@@ -592,13 +638,15 @@ int main(int argc, char **argv) {
             true_max = std::max(true_max, std::fabs(v));
         const double scale = std::max(1.0, std::ceil(1.2 * true_max));
         char title[160];
-        std::snprintf(title, sizeof title, "Sheet %d: raw heights from the extractor (mm)",
-                      r.index);
-        height_map_png(base + "_raw.png", title, sheet, sheet.raw, x, scale);
-        std::snprintf(title, sizeof title, "Sheet %d: reconstructed heights (mm)", r.index);
-        height_map_png(base + "_reconstructed.png", title, sheet, sheet.z, x, scale);
-        std::snprintf(title, sizeof title, "Sheet %d: true heights (mm)", r.index);
-        height_map_png(base + "_true.png", title, sheet, sheet.truth, x, scale);
+        if (rows >= 2) {
+            std::snprintf(title, sizeof title, "Sheet %d: raw heights from the extractor (mm)",
+                          r.index);
+            height_map_png(base + "_raw.png", title, sheet, sheet.raw, x, scale);
+            std::snprintf(title, sizeof title, "Sheet %d: reconstructed heights (mm)", r.index);
+            height_map_png(base + "_reconstructed.png", title, sheet, sheet.z, x, scale);
+            std::snprintf(title, sizeof title, "Sheet %d: true heights (mm)", r.index);
+            height_map_png(base + "_true.png", title, sheet, sheet.truth, x, scale);
+        }
         if (r.index == 1) {
             for (size_t i = 0; i < sheet.s.size(); ++i) {
                 fiber_plot_s.push_back(sheet.s[i]);
@@ -607,88 +655,43 @@ int main(int argc, char **argv) {
                 fiber_plot_truth.push_back(sheet.truth[i * fibers + plot_fiber]);
             }
         }
-        sheet.clear();
+        report_time += thread_cpu_s() - t0;
     };
-
-    // Moves finished rows from the reconstructor to the flatness metrics.
-    auto pull_rows = [&]() {
+    auto take_sheets = [&]() {
         for (;;) {
-            size_t got = 0;
-            double t0 = now_s();
-            CHECK(flt_recon_pull(recon, pull_capacity, fibers, s_out.data(), z_out.data(),
-                                 flags_out.data(), &got));
-            busy += now_s() - t0;
-            if (got == 0)
+            flt_sheet *sh = nullptr;
+            CHECK(flt_gauge_next_sheet(gauge, 0, &sh));
+            if (!sh)
                 return;
-            size_t fed = 0;
-            while (fed < got) {
-                size_t used = 0;
-                int evaluated = 0;
-                t0 = now_s();
-                CHECK(flt_flatness_push(flatness, got - fed, fibers, &s_out[fed],
-                                        &z_out[fed * fibers], &flags_out[fed * fibers], &used,
-                                        &evaluated));
-                busy += now_s() - t0;
-                fed += used;
-            }
-            for (size_t i = 0; i < got; ++i) {
-                sheet.s.push_back(s_out[i]);
-                sheet.z.insert(sheet.z.end(), &z_out[i * fibers], &z_out[(i + 1) * fibers]);
-                sheet.raw.insert(sheet.raw.end(), &pending.raw[i * fibers],
-                                 &pending.raw[(i + 1) * fibers]);
-                sheet.truth.insert(sheet.truth.end(), &pending.truth[i * fibers],
-                                   &pending.truth[(i + 1) * fibers]);
-            }
-            pending.raw.erase(pending.raw.begin(), pending.raw.begin() + got * fibers);
-            pending.truth.erase(pending.truth.begin(), pending.truth.begin() + got * fibers);
-            rows_done += got;
+            take_sheet(sh);
         }
     };
 
     const double total_length = st.sheets * st.sheet_length;
-    double next_cut = st.sheet_length;
+    const double cpu0 = process_cpu_s();
     for (;;) {
         double e = 0;
-        double t0 = now_s();
+        const double t0 = thread_cpu_s();
+        truth.resize((frames + 1) * fibers);
         CHECK(flt_sim_next_frame(sim, frame.data(), frame_bytes, k_camera_width, &e, fibers,
-                                 truth.data(), nullptr));
-        render += now_s() - t0;
-        double s = 0;
-        t0 = now_s();
-        CHECK(flt_extractor_process(extractor, frame.data(), FLT_PIXEL_MONO8, k_camera_width,
-                                    k_roi_rows, k_camera_width, e, fibers, &s, height.data(),
-                                    slope.data(), valid.data()));
-        busy += now_s() - t0;
-        ++frames;
-        if (s >= total_length)
+                                 &truth[frames * fibers], nullptr));
+        render += thread_cpu_s() - t0;
+        if (e >= total_length)
             break;
-        if (s < 0)
-            continue;  // the strip's head has not reached both lasers
-        if (s >= next_cut) {
-            // The cut: end the sheet in the reconstructor (its last knot
-            // carries over into the next sheet) and in the metrics.
-            t0 = now_s();
-            CHECK(flt_recon_end_sheet(recon));
-            busy += now_s() - t0;
-            pull_rows();
-            finish_sheet();
-            next_cut += st.sheet_length;
-        }
-        for (size_t k = 0; k < fibers; ++k)
-            invalid_samples += !valid[k];
-        pending.raw.insert(pending.raw.end(), height.begin(), height.end());
-        pending.truth.insert(pending.truth.end(), truth.begin(), truth.end());
-        t0 = now_s();
-        CHECK(flt_recon_push(recon, 1, fibers, &s, height.data(), slope.data(), valid.data()));
-        busy += now_s() - t0;
-        pull_rows();
+        CHECK(flt_gauge_push_frame(gauge, frame.data(), FLT_PIXEL_MONO8, k_camera_width, k_roi_rows,
+                                   k_camera_width, e));
+        ++frames;
+        take_sheets();
         if (frames % 50 == 0)
             std::fprintf(stderr, "\r  frame %6zu  s = %7.1f m  %5.1f%% of the strip", frames,
-                         s / 1000, 100 * s / total_length);
+                         e / 1000, 100 * e / total_length);
     }
-    CHECK(flt_recon_end_sheet(recon));
-    pull_rows();
-    finish_sheet();
+    // The end of the strip: its last sheet ends at its last row.
+    CHECK(flt_gauge_flush(gauge));
+    take_sheets();
+    // Library time: every thread's CPU time but the rendering and the
+    // report's, which a real line does not have.
+    const double busy = process_cpu_s() - cpu0 - render - report_time;
     std::fprintf(stderr, "\r%78s\r", "");
 
     // ---------------------------------------------------------- summary
@@ -696,8 +699,9 @@ int main(int argc, char **argv) {
     std::printf("\nSummary\n");
     std::printf("  sheets processed      %zu (%zu frames, %zu rows; %.2f%% of samples invalid)\n",
                 results.size(), frames, rows_done,
-                100.0 * double(invalid_samples) / double(std::max<size_t>(1, rows_done * fibers)));
-    std::printf("  real-time factor      %.1fx at %.0f m/min (library %.2f s for %.1f s of strip;\n"
+                100.0 * invalid_samples / double(std::max<size_t>(1, rows_done * fibers)));
+    std::printf("  real-time factor      %.1fx at %.0f m/min (library %.2f s of CPU on all "
+                "threads for %.1f s of strip;\n"
                 "                        rendering the frames took another %.1f s)\n",
                 strip_s / busy, st.speed, busy, strip_s, render);
     std::printf("  shape accuracy        rms %.3f mm, max %.3f mm against the true surface\n",
@@ -780,14 +784,12 @@ int main(int argc, char **argv) {
                 "report.json\n",
                 st.out.c_str());
 
-    flt_flatness_destroy(flatness);
+    flt_gauge_destroy(gauge);
     flt_flatness_destroy(truth_flatness);
-    flt_recon_destroy(recon);
-    flt_extractor_destroy(extractor);
     flt_sim_destroy(sim);
     flt_calib_destroy(calib);
     flt_options_destroy(sim_opt);
-    flt_options_destroy(recon_opt);
+    flt_options_destroy(gauge_opt);
     flt_options_destroy(flat_opt);
     return results.size() == size_t(st.sheets) ? 0 : 1;
 }
