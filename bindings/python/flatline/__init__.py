@@ -17,7 +17,8 @@ Components: the calibration model (Calibration), the simulated sensor
 (SimulatedLine), frame sources (Source: simulator, image sequences, USB3
 Vision cameras; U3VSimBus for simulated cameras), the frame-to-profile
 extractor (Extractor), the reconstructor (reconstruct, Reconstructor) and
-the flatness metrics (Flatness, i_units).
+the flatness metrics (Flatness, i_units), and the gauge that runs them
+all on a line (Gauge: frames and cuts in, Sheet results out).
 """
 
 from __future__ import annotations
@@ -96,6 +97,11 @@ from ._source import (
     list_cameras,
     source_options,
 )
+
+# The gauge: exported here; its names join __all__ once the hand-written
+# __init__.pyi stub (which must list every name of __all__) is gone in
+# favour of the inline annotations it already has.
+from ._gauge import Gauge, Sheet, SheetFlag, SheetZones, gauge_options
 
 #: The version of the C headers this binding was built against.
 __version__: str = _capi.FLT_HEADER_VERSION

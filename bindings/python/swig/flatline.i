@@ -47,3 +47,4 @@
 %include "sim.i"
 %include "flatness.i"
 %include "source.i"
+%include "gauge.i"

@@ -1,0 +1,417 @@
+# SPDX-License-Identifier: Apache-2.0
+"""The gauge (flatline/gauge.h): one handle that runs a line. Camera frames
+(or profile rows) and the shear's cuts go in, measured sheets come out."""
+
+from __future__ import annotations
+
+import enum
+import threading
+from dataclasses import dataclass, field
+from typing import Any, Dict, Iterator, Optional
+
+import numpy as np
+
+from . import capi as _capi
+from ._arrays import as_float64, as_mask, as_real
+from ._calib import Calibration
+from ._errors import StateError
+from ._flatness import FiberResults, Shape, ShapeComponent
+from ._options import make_options, options_doc, prefixed_options
+from ._pixels import PixelFormat
+from ._source import Source
+
+__all__ = [
+    "SheetFlag",
+    "SheetZones",
+    "Sheet",
+    "Gauge",
+    "gauge_options",
+]
+
+
+class SheetFlag(enum.IntFlag):
+    """How a sheet began and ended, and which of its values are NaN
+    (FLT_SHEET_FLAG_*)."""
+
+    NONE = 0
+    HEAD = _capi.FLT_SHEET_FLAG_HEAD  #: starts at its strip's head, not a cut
+    TAIL = _capi.FLT_SHEET_FLAG_TAIL  #: ends at its strip's tail
+    FLUSHED = _capi.FLT_SHEET_FLAG_FLUSHED  #: ended by flush() (end of input)
+    SPLIT = _capi.FLT_SHEET_FLAG_SPLIT  #: ended at gauge_max_sheet_length: no cut came
+    NEW_STRIP = _capi.FLT_SHEET_FLAG_NEW_STRIP  #: ended by a long reversal or a jump
+    NO_EDGES = _capi.FLT_SHEET_FLAG_NO_EDGES  #: strip edges unknown (NaN)
+    NO_WAVE = _capi.FLT_SHEET_FLAG_NO_WAVE  #: no fiber has a wave (wave values NaN)
+    EMPTY = _capi.FLT_SHEET_FLAG_EMPTY  #: no row: every result NaN and flagged
+
+
+# flt_sheet_value keys by the names Sheet.values uses (in key order).
+_VALUES = (
+    "id", "coil", "index", "s_start", "s_end", "rows", "s_first", "s_last",
+    "strip_left", "strip_right", "strip_width", "strip_centre", "shape",
+    "confidence", "components", "bow", "crossbow", "wave_height", "wave_period",
+    "wave_steepness", "wave_x", "max_i_units", "flags", "window_flags", "frames",
+    "skipped", "dropped", "saturated", "invalid", "lookahead", "fibers", "zones",
+)
+
+_COUNTERS = {
+    "frames": _capi.FLT_GAUGE_COUNT_FRAMES,
+    "extracted": _capi.FLT_GAUGE_COUNT_EXTRACTED,
+    "skipped_stop": _capi.FLT_GAUGE_COUNT_SKIPPED_STOP,
+    "skipped_reversal": _capi.FLT_GAUGE_COUNT_SKIPPED_REVERSAL,
+    "dropped": _capi.FLT_GAUGE_COUNT_DROPPED,
+    "no_strip": _capi.FLT_GAUGE_COUNT_NO_STRIP,
+    "strips": _capi.FLT_GAUGE_COUNT_STRIPS,
+    "sheets": _capi.FLT_GAUGE_COUNT_SHEETS,
+    "sheets_dropped": _capi.FLT_GAUGE_COUNT_SHEETS_DROPPED,
+    "cuts": _capi.FLT_GAUGE_COUNT_CUTS,
+    "cuts_ignored": _capi.FLT_GAUGE_COUNT_CUTS_IGNORED,
+    "reversals": _capi.FLT_GAUGE_COUNT_REVERSALS,
+    "extract_errors": _capi.FLT_GAUGE_COUNT_EXTRACT_ERRORS,
+    "queued": _capi.FLT_GAUGE_COUNT_QUEUED,
+    "acquiring": _capi.FLT_GAUGE_COUNT_ACQUIRING,
+    "sheets_waiting": _capi.FLT_GAUGE_COUNT_SHEETS_WAITING,
+}
+
+
+@dataclass(frozen=True)
+class SheetZones:
+    """A sheet's zone profile, (zones,) arrays."""
+
+    centre_x: np.ndarray  #: (zones,) zone centre across the width, mm
+    i_units: np.ndarray  #: (zones,) I-Units; NaN with ZONE_NO_DATA
+    flags: np.ndarray  #: (zones,) uint8 ZONE_* bits
+
+
+@dataclass(frozen=True)
+class Sheet:
+    """One measured sheet, copied out of the library (it stays valid for as
+    long as it is referenced). A NaN value always comes with its flag:
+    SheetFlag for the edges and the wave, the window flags (WINDOW_*) for
+    bow and crossbow, the fiber and zone flags for the arrays."""
+
+    id: int  #: number along the gauge's life, 1, 2, ...
+    coil: int  #: number of its strip (coil), 1, 2, ...
+    index: int  #: number within its coil, 1, 2, ...
+    s_start: float  #: where it starts along the strip, mm (a cut, or its strip's head)
+    s_end: float  #: where it ends, mm (a cut, the tail, a split)
+    rows: int  #: rows (frames) in it
+    s_first: float  #: s of its first row, mm (NaN with EMPTY)
+    s_last: float  #: s of its last row, mm (NaN with EMPTY)
+    strip_left: float  #: the strip's left edge, mm across the sensor
+    strip_right: float  #: its right edge, mm
+    strip_width: float  #: its width, mm
+    strip_centre: float  #: its centre, mm
+    shape: Shape  #: the shape class
+    confidence: float  #: in [0, 1]
+    components: ShapeComponent  #: FLT_SHAPE_HAS_* bits
+    bow_mm: float  #: coil-set sagitta over the sheet, mm
+    crossbow_mm: float  #: transverse sagitta over the width, mm
+    wave_height: float  #: the largest wave over the fibers: peak to peak, mm
+    wave_period: float  #: its period, mm
+    wave_steepness_percent: float  #: its steepness, %
+    wave_x: float  #: the x of its fiber, mm
+    max_i_units: float  #: the largest zone I-Units
+    flags: SheetFlag  #: how it began and ended, what is NaN
+    window_flags: int  #: the flatness window's WINDOW_* bits
+    frames: int  #: frames measured (its rows)
+    skipped: int  #: frames skipped (line stops, short reversals)
+    dropped: int  #: frames dropped at a full queue
+    saturated: int  #: saturated peaks (0 until the extractor counts them)
+    invalid: int  #: samples (row, fiber) without a measurement
+    lookahead_mm: float  #: strip the reconstructor had taken beyond s_end when finished
+    fibers: FiberResults  #: per fiber: x, arc length, I-Units, wave, flags
+    zones: SheetZones  #: per zone: centre, I-Units, flags
+    s: Optional[np.ndarray] = None  #: (rows,) row positions, mm (gauge_keep_maps >= 1)
+    z: Optional[np.ndarray] = None  #: (rows, K) reconstructed heights, mm
+    z_flags: Optional[np.ndarray] = None  #: (rows, K) uint8 FLAG_* bits
+    measured: Optional[np.ndarray] = None  #: (rows, K) measured heights, mm (gauge_keep_maps 2)
+    #: Every scalar result by its C name (flt_sheet_value), later ones too.
+    values: Dict[str, float] = field(default_factory=dict)
+
+
+def _read_sheet(handle: Any, maps: int) -> Sheet:
+    raw = [float(_capi.flt_sheet_get(handle, key)) for key in range(len(_VALUES))]
+    v = dict(zip(_VALUES, raw))
+    fibers, zones, rows = int(v["fibers"]), int(v["zones"]), int(v["rows"])
+
+    def array(key: int, n: int) -> np.ndarray:
+        out = np.empty(n)
+        handle.array_into(key, out)
+        out.flags.writeable = False
+        return out
+
+    fiber_flags = array(_capi.FLT_SHEET_FIBER_FLAGS, fibers).astype(np.uint8)
+    fiber_results = FiberResults(
+        array(_capi.FLT_SHEET_FIBER_X, fibers),
+        array(_capi.FLT_SHEET_FIBER_ARC_LENGTH, fibers),
+        array(_capi.FLT_SHEET_FIBER_I_UNITS, fibers),
+        array(_capi.FLT_SHEET_FIBER_WAVE_HEIGHT, fibers),
+        array(_capi.FLT_SHEET_FIBER_WAVE_PERIOD, fibers),
+        array(_capi.FLT_SHEET_FIBER_STEEPNESS, fibers),
+        fiber_flags,
+    )
+    zone_results = SheetZones(
+        array(_capi.FLT_SHEET_ZONE_CENTRE_X, zones),
+        array(_capi.FLT_SHEET_ZONE_I_UNITS, zones),
+        array(_capi.FLT_SHEET_ZONE_FLAGS, zones).astype(np.uint8),
+    )
+    s = z = z_flags = measured = None
+    if maps >= 1:
+        s = np.empty(rows)
+        z = np.empty((rows, fibers))
+        z_flags = np.empty((rows, fibers), dtype=np.uint8)
+        handle.height_map_into(s, z, z_flags)
+    if maps >= 2:
+        measured = np.empty((rows, fibers))
+        handle.measured_map_into(measured)
+    return Sheet(
+        int(v["id"]), int(v["coil"]), int(v["index"]), v["s_start"], v["s_end"], rows,
+        v["s_first"], v["s_last"], v["strip_left"], v["strip_right"], v["strip_width"],
+        v["strip_centre"], Shape(int(v["shape"])), v["confidence"],
+        ShapeComponent(int(v["components"])), v["bow"], v["crossbow"], v["wave_height"],
+        v["wave_period"], v["wave_steepness"], v["wave_x"], v["max_i_units"],
+        SheetFlag(int(v["flags"])), int(v["window_flags"]), int(v["frames"]),
+        int(v["skipped"]), int(v["dropped"]), int(v["saturated"]), int(v["invalid"]),
+        v["lookahead"], fiber_results, zone_results, s, z, z_flags, measured, v)
+
+
+def gauge_options() -> Dict[str, float]:
+    """The gauge's own options (gauge_*) with their C defaults. A Gauge also
+    takes the reconstructor's, the extractor's (extract_*) and the flatness
+    metrics' (flat_*) options."""
+    return {name: info.default for name, info in prefixed_options("gauge_").items()}
+
+
+class Gauge:
+    """One handle that runs a line: frames (or profile rows) and the shear's
+    cuts in, measured sheets out (flatline/gauge.h).
+
+    Args:
+        calib: the sensor's finished :class:`Calibration` (frame size, laser
+            spacing, fiber grid: every geometric constant comes from it).
+        **options: the reconstructor's, extractor's (extract_*), flatness
+            (flat_*) and gauge (gauge_*) options by their C names; another
+            component's option (sim_*, source_*) raises InvalidArgumentError.
+
+    Frames go in with :meth:`push_frame` (or :meth:`push_row`), or from a
+    :class:`Source` the gauge acquires from on a thread of its own
+    (:meth:`attach`, :meth:`start`, :meth:`stop`). :meth:`cut` tells where
+    the shear cut, before or after the strip gets there. Sheets come out in
+    order: iterate the gauge for the sheets waiting now, or
+    :meth:`sheets` to wait for them as they come; :meth:`flush` ends the
+    strip (its last sheet) at the end of the input.
+
+        with flatline.Gauge(calib, rigid_motion=1, robust=1) as gauge:
+            gauge.cut(3000.0)
+            for frame in frames:
+                gauge.push_frame(frame.pixels, frame.encoder_mm)
+                for sheet in gauge:
+                    print(sheet.id, sheet.shape, sheet.max_i_units)
+            gauge.flush()
+            for sheet in gauge:
+                ...
+
+    Pushing is serialised (frames must arrive in order); iterating sheets
+    may run on another thread. The GIL is released while the gauge waits
+    (a full queue with gauge_overflow = 1, flush, stop, a sheet). While an
+    attached source is acquiring, leave it (and the simulator or bus it
+    reads) alone: the gauge's thread uses it.
+
+    Options:
+{options}
+    """
+
+    def __init__(self, calib: Calibration, **options: float) -> None:
+        fn = "Gauge"
+        if not isinstance(calib, Calibration):
+            raise TypeError(f"{fn}() argument 'calib' must be a Calibration, not "
+                            f"{type(calib).__name__}")
+        bag = make_options(fn, options)
+        with calib._reading():
+            handle = _capi.flt_gauge_create(calib._live(), bag)
+        self._handle: Optional[_capi.flt_gauge] = handle
+        self._push = threading.Lock()
+        self._source: Optional[Source] = None
+        self._maps = int(_capi.flt_gauge_get_option(handle, _capi.FLT_OPT_GAUGE_KEEP_MAPS))
+        self._fibers = int(calib.fiber_grid.count)
+        width, height = calib.frame_size
+        self._frame_shape = (height, width)
+
+    # -- lifetime -------------------------------------------------------------------
+
+    def close(self) -> None:
+        """Stops the acquisition and the workers and frees everything now
+        (unfinished sheets are dropped). Idempotent; later calls raise
+        StateError."""
+        self._handle = None
+        self._source = None
+
+    @property
+    def closed(self) -> bool:
+        """True after :meth:`close`."""
+        return self._handle is None
+
+    def __enter__(self) -> "Gauge":
+        self._live()
+        return self
+
+    def __exit__(self, *exc_info: Any) -> None:
+        self.close()
+
+    def __del__(self) -> None:
+        # The C gauge must stop before the source it borrows goes.
+        if getattr(self, "_handle", None) is not None:
+            self._handle = None
+
+    def _live(self) -> _capi.flt_gauge:
+        handle = self._handle
+        if handle is None:
+            raise StateError("the Gauge is closed")
+        return handle
+
+    def __repr__(self) -> str:
+        if getattr(self, "_handle", None) is None:
+            return "<flatline.Gauge closed>"
+        return f"<flatline.Gauge {self._fibers} fibers>"
+
+    def option(self, name: str) -> float:
+        """The effective value of an option: the gauge's, and the
+        reconstructor's as the gauge set them (laser_spacing from the
+        calibration, row_capacity from its latency)."""
+        key = _capi.flt_option_find(name)
+        return float(_capi.flt_gauge_get_option(self._live(), key))
+
+    # -- input ----------------------------------------------------------------------
+
+    def push_frame(self, frame: np.ndarray, encoder_mm: float,
+                   format: Optional[PixelFormat] = None) -> None:
+        """One camera frame: (height, width) uint8 (Mono8) or uint16 pixels
+        (Mono16 unless `format` says Mono10 or Mono12), taken at encoder_mm.
+        Copied: the array may be reused at once. Skipped and dropped frames
+        are counted, not raised (:meth:`counters`)."""
+        fn = "push_frame"
+        if not isinstance(frame, np.ndarray):
+            raise TypeError(f"{fn}() argument 'frame' must be a numpy array, not "
+                            f"{type(frame).__name__}")
+        if frame.dtype.kind != "u" or frame.dtype.itemsize not in (1, 2):
+            raise TypeError(f"{fn}() argument 'frame' has dtype {frame.dtype}; frames are "
+                            f"uint8 (Mono8) or uint16 (Mono10/12/16)")
+        if format is None:
+            fmt = PixelFormat.MONO8 if frame.dtype.itemsize == 1 else PixelFormat.MONO16
+        else:
+            fmt = PixelFormat(format)
+            if fmt.dtype.itemsize != frame.dtype.itemsize:
+                raise TypeError(f"{fn}() argument 'frame' has dtype {frame.dtype}, but "
+                                f"{fmt.name} frames are {fmt.dtype}")
+        if frame.shape != self._frame_shape:
+            raise ValueError(f"{fn}() argument 'frame' has shape {frame.shape}, but the "
+                             f"calibration's frames are {self._frame_shape} (height, width)")
+        item = frame.dtype.itemsize
+        if not (frame.flags.aligned and frame.dtype.isnative and frame.strides[1] == item
+                and frame.strides[0] >= frame.shape[1] * item):
+            frame = np.ascontiguousarray(frame, dtype=frame.dtype.newbyteorder("="))
+        encoder_mm = as_real(fn, "encoder_mm", encoder_mm)
+        with self._push:
+            self._live().push_frame_array(frame, int(fmt), encoder_mm)
+
+    def push_row(self, encoder_mm: float, height: Any, slope: Any,
+                 valid: Any = None) -> None:
+        """One profile row instead of a frame (a sensor that extracts its own
+        profiles): height (K,) mm, slope (K,) mm/mm, valid (K,) bool or None
+        (then finite values are valid), at the frame's encoder position."""
+        fn = "push_row"
+        encoder_mm = as_real(fn, "encoder_mm", encoder_mm)
+        h = as_float64(fn, "height", height, 1)
+        g = as_float64(fn, "slope", slope, 1)
+        if valid is None:
+            mask, flagged = np.zeros(1, dtype=np.uint8), 0
+        else:
+            mask, flagged = as_mask(fn, "valid", valid, 1), 1
+        with self._push:
+            self._live().push_row_arrays(encoder_mm, h, g, mask, flagged)
+
+    def cut(self, encoder_mm: float) -> None:
+        """The shear cut the strip at encoder_mm (the reading at which the cut
+        line lies midway between the lasers), before or after the strip gets
+        there; cuts come in increasing order."""
+        _capi.flt_gauge_cut(self._live(), as_real("cut", "encoder_mm", encoder_mm))
+
+    def flush(self) -> None:
+        """The end of the input: processes every frame pushed, ends the strip
+        (its last sheet) and waits until that sheet is out."""
+        with self._push:
+            self._live().flush_waiting()
+
+    # -- acquisition ----------------------------------------------------------------
+
+    def attach(self, source: Optional[Source]) -> None:
+        """Acquires from `source` (kept alive by the gauge) on :meth:`start`;
+        None detaches. StateError while acquiring."""
+        if source is not None and not isinstance(source, Source):
+            raise TypeError(f"attach() argument 'source' must be a Source or None, not "
+                            f"{type(source).__name__}")
+        handle = None if source is None else source._live()
+        _capi.flt_gauge_attach_source(self._live(), handle)
+        self._source = source
+
+    def start(self) -> None:
+        """Starts the attached source and the gauge's acquisition thread."""
+        _capi.flt_gauge_start(self._live())
+
+    def stop(self) -> None:
+        """Stops the acquisition and waits until its frames are processed (the
+        strip stays open: :meth:`flush` ends it). Raises the error that ended
+        the acquisition by itself, e.g. DeviceError for an unplugged camera."""
+        self._live().stop_waiting()
+
+    # -- output ---------------------------------------------------------------------
+
+    def next_sheet(self, timeout: float = 0.0) -> Optional[Sheet]:
+        """The next finished sheet, waiting up to `timeout` seconds; None if
+        none came."""
+        seconds = as_real("next_sheet", "timeout", timeout)
+        if not seconds >= 0:
+            raise ValueError(f"next_sheet() argument 'timeout' must be >= 0, got {timeout}")
+        ms = int(min(seconds, 4e6) * 1000.0)
+        handle = self._live().next_sheet_waiting(ms)
+        if handle is None:
+            return None
+        try:
+            return _read_sheet(handle, self._maps)
+        finally:
+            del handle  # the slot goes back to the gauge at once
+
+    def __iter__(self) -> Iterator[Sheet]:
+        """The sheets finished so far, oldest first (without waiting)."""
+        while True:
+            sheet = self.next_sheet()
+            if sheet is None:
+                return
+            yield sheet
+
+    def sheets(self, timeout: float = 1.0) -> Iterator[Sheet]:
+        """Sheets as they come: each waited for up to `timeout` seconds; the
+        iteration ends when none came in that time (e.g. after :meth:`stop`
+        and :meth:`flush`)."""
+        while True:
+            sheet = self.next_sheet(timeout)
+            if sheet is None:
+                return
+            yield sheet
+
+    def counters(self) -> Dict[str, int]:
+        """The gauge's counters by name: frames, extracted, skipped_stop,
+        skipped_reversal, dropped, no_strip, strips, sheets, sheets_dropped,
+        cuts, cuts_ignored, reversals, extract_errors, queued, acquiring,
+        sheets_waiting."""
+        handle = self._live()
+        return {name: int(_capi.flt_gauge_count(handle, key)) for name, key in _COUNTERS.items()}
+
+
+def _document_options() -> None:
+    names = [name for name, info in prefixed_options("gauge_").items()]
+    if Gauge.__doc__:
+        Gauge.__doc__ = Gauge.__doc__.replace("{options}", options_doc(names))
+
+
+_document_options()

@@ -1,0 +1,222 @@
+# SPDX-License-Identifier: Apache-2.0
+"""The gauge from Python: sheets out of rows and frames, cuts early and late,
+counters, the iterators, a source on the gauge's thread, bad input."""
+
+import math
+import threading
+
+import numpy as np
+import pytest
+
+import flatline
+
+K = 51  # fibers across 1500 mm
+PITCH = 1500.0 / (K - 1)
+
+
+def reference_sheet(rows, step=3.0):
+    """The reference's sheet (12 mm centre buckle with wavy edges, 1800 mm
+    waves) measured noise-free by two lasers 100 mm apart, rows every step
+    mm from s = 0: (s, height, slope, truth)."""
+    s = np.arange(rows) * step
+    x = -750.0 + PITCH * np.arange(K)
+
+    def z(ss):
+        return 12.0 * np.sin(2 * np.pi * ss[:, None] / 1800.0) * np.cos(2 * np.pi * x / 1500.0)
+
+    behind, ahead = z(s - 50.0), z(s + 50.0)
+    return s, 0.5 * (behind + ahead), (ahead - behind) / 100.0, z(s)
+
+
+@pytest.fixture(scope="module")
+def calib():
+    return flatline.Calibration.reference(first_row=900, rows=240, first_x_mm=-750.0,
+                                          pitch_mm=PITCH, fibers=K)
+
+
+def run_rows(calib, s, h, g, cuts=(), workers=2, **options):
+    gauge = flatline.Gauge(calib, gauge_workers=workers, gauge_overflow=1,
+                           gauge_keep_maps=1, gauge_sheet_slots=32,
+                           gauge_frame_spacing=2.0, **options)
+    for c in cuts:
+        gauge.cut(c)
+    for r in range(len(s)):
+        gauge.push_row(s[r], h[r], g[r])
+    gauge.flush()
+    sheets = list(gauge)
+    counters = gauge.counters()
+    gauge.close()
+    return sheets, counters
+
+
+def test_rows_to_sheets_with_cuts(calib):
+    s, h, g, truth = reference_sheet(3000)  # 9 m
+    sheets, counters = run_rows(calib, s, h, g, cuts=(3000.0, 6000.0))
+    assert [sh.id for sh in sheets] == [1, 2, 3]
+    assert [sh.coil for sh in sheets] == [1, 1, 1]
+    assert (sheets[0].s_start, sheets[0].s_end) == (0.0, 3000.0)
+    assert (sheets[1].s_start, sheets[1].s_end) == (3000.0, 6000.0)
+    assert sheets[0].flags == flatline.SheetFlag.HEAD
+    assert flatline.SheetFlag.FLUSHED in sheets[2].flags
+    assert sum(sh.rows for sh in sheets) == 3000 == counters["frames"]
+    # A sheet ends exactly at its cut: its rows lie before it.
+    assert sheets[0].s[-1] < 3000.0 <= sheets[1].s[0]
+    # Noise-free rows: the reconstruction is within 1 um of the truth
+    # (the reconstructor's own figure on this sheet is 0.25 um).
+    z = np.concatenate([sh.z for sh in sheets])
+    assert np.max(np.abs(z - truth)) < 1e-3
+    # The centre buckle and wavy edges: every sheet is a mix of the two,
+    # the strip spans the fiber grid plus one pitch.
+    for sh in sheets:
+        assert sh.shape in (flatline.Shape.MIX, flatline.Shape.CENTRE_BUCKLE,
+                            flatline.Shape.WAVY_EDGE_BOTH)
+        assert sh.strip_width == pytest.approx(1500.0 + PITCH, abs=1e-9)
+        assert sh.fibers.i_units.shape == (K,) and sh.zones.i_units.ndim == 1
+        assert sh.values["rows"] == sh.rows
+        assert sh.dropped == 0 and sh.invalid == 0
+    # A 12 mm wave of 1800 mm: the largest wave is 24 mm peak to peak at
+    # the centre or the edges (within 2% for the rows' sampling).
+    assert sheets[1].wave_height == pytest.approx(24.0, rel=0.02)
+    assert sheets[1].wave_period == pytest.approx(1800.0, rel=0.02)
+
+
+def test_workers_give_the_same_sheets(calib):
+    s, h, g, _ = reference_sheet(1500)
+    runs = [run_rows(calib, s, h, g, cuts=(1500.0, 3000.0), workers=w)[0] for w in (0, 1, 2)]
+    for other in runs[1:]:
+        assert len(other) == len(runs[0])
+        for a, b in zip(runs[0], other):
+            assert a.values == b.values or all(
+                (a.values[k] == b.values[k]) or (math.isnan(a.values[k]) and
+                                                 math.isnan(b.values[k]))
+                for k in a.values)
+            assert np.array_equal(a.z, b.z)
+            assert np.array_equal(a.fibers.i_units, b.fibers.i_units, equal_nan=True)
+
+
+def test_late_cut_gives_the_early_cut_sheets(calib):
+    s, h, g, _ = reference_sheet(5400)  # 16.2 m
+    early, _ = run_rows(calib, s, h, g, cuts=(3000.0,), gauge_max_sheet_length=14000.0)
+    gauge = flatline.Gauge(calib, gauge_overflow=1, gauge_keep_maps=1,
+                           gauge_frame_spacing=2.0, gauge_max_sheet_length=14000.0)
+    for r in range(4000):  # to s = 12 m: the reconstructor finished s = 3 m long ago
+        gauge.push_row(s[r], h[r], g[r])
+    gauge.cut(3000.0)
+    for r in range(4000, len(s)):
+        gauge.push_row(s[r], h[r], g[r])
+    gauge.flush()
+    late = list(gauge)
+    assert len(late) == len(early) == 2
+    for a, b in zip(early, late):
+        assert np.array_equal(a.z, b.z) and a.rows == b.rows and a.s_end == b.s_end
+    assert late[0].lookahead_mm > early[0].lookahead_mm
+
+
+def test_line_stop_and_reversal_are_skipped_and_counted(calib):
+    s, h, g, _ = reference_sheet(1000)
+    gauge = flatline.Gauge(calib, gauge_overflow=1, gauge_frame_spacing=2.0)
+    for r in range(500):
+        gauge.push_row(s[r], h[r], g[r])
+    for _ in range(5):  # the line stops
+        gauge.push_row(s[499], h[499] + 9.0, g[499])
+    for r in range(490, 1000):  # backs up 30 mm, then on again
+        gauge.push_row(s[r], h[r], g[r])
+    gauge.flush()
+    (sheet,) = list(gauge)
+    c = gauge.counters()
+    # Rows 490..498 lie behind the furthest position (reversal); row 499 is
+    # at it again (a stop, like the five before).
+    assert c["skipped_stop"] == 6 and c["skipped_reversal"] == 9
+    assert sheet.skipped == 15 and sheet.rows == 1000
+
+
+def test_frames_and_the_sheet_iterator(calib):
+    with flatline.SimulatedLine(calib, sim_frame_spacing=10.0) as sim:
+        sim.add_defect("centre_buckle", 4.0, 800.0)
+        with flatline.Gauge(calib, gauge_frame_spacing=8.0, gauge_overflow=1,
+                            lag_knots=4) as gauge:
+            gauge.cut(1000.0)
+            got = []
+            for _ in range(200):  # 2 m
+                frame = sim.next_frame()
+                gauge.push_frame(frame.image, frame.encoder_mm)
+                got.extend(gauge)
+            gauge.flush()
+            got.extend(gauge.sheets(timeout=0.1))
+            assert [sh.id for sh in got] == [1, 2]
+            assert got[0].s_end == 1000.0 and got[0].rows == 100
+            assert gauge.counters()["extracted"] == 200
+            assert gauge.option("laser_spacing") == 100.0
+
+
+def test_acquisition_from_a_source(calib):
+    with flatline.SimulatedLine(calib, sim_frame_spacing=10.0) as sim:
+        sim.add_defect("centre_buckle", 4.0, 800.0)
+        source = flatline.Source.simulator(sim)
+        with flatline.Gauge(calib, gauge_frame_spacing=8.0, gauge_overflow=1,
+                            lag_knots=4) as gauge:
+            gauge.attach(source)
+            gauge.cut(1000.0)
+            gauge.start()
+            with pytest.raises(flatline.StateError, match="acquiring"):
+                gauge.flush()  # frames come from the source: stop first
+            sheet = gauge.next_sheet(timeout=60.0)  # comes while acquiring
+            gauge.stop()
+            assert sheet is not None and sheet.s_end == 1000.0
+            assert gauge.counters()["acquiring"] == 0
+            gauge.flush()
+            rest = gauge.next_sheet()
+            assert rest is not None and rest.s_start == 1000.0
+            gauge.attach(None)
+
+
+def test_sheets_can_be_taken_on_another_thread(calib):
+    s, h, g, _ = reference_sheet(2000)
+    gauge = flatline.Gauge(calib, gauge_overflow=1, gauge_frame_spacing=2.0, lag_knots=4)
+    for c in (1000.0, 2000.0, 3000.0, 4000.0, 5000.0):
+        gauge.cut(c)
+    taken = []
+    reader = threading.Thread(target=lambda: taken.extend(gauge.sheets(timeout=5.0)))
+    reader.start()
+    for r in range(len(s)):
+        gauge.push_row(s[r], h[r], g[r])
+    gauge.flush()
+    reader.join()
+    assert [sh.id for sh in taken] == [1, 2, 3, 4, 5, 6]
+
+
+def test_bad_input_raises_with_the_library_message(calib):
+    with pytest.raises(flatline.InvalidArgumentError, match="sim_seed"):
+        flatline.Gauge(calib, sim_seed=3)
+    with pytest.raises(TypeError):
+        flatline.Gauge(calib, no_such_option=1)
+    with pytest.raises(flatline.InvalidArgumentError, match="laser_spacing"):
+        flatline.Gauge(calib, laser_spacing=80.0)
+    gauge = flatline.Gauge(calib)
+    with pytest.raises(ValueError, match="shape"):
+        gauge.push_frame(np.zeros((10, 10), np.uint8), 0.0)
+    with pytest.raises(TypeError, match="dtype"):
+        gauge.push_frame(np.zeros((240, 2048), np.float32), 0.0)
+    with pytest.raises(flatline.InvalidArgumentError, match="encoder_mm"):
+        gauge.push_frame(np.zeros((240, 2048), np.uint8), math.nan)
+    with pytest.raises(flatline.InvalidArgumentError, match="fibers"):
+        gauge.push_row(0.0, np.zeros(K + 1), np.zeros(K + 1))
+    with pytest.raises(flatline.InvalidArgumentError, match="shape"):
+        gauge.push_row(0.0, np.zeros(K), np.zeros(K - 1))
+    gauge.cut(100.0)
+    with pytest.raises(flatline.InvalidArgumentError, match="previous cut"):
+        gauge.cut(50.0)
+    with pytest.raises(flatline.StateError, match="no source"):
+        gauge.start()
+    with pytest.raises(ValueError):
+        gauge.next_sheet(timeout=-1)
+    gauge.close()
+    with pytest.raises(flatline.StateError):
+        gauge.cut(200.0)
+
+
+def test_gauge_options_table():
+    table = flatline.gauge_options()
+    assert table["gauge_workers"] == 2.0 and table["gauge_frame_spacing"] == 1.0
+    assert all(name.startswith("gauge_") for name in table) and len(table) == 10
+    assert "gauge_workers (int): default 2" in flatline.Gauge.__doc__
