@@ -14,14 +14,13 @@ slope untouched) and 1/16 px of peak-detection noise per laser and fiber:
     height = (z(s - 50) + z(s + 50)) / 2,   slope = (z(s + 50) - z(s - 50)) / 100
 
 It reconstructs twice: the whole sheet at once (flatline.reconstruct) and
-streaming, frame block by frame block, as the gauge runs on the line
-(flatline.Reconstructor), and prints the accuracy of both against the
-simulator's ground truth. It also renders one camera frame and finds the
-two laser lines in it with flatline.Extractor, as the gauge does per frame.
-
-The I-Unit profile across the width comes with the flatness component of
-libflatline (flatline.i_units); this example will plot it once the binding
-has it.
+on the line: the rows go one by one into a flatline.Gauge with the shear's
+cuts every 3000 mm, and the gauge hands out finished sheets, each with its
+shape class, I-Unit zone profile and height map. It prints the accuracy of
+both against the simulator's ground truth and each sheet's results, and
+plots the zone profiles. It also renders one camera frame and finds the two
+laser lines in it with flatline.Extractor, as the gauge's workers do per
+frame (a gauge takes camera frames with push_frame the same way).
 
 Usage:
     python3 examples/python/reconstruct_sheet.py [--out DIR] [--seed N]
@@ -47,6 +46,7 @@ WIDTH = 1500.0  # mm across
 PITCH = 10.0  # mm between fibers
 VIBRATION = 2.5  # mm, sigma of the strip's bounce per frame
 PEAK_NOISE = 1 / 16  # px, sigma of one laser's peak per fiber
+CUT_EVERY = 3000.0  # mm of strip between the shear's cuts
 
 
 def simulate(seed):
@@ -67,21 +67,25 @@ def simulate(seed):
     return calib, rows, frame, peaks
 
 
-def stream(calib, s, height, slope, block=100):
-    """The on-line way: frames arrive in blocks, finished rows come out later.
-    The reconstructor takes the fibers and the laser spacing from the
-    calibration."""
-    parts = []
-    with flatline.Reconstructor(calib) as recon:
-        for start in range(0, len(s), block):
-            rows = slice(start, start + block)
-            recon.push(s[rows], height[rows], slope[rows])
-            parts.append(recon.pull())
-        recon.end_sheet()
-        parts.append(recon.pull())
-    out_s, z, flags = (np.concatenate(p) for p in zip(*parts))
-    assert np.array_equal(out_s, s) and not flags.any()
-    return z
+def on_the_line(calib, s, height, slope):
+    """The on-line way: one Gauge takes the profile rows at their encoder
+    positions (a sensor that extracts its own profiles; camera frames go in
+    with push_frame) and the shear's cuts, and hands out each sheet once the
+    reconstructor has seen enough strip beyond its cut. The gauge takes the
+    fibers and the laser spacing from the calibration."""
+    centre = sum(calib.laser_offsets) / 2  # the row at s: the frame at encoder s + centre
+    sheets = []
+    with flatline.Gauge(calib, rigid_motion=1, gauge_frame_spacing=0.8 * STEP,
+                        gauge_overflow=1, gauge_keep_maps=1) as gauge:
+        for cut in np.arange(CUT_EVERY, s[-1], CUT_EVERY):
+            gauge.cut(cut + centre)
+        for r in range(len(s)):
+            gauge.push_row(s[r] + centre, height[r], slope[r])
+            sheets.extend(gauge)  # the sheets finished so far
+        gauge.flush()  # the end of the strip: its last sheet
+        sheets.extend(gauge)
+    assert np.array_equal(np.concatenate([sheet.s for sheet in sheets]), s)
+    return sheets
 
 
 def stats(error):
@@ -95,7 +99,7 @@ def plot(out_dir, s, x, height, z, z_true, fiber):
     fig, axes = plt.subplots(1, 3, figsize=(13, 6), sharey=True, constrained_layout=True)
     error = z - z_true
     panels = [(height, "raw heights (mean of the lasers)", limit, "z [mm]"),
-              (z, "reconstructed", limit, "z [mm]"),
+              (z, "reconstructed (the gauge's sheets)", limit, "z [mm]"),
               (error, "reconstructed - true", np.abs(error).max(), "error [mm]")]
     for ax, (image, title, scale, label) in zip(axes, panels):
         im = ax.imshow(image, aspect="auto", extent=extent, cmap="RdBu_r",
@@ -128,6 +132,25 @@ def plot(out_dir, s, x, height, z, z_true, fiber):
     fig.savefig(fiber_png, dpi=110)
     plt.close(fig)
     return heights_png, fiber_png
+
+
+def plot_zones(out_dir, sheets):
+    """Each sheet's I-Unit profile across the width, as the operator reads it."""
+    fig, axes = plt.subplots(len(sheets), 1, figsize=(11, 2.4 * len(sheets)), sharex=True,
+                             sharey=True, constrained_layout=True, squeeze=False)
+    for ax, sheet in zip(axes[:, 0], sheets):
+        zones = sheet.zones
+        ax.bar(zones.centre_x, np.nan_to_num(zones.i_units), width=0.85 * np.diff(zones.centre_x)[0],
+               color="tab:blue")
+        ax.set_ylabel("I-Units")
+        ax.set_title(f"sheet {sheet.id} ({sheet.s_start / 1000:.1f}-{sheet.s_end / 1000:.1f} m): "
+                     f"{sheet.shape}, confidence {sheet.confidence:.2f}", fontsize=10)
+        ax.grid(alpha=0.3, axis="y")
+    axes[-1, 0].set_xlabel("zone centre across the width [mm]")
+    zones_png = os.path.join(out_dir, "zones.png")
+    fig.savefig(zones_png, dpi=110)
+    plt.close(fig)
+    return zones_png
 
 
 def plot_frame(out_dir, frame, peaks):
@@ -167,22 +190,30 @@ def main():
           f"{time.perf_counter() - start:.2f} s")
 
     start = time.perf_counter()
-    z = flatline.reconstruct(s, height, slope, laser_spacing=calib.laser_spacing)
+    z = flatline.reconstruct(s, height, slope, laser_spacing=calib.laser_spacing, rigid_motion=1)
     print(f"whole sheet reconstructed in {time.perf_counter() - start:.2f} s")
     start = time.perf_counter()
-    z_stream = stream(calib, s, height, slope)
-    print(f"streamed in {time.perf_counter() - start:.2f} s")
+    sheets = on_the_line(calib, s, height, slope)
+    z_line = np.concatenate([sheet.z for sheet in sheets])
+    print(f"on the line (flatline.Gauge): {len(sheets)} sheets in "
+          f"{time.perf_counter() - start:.2f} s")
 
-    print(f"raw heights   vs true: {stats(height - z_true)}")
-    print(f"reconstructed vs true: {stats(z - z_true)}")
-    print(f"streamed      vs true: {stats(z_stream - z_true)}")
+    print(f"raw heights       vs true: {stats(height - z_true)}")
+    print(f"whole sheet       vs true: {stats(z - z_true)}")
+    print(f"gauge's sheets    vs true: {stats(z_line - z_true)}")
+    for sheet in sheets:
+        print(f"  sheet {sheet.id}: {sheet.s_start / 1000:.1f}-{sheet.s_end / 1000:.1f} m, "
+              f"{sheet.shape} (confidence {sheet.confidence:.2f}), largest zone "
+              f"{sheet.max_i_units:.1f} I-Units, largest wave {sheet.wave_height:.1f} mm "
+              f"over {sheet.wave_period:.0f} mm")
     found = np.isfinite(peaks) & np.isfinite(frame.peak_rows)
     peak_rms = np.sqrt(np.mean((peaks[found] - frame.peak_rows[found]) ** 2))
     print(f"extractor peaks vs true line centres: RMS {peak_rms:.4f} px "
           f"in {100 * found.mean():.1f} % of the columns")
 
     fiber = int(np.argmin(np.abs(x - 0.0)))  # the centre: largest waves
-    for path in plot(args.out, s, x, height, z, z_true, fiber) + (plot_frame(args.out, frame, peaks),):
+    for path in (plot(args.out, s, x, height, z_line, z_true, fiber)
+                 + (plot_zones(args.out, sheets), plot_frame(args.out, frame, peaks))):
         print(f"wrote {path}")
 
 
