@@ -30,8 +30,9 @@ namespace Flatline
     /// ("knot_spacing", ...) through flt_option_find, so an option added to
     /// the C library is usable here without a binding change; the typed
     /// properties cover the options known when this binding was written
-    /// (calibration, simulator, extractor, flatness and frame-source keys
-    /// carry a Calib / Sim / Extract / Flat / Source or U3v prefix).
+    /// (calibration, simulator, extractor, flatness, frame-source and gauge
+    /// keys carry a Calib / Sim / Extract / Flat / Source or U3v / Gauge
+    /// prefix).
     /// Keys never set keep their default. Objects created from a bag keep
     /// their own copy of the values, so the bag may be disposed right after.
     /// </summary>
@@ -269,6 +270,34 @@ namespace Flatline
         public int U3vPendingAckLimit { get => (int)Get("u3v_pending_ack_limit"); set => Set("u3v_pending_ack_limit", value); }
         /// <summary>Times a command is sent when no acknowledge comes.</summary>
         public int U3vCommandAttempts { get => (int)Get("u3v_command_attempts"); set => Set("u3v_command_attempts", value); }
+
+        // ---- the gauge (Gauge); flatline/gauge.h
+        /// <summary>Threads that process the frames; 0 processes each frame on
+        /// the thread that delivers it.</summary>
+        public int GaugeWorkers { get => (int)Get("gauge_workers"); set => Set("gauge_workers", value); }
+        /// <summary>Frames the queue between acquisition and processing holds
+        /// (width x height x 2 bytes each).</summary>
+        public int GaugeQueueFrames { get => (int)Get("gauge_queue_frames"); set => Set("gauge_queue_frames", value); }
+        /// <summary>True: the pushing thread waits for room in a full queue
+        /// (recorded frames); false: the frame is dropped and counted (a live
+        /// camera; gauge_overflow).</summary>
+        public bool GaugeOverflowWait { get => Get("gauge_overflow") != 0; set => Set("gauge_overflow", value ? 1 : 0); }
+        /// <summary>The least encoder advance for a frame to be taken, mm
+        /// (closer frames are a line stop); sizes the buffers.</summary>
+        public double GaugeFrameSpacing { get => Get("gauge_frame_spacing"); set => Set("gauge_frame_spacing", value); }
+        /// <summary>A reversal longer than this, mm, starts a new strip.</summary>
+        public double GaugeReversalLength { get => Get("gauge_reversal_length"); set => Set("gauge_reversal_length", value); }
+        /// <summary>A frame shows the strip when its valid fibers span this, mm.</summary>
+        public double GaugeStripMinWidth { get => Get("gauge_strip_min_width"); set => Set("gauge_strip_min_width", value); }
+        /// <summary>The strip has left when no frame showed it over this, mm.</summary>
+        public double GaugeTailLength { get => Get("gauge_tail_length"); set => Set("gauge_tail_length", value); }
+        /// <summary>A sheet this long without a cut is ended there, mm.</summary>
+        public double GaugeMaxSheetLength { get => Get("gauge_max_sheet_length"); set => Set("gauge_max_sheet_length", value); }
+        /// <summary>What each sheet keeps: 0 nothing, 1 its reconstructed
+        /// height map, 2 also the measured heights.</summary>
+        public int GaugeKeepMaps { get => (int)Get("gauge_keep_maps"); set => Set("gauge_keep_maps", value); }
+        /// <summary>Sheets that can exist at once, waiting or held.</summary>
+        public int GaugeSheetSlots { get => (int)Get("gauge_sheet_slots"); set => Set("gauge_sheet_slots", value); }
 
         public void Dispose()
         {

@@ -492,7 +492,7 @@ namespace Flatline
             GC.SuppressFinalize(this);
         }
 
-        private SourceHandle LiveHandle
+        internal SourceHandle LiveHandle
         {
             get
             {

@@ -166,4 +166,24 @@ namespace Flatline
         protected override void Destroy(IntPtr native) => FlatlineNative.flt_u3v_sim_destroy_handle(native);
         protected override void OnLive(int delta) => Interlocked.Add(ref live, delta);
     }
+
+    internal sealed class GaugeHandle : FlatlineHandle
+    {
+        private static long live;
+        internal static long Live => Interlocked.Read(ref live);
+        public GaugeHandle() { }
+        // Removes the callback before destroying: no sheet may reach a
+        // delegate while the gauge shuts down (see swig/gauge.i).
+        protected override void Destroy(IntPtr native) => FlatlineNative.flt_cs_gauge_release(native);
+        protected override void OnLive(int delta) => Interlocked.Add(ref live, delta);
+    }
+
+    internal sealed class SheetHandle : FlatlineHandle
+    {
+        private static long live;
+        internal static long Live => Interlocked.Read(ref live);
+        public SheetHandle() { }
+        protected override void Destroy(IntPtr native) => FlatlineNative.flt_sheet_destroy_handle(native);
+        protected override void OnLive(int delta) => Interlocked.Add(ref live, delta);
+    }
 }

@@ -10,7 +10,7 @@ FLT_CS_HANDLE(flt_extractor, ExtractorHandle)
 %typemap(ctype) const void *frame "const void *"
 %typemap(imtype) const void *frame "void*"
 %typemap(cstype) const void *frame "void*"
-%typemap(in) const void *frame %{ $1 = $input; %}
+%typemap(in) const void *frame %{ $1 = ($1_ltype)$input; %}
 %typemap(csin) const void *frame "$csinput"
 
 /* flt_pixel_format travels as an int (common.i); the public PixelFormat

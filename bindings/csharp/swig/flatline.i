@@ -20,7 +20,8 @@
  *
  * One .i per component, in dependency order (recon.h uses calib.h, as do
  * extractor.h, sim.h and flatness.h; source.h extractor.h and sim.h, and
- * flatness.i defines FLT_CS_OUT_POINTER, which source.i uses).
+ * flatness.i defines FLT_CS_OUT_POINTER, which source.i uses; gauge.h uses
+ * source.h, and source.i's FLT_CS_INT_ENUM and uint64_t outputs).
  */
 %module FlatlineNative
 
@@ -31,3 +32,4 @@
 %include "sim.i"
 %include "flatness.i"
 %include "source.i"
+%include "gauge.i"

@@ -1,0 +1,713 @@
+// SPDX-License-Identifier: Apache-2.0
+#nullable enable
+using System;
+using System.Collections.Concurrent;
+using System.Collections.Generic;
+using System.Runtime.CompilerServices;
+using System.Runtime.InteropServices;
+using System.Threading;
+using System.Threading.Tasks;
+
+namespace Flatline
+{
+    /// <summary>How a sheet began and ended, and which of its values are NaN
+    /// (FLT_SHEET_FLAG_*).</summary>
+    [Flags]
+    public enum SheetFlags : uint
+    {
+        None = 0,
+        /// <summary>Starts at its strip's head, not at a cut.</summary>
+        Head = FlatlineNative.FLT_SHEET_FLAG_HEAD,
+        /// <summary>Ends at its strip's tail (the strip left the sensor).</summary>
+        Tail = FlatlineNative.FLT_SHEET_FLAG_TAIL,
+        /// <summary>Ended by <see cref="Gauge.Flush"/> (the end of the input).</summary>
+        Flushed = FlatlineNative.FLT_SHEET_FLAG_FLUSHED,
+        /// <summary>Ended at GaugeMaxSheetLength: no cut came.</summary>
+        Split = FlatlineNative.FLT_SHEET_FLAG_SPLIT,
+        /// <summary>Ended because the encoder reversed or jumped: a new strip began.</summary>
+        NewStrip = FlatlineNative.FLT_SHEET_FLAG_NEW_STRIP,
+        /// <summary>The strip's edges are unknown: the Strip* values are NaN.</summary>
+        NoEdges = FlatlineNative.FLT_SHEET_FLAG_NO_EDGES,
+        /// <summary>No fiber has a wave: the Wave* values are NaN.</summary>
+        NoWave = FlatlineNative.FLT_SHEET_FLAG_NO_WAVE,
+        /// <summary>No row: every result is NaN and flagged.</summary>
+        Empty = FlatlineNative.FLT_SHEET_FLAG_EMPTY,
+    }
+
+    /// <summary>A sheet's scalar results by key (flt_sheet_value), for
+    /// <see cref="Sheet.Value"/>; the properties of <see cref="Sheet"/> name
+    /// them too.</summary>
+    public enum SheetValue
+    {
+        Id = NativeSheetValue.FLT_SHEET_ID,
+        Coil = NativeSheetValue.FLT_SHEET_COIL,
+        Index = NativeSheetValue.FLT_SHEET_INDEX,
+        SStart = NativeSheetValue.FLT_SHEET_S_START,
+        SEnd = NativeSheetValue.FLT_SHEET_S_END,
+        Rows = NativeSheetValue.FLT_SHEET_ROWS,
+        SFirst = NativeSheetValue.FLT_SHEET_S_FIRST,
+        SLast = NativeSheetValue.FLT_SHEET_S_LAST,
+        StripLeft = NativeSheetValue.FLT_SHEET_STRIP_LEFT,
+        StripRight = NativeSheetValue.FLT_SHEET_STRIP_RIGHT,
+        StripWidth = NativeSheetValue.FLT_SHEET_STRIP_WIDTH,
+        StripCentre = NativeSheetValue.FLT_SHEET_STRIP_CENTRE,
+        Shape = NativeSheetValue.FLT_SHEET_SHAPE,
+        Confidence = NativeSheetValue.FLT_SHEET_CONFIDENCE,
+        Components = NativeSheetValue.FLT_SHEET_COMPONENTS,
+        Bow = NativeSheetValue.FLT_SHEET_BOW,
+        Crossbow = NativeSheetValue.FLT_SHEET_CROSSBOW,
+        WaveHeight = NativeSheetValue.FLT_SHEET_WAVE_HEIGHT,
+        WavePeriod = NativeSheetValue.FLT_SHEET_WAVE_PERIOD,
+        WaveSteepness = NativeSheetValue.FLT_SHEET_WAVE_STEEPNESS,
+        WaveX = NativeSheetValue.FLT_SHEET_WAVE_X,
+        MaxIUnits = NativeSheetValue.FLT_SHEET_MAX_I_UNITS,
+        Flags = NativeSheetValue.FLT_SHEET_FLAGS,
+        WindowFlags = NativeSheetValue.FLT_SHEET_WINDOW_FLAGS,
+        Frames = NativeSheetValue.FLT_SHEET_FRAMES,
+        Skipped = NativeSheetValue.FLT_SHEET_SKIPPED,
+        Dropped = NativeSheetValue.FLT_SHEET_DROPPED,
+        Saturated = NativeSheetValue.FLT_SHEET_SATURATED,
+        Invalid = NativeSheetValue.FLT_SHEET_INVALID,
+        Lookahead = NativeSheetValue.FLT_SHEET_LOOKAHEAD,
+        Fibers = NativeSheetValue.FLT_SHEET_FIBERS,
+        Zones = NativeSheetValue.FLT_SHEET_ZONES,
+    }
+
+    /// <summary>The gauge's counters (flt_gauge_counter).</summary>
+    public enum GaugeCounter
+    {
+        Frames = NativeGaugeCounter.FLT_GAUGE_COUNT_FRAMES,
+        Extracted = NativeGaugeCounter.FLT_GAUGE_COUNT_EXTRACTED,
+        SkippedStop = NativeGaugeCounter.FLT_GAUGE_COUNT_SKIPPED_STOP,
+        SkippedReversal = NativeGaugeCounter.FLT_GAUGE_COUNT_SKIPPED_REVERSAL,
+        Dropped = NativeGaugeCounter.FLT_GAUGE_COUNT_DROPPED,
+        NoStrip = NativeGaugeCounter.FLT_GAUGE_COUNT_NO_STRIP,
+        Strips = NativeGaugeCounter.FLT_GAUGE_COUNT_STRIPS,
+        Sheets = NativeGaugeCounter.FLT_GAUGE_COUNT_SHEETS,
+        SheetsDropped = NativeGaugeCounter.FLT_GAUGE_COUNT_SHEETS_DROPPED,
+        Cuts = NativeGaugeCounter.FLT_GAUGE_COUNT_CUTS,
+        CutsIgnored = NativeGaugeCounter.FLT_GAUGE_COUNT_CUTS_IGNORED,
+        Reversals = NativeGaugeCounter.FLT_GAUGE_COUNT_REVERSALS,
+        ExtractErrors = NativeGaugeCounter.FLT_GAUGE_COUNT_EXTRACT_ERRORS,
+        Queued = NativeGaugeCounter.FLT_GAUGE_COUNT_QUEUED,
+        Acquiring = NativeGaugeCounter.FLT_GAUGE_COUNT_ACQUIRING,
+        SheetsWaiting = NativeGaugeCounter.FLT_GAUGE_COUNT_SHEETS_WAITING,
+    }
+
+    /// <summary>
+    /// One measured sheet, copied out of the library (it stays valid for as
+    /// long as it is referenced). A NaN value always comes with its flag:
+    /// <see cref="Flags"/> for the strip edges and the wave,
+    /// <see cref="WindowFlags"/> for bow and crossbow, the fiber and zone
+    /// flags for the arrays.
+    /// </summary>
+    public sealed class Sheet
+    {
+        private readonly double[] values;
+
+        private Sheet(double[] values)
+        {
+            this.values = values;
+        }
+
+        /// <summary>Any scalar result by key (later library versions add keys).</summary>
+        public double Value(SheetValue key) => values[(int)key];
+
+        /// <summary>The sheet's number along the gauge's life, 1, 2, ...</summary>
+        public long Id => (long)Value(SheetValue.Id);
+        /// <summary>The number of its strip (coil), 1, 2, ...</summary>
+        public long Coil => (long)Value(SheetValue.Coil);
+        /// <summary>Its number within the coil, 1, 2, ...</summary>
+        public long Index => (long)Value(SheetValue.Index);
+        /// <summary>Where it starts along the strip, mm (a cut, or its strip's head).</summary>
+        public double SStartMm => Value(SheetValue.SStart);
+        /// <summary>Where it ends, mm (a cut, the tail, a split).</summary>
+        public double SEndMm => Value(SheetValue.SEnd);
+        /// <summary>Rows (frames) in the sheet.</summary>
+        public int Rows => (int)Value(SheetValue.Rows);
+        /// <summary>s of its first and last row, mm (NaN with <see cref="SheetFlags.Empty"/>).</summary>
+        public double SFirstMm => Value(SheetValue.SFirst);
+        public double SLastMm => Value(SheetValue.SLast);
+        /// <summary>The strip's edges, width and centre across the sensor, mm.</summary>
+        public double StripLeftMm => Value(SheetValue.StripLeft);
+        public double StripRightMm => Value(SheetValue.StripRight);
+        public double StripWidthMm => Value(SheetValue.StripWidth);
+        public double StripCentreMm => Value(SheetValue.StripCentre);
+        /// <summary>The shape class, its confidence in [0, 1] and its components.</summary>
+        public ShapeClass Shape => (ShapeClass)(int)Value(SheetValue.Shape);
+        /// <summary>The C library's name of the class, e.g. "centre buckle".</summary>
+        public string ShapeName => Flatness.ShapeName(Shape);
+        public double Confidence => Value(SheetValue.Confidence);
+        public ShapeComponents Components => (ShapeComponents)(uint)Value(SheetValue.Components);
+        /// <summary>Bow (coil set) and crossbow sagittas, mm.</summary>
+        public double BowMm => Value(SheetValue.Bow);
+        public double CrossbowMm => Value(SheetValue.Crossbow);
+        /// <summary>The largest wave over the fibers: peak-to-peak height (mm),
+        /// period (mm), steepness (%), and the x of its fiber (mm).</summary>
+        public double WaveHeightMm => Value(SheetValue.WaveHeight);
+        public double WavePeriodMm => Value(SheetValue.WavePeriod);
+        public double WaveSteepnessPercent => Value(SheetValue.WaveSteepness);
+        public double WaveXMm => Value(SheetValue.WaveX);
+        /// <summary>The largest zone I-Units.</summary>
+        public double MaxIUnits => Value(SheetValue.MaxIUnits);
+        public SheetFlags Flags => (SheetFlags)(uint)Value(SheetValue.Flags);
+        public WindowFlags WindowFlags => (WindowFlags)(uint)Value(SheetValue.WindowFlags);
+        /// <summary>Frames measured (its rows), skipped (line stops, short
+        /// reversals), dropped (a full queue); saturated peaks; invalid samples.</summary>
+        public long Frames => (long)Value(SheetValue.Frames);
+        public long Skipped => (long)Value(SheetValue.Skipped);
+        public long Dropped => (long)Value(SheetValue.Dropped);
+        public long Saturated => (long)Value(SheetValue.Saturated);
+        public long Invalid => (long)Value(SheetValue.Invalid);
+        /// <summary>Strip the reconstructor had taken beyond <see cref="SEndMm"/>
+        /// when the sheet was finished, mm.</summary>
+        public double LookaheadMm => Value(SheetValue.Lookahead);
+
+        /// <summary>Per fiber [fibers]: x (mm), I-Units, arc length (mm), the
+        /// largest wave's height (mm), period (mm) and steepness (%), flags.</summary>
+        public double[] FiberX { get; private set; } = Array.Empty<double>();
+        public double[] FiberIUnits { get; private set; } = Array.Empty<double>();
+        public double[] FiberArcLengthMm { get; private set; } = Array.Empty<double>();
+        public double[] FiberWaveHeightMm { get; private set; } = Array.Empty<double>();
+        public double[] FiberWavePeriodMm { get; private set; } = Array.Empty<double>();
+        public double[] FiberSteepnessPercent { get; private set; } = Array.Empty<double>();
+        public FiberFlags[] FiberFlags { get; private set; } = Array.Empty<FiberFlags>();
+        /// <summary>Per zone [zones]: centre x (mm), I-Units, flags.</summary>
+        public double[] ZoneCentreX { get; private set; } = Array.Empty<double>();
+        public double[] ZoneIUnits { get; private set; } = Array.Empty<double>();
+        public ZoneFlags[] ZoneFlags { get; private set; } = Array.Empty<ZoneFlags>();
+
+        /// <summary>With GaugeKeepMaps >= 1: the rows' positions [rows] (mm),
+        /// reconstructed heights [rows, fibers] (mm) and their flags; null
+        /// otherwise.</summary>
+        public double[]? S { get; private set; }
+        public double[,]? Z { get; private set; }
+        public ReconFlags[,]? ZFlags { get; private set; }
+        /// <summary>With GaugeKeepMaps = 2: the measured heights [rows,
+        /// fibers] (mm, NaN where invalid); null otherwise.</summary>
+        public double[,]? Measured { get; private set; }
+
+        internal static unsafe Sheet Read(IntPtr sheet, int maps)
+        {
+            int count = (int)NativeSheetValue.FLT_SHEET_ZONES + 1;
+            var values = new double[count];
+            for (int key = 0; key < count; ++key)
+            {
+                FlatlineNative.flt_cs_sheet_get(sheet, key, out double v);
+                values[key] = v;
+            }
+            var result = new Sheet(values);
+            int fibers = (int)values[(int)SheetValue.Fibers], zones = (int)values[(int)SheetValue.Zones];
+            double[] Values(NativeSheetArray key, int n)
+            {
+                var a = new double[n];
+                fixed (double* pa = a)
+                    FlatlineNative.flt_cs_sheet_get_array(sheet, (int)key, (ulong)n, pa);
+                return a;
+            }
+            result.FiberX = Values(NativeSheetArray.FLT_SHEET_FIBER_X, fibers);
+            result.FiberIUnits = Values(NativeSheetArray.FLT_SHEET_FIBER_I_UNITS, fibers);
+            result.FiberArcLengthMm = Values(NativeSheetArray.FLT_SHEET_FIBER_ARC_LENGTH, fibers);
+            result.FiberWaveHeightMm = Values(NativeSheetArray.FLT_SHEET_FIBER_WAVE_HEIGHT, fibers);
+            result.FiberWavePeriodMm = Values(NativeSheetArray.FLT_SHEET_FIBER_WAVE_PERIOD, fibers);
+            result.FiberSteepnessPercent = Values(NativeSheetArray.FLT_SHEET_FIBER_STEEPNESS, fibers);
+            var fiberFlags = Values(NativeSheetArray.FLT_SHEET_FIBER_FLAGS, fibers);
+            result.FiberFlags = new FiberFlags[fibers];
+            for (int k = 0; k < fibers; ++k)
+                result.FiberFlags[k] = (FiberFlags)(byte)fiberFlags[k];
+            result.ZoneCentreX = Values(NativeSheetArray.FLT_SHEET_ZONE_CENTRE_X, zones);
+            result.ZoneIUnits = Values(NativeSheetArray.FLT_SHEET_ZONE_I_UNITS, zones);
+            var zoneFlags = Values(NativeSheetArray.FLT_SHEET_ZONE_FLAGS, zones);
+            result.ZoneFlags = new ZoneFlags[zones];
+            for (int j = 0; j < zones; ++j)
+                result.ZoneFlags[j] = (ZoneFlags)(byte)zoneFlags[j];
+            int rows = result.Rows;
+            if (maps >= 1)
+            {
+                var s = new double[rows];
+                var z = new double[rows, fibers];
+                var flags = new ReconFlags[rows, fibers];
+                fixed (double* ps = s, pz = z)
+                fixed (ReconFlags* pf = flags)
+                    FlatlineNative.flt_cs_sheet_height_map(sheet, (ulong)rows, (ulong)fibers, ps, pz, (byte*)pf);
+                result.S = s;
+                result.Z = z;
+                result.ZFlags = flags;
+            }
+            if (maps >= 2)
+            {
+                var measured = new double[rows, fibers];
+                fixed (double* pm = measured)
+                    FlatlineNative.flt_cs_sheet_measured_map(sheet, (ulong)rows, (ulong)fibers, pm);
+                result.Measured = measured;
+            }
+            return result;
+        }
+
+        public override string ToString() =>
+            $"sheet {Id} (coil {Coil}): {SStartMm:F0} .. {SEndMm:F0} mm, {Rows} rows, {ShapeName}, " +
+            $"{MaxIUnits:F1} I-Units";
+    }
+
+    /// <summary>The sheet of a <see cref="Gauge.SheetFinished"/> event.</summary>
+    public sealed class SheetEventArgs : EventArgs
+    {
+        internal SheetEventArgs(Sheet sheet) => Sheet = sheet;
+        public Sheet Sheet { get; }
+    }
+
+    /// <summary>
+    /// One handle that runs a line (flatline/gauge.h): camera frames (or
+    /// profile rows) and the shear's cuts in, measured <see cref="Sheet"/>s
+    /// out. Created from the sensor's finished calibration (frame size, laser
+    /// spacing, fiber grid) and one options bag (the reconstructor's, the
+    /// Extract*, Flat* and Gauge* keys; another component's is refused).
+    /// </summary>
+    /// <remarks>
+    /// Frames go in with <see cref="Push(byte[,], double)"/> (copied), or
+    /// from an attached <see cref="FrameSource"/> the gauge acquires on a
+    /// thread of its own (<see cref="Attach"/>, <see cref="Start"/>,
+    /// <see cref="Stop"/>). <see cref="Cut"/> tells where the shear cut,
+    /// before or after the strip gets there; <see cref="Flush"/> ends the
+    /// strip at the end of the input. Sheets come out in order: by polling
+    /// (<see cref="NextSheet"/>), as the <see cref="SheetFinished"/> event,
+    /// or as an <c>await foreach</c> over <see cref="SheetsAsync"/>. While an
+    /// event handler or an enumeration is active the sheets go to them
+    /// (raised on a gauge thread; a handler must not call Flush, Stop or
+    /// Dispose of its gauge), and NextSheet throws
+    /// <see cref="FlatlineStateException"/>. Frames come from one thread at a
+    /// time; the other calls may come from any thread.
+    /// </remarks>
+    public sealed class Gauge : IDisposable
+    {
+        [UnmanagedFunctionPointer(CallingConvention.Cdecl)]
+        private delegate void NativeSheetCallback(IntPtr sheet, IntPtr user);
+
+        private readonly GaugeHandle handle;
+        private readonly NativeSheetCallback callback;  // kept alive while the gauge lives
+        private readonly IntPtr callbackPointer;
+        private readonly object sync = new object();            // handlers, channels, errors
+        private readonly object registration = new object();    // the native callback's state
+        private readonly object push = new object();            // frames in order
+        private EventHandler<SheetEventArgs>? sheetFinished;
+        private readonly List<SheetChannel> channels = new List<SheetChannel>();
+        private bool callbackSet;
+        private Exception? handlerError;
+        private SourceHandle? attached;  // referenced (DangerousAddRef) while attached
+
+        static Gauge() => NativeLoader.EnsureLoaded();
+
+        /// <summary>A gauge for the sensor of <paramref name="calibration"/>
+        /// (finished, else <see cref="FlatlineStateException"/>);
+        /// <paramref name="options"/> (null for the defaults) is copied.
+        /// <see cref="InvalidArgumentException"/> names an option a part
+        /// refuses (or one of another component). Its worker threads start
+        /// here.</summary>
+        public Gauge(Calibration calibration, FlatlineOptions? options = null)
+        {
+            if (calibration == null)
+                throw new ArgumentNullException(nameof(calibration));
+            using (var scope = FlatlineOptions.Borrow(options))
+            {
+                FlatlineNative.flt_gauge_create(calibration.LiveHandle, scope.Handle, out handle);
+            }
+            Calibration = calibration;
+            FrameWidth = calibration.FrameWidth;
+            FrameHeight = calibration.FrameHeight;
+            FlatlineNative.flt_gauge_get_option(handle, FlatlineOptions.Key("gauge_keep_maps"), out double maps);
+            Maps = (int)maps;
+            FlatlineNative.flt_gauge_get_option(handle, FlatlineOptions.Key("row_capacity"), out double rows);
+            callback = OnSheet;
+            callbackPointer = Marshal.GetFunctionPointerForDelegate(callback);
+            // Its buffers, mostly the reconstructor's rows (9 bytes per row and fiber).
+            handle.Track((long)(rows * calibration.FiberGrid.Count * 9));
+        }
+
+        /// <summary>The calibration the gauge was created from.</summary>
+        public Calibration Calibration { get; }
+        public int FrameWidth { get; }
+        public int FrameHeight { get; }
+        /// <summary>What each sheet keeps of its rows (GaugeKeepMaps).</summary>
+        public int Maps { get; }
+
+        /// <summary>The effective value of an option: the gauge's, and the
+        /// reconstructor's as the gauge set them (laser_spacing from the
+        /// calibration, row_capacity from its latency).</summary>
+        public double GetOption(string name)
+        {
+            FlatlineNative.flt_gauge_get_option(LiveHandle, FlatlineOptions.Key(name), out double value);
+            return value;
+        }
+
+        // ---- input ---------------------------------------------------------
+
+        /// <summary>One Mono8 frame [FrameHeight, FrameWidth] taken at
+        /// <paramref name="encoderMm"/> (mm); copied. Frames skipped (line
+        /// stop, reversal) or dropped (a full queue) are counted, not thrown.</summary>
+        public unsafe void Push(byte[,] frame, double encoderMm)
+        {
+            CheckFrame(frame);
+            lock (push)
+            {
+                ThrowHandlerError();
+                fixed (byte* pf = frame)
+                    FlatlineNative.flt_gauge_push_frame(LiveHandle, pf, (int)PixelFormat.Mono8, (uint)FrameWidth,
+                                                        (uint)FrameHeight, (ulong)FrameWidth, encoderMm);
+            }
+        }
+
+        /// <summary>One 16-bit frame of <paramref name="format"/> (Mono10, 12 or 16).</summary>
+        public unsafe void Push(ushort[,] frame, PixelFormat format, double encoderMm)
+        {
+            if (format == PixelFormat.Mono8)
+                throw new ArgumentException("a ushort[,] frame is Mono10, Mono12 or Mono16; pass Mono8 frames as byte[,]",
+                                            nameof(format));
+            CheckFrame(frame);
+            lock (push)
+            {
+                ThrowHandlerError();
+                fixed (ushort* pf = frame)
+                    FlatlineNative.flt_gauge_push_frame(LiveHandle, pf, (int)format, (uint)FrameWidth,
+                                                        (uint)FrameHeight, (ulong)FrameWidth * 2, encoderMm);
+            }
+        }
+
+        /// <summary>A simulated frame, with its own format and encoder position.</summary>
+        public void Push(SimulatedFrame frame)
+        {
+            if (frame == null)
+                throw new ArgumentNullException(nameof(frame));
+            if (frame.Pixels8 != null)
+                Push(frame.Pixels8, frame.EncoderMm);
+            else
+                Push(frame.Pixels16, frame.Format, frame.EncoderMm);
+        }
+
+        /// <summary>A frame from a <see cref="FrameSource"/>.</summary>
+        public void Push(Frame frame)
+        {
+            if (frame == null)
+                throw new ArgumentNullException(nameof(frame));
+            if (frame.Pixels8 != null)
+                Push(frame.Pixels8, frame.EncoderMm);
+            else
+                Push(frame.Pixels16, frame.Format, frame.EncoderMm);
+        }
+
+        /// <summary>One profile row instead of a frame (a sensor that extracts
+        /// its own profiles): heights (mm) and slopes (mm/mm) [fibers], valid
+        /// [fibers] or null (then finite values are valid).</summary>
+        public unsafe void PushRow(double encoderMm, double[] height, double[] slope, bool[]? valid = null)
+        {
+            if (height == null)
+                throw new ArgumentNullException(nameof(height));
+            if (slope == null)
+                throw new ArgumentNullException(nameof(slope));
+            Shapes.Check(slope, height.Length, nameof(slope));
+            if (valid != null)
+                Shapes.Check(valid, height.Length, nameof(valid));
+            lock (push)
+            {
+                ThrowHandlerError();
+                fixed (double* ph = height, pg = slope)
+                fixed (bool* pv = valid)
+                    FlatlineNative.flt_gauge_push_row(LiveHandle, encoderMm, (ulong)height.Length, ph, pg, (byte*)pv);
+            }
+        }
+
+        /// <summary>The shear cut the strip at <paramref name="encoderMm"/>
+        /// (the reading at which the cut line lies midway between the lasers),
+        /// before or after the strip gets there; cuts come in increasing order.</summary>
+        public void Cut(double encoderMm)
+        {
+            ThrowHandlerError();
+            FlatlineNative.flt_gauge_cut(LiveHandle, encoderMm);
+        }
+
+        /// <summary>The end of the input: processes every frame pushed, ends
+        /// the strip (its last sheet) and waits until that sheet is out.</summary>
+        public void Flush()
+        {
+            lock (push)
+            {
+                ThrowHandlerError();
+                FlatlineNative.flt_gauge_flush(LiveHandle);
+            }
+            ThrowHandlerError();
+        }
+
+        // ---- acquisition ---------------------------------------------------
+
+        /// <summary>Acquires from <paramref name="source"/> on <see cref="Start"/>
+        /// (kept alive while attached; leave it alone meanwhile); null
+        /// detaches. <see cref="FlatlineStateException"/> while acquiring.</summary>
+        public void Attach(FrameSource? source)
+        {
+            var live = LiveHandle;
+            lock (push)
+            {
+                SourceHandle? next = source?.LiveHandle;
+                bool added = false;
+                next?.DangerousAddRef(ref added);
+                try
+                {
+                    if (next != null)
+                        FlatlineNative.flt_gauge_attach_source(live, next);
+                    else
+                        FlatlineNative.flt_gauge_attach_source(live, new SourceHandle());
+                }
+                catch
+                {
+                    if (added)
+                        next!.DangerousRelease();
+                    throw;
+                }
+                attached?.DangerousRelease();
+                attached = added ? next : null;
+            }
+        }
+
+        /// <summary>Starts the attached source and the gauge's acquisition thread.</summary>
+        public void Start() => FlatlineNative.flt_gauge_start(LiveHandle);
+
+        /// <summary>Stops the acquisition and waits until its frames are
+        /// processed (the strip stays open: <see cref="Flush"/> ends it).
+        /// Throws the error that ended the acquisition by itself, e.g.
+        /// <see cref="DeviceException"/> for an unplugged camera.</summary>
+        public void Stop()
+        {
+            FlatlineNative.flt_gauge_stop(LiveHandle);
+            ThrowHandlerError();
+        }
+
+        // ---- output --------------------------------------------------------
+
+        /// <summary>The next finished sheet, waiting up to
+        /// <paramref name="timeoutMs"/>; null if none came.
+        /// <see cref="FlatlineStateException"/> while the sheets go to
+        /// <see cref="SheetFinished"/> or <see cref="SheetsAsync"/>.</summary>
+        public Sheet? NextSheet(int timeoutMs = 0)
+        {
+            if (timeoutMs < 0)
+                throw new ArgumentOutOfRangeException(nameof(timeoutMs), timeoutMs, "must be >= 0");
+            FlatlineNative.flt_gauge_next_sheet(LiveHandle, (uint)timeoutMs, out SheetHandle sheet);
+            using (sheet)
+            {
+                if (sheet.IsInvalid)
+                    return null;
+                bool added = false;
+                sheet.DangerousAddRef(ref added);
+                try
+                {
+                    return Sheet.Read(sheet.DangerousGetHandle(), Maps);
+                }
+                finally
+                {
+                    if (added)
+                        sheet.DangerousRelease();
+                }
+            }
+        }
+
+        /// <summary>Every sheet, in order, raised on a gauge thread (sheets
+        /// already waiting are raised when the first handler is added). An
+        /// exception a handler throws is thrown, wrapped, by the gauge's next
+        /// Push, Cut, Flush or Stop.</summary>
+        public event EventHandler<SheetEventArgs> SheetFinished
+        {
+            add
+            {
+                lock (sync)
+                    sheetFinished += value;
+                UpdateCallback();
+            }
+            remove
+            {
+                lock (sync)
+                    sheetFinished -= value;
+                UpdateCallback();
+            }
+        }
+
+        /// <summary>The sheets as they are finished, for <c>await foreach</c>;
+        /// the enumeration ends when the token is cancelled or the gauge is
+        /// disposed.</summary>
+        public async IAsyncEnumerable<Sheet> SheetsAsync([EnumeratorCancellation] CancellationToken cancellation = default)
+        {
+            var channel = new SheetChannel();
+            lock (sync)
+                channels.Add(channel);
+            UpdateCallback();
+            try
+            {
+                while (true)
+                {
+                    Sheet? sheet;
+                    try
+                    {
+                        sheet = await channel.ReadAsync(cancellation).ConfigureAwait(false);
+                    }
+                    catch (OperationCanceledException)
+                    {
+                        yield break;
+                    }
+                    if (sheet == null)
+                        yield break;  // the gauge was disposed
+                    yield return sheet;
+                }
+            }
+            finally
+            {
+                lock (sync)
+                    channels.Remove(channel);
+                if (!handle.IsClosed)
+                    UpdateCallback();
+            }
+        }
+
+        /// <summary>One of the gauge's counters.</summary>
+        public unsafe ulong Count(GaugeCounter counter)
+        {
+            ulong value;
+            FlatlineNative.flt_gauge_count(LiveHandle, (int)counter, &value);
+            return value;
+        }
+
+        /// <summary>Every counter, by name.</summary>
+        public IReadOnlyDictionary<GaugeCounter, ulong> Counters
+        {
+            get
+            {
+                var all = new Dictionary<GaugeCounter, ulong>();
+                foreach (GaugeCounter c in Enum.GetValues(typeof(GaugeCounter)))
+                    all[c] = Count(c);
+                return all;
+            }
+        }
+
+        /// <summary>Stops the acquisition and the workers and frees everything
+        /// now (unfinished sheets are dropped; enumerations end). Further calls
+        /// throw <see cref="ObjectDisposedException"/>; a second Dispose does
+        /// nothing.</summary>
+        public void Dispose()
+        {
+            handle.Dispose();
+            lock (push)
+            {
+                attached?.DangerousRelease();
+                attached = null;
+            }
+            SheetChannel[] open;
+            lock (sync)
+                open = channels.ToArray();
+            foreach (var c in open)
+                c.Complete();
+            GC.SuppressFinalize(this);
+        }
+
+        private GaugeHandle LiveHandle
+        {
+            get
+            {
+                if (handle.IsClosed)
+                    throw new ObjectDisposedException(nameof(Gauge));
+                return handle;
+            }
+        }
+
+        private void CheckFrame<T>(T[,] frame)
+        {
+            if (frame == null)
+                throw new ArgumentNullException(nameof(frame));
+            if (frame.GetLength(0) != FrameHeight || frame.GetLength(1) != FrameWidth)
+                throw new ArgumentException(
+                    $"the frame is [{frame.GetLength(0)}, {frame.GetLength(1)}], but the calibration's frames are " +
+                    $"[{FrameHeight}, {FrameWidth}] (height, width)", nameof(frame));
+        }
+
+        // The native callback is set while a handler or an enumeration wants
+        // the sheets; set outside `sync`, which the callback itself takes.
+        private void UpdateCallback()
+        {
+            lock (registration)
+            {
+                bool want;
+                lock (sync)
+                    want = sheetFinished != null || channels.Count > 0;
+                if (want == callbackSet || handle.IsClosed)
+                    return;
+                FlatlineNative.flt_gauge_set_callback(LiveHandle, want ? callbackPointer : IntPtr.Zero, IntPtr.Zero);
+                callbackSet = want;
+            }
+        }
+
+        // On a gauge thread (or the thread that set the callback, for the
+        // sheets that were waiting): nothing may escape into native code.
+        private void OnSheet(IntPtr nativeSheet, IntPtr user)
+        {
+            try
+            {
+                var sheet = Sheet.Read(nativeSheet, Maps);
+                EventHandler<SheetEventArgs>? handlers;
+                SheetChannel[] open;
+                lock (sync)
+                {
+                    handlers = sheetFinished;
+                    open = channels.ToArray();
+                }
+                foreach (var c in open)
+                    c.Post(sheet);
+                handlers?.Invoke(this, new SheetEventArgs(sheet));
+            }
+            catch (Exception e)
+            {
+                lock (sync)
+                    handlerError ??= e;
+            }
+        }
+
+        private void ThrowHandlerError()
+        {
+            Exception? e;
+            lock (sync)
+            {
+                e = handlerError;
+                handlerError = null;
+            }
+            if (e != null)
+                throw new InvalidOperationException("a SheetFinished handler threw on the gauge's thread", e);
+        }
+
+        // An unbounded queue one enumeration reads.
+        private sealed class SheetChannel
+        {
+            private readonly ConcurrentQueue<Sheet> sheets = new ConcurrentQueue<Sheet>();
+            private readonly SemaphoreSlim available = new SemaphoreSlim(0);
+            private volatile bool completed;
+
+            public void Post(Sheet sheet)
+            {
+                sheets.Enqueue(sheet);
+                available.Release();
+            }
+
+            public void Complete()
+            {
+                completed = true;
+                available.Release();
+            }
+
+            public async Task<Sheet?> ReadAsync(CancellationToken cancellation)
+            {
+                while (true)
+                {
+                    if (sheets.TryDequeue(out Sheet? sheet))
+                        return sheet;
+                    if (completed)
+                        return null;
+                    await available.WaitAsync(cancellation).ConfigureAwait(false);
+                }
+            }
+        }
+    }
+}

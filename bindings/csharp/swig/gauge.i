@@ -1,0 +1,66 @@
+// SPDX-License-Identifier: Apache-2.0
+/* The gauge and its sheets (include/flatline/gauge.h). */
+%{
+#include "flatline/gauge.h"
+%}
+
+FLT_CS_HANDLE(flt_gauge, GaugeHandle)
+FLT_CS_HANDLE(flt_sheet, SheetHandle)
+
+FLT_CS_INT_ENUM(flt_sheet_value, NativeSheetValue)
+FLT_CS_INT_ENUM(flt_sheet_array, NativeSheetArray)
+FLT_CS_INT_ENUM(flt_gauge_counter, NativeGaugeCounter)
+%ignore FLT_SHEET_VALUE_MAX_ENUM_;
+%ignore FLT_SHEET_ARRAY_MAX_ENUM_;
+%ignore FLT_GAUGE_COUNT_MAX_ENUM_;
+
+/* The callback: a function pointer the public Gauge makes from a delegate
+ * it keeps alive (Marshal.GetFunctionPointerForDelegate), and its user
+ * pointer, both IntPtrs. */
+%typemap(ctype) flt_sheet_callback callback "flt_sheet_callback"
+%typemap(imtype) flt_sheet_callback callback "global::System.IntPtr"
+%typemap(cstype) flt_sheet_callback callback "global::System.IntPtr"
+%typemap(in) flt_sheet_callback callback %{ $1 = ($1_ltype)$input; %}
+%typemap(csin) flt_sheet_callback callback "$csinput"
+%typemap(ctype) void *user "void *"
+%typemap(imtype) void *user "global::System.IntPtr"
+%typemap(cstype) void *user "global::System.IntPtr"
+%typemap(in) void *user %{ $1 = $input; %}
+%typemap(csin) void *user "$csinput"
+
+/* A sheet is read through its raw pointer: the callback's is borrowed (no
+ * SafeHandle may own it), and a polled one is read the same way while its
+ * SheetHandle is held. */
+%typemap(ctype) void *sheet "void *"
+%typemap(imtype) void *sheet "global::System.IntPtr"
+%typemap(cstype) void *sheet "global::System.IntPtr"
+%typemap(in) void *sheet %{ $1 = $input; %}
+%typemap(csin) void *sheet "$csinput"
+%inline %{
+flt_status flt_cs_sheet_get(void *sheet, int key, double *out) {
+    return flt_sheet_get((const flt_sheet *)sheet, (flt_sheet_value)key, out);
+}
+flt_status flt_cs_sheet_get_array(void *sheet, int key, size_t count, double *values) {
+    return flt_sheet_get_array((const flt_sheet *)sheet, (flt_sheet_array)key, count, values);
+}
+flt_status flt_cs_sheet_height_map(void *sheet, size_t rows, size_t fibers, double *s_values,
+                                   double *z_values, uint8_t *flag_values) {
+    return flt_sheet_height_map((const flt_sheet *)sheet, rows, fibers, s_values, z_values,
+                                flag_values);
+}
+flt_status flt_cs_sheet_measured_map(void *sheet, size_t rows, size_t fibers,
+                                     double *height_values) {
+    return flt_sheet_measured_map((const flt_sheet *)sheet, rows, fibers, height_values);
+}
+/* Destroys a gauge after removing its callback, so that no sheet reaches a
+ * delegate while the gauge shuts down (its finalizer may run after the
+ * managed Gauge is gone). */
+void flt_cs_gauge_release(void *handle) {
+    if (handle && flt_gauge_set_callback((flt_gauge *)handle, NULL, NULL) != FLT_OK) {
+        /* not a live gauge: destroy ignores it too */
+    }
+    flt_gauge_destroy((flt_gauge *)handle);
+}
+%}
+
+%include "flatline/gauge.h"

@@ -1,0 +1,303 @@
+// SPDX-License-Identifier: Apache-2.0
+#nullable enable
+using System;
+using System.Collections.Generic;
+using System.Linq;
+using System.Runtime.CompilerServices;
+using System.Threading;
+using System.Threading.Tasks;
+using Xunit;
+using Xunit.Abstractions;
+
+namespace Flatline.Tests
+{
+    public class GaugeTests
+    {
+        private const int Fibers = 51;          // across 1500 mm
+        private const double Pitch = 30.0;      // mm
+        private const double Step = 3.0;        // mm between rows
+        private readonly ITestOutputHelper output;
+        public GaugeTests(ITestOutputHelper output) => this.output = output;
+
+        private static Calibration Sensor() =>
+            Calibration.Reference(firstRow: 900, rows: 240, firstXMm: -750, pitchMm: Pitch, fibers: Fibers);
+
+        // The reference's sheet, 12 sin(2 pi s / 1800) cos(2 pi x / 1500),
+        // as two lasers 100 mm apart measure it, noise-free.
+        private static double Z(double s, int k) =>
+            12.0 * Math.Sin(2 * Math.PI * s / 1800.0) * Math.Cos(2 * Math.PI * (-750 + Pitch * k) / 1500.0);
+
+        private static void Row(int r, double[] height, double[] slope)
+        {
+            double s = Step * r;
+            for (int k = 0; k < Fibers; ++k)
+            {
+                double behind = Z(s - 50, k), ahead = Z(s + 50, k);
+                height[k] = 0.5 * (behind + ahead);
+                slope[k] = (ahead - behind) / 100.0;
+            }
+        }
+
+        private static void PushRows(Gauge gauge, int first, int end)
+        {
+            var height = new double[Fibers];
+            var slope = new double[Fibers];
+            for (int r = first; r < end; ++r)
+            {
+                Row(r, height, slope);
+                gauge.PushRow(Step * r, height, slope);
+            }
+        }
+
+        private static FlatlineOptions Options(int workers = 2) => new FlatlineOptions
+        {
+            GaugeWorkers = workers, GaugeOverflowWait = true, GaugeKeepMaps = 1, GaugeSheetSlots = 16,
+            GaugeFrameSpacing = 2.0,
+        };
+
+        private static List<Flatline.Sheet> Drain(Gauge gauge)
+        {
+            var sheets = new List<Flatline.Sheet>();
+            for (Flatline.Sheet? sheet; (sheet = gauge.NextSheet()) != null;)
+                sheets.Add(sheet);
+            return sheets;
+        }
+
+        [Fact]
+        public void RowsAndCutsGiveSheetsThatEndAtTheirCuts()
+        {
+            using var calibration = Sensor();
+            using var options = Options();
+            using var gauge = new Gauge(calibration, options);
+            gauge.Cut(3000);
+            gauge.Cut(6000);
+            PushRows(gauge, 0, 3000);  // 9 m
+            gauge.Flush();
+            var sheets = Drain(gauge);
+            Assert.Equal(new long[] { 1, 2, 3 }, sheets.Select(s => s.Id));
+            Assert.Equal(SheetFlags.Head, sheets[0].Flags);
+            Assert.True(sheets[2].Flags.HasFlag(SheetFlags.Flushed));
+            Assert.Equal(3000.0, sheets[0].SEndMm);
+            Assert.Equal(3000.0, sheets[1].SStartMm);
+            Assert.Equal(3000, sheets.Sum(s => s.Rows));
+            Assert.True(sheets[0].S![sheets[0].Rows - 1] < 3000 && sheets[1].S![0] >= 3000);
+            // Noise-free rows: within 1 um of the truth (the reconstructor's
+            // own figure on this sheet is 0.25 um).
+            double worst = 0;
+            foreach (var sheet in sheets)
+                for (int r = 0; r < sheet.Rows; ++r)
+                    for (int k = 0; k < Fibers; ++k)
+                        worst = Math.Max(worst, Math.Abs(sheet.Z![r, k] - Z(sheet.S![r], k)));
+            output.WriteLine($"3 sheets, max error {worst * 1e3:F3} um; sheet 2: {sheets[1]}");
+            Assert.True(worst < 1e-3, $"max error {worst} mm");
+            // A 12 mm wave of 1800 mm: 24 mm peak to peak within 2 % (row sampling).
+            Assert.InRange(sheets[1].WaveHeightMm, 23.5, 24.5);
+            Assert.Equal(Pitch * Fibers, sheets[1].StripWidthMm, 9);
+            Assert.Equal(sheets[1].Value(SheetValue.Rows), sheets[1].Rows);
+            Assert.Equal(3000UL, gauge.Count(GaugeCounter.Frames));
+        }
+
+        [Fact]
+        public void WorkersGiveTheSameSheetsBitForBit()
+        {
+            using var calibration = Sensor();
+            var runs = new List<List<Flatline.Sheet>>();
+            foreach (int workers in new[] { 0, 1, 2 })
+            {
+                using var options = Options(workers);
+                using var gauge = new Gauge(calibration, options);
+                gauge.Cut(1500);
+                PushRows(gauge, 0, 1500);
+                gauge.Flush();
+                runs.Add(Drain(gauge));
+            }
+            foreach (var other in runs.Skip(1))
+            {
+                Assert.Equal(runs[0].Count, other.Count);
+                for (int i = 0; i < other.Count; ++i)
+                {
+                    Assert.Equal(runs[0][i].Z, other[i].Z);
+                    Assert.Equal(runs[0][i].ZoneIUnits, other[i].ZoneIUnits);
+                    Assert.Equal(runs[0][i].BowMm, other[i].BowMm);
+                }
+            }
+        }
+
+        [Fact]
+        public void TheEventRaisesEverySheetInOrderAndPollingWaits()
+        {
+            using var calibration = Sensor();
+            using var options = Options();
+            using var gauge = new Gauge(calibration, options);
+            var ids = new List<long>();
+            int threadOfTest = Environment.CurrentManagedThreadId;
+            int raisedElsewhere = 0;
+            void Handler(object? sender, SheetEventArgs e)
+            {
+                lock (ids)
+                    ids.Add(e.Sheet.Id);
+                if (Environment.CurrentManagedThreadId != threadOfTest)
+                    Interlocked.Increment(ref raisedElsewhere);
+            }
+            gauge.SheetFinished += Handler;
+            Assert.Throws<FlatlineStateException>(() => gauge.NextSheet());
+            for (int c = 1; c < 5; ++c)
+                gauge.Cut(1000.0 * c);
+            PushRows(gauge, 0, 2000);
+            gauge.Flush();
+            Assert.Equal(new long[] { 1, 2, 3, 4, 5 }, ids);
+            Assert.True(raisedElsewhere > 0, "the sheets are raised on the gauge's threads");
+            gauge.SheetFinished -= Handler;
+            Assert.Null(gauge.NextSheet(10));  // polling again: nothing left
+        }
+
+        [Fact]
+        public void AHandlerExceptionComesBackFromTheNextCall()
+        {
+            using var calibration = Sensor();
+            using var options = Options();
+            using var gauge = new Gauge(calibration, options);
+            gauge.SheetFinished += (sender, e) => throw new ApplicationException("the handler's own");
+            PushRows(gauge, 0, 400);
+            var thrown = Assert.Throws<InvalidOperationException>(() => gauge.Flush());
+            Assert.IsType<ApplicationException>(thrown.InnerException);
+        }
+
+        [Fact]
+        public async Task SheetsAsyncYieldsTheSheetsAsTheyCome()
+        {
+            using var calibration = Sensor();
+            using var options = Options();
+            options.LagKnots = 4;
+            using var gauge = new Gauge(calibration, options);
+            for (int c = 1; c < 6; ++c)
+                gauge.Cut(1000.0 * c);
+            using var cancel = new CancellationTokenSource(TimeSpan.FromSeconds(120));
+            var reader = Task.Run(async () =>
+            {
+                var ids = new List<long>();
+                await foreach (var sheet in gauge.SheetsAsync(cancel.Token))
+                {
+                    ids.Add(sheet.Id);
+                    if (ids.Count == 6)
+                        break;
+                }
+                return ids;
+            });
+            // The enumeration takes the sheets once it has started.
+            for (int i = 0; i < 1000 && !reader.IsCompleted; ++i)
+            {
+                try
+                {
+                    gauge.NextSheet();
+                    Thread.Sleep(1);
+                }
+                catch (FlatlineStateException)
+                {
+                    break;  // the callback is set: the enumeration is listening
+                }
+            }
+            PushRows(gauge, 0, 2000);
+            gauge.Flush();
+            var got = await reader;
+            Assert.Equal(new long[] { 1, 2, 3, 4, 5, 6 }, got);
+        }
+
+        [Fact]
+        public void FramesFromASourceOnTheGaugesThread()
+        {
+            using var calibration = Sensor();
+            using var lineOptions = new FlatlineOptions { SimFrameSpacing = 10 };
+            using var line = new SimulatedLine(calibration, lineOptions);
+            line.AddDefect(DefectKind.CentreBuckle, 4, 800);
+            using var source = FrameSource.Simulator(line);
+            using var options = new FlatlineOptions { GaugeFrameSpacing = 8, GaugeOverflowWait = true, LagKnots = 4 };
+            using var gauge = new Gauge(calibration, options);
+            Assert.Throws<FlatlineStateException>(() => gauge.Start());  // no source yet
+            gauge.Attach(source);
+            gauge.Cut(1000);
+            gauge.Start();
+            Assert.Equal(1UL, gauge.Count(GaugeCounter.Acquiring));
+            Assert.Throws<FlatlineStateException>(() => gauge.Flush());
+            Flatline.Sheet? first = null;
+            for (int i = 0; i < 600 && first == null; ++i)
+                first = gauge.NextSheet(100);
+            gauge.Stop();
+            Assert.NotNull(first);
+            Assert.Equal(1000.0, first!.SEndMm);
+            Assert.Equal(100, first.Rows);
+            gauge.Flush();
+            var rest = gauge.NextSheet();
+            Assert.NotNull(rest);
+            Assert.Equal(1000.0, rest!.SStartMm);
+            gauge.Attach(null);
+        }
+
+        [Fact]
+        public void PushedFramesGiveSheets()
+        {
+            using var calibration = Sensor();
+            using var lineOptions = new FlatlineOptions { SimFrameSpacing = 10 };
+            using var line = new SimulatedLine(calibration, lineOptions);
+            line.AddDefect(DefectKind.CentreBuckle, 4, 800);
+            using var options = new FlatlineOptions { GaugeFrameSpacing = 8, GaugeOverflowWait = true, LagKnots = 4 };
+            using var gauge = new Gauge(calibration, options);
+            gauge.Cut(1000);
+            for (int f = 0; f < 200; ++f)
+                gauge.Push(line.NextFrame());
+            gauge.Flush();
+            var sheets = Drain(gauge);
+            Assert.Equal(2, sheets.Count);
+            Assert.Equal(200UL, gauge.Count(GaugeCounter.Extracted));
+            Assert.Equal(100.0, gauge.GetOption("laser_spacing"));
+        }
+
+        [Fact]
+        public void AGaugeNobodyDisposesIsFreedByItsFinalizer()
+        {
+            using var calibration = Sensor();
+            long before = GaugeHandle.Live;
+            MakeAndDrop(calibration);
+            for (int i = 0; i < 20 && GaugeHandle.Live > before; ++i)
+            {
+                GC.Collect();
+                GC.WaitForPendingFinalizers();
+            }
+            // Its handler was set and its strip open: the finalizer removes
+            // the callback, stops the workers and frees everything.
+            Assert.Equal(before, GaugeHandle.Live);
+        }
+
+        [MethodImpl(MethodImplOptions.NoInlining)]
+        private static void MakeAndDrop(Calibration calibration)
+        {
+            var gauge = new Gauge(calibration);
+            gauge.SheetFinished += (sender, e) => { };
+            gauge.Cut(600);
+            PushRows(gauge, 0, 400);
+        }
+
+        [Fact]
+        public void BadInputThrowsWithTheLibrarysMessage()
+        {
+            using var calibration = Sensor();
+            using (var foreign = new FlatlineOptions { SimSeed = 3 })
+            {
+                var e = Assert.Throws<InvalidArgumentException>(() => new Gauge(calibration, foreign));
+                Assert.Contains("sim_seed", e.Message);
+            }
+            using var gauge = new Gauge(calibration);
+            Assert.Throws<ArgumentException>(() => gauge.Push(new byte[10, 10], 0.0));
+            Assert.Throws<ArgumentNullException>(() => gauge.PushRow(0.0, null!, new double[Fibers]));
+            Assert.Throws<InvalidArgumentException>(() => gauge.PushRow(0.0, new double[Fibers + 1], new double[Fibers + 1]));
+            Assert.Throws<InvalidArgumentException>(() => gauge.Push(new byte[240, 2048], double.NaN));
+            gauge.Cut(100);
+            var order = Assert.Throws<InvalidArgumentException>(() => gauge.Cut(50));
+            Assert.Contains("previous cut", order.Message);
+            Assert.Throws<ArgumentOutOfRangeException>(() => gauge.NextSheet(-1));
+            gauge.Dispose();
+            Assert.Throws<ObjectDisposedException>(() => gauge.Cut(200));
+            gauge.Dispose();  // idempotent
+        }
+    }
+}
