@@ -1,53 +1,124 @@
 // SPDX-License-Identifier: Apache-2.0
-// libFuzzer harness: the GenICam XML and ZIP reader of the USB3 Vision
-// client (lib/sources/u3v/genicam.cpp, internal: flt::u3v::unzip_single,
-// genicam_map::parse and resolve). The first byte picks the input's form:
-// a ZIP archive (inflated, then parsed when it holds XML) or the XML text
-// itself; then feature names are resolved: the camera's usual ones, every
-// node's own name (following pValue links, possibly in cycles), and names
-// from the input. Bad input must raise flt::error with FORMAT (zip, XML) or
-// NOT_FOUND (resolve) - the statuses the public API turns them into. Any
-// other exception would surface as FLT_ERR_INTERNAL: the harness aborts.
+// libFuzzer harness: the GenICam engine (lib/sources/genicam/, internal:
+// flt::genicam::unzip_single, xml_document, node_map). The first byte picks
+// the input's form:
+//   bit 0   a ZIP archive (inflated, then loaded when it holds XML), else
+//           the description's text itself;
+//   bit 1   the next two bytes give a length n (big endian, at most 4096)
+//           and the n bytes after them are the camera's registers; without
+//           it the registers are the input's own bytes.
+// Registers repeat: address a reads register byte a % n. Then features are
+// evaluated - the camera's usual ones, the first 64 of the description and
+// a name made of the input's last 16 bytes: values, access, flags, bounds,
+// entries, the register behind them, and writes. Bad input must raise
+// flt::error with a status the public API documents for it (FORMAT,
+// NOT_FOUND, NUMERIC, STATE, INVALID_ARGUMENT) or std::bad_alloc; any other
+// exception, or FLT_ERR_INTERNAL, would reach a caller as an internal
+// error: the harness aborts.
 #include <cstdint>
 #include <cstdlib>
+#include <new>
 #include <string>
+#include <vector>
 
 #include "core/error.hpp"
-#include "sources/u3v/genicam.hpp"
+#include "sources/genicam/node_map.hpp"
+#include "sources/genicam/text.hpp"
 
 namespace {
 
-void resolve_all(const flt::u3v::genicam_map &map, const std::string &extra) {
-    static const char *const names[] = {"Width",           "Height",          "PixelFormat",
-                                        "OffsetY",         "AcquisitionMode", "AcquisitionStart",
-                                        "AcquisitionStop", "ExposureTime",    "Gain",
-                                        "TriggerMode",     "TriggerSource",   ""};
-    for (const char *name : names) {
-        try {
-            (void)map.resolve(name);
-        } catch (const flt::error &e) {
-            if (e.status != FLT_ERR_NOT_FOUND && e.status != FLT_ERR_FORMAT)
-                std::abort();
-        }
+struct fuzz_port : flt::genicam::register_port {
+    const std::uint8_t *bytes = nullptr;
+    std::size_t n = 0;
+    void read(std::uint64_t address, std::uint8_t *out, std::size_t count) override {
+        for (std::size_t i = 0; i < count; ++i)
+            out[i] = n ? bytes[(address + i) % n] : 0;
     }
+    void write(std::uint64_t, const std::uint8_t *, std::size_t) override {}
+};
+
+bool allowed(flt_status s) {
+    return s == FLT_ERR_FORMAT || s == FLT_ERR_NOT_FOUND || s == FLT_ERR_NUMERIC ||
+           s == FLT_ERR_STATE || s == FLT_ERR_INVALID_ARGUMENT;
+}
+
+template <class F> void expect(F &&call) {
     try {
-        (void)map.resolve(extra);
+        call();
     } catch (const flt::error &e) {
-        if (e.status != FLT_ERR_NOT_FOUND && e.status != FLT_ERR_FORMAT)
+        if (!allowed(e.status) || e.what()[0] == '\0')
             std::abort();
     }
 }
 
-void parse_and_resolve(const std::string &xml, const std::string &extra) {
-    flt::u3v::genicam_map map;
+void evaluate(flt::genicam::node_map &map, const std::string &name) {
+    using flt::genicam::interface_kind;
+    expect([&] { (void)map.access(name); });
+    expect([&] { (void)map.flags(name); });
+    expect([&] {
+        flt::genicam::register_info r;
+        (void)map.register_of(name, r);
+    });
+    interface_kind kind = interface_kind::none;
+    expect([&] { kind = map.interface_of(name); });
+    expect([&] { (void)map.get_int(name, false); });
+    expect([&] { (void)map.get_float(name, false); });
+    expect([&] { (void)map.get_string(name, false); });
+    expect([&] { (void)map.int_min(name); });
+    expect([&] { (void)map.int_max(name); });
+    expect([&] { (void)map.int_inc(name); });
+    expect([&] { (void)map.float_min(name); });
+    expect([&] { (void)map.float_max(name); });
+    if (kind == interface_kind::enumeration) {
+        expect([&] {
+            const auto entries = map.enum_entries(name);
+            if (!entries.empty())
+                map.set_enum(name, entries.back().name);
+        });
+    }
+    expect([&] { map.set_int(name, 16); });
+    expect([&] { map.set_float(name, 1.5); });
+    expect([&] { map.set_string(name, "x"); });
+    if (kind == interface_kind::command) {
+        expect([&] { map.execute(name, false); });
+        expect([&] { (void)map.is_done(name); });
+    }
+}
+
+void load_and_evaluate(const std::string &text, fuzz_port &port, const std::string &extra) {
+    flt::genicam::node_map map;
     try {
-        map.parse(xml);
+        map.load(flt::genicam::xml_document(text));
     } catch (const flt::error &e) {
         if (e.status != FLT_ERR_FORMAT)
             std::abort();
         return;
     }
-    resolve_all(map, extra);
+    map.bind(&port);
+    static const char *const usual[] = {"Width",
+                                        "Height",
+                                        "OffsetX",
+                                        "OffsetY",
+                                        "PixelFormat",
+                                        "PayloadSize",
+                                        "AcquisitionMode",
+                                        "AcquisitionStart",
+                                        "AcquisitionStop",
+                                        "ExposureTime",
+                                        "Gain",
+                                        "TriggerSelector",
+                                        "TriggerMode",
+                                        "TriggerSource",
+                                        "TLParamsLocked",
+                                        "DeviceVendorName",
+                                        "DeviceModelName",
+                                        ""};
+    for (const char *name : usual)
+        evaluate(map, name);
+    const std::vector<std::string> names = map.feature_names();
+    for (std::size_t i = 0; i < names.size() && i < 64; ++i)
+        evaluate(map, names[i]);
+    evaluate(map, extra);
 }
 
 }  // namespace
@@ -57,25 +128,38 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t *data, std::size_t size
         return 0;
     const std::uint8_t mode = data[0];
     ++data, --size;
-    // The last up to 16 bytes name one more feature to resolve.
+    fuzz_port port;
+    if ((mode & 2) && size >= 2) {
+        std::size_t n = (std::size_t(data[0]) << 8) | data[1];
+        data += 2, size -= 2;
+        n = n > 4096 ? 4096 : n;
+        n = n > size ? size : n;
+        port.bytes = data;
+        port.n = n;
+        data += n, size -= n;
+    } else {
+        port.bytes = data;
+        port.n = size;
+    }
+    // The last up to 16 bytes name one more feature to evaluate.
     const std::size_t extra_n = size < 16 ? size : 16;
     const std::string extra(reinterpret_cast<const char *>(data + size - extra_n), extra_n);
     try {
         if (mode & 1) {
             std::string inflated;
             try {
-                inflated = flt::u3v::unzip_single(data, size);
+                inflated = flt::genicam::unzip_single(data, size);
             } catch (const flt::error &e) {
                 if (e.status != FLT_ERR_FORMAT)
                     std::abort();
                 return 0;
             }
-            parse_and_resolve(inflated, extra);
+            load_and_evaluate(inflated, port, extra);
         } else {
-            parse_and_resolve(std::string(reinterpret_cast<const char *>(data), size), extra);
+            load_and_evaluate(std::string(reinterpret_cast<const char *>(data), size), port, extra);
         }
     } catch (const std::bad_alloc &) {
-        // A declared size the allocator refuses is FLT_ERR_OUT_OF_MEMORY.
+        // A size the allocator refuses is FLT_ERR_OUT_OF_MEMORY.
     }
     return 0;
 }

@@ -91,6 +91,64 @@ int main(int argc, char **argv) {
         flt_u3v_sim_destroy(bus);
     }
 
+    /* genicam: every node kind the engine evaluates (selectors, pIndex,
+     * StructReg, formulas, converters, big-endian bit fields, commands),
+     * with 256 bytes of registers (byte 0: bit 1 = registers follow, then
+     * their length, big endian). */
+    {
+        static const char nodes[] =
+            "<RegisterDescription SchemaMajorVersion=\"1\" SchemaMinorVersion=\"1\">"
+            "<Integer Name=\"Width\"><pValue>W</pValue><pMin>Lo</pMin><Max>4096</Max>"
+            "<Inc>16</Inc><pIsLocked>TLParamsLocked</pIsLocked></Integer>"
+            "<IntReg Name=\"W\"><Address>0x10</Address><Length>4</Length><AccessMode>RW"
+            "</AccessMode><pPort>Device</pPort><Sign>Unsigned</Sign><Endianess>BigEndian"
+            "</Endianess></IntReg><Integer Name=\"Lo\"><Value>16</Value></Integer>"
+            "<Integer Name=\"TLParamsLocked\"><Value>0</Value></Integer>"
+            "<Enumeration Name=\"TriggerSelector\"><EnumEntry Name=\"FrameStart\"><Value>0"
+            "</Value></EnumEntry><EnumEntry Name=\"LineStart\"><Value>1</Value>"
+            "<pIsAvailable>Lo</pIsAvailable></EnumEntry><pValue>Sel</pValue>"
+            "<pSelected>TriggerMode</pSelected></Enumeration>"
+            "<MaskedIntReg Name=\"Sel\"><Address>0x20</Address><Length>4</Length>"
+            "<AccessMode>RW</AccessMode><pPort>Device</pPort><LSB>31</LSB><MSB>30</MSB>"
+            "<Endianess>BigEndian</Endianess></MaskedIntReg>"
+            "<IntReg Name=\"TriggerMode\"><Address>0x40</Address><pIndex Offset=\"8\">"
+            "TriggerSelector</pIndex><Length>4</Length><AccessMode>RW</AccessMode>"
+            "<pPort>Device</pPort><Endianess>LittleEndian</Endianess></IntReg>"
+            "<StructReg Comment=\"s\"><Address>0x50</Address><IntSwissKnife Name=\"Off\">"
+            "<pVariable Name=\"S\">TriggerSelector</pVariable><Formula>S * 4</Formula>"
+            "</IntSwissKnife><Length>4</Length><AccessMode>RO</AccessMode><pPort>Device"
+            "</pPort><StructEntry Name=\"Ready\"><Bit>0</Bit></StructEntry>"
+            "<StructEntry Name=\"Count\"><LSB>8</LSB><MSB>15</MSB><Sign>Signed</Sign>"
+            "</StructEntry></StructReg>"
+            "<Converter Name=\"ExposureTime\"><FormulaTo>FROM / 1.024</FormulaTo>"
+            "<FormulaFrom>(TO &lt; 1) ? 0 : TO * 1.024</FormulaFrom><pValue>Raw</pValue>"
+            "</Converter><IntConverter Name=\"Gain\"><FormulaTo>FROM * 2</FormulaTo>"
+            "<FormulaFrom>(TO / 2) &amp; 0xFF</FormulaFrom><pValue>Raw</pValue></IntConverter>"
+            "<IntReg Name=\"Raw\"><Address>0x60</Address><Length>2</Length><AccessMode>RW"
+            "</AccessMode><pPort>Device</pPort><Sign>Signed</Sign></IntReg>"
+            "<SwissKnife Name=\"PayloadSize\"><pVariable Name=\"W\">Width</pVariable>"
+            "<Constant Name=\"K\">0.5</Constant><Expression Name=\"X\">W ** 2</Expression>"
+            "<Formula>ROUND(SQRT(X) * K, 1) + SGN(-W) + (W &gt;&gt; 2 &lt;&lt; 1)</Formula>"
+            "</SwissKnife><FloatReg Name=\"G\"><Address>0x70</Address><Length>8</Length>"
+            "<AccessMode>RW</AccessMode><pPort>Device</pPort><Endianess>BigEndian"
+            "</Endianess></FloatReg>"
+            "<Boolean Name=\"ReverseX\"><pValue>W</pValue><OnValue>3</OnValue></Boolean>"
+            "<Command Name=\"AcquisitionStart\"><pValue>Raw</pValue><CommandValue>1"
+            "</CommandValue></Command><StringReg Name=\"DeviceVendorName\"><Address>0x80"
+            "</Address><Length>16</Length><AccessMode>RO</AccessMode><pPort>Device</pPort>"
+            "</StringReg><Integer Name=\"Table\"><pIndex>TriggerSelector</pIndex>"
+            "<ValueIndexed Index=\"1\">7</ValueIndexed><ValueDefault>3</ValueDefault>"
+            "</Integer></RegisterDescription>";
+        uint8_t seed[3 + 256 + sizeof nodes];
+        seed[0] = 2;
+        seed[1] = 1;
+        seed[2] = 0;
+        for (int i = 0; i < 256; ++i)
+            seed[3 + i] = (uint8_t)(i * 37 + 11);
+        memcpy(seed + 3 + 256, nodes, sizeof nodes - 1);
+        put("genicam", "nodes-with-registers", seed, 3 + 256 + sizeof nodes - 1);
+    }
+
     /* u3v: mode 0 (stream), then transfers as the harness reads them:
      * kind, u16 length, fields. A leader (kind 1), the 2048-byte payload
      * of a 64 x 32 Mono8 frame in 512-byte transfers of a pattern (kind 0:
