@@ -15,5 +15,6 @@
 #include "flatline/flatness.h"
 #include "flatline/source.h"
 #include "flatline/gauge.h"
+#include "flatline/genicam.h"
 
 #endif /* FLATLINE_FLATLINE_H */

@@ -2906,6 +2906,342 @@ static void row_sheet_measured_map(void) {
 }
 
 /* ---------------------------------------------------------------------- */
+/* genicam.h                                                               */
+/* ---------------------------------------------------------------------- */
+
+static const char k_genicam_xml[] =
+    "<RegisterDescription VendorName=\"V\" ModelName=\"M\">"
+    "<Integer Name=\"Width\"><pValue>WidthReg</pValue><Min>16</Min><Max>4096</Max></Integer>"
+    "<IntReg Name=\"WidthReg\"><Address>0x100</Address><Length>4</Length>"
+    "<AccessMode>RW</AccessMode><pPort>Device</pPort><Endianess>LittleEndian</Endianess>"
+    "</IntReg>"
+    "<Float Name=\"Gain\"><Value>1.5</Value><Min>0</Min><Max>24</Max></Float>"
+    "<Enumeration Name=\"Mode\"><EnumEntry Name=\"Off\"><Value>0</Value></EnumEntry>"
+    "<EnumEntry Name=\"On\"><Value>1</Value></EnumEntry><Value>0</Value></Enumeration>"
+    "<String Name=\"Label\"><Value>x</Value></String>"
+    "<Command Name=\"Start\"><pValue>WidthReg</pValue><CommandValue>32</CommandValue></Command>"
+    "<SwissKnife Name=\"Twice\"><pVariable Name=\"W\">Width</pVariable><Formula>W * 2</Formula>"
+    "</SwissKnife>"
+    "</RegisterDescription>";
+
+/* A description with Width = 640 in its memory image. */
+static flt_genicam *new_genicam(void) {
+    flt_genicam *g = NULL;
+    const uint8_t width[4] = {0x80, 0x02, 0, 0};
+    if (flt_genicam_load_memory(k_genicam_xml, sizeof k_genicam_xml - 1, &g) != FLT_OK ||
+        flt_genicam_set_memory(g, 0x100, width, 4) != FLT_OK) {
+        fprintf(stderr, "fixture: genicam: %s\n", flt_last_error_message());
+        exit(2);
+    }
+    return g;
+}
+
+static void row_genicam_load(void) {
+    char path[300], garbage[300];
+    path_in_dir(path, sizeof path, "camera.xml");
+    write_file(path, k_genicam_xml, sizeof k_genicam_xml - 1);
+    path_in_dir(garbage, sizeof garbage, "garbage.xml");
+    write_file(garbage, "PK\x03\x04garbage", 11);
+    flt_genicam *g = NULL;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_genicam_load(path, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'path'", flt_genicam_load(NULL, &g));
+    BAD(FLT_ERR_IO, "cannot open", flt_genicam_load("/nonexistent/x.xml", &g));
+    BAD(FLT_ERR_FORMAT, "ZIP", flt_genicam_load(garbage, &g));
+    BAD(FLT_ERR_IO, NULL, flt_genicam_load(g_dir, &g)); /* a folder */
+    GOOD(flt_genicam_load(path, &g));
+    flt_genicam_destroy(g);
+}
+
+static void row_genicam_load_memory(void) {
+    flt_genicam *g = NULL;
+    const char *x = k_genicam_xml;
+    const size_t n = sizeof k_genicam_xml - 1;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_genicam_load_memory(x, n, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'data'", flt_genicam_load_memory(NULL, n, &g));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'bytes'", flt_genicam_load_memory(x, 0, &g));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'bytes'", flt_genicam_load_memory(x, NEG, &g));
+    BAD(FLT_ERR_FORMAT, "malformed", flt_genicam_load_memory(x, n / 2, &g)); /* truncated */
+    BAD(FLT_ERR_FORMAT, "no node", flt_genicam_load_memory("<a/>", 4, &g));
+    BAD(FLT_ERR_FORMAT, NULL, flt_genicam_load_memory("\x01\x02\x03 \xff<", 6, &g));
+    GOOD(flt_genicam_load_memory(x, n, &g));
+    flt_genicam_destroy(g);
+}
+
+static void row_genicam_destroy(void) {
+    flt_genicam_destroy(NULL);
+    ++g_checks;
+}
+
+static void row_genicam_get_text(void) {
+    flt_genicam *g = new_genicam();
+    const char *t;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'description'",
+        flt_genicam_get_text(NULL, FLT_GENICAM_VENDOR_NAME, &t));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_genicam_get_text(g, FLT_GENICAM_VENDOR_NAME, NULL));
+    ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "'which' = -1",
+                flt_genicam_get_text(g, (flt_genicam_text)-1, &t));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'which' = 4", flt_genicam_get_text(g, (flt_genicam_text)4, &t));
+    GOOD(flt_genicam_get_text(g, FLT_GENICAM_MODEL_NAME, &t));
+    flt_genicam_destroy(g);
+}
+
+static void row_genicam_feature_count(void) {
+    flt_genicam *g = new_genicam();
+    size_t n;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'description'", flt_genicam_feature_count(NULL, &n));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_genicam_feature_count(g, NULL));
+    GOOD(flt_genicam_feature_count(g, &n));
+    flt_genicam_destroy(g);
+}
+
+static void row_genicam_feature_name(void) {
+    flt_genicam *g = new_genicam();
+    const char *name;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'description'", flt_genicam_feature_name(NULL, 0, &name));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_genicam_feature_name(g, 0, NULL));
+    BAD(FLT_ERR_NOT_FOUND, "'index' = 7", flt_genicam_feature_name(g, 7, &name));
+    BAD(FLT_ERR_NOT_FOUND, "'index'", flt_genicam_feature_name(g, NEG, &name));
+    GOOD(flt_genicam_feature_name(g, 6, &name));
+    flt_genicam_destroy(g);
+}
+
+static void row_genicam_feature_info(void) {
+    flt_genicam *g = new_genicam();
+    flt_genicam_type type;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'description'",
+        flt_genicam_feature_info(NULL, "Width", &type, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'feature'",
+        flt_genicam_feature_info(g, NULL, &type, NULL, NULL));
+    BAD(FLT_ERR_NOT_FOUND, "'Nope'", flt_genicam_feature_info(g, "Nope", &type, NULL, NULL));
+    BAD(FLT_ERR_NOT_FOUND, NULL, flt_genicam_feature_info(g, "", &type, NULL, NULL));
+    GOOD(flt_genicam_feature_info(g, "Width", NULL, NULL, NULL));
+    flt_genicam_destroy(g);
+}
+
+static void row_genicam_set_memory(void) {
+    flt_genicam *g = new_genicam();
+    const uint8_t b[4] = {1, 2, 3, 4};
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'description'", flt_genicam_set_memory(NULL, 0, b, 4));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'bytes'", flt_genicam_set_memory(g, 0, NULL, 4));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'count' = 0", flt_genicam_set_memory(g, 0, b, 0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'count'", flt_genicam_set_memory(g, 0, b, NEG));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "past 2^64", flt_genicam_set_memory(g, UINT64_MAX, b, 4));
+    GOOD(flt_genicam_set_memory(g, UINT64_MAX - 3, b, 4));
+    flt_genicam_destroy(g);
+}
+
+static void row_genicam_get_memory(void) {
+    flt_genicam *g = new_genicam();
+    uint8_t b[4];
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'description'", flt_genicam_get_memory(NULL, 0x100, b, 4));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_genicam_get_memory(g, 0x100, NULL, 4));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'count' = 0", flt_genicam_get_memory(g, 0x100, b, 0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "past 2^64", flt_genicam_get_memory(g, UINT64_MAX, b, 4));
+    BAD(FLT_ERR_NOT_FOUND, "0x104", flt_genicam_get_memory(g, 0x102, b, 4));
+    GOOD(flt_genicam_get_memory(g, 0x100, b, 4));
+    flt_genicam_destroy(g);
+}
+
+static void row_genicam_clear_memory(void) {
+    flt_genicam *g = new_genicam();
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'description'", flt_genicam_clear_memory(NULL));
+    GOOD(flt_genicam_clear_memory(g));
+    flt_genicam_destroy(g);
+}
+
+static int FLT_CALL bad_input_read(void *user, uint64_t address, void *out, size_t bytes) {
+    (void)user;
+    (void)address;
+    memset(out, 0, bytes);
+    return 0;
+}
+
+static void row_genicam_set_registers(void) {
+    flt_genicam *g = new_genicam();
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'description'",
+        flt_genicam_set_registers(NULL, bad_input_read, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'read' is NULL",
+        flt_genicam_set_registers(g, NULL, (flt_genicam_write_fn)bad_input_read, NULL));
+    GOOD(flt_genicam_set_registers(g, bad_input_read, NULL, NULL));
+    int64_t v;
+    /* writes without a write callback */
+    BAD(FLT_ERR_STATE, "write callback", flt_genicam_set_int(g, "Width", 32));
+    GOOD(flt_genicam_get_int(g, "Width", &v));
+    GOOD(flt_genicam_set_registers(g, NULL, NULL, NULL));
+    flt_genicam_destroy(g);
+}
+
+/* The checks every evaluating function shares: handle, feature name. */
+#define GENICAM_FEATURE_CHECKS(call_null_handle, call_null_feature, call_unknown) \
+  do {                                                                            \
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'description'", call_null_handle);             \
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'feature'", call_null_feature);                \
+    BAD(FLT_ERR_NOT_FOUND, "'Nope'", call_unknown);                               \
+  } while (0)
+
+static void row_genicam_get_access(void) {
+    flt_genicam *g = new_genicam();
+    flt_genicam_access a;
+    GENICAM_FEATURE_CHECKS(flt_genicam_get_access(NULL, "Width", &a),
+                           flt_genicam_get_access(g, NULL, &a),
+                           flt_genicam_get_access(g, "Nope", &a));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_genicam_get_access(g, "Width", NULL));
+    GOOD(flt_genicam_get_access(g, "Width", &a));
+    flt_genicam_destroy(g);
+}
+
+static void row_genicam_get_flags(void) {
+    flt_genicam *g = new_genicam();
+    int i, a, l;
+    GENICAM_FEATURE_CHECKS(flt_genicam_get_flags(NULL, "Width", &i, &a, &l),
+                           flt_genicam_get_flags(g, NULL, &i, &a, &l),
+                           flt_genicam_get_flags(g, "Nope", &i, &a, &l));
+    GOOD(flt_genicam_get_flags(g, "Width", NULL, NULL, NULL));
+    flt_genicam_destroy(g);
+}
+
+static void row_genicam_register(void) {
+    flt_genicam *g = new_genicam();
+    uint64_t address;
+    GENICAM_FEATURE_CHECKS(flt_genicam_register(NULL, "Width", &address, NULL, NULL, NULL, NULL),
+                           flt_genicam_register(g, NULL, &address, NULL, NULL, NULL, NULL),
+                           flt_genicam_register(g, "Nope", &address, NULL, NULL, NULL, NULL));
+    BAD(FLT_ERR_NOT_FOUND, "no single register",
+        flt_genicam_register(g, "Twice", &address, NULL, NULL, NULL, NULL));
+    GOOD(flt_genicam_register(g, "Width", &address, NULL, NULL, NULL, NULL));
+    flt_genicam_destroy(g);
+}
+
+static void row_genicam_get_int(void) {
+    flt_genicam *g = new_genicam();
+    int64_t v;
+    GENICAM_FEATURE_CHECKS(flt_genicam_get_int(NULL, "Width", &v), flt_genicam_get_int(g, NULL, &v),
+                           flt_genicam_get_int(g, "Nope", &v));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_genicam_get_int(g, "Width", NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "no integer value", flt_genicam_get_int(g, "Label", &v));
+    BAD(FLT_ERR_NUMERIC, "1.5", flt_genicam_get_int(g, "Gain", &v)); /* not integral */
+    GOOD(flt_genicam_get_int(g, "Width", &v));
+    flt_genicam_destroy(g);
+}
+
+static void row_genicam_get_float(void) {
+    flt_genicam *g = new_genicam();
+    double v;
+    GENICAM_FEATURE_CHECKS(flt_genicam_get_float(NULL, "Gain", &v),
+                           flt_genicam_get_float(g, NULL, &v),
+                           flt_genicam_get_float(g, "Nope", &v));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_genicam_get_float(g, "Gain", NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "no number value", flt_genicam_get_float(g, "Start", &v));
+    GOOD(flt_genicam_get_float(g, "Twice", &v));
+    flt_genicam_destroy(g);
+}
+
+static void row_genicam_get_string(void) {
+    flt_genicam *g = new_genicam();
+    const char *v;
+    GENICAM_FEATURE_CHECKS(flt_genicam_get_string(NULL, "Label", &v),
+                           flt_genicam_get_string(g, NULL, &v),
+                           flt_genicam_get_string(g, "Nope", &v));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_genicam_get_string(g, "Label", NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "no string value", flt_genicam_get_string(g, "Width", &v));
+    GOOD(flt_genicam_get_string(g, "Mode", &v));
+    flt_genicam_destroy(g);
+}
+
+static void row_genicam_int_bounds(void) {
+    flt_genicam *g = new_genicam();
+    int64_t lo, hi, inc;
+    GENICAM_FEATURE_CHECKS(flt_genicam_int_bounds(NULL, "Width", &lo, &hi, &inc),
+                           flt_genicam_int_bounds(g, NULL, &lo, &hi, &inc),
+                           flt_genicam_int_bounds(g, "Nope", &lo, &hi, &inc));
+    GOOD(flt_genicam_int_bounds(g, "Width", NULL, NULL, NULL));
+    flt_genicam_destroy(g);
+}
+
+static void row_genicam_float_bounds(void) {
+    flt_genicam *g = new_genicam();
+    double lo, hi;
+    GENICAM_FEATURE_CHECKS(flt_genicam_float_bounds(NULL, "Gain", &lo, &hi),
+                           flt_genicam_float_bounds(g, NULL, &lo, &hi),
+                           flt_genicam_float_bounds(g, "Nope", &lo, &hi));
+    GOOD(flt_genicam_float_bounds(g, "Gain", &lo, NULL));
+    flt_genicam_destroy(g);
+}
+
+static void row_genicam_enum_count(void) {
+    flt_genicam *g = new_genicam();
+    size_t n;
+    GENICAM_FEATURE_CHECKS(flt_genicam_enum_count(NULL, "Mode", &n),
+                           flt_genicam_enum_count(g, NULL, &n),
+                           flt_genicam_enum_count(g, "Nope", &n));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_genicam_enum_count(g, "Mode", NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "not an Enumeration", flt_genicam_enum_count(g, "Width", &n));
+    GOOD(flt_genicam_enum_count(g, "Mode", &n));
+    flt_genicam_destroy(g);
+}
+
+static void row_genicam_enum_entry(void) {
+    flt_genicam *g = new_genicam();
+    const char *name;
+    GENICAM_FEATURE_CHECKS(flt_genicam_enum_entry(NULL, "Mode", 0, &name, NULL, NULL),
+                           flt_genicam_enum_entry(g, NULL, 0, &name, NULL, NULL),
+                           flt_genicam_enum_entry(g, "Nope", 0, &name, NULL, NULL));
+    BAD(FLT_ERR_NOT_FOUND, "'index' = 2", flt_genicam_enum_entry(g, "Mode", 2, &name, NULL, NULL));
+    BAD(FLT_ERR_NOT_FOUND, "'index'", flt_genicam_enum_entry(g, "Mode", NEG, &name, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "not an Enumeration",
+        flt_genicam_enum_entry(g, "Width", 0, &name, NULL, NULL));
+    GOOD(flt_genicam_enum_entry(g, "Mode", 1, NULL, NULL, NULL));
+    flt_genicam_destroy(g);
+}
+
+static void row_genicam_set_int(void) {
+    flt_genicam *g = new_genicam();
+    GENICAM_FEATURE_CHECKS(flt_genicam_set_int(NULL, "Width", 32), flt_genicam_set_int(g, NULL, 32),
+                           flt_genicam_set_int(g, "Nope", 32));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "outside 16 .. 4096", flt_genicam_set_int(g, "Width", INT64_MIN));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "outside", flt_genicam_set_int(g, "Width", INT64_MAX));
+    BAD(FLT_ERR_STATE, "read-only", flt_genicam_set_int(g, "Twice", 1));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "takes no integer", flt_genicam_set_int(g, "Label", 1));
+    GOOD(flt_genicam_set_int(g, "Width", 32));
+    flt_genicam_destroy(g);
+}
+
+static void row_genicam_set_float(void) {
+    flt_genicam *g = new_genicam();
+    GENICAM_FEATURE_CHECKS(flt_genicam_set_float(NULL, "Gain", 1.0),
+                           flt_genicam_set_float(g, NULL, 1.0),
+                           flt_genicam_set_float(g, "Nope", 1.0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'value' = nan", flt_genicam_set_float(g, "Gain", NaN_));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'value' = inf", flt_genicam_set_float(g, "Gain", Inf_));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "outside", flt_genicam_set_float(g, "Gain", 1e300));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "not an integer", flt_genicam_set_float(g, "Width", 32.5));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "not an integer", flt_genicam_set_float(g, "Width", -1e300));
+    GOOD(flt_genicam_set_float(g, "Gain", 2.0));
+    flt_genicam_destroy(g);
+}
+
+static void row_genicam_set_string(void) {
+    flt_genicam *g = new_genicam();
+    GENICAM_FEATURE_CHECKS(flt_genicam_set_string(NULL, "Mode", "On"),
+                           flt_genicam_set_string(g, NULL, "On"),
+                           flt_genicam_set_string(g, "Nope", "On"));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'value'", flt_genicam_set_string(g, "Mode", NULL));
+    BAD(FLT_ERR_NOT_FOUND, "no entry 'Maybe'", flt_genicam_set_string(g, "Mode", "Maybe"));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "takes no string", flt_genicam_set_string(g, "Width", "1"));
+    GOOD(flt_genicam_set_string(g, "Mode", "On"));
+    flt_genicam_destroy(g);
+}
+
+static void row_genicam_execute(void) {
+    flt_genicam *g = new_genicam();
+    GENICAM_FEATURE_CHECKS(flt_genicam_execute(NULL, "Start"), flt_genicam_execute(g, NULL),
+                           flt_genicam_execute(g, "Nope"));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "not a Command", flt_genicam_execute(g, "Width"));
+    GOOD(flt_genicam_execute(g, "Start"));
+    flt_genicam_destroy(g);
+}
+
+/* ---------------------------------------------------------------------- */
 /* The table                                                               */
 /* ---------------------------------------------------------------------- */
 
@@ -3064,6 +3400,32 @@ static const row k_rows[] = {
     ROW(sheet_get_array),
     ROW(sheet_height_map),
     ROW(sheet_measured_map),
+    /* genicam.h */
+    ROW(genicam_load),
+    ROW(genicam_load_memory),
+    ROW(genicam_destroy),
+    ROW(genicam_get_text),
+    ROW(genicam_feature_count),
+    ROW(genicam_feature_name),
+    ROW(genicam_feature_info),
+    ROW(genicam_set_memory),
+    ROW(genicam_get_memory),
+    ROW(genicam_clear_memory),
+    ROW(genicam_set_registers),
+    ROW(genicam_get_access),
+    ROW(genicam_get_flags),
+    ROW(genicam_register),
+    ROW(genicam_get_int),
+    ROW(genicam_get_float),
+    ROW(genicam_get_string),
+    ROW(genicam_int_bounds),
+    ROW(genicam_float_bounds),
+    ROW(genicam_enum_count),
+    ROW(genicam_enum_entry),
+    ROW(genicam_set_int),
+    ROW(genicam_set_float),
+    ROW(genicam_set_string),
+    ROW(genicam_execute),
 };
 #define N_ROWS (sizeof k_rows / sizeof k_rows[0])
 
