@@ -418,6 +418,11 @@ struct evaluator {
                 fail(FLT_ERR_FORMAT, "'" + x.name + "' has no LSB/MSB or Bit");
             int lo = x.lsb >= 0 ? x.lsb : x.msb, hi = x.msb >= 0 ? x.msb : x.lsb;
             const int top = int(8 * len) - 1;
+            // Bits beyond the register, in either numbering (fuzz_genicam: a
+            // big-endian LSB 63 of a 4-byte register made a negative shift).
+            if (lo > top || hi > top)
+                fail(FLT_ERR_FORMAT, "'" + x.name + "' has bits beyond its " + std::to_string(len) +
+                                         "-byte register");
             if (x.big_endian) {
                 // Big-endian registers number their bits from the most
                 // significant one: bit 0 is the top bit of the value.
@@ -450,9 +455,6 @@ struct evaluator {
     std::int64_t read_int_register(int n) {
         std::uint64_t a = 0;
         std::int64_t len = 0;
-        if (at(n).has_length || at(n).p_length.set()) {
-            // checked below once the length is known
-        }
         const std::vector<std::uint8_t> bytes = read_bytes(n, a, len);
         if (len > 8)
             fail(FLT_ERR_FORMAT, "integer register '" + at(n).name + "' has Length " +
