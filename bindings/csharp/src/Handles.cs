@@ -186,4 +186,13 @@ namespace Flatline
         protected override void Destroy(IntPtr native) => FlatlineNative.flt_sheet_destroy_handle(native);
         protected override void OnLive(int delta) => Interlocked.Add(ref live, delta);
     }
+
+    internal sealed class GenICamHandle : FlatlineHandle
+    {
+        private static long live;
+        internal static long Live => Interlocked.Read(ref live);
+        public GenICamHandle() { }
+        protected override void Destroy(IntPtr native) => FlatlineNative.flt_genicam_destroy_handle(native);
+        protected override void OnLive(int delta) => Interlocked.Add(ref live, delta);
+    }
 }

@@ -21,7 +21,8 @@
  * One .i per component, in dependency order (recon.h uses calib.h, as do
  * extractor.h, sim.h and flatness.h; source.h extractor.h and sim.h, and
  * flatness.i defines FLT_CS_OUT_POINTER, which source.i uses; gauge.h uses
- * source.h, and source.i's FLT_CS_INT_ENUM and uint64_t outputs).
+ * source.h, and source.i's FLT_CS_INT_ENUM and uint64_t outputs; genicam.i
+ * uses source.i's FLT_CS_INT_ENUM and its `void *out` buffers).
  */
 %module FlatlineNative
 
@@ -33,3 +34,4 @@
 %include "flatness.i"
 %include "source.i"
 %include "gauge.i"
+%include "genicam.i"

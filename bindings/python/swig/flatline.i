@@ -48,3 +48,4 @@
 %include "flatness.i"
 %include "source.i"
 %include "gauge.i"
+%include "genicam.i"
