@@ -104,15 +104,17 @@
  *   (push_frame, push_row, or the attached source) must come from one
  *   thread at a time, in order; cut() may come from another thread.
  *   The callback runs on a gauge thread; it must not call
- *   flt_gauge_flush, flt_gauge_stop or flt_gauge_destroy of its gauge
- *   (FLT_ERR_STATE).
+ *   flt_gauge_flush, flt_gauge_stop, flt_gauge_next_sheet or
+ *   flt_gauge_set_callback of its gauge (FLT_ERR_STATE) nor
+ *   flt_gauge_destroy (ignored there).
  *
  * Memory
- *   Everything is allocated by flt_gauge_create(), except the workers'
- *   extractors when the bands are automatic (created once, when the first
- *   frame has shown the two lines). Frames, cuts and sheets allocate
- *   nothing. The big parts, with K fibers and F = gauge_frame_spacing:
- *   the frame queue, gauge_queue_frames x width x height x 2 bytes; the
+ *   Everything is allocated by flt_gauge_create(), except, once, the
+ *   workers' extractors when the bands are automatic (when the first frame
+ *   has shown the two lines) and the flatness metrics' column scratch (at
+ *   the first sheet longer than any before). Frames, cuts and sheets
+ *   allocate nothing (tests/c/test_gauge_alloc.c counts). The big parts, with K fibers and F =
+ * gauge_frame_spacing: the frame queue, gauge_queue_frames x width x height x 2 bytes; the
  *   reconstructor, about 9 bytes x K x its latency / F (rigid_motion and
  *   robust: about 17 m of strip); two sheet buffers and the sheet slots'
  *   maps, 9 (17 with measured heights) bytes x K x gauge_max_sheet_length
@@ -124,6 +126,8 @@
 #include "flatline/calib.h"
 #include "flatline/common.h"
 #include "flatline/extractor.h"
+#include "flatline/flatness.h" /* FLT_WINDOW_*, FLT_FIBER_*, FLT_ZONE_*, flt_shape */
+#include "flatline/recon.h"    /* FLT_FLAG_* of the height maps */
 #include "flatline/source.h"
 
 #ifdef __cplusplus
@@ -310,7 +314,8 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_create(const flt_calib *cali
 
 /** Stops the acquisition thread and the workers, drops what is not
  * finished, and frees everything. Sheets the caller holds stay valid until
- * destroyed. NULL is a no-op. */
+ * destroyed. NULL is a no-op, and so is a call from inside the gauge's own
+ * callback (it would wait for itself). */
 FLT_API void FLT_CALL flt_gauge_destroy(flt_gauge *gauge);
 
 /** The effective value of an option: the gauge's keys, and the

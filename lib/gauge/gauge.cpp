@@ -739,8 +739,10 @@ void gauge::sequence(frame_slot &slot) {
     const bool present = valid > 0 && double(valid) * pitch_ >= cfg_.strip_min_width;
     const double s = slot.s;
 
-    if (in_strip_ && present && s - last_pushed_s_ > max_jump_) {
-        // Farther than the reconstructor bridges: a new strip.
+    if (in_strip_ && pushed_ && s - last_pushed_s_ > max_jump_) {
+        // Farther than the reconstructor bridges (frames dropped, an encoder
+        // that jumped): the strip so far is finished; this row may begin
+        // the next one.
         end_strip(FLT_SHEET_FLAG_NEW_STRIP);
         std::lock_guard<std::mutex> lock(m_);
         ++n_reversals_;
@@ -1271,8 +1273,12 @@ flt_status gauge::flush(const char *fn) {
 
 flt_status gauge::attach(const char *fn, flt_source *source) {
     std::lock_guard<std::mutex> lock(m_);
-    if (acquiring_ || acquisition_.joinable())
+    if (acquiring_)
         return fail(FLT_ERR_STATE, "%s: the gauge is acquiring; call flt_gauge_stop first", fn);
+    if (acquisition_.joinable())
+        return fail(FLT_ERR_STATE,
+                    "%s: the acquisition ended by itself; call flt_gauge_stop first (it says why)",
+                    fn);
     source_ = source;
     return FLT_OK;
 }
@@ -1283,8 +1289,12 @@ flt_status gauge::start(const char *fn) {
     std::unique_lock<std::mutex> lock(m_);
     if (source_ == nullptr)
         return fail(FLT_ERR_STATE, "%s: no source is attached (flt_gauge_attach_source)", fn);
-    if (acquiring_ || acquisition_.joinable())
+    if (acquiring_)
         return fail(FLT_ERR_STATE, "%s: the gauge is already acquiring", fn);
+    if (acquisition_.joinable())
+        return fail(FLT_ERR_STATE,
+                    "%s: the acquisition ended by itself; call flt_gauge_stop first (it says why)",
+                    fn);
     lock.unlock();
     const flt_status st = flt_source_start(source_);
     if (st != FLT_OK && st != FLT_ERR_STATE)  // STATE: the caller started it
