@@ -12,7 +12,7 @@
  *     rigid heave is only known to the heave's averaged noise; flatness is
  *     about shape), below --max-rms-mm and --max-err-mm.
  *
- *   flatline_soak [--rows N] [--fibers N] [--sheet-mm L] [--frames]
+ *   flatline_soak [--rows N] [--fibers N] [--sheet-mm L] [--frames] [--gauge]
  *                 [--report-every N] [--max-rms-mm X] [--max-err-mm X]
  *                 [--rss-slack-kb K]
  *
@@ -64,7 +64,7 @@ int main(int argc, char **argv) {
     size_t total_rows = 2400000, fibers = 101, report_every = 100000;
     double sheet_mm = 3000.0, max_rms = 0.25, max_err = 1.5;
     long rss_slack_kb = 1024;
-    int frames = 0;
+    int frames = 0, gauge = 0;
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : "0";
         if (!strcmp(a, "--rows"))
@@ -83,9 +83,11 @@ int main(int argc, char **argv) {
             rss_slack_kb = atol(v), ++i;
         else if (!strcmp(a, "--frames"))
             frames = 1;
+        else if (!strcmp(a, "--gauge"))
+            gauge = 1;
         else {
             fprintf(stderr,
-                    "usage: %s [--rows N] [--fibers N] [--sheet-mm L] [--frames] "
+                    "usage: %s [--rows N] [--fibers N] [--sheet-mm L] [--frames] [--gauge] "
                     "[--report-every N] [--max-rms-mm X] [--max-err-mm X] "
                     "[--rss-slack-kb K]\n",
                     argv[0]);
@@ -120,7 +122,26 @@ int main(int argc, char **argv) {
     if (frames)
         check(flt_extractor_create(calib, opt, &ex), "extractor");
     flt_recon *rec = NULL;
-    check(flt_recon_create_from_calib(calib, NULL, &rec), "reconstructor");
+    flt_gauge *g = NULL;
+    if (gauge) {
+        /* The gauge: its own extractors (frames) and reconstructor, two
+         * workers, a cut at every sheet end, the sheets' height maps kept to
+         * check them. Rendered frames may wait for it. */
+        flt_options *go = NULL;
+        check(flt_options_create(&go), "options");
+        check(flt_options_set(go, FLT_OPT_GAUGE_WORKERS, 2), "gauge_workers");
+        check(flt_options_set(go, FLT_OPT_GAUGE_OVERFLOW, 1), "gauge_overflow");
+        check(flt_options_set(go, FLT_OPT_GAUGE_KEEP_MAPS, 1), "gauge_keep_maps");
+        check(flt_options_set(go, FLT_OPT_GAUGE_FRAME_SPACING, 0.8 * frame_mm),
+              "gauge_frame_spacing");
+        check(flt_options_set(go, FLT_OPT_GAUGE_MAX_SHEET_LENGTH, sheet_mm + 1000.0),
+              "gauge_max_sheet_length");
+        check(flt_options_set(go, FLT_OPT_GAUGE_SHEET_SLOTS, 8), "gauge_sheet_slots");
+        check(flt_gauge_create(calib, go, &g), "gauge");
+        flt_options_destroy(go);
+    } else {
+        check(flt_recon_create_from_calib(calib, NULL, &rec), "reconstructor");
+    }
 
     /* Everything per row is allocated here, once: the rows of the block
      * being pushed, and a ring of truth rows waiting for their output (the
@@ -133,6 +154,11 @@ int main(int argc, char **argv) {
     double *truth_ring = malloc(sizeof(double) * ring * fibers);
     double *s_out = malloc(sizeof(double) * ring), *z_out = malloc(sizeof(double) * ring * fibers);
     uint8_t *frame = frames ? malloc((size_t)WIDTH * ROI_ROWS) : NULL;
+    /* The gauge's sheets: a map of up to a sheet and a row. */
+    const size_t map_rows = sheet_rows + 2;
+    double *map_s = malloc(sizeof(double) * map_rows),
+           *map_z = malloc(sizeof(double) * map_rows * fibers);
+    memset(map_z, 0, sizeof(double) * map_rows * fibers);
     /* Per sheet and fiber: sums for the mean offset and the error. */
     double *sum_e = calloc(fibers, sizeof(double)), *sum_e2 = calloc(fibers, sizeof(double));
     double *min_e = malloc(sizeof(double) * fibers), *max_e = malloc(sizeof(double) * fibers);
@@ -155,7 +181,11 @@ int main(int argc, char **argv) {
     printf("soak: %zu rows (%.1f km of strip, %.1f min at 120 m/min), %zu fibers, sheets of "
            "%zu rows, %s; RSS %ld kB\n",
            total_rows, total_rows * frame_mm / 1e6, total_rows * frame_mm / 2000.0 / 60.0, fibers,
-           sheet_rows, frames ? "rendered frames + extractor" : "profile rows", rss_start);
+           sheet_rows,
+           gauge    ? (frames ? "rendered frames into a gauge" : "profile rows into a gauge")
+           : frames ? "rendered frames + extractor"
+                    : "profile rows",
+           rss_start);
 
 /* One sheet's accuracy, from the sums of its pulled rows. */
 #define CLOSE_SHEET()                                                                           \
@@ -188,7 +218,78 @@ int main(int argc, char **argv) {
     }                                                                                           \
   } while (0)
 
-    while (pushed < total_rows) {
+    while (gauge && pushed < total_rows) {
+        /* One row (or frame) at a time into the gauge; the cut of the sheet
+         * that begins is given ahead of the strip. */
+        double *truth = truth_ring + (pushed % ring) * fibers;
+        if (in_sheet == 0)
+            check(flt_gauge_cut(g, sheet_mm * (double)(pushed / sheet_rows + 1)), "cut");
+        if (frames) {
+            double encoder;
+            check(flt_sim_next_frame(sim, frame, (size_t)WIDTH * ROI_ROWS, WIDTH, &encoder, fibers,
+                                     truth, NULL),
+                  "frame");
+            check(flt_gauge_push_frame(g, frame, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, encoder),
+                  "push_frame");
+        } else {
+            double encoder;
+            check(flt_sim_next_rows(sim, 1, fibers, &encoder, s, h, k, valid, truth), "rows");
+            check(flt_gauge_push_row(g, encoder, fibers, h, k, valid), "push_row");
+        }
+        ++pushed;
+        in_sheet = in_sheet + 1 == sheet_rows ? 0 : in_sheet + 1;
+        if (pushed == total_rows)
+            check(flt_gauge_flush(g), "flush");
+        for (;;) {
+            flt_sheet *sheet = NULL;
+            check(flt_gauge_next_sheet(g, 0, &sheet), "next_sheet");
+            if (!sheet)
+                break;
+            double rows_d = 0;
+            check(flt_sheet_get(sheet, FLT_SHEET_ROWS, &rows_d), "sheet rows");
+            const size_t rows = (size_t)rows_d;
+            if (rows > map_rows) {
+                fprintf(stderr, "soak: a sheet of %zu rows, more than %zu\n", rows, map_rows);
+                return 2;
+            }
+            check(flt_sheet_height_map(sheet, rows, fibers, map_s, map_z, NULL), "height map");
+            flt_sheet_destroy(sheet);
+            for (size_t r = 0; r < rows; ++r, ++pulled) {
+                /* Row i of the strip lies at s = i * frame_mm. */
+                const size_t i = (size_t)llround(map_s[r] / frame_mm);
+                if (pushed - i > ring) {
+                    fprintf(stderr, "soak: a sheet's row %zu is older than the truth ring\n", i);
+                    return 2;
+                }
+                const double *row_truth = truth_ring + (i % ring) * fibers;
+                for (size_t f = 0; f < fibers; ++f) {
+                    const double e = map_z[r * fibers + f] - row_truth[f];
+                    if (!isfinite(e))
+                        continue;
+                    sum_e[f] += e, sum_e2[f] += e * e, ++count_e[f];
+                    if (e < min_e[f])
+                        min_e[f] = e;
+                    if (e > max_e[f])
+                        max_e[f] = e;
+                }
+            }
+            CLOSE_SHEET();
+        }
+        const long rss = rss_kb();
+        if (rss > rss_max)
+            rss_max = rss;
+        if (rss_after_warmup < 0 && pushed >= warmup)
+            rss_after_warmup = rss;
+        if (pushed % report_every == 0 || pushed == total_rows) {
+            const double t = now_s() - t0, strip_s = pushed * frame_mm / 2000.0;
+            printf("  %8zu rows  %6.2f km  %5.1f min of line  RSS %ld kB  sheets %zu  worst "
+                   "rms %.4f mm  %.0f rows/s (%.1fx real time)\n",
+                   pushed, pushed * frame_mm / 1e6, strip_s / 60.0, rss, sheets, worst_rms,
+                   pushed / t, strip_s / t);
+            fflush(stdout);
+        }
+    }
+    while (!gauge && pushed < total_rows) {
         /* Rows up to the end of the block or of the sheet. */
         size_t rows = BLOCK;
         if (rows > sheet_rows - in_sheet)
@@ -276,12 +377,14 @@ int main(int argc, char **argv) {
            : memory_ok ? "flat"
                        : "GROWING");
     flt_recon_destroy(rec);
+    flt_gauge_destroy(g);
     flt_extractor_destroy(ex);
     flt_sim_destroy(sim);
     flt_options_destroy(opt);
     flt_calib_destroy(calib);
     free(s), free(h), free(k), free(valid), free(truth_ring), free(s_out), free(z_out);
     free(frame), free(sum_e), free(sum_e2), free(min_e), free(max_e), free(count_e);
+    free(map_s), free(map_z);
     const int ok = memory_ok && bad_sheets == 0 && sheets > 0;
     printf("soak: %s\n", ok ? "OK" : "FAILED");
     return ok ? 0 : 1;
