@@ -588,24 +588,44 @@ void gauge::take(const gauge_input &in, bool from_acquisition) {
     run_inline();
 }
 
+// Inline (0 workers), the thread that works holds the sequencing role as
+// the workers do: a frame from the acquisition thread and a cut or flush
+// from another thread take turns.
+void gauge::acquire_sequencer() {
+    std::unique_lock<std::mutex> lock(m_);
+    idle_cv_.wait(lock, [&] { return !sequencing_; });
+    sequencing_ = true;
+}
+
+void gauge::release_sequencer() {
+    {
+        std::lock_guard<std::mutex> lock(m_);
+        sequencing_ = false;
+    }
+    idle_cv_.notify_all();
+}
+
 void gauge::run_inline() {
     frame_slot &slot = slots_[0];
-    if (!gauge_guarded(
-            this,
-            [&] {
-                if (slot.state == slot_extracted)
-                    sequence(slot);
-                run_jobs_inline();
-            },
-            &gauge::record_failure)) {
+    acquire_sequencer();
+    const bool ok = gauge_guarded(
+        this,
+        [&] {
+            if (slot.state == slot_extracted)
+                sequence(slot);
+            run_jobs_inline();
+        },
+        &gauge::record_failure);
+    {
         std::lock_guard<std::mutex> lock(m_);
         slot.state = slot_free;
         tail_ = head_;
+    }
+    release_sequencer();
+    if (!ok) {
+        std::lock_guard<std::mutex> lock(m_);
         throw error(failure_status_, failure_message_.c_str());
     }
-    std::lock_guard<std::mutex> lock(m_);
-    slot.state = slot_free;
-    tail_ = head_;
 }
 
 void gauge::run_jobs_inline() {
@@ -1214,19 +1234,31 @@ flt_status gauge::cut(const char *fn, double encoder_mm) {
         cut_floor_ = c;
         ++n_cuts_;
     }
-    if (cfg_.workers == 0) {
-        // Inline: a late cut splits its sheet now.
-        if (!gauge_guarded(
-                this,
-                [&] {
-                    if (in_strip_) {
-                        activate_cuts(std::numeric_limits<std::uint64_t>::max());
-                        if (has_output_)
-                            apply_cuts(last_output_s_);
-                        run_jobs_inline();
+    if (cfg_.workers == 0 && !in_gauge_callback(this)) {
+        // Inline: a late cut splits its sheet now (from inside the
+        // callback, which holds the role, with the next frame).
+        acquire_sequencer();
+        const bool ok = gauge_guarded(
+            this,
+            [&] {
+                if (in_strip_) {
+                    // The cuts due before the next frame (an acquisition
+                    // thread may have queued one that is not sequenced yet:
+                    // its cuts wait for it, as with workers).
+                    std::uint64_t next;
+                    {
+                        std::lock_guard<std::mutex> lock(m_);
+                        next = tail_;
                     }
-                },
-                &gauge::record_failure))
+                    activate_cuts(next);
+                    if (has_output_)
+                        apply_cuts(last_output_s_);
+                    run_jobs_inline();
+                }
+            },
+            &gauge::record_failure);
+        release_sequencer();
+        if (!ok)
             return failure(fn);
     }
     return FLT_OK;

@@ -152,6 +152,8 @@ class gauge {
     bool run_one(std::unique_lock<std::mutex> &lock, unsigned index);
     void run_inline();
     void run_jobs_inline();
+    void acquire_sequencer();
+    void release_sequencer();
     // The sequencer (one thread at a time, frames in order).
     void sequence(frame_slot &slot);
     void activate_cuts(std::uint64_t up_to_seq);

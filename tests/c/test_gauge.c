@@ -1062,6 +1062,49 @@ static void acquisition_from_a_source(void **state) {
     flt_gauge_destroy(g);
     flt_source_destroy(src);
 
+    /* Inline (0 workers): the acquisition thread is the whole gauge, and
+     * cuts given from this thread while it runs take turns with its frames
+     * (early or late, whichever they turn out to be: the sheets are the
+     * same). Frames come every 10 mm from 0, so a sheet between cuts holds
+     * (end - start) / 10 rows exactly. */
+    so = bag();
+    set(so, FLT_OPT_SIM_FRAME_SPACING, F_STEP);
+    flt_sim *sim0 = NULL;
+    OK(flt_sim_create(calib, so, &sim0));
+    flt_options_destroy(so);
+    OK(flt_source_create_sim(sim0, NULL, &src));
+    flt_options *o0 = bag();
+    set(o0, FLT_OPT_GAUGE_FRAME_SPACING, 8.0);
+    set(o0, FLT_OPT_GAUGE_OVERFLOW, 1);
+    set(o0, FLT_OPT_LAG_KNOTS, 4);
+    set(o0, FLT_OPT_GAUGE_WORKERS, 0);
+    OK(flt_gauge_create(calib, o0, &g));
+    OK(flt_gauge_attach_source(g, src));
+    OK(flt_gauge_start(g));
+    const double inline_cuts[3] = {1000.0, 1500.0, 2000.0};
+    for (int i = 0; i < 3; ++i)
+        OK(flt_gauge_cut(g, inline_cuts[i]));
+    for (int k = 0; k < 3; ++k) {
+        sh = NULL;
+        for (int i = 0; i < 30000 && !sh; ++i)
+            OK(flt_gauge_next_sheet(g, 1, &sh));
+        assert_non_null(sh);
+        const double start = k == 0 ? 0.0 : inline_cuts[k - 1];
+        assert_true(get(sh, FLT_SHEET_S_START) == start);
+        assert_true(get(sh, FLT_SHEET_S_END) == inline_cuts[k]);
+        assert_int_equal(get(sh, FLT_SHEET_ROWS), (inline_cuts[k] - start) / F_STEP);
+        flt_sheet_destroy(sh);
+    }
+    OK(flt_gauge_stop(g));
+    assert_int_equal(count(g, FLT_GAUGE_COUNT_CUTS), 3);
+    assert_int_equal(count(g, FLT_GAUGE_COUNT_CUTS_IGNORED), 0);
+    assert_int_equal(count(g, FLT_GAUGE_COUNT_QUEUED), 0);
+    OK(flt_gauge_attach_source(g, NULL));
+    flt_gauge_destroy(g);
+    flt_source_destroy(src);
+    flt_sim_destroy(sim0);
+    flt_options_destroy(o0);
+
     /* A camera unplugged while acquiring: the acquisition ends by itself
      * and stop() says why. */
     flt_u3v_sim *bus = NULL;
