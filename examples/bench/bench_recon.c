@@ -158,13 +158,14 @@ int main(int argc, char **argv) {
     add_noise(ROWS, s, h, g);
     const struct {
         const char *name, *goal;
-        int rigid, robust;
+        int rigid;
+        flt_robust robust;
     } modes[] = {
-        {"plain", "", 0, 0},
-        {"rigid_motion", "", 1, 0},
-        {"robust (Huber)", "   [goal <= 60 ms]", 0, 1},
-        {"rigid_motion + robust (Huber)", "   [goal <= 60 ms]", 1, 1},
-        {"rigid_motion + robust (Tukey)", "", 1, 2},
+        {"plain", "", 0, FLT_ROBUST_NONE},
+        {"rigid_motion", "", 1, FLT_ROBUST_NONE},
+        {"robust (Huber)", "   [goal <= 60 ms]", 0, FLT_ROBUST_HUBER},
+        {"rigid_motion + robust (Huber)", "   [goal <= 60 ms]", 1, FLT_ROBUST_HUBER},
+        {"rigid_motion + robust (Tukey)", "", 1, FLT_ROBUST_TUKEY},
     };
     printf("experiment 3 noise (2.5 mm heave, 0.5 mm eccentricity, 0.05 mm peak noise, "
            "shear ringing every 3 m):\n");
@@ -206,7 +207,8 @@ int main(int argc, char **argv) {
         flt_options *o = NULL;
         check(flt_options_create(&o), "flt_options_create");
         check(flt_options_set(o, FLT_OPT_RIGID_MOTION, mode), "flt_options_set");
-        check(flt_options_set(o, FLT_OPT_ROBUST, mode), "flt_options_set");
+        check(flt_options_set(o, FLT_OPT_ROBUST, mode ? FLT_ROBUST_HUBER : FLT_ROBUST_NONE),
+              "flt_options_set");
         flt_recon *rc = NULL;
         check(flt_recon_create(FIBERS, o, &rc), "flt_recon_create");
         flt_options_destroy(o);

@@ -502,7 +502,7 @@ int main(int argc, char **argv) {
     //   gauge_keep_maps = 2: the report draws each sheet's reconstructed and
     //   measured heights.
     flt_options *gauge_opt = make_options({{FLT_OPT_RIGID_MOTION, 1},
-                                           {FLT_OPT_ROBUST, 1},
+                                           {FLT_OPT_ROBUST, FLT_ROBUST_HUBER},
                                            {FLT_OPT_GAUGE_FRAME_SPACING, 0.8 * k_frame_spacing},
                                            {FLT_OPT_GAUGE_OVERFLOW, 1},
                                            {FLT_OPT_GAUGE_MAX_SHEET_LENGTH, st.sheet_length + 1000},

@@ -45,9 +45,9 @@ Methods:
                 experiment (the standard deviations of the simulated noise
                 without the shear wave, measured on the realisation); not run
                 on experiment 1, which has no noise to weight by;
-  flt robust    robust=1 (Huber), rigid_motion=1, no noise level given: the
+  flt robust    robust="huber", rigid_motion=True, no noise level given: the
                 method the targets apply to;
-  flt huber     robust=1 alone and flt tukey robust=2 with rigid_motion=1,
+  flt huber     robust="huber" alone and flt tukey robust="tukey" with rigid_motion,
                 for information;
   flt gauge     flt robust's options on the line: the rows pushed one by one
                 into a flatline.Gauge (the streaming reconstructor running on
@@ -297,13 +297,13 @@ def library_options(method, measurement):
         return {"height_sigma": measurement.height_sigma,
                 "slope_sigma": measurement.slope_sigma}
     if method == "flt robust":
-        return {"robust": 1, "rigid_motion": 1}
+        return {"robust": "huber", "rigid_motion": True}
     if method == "flt huber":
-        return {"robust": 1}
+        return {"robust": "huber"}
     if method == "flt tukey":
-        return {"robust": 2, "rigid_motion": 1}
+        return {"robust": "tukey", "rigid_motion": True}
     if method == "flt gauge":
-        return {"robust": 1, "rigid_motion": 1}
+        return {"robust": "huber", "rigid_motion": True}
     raise KeyError(method)
 
 
@@ -633,7 +633,7 @@ def main(argv=None):
 
     checks = check_targets(table)
     print()
-    print("Targets (model (b), flt robust = robust=1 rigid_motion=1, no noise level given, "
+    print("Targets (model (b), flt robust = robust=huber rigid_motion, no noise level given, "
           "constant removed, every seed):")
     for ok, text in checks:
         print(f"  {'PASS' if ok else 'FAIL'}  {text}")

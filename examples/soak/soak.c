@@ -120,7 +120,7 @@ int main(int argc, char **argv) {
     check(flt_sim_add_defect(sim, FLT_SIM_QUARTER_BUCKLE, 1.5, 1100.0), "defect");
     flt_extractor *ex = NULL;
     if (frames)
-        check(flt_extractor_create(calib, opt, &ex), "extractor");
+        check(flt_extractor_create(calib, NULL, &ex), "extractor");
     flt_recon *rec = NULL;
     flt_gauge *g = NULL;
     if (gauge) {

@@ -144,8 +144,18 @@ FLT_API const char *FLT_CALL flt_version_string(void);
 /* Option keys. Values are fixed forever; new keys are appended.
  * Each key has a name (the snake_case word in quotes, which the Python and C#
  * bindings use as the keyword), bounds and a default; see flt_option_info().
- * A component reads the keys it knows and ignores the others, so one bag can
- * configure a whole pipeline. */
+ * Keys are numbered by component, a hundred each: 100s the reconstructor,
+ * 200s calibration, 300s the simulator, 400s the extractor, 500s flatness,
+ * 600s frame sources (700s to 900s are reserved for later components).
+ * A component refuses a bag in which a key of another component was set
+ * (FLT_ERR_INVALID_ARGUMENT, naming the key and both components): such a
+ * value would have no effect, which hides a mistake. Give each component
+ * a bag of its own; keys only read as their default never count.
+ * An option whose value is a choice has named values: a typedef'd enum in
+ * its component's header (flt_robust, flt_flat_reference,
+ * flt_encoder_mode), and lower-case names for the bindings
+ * (flt_option_choice_at()). On/off options (rigid_motion, calib_ransac,
+ * calib_rational_distortion) take 0 or 1. */
 typedef enum flt_option {
     /* --- reconstructor (flatline/recon.h) --- */
     /* "knot_spacing": distance L between spline knots along travel, mm.
@@ -215,8 +225,9 @@ typedef enum flt_option {
      * vibration it cuts the error about 2.8-fold and costs 0.02 um on the
      * noise-free reference sheet. Default 10. */
     FLT_OPT_CURVATURE_JUMP_WEIGHT = 110,
-    /* "robust": 0 (the default) for least squares; 1 for Huber and 2 for
-     * Tukey, an M-estimator that takes outliers such as the shear station's
+    /* "robust" (flt_robust, recon.h): FLT_ROBUST_NONE (0, the default) for
+     * least squares; FLT_ROBUST_HUBER (1) for Huber and FLT_ROBUST_TUKEY (2)
+     * for Tukey, an M-estimator that takes outliers such as the shear station's
      * ringing and spurious laser peaks out. Its noise levels are estimated
      * from the data, per fiber and per measurement kind (a running median of
      * absolute residuals), so height_sigma and slope_sigma only seed the
@@ -354,8 +365,10 @@ typedef enum flt_option {
     /* "flat_zone_width": width of an I-Unit zone across the strip, mm.
      * Default 50. */
     FLT_OPT_FLAT_ZONE_WIDTH = 502,
-    /* "flat_reference": the I-Unit reference length, 0 = the shortest valid
-     * fiber (default), 1 = the mean of the valid fibers (integer). */
+    /* "flat_reference" (flt_flat_reference, flatness.h): the I-Unit
+     * reference length, FLT_FLAT_REFERENCE_SHORTEST (0, the default) the
+     * shortest valid fiber, FLT_FLAT_REFERENCE_MEAN (1) the mean of the
+     * valid fibers. */
     FLT_OPT_FLAT_REFERENCE = 503,
     /* "flat_min_length": shortest window the metrics accept, mm: one
      * flatness wave. Default 500 (the shortest defect waves, DESIGN.md). */
@@ -382,9 +395,11 @@ typedef enum flt_option {
     FLT_OPT_FLAT_ROW_CAPACITY = 510,
 
     /* --- frame sources (flatline/source.h) --- */
-    /* "source_encoder_mode": where a frame's encoder position comes from
-     * (integer): 0 auto, 1 fixed step, 2 host (flt_source_set_encoder),
-     * 3 camera chunk counter. Default 0; see flatline/source.h. */
+    /* "source_encoder_mode" (flt_encoder_mode, source.h): where a frame's
+     * encoder position comes from: FLT_ENCODER_AUTO (0, the default),
+     * FLT_ENCODER_FIXED_STEP (1), FLT_ENCODER_HOST (2,
+     * flt_source_set_encoder), FLT_ENCODER_CHUNK (3, the camera's chunk
+     * counter); see flatline/source.h. */
     FLT_OPT_SOURCE_ENCODER_MODE = 600,
     /* "source_encoder_step": travel per frame (per block id) in fixed-step
      * mode, mm. Default 3 (the reference sensor's frame spacing). */
@@ -475,12 +490,15 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_options_create(flt_options **out);
 /* Frees a bag; NULL is a no-op. Handles created from it keep their own copy
  * of the values, so the bag may be freed right after use. */
 FLT_API void FLT_CALL flt_options_destroy(flt_options *options);
-/* Sets one value. Fails with FLT_ERR_INVALID_ARGUMENT, leaving the bag
- * unchanged, for an unknown key, a NaN, a value outside the key's bounds or a
- * fraction for an integer key. */
+/* Sets one value and marks the key as set (see the component rule above).
+ * Fails, leaving the bag unchanged, with FLT_ERR_NOT_FOUND for an unknown
+ * key (as flt_options_get and flt_option_info do), and with
+ * FLT_ERR_INVALID_ARGUMENT for a NaN, a value outside the key's bounds or
+ * a fraction for an integer key. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_options_set(flt_options *options, flt_option key,
                                                           double value);
-/* Reads one value (the default if never set). */
+/* Reads one value (the default if never set). FLT_ERR_NOT_FOUND for an
+ * unknown key. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_options_get(const flt_options *options,
                                                           flt_option key, double *out);
 
@@ -494,6 +512,23 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_option_find(const char *name, flt_
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_option_info(flt_option key, const char **name,
                                                           double *min_value, double *max_value,
                                                           double *default_value, int *is_integer);
+
+/**
+ * Names the values of an option whose value is a choice: the index-th
+ * choice of `key` (index 0, 1, ... in the order of their values).
+ *
+ * @param key        an option key, e.g. FLT_OPT_ROBUST.
+ * @param index      which choice.
+ * @param name_out   receives its lower-case name, e.g. "huber" (static
+ *                   storage), which the Python binding accepts as the value.
+ * @param value_out  receives its value (the C enumerator), or NULL.
+ * @return FLT_OK; FLT_ERR_NOT_FOUND for an unknown key, a key whose value is
+ *         a number (it has no choices) or an index past the last choice;
+ *         FLT_ERR_INVALID_ARGUMENT for a NULL name_out.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_option_choice_at(flt_option key, size_t index,
+                                                               const char **name_out,
+                                                               int *value_out);
 
 /* Enumerates the keys: the index-th key for index 0, 1, ...;
  * FLT_ERR_NOT_FOUND past the last one. */

@@ -178,6 +178,17 @@ enum {
  * "unknown" for a value outside the enum. Static storage. */
 FLT_API const char *FLT_CALL flt_shape_string(flt_shape shape);
 
+/** Values of the option "flat_reference" (FLT_OPT_FLAT_REFERENCE): the
+ * length I-Units are measured against; the bindings' names in quotes. */
+typedef enum flt_flat_reference {
+    /** "shortest": the shortest valid fiber (the default; ASTM A1030). */
+    FLT_FLAT_REFERENCE_SHORTEST = 0,
+    /** "mean": the mean of the valid fibers. */
+    FLT_FLAT_REFERENCE_MEAN = 1,
+    /** Not a value: keeps the type int-sized. */
+    FLT_FLAT_REFERENCE_MAX_ENUM_ = 0x7FFFFFFF
+} flt_flat_reference;
+
 typedef struct flt_flatness flt_flatness;
 
 /* Creates the metrics for `fibers` fibers (>= 1) at fiber_x [fibers] (mm,

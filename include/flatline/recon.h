@@ -62,7 +62,7 @@
  *   added. About 3x less shape error under 2.5 mm of heave. Fibers are then
  *   no longer solved independently (a dead fiber is still NaN and flagged).
  *
- * Robust mode (option robust = 1 Huber, 2 Tukey)
+ * Robust mode (option robust = FLT_ROBUST_HUBER or FLT_ROBUST_TUKEY)
  *   An M-estimator for outliers such as the shear station's ringing and
  *   spurious laser peaks: a plain pass, then robust_iterations reweighted
  *   passes. Each reweighted pass judges every sample by its residual against
@@ -117,6 +117,21 @@ enum {
     FLT_FLAG_NO_DATA = 4
 };
 
+/** Values of the option "robust" (FLT_OPT_ROBUST); the bindings' names in
+ * quotes. */
+typedef enum flt_robust {
+    /** "none": least squares (the default). */
+    FLT_ROBUST_NONE = 0,
+    /** "huber": Huber's M-estimator, the one to use (see "Robust mode");
+     * what the bindings' robust=True means. */
+    FLT_ROBUST_HUBER = 1,
+    /** "tukey": Tukey's biweight; can lock onto a wrong level when a strip
+     * starts inside the shear station's ringing. */
+    FLT_ROBUST_TUKEY = 2,
+    /** Not a value: keeps the type int-sized. */
+    FLT_ROBUST_MAX_ENUM_ = 0x7FFFFFFF
+} flt_robust;
+
 typedef struct flt_recon flt_recon;
 
 /* Creates a streaming reconstructor for `fibers` fibers (>= 1), for lasers
@@ -127,8 +142,9 @@ typedef struct flt_recon flt_recon;
  * curvature_weight, curvature_jump_weight, lag_knots, max_gap, row_capacity,
  * rigid_motion, shape_sigma, robust, robust_iterations,
  * robust_line_iterations); copied, not kept.
- * Fails with FLT_ERR_INVALID_ARGUMENT if fibers is 0 or the options are
- * inconsistent, FLT_ERR_OUT_OF_MEMORY if the buffers do not fit. */
+ * Fails with FLT_ERR_INVALID_ARGUMENT if fibers is 0, the options are
+ * inconsistent or set a key of another component (common.h),
+ * FLT_ERR_OUT_OF_MEMORY if the buffers do not fit. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_create(size_t fibers,
                                                            const flt_options *options,
                                                            flt_recon **out);
@@ -170,7 +186,9 @@ FLT_API void FLT_CALL flt_recon_destroy(flt_recon *recon);
 /* The number of fibers the handle was created with. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_fibers(const flt_recon *recon, size_t *out);
 
-/* The effective value of an option (knot_spacing resolved to mm). */
+/* The effective value of an option (knot_spacing resolved to mm).
+ * FLT_ERR_NOT_FOUND for an unknown key, FLT_ERR_INVALID_ARGUMENT for a key
+ * of another component. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_get_option(const flt_recon *recon,
                                                                flt_option key, double *out);
 

@@ -29,7 +29,8 @@
  *   `height` rows of `stride_bytes`) to keep it longer.
  *
  * Encoder positions (encoder_mm, mm of strip travel; see lib/sources/README.md
- * for how to wire a real encoder). The option "source_encoder_mode" picks:
+ * for how to wire a real encoder). The option "source_encoder_mode"
+ * (flt_encoder_mode: FLT_ENCODER_AUTO, _FIXED_STEP, _HOST, _CHUNK) picks:
  *   0 auto        simulator: its own encoder position; images: the CSV file
  *                 when one is given, else fixed step; camera: fixed step.
  *   1 fixed step  encoder_mm = source_encoder_start + source_encoder_step *
@@ -111,6 +112,22 @@ typedef struct flt_frame flt_frame;
 typedef struct flt_camera_list flt_camera_list;
 /* A simulated USB bus with simulated USB3 Vision cameras (see below). */
 typedef struct flt_u3v_sim flt_u3v_sim;
+
+/** Values of the option "source_encoder_mode" (FLT_OPT_SOURCE_ENCODER_MODE):
+ * where a frame's encoder position comes from (see "Encoder positions");
+ * the bindings' names in quotes. */
+typedef enum flt_encoder_mode {
+    /** "auto": the simulator's own, an image CSV file, else fixed step. */
+    FLT_ENCODER_AUTO = 0,
+    /** "fixed_step": source_encoder_start + source_encoder_step * block. */
+    FLT_ENCODER_FIXED_STEP = 1,
+    /** "host": the value last given to flt_source_set_encoder(). */
+    FLT_ENCODER_HOST = 2,
+    /** "chunk": the camera's encoder counter chunk. */
+    FLT_ENCODER_CHUNK = 3,
+    /** Not a value: keeps the type int-sized. */
+    FLT_ENCODER_MODE_MAX_ENUM_ = 0x7FFFFFFF
+} flt_encoder_mode;
 
 typedef enum flt_source_kind {
     FLT_SOURCE_SIMULATOR = 1,

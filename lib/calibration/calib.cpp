@@ -224,6 +224,8 @@ FLT_API flt_status FLT_CALL flt_calib_estimate_intrinsics(
     return guard(fn, [&] {
         if (flt_status st = check_mutable(fn, calib))
             return st;
+        if (flt_status st = check_option_component(fn, options, {FLT_OPT_CALIB_RANSAC}))
+            return st;
         const calib_model &m = calib->model;
         if (!m.has_frame)
             return fail(FLT_ERR_STATE, "%s: set the frame size (flt_calib_set_frame_size) first",
@@ -324,6 +326,8 @@ FLT_API flt_status FLT_CALL flt_calib_estimate_homography(
     const char *fn = "flt_calib_estimate_homography";
     return guard(fn, [&] {
         if (flt_status st = check_mutable(fn, calib))
+            return st;
+        if (flt_status st = check_option_component(fn, options, {FLT_OPT_CALIB_RANSAC}))
             return st;
         if (flt_status st = check_laser(fn, laser))
             return st;

@@ -6,6 +6,9 @@
 #include <limits>
 
 #include "core/error.hpp"
+#include "flatline/flatness.h"
+#include "flatline/recon.h"
+#include "flatline/source.h"
 
 namespace flt {
 namespace {
@@ -105,6 +108,26 @@ const option_spec k_options[] = {
     {FLT_OPT_GAUGE_SHEET_SLOTS, "gauge_sheet_slots", 1.0, 1024.0, 4.0, true},
 };
 constexpr std::size_t k_option_count = sizeof k_options / sizeof k_options[0];
+
+// Options whose value is a choice, their values in order. The names are
+// what the bindings accept for the value (robust="huber").
+const option_choice k_choices[] = {
+    {FLT_OPT_ROBUST, "none", FLT_ROBUST_NONE},
+    {FLT_OPT_ROBUST, "huber", FLT_ROBUST_HUBER},
+    {FLT_OPT_ROBUST, "tukey", FLT_ROBUST_TUKEY},
+    {FLT_OPT_FLAT_REFERENCE, "shortest", FLT_FLAT_REFERENCE_SHORTEST},
+    {FLT_OPT_FLAT_REFERENCE, "mean", FLT_FLAT_REFERENCE_MEAN},
+    {FLT_OPT_SOURCE_ENCODER_MODE, "auto", FLT_ENCODER_AUTO},
+    {FLT_OPT_SOURCE_ENCODER_MODE, "fixed_step", FLT_ENCODER_FIXED_STEP},
+    {FLT_OPT_SOURCE_ENCODER_MODE, "host", FLT_ENCODER_HOST},
+    {FLT_OPT_SOURCE_ENCODER_MODE, "chunk", FLT_ENCODER_CHUNK},
+};
+
+// The components by the hundreds of their keys (common.h).
+const char *const k_components[] = {
+    nullptr,    "the reconstructor", "calibration", "the simulator",    "the extractor",
+    "flatness", "frame sources",     "the gauge",   "quality verdicts", "the advisor",
+};
 static_assert(k_option_count <= flt_options::max_keys,
               "grow flt_options::max_keys (it is internal, not ABI)");
 
@@ -120,6 +143,35 @@ flt_status unknown_key(const char *fn, int key) {
 }
 
 }  // namespace
+
+const char *option_component(int key) {
+    const int range = key / 100;
+    if (key < 0 || range >= int(sizeof k_components / sizeof k_components[0]) ||
+        !k_components[range])
+        return "another component";
+    return k_components[range];
+}
+
+flt_status check_option_component(const char *fn, const flt_options *options,
+                                  std::initializer_list<int> ranges) {
+    if (!options || ranges.size() == 0)
+        return FLT_OK;
+    for (std::size_t i = 0; i < k_option_count; ++i) {
+        const int key = int(k_options[i].key);
+        if (!options->is_set[i])
+            continue;
+        bool read = false;
+        for (int range : ranges)
+            read = read || key / 100 == range / 100;
+        if (!read)
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: option '%s' belongs to %s, not to %s: give each component a bag "
+                        "of its own options",
+                        fn, k_options[i].name, option_component(key),
+                        option_component(*ranges.begin()));
+    }
+    return FLT_OK;
+}
 
 const option_spec *find_option(flt_option key) {
     std::size_t i = slot_of(key);
@@ -170,7 +222,7 @@ FLT_API flt_status FLT_CALL flt_options_set(flt_options *options, flt_option key
         FLT_CHECK_NOT_NULL(fn, options);
         const option_spec *spec = enum_arg(key) < 0 ? nullptr : find_option(key);
         if (!spec)
-            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: unknown option key %d", fn, enum_arg(key));
+            return unknown_key(fn, enum_arg(key));
         if (std::isnan(value))
             return fail(FLT_ERR_INVALID_ARGUMENT, "%s: option '%s' is NaN", fn, spec->name);
         if (value < spec->min_value || value > spec->max_value)
@@ -231,6 +283,33 @@ FLT_API flt_status FLT_CALL flt_option_info(flt_option key, const char **name, d
         if (is_integer)
             *is_integer = spec->is_integer ? 1 : 0;
         return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_option_choice_at(flt_option key, size_t index,
+                                                 const char **name_out, int *value_out) {
+    const char *fn = "flt_option_choice_at";
+    return guard(fn, [&] {
+        FLT_CHECK_NOT_NULL(fn, name_out);
+        const option_spec *spec = enum_arg(key) < 0 ? nullptr : find_option(key);
+        if (!spec)
+            return unknown_key(fn, enum_arg(key));
+        std::size_t seen = 0;
+        for (const option_choice &choice : k_choices) {
+            if (choice.key != key)
+                continue;
+            if (seen++ == index) {
+                *name_out = choice.name;
+                if (value_out)
+                    *value_out = choice.value;
+                return FLT_OK;
+            }
+        }
+        if (seen == 0)
+            return fail(FLT_ERR_NOT_FOUND, "%s: option '%s' is a number, not a choice", fn,
+                        spec->name);
+        return fail(FLT_ERR_NOT_FOUND, "%s: index %zu is past the last of the %zu choices of '%s'",
+                    fn, index, seen, spec->name);
     });
 }
 

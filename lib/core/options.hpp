@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cstddef>
+#include <initializer_list>
 
 #include "flatline/common.h"
 
@@ -31,6 +32,32 @@ double option_value(const flt_options *options, flt_option key);
 // True if key was set in options with flt_options_set (false for a NULL
 // bag): a value the caller chose, not a default.
 bool option_is_set(const flt_options *options, flt_option key);
+
+// Option keys are numbered by component, a hundred each (common.h):
+// 100s the reconstructor, 200s calibration, 300s the simulator, 400s the
+// extractor, 500s flatness, 600s frame sources, 700s the gauge, 800s
+// quality verdicts, 900s the advisor. The component of a key, e.g.
+// "the simulator" ("another component" outside those ranges).
+const char *option_component(int key);
+
+// Every component's create calls this with its range (100 for the
+// reconstructor, ...) before reading a bag: a key the caller set that
+// belongs to another component would be silently ignored, which hides a
+// mistake (a typo'd bag, options meant for another stage). Fails with
+// FLT_ERR_INVALID_ARGUMENT naming the key and the components; a NULL bag
+// passes. A component built on others lists every range it reads, its
+// own first (the message names it).
+flt_status check_option_component(const char *fn, const flt_options *options,
+                                  std::initializer_list<int> ranges);
+
+// The named values of an option whose value is a choice (robust,
+// flat_reference, source_encoder_mode): the C enumerators in the
+// component's header, and the lower-case names the bindings accept.
+struct option_choice {
+    flt_option key;
+    const char *name;
+    int value;
+};
 
 }  // namespace flt
 

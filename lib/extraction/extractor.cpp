@@ -600,6 +600,8 @@ FLT_API flt_status FLT_CALL flt_extractor_create(const flt_calib *calib, const f
                         "%s: argument 'calib' is not a live flt_calib handle", fn);
         if (!finished)
             return fail(FLT_ERR_STATE, "%s: argument 'calib' is not finished", fn);
+        if (flt_status st = check_option_component(fn, options, {FLT_OPT_EXTRACT_SG_WINDOW}))
+            return st;
         auto ex = std::make_unique<flt_extractor>();
         ex->calib = copy_calib(calib);
         check(flt_calib_get_frame_size(ex->calib, &ex->width, &ex->height));

@@ -129,6 +129,8 @@ flt_status check_rows(const char *fn, std::size_t rows, std::size_t fibers, cons
 flt_status create_handle(const char *fn, std::size_t fibers, const double *x,
                          const flt_options *options, flt_flatness **out) {
     flatness_params p;
+    if (flt_status st = check_option_component(fn, options, {FLT_OPT_FLAT_WINDOW_LENGTH}))
+        return st;
     if (flt_status st = read_params(fn, options, &p))
         return st;
     if (p.row_capacity > std::numeric_limits<std::size_t>::max() / sizeof(double) / fibers)

@@ -44,6 +44,8 @@ namespace {
 // laser_spacing: the sensor's, from a calibration, or 0 to read the option.
 flt_status read_params(const char *fn, const flt_options *options, recon_config *out,
                        double laser_spacing = 0.0) {
+    if (flt_status st = check_option_component(fn, options, {FLT_OPT_KNOT_SPACING}))
+        return st;
     recon_config config;
     recon_params &p = config.params;
     p.laser_spacing =
@@ -254,9 +256,15 @@ FLT_API flt_status FLT_CALL flt_recon_get_option(const flt_recon *recon, flt_opt
         if (flt_status st = check_handle(fn, recon))
             return st;
         FLT_CHECK_NOT_NULL(fn, out);
-        if (enum_arg(key) < 0)
-            return fail(FLT_ERR_NOT_FOUND, "%s: option key %d is not a reconstructor option", fn,
-                        enum_arg(key));
+        // Unknown keys: FLT_ERR_NOT_FOUND, as from flt_options_get; keys of
+        // other components: the argument is wrong, as in a bag at create.
+        const option_spec *spec = enum_arg(key) < 0 ? nullptr : find_option(key);
+        if (!spec)
+            return fail(FLT_ERR_NOT_FOUND, "%s: unknown option key %d", fn, enum_arg(key));
+        if (enum_arg(key) / 100 != FLT_OPT_KNOT_SPACING / 100)
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: option '%s' belongs to %s, not to %s", fn,
+                        spec->name, option_component(enum_arg(key)),
+                        option_component(FLT_OPT_KNOT_SPACING));
         const recon_config &c = recon->engine->config();
         const recon_params &p = c.params;
         switch (key) {
@@ -302,9 +310,9 @@ FLT_API flt_status FLT_CALL flt_recon_get_option(const flt_recon *recon, flt_opt
             case FLT_OPT_ROBUST_LINE_ITERATIONS:
                 *out = double(c.line_iterations);
                 break;
-            default:
-                return fail(FLT_ERR_NOT_FOUND, "%s: option key %d is not a reconstructor option",
-                            fn, (int)key);
+            default:  // a reconstructor key registered but not reported here
+                return fail(FLT_ERR_INTERNAL, "%s: option '%s' has no effective value", fn,
+                            spec->name);
         }
         return FLT_OK;
     });

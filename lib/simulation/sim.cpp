@@ -487,6 +487,8 @@ FLT_API flt_status FLT_CALL flt_sim_create(const flt_calib *calib, const flt_opt
     return guard(fn, [&] {
         FLT_CHECK_NOT_NULL(fn, out);
         *out = nullptr;
+        if (flt_status st = check_option_component(fn, options, {FLT_OPT_SIM_SEED}))
+            return st;
         const sim_params params = read_params(options);
         if (params.bit_depth != 8 && params.bit_depth != 10 && params.bit_depth != 12 &&
             params.bit_depth != 16)

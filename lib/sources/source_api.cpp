@@ -117,6 +117,8 @@ FLT_API flt_status FLT_CALL flt_source_create_sim(flt_sim *sim, const flt_option
         FLT_CHECK_NOT_NULL(fn, out);
         *out = nullptr;
         FLT_CHECK_NOT_NULL(fn, sim);
+        if (flt_status st = check_option_component(fn, options, {FLT_OPT_SOURCE_ENCODER_MODE}))
+            return st;
         auto s = std::make_unique<flt_source>();
         s->encoder.configure(options, false);
         s->impl = sources::make_sim_source(sim);
@@ -129,6 +131,8 @@ namespace {
 
 flt_status create_images(const char *fn, std::vector<std::string> paths, const char *csv,
                          const flt_options *options, flt_source **out) {
+    if (flt_status st = check_option_component(fn, options, {FLT_OPT_SOURCE_ENCODER_MODE}))
+        return st;
     auto s = std::make_unique<flt_source>();
     s->encoder.configure(options, false);
     const int bits = int(option_value(options, FLT_OPT_SOURCE_IMAGE_BITS));
@@ -251,6 +255,8 @@ FLT_API flt_status FLT_CALL flt_source_open_u3v(flt_u3v_sim *bus, const char *se
         if (bus && bus->magic != k_bus_magic)
             return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'bus' is not a live flt_u3v_sim",
                         fn);
+        if (flt_status st = check_option_component(fn, options, {FLT_OPT_SOURCE_ENCODER_MODE}))
+            return st;
         auto s = std::make_unique<flt_source>();
         s->encoder.configure(options, true);
         u3v::camera_config config;

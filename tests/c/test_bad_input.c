@@ -377,10 +377,11 @@ static void row_options_set(void) {
     flt_options *o = NULL;
     GOOD(flt_options_create(&o));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'options'", flt_options_set(NULL, FLT_OPT_MAX_GAP, 1.0));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "unknown option key", flt_options_set(o, (flt_option)99, 1.0));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "unknown option key", flt_options_set(o, FLT_OPT_MAX_ENUM_, 1.0));
-    ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "unknown option key",
-                flt_options_set(o, (flt_option)-1, 1.0));
+    /* An unknown key: FLT_ERR_NOT_FOUND, as from flt_options_get and
+     * flt_option_info. */
+    BAD(FLT_ERR_NOT_FOUND, "unknown option key", flt_options_set(o, (flt_option)99, 1.0));
+    BAD(FLT_ERR_NOT_FOUND, "unknown option key", flt_options_set(o, FLT_OPT_MAX_ENUM_, 1.0));
+    ENUM_UB_BAD(FLT_ERR_NOT_FOUND, "unknown option key", flt_options_set(o, (flt_option)-1, 1.0));
     BAD(FLT_ERR_INVALID_ARGUMENT, "is NaN", flt_options_set(o, FLT_OPT_LASER_SPACING, NaN_));
     BAD(FLT_ERR_INVALID_ARGUMENT, "outside", flt_options_set(o, FLT_OPT_LASER_SPACING, Inf_));
     BAD(FLT_ERR_INVALID_ARGUMENT, "outside", flt_options_set(o, FLT_OPT_LASER_SPACING, -Inf_));
@@ -437,6 +438,29 @@ static void row_option_info(void) {
     GOOD(flt_option_info(FLT_OPT_MAX_GAP, NULL, NULL, NULL, NULL, NULL));
 }
 
+static void row_option_choice_at(void) {
+    const char *name = NULL;
+    int value = -1;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'name_out'",
+        flt_option_choice_at(FLT_OPT_ROBUST, 0, NULL, NULL));
+    BAD(FLT_ERR_NOT_FOUND, "unknown option key",
+        flt_option_choice_at((flt_option)99, 0, &name, NULL));
+    BAD(FLT_ERR_NOT_FOUND, "unknown option key",
+        flt_option_choice_at(FLT_OPT_MAX_ENUM_, 0, &name, NULL));
+    ENUM_UB_BAD(FLT_ERR_NOT_FOUND, "unknown option key -1",
+                flt_option_choice_at((flt_option)-1, 0, &name, NULL));
+    BAD(FLT_ERR_NOT_FOUND, "'max_gap' is a number",
+        flt_option_choice_at(FLT_OPT_MAX_GAP, 0, &name, NULL));
+    BAD(FLT_ERR_NOT_FOUND, "past the last of the 3 choices",
+        flt_option_choice_at(FLT_OPT_ROBUST, 3, &name, &value));
+    BAD(FLT_ERR_NOT_FOUND, "past the last", flt_option_choice_at(FLT_OPT_ROBUST, NEG, &name, NULL));
+    GOOD(flt_option_choice_at(FLT_OPT_ROBUST, 1, &name, &value));
+    ++g_checks;
+    if (strcmp(name, "huber") != 0 || value != FLT_ROBUST_HUBER)
+        ERR("robust's choice 1 is '%s' = %d, expected 'huber' = 1", name, value);
+    GOOD(flt_option_choice_at(FLT_OPT_ROBUST, 0, &name, NULL)); /* value_out may be NULL */
+}
+
 static void row_option_at(void) {
     flt_option k;
     BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_option_at(0, NULL));
@@ -471,6 +495,11 @@ static void row_recon_create(void) {
     /* Inconsistent options: knots far finer than the laser spacing. */
     flt_options *o = options_with(FLT_OPT_KNOT_SPACING, 0.001);
     BAD(FLT_ERR_INVALID_ARGUMENT, "knot_spacing", flt_recon_create(FIBERS, o, &r));
+    flt_options_destroy(o);
+    /* Another component's option: it would do nothing here. */
+    o = options_with(FLT_OPT_FLAT_REFERENCE, FLT_FLAT_REFERENCE_MEAN);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'flat_reference' belongs to flatness, not to the reconstructor",
+        flt_recon_create(FIBERS, o, &r));
     flt_options_destroy(o);
     /* Buffers that fit size_t but not memory (1e7 rows x 2.5e4 fibers x 9
      * bytes = 2.25 TB): out of memory, not a crash. Linux refuses it under its
@@ -521,10 +550,12 @@ static void row_recon_get_option(void) {
     double v;
     BAD(FLT_ERR_INVALID_ARGUMENT, "'recon'", flt_recon_get_option(NULL, FLT_OPT_MAX_GAP, &v));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_recon_get_option(r, FLT_OPT_MAX_GAP, NULL));
-    BAD(FLT_ERR_NOT_FOUND, "not a reconstructor option",
+    /* Another component's key is a wrong argument; an unknown one is not
+     * found, as everywhere. */
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'sim_seed' belongs to the simulator, not to the reconstructor",
         flt_recon_get_option(r, FLT_OPT_SIM_SEED, &v));
-    BAD(FLT_ERR_NOT_FOUND, "not a reconstructor option",
-        flt_recon_get_option(r, FLT_OPT_MAX_ENUM_, &v));
+    BAD(FLT_ERR_NOT_FOUND, "unknown option key", flt_recon_get_option(r, FLT_OPT_MAX_ENUM_, &v));
+    BAD(FLT_ERR_NOT_FOUND, "unknown option key 199", flt_recon_get_option(r, (flt_option)199, &v));
     ENUM_UB_BAD(FLT_ERR_NOT_FOUND, "option key -2", flt_recon_get_option(r, (flt_option)-2, &v));
     GOOD(flt_recon_get_option(r, FLT_OPT_KNOT_SPACING, &v));
     flt_recon_destroy(r);
@@ -693,6 +724,10 @@ static void row_reconstruct(void) {
     make_rows(40);
     double *s = g_rows.s, *h = g_rows.h, *k = g_rows.k;
     double *z = malloc(sizeof(double) * 40 * FIBERS);
+    flt_options *o = options_with(FLT_OPT_SIM_SEED, 3);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'sim_seed' belongs to the simulator",
+        flt_reconstruct(o, 40, FIBERS, s, h, k, NULL, z, NULL));
+    flt_options_destroy(o);
     BAD(FLT_ERR_INVALID_ARGUMENT, "'s'",
         flt_reconstruct(NULL, 40, FIBERS, NULL, h, k, NULL, z, NULL));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'height'",
@@ -717,7 +752,7 @@ static void row_reconstruct(void) {
     bad_s[39] = bad_s[38];
     BAD(FLT_ERR_INVALID_ARGUMENT, "increas",
         flt_reconstruct(NULL, 40, FIBERS, bad_s, h, k, NULL, z, NULL));
-    flt_options *o = options_with(FLT_OPT_KNOT_SPACING, 0.001);
+    o = options_with(FLT_OPT_KNOT_SPACING, 0.001);
     BAD(FLT_ERR_INVALID_ARGUMENT, "knot_spacing",
         flt_reconstruct(o, 40, FIBERS, s, h, k, NULL, z, NULL));
     flt_options_destroy(o);
@@ -853,6 +888,11 @@ static void row_calib_estimate_intrinsics(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'calib'",
         flt_calib_estimate_intrinsics(NULL, 3, views, 64, FLT_TARGET_CHESSBOARD, 9, 6, 10, NULL,
                                       &rms, NULL));
+    flt_options *o = options_with(FLT_OPT_ROBUST, FLT_ROBUST_HUBER);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'robust' belongs to the reconstructor, not to calibration",
+        flt_calib_estimate_intrinsics(c, 3, views, 64, FLT_TARGET_CHESSBOARD, 9, 6, 10, o, &rms,
+                                      NULL));
+    flt_options_destroy(o);
     /* Wrong order: the frame size comes first. */
     BAD(FLT_ERR_STATE, "frame size",
         flt_calib_estimate_intrinsics(c, 3, views, 64, FLT_TARGET_CHESSBOARD, 9, 6, 10, NULL, &rms,
@@ -939,6 +979,10 @@ static void row_calib_estimate_homography(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'calib'",
         flt_calib_estimate_homography(NULL, 0, 4, image, plane, NULL, NULL, NULL, NULL, NULL,
                                       NULL));
+    flt_options *o = options_with(FLT_OPT_SIM_SEED, 2);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'sim_seed' belongs to the simulator, not to calibration",
+        flt_calib_estimate_homography(c, 0, 4, image, plane, o, NULL, NULL, NULL, NULL, NULL));
+    flt_options_destroy(o);
     /* Wrong order: intrinsics first. */
     BAD(FLT_ERR_STATE, "intrinsics",
         flt_calib_estimate_homography(c, 0, 4, image, plane, NULL, NULL, NULL, NULL, NULL, NULL));
@@ -1262,7 +1306,11 @@ static void row_extractor_create(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_extractor_create(g_calib, NULL, NULL));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'calib'", flt_extractor_create(NULL, NULL, &e));
     BAD(FLT_ERR_STATE, "not finished", flt_extractor_create(c, NULL, &e));
-    flt_options *o = options_with(FLT_OPT_EXTRACT_SG_WINDOW, 10);
+    flt_options *o = options_with(FLT_OPT_SIM_LINE_SIGMA, 1.5);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'sim_line_sigma' belongs to the simulator, not to the extractor",
+        flt_extractor_create(g_calib, o, &e));
+    flt_options_destroy(o);
+    o = options_with(FLT_OPT_EXTRACT_SG_WINDOW, 10);
     BAD(FLT_ERR_INVALID_ARGUMENT, "extract_sg_window", flt_extractor_create(g_calib, o, &e));
     GOOD(flt_options_set(o, FLT_OPT_EXTRACT_SG_WINDOW, 5));
     GOOD(flt_options_set(o, FLT_OPT_EXTRACT_SG_ORDER, 6));
@@ -1458,6 +1506,11 @@ static void row_sim_create(void) {
     BAD(FLT_ERR_STATE, "not finished", flt_sim_create(c, NULL, &s));
     uint64_t junk[16] = {0};
     BAD(FLT_ERR_INVALID_ARGUMENT, "'calib'", flt_sim_create((const flt_calib *)junk, NULL, &s));
+    flt_options *o = options_with(FLT_OPT_EXTRACT_SG_WINDOW, 9);
+    BAD(FLT_ERR_INVALID_ARGUMENT,
+        "'extract_sg_window' belongs to the extractor, not to the simulator",
+        flt_sim_create(g_calib, o, &s));
+    flt_options_destroy(o);
     ++g_checks;
     if (s != NULL)
         ERR("*out not NULL after a failure");
@@ -1684,6 +1737,10 @@ static void row_flatness_create(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'fiber_x'", flt_flatness_create(FIBERS, NULL, NULL, &f));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers' is 0", flt_flatness_create(0, g_x, NULL, &f));
     BAD(FLT_ERR_INVALID_ARGUMENT, "fiber_x[2]", flt_flatness_create(3, x, NULL, &f));
+    flt_options *foreign = options_with(FLT_OPT_ROBUST, FLT_ROBUST_TUKEY);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'robust' belongs to the reconstructor, not to flatness",
+        flt_flatness_create(FIBERS, g_x, foreign, &f));
+    flt_options_destroy(foreign);
     x[2] = NaN_;
     BAD(FLT_ERR_INVALID_ARGUMENT, "fiber_x[2]", flt_flatness_create(3, x, NULL, &f));
     x[2] = Inf_;
@@ -1709,6 +1766,10 @@ static void row_flatness_create_from_calib(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_flatness_create_from_calib(g_calib, NULL, NULL));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'calib'", flt_flatness_create_from_calib(NULL, NULL, &f));
     BAD(FLT_ERR_INVALID_ARGUMENT, "fiber grid", flt_flatness_create_from_calib(c, NULL, &f));
+    flt_options *o = options_with(FLT_OPT_LASER_SPACING, 80);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'laser_spacing' belongs to the reconstructor",
+        flt_flatness_create_from_calib(g_calib, o, &f));
+    flt_options_destroy(o);
     GOOD(flt_flatness_create_from_calib(g_calib, NULL, &f));
     flt_flatness_destroy(f);
     flt_calib_destroy(c);
@@ -1742,6 +1803,10 @@ static void row_recon_create_from_calib(void) {
     /* Inconsistent options, as for flt_recon_create. */
     o = options_with(FLT_OPT_KNOT_SPACING, 0.001);
     BAD(FLT_ERR_INVALID_ARGUMENT, "knot_spacing", flt_recon_create_from_calib(g_calib, o, &r));
+    flt_options_destroy(o);
+    o = options_with(FLT_OPT_EXTRACT_SG_WINDOW, 9);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'extract_sg_window' belongs to the extractor",
+        flt_recon_create_from_calib(g_calib, o, &r));
     flt_options_destroy(o);
     /* Lasers 1 nm apart: finished (the offsets differ) but no spacing the
      * reconstructor can work with. */
@@ -2004,8 +2069,13 @@ static void row_source_create_sim(void) {
     flt_source *s = NULL;
     BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_source_create_sim(g_sim, NULL, NULL));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'sim'", flt_source_create_sim(NULL, NULL, &s));
-    flt_options *o = options_with(FLT_OPT_SOURCE_ENCODER_MODE, 3);
+    flt_options *o = options_with(FLT_OPT_SOURCE_ENCODER_MODE, FLT_ENCODER_CHUNK);
     BAD(FLT_ERR_INVALID_ARGUMENT, "source_encoder_mode", flt_source_create_sim(g_sim, o, &s));
+    flt_options_destroy(o);
+    /* The simulator's own options go to flt_sim_create, not here. */
+    o = options_with(FLT_OPT_SIM_SEED, 5);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'sim_seed' belongs to the simulator, not to frame sources",
+        flt_source_create_sim(g_sim, o, &s));
     flt_options_destroy(o);
     ++g_checks;
     if (s != NULL)
@@ -2047,6 +2117,11 @@ static void row_source_create_images(void) {
     BAD(FLT_ERR_IO, "no_such.csv",
         flt_source_create_images(one, 1, "/nonexistent/no_such.csv", NULL, &s));
     write_file(csv, "12.5\n", 5);
+    flt_options *o = options_with(FLT_OPT_U3V_TRANSFERS, 4); /* source options are fine */
+    GOOD(flt_options_set(o, FLT_OPT_FLAT_ZONE_WIDTH, 100));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'flat_zone_width' belongs to flatness, not to frame sources",
+        flt_source_create_images(one, 1, csv, o, &s));
+    flt_options_destroy(o);
     GOOD(flt_source_create_images(one, 1, csv, NULL, &s));
     flt_source_destroy(s);
     /* The second image has another size: found when it is read. */
@@ -2075,6 +2150,10 @@ static void row_source_create_image_dir(void) {
     BAD(FLT_ERR_NOT_FOUND, "empty", flt_source_create_image_dir(empty, NULL, NULL, &s));
     BAD(FLT_ERR_IO, "no_such_dir",
         flt_source_create_image_dir("/nonexistent/no_such_dir", NULL, NULL, &s));
+    flt_options *o = options_with(FLT_OPT_SIM_SEED, 4);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'sim_seed' belongs to the simulator",
+        flt_source_create_image_dir(d, NULL, o, &s));
+    flt_options_destroy(o);
     GOOD(flt_source_create_image_dir(d, NULL, NULL, &s));
     flt_source_destroy(s);
 }
@@ -2343,6 +2422,10 @@ static void row_source_open_u3v(void) {
     flt_source *s = NULL;
     BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_source_open_u3v(bus, "S1", NULL, NULL));
     BAD(FLT_ERR_NOT_FOUND, "NOPE", flt_source_open_u3v(bus, "NOPE", NULL, &s));
+    flt_options *o = options_with(FLT_OPT_EXTRACT_MIN_PEAK, 0.2);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'extract_min_peak' belongs to the extractor",
+        flt_source_open_u3v(bus, "S1", o, &s));
+    flt_options_destroy(o);
     flt_u3v_sim *empty = NULL;
     GOOD(flt_u3v_sim_create(&empty));
     BAD(FLT_ERR_NOT_FOUND, NULL, flt_source_open_u3v(empty, NULL, NULL, &s));
@@ -3265,6 +3348,7 @@ static const row k_rows[] = {
     ROW(options_get),
     ROW(option_find),
     ROW(option_info),
+    ROW(option_choice_at),
     ROW(option_at),
     /* recon.h */
     ROW(recon_create),

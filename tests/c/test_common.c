@@ -79,7 +79,12 @@ static void options_enforce_bounds_nan_and_integers(void **state) {
     assert_int_equal(flt_options_set(o, FLT_OPT_LAG_KNOTS, 2.5), FLT_ERR_INVALID_ARGUMENT);
     assert_non_null(strstr(flt_last_error_message(), "whole number"));
     assert_int_equal(flt_options_set(o, FLT_OPT_LAG_KNOTS, -1), FLT_ERR_INVALID_ARGUMENT);
-    assert_int_equal(flt_options_set(o, (flt_option)12345, 1.0), FLT_ERR_INVALID_ARGUMENT);
+    /* An unknown key is not found, by set, get and info alike. */
+    assert_int_equal(flt_options_set(o, (flt_option)12345, 1.0), FLT_ERR_NOT_FOUND);
+    double unused;
+    assert_int_equal(flt_options_get(o, (flt_option)12345, &unused), FLT_ERR_NOT_FOUND);
+    assert_int_equal(flt_option_info((flt_option)12345, NULL, NULL, NULL, NULL, NULL),
+                     FLT_ERR_NOT_FOUND);
     assert_int_equal(flt_options_set(NULL, FLT_OPT_LAG_KNOTS, 1.0), FLT_ERR_INVALID_ARGUMENT);
     assert_non_null(strstr(flt_last_error_message(), "'options'"));
     assert_int_equal(flt_options_set(o, FLT_OPT_LAG_KNOTS, 7), FLT_OK);
@@ -121,6 +126,55 @@ static void options_are_found_by_name_and_enumerated(void **state) {
     assert_true(def == 100.0);
 }
 
+/* Every option whose value is a choice names each of its whole values once,
+ * in order, with the C enumerator's value; every other option has none. */
+static void choices_name_every_value_of_a_choice_option(void **state) {
+    (void)state;
+    size_t with_choices = 0;
+    for (size_t i = 0;; ++i) {
+        flt_option k;
+        if (flt_option_at(i, &k) != FLT_OK)
+            break;
+        const char *option = NULL;
+        double lo, hi;
+        int integer;
+        assert_int_equal(flt_option_info(k, &option, &lo, &hi, NULL, &integer), FLT_OK);
+        size_t n = 0;
+        const char *name;
+        int value;
+        while (flt_option_choice_at(k, n, &name, &value) == FLT_OK) {
+            assert_int_equal(value, (int)lo + (int)n);
+            assert_true(strlen(name) > 0);
+            for (size_t j = 0; j < n; ++j) {
+                const char *other;
+                assert_int_equal(flt_option_choice_at(k, j, &other, NULL), FLT_OK);
+                assert_true(strcmp(other, name) != 0);
+            }
+            ++n;
+        }
+        assert_int_equal(flt_last_error_status(), FLT_ERR_NOT_FOUND);
+        if (n > 0) {
+            ++with_choices;
+            assert_true(integer);
+            assert_true(lo == 0 && hi == (double)(n - 1)); /* every value named */
+        }
+    }
+    assert_int_equal(with_choices, 3); /* robust, flat_reference, source_encoder_mode */
+    const char *name;
+    int value;
+    assert_int_equal(flt_option_choice_at(FLT_OPT_ROBUST, FLT_ROBUST_TUKEY, &name, &value), FLT_OK);
+    assert_string_equal(name, "tukey");
+    assert_int_equal(value, FLT_ROBUST_TUKEY);
+    assert_int_equal(
+        flt_option_choice_at(FLT_OPT_FLAT_REFERENCE, FLT_FLAT_REFERENCE_MEAN, &name, &value),
+        FLT_OK);
+    assert_string_equal(name, "mean");
+    assert_int_equal(
+        flt_option_choice_at(FLT_OPT_SOURCE_ENCODER_MODE, FLT_ENCODER_CHUNK, &name, &value),
+        FLT_OK);
+    assert_string_equal(name, "chunk");
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(status_strings_name_every_code),
@@ -128,6 +182,7 @@ int main(void) {
         cmocka_unit_test(error_message_names_argument_and_is_cleared),
         cmocka_unit_test(error_message_is_thread_local),
         cmocka_unit_test(options_enforce_bounds_nan_and_integers),
+        cmocka_unit_test(choices_name_every_value_of_a_choice_option),
         cmocka_unit_test(options_are_found_by_name_and_enumerated),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -699,7 +699,7 @@ static void buffer_full_with_nothing_finished_says_why(void **state) {
     assert_int_equal(flt_options_create(&o), FLT_OK);
     assert_int_equal(flt_options_set(o, FLT_OPT_ROW_CAPACITY, 4096), FLT_OK);
     assert_int_equal(flt_options_set(o, FLT_OPT_RIGID_MOTION, 1), FLT_OK);
-    assert_int_equal(flt_options_set(o, FLT_OPT_ROBUST, 1), FLT_OK);
+    assert_int_equal(flt_options_set(o, FLT_OPT_ROBUST, FLT_ROBUST_HUBER), FLT_OK);
     flt_recon *rc = make_recon(K, o);
     flt_options_destroy(o);
     size_t r = 0;
@@ -735,7 +735,7 @@ static void robust_streaming_with_rows_sparser_than_knots(void **state) {
     const size_t K = 2;
     flt_options *o = NULL;
     assert_int_equal(flt_options_create(&o), FLT_OK);
-    assert_int_equal(flt_options_set(o, FLT_OPT_ROBUST, 1), FLT_OK);
+    assert_int_equal(flt_options_set(o, FLT_OPT_ROBUST, FLT_ROBUST_HUBER), FLT_OK);
     assert_int_equal(flt_options_set(o, FLT_OPT_LASER_SPACING, 3.0), FLT_OK);
     flt_recon *rc = make_recon(K, o);
     flt_options_destroy(o);
@@ -774,7 +774,9 @@ static void absurd_values_are_invalid_samples(void **state) {
         flt_options *o = NULL;
         assert_int_equal(flt_options_create(&o), FLT_OK);
         assert_int_equal(flt_options_set(o, FLT_OPT_RIGID_MOTION, mode >= 1), FLT_OK);
-        assert_int_equal(flt_options_set(o, FLT_OPT_ROBUST, mode == 2), FLT_OK);
+        assert_int_equal(
+            flt_options_set(o, FLT_OPT_ROBUST, mode == 2 ? FLT_ROBUST_HUBER : FLT_ROBUST_NONE),
+            FLT_OK);
         double *z = alloc_rows(t->rows, K);
         uint8_t *flags = malloc(t->rows * K);
         assert_int_equal(flt_reconstruct(o, t->rows, K, t->s, t->height, t->slope, NULL, z, flags),
@@ -1039,7 +1041,7 @@ static void robust_mode_removes_shear_transients(void **state) {
             flt_options *o = NULL;
             assert_int_equal(flt_options_create(&o), FLT_OK);
             assert_int_equal(flt_options_set(o, FLT_OPT_RIGID_MOTION, 1), FLT_OK);
-            assert_int_equal(flt_options_set(o, FLT_OPT_ROBUST, 1), FLT_OK);
+            assert_int_equal(flt_options_set(o, FLT_OPT_ROBUST, FLT_ROBUST_HUBER), FLT_OK);
             flt_recon *rc = make_recon(t->fibers, o);
             flt_options_destroy(o);
             double *zs = alloc_rows(t->rows, t->fibers);
@@ -1077,7 +1079,7 @@ static void robust_mode_is_exact_and_streams_like_batch(void **state) {
     test_error(t, zb, 0, t->rows, &mx, &rms);
     flt_options *o = NULL;
     assert_int_equal(flt_options_create(&o), FLT_OK);
-    assert_int_equal(flt_options_set(o, FLT_OPT_ROBUST, 1), FLT_OK);
+    assert_int_equal(flt_options_set(o, FLT_OPT_ROBUST, FLT_ROBUST_HUBER), FLT_OK);
     flt_recon *rc = make_recon(t->fibers, o);
     flt_options_destroy(o);
     double *zs = alloc_rows(t->rows, t->fibers);
@@ -1116,7 +1118,7 @@ static void robust_mode_with_invalid_samples_and_carry_over(void **state) {
         valid[i] = test_rng_uniform(&rng) >= 0.10;
     flt_options *o = NULL;
     assert_int_equal(flt_options_create(&o), FLT_OK);
-    assert_int_equal(flt_options_set(o, FLT_OPT_ROBUST, 2), FLT_OK); /* Tukey */
+    assert_int_equal(flt_options_set(o, FLT_OPT_ROBUST, FLT_ROBUST_TUKEY), FLT_OK);
     flt_recon *rc = make_recon(K, o);
     flt_options_destroy(o);
     double *z = alloc_rows(t->rows, K);
@@ -1200,7 +1202,7 @@ static void robust_batch_with_a_mask_is_exact(void **state) {
     for (int rigid = 0; rigid <= 1; ++rigid) {
         flt_options *o = NULL;
         assert_int_equal(flt_options_create(&o), FLT_OK);
-        assert_int_equal(flt_options_set(o, FLT_OPT_ROBUST, 1), FLT_OK);
+        assert_int_equal(flt_options_set(o, FLT_OPT_ROBUST, FLT_ROBUST_HUBER), FLT_OK);
         assert_int_equal(flt_options_set(o, FLT_OPT_RIGID_MOTION, rigid), FLT_OK);
         double *z = alloc_rows(t->rows, K);
         assert_int_equal(flt_reconstruct(o, t->rows, K, t->s, t->height, t->slope, valid, z, flags),

@@ -54,7 +54,7 @@ static void robust_rigid_streaming_allocates_nothing_after_create(void **state) 
     (void)state;
     flt_options *o = NULL;
     assert_int_equal(flt_options_create(&o), FLT_OK);
-    assert_int_equal(flt_options_set(o, FLT_OPT_ROBUST, 1), FLT_OK);
+    assert_int_equal(flt_options_set(o, FLT_OPT_ROBUST, FLT_ROBUST_HUBER), FLT_OK);
     assert_int_equal(flt_options_set(o, FLT_OPT_RIGID_MOTION, 1), FLT_OK);
     stream_and_count(o);
     flt_options_destroy(o);

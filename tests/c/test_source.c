@@ -215,7 +215,7 @@ static void test_sim_source_gives_the_simulator_frames(void **state) {
     /* host encoder: NaN until set, then the value set last */
     flt_options *o = NULL;
     ok(flt_options_create(&o));
-    ok(flt_options_set(o, FLT_OPT_SOURCE_ENCODER_MODE, 2));
+    ok(flt_options_set(o, FLT_OPT_SOURCE_ENCODER_MODE, FLT_ENCODER_HOST));
     ok(flt_source_create_sim(a, o, &src));
     ok(flt_source_start(src));
     const flt_frame *f = NULL;
@@ -231,7 +231,7 @@ static void test_sim_source_gives_the_simulator_frames(void **state) {
     flt_source_destroy(src);
 
     /* fixed step: start + step * frame */
-    ok(flt_options_set(o, FLT_OPT_SOURCE_ENCODER_MODE, 1));
+    ok(flt_options_set(o, FLT_OPT_SOURCE_ENCODER_MODE, FLT_ENCODER_FIXED_STEP));
     ok(flt_options_set(o, FLT_OPT_SOURCE_ENCODER_STEP, 2.0));
     ok(flt_options_set(o, FLT_OPT_SOURCE_ENCODER_START, 10.0));
     ok(flt_source_create_sim(a, o, &src));
@@ -246,7 +246,7 @@ static void test_sim_source_gives_the_simulator_frames(void **state) {
                  FLT_ERR_INVALID_ARGUMENT, "not a live frame");
     flt_source_destroy(src);
 
-    ok(flt_options_set(o, FLT_OPT_SOURCE_ENCODER_MODE, 3));
+    ok(flt_options_set(o, FLT_OPT_SOURCE_ENCODER_MODE, FLT_ENCODER_CHUNK));
     assert_error(flt_source_create_sim(a, o, &src), FLT_ERR_INVALID_ARGUMENT,
                  "'source_encoder_mode' = 3");
     assert_null(src);

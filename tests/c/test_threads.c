@@ -69,7 +69,7 @@ static void run_line(result *out) {
     flt_sim *sim = NULL;
     flt_extractor *ex = NULL;
     flt_recon *rec = NULL;
-    flt_options *opt = NULL;
+    flt_options *opt = NULL, *recon_opt = NULL;
     uint8_t *frame = malloc((size_t)WIDTH * ROI_ROWS);
     double *peaks = malloc(sizeof(double) * 2 * WIDTH);
     double s, h[FIBERS], k[FIBERS];
@@ -80,12 +80,13 @@ static void run_line(result *out) {
     TRY(flt_options_create(&opt));
     TRY(flt_options_set(opt, FLT_OPT_SIM_PEAK_SIGMA, 1.0 / 16.0));
     TRY(flt_options_set(opt, FLT_OPT_SIM_HEAVE_SIGMA, 0.5));
-    TRY(flt_options_set(opt, FLT_OPT_LAG_KNOTS, 8));
+    TRY(flt_options_create(&recon_opt));
+    TRY(flt_options_set(recon_opt, FLT_OPT_LAG_KNOTS, 8));
     TRY(flt_sim_create(g_calib, opt, &sim));
     TRY(flt_sim_add_defect(sim, FLT_SIM_CENTRE_BUCKLE, 3.0, 400.0));
     TRY(flt_sim_add_defect(sim, FLT_SIM_WAVY_EDGE_BOTH, 2.0, 250.0));
-    TRY(flt_extractor_create(g_calib, opt, &ex));
-    TRY(flt_recon_create(FIBERS, opt, &rec));
+    TRY(flt_extractor_create(g_calib, NULL, &ex));
+    TRY(flt_recon_create_from_calib(g_calib, recon_opt, &rec));
 
     for (int f = 0; f < FRAMES; ++f) {
         double encoder;
@@ -120,6 +121,7 @@ done:
     flt_extractor_destroy(ex);
     flt_sim_destroy(sim);
     flt_options_destroy(opt);
+    flt_options_destroy(recon_opt);
     free(peaks);
     free(frame);
 }

@@ -352,7 +352,7 @@ static void test_stream_with_fine_alignment_and_encoder_chunk(void **state) {
     ok(flt_u3v_sim_set(bus, 1, FLT_U3V_SIM_ENCODER_CHUNK, 1));
     flt_options *o = NULL;
     ok(flt_options_create(&o));
-    ok(flt_options_set(o, FLT_OPT_SOURCE_ENCODER_MODE, 3));
+    ok(flt_options_set(o, FLT_OPT_SOURCE_ENCODER_MODE, FLT_ENCODER_CHUNK));
     ok(flt_options_set(o, FLT_OPT_U3V_TRANSFER_SIZE, 1000));
     flt_source *src = open_camera(bus, "SN0002", o);
     ok(flt_source_start(src));

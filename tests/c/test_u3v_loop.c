@@ -56,7 +56,7 @@ static void test_camera_path_gives_the_direct_path_rows(void **state) {
     ok(flt_u3v_sim_set(bus, 0, FLT_U3V_SIM_ENCODER_MM_PER_COUNT_UM, 500));
     flt_options *o = NULL;
     ok(flt_options_create(&o));
-    ok(flt_options_set(o, FLT_OPT_SOURCE_ENCODER_MODE, 3));
+    ok(flt_options_set(o, FLT_OPT_SOURCE_ENCODER_MODE, FLT_ENCODER_CHUNK));
     ok(flt_options_set(o, FLT_OPT_SOURCE_ENCODER_MM_PER_COUNT, 0.5));
     flt_source *src = NULL;
     ok(flt_source_open_u3v(bus, "LOOP-1", o, &src));

@@ -8,13 +8,15 @@ namespace Flatline
     /// default, and whether it takes whole numbers only.</summary>
     public sealed class OptionInfo
     {
-        internal OptionInfo(string name, double min, double max, double defaultValue, bool isInteger)
+        internal OptionInfo(string name, double min, double max, double defaultValue, bool isInteger,
+                            IReadOnlyDictionary<string, int> choices)
         {
             Name = name;
             Min = min;
             Max = max;
             Default = defaultValue;
             IsInteger = isInteger;
+            Choices = choices;
         }
 
         public string Name { get; }
@@ -22,6 +24,10 @@ namespace Flatline
         public double Max { get; }
         public double Default { get; }
         public bool IsInteger { get; }
+        /// <summary>For an option whose value is a choice, the C library's
+        /// name of each value (e.g. "huber" = 1, the value of
+        /// <see cref="RobustMode.Huber"/>); empty for a number.</summary>
+        public IReadOnlyDictionary<string, int> Choices { get; }
         public override string ToString() => $"{Name} [{Min}, {Max}] default {Default}{(IsInteger ? " (integer)" : "")}";
     }
 
@@ -134,10 +140,10 @@ namespace Flatline
         /// <summary>With RigidMotion, standard deviation of a height's
         /// deviation from its frame's line across the strip, mm.</summary>
         public double ShapeSigma { get => Get("shape_sigma"); set => Set("shape_sigma", value); }
-        /// <summary>Robust reconstruction: 0 least squares, 1 Huber, 2 Tukey;
-        /// takes outliers such as the shear station's ringing and spurious
-        /// laser peaks out, noise levels estimated from the data.</summary>
-        public int Robust { get => (int)Get("robust"); set => Set("robust", value); }
+        /// <summary>Robust reconstruction (<see cref="RobustMode"/>): takes
+        /// outliers such as the shear station's ringing and spurious laser
+        /// peaks out, noise levels estimated from the data.</summary>
+        public RobustMode Robust { get => (RobustMode)(int)Get("robust"); set => Set("robust", (int)value); }
         /// <summary>Reweighted passes over the fibers after the plain one (1..10).</summary>
         public int RobustIterations { get => (int)Get("robust_iterations"); set => Set("robust_iterations", value); }
         /// <summary>With RigidMotion and Robust, reweighted passes over the
@@ -227,9 +233,9 @@ namespace Flatline
         public double FlatUpdateInterval { get => Get("flat_update_interval"); set => Set("flat_update_interval", value); }
         /// <summary>Width of an I-Unit zone across the strip, mm.</summary>
         public double FlatZoneWidth { get => Get("flat_zone_width"); set => Set("flat_zone_width", value); }
-        /// <summary>The I-Unit reference length: the shortest valid fiber
-        /// (false, the default) or the mean of the valid fibers (true).</summary>
-        public bool FlatReferenceMean { get => Get("flat_reference") != 0; set => Set("flat_reference", value ? 1 : 0); }
+        /// <summary>The I-Unit reference length (<see cref="Flatline.FlatReference"/>):
+        /// the shortest valid fiber (the default) or the mean of the valid fibers.</summary>
+        public FlatReference FlatReference { get => (FlatReference)(int)Get("flat_reference"); set => Set("flat_reference", (int)value); }
         /// <summary>Shortest window the metrics accept, mm (one flatness wave).</summary>
         public double FlatMinLength { get => Get("flat_min_length"); set => Set("flat_min_length", value); }
         /// <summary>Least share of a window (0..1) a fiber's usable rows must cover.</summary>
@@ -327,7 +333,22 @@ namespace Flatline
         {
             FlatlineNative.flt_option_info(key, out IntPtr name, out double min, out double max,
                                            out double defaultValue, out int isInteger);
-            return new OptionInfo(Utf8.Decode(name), min, max, defaultValue, isInteger != 0);
+            var choices = new Dictionary<string, int>();
+            // Only whole-number options can be choices; the library names
+            // their values until NotFound.
+            for (ulong index = 0; isInteger != 0; ++index)
+            {
+                try
+                {
+                    FlatlineNative.flt_option_choice_at(key, index, out IntPtr choice, out int value);
+                    choices.Add(Utf8.Decode(choice), value);
+                }
+                catch (NotFoundException)
+                {
+                    break;  // past the last choice, or a number
+                }
+            }
+            return new OptionInfo(Utf8.Decode(name), min, max, defaultValue, isInteger != 0, choices);
         }
 
         /// <summary>The caller's bag, or a bag of defaults for null (the

@@ -3,6 +3,16 @@ using System;
 
 namespace Flatline
 {
+    /// <summary>The length I-Units are measured against (the option
+    /// "flat_reference", flt_flat_reference in flatline/flatness.h).</summary>
+    public enum FlatReference
+    {
+        /// <summary>The shortest valid fiber (the default).</summary>
+        Shortest = NativeFlatReference.FLT_FLAT_REFERENCE_SHORTEST,
+        /// <summary>The mean of the valid fibers.</summary>
+        Mean = NativeFlatReference.FLT_FLAT_REFERENCE_MEAN,
+    }
+
     /// <summary>The shape class of a window (flt_shape), from its zone
     /// I-Unit profile; see include/flatline/flatness.h for the rule.</summary>
     public enum ShapeClass

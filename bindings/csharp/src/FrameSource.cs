@@ -14,17 +14,17 @@ namespace Flatline
     }
 
     /// <summary>Where a frame's encoder position comes from (the option
-    /// source_encoder_mode; see include/flatline/source.h).</summary>
+    /// source_encoder_mode, flt_encoder_mode; see include/flatline/source.h).</summary>
     public enum EncoderMode
     {
         /// <summary>Simulator: its own; images: the CSV when given, else fixed step; camera: fixed step.</summary>
-        Auto = 0,
+        Auto = NativeEncoderMode.FLT_ENCODER_AUTO,
         /// <summary>SourceEncoderStart + SourceEncoderStep * (block id - first block id).</summary>
-        FixedStep = 1,
+        FixedStep = NativeEncoderMode.FLT_ENCODER_FIXED_STEP,
         /// <summary>The value last given to <see cref="FrameSource.SetEncoder"/>.</summary>
-        Host = 2,
+        Host = NativeEncoderMode.FLT_ENCODER_HOST,
         /// <summary>A USB3 Vision camera's encoder counter chunk.</summary>
-        Chunk = 3,
+        Chunk = NativeEncoderMode.FLT_ENCODER_CHUNK,
     }
 
     /// <summary>Frame and channel counters of a source (flt_source_counter).</summary>

@@ -20,6 +20,20 @@ namespace Flatline
         NoData = FlatlineNative.FLT_FLAG_NO_DATA,
     }
 
+    /// <summary>The robust modes of the reconstructor (the option "robust",
+    /// flt_robust in flatline/recon.h).</summary>
+    public enum RobustMode
+    {
+        /// <summary>Least squares (the default).</summary>
+        None = NativeRobust.FLT_ROBUST_NONE,
+        /// <summary>Huber's M-estimator: the one to use against the shear
+        /// station's ringing and spurious laser peaks.</summary>
+        Huber = NativeRobust.FLT_ROBUST_HUBER,
+        /// <summary>Tukey's biweight; can lock onto a wrong level when a
+        /// strip starts inside the ringing.</summary>
+        Tukey = NativeRobust.FLT_ROBUST_TUKEY,
+    }
+
     /// <summary>
     /// Reconstructed rows. <see cref="S"/>[r] is the material position of row
     /// r in mm; <see cref="Z"/>[r, k] the height of fiber k there in mm (NaN

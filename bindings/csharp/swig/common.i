@@ -82,7 +82,7 @@ FLT_CS_OUT_SIZE(size_t *out, size_t *rows_out, size_t *count_out, size_t *length
 %enddef
 FLT_CS_OUT_SCALAR(double, double, double *out, double *min_value,
                   double *max_value, double *default_value)
-FLT_CS_OUT_SCALAR(int, int, int *is_integer, int *out)
+FLT_CS_OUT_SCALAR(int, int, int *is_integer, int *out, int *value_out)
 FLT_CS_OUT_SCALAR(uint32_t, uint, uint32_t *width_out, uint32_t *height_out,
                   uint32_t *first_row_out, uint32_t *rows_out)
 
@@ -114,11 +114,11 @@ FLT_CS_ARRAY(uint16_t, ushort)
     return Utf8.Decode($imcall);
   }
 /* A static name returned through an output argument. */
-%typemap(ctype) const char **name "const char **"
-%typemap(imtype) const char **name "out global::System.IntPtr"
-%typemap(cstype) const char **name "out global::System.IntPtr"
-%typemap(in) const char **name %{ $1 = ($1_ltype)$input; %}
-%typemap(csin) const char **name "out $csinput"
+%typemap(ctype) const char **name, const char **name_out "const char **"
+%typemap(imtype) const char **name, const char **name_out "out global::System.IntPtr"
+%typemap(cstype) const char **name, const char **name_out "out global::System.IntPtr"
+%typemap(in) const char **name, const char **name_out %{ $1 = ($1_ltype)$input; %}
+%typemap(csin) const char **name, const char **name_out "out $csinput"
 
 /* ---- handles: each opaque flt_x becomes a SafeHandle subclass (written in
  * ../src/Handles.cs) passed by the P/Invoke marshaller, which keeps it alive

@@ -10,6 +10,9 @@ FLT_CS_HANDLE(flt_flatness, FlatnessHandle)
  * takes its values from the generated NativeShape. */
 %rename(NativeShape) flt_shape;
 %ignore FLT_SHAPE_MAX_ENUM_;
+/* The I-Unit references stay internal; the public FlatReference mirrors them. */
+%rename(NativeFlatReference) flt_flat_reference;
+%ignore FLT_FLAT_REFERENCE_MAX_ENUM_;
 %typemap(ctype) flt_shape "int"
 %typemap(imtype) flt_shape "int"
 %typemap(cstype) flt_shape "int"

@@ -28,6 +28,8 @@ FLT_CS_INT_ENUM(flt_camera_string, NativeCameraString)
 FLT_CS_INT_ENUM(flt_camera_value, NativeCameraValue)
 FLT_CS_INT_ENUM(flt_u3v_sim_param, NativeU3VSimParam)
 FLT_CS_INT_ENUM(flt_u3v_fault, NativeU3VFault)
+FLT_CS_INT_ENUM(flt_encoder_mode, NativeEncoderMode)
+%ignore FLT_ENCODER_MODE_MAX_ENUM_;
 %ignore FLT_SOURCE_KIND_MAX_ENUM_;
 %ignore FLT_COUNT_MAX_ENUM_;
 %ignore FLT_CAMERA_STRING_MAX_ENUM_;

@@ -46,7 +46,7 @@ namespace Flatline.Tests
             Assert.Equal(8192, options.RowCapacity);
             Assert.False(options.RigidMotion);
             Assert.Equal(0.1, options.ShapeSigma);
-            Assert.Equal(0, options.Robust);
+            Assert.Equal(RobustMode.None, options.Robust);
             Assert.Equal(2, options.RobustIterations);
             Assert.Equal(8, options.RobustLineIterations);
         }
@@ -58,7 +58,7 @@ namespace Flatline.Tests
             {
                 KnotSpacing = 50, LaserSpacing = 120, HeightSigma = 1.5, SlopeSigma = 0.002,
                 CurvatureWeight = 0.01, LagKnots = 16, MaxGap = 300, RowCapacity = 1000,
-                Robust = 1, RobustIterations = 3, RobustLineIterations = 5,
+                Robust = RobustMode.Huber, RobustIterations = 3, RobustLineIterations = 5,
             };
             Assert.Equal(50.0, options["knot_spacing"]);
             Assert.Equal(120.0, options.Get("laser_spacing"));
@@ -120,6 +120,50 @@ namespace Flatline.Tests
             Assert.Equal(80.0, recon.GetOption("knot_spacing"));  // 0 resolves to laser_spacing
             Assert.Equal(12.0, recon.GetOption("lag_knots"));
             Assert.Equal(8192.0, recon.GetOption("row_capacity"));
+        }
+
+        [Fact]
+        public void ChoiceEnumsCarryTheCLibrarysValuesAndNames()
+        {
+            // The library names each value ("huber"); the C# enum member of
+            // that value has the same name, without the underscores.
+            void Agree<T>(string option) where T : struct, Enum
+            {
+                var choices = FlatlineOptions.Describe(option).Choices;
+                Assert.Equal(Enum.GetValues(typeof(T)).Length, choices.Count);
+                foreach (var pair in choices)
+                    Assert.Equal(pair.Key.Replace("_", ""), Enum.GetName(typeof(T), pair.Value), ignoreCase: true);
+            }
+            Agree<RobustMode>("robust");
+            Agree<FlatReference>("flat_reference");
+            Agree<EncoderMode>("source_encoder_mode");
+            Assert.Empty(FlatlineOptions.Describe("max_gap").Choices);
+            using var options = new FlatlineOptions
+            {
+                Robust = RobustMode.Tukey, FlatReference = FlatReference.Mean,
+                SourceEncoderMode = EncoderMode.Chunk,
+            };
+            Assert.Equal(2.0, options["robust"]);
+            Assert.Equal(1.0, options["flat_reference"]);
+            Assert.Equal(3.0, options["source_encoder_mode"]);
+        }
+
+        [Fact]
+        public void AnOptionOfAnotherComponentIsRefusedAndAnUnknownOneIsNotFound()
+        {
+            // One bag for two components: the flatness key would do nothing
+            // in the reconstructor, so the reconstructor refuses it.
+            using var mixed = new FlatlineOptions { LagKnots = 8, FlatReference = FlatReference.Mean };
+            var e = Assert.Throws<InvalidArgumentException>(() => new Reconstructor(2, mixed));
+            Assert.Contains("'flat_reference' belongs to flatness, not to the reconstructor", e.Message);
+            using var recon = new Reconstructor(2);
+            e = Assert.Throws<InvalidArgumentException>(() => recon.GetOption("sim_seed"));
+            Assert.Contains("'sim_seed' belongs to the simulator", e.Message);
+            // An unknown name is not found by every call alike.
+            Assert.Throws<NotFoundException>(() => mixed.Set("no_such_option", 1));
+            Assert.Throws<NotFoundException>(() => mixed.Get("no_such_option"));
+            Assert.Throws<NotFoundException>(() => FlatlineOptions.Describe("no_such_option"));
+            Assert.Throws<NotFoundException>(() => recon.GetOption("no_such_option"));
         }
 
         [Fact]

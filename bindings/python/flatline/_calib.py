@@ -17,7 +17,7 @@ import numpy as np
 from . import capi as _capi
 from ._arrays import as_float64, as_index, as_points, as_real
 from ._errors import StateError
-from ._options import make_options
+from ._options import OptionValue, make_options
 
 __all__ = [
     "LASERS",
@@ -486,7 +486,7 @@ class Calibration:
             self._live().set_homography_array(laser, matrix)
 
     def estimate_homography(self, laser: int, image_points: Any, plane_points: Any, *,
-                            ransac: bool = False, **options: float) -> HomographyFit:
+                            ransac: bool = False, **options: OptionValue) -> HomographyFit:
         """Estimates laser `laser`'s homography from correspondences and
         stores it (the intrinsics must be set: the image points are
         undistorted through them first). Normalised DLT, then

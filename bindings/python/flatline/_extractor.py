@@ -13,7 +13,7 @@ from . import capi as _capi
 from ._arrays import as_index, as_real
 from ._calib import LASERS, Calibration
 from ._errors import StateError
-from ._options import make_options, options_doc, prefixed_options
+from ._options import OptionValue, make_options, options_doc, prefixed_options
 from ._pixels import PixelFormat
 
 __all__ = ["ExtractedRow", "Extractor", "extractor_options"]
@@ -85,7 +85,7 @@ class Extractor:
     """
 
     def __init__(self, calib: Calibration, pixel_format: Union[PixelFormat, str, int, None] = None,
-                 **options: float) -> None:
+                 **options: OptionValue) -> None:
         fn = "Extractor"
         if not isinstance(calib, Calibration):
             raise TypeError(f"{fn}() argument 'calib' must be a Calibration, not "

@@ -16,7 +16,7 @@ from . import capi as _capi
 from ._arrays import as_float64, check_shape
 from ._calib import Calibration
 from ._errors import StateError
-from ._options import make_options, options_doc, prefixed_options
+from ._options import OptionValue, make_options, options_doc, prefixed_options
 
 __all__ = [
     "FIBER_NO_DATA",
@@ -221,7 +221,7 @@ class Flatness:
 {options}
     """
 
-    def __init__(self, fiber_x: Union[Any, Calibration], **options: float) -> None:
+    def __init__(self, fiber_x: Union[Any, Calibration], **options: OptionValue) -> None:
         fn = "Flatness"
         bag = make_options(fn, options, prefixes=("flat_",))
         self._lock = threading.Lock()
@@ -399,7 +399,7 @@ class Flatness:
 
 
 def i_units(z: Any, s: Any, fiber_x: Any = None, flags: Any = None,
-            **options: float) -> FlatnessResult:
+            **options: OptionValue) -> FlatnessResult:
     """Flatness of one whole sheet: a :class:`Flatness` over fiber_x
     evaluated once on all rows. Returns the :class:`FlatnessResult`; the
     per-fiber I-Units are ``result.fibers.i_units`` (K,), the zone profile

@@ -16,7 +16,7 @@ from ._arrays import as_float64, as_mask, as_real
 from ._calib import Calibration
 from ._errors import StateError
 from ._flatness import FiberResults, Shape, ShapeComponent
-from ._options import make_options, options_doc, prefixed_options
+from ._options import OptionValue, make_options, options_doc, prefixed_options
 from ._pixels import PixelFormat
 from ._source import Source
 
@@ -201,7 +201,7 @@ class Gauge:
     :meth:`sheets` to wait for them as they come; :meth:`flush` ends the
     strip (its last sheet) at the end of the input.
 
-        with flatline.Gauge(calib, rigid_motion=1, robust=1) as gauge:
+        with flatline.Gauge(calib, rigid_motion=True, robust="huber") as gauge:
             gauge.cut(3000.0)
             for frame in frames:
                 gauge.push_frame(frame.pixels, frame.encoder_mm)
@@ -221,7 +221,7 @@ class Gauge:
 {options}
     """
 
-    def __init__(self, calib: Calibration, **options: float) -> None:
+    def __init__(self, calib: Calibration, **options: OptionValue) -> None:
         fn = "Gauge"
         if not isinstance(calib, Calibration):
             raise TypeError(f"{fn}() argument 'calib' must be a Calibration, not "

@@ -11,8 +11,8 @@ import numpy as np
 from . import capi as _capi
 from ._arrays import as_float64, block, check_shape
 from ._calib import Calibration
-from ._errors import NotFoundError, StateError
-from ._options import make_options, option_info, options
+from ._errors import InvalidArgumentError, NotFoundError, StateError
+from ._options import OptionValue, make_options, option_info, options
 
 __all__ = [
     "FLAG_INVALID_INPUT",
@@ -41,13 +41,16 @@ def reconstructor_options() -> Dict[str, float]:
     for info in options().values():
         try:
             names[info.name] = _capi.flt_recon_get_option(probe, info.key)
-        except NotFoundError:  # read by another component
+        except InvalidArgumentError:  # another component's
             pass
     return names
 
 
+_NAMES = frozenset(reconstructor_options())
+
+
 def reconstruct(s: Any, height: Any, slope: Any, valid: Any = None,
-                **options: float) -> np.ndarray:
+                **options: OptionValue) -> np.ndarray:
     """Reconstructs one whole sheet: the least-squares Hermite spline of every
     fiber, fitted to all rows at once (no lag, no carry-over).
 
@@ -83,12 +86,12 @@ def reconstruct(s: Any, height: Any, slope: Any, valid: Any = None,
 
 
 def reconstruct_with_flags(s: Any, height: Any, slope: Any, valid: Any = None,
-                           **options: float) -> Tuple[np.ndarray, np.ndarray]:
+                           **options: OptionValue) -> Tuple[np.ndarray, np.ndarray]:
     """As :func:`reconstruct`, and also returns the (N, K) uint8 flags
     (FLAG_* bits) of every output value."""
     fn = "reconstruct"
     s, height, slope, mask, masked = block(fn, s, height, slope, valid)
-    bag = make_options(fn, options)
+    bag = make_options(fn, options, names=_NAMES)
     z = np.empty(height.shape, dtype=np.float64)
     flags = np.empty(height.shape, dtype=np.uint8)
     _capi.flt_py_reconstruct(bag, s, height, slope, mask, masked, z, flags)
@@ -124,10 +127,10 @@ class Reconstructor:
 {options}
     """
 
-    def __init__(self, fibers: Union[int, Calibration], **options: float) -> None:
+    def __init__(self, fibers: Union[int, Calibration], **options: OptionValue) -> None:
         fn = "Reconstructor"
         if isinstance(fibers, Calibration):
-            bag = make_options(fn, options)
+            bag = make_options(fn, options, names=_NAMES)
             with fibers._reading():
                 handle = _capi.flt_recon_create_from_calib(fibers._live(), bag)
         else:
@@ -138,7 +141,7 @@ class Reconstructor:
                 )
             if fibers < 1:
                 raise ValueError(f"{fn}() argument 'fibers' must be >= 1, got {fibers}")
-            bag = make_options(fn, options)
+            bag = make_options(fn, options, names=_NAMES)
             handle = _capi.flt_recon_create(int(fibers), bag)
         self._lock = threading.Lock()
         self._handle: Optional[_capi.flt_recon] = handle
@@ -193,8 +196,8 @@ class Reconstructor:
 
     def option(self, name: str) -> float:
         """The effective value of option `name` (knot_spacing resolved to mm).
-        NotFoundError (a KeyError) if the library has no such option or the
-        reconstructor does not read it."""
+        NotFoundError (a KeyError) if the library has no such option,
+        InvalidArgumentError (a ValueError) if it is another component's."""
         key = option_info(name).key
         with self._lock:
             return float(_capi.flt_recon_get_option(self._live(), key))

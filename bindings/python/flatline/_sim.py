@@ -14,7 +14,7 @@ from . import capi as _capi
 from ._arrays import as_float64, as_index, as_real
 from ._calib import Calibration
 from ._errors import StateError
-from ._options import make_options, options_doc, prefixed_options
+from ._options import OptionValue, make_options, options_doc, prefixed_options
 from ._pixels import PixelFormat
 
 __all__ = [
@@ -115,7 +115,7 @@ class SimulatedLine:
 {options}
     """
 
-    def __init__(self, calib: Optional[Calibration] = None, **options: float) -> None:
+    def __init__(self, calib: Optional[Calibration] = None, **options: OptionValue) -> None:
         fn = "SimulatedLine"
         if calib is None:
             calib = Calibration.reference()

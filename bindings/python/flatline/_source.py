@@ -17,7 +17,7 @@ from . import capi as _capi
 from ._arrays import as_index, as_real
 from ._errors import StateError
 from ._extractor import _format as _pixel_format_arg
-from ._options import make_options, options_doc, prefixed_options
+from ._options import OptionValue, make_options, options_doc, prefixed_options
 from ._pixels import PixelFormat
 from ._sim import SimulatedLine
 
@@ -385,10 +385,11 @@ class Source:
         return self
 
     @classmethod
-    def simulator(cls, sim: SimulatedLine, **options: float) -> "Source":
+    def simulator(cls, sim: SimulatedLine, **options: OptionValue) -> "Source":
         """Frames rendered by `sim` (kept alive by the source), with the
-        simulator's own encoder positions (source_encoder_mode 0), or the
-        fixed step (1) or host positions (2). Block ids count from 0."""
+        simulator's own encoder positions (source_encoder_mode "auto"), or
+        the fixed step ("fixed_step") or host positions ("host"). Block ids
+        count from 0."""
         fn = "Source.simulator"
         if not isinstance(sim, SimulatedLine):
             raise TypeError(f"{fn}() argument 'sim' must be a SimulatedLine, not "
@@ -402,7 +403,7 @@ class Source:
     @classmethod
     def images(cls, paths: Union[str, "os.PathLike[str]", Sequence[Any]],
                encoder_csv: Union[str, "os.PathLike[str]", None] = None,
-               step: Optional[float] = None, **options: float) -> "Source":
+               step: Optional[float] = None, **options: OptionValue) -> "Source":
         """A recorded image sequence (PNG, TIFF: single-channel 8 or 16 bits,
         all of one size).
 
@@ -413,7 +414,7 @@ class Source:
                 ("encoder_mm" or "file name,encoder_mm"); FormatError names
                 a bad line.
             step: without a CSV, the travel per image, mm (sets
-                source_encoder_mode = 1 and source_encoder_step; the first
+                source_encoder_mode = "fixed_step" and source_encoder_step; the first
                 image is at source_encoder_start).
             **options: source options (source_*), e.g. source_image_bits.
 
@@ -422,7 +423,7 @@ class Source:
         fn = "Source.images"
         if step is not None:
             options = dict(options)
-            options.setdefault("source_encoder_mode", 1)
+            options.setdefault("source_encoder_mode", "fixed_step")
             options["source_encoder_step"] = as_real(fn, "step", step)
         bag = make_options(fn, options, prefixes=("source_",))
         csv = None if encoder_csv is None else os.fsdecode(encoder_csv)
@@ -443,7 +444,7 @@ class Source:
 
     @classmethod
     def u3v(cls, serial: Optional[str] = None, bus: Optional[U3VSimBus] = None,
-            **options: float) -> "Source":
+            **options: OptionValue) -> "Source":
         """Opens a USB3 Vision camera: the one with serial number `serial`
         (None: the first), on the USB bus, or on the simulated `bus` (kept
         alive by the source). Reads the bootstrap registers and the GenICam
@@ -567,7 +568,7 @@ class Source:
             yield frame
 
     def set_encoder(self, encoder_mm: float) -> None:
-        """source_encoder_mode 2: the position the next frames carry, mm."""
+        """source_encoder_mode "host": the position the next frames carry, mm."""
         encoder_mm = as_real("set_encoder", "encoder_mm", encoder_mm)
         with self._locked():
             _capi.flt_source_set_encoder(self._live(), encoder_mm)

@@ -103,10 +103,13 @@ static void flt_py_raise_last(flt_status status) {
 %typemap(in, numinputs=0) flt_option *out (flt_option temp) { $1 = &temp; }
 %typemap(argout) flt_option *out { %append_output(PyLong_FromLong((long)*$1)); }
 
-%typemap(in, numinputs=0) const char **name (const char *temp = NULL) { $1 = ($1_ltype)&temp; }
-%typemap(argout) const char **name {
+%typemap(in, numinputs=0) const char **name (const char *temp = NULL),
+                          const char **name_out (const char *temp = NULL) { $1 = ($1_ltype)&temp; }
+%typemap(argout) const char **name, const char **name_out {
   %append_output(PyUnicode_FromString(*$1 ? *$1 : ""));
 }
+%typemap(in, numinputs=0) int *value_out (int temp = 0) { $1 = &temp; }
+%typemap(argout) int *value_out { %append_output(PyLong_FromLong((long)*$1)); }
 
 /* The option bag: a Python-owned handle, freed by its destructor. */
 %nodefaultctor flt_options;

@@ -144,6 +144,62 @@ def test_option_of_wrong_type_is_a_type_error():
         flatline.Reconstructor(1, lag_knots=True)
 
 
+def test_a_choice_takes_its_name_and_a_switch_takes_a_bool():
+    """robust="huber" is robust=1; robust=True the recommended mode (Huber,
+    the first after "none"); rigid_motion=True is 1. A name that is not a
+    choice is a ValueError listing them; a bool where neither makes sense is
+    still a TypeError."""
+    with flatline.Reconstructor(1, robust="tukey", rigid_motion=True) as recon:
+        assert recon.option("robust") == 2.0 and recon.option("rigid_motion") == 1.0
+    with flatline.Reconstructor(1, robust=True) as recon:
+        assert recon.option("robust") == float(capi.FLT_ROBUST_HUBER)
+    with flatline.Reconstructor(1, robust=False, rigid_motion=False) as recon:
+        assert recon.option("robust") == 0.0 and recon.option("rigid_motion") == 0.0
+    with flatline.Reconstructor(1, robust=1) as recon:  # numbers still work
+        assert recon.option("robust") == 1.0
+    with pytest.raises(ValueError, match="'robust' = 'hubert' is not one of 'none', 'huber', "
+                                         "'tukey'"):
+        flatline.Reconstructor(1, robust="hubert")
+    with pytest.raises(TypeError, match="'lag_knots' must be a real number, not str"):
+        flatline.Reconstructor(1, lag_knots="huber")
+    with pytest.raises(TypeError, match="'flat_reference' must be a real number or one of "
+                                        "'shortest', 'mean', not bool"):
+        flatline.Flatness([0.0, 1.0], flat_reference=True)
+    with flatline.Flatness([0.0, 10.0, 20.0], flat_reference="mean") as flat:
+        assert flat is not None
+    info = flatline.option_info("source_encoder_mode")
+    assert dict(info.choices) == {"auto": 0, "fixed_step": 1, "host": 2, "chunk": 3}
+    assert flatline.option_info("rigid_motion").is_switch
+    assert not flatline.option_info("max_gap").choices
+    assert "robust (str or int): one of 'none', 'huber', 'tukey'; default 'none'" in \
+        flatline.Reconstructor.__doc__
+    assert "rigid_motion (bool): default False" in flatline.Reconstructor.__doc__
+
+
+def test_an_option_of_another_component_is_an_unexpected_keyword():
+    """Python names it as it does any unexpected keyword; the C library
+    refuses it too (InvalidArgumentError), for a bag made by hand."""
+    with pytest.raises(TypeError, match="unexpected keyword argument 'sim_seed' "
+                                        r"\(an option of another component"):
+        flatline.Reconstructor(2, sim_seed=3)
+    with pytest.raises(TypeError, match="unexpected keyword argument 'robust'"):
+        flatline.Flatness([0.0, 1.0], robust="huber")
+    bag = capi.flt_options_create()
+    capi.flt_options_set(bag, capi.FLT_OPT_SIM_SEED, 3.0)
+    with pytest.raises(flatline.InvalidArgumentError,
+                       match="'sim_seed' belongs to the simulator, not to the reconstructor"):
+        capi.flt_recon_create(2, bag)
+    with flatline.Reconstructor(1) as recon, \
+            pytest.raises(flatline.InvalidArgumentError, match="belongs to the simulator"):
+        recon.option("sim_seed")
+    # An unknown key: NotFoundError from set, get and info alike.
+    for call in (lambda: capi.flt_options_set(bag, 99, 1.0),
+                 lambda: capi.flt_options_get(bag, 99),
+                 lambda: capi.flt_option_info(99)):
+        with pytest.raises(flatline.NotFoundError, match="unknown option key 99"):
+            call()
+
+
 def test_a_failed_call_leaves_the_reconstructor_usable():
     s, h, sl, _ = sine_sheet(fibers=2, length=900)
     with flatline.Reconstructor(2, lag_knots=4) as recon:

@@ -326,7 +326,7 @@ def test_simulated_camera_to_source_to_extractor_to_reconstruct_round_trip(calib
         bus.add_camera("Flatline", "Sensor", "SIM-1", 64, 32)
         bus.set_frames(0, sim)
         bus.set(0, "encoder_chunk", 1)
-        with flatline.Source.u3v(bus=bus, source_encoder_mode=3) as cam:
+        with flatline.Source.u3v(bus=bus, source_encoder_mode="chunk") as cam:
             cam.start()
             got = [cam.next() for _ in range(frames)]
     assert [g.encoder_mm for g in got] == [w.encoder_mm for w in want]
@@ -387,7 +387,7 @@ def test_host_encoder_positions_and_reprs(calib):
     # source_encoder_mode 2: each frame carries the position set last (NaN
     # before the first set_encoder); other modes refuse set_encoder.
     with flatline.SimulatedLine(calib) as sim, \
-            flatline.Source.simulator(sim, source_encoder_mode=2) as source:
+            flatline.Source.simulator(sim, source_encoder_mode="host") as source:
         source.start()
         assert np.isnan(source.next().encoder_mm)
         source.set_encoder(12.5)
