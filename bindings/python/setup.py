@@ -85,6 +85,10 @@ class CMakeBuild(build_ext):
         # follow a symlink anyway): wheels cannot hold symlinks.
         for library in built.glob("libflatline.so*"):
             shutil.copyfile(library, target.parent / library.name)
+        # The licence and the third-party notices travel with the binaries
+        # (the package holds libflatline.so, which NOTICE describes).
+        for notice in ("LICENSE", "NOTICE"):
+            shutil.copyfile(SOURCE_DIR / notice, target.parent / notice)
 
 
 setup(
