@@ -5,8 +5,8 @@
  * Frames: the reference sensor's full 2048 x 2048 Mono8 frame from the
  * simulator (centre buckle, default speckle and shot noise), two 128-row
  * bands (laser 1 rows 892..1019, laser 0 rows 1020..1147), 1001 fibers at
- * 2 mm. Goal (issue 4): >= 3300 frames/s, five times the 667 frames/s of
- * 120 m/min at 3 mm spacing.
+ * 2 mm. Goal: >= 3300 frames/s, five times the 667 frames/s of 120 m/min
+ * at 3 mm spacing.
  *
  * Usage: bench_extractor [seconds]   (default 3)
  */

@@ -2,12 +2,13 @@
 /*
  * Benchmark of the Hermite reconstructor on the reference's production sheet:
  * 6000 mm x 2300 mm at 3 mm x 2 mm, i.e. 2000 rows x 1150 fibers
- * (DESIGN.md, "Reference numbers": the reference needed 350 ms).
+ * (the reference article needed 350 ms for it).
  *
  * Prints, single-threaded:
  *   - batch: milliseconds per sheet with flt_reconstruct (median of runs),
  *     on the noise-free sheet, then every mode (plain, rigid_motion, robust)
- *     on the same sheet with issue 7's experiment 3 noise, with each mode's
+ *     on the same sheet with the noise of the article's third experiment
+ *     (vibration, eccentricity, peak noise, shear ringing), with each mode's
  *     largest error after removing one constant (a sanity check, not the
  *     accuracy study: examples/python/compare_filters.py is);
  *   - streaming: microseconds per pushed row, amortised over a long strip
@@ -64,7 +65,7 @@ static double normal(double sigma) {
 
 /* The shear station's ringing at material position x (mm): a damped sine
  * (50 mm envelope, decay 0.07/mm, period 10 mm) after every cut, a cut
- * every 3000 mm from 0 (issue 7's experiment 3). */
+ * every 3000 mm from 0 (the article's third experiment). */
 static double shear(double x) {
     const double pi = 3.14159265358979323846;
     if (x < 0)
@@ -200,8 +201,8 @@ int main(int argc, char **argv) {
 
     /* Streaming: a 5-sheet strip (30 m), one row per push, pulled as it goes,
      * end_sheet every 2000 rows. Row data is prepared up front. Default
-     * options on the noise-free strip (issue 2's goal), then rigid_motion +
-     * robust on the strip with experiment 3's noise. */
+     * options on the noise-free strip (goal: <= 10 us per row), then
+     * rigid_motion + robust on the strip with experiment 3's noise. */
     double *s_out = malloc(ROWS * sizeof(double));
     for (int mode = 0; mode < 2; ++mode) {
         flt_options *o = NULL;

@@ -2,9 +2,9 @@
 # SPDX-License-Identifier: Apache-2.0
 """Reruns the reference's three synthetic experiments and compares
 libflatline's Hermite reconstructor against the reference's four classic
-filters (issue 7).
+filters.
 
-The sheet (the seed article, section 7.1): 9000 mm along travel x 1500 mm
+The sheet (the reference article, section 7.1; citation in README.md): 9000 mm along travel x 1500 mm
 across, sampled every 3 mm of travel (3000 rows) and every 2 mm across (751
 fibers), with centre buckles and wavy edges:
     z(s, x) = 12 sin(2 pi s / 1800) cos(2 pi x / 1500),   x in [-750, 750] mm
@@ -12,7 +12,7 @@ Two laser lines Delta-d = 100 mm apart; per row (frame at s) and fiber the
 sensor gives
     height = (r_A + r_B) / 2,   slope = (r_B - r_A) / Delta-d
 from laser A's reading r_A of the strip at s - Delta-d/2 and laser B's r_B
-at s + Delta-d/2 (DESIGN.md; the operators flt_reconstruct fits).
+at s + Delta-d/2 (docs/sensor.md; the operators flt_reconstruct fits).
 
 Experiments (the reference's):
   1. no noise;
@@ -77,8 +77,8 @@ error): the absolute level of a bouncing strip cannot be observed beyond
 averaging, and flatness does not depend on it. With the mean removed, the
 standard deviation of the signed error equals the RMSE column.
 
-Targets (issue 7; model (b), flt robust and flt gauge, constant removed,
-every seed; the baseline factor for flt robust):
+Targets (model (b), flt robust and flt gauge, constant removed, every
+seed; the baseline factor for flt robust):
   experiment 3: MaxAE <= 0.30 mm and STD <= 0.06 mm, and every metric at
                 least 3x better than the best baseline's;
   experiment 2: MaxAE <= 0.25 mm and STD <= 0.05 mm;

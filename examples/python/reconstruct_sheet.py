@@ -3,7 +3,7 @@
 """Simulates the reference sheet with libflatline's simulated sensor,
 reconstructs it, and plots raw against reconstructed heights to PNG files.
 
-The sheet (DESIGN.md, after the seed article): centre buckles and wavy edges,
+The sheet (after the reference article, see README.md): centre buckles and wavy edges,
 sinusoidal along travel with period 1800 mm and 12 mm amplitude, 9000 mm
 long, measured every 3 mm of travel, fibers every 10 mm across 1500 mm. The
 sensor is the reference one (flatline.Calibration.reference(): two laser

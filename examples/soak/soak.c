@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 /*
- * Endurance run (issue 10; not a CI test): the simulated line streamed for
+ * Endurance run (not a CI test): the simulated line streamed for
  * the equivalent of one hour of production at 120 m/min, 2.4 million rows
  * 3 mm apart (7.2 km of strip), through the streaming
  * reconstructor with carry-over at every sheet end, checking that

@@ -371,7 +371,7 @@ typedef enum flt_option {
      * valid fibers. */
     FLT_OPT_FLAT_REFERENCE = 503,
     /* "flat_min_length": shortest window the metrics accept, mm: one
-     * flatness wave. Default 500 (the shortest defect waves, DESIGN.md). */
+     * flatness wave. Default 500 (the shortest defect waves). */
     FLT_OPT_FLAT_MIN_LENGTH = 504,
     /* "flat_min_coverage": the least share of a window a fiber's usable
      * rows must cover for the fiber to count, 0..1. Default 0.8. */

@@ -3,7 +3,7 @@
  * libflatline - the frame-to-profile extractor: camera frame -> one profile
  * row (height, slope and validity per fiber).
  *
- * What it does (DESIGN.md, "Frame -> profile")
+ * What it does (docs/sensor.md: what one frame measures)
  *   Per camera column u and per laser L, inside that laser's band of rows
  *   (its region of interest):
  *     1. finds the strongest valid peak: the brightest pixel of the column,

@@ -169,7 +169,7 @@ flt_sim_next_frame(flt_sim *sim, void *frame_out, size_t capacity_bytes, size_t 
 /* Back to frame 0: the following output repeats the first bytes exactly. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_rewind(flt_sim *sim);
 
-/* The reference sensor (DESIGN.md, "The sensor") as a finished calibration,
+/* The reference sensor (docs/sensor.md) as a finished calibration,
  * for the simulator, tests and demos: a 2048 x 2048 camera, f = 6 mm lens,
  * 5.5 um pixels (fx = fy = 1090.9 px), principal point (1030.25, 1019.75),
  * the barrel distortion of a 6 mm lens (k1 = -0.08, k2 = 0.012, p1 = 1.5e-4,

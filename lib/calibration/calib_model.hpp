@@ -3,8 +3,9 @@
 // the C entry points (calib.cpp) and the file reader (calib_io.cpp) share.
 //
 // Plain arrays, not Eigen members: the model is copied by value when a file
-// is loaded and must not depend on alignment (see STYLE.md on
-// EIGEN_MAX_ALIGN_BYTES).
+// is loaded and must not depend on alignment (fixed-size Eigen members
+// align to EIGEN_MAX_ALIGN_BYTES, which may differ between translation units
+// built with different instruction sets, and a mismatch corrupts the heap).
 #pragma once
 
 #include <cstddef>

@@ -2,7 +2,7 @@
 // Internal: the streaming Hermite reconstruction engine behind flt_recon and
 // flt_reconstruct().
 //
-// The math (DESIGN.md, "Hermite reconstruction"):
+// The math (docs/reconstruction.md has it in full):
 //   Per fiber, unknowns are (z_j, m_j = L*z'_j) at knots t_j = t0 + j*L, all in
 //   mm so the normal matrix is well scaled. A row at s measures, per fiber,
 //     height: (z(s-D/2) + z(s+D/2))/2          weight 1/height_sigma^2

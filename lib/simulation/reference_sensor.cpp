@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-// flt_calib_create_reference(): the reference sensor of DESIGN.md as a
+// flt_calib_create_reference(): the reference sensor (docs/sensor.md) as a
 // finished calibration, built through the public calibration API only.
 #include <cmath>
 

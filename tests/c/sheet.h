@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 /*
  * Test helper: the reference's synthetic sheet and a two-laser measurement
- * of it (DESIGN.md, "Reference numbers").
+ * of it (the reference article's synthetic sheet, docs/README.md).
  *
  * Surface: z(x, s) = A sin(2 pi s / P_s) cos(2 pi x / P_x), x centred on the
  * strip, so the centre fibers buckle while the edges wave in opposite phase:
@@ -39,7 +39,8 @@ test_sheet *test_sheet_make(size_t rows, size_t fibers, double s0, double dx, do
  * difference over Delta-d. */
 void test_sheet_add_noise(test_sheet *sheet, double vib_sigma, double peak_sigma, unsigned seed);
 
-/* The reference's hard case, as physics has it (issue 7's model b): after
+/* The reference's hard case, as physics has it ("model b" of
+ * examples/python/compare_filters.py): after
  * every cut (at multiples of `interval` mm of material) the strip rings with
  * a damped sine, amplitude * exp(-decay * u) * sin(2 pi u / period) at u mm
  * past the cut. It travels with the material, so each laser reads it at its

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 /*
- * The bad-input matrix (issue 10): every exported function of libflatline
+ * The bad-input matrix: every exported function of libflatline
  * against the inputs a careless or hostile caller gives it.
  *
  * The table at the bottom has one row per public function. Each row's

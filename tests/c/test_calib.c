@@ -128,8 +128,8 @@ static void field_error(const flt_calib *calib, unsigned laser, double *rms, dou
 /* ------------------------------------------------------------------ tests */
 
 /* Noise-free correspondences: the true image->plane map of a pinhole camera
- * is exactly a homography, so only rounding remains. 1e-6 mm is the issue's
- * bound; double rounding through Newton undistortion (1e-10 px) and the
+ * is exactly a homography, so only rounding remains. 1e-6 mm is the
+ * goal; double rounding through Newton undistortion (1e-10 px) and the
  * fit is ~1e-9 mm. */
 static void homography_noise_free_is_exact(void **state) {
     (void)state;

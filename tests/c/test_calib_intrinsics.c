@@ -203,7 +203,7 @@ static int render_asymmetric_circles(const double *ray_map, const double p[6], u
 }
 
 /* Circle grids, symmetric and asymmetric, through the same poses: every
- * view found, focal length within 0.5 % (the issue's bound) and the
+ * view found, focal length within 0.5 % (the goal) and the
  * undistortion within the chessboard's 1.5 px. Blob centroids average
  * hundreds of pixels, so they are far less noisy than chessboard corners
  * (measured RMS 0.006 px, focal 0.016 %); the RMS bound, 0.05 px, leaves

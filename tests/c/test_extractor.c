@@ -76,7 +76,7 @@ static double sheet_at(const flt_sim *sim, double x, double s) {
  * row), line sigma 1.5, 2 and 3 px with a Savitzky-Golay window of about 5
  * sigma (9, 11, 15 rows), the default speckle (contrast 0.05 per pixel),
  * shot noise of a 10000 e- well, 8-bit: RMS error of the peak rows <= 1/16 px
- * (the issue's bound; the reference's typical error). 4 frames x 2 lasers x
+ * (the goal; the reference's typical error). 4 frames x 2 lasers x
  * 2048 columns per sigma: the RMS estimate is good to 1 %. */
 static void peak_rows_within_a_sixteenth_of_a_pixel(void **state) {
     (void)state;
@@ -127,7 +127,7 @@ static void peak_rows_within_a_sixteenth_of_a_pixel(void **state) {
 
 /* Height accuracy with noise-free motion: each laser's z on the fiber grid
  * against the sheet at that laser's material position, 2 sigma <= 0.1 mm
- * (the issue's bound; the reference reached 0.25 mm, industry asks 0.35),
+ * (the goal; the reference reached 0.25 mm, industry asks 0.35),
  * and >= 99.5 % of fibers valid on a clean sheet. Also the row operators:
  * height and slope equal the combination of the two lasers' z. */
 static void heights_within_0_1_mm_two_sigma(void **state) {
@@ -235,7 +235,7 @@ static void mono12_frames_give_the_same_accuracy(void **state) {
  * of fibers off by more than 1 mm. Run with the default line (sigma 2 px,
  * Savitzky-Golay window 11) and with the widest line of the peak test
  * (sigma 3 px, window 15), where the window reaches furthest into a
- * reflection beside the line. Harsher than the issue: no kept column peak
+ * reflection beside the line. Harsher than the goal: no kept column peak
  * may be off by more than 1 px (2.1 mm of z on the reference sensor), so a
  * wrong peak cannot hide in a fiber whose neighbours were rejected. And it
  * still measures: < 10 % of fibers rejected (measured 7.7 % and 8.7 %). */
@@ -301,7 +301,7 @@ static void spurious_reflections_are_rejected_not_measured(void **state) {
  * 1500 mm across) with the reference noise: rigid heave 2.5 mm per frame,
  * roll eccentricity 0.5 mm at 50 mm, 1/16 px peak noise per laser, frames
  * every 3 mm -> extractor -> flt_reconstruct with default options: max error
- * <= 0.5 mm (the issue's bound). The sheet is 5400 mm (3 periods) rather than
+ * <= 0.5 mm (the goal). The sheet is 5400 mm (3 periods) rather than
  * the reference 9000 mm and the fibers 10 mm apart: each fiber is
  * reconstructed from its own samples (plus the frame's rigid line), so
  * neither shortcut changes the physics, and they keep the run to seconds. */

@@ -5,8 +5,9 @@
  * classified, 5 seeds per class; and zone profiles from streamed windows
  * against whole-sheet evaluation of the same material.
  *
- * Reference noise (DESIGN.md): 2.5 mm rigid heave per frame, 0.5 mm roll
- * eccentricity at 50 mm, 1/16 px peak-detection noise per laser.
+ * Reference noise (the reference article's second experiment): 2.5 mm
+ * rigid heave per frame, 0.5 mm roll eccentricity at 50 mm, 1/16 px
+ * peak-detection noise per laser.
  *
  * Reconstruction: flt_reconstruct with rigid_motion = 1. The heave moves
  * every fiber of a frame together; rigid_motion models exactly that and

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-/* The streaming Hermite reconstructor against ground truth (issue 2).
+/* The streaming Hermite reconstructor against ground truth.
  *
  * The reference sheet (tests/c/sheet.h): 12 mm centre buckle + wavy edges,
  * periods 1800 mm along and 1500 mm across, 9000 mm long at dx = 3 mm,
@@ -101,7 +101,7 @@ static void noise_free_reference_sheet_within_1um(void **state) {
     test_error(t, z, 0, t->rows, &mx, &rms);
     print_message("batch, noise-free reference sheet: max %.3g um, rms %.3g um\n", mx * 1e3,
                   rms * 1e3);
-    /* Issue 2: <= 1 um (the reference reached 0.64 um with ideal point data). */
+    /* Goal: <= 1 um (the reference reached 0.64 um with ideal point data). */
     assert_true(mx <= 1e-3);
     for (size_t i = 0; i < t->rows * t->fibers; ++i)
         assert_int_equal(flags[i], 0);
@@ -159,7 +159,7 @@ static void streaming_equals_batch_noise_free(void **state) {
     assert_int_equal(pulled, t->rows);
     double d = max_abs_diff(zs, zb, N);
     print_message("noise-free: streaming vs batch max difference %.3g um\n", d * 1e3);
-    assert_true(d <= 1e-3); /* issue 2: within 1 um */
+    assert_true(d <= 1e-3); /* goal: within 1 um */
     flt_recon_destroy(rc);
     free(zb);
     free(zs);
@@ -187,7 +187,7 @@ static void streaming_rms_within_5pct_of_batch_noisy(void **state) {
         test_error(t, zs, 0, t->rows, &mxs, &rmss);
         print_message("noisy seed %u: batch rms %.4f mm, streaming rms %.4f mm (ratio %.3f)\n",
                       seed, rmsb, rmss, rmss / rmsb);
-        assert_true(rmss <= 1.05 * rmsb); /* issue 2: within 5% */
+        assert_true(rmss <= 1.05 * rmsb); /* goal: within 5% */
         /* And the batch itself beats the reference's 0.12 mm sigma. */
         assert_true(rmsb < 0.12);
         flt_recon_destroy(rc);
@@ -1010,7 +1010,8 @@ static double *reconstruct_modes(const test_sheet *t, int rigid, int robust) {
 
 static void robust_mode_removes_shear_transients(void **state) {
     (void)state;
-    /* Issue 7's experiment 3 in its physical form (model b): the reference
+    /* The article's third experiment in its physical form (model b of
+     * examples/python/compare_filters.py): the reference
      * sheet, 2.5 mm rigid heave per frame, 0.5 mm eccentricity at 50 mm,
      * 1/16 px peak noise, and the shear station's ringing (50 mm envelope,
      * decay 0.07/mm, 10 mm period) after a cut every 3000 mm. No noise
@@ -1036,7 +1037,7 @@ static void robust_mode_removes_shear_transients(void **state) {
         if (seed == 1) {
             /* Streamed row by row, pulled as rows finish: the
              * intermediate stages see 8 knots ahead where the batch passes
-             * see the whole sheet, so the bounds are the issue's targets
+             * see the whole sheet, so the bounds are the targets
              * themselves (measured 0.13 mm, 0.02 mm with 751 fibers). */
             flt_options *o = NULL;
             assert_int_equal(flt_options_create(&o), FLT_OK);

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 /*
- * Threads (issue 10): N threads, each with its own simulator, extractor and
+ * Threads: N threads, each with its own simulator, extractor and
  * reconstructor, all made from ONE finished calibration that they share
  * (calib.h: a finished flt_calib is immutable and may be used from any
  * number of threads at once). Each thread renders the simulated frames,

@@ -243,7 +243,7 @@ namespace Flatline
         }
 
         /// <summary>
-        /// The reference sensor of DESIGN.md as a finished model
+        /// The reference sensor (docs/sensor.md) as a finished model
         /// (flt_calib_create_reference in flatline/sim.h): 2048 x 2048 camera,
         /// fx = fy = 1090.9 px, lasers at offsets -50 and +50 mm, encoder
         /// 0.01 mm per count. <paramref name="firstRow"/>, <paramref name="rows"/>:

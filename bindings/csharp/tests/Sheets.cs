@@ -52,7 +52,7 @@ namespace Flatline.Tests
             return sheet;
         }
 
-        /// <summary>The accuracy sine of the issue: z = 12 sin(2 pi s / 1800) mm.</summary>
+        /// <summary>The accuracy sine of the reference article: z = 12 sin(2 pi s / 1800) mm.</summary>
         public static double Sine(double s, int fiber) => 12.0 * Math.Sin(2 * Math.PI * s / 1800.0);
 
         /// <summary>Different fibers, different shapes: a transposed or

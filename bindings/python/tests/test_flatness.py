@@ -28,7 +28,7 @@ def test_sine_i_units_waves_and_steepness_match_the_analytic_values():
     # I-Units are its own sine's 2.467 (H/P)^2 1e5 (pi^2/4 = 2.4674). The
     # small-H/P formula drops the next term (-3/16 (pi H/P)^2 relative,
     # <= 1.9e-4 here) and the chords over 3 mm rows add their own; measured
-    # -0.05 to -0.07%: 1% is the bound with a wide margin.
+    # -0.05 to -0.07%: 1% is the accuracy goal with a wide margin.
     amplitudes = [0.0, 5.0, 10.0, 15.0, 8.0, 12.0]
     periods = [1000.0, 1000.0, 1000.0, 1500.0, 2000.0, 1200.0]
     s, z = sine_fibers(amplitudes, periods)

@@ -14,7 +14,7 @@ def test_noise_free_sine_is_reconstructed_within_a_micrometre():
     # The reference sheet along travel: z = 12 sin(2 pi s / 1800), 9000 mm
     # at 3 mm, two lasers 100 mm apart. A cubic Hermite spline with 100 mm
     # knots represents this sine to ~(pi L / P)^4 / 384 * A ~ 0.3 um, so
-    # 1e-3 mm is the bound the issue sets with margin.
+    # 1e-3 mm is the accuracy goal (1 um) with margin.
     s, h, sl, z_true = sine_sheet(fibers=4)
     z = flatline.reconstruct(s, h, sl)
     assert z.shape == h.shape and z.dtype == np.float64

@@ -22,7 +22,7 @@ def small_calib():
 
 
 def reference_sheet(sim):
-    """The seed article's sheet: centre buckles and wavy edges, sinusoidal
+    """The reference article's sheet: centre buckles and wavy edges, sinusoidal
     along travel with period 1800 mm, 12 mm amplitude."""
     sim.add_defect("centre_buckle", 12.0, 1800.0)
     sim.add_defect(flatline.Defect.WAVY_EDGE_BOTH, 12.0, 1800.0)

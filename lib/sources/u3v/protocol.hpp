@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // Internal: USB3 Vision wire format (GenCP over USB, bootstrap registers,
-// stream leader and trailer). Values from the U3V standard as documented in
-// ../shared/U3V.md; all multi-byte fields are little-endian on the wire.
+// stream leader and trailer). Values from the U3V standard, summarised in
+// docs/usb3vision.md; all multi-byte fields are little-endian on the wire.
 #pragma once
 
 #include <cstddef>
