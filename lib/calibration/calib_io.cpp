@@ -97,7 +97,7 @@ class parser {
         }
     }
 
-    [[noreturn]] void truncated(const std::string &path) {
+    [[noreturn]] void truncated(const std::string &path) const {
         format_error("the file ends early (truncated?) inside '" + path + "' at line " +
                      std::to_string(line_));
     }
@@ -140,7 +140,12 @@ class parser {
                 if (*p_ != ':')
                     unexpected(path, "':' after a field name");
                 ++p_;
-                const std::string child = path == "(top level)" ? key : path + "." + key;
+                std::string child;
+                if (path != "(top level)") {
+                    child = path;
+                    child += '.';
+                }
+                child += key;
                 node value = parse_value(child, depth + 1);
                 n.members.emplace_back(std::move(key), std::move(value));
                 skip_space();

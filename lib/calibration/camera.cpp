@@ -68,9 +68,9 @@ void undistort_pixel(const camera_model &cam, double u, double v, double *u_out,
         const double dy = (-e.j10 * rx + e.j00 * ry) / det;
         // Damped step: halve until the residual shrinks, so a strongly
         // distorted corner cannot throw the iteration onto another branch.
-        double step = 1.0;
         bool improved = false;
-        for (int half = 0; half < 30; ++half, step *= 0.5) {
+        for (int half = 0; half < 30; ++half) {
+            const double step = std::ldexp(1.0, -half);  // 1, 1/2, 1/4, ... exactly
             const double xn = x - step * dx, yn = y - step * dy;
             const distortion_eval en = distort_normalised(cam.distortion, xn, yn);
             const double rxn = en.xd - xd, ryn = en.yd - yd;

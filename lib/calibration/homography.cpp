@@ -55,11 +55,11 @@ Eigen::Vector2d project(const mat3 &g, double a, double b) {
 // Normalised points, row i = (a, b).
 Eigen::MatrixX2d transform_points(const mat3 &t, std::size_t n, const double *pts,
                                   const std::size_t *index) {
-    Eigen::MatrixX2d out(n, 2);
+    Eigen::MatrixX2d out(Eigen::Index(n), 2);
     for (std::size_t i = 0; i < n; ++i) {
         const std::size_t k = index ? index[i] : i;
-        out(i, 0) = t(0, 0) * pts[2 * k] + t(0, 2);
-        out(i, 1) = t(1, 1) * pts[2 * k + 1] + t(1, 2);
+        out(Eigen::Index(i), 0) = t(0, 0) * pts[2 * k] + t(0, 2);
+        out(Eigen::Index(i), 1) = t(1, 1) * pts[2 * k + 1] + t(1, 2);
     }
     return out;
 }
@@ -82,7 +82,7 @@ bool dlt(const Eigen::MatrixX2d &plane, const Eigen::MatrixX2d &image, mat3 *g_o
         a.row(8).setZero();
     }
     Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeFullV);
-    const Eigen::VectorXd sv = svd.singularValues();
+    const Eigen::VectorXd &sv = svd.singularValues();
     // The 8th singular value is what separates the solution from a family.
     if (!(sv(7) > 1e-10 * sv(0)))
         return false;
@@ -95,7 +95,7 @@ bool dlt(const Eigen::MatrixX2d &plane, const Eigen::MatrixX2d &image, mat3 *g_o
 
 double rcond(const mat3 &m) {
     Eigen::JacobiSVD<mat3> svd(m);
-    const Eigen::Vector3d sv = svd.singularValues();
+    const Eigen::Vector3d &sv = svd.singularValues();
     return sv(0) > 0 ? sv(2) / sv(0) : 0.0;
 }
 

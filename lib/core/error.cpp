@@ -15,6 +15,7 @@ struct thread_error {
 thread_local thread_error t_error;
 }  // namespace
 
+// NOLINTNEXTLINE(cert-dcl50-cpp): printf-style on purpose, the format attribute checks it
 flt_status fail(flt_status status, const char *format, ...) {
     va_list args;
     va_start(args, format);

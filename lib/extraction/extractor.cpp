@@ -67,7 +67,7 @@ flt_calib *copy_calib(const flt_calib *calib) {
     if (st != FLT_OK && st != FLT_ERR_BUFFER_FULL)
         check(st);
     std::string text(length + 1, '\0');
-    check(flt_calib_save_text(calib, &text[0], text.size(), &length));
+    check(flt_calib_save_text(calib, text.data(), text.size(), &length));
     flt_calib *copy = nullptr;
     check(flt_calib_load_text(text.data(), length, &copy));
     clear_error();  // the size query above left a BUFFER_FULL message
@@ -144,8 +144,10 @@ std::vector<float> sg_derivative_taps(int half, int order) {
     for (int j = -half; j <= half; ++j) {
         const double t = double(j) / half;  // scaled for conditioning
         double p = 1;
-        for (int k = 0; k <= order; ++k, p *= t)
+        for (int k = 0; k <= order; ++k) {
             a(j + half, k) = p;
+            p *= t;
+        }
     }
     const Eigen::MatrixXd pinv = (a.transpose() * a).ldlt().solve(a.transpose());
     std::vector<float> taps(n);
@@ -176,8 +178,10 @@ void flt_extractor::build_maps() {
     for (int i = 0; i < k_map_nodes; ++i) {
         node_t[i] = std::cos(M_PI * (i + 0.5) / k_map_nodes);
         double p = 1;
-        for (int k = 0; k < k_map_terms; ++k, p *= node_t[i])
+        for (int k = 0; k < k_map_terms; ++k) {
             vander(i, k) = p;
+            p *= node_t[i];
+        }
     }
     const Eigen::Matrix<double, k_map_terms, k_map_nodes> map_fit =
         (vander.transpose() * vander).ldlt().solve(vander.transpose());
@@ -196,7 +200,7 @@ void flt_extractor::build_maps() {
             bool finite = true;
             Eigen::Matrix<double, k_map_nodes, 1> xs, zs;
             for (int i = 0; i < k_map_nodes; ++i) {
-                xs(i) = col[2 * i], zs(i) = col[2 * i + 1];
+                xs(i) = col[2 * std::ptrdiff_t(i)], zs(i) = col[2 * std::ptrdiff_t(i) + 1];
                 finite = finite && std::isfinite(xs(i)) && std::isfinite(zs(i));
             }
             double *cx = &poly[laser][(std::size_t(u) * 2 + 0) * k_map_terms];
@@ -359,12 +363,12 @@ void flt_extractor::reject_misshapen(double *rows) {
     // values[0, end) partially sorted so that the q-quantile of the first n
     // is in place (end = n, or the place of a larger quantile found before).
     auto quantile = [&](std::size_t n, double q, std::size_t end) {
-        const std::size_t i = std::size_t(q * double(n - 1) + 0.5);
+        const auto i = std::size_t(std::lround(q * double(n - 1)));
         std::nth_element(values, values + i, values + end);
         return values[i];
     };
     auto quantile_place = [](std::size_t n, double q) {
-        return std::size_t(q * double(n - 1) + 0.5);
+        return std::size_t(std::lround(q * double(n - 1)));
     };
     // Per block: quartiles of width and area, median |skew|.
     double *scatter = block_scatter.data();  // [3 * blocks]: width, area, skew

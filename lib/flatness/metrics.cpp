@@ -364,9 +364,10 @@ void flatness_engine::evaluate(std::size_t rows, const double *s, const double *
             out.flags |= FLT_WINDOW_NO_BOW;
         } else {
             const std::size_t take = std::max<std::size_t>(1, n / 4);
-            std::nth_element(
-                order_.begin(), order_.begin() + (take - 1), order_.begin() + n,
-                [&](std::size_t a, std::size_t b) { return out.i_units[a] < out.i_units[b]; });
+            std::nth_element(order_.begin(), order_.begin() + std::ptrdiff_t(take - 1),
+                             order_.begin() + std::ptrdiff_t(n), [&](std::size_t a, std::size_t b) {
+                                 return out.i_units[a] < out.i_units[b];
+                             });
             double sum = 0.0;
             for (std::size_t i = 0; i < take; ++i)
                 sum += bow_coef_[order_[i]];

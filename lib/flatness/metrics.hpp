@@ -35,7 +35,7 @@ struct fiber_layout {
     std::vector<std::size_t> zone_of;     // [fibers]
     std::vector<std::size_t> zone_count;  // [zones]
 
-    void build(const double *fiber_x, std::size_t fibers, double zone_width);
+    void build(const double *fiber_x, std::size_t fibers, double width_of_zone);
     std::size_t fibers() const { return x.size(); }
     std::size_t zones() const { return zone_left.size(); }
 };

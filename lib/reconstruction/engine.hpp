@@ -152,7 +152,7 @@ class recon_engine {
     // flags, gaps and emission. hok(k) / gok(k): fiber k's height / slope
     // sample is valid (asked only when nbad > 0).
     template <class HeightOk, class SlopeOk>
-    void finish_row(double s, std::size_t nbad, HeightOk hok, SlopeOk gok);
+    void finish_row(double s, std::size_t nbad, HeightOk h_ok, SlopeOk g_ok);
 
     // ---- window management ----
     void start_window(long first_knot);  // empty window at first_knot
@@ -168,7 +168,7 @@ class recon_engine {
     long emit_group() const { return p_.emit_group(); }
     void emit_upto(long last);  // solve and emit knots <= last
     void finish_rows();         // evaluate rows now determined
-    void mark_gap(std::size_t fiber, double from);
+    void mark_gap(std::size_t k, double from);
     double *hist_at(long j);  // state (z, m) of knot j, [2][K]
     const double *hist_at(long j) const;
 
@@ -176,7 +176,6 @@ class recon_engine {
     std::size_t tri(int r, int c) const {
         return std::size_t(r) * n_ - std::size_t(r) * (r - 1) / 2 + std::size_t(c - r);
     }
-    double *fiber_entry(std::vector<double> &v, std::size_t entry) { return v.data() + entry * K_; }
 
     // ---- sizes ----
     std::size_t K_;

@@ -294,8 +294,8 @@ void recon_pipeline::batch(std::size_t rows, const double *s, const double *heig
             const double *h, *g;
             const std::uint8_t *v;
             std::size_t K;
-            void row(int, std::size_t r, const double **ho, const double **go,
-                     const std::uint8_t **vo, double *) override {
+            void row(int /*pass*/, std::size_t r, const double **ho, const double **go,
+                     const std::uint8_t **vo, double * /*line*/) override {
                 *ho = h + r * K;
                 *go = g + r * K;
                 *vo = v ? v + r * K : nullptr;
@@ -362,8 +362,8 @@ void recon_pipeline::batch(std::size_t rows, const double *s, const double *heig
 
     struct line_rows final : row_source {
         const double *h, *g;
-        void row(int, std::size_t r, const double **ho, const double **go, const std::uint8_t **vo,
-                 double *) override {
+        void row(int /*pass*/, std::size_t r, const double **ho, const double **go,
+                 const std::uint8_t **vo, double * /*line*/) override {
             *ho = h + r;  // one fiber; NaN where the line is unseen
             *go = g + r;
             *vo = nullptr;

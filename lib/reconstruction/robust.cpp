@@ -79,38 +79,38 @@ constexpr double k_gross = 4.0;
 // The residual and the scale's sums, common to both estimators. Compiled
 // per case (masked, with a line, heights or slopes) so that the loop keeps
 // only what it needs in registers.
-#define FLT_WEIGH_RESIDUAL(masked, lined, slopes)                         \
-  double v = value[k];                                                    \
-  if (lined)                                                              \
-    v -= a + b * (double(std::int32_t(k)) - centre); /* vectorises */     \
-  const bool fin = std::fabs(value[k]) <= big;                            \
-  double ok = fin ? 1.0 : 0.0;                                            \
-  if (masked)                                                             \
-    ok *= valid[k] != 0 ? 1.0 : 0.0;                                      \
-  const double r = (fin ? (slopes ? scale * v : v) - pred[k] : 0.0) * ok; \
-  const double ar = std::fabs(r), sg = sigma[k], clip = k_clip * sg;      \
-  sum[k] += ar < clip ? ar : clip;                                        \
+#define FLT_WEIGH_RESIDUAL(masked, lined, slopes)                           \
+  double v = value[k];                                                      \
+  if (lined)                                                                \
+    v -= a + b * (double(std::int32_t(k)) - centre); /* vectorises */       \
+  const bool fin = std::fabs(value[k]) <= big;                              \
+  double ok = fin ? 1.0 : 0.0;                                              \
+  if (masked)                                                               \
+    ok *= valid[k] != 0 ? 1.0 : 0.0;                                        \
+  const double r = (fin ? ((slopes) ? scale * v : v) - pred[k] : 0.0) * ok; \
+  const double ar = std::fabs(r), sg = sigma[k], clip = k_clip * sg;        \
+  sum[k] += ar < clip ? ar : clip;                                          \
   count[k] += ok;
 
 // Huber: a pseudo-observation with psi(r) = r clipped at k_huber * sigma;
 // beyond k_gross * sigma the raw value with weight k_huber * sigma / |r|.
-#define FLT_WEIGH_HUBER_BODY(masked, lined, slopes)                             \
-  const double big = k_max_sample;                                              \
-  std::uint64_t bits = 0; /* OR of the multipliers: the sign bit says -1 */     \
-  for (std::size_t k = 0; k < K; ++k) {                                         \
-    FLT_WEIGH_RESIDUAL(masked, lined, slopes)                                   \
-    const double c = k_huber * sg, upper = r > c ? c : r;                       \
-    const double psi = upper < -c ? -c : upper;                                 \
-    const double gross = ar > k_gross * sg ? 1.0 : 0.0;                         \
-    const double pseudo = slopes ? (pred[k] + psi) * inv_scale : pred[k] + psi; \
-    out[k] = ok * (1.0 - gross) != 0.0 ? pseudo : v;                            \
-    const double m = ok * (gross != 0.0 ? -1.0 : 1.0); /* ok = 0: +0 */         \
-    mult[k] = m;                                                                \
-    std::uint64_t u;                                                            \
-    std::memcpy(&u, &m, sizeof u);                                              \
-    bits |= u;                                                                  \
-  }                                                                             \
-  (void)inv_var;                                                                \
+#define FLT_WEIGH_HUBER_BODY(masked, lined, slopes)                               \
+  const double big = k_max_sample;                                                \
+  std::uint64_t bits = 0; /* OR of the multipliers: the sign bit says -1 */       \
+  for (std::size_t k = 0; k < K; ++k) {                                           \
+    FLT_WEIGH_RESIDUAL(masked, lined, slopes)                                     \
+    const double c = k_huber * sg, upper = r > c ? c : r;                         \
+    const double psi = upper < -c ? -c : upper;                                   \
+    const double gross = ar > k_gross * sg ? 1.0 : 0.0;                           \
+    const double pseudo = (slopes) ? (pred[k] + psi) * inv_scale : pred[k] + psi; \
+    out[k] = ok * (1.0 - gross) != 0.0 ? pseudo : v;                              \
+    const double m = ok * (gross != 0.0 ? -1.0 : 1.0); /* ok = 0: +0 */           \
+    mult[k] = m;                                                                  \
+    std::uint64_t u;                                                              \
+    std::memcpy(&u, &m, sizeof u);                                                \
+    bits |= u;                                                                    \
+  }                                                                               \
+  (void)inv_var;                                                                  \
   return (bits >> 63) != 0;
 
 // Tukey: the raw value with weight (1 - u^2)^2, u = r / (k_tukey sigma),
@@ -272,10 +272,9 @@ bool robust_scale::end_row() {
         // few valid samples) take the general path.
         if (filled_ < 9) {
             const std::size_t below = 4 - filled_ / 2;
+            const double inf = std::numeric_limits<double>::infinity();
             for (std::size_t b = filled_; b < 9; ++b)
-                std::fill_n(estimates_.data() + b * K_, K_,
-                            b < filled_ + below ? -std::numeric_limits<double>::infinity()
-                                                : std::numeric_limits<double>::infinity());
+                std::fill_n(estimates_.data() + b * K_, K_, b < filled_ + below ? -inf : inf);
         }
         median9(K_, estimates_.data(), k_min_sigma_fraction * initial_, sigma_.data(),
                 incomplete_.data());

@@ -156,7 +156,7 @@ class recon_chain {
     // out_h_, out_g_ (pseudo-observations or raw values) and mult_h_,
     // mult_g_ (weight multipliers); see robust.cpp.
     // line: as row_source gives it, or nullptr for none.
-    void reweigh(std::size_t scale, recon_engine &next, const double *height, const double *slope,
+    void reweigh(std::size_t scale, recon_engine &next, const double *h, const double *g,
                  const std::uint8_t *valid, const double *line);
 
     std::size_t K_;

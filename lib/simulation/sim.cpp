@@ -86,7 +86,7 @@ flt_calib *copy_calib(const flt_calib *calib) {
     if (st != FLT_OK && st != FLT_ERR_BUFFER_FULL)
         check(st);
     std::string text(length + 1, '\0');
-    check(flt_calib_save_text(calib, &text[0], text.size(), &length));
+    check(flt_calib_save_text(calib, text.data(), text.size(), &length));
     flt_calib *copy = nullptr;
     check(flt_calib_load_text(text.data(), length, &copy));
     clear_error();  // the size query above left a BUFFER_FULL message
@@ -193,7 +193,7 @@ struct flt_sim {
             return 0;
         double z = 0;
         double cut = std::floor(s / p.shear_interval) * p.shear_interval;
-        for (int k = 0; k < 16; ++k, cut -= p.shear_interval) {
+        for (int k = 0; k < 16; ++k) {
             const double d = s - cut;
             if (d * p.shear_decay > 30)
                 break;
@@ -201,6 +201,7 @@ struct flt_sim {
                  std::sin(2 * k_pi * d / p.shear_period);
             if (p.shear_decay <= 0)
                 break;  // undamped: only the latest cut
+            cut -= p.shear_interval;
         }
         return z;
     }

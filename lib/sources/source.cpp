@@ -8,6 +8,7 @@
 
 namespace flt::sources {
 
+// NOLINTNEXTLINE(cert-dcl50-cpp): printf-style on purpose, the format attribute checks it
 void raise(flt_status status, const char *format, ...) {
     char text[400];
     va_list args;

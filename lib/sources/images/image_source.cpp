@@ -15,6 +15,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <system_error>
 
 #include "core/error.hpp"
@@ -38,12 +39,11 @@ bool has_image_suffix(const std::string &name) {
     std::string lower = name;
     std::transform(lower.begin(), lower.end(), lower.begin(),
                    [](unsigned char c) { return char(std::tolower(c)); });
-    for (const char *s : {".png", ".tif", ".tiff"}) {
+    const char *const suffixes[] = {".png", ".tif", ".tiff"};
+    return std::any_of(std::begin(suffixes), std::end(suffixes), [&lower](const char *s) {
         const std::size_t n = std::strlen(s);
-        if (lower.size() > n && lower.compare(lower.size() - n, n, s) == 0)
-            return true;
-    }
-    return false;
+        return lower.size() > n && lower.compare(lower.size() - n, n, s) == 0;
+    });
 }
 
 class image_source final : public source_impl {
@@ -65,7 +65,7 @@ class image_source final : public source_impl {
     }
     void stop() override {}
 
-    bool next(unsigned, raw_frame &out) override {
+    bool next(unsigned /*timeout_ms*/, raw_frame &out) override {
         if (next_index_ >= paths_.size())
             return false;  // end of the sequence
         const std::size_t index = std::size_t(next_index_++);
@@ -221,7 +221,7 @@ std::vector<std::string> list_image_files(const std::string &directory) {
     if (folder.back() != '/' && folder.back() != '\\')
         folder += '/';
     for (std::string &n : names)
-        n = folder + n;
+        n.insert(0, folder);
     return names;
 }
 

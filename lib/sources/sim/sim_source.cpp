@@ -29,7 +29,7 @@ class sim_source final : public source_impl {
     void start() override {}
     void stop() override {}
 
-    bool next(unsigned, raw_frame &out) override {
+    bool next(unsigned /*timeout_ms*/, raw_frame &out) override {
         double encoder_mm = 0.0;
         if (flt_sim_next_frame(sim_, pixels_.data(), pixels_.size(), stride_, &encoder_mm, 0,
                                nullptr, nullptr) != FLT_OK)

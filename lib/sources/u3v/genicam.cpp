@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <limits>
+#include <iterator>
 #include <string>
 
 #include "core/error.hpp"
@@ -68,10 +69,8 @@ bool is_node_kind(const char *tag) {
         "StringReg", "Register",    "Converter", "IntConverter", "SwissKnife",     "IntSwissKnife",
         "Port",      "ConfRom",     "TextDesc",  "IntKey",       "AdvFeatureLock", "SmartFeature",
         "StructReg", "StructEntry"};
-    for (const char *k : kinds)
-        if (std::strcmp(k, tag) == 0)
-            return true;
-    return false;
+    return std::any_of(std::begin(kinds), std::end(kinds),
+                       [tag](const char *k) { return std::strcmp(k, tag) == 0; });
 }
 
 struct parser_state {
@@ -136,10 +135,8 @@ void set_property(parser_state &s, genicam_node &n, const std::string &tag,
     } else if (tag == "pAddress" || tag == "IntSwissKnife" || tag == "pIndex" || tag == "pLength") {
         n.unsupported = "its register address or length is computed (" + tag + ")";
     } else if (tag == "Length") {
-        if (parse_int(text, v) && v > 0 && v <= 8)
-            n.length = std::uint32_t(v);
-        else if (parse_int(text, v))
-            n.length = std::uint32_t(v);  // StringReg etc.
+        if (parse_int(text, v))
+            n.length = std::uint32_t(v);  // 1..8 for integers; StringReg etc. longer
     } else if (tag == "Endianess") {
         n.little_endian = text.find("Big") == std::string::npos;
     } else if (tag == "Sign") {
@@ -349,9 +346,16 @@ feature_access genicam_map::resolve(const std::string &feature) const {
     std::string path = feature;
     for (int depth = 0; depth < 16; ++depth) {
         auto cannot = [&](const std::string &why) {
-            raise(FLT_ERR_NOT_FOUND, "feature '" + feature + "' cannot be resolved: node '" +
-                                         n->name + "' (" + n->kind + ") " + why +
-                                         "; give its register with flt_source_map_feature()");
+            std::string message = "feature '";
+            message += feature;
+            message += "' cannot be resolved: node '";
+            message += n->name;
+            message += "' (";
+            message += n->kind;
+            message += ") ";
+            message += why;
+            message += "; give its register with flt_source_map_feature()";
+            raise(FLT_ERR_NOT_FOUND, message);
         };
         if (!n->unsupported.empty())
             cannot(n->unsupported);

@@ -43,10 +43,10 @@ std::string make_xml(const std::string &vendor, const std::string &model) {
         return std::string(text);
     };
     auto enumeration = [&](const char *name, const char *reg,
-                           std::vector<std::pair<const char *, std::uint32_t>> entries) {
+                           const std::vector<std::pair<const char *, std::uint32_t>> &entries) {
         std::string s = std::string("    <Enumeration Name=\"") + name +
                         "\" NameSpace=\"Standard\">\n" + "      <ToolTip>" + name + "</ToolTip>\n";
-        for (auto &e : entries) {
+        for (const auto &e : entries) {
             char text[256];
             std::snprintf(text, sizeof text,
                           "      <EnumEntry Name=\"%s\" NameSpace=\"Standard\">\n"
@@ -170,11 +170,12 @@ std::vector<std::uint8_t> make_zip(const std::string &name, const std::string &t
     put_u32(h + 18, std::uint32_t(packed.size()));
     put_u32(h + 22, std::uint32_t(text.size()));
     put_u16(h + 26, std::uint16_t(name.size()));
+    // NOLINTNEXTLINE(bugprone-not-null-terminated-result): a ZIP name field has no NUL
     std::memcpy(h + 30, name.data(), name.size());
     zip.insert(zip.end(), packed.begin(), packed.end());
     const std::size_t central = zip.size();
     std::vector<std::uint8_t> c(46 + name.size());
-    put_u32(&c[0], 0x02014b50u);
+    put_u32(c.data(), 0x02014b50u);
     put_u16(&c[4], 20);
     put_u16(&c[6], 20);
     put_u16(&c[10], 8);
@@ -185,7 +186,7 @@ std::vector<std::uint8_t> make_zip(const std::string &name, const std::string &t
     std::memcpy(&c[46], name.data(), name.size());
     zip.insert(zip.end(), c.begin(), c.end());
     std::vector<std::uint8_t> end(22);
-    put_u32(&end[0], 0x06054b50u);
+    put_u32(end.data(), 0x06054b50u);
     put_u16(&end[8], 1);
     put_u16(&end[10], 1);
     put_u32(&end[12], std::uint32_t(c.size()));
@@ -249,7 +250,7 @@ struct sim_camera {
 
     std::uint32_t reg32(std::uint64_t a) const { return get_u32(&regs[a]); }
     void set_reg32(std::uint64_t a, std::uint32_t v) { put_u32(&regs[a], v); }
-    std::uint64_t sirm(std::uint64_t off) const { return sim_map::sirm + off; }
+    static std::uint64_t sirm(std::uint64_t off) { return sim_map::sirm + off; }
 
     int bits() const { return pfnc_bits(reg32(sim_map::pixel_format)); }
     std::size_t image_bytes() const {
@@ -422,7 +423,7 @@ struct sim_camera {
         auto ack_of = [&](std::uint16_t status, std::uint16_t id, std::uint16_t request,
                           const std::uint8_t *body, std::size_t body_n) {
             std::vector<std::uint8_t> a(k_gencp_header + body_n);
-            put_u32(&a[0], k_prefix_control);
+            put_u32(a.data(), k_prefix_control);
             put_u16(&a[4], status);
             put_u16(&a[6], id);
             put_u16(&a[8], std::uint16_t(body_n));
@@ -516,8 +517,8 @@ struct sim_camera {
             std::uint8_t *c = &body[image];
             put_u32(c, k_image_chunk_id);
             put_u32(c + 4, std::uint32_t(image));
-            const double counts = std::llround(encoder_mm * 1000.0 / um_per_count);
-            put_u64(c + 8, std::uint64_t(std::int64_t(counts)));
+            const long long counts = std::llround(encoder_mm * 1000.0 / um_per_count);
+            put_u64(c + 8, std::uint64_t(counts));
             put_u32(c + 16, encoder_chunk_id);
             put_u32(c + 20, 8);
         }
@@ -528,7 +529,7 @@ struct sim_camera {
             push(std::move(junk));
         }
         std::vector<std::uint8_t> leader(sim_map::leader_size, 0);
-        put_u32(&leader[0], k_magic_leader);
+        put_u32(leader.data(), k_magic_leader);
         put_u16(&leader[6], std::uint16_t(sim_map::leader_size));
         put_u64(&leader[8], block);
         put_u16(&leader[18], encoder_chunk ? k_payload_image_chunk : k_payload_image);
@@ -559,12 +560,13 @@ struct sim_camera {
         std::size_t sent = 0;
         for (std::size_t i = 0; i < count && sent < payload; ++i) {
             const std::size_t n = std::min(size, payload - sent);
-            parts.emplace_back(body.begin() + sent, body.begin() + sent + n);
+            const auto from = body.begin() + std::ptrdiff_t(sent);
+            parts.emplace_back(from, from + std::ptrdiff_t(n));
             sent += n;
         }
         if (final1 > 0 && sent < payload) {
             // the remainder, padded to the aligned final transfer size
-            std::vector<std::uint8_t> last(body.begin() + sent, body.end());
+            std::vector<std::uint8_t> last(body.begin() + std::ptrdiff_t(sent), body.end());
             last.resize(std::max(final1, last.size()), 0);
             parts.push_back(std::move(last));
             sent = payload;
@@ -581,7 +583,7 @@ struct sim_camera {
         if (mid)
             return;  // no trailer: the next leader arrives mid-frame
         std::vector<std::uint8_t> trailer(sim_map::trailer_size, 0);
-        put_u32(&trailer[0], k_magic_trailer);
+        put_u32(trailer.data(), k_magic_trailer);
         put_u16(&trailer[6], std::uint16_t(sim_map::trailer_size));
         put_u64(&trailer[8], block);
         put_u16(&trailer[16],
@@ -672,10 +674,10 @@ class sim_device final : public usb_device {
             return usb_status::no_device;
         return number >= 0 && number <= 2 ? usb_status::ok : usb_status::not_found;
     }
-    usb_status release_interface(int) override {
+    usb_status release_interface(int /*number*/) override {
         return cam_.unplugged ? usb_status::no_device : usb_status::ok;
     }
-    usb_status clear_halt(std::uint8_t) override {
+    usb_status clear_halt(std::uint8_t /*endpoint*/) override {
         return cam_.unplugged ? usb_status::no_device : usb_status::ok;
     }
     usb_status string_descriptor(std::uint8_t index, std::string &out) override {
@@ -700,7 +702,7 @@ class sim_device final : public usb_device {
         return usb_status::ok;
     }
     usb_status bulk_write(std::uint8_t endpoint, const std::uint8_t *data, std::size_t length,
-                          std::size_t &sent, unsigned) override {
+                          std::size_t &sent, unsigned /*timeout_ms*/) override {
         sent = 0;
         if (cam_.unplugged)
             return usb_status::no_device;
@@ -750,7 +752,7 @@ class sim_device final : public usb_device {
         cam_.submitted.push_back(slot);
         return usb_status::ok;
     }
-    usb_status async_reap(unsigned, usb_completion &out) override {
+    usb_status async_reap(unsigned /*timeout_ms*/, usb_completion &out) override {
         if (cam_.submitted.empty())
             return usb_status::timeout;
         const std::size_t slot = cam_.submitted.front();
@@ -965,7 +967,7 @@ std::uint64_t sim_get(const sim_camera &cam, flt_u3v_sim_param param) {
             return cam.speed_mbps;
         case FLT_U3V_SIM_LEFT_STREAMING:
         case FLT_U3V_SIM_SI_CONTROL:
-            return cam.reg32(cam.sirm(sirm::control));
+            return cam.reg32(sim_camera::sirm(sirm::control));
         case FLT_U3V_SIM_ACQUIRING:
             return cam.acquiring;
         case FLT_U3V_SIM_COMMANDS:

@@ -186,7 +186,8 @@ bool stream_channel::on_leader(const std::uint8_t *p, std::size_t n) {
         acc_.add(FLT_COUNT_LOST, block - last_block_ - 1);
         char text[160];
         std::snprintf(text, sizeof text, "block ids %llu..%llu never arrived (lost)",
-                      (unsigned long long)(last_block_ + 1), (unsigned long long)(block - 1));
+                      static_cast<unsigned long long>(last_block_) + 1,
+                      static_cast<unsigned long long>(block) - 1);
         acc_.stream_error = text;
     }
     last_block_ = block;
