@@ -289,7 +289,7 @@ void gauge::init(const flt_calib *calib, const flt_options *options) {
         if (st != FLT_OK && st != FLT_ERR_BUFFER_FULL)
             check(st);
         std::string text(length + 1, '\0');
-        check(flt_calib_save_text(calib, &text[0], text.size(), &length));
+        check(flt_calib_save_text(calib, text.data(), text.size(), &length));
         check(flt_calib_load_text(text.data(), length, &calib_for_extractors_));
         clear_error();  // the size query left a BUFFER_FULL message
     }
@@ -448,7 +448,7 @@ bool gauge_guarded(gauge *g, Body &&body, void (gauge::*rec)(flt_status, const c
 // ---------------------------------------------------------------- producer
 
 void gauge::extract(frame_slot &slot, const void *pixels, flt_pixel_format format,
-                    std::size_t stride, flt_extractor *extractor, bool *error_out) {
+                    std::size_t stride, flt_extractor *extractor, bool *error_out) const {
     const flt_status st = flt_extractor_process(extractor, pixels, format, width_, height_, stride,
                                                 slot.encoder_mm, K_, &slot.s, slot.height.data(),
                                                 slot.slope.data(), slot.valid.data());
@@ -493,7 +493,7 @@ void gauge::resolve_band(frame_slot &slot) {
     band_known_ = true;
 }
 
-void gauge::fill_slot(frame_slot &slot, const gauge_input &in) {
+void gauge::fill_slot(frame_slot &slot, const gauge_input &in) const {
     slot.encoder_mm = in.encoder_mm;
     if (in.pixels == nullptr) {
         // A profile row: what the extractor would give for this frame.
@@ -1559,7 +1559,7 @@ flt_status gauge::check_frame(const char *fn, const void *pixels, int format, st
     return check_encoder(fn, encoder_mm);
 }
 
-flt_status gauge::check_encoder(const char *fn, double encoder_mm) const {
+flt_status gauge::check_encoder(const char *fn, double encoder_mm) {
     if (!std::isfinite(encoder_mm) || std::fabs(encoder_mm) > 1.0e12)
         return fail(FLT_ERR_INVALID_ARGUMENT,
                     "%s: argument 'encoder_mm' = %g is not a position (finite, at most 1e12 mm)",

@@ -91,7 +91,7 @@ class gauge {
     // the enum must not be loaded as one.
     flt_status check_frame(const char *fn, const void *pixels, int format, std::uint32_t width,
                            std::uint32_t height, std::size_t stride, double encoder_mm) const;
-    flt_status check_encoder(const char *fn, double encoder_mm) const;
+    static flt_status check_encoder(const char *fn, double encoder_mm);
     // The producer's entry (push_frame, push_row, the acquisition thread),
     // input already checked. Throws flt::error for a failure.
     void take(const gauge_input &in, bool from_acquisition);
@@ -143,9 +143,9 @@ class gauge {
     };
 
     // Producer side.
-    void fill_slot(frame_slot &slot, const gauge_input &in);
+    void fill_slot(frame_slot &slot, const gauge_input &in) const;
     void extract(frame_slot &slot, const void *pixels, flt_pixel_format format, std::size_t stride,
-                 flt_extractor *extractor, bool *error_out);
+                 flt_extractor *extractor, bool *error_out) const;
     void resolve_band(frame_slot &slot);
     // Workers.
     void worker_main(unsigned index);
@@ -167,9 +167,9 @@ class gauge {
     void output_row(double s, const double *z, const std::uint8_t *flags, const row_meta &meta,
                     const double *measured);
     void apply_cuts(double s_limit);
-    // Ends the open sheet at s_end: the rows before it (all rows with
+    // Ends the open sheet at s_at: the rows before it (all rows with
     // all_rows), the rest begin the next sheet.
-    void split(double s_end, unsigned end_flags, bool all_rows = false);
+    void split(double s_at, unsigned end_flags, bool all_rows = false);
     int free_buffer_or_wait();
     // Evaluation (one thread at a time, sheets in order).
     void evaluate(const sheet_job &job);

@@ -143,7 +143,7 @@ FLT_API flt_status FLT_CALL flt_gauge_push_row(flt_gauge *gauge, double encoder_
             return fail(FLT_ERR_INVALID_ARGUMENT,
                         "%s: argument 'fibers' = %zu but the calibration has %zu", fn, fibers,
                         g.fibers());
-        if (flt_status st = g.check_encoder(fn, encoder_mm))
+        if (flt_status st = flt::gauge::check_encoder(fn, encoder_mm))
             return st;
         if (flt_status st = not_while_acquiring(fn, g))
             return st;
@@ -164,7 +164,7 @@ FLT_API flt_status FLT_CALL flt_gauge_cut(flt_gauge *gauge, double encoder_mm) {
     return guard(fn, [&] {
         if (flt_status st = check_handle(fn, gauge))
             return st;
-        if (flt_status st = gauge->impl->check_encoder(fn, encoder_mm))
+        if (flt_status st = flt::gauge::check_encoder(fn, encoder_mm))
             return st;
         if (flt_status st = gauge->impl->cut(fn, encoder_mm))
             return st;
