@@ -214,7 +214,7 @@ struct evaluator {
                                      "' names the node itself (a loop in the description)");
         return t;
     }
-    int feature(const std::string &name) {
+    int feature(const std::string &name) const {
         const int n = find(name);
         if (n < 0)
             throw error(FLT_ERR_NOT_FOUND,
@@ -322,7 +322,7 @@ struct evaluator {
     bool cachable(int n) {
         return m.caching && at(n).cachable != cache_mode::no_cache && !at(n).polled;
     }
-    std::string where(std::uint64_t a, std::int64_t len, const std::string &port) {
+    static std::string where(std::uint64_t a, std::int64_t len, const std::string &port) {
         return "register " + hex(a) + " (" + std::to_string(len) + " bytes" +
                (port == "Device" ? std::string() : " on port '" + port + "'") + "): ";
     }

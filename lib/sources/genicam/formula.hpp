@@ -116,7 +116,7 @@ class formula {
         std::size_t id = 0;          // op::variable
     };
     struct parser;
-    number eval(int t, mode m, const std::function<number(std::size_t)> &variable) const;
+    number eval(int index, mode m, const std::function<number(std::size_t)> &variable) const;
     [[noreturn]] void refuse(const std::string &why) const;
 
     std::string text_;

@@ -127,8 +127,8 @@ struct parser_state {
         return index;
     }
 
-    void apply(node &n, const property &p);
-    void apply_entry(enum_entry &e, const property &p);
+    static void apply(node &n, const property &p);
+    static void apply_entry(enum_entry &e, const property &p);
 
     void start(const char *tag, const char **attributes) {
         const std::string t = tag;
@@ -146,6 +146,9 @@ struct parser_state {
             return;
         }
         const frame::type_t parent = stack.back().type;
+        // The Extension branch below skips too, but only after the root/group
+        // test, which must come first (bugprone-branch-clone is wrong here).
+        // NOLINTNEXTLINE(bugprone-branch-clone)
         if (parent == frame::prop || parent == frame::skip) {
             f.type = frame::skip;
         } else if (parent == frame::root || parent == frame::group) {
@@ -449,7 +452,7 @@ void parser_state::apply(node &n, const property &p) {
 void XMLCALL on_start(void *user, const XML_Char *tag, const XML_Char **attributes) {
     static_cast<parser_state *>(user)->start(tag, attributes);
 }
-void XMLCALL on_end(void *user, const XML_Char *) {
+void XMLCALL on_end(void *user, const XML_Char * /*tag*/) {
     static_cast<parser_state *>(user)->end();
 }
 void XMLCALL on_text(void *user, const XML_Char *text, int length) {
