@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-/*
+/** @file
  * libflatline - conventions shared by every component.
  *
  * Read this header once; every other header follows it.
@@ -49,8 +49,10 @@
 
 #include "flatline/version.h"
 
-/* FLT_API marks the exported functions; everything else in the library is
- * hidden. FLT_CALL pins the calling convention on 32-bit Windows. */
+/** @def FLT_API
+ * Marks the exported functions; everything else in the library is hidden. */
+/** @def FLT_CALL
+ * Pins the calling convention on 32-bit Windows (__cdecl). */
 #if defined(_WIN32) || defined(__CYGWIN__)
 #  if defined(FLT_BUILDING_LIBRARY)
 #    define FLT_API __declspec(dllexport)
@@ -69,7 +71,8 @@
 #  define FLT_CALL
 #endif
 
-/* Results that must not be ignored. */
+/** @def FLT_NODISCARD
+ * Results that must not be ignored (a warning where the compiler can). */
 #if defined(__GNUC__) || defined(__clang__)
 #  define FLT_NODISCARD __attribute__((warn_unused_result))
 #else
@@ -84,64 +87,65 @@ extern "C" {
 /* Status codes                                                            */
 /* ---------------------------------------------------------------------- */
 
-/* Codes are stable: new ones are only ever added. */
+/** Codes are stable: new ones are only ever added. */
 typedef enum flt_status {
+    /** Success. */
     FLT_OK = 0,
-    /* An argument is NULL, out of range, NaN, or disagrees with the handle. */
+    /** An argument is NULL, out of range, NaN, or disagrees with the handle. */
     FLT_ERR_INVALID_ARGUMENT = -1,
-    /* Memory could not be allocated. The handle is unchanged. */
+    /** Memory could not be allocated. The handle is unchanged. */
     FLT_ERR_OUT_OF_MEMORY = -2,
-    /* The call is not allowed in the handle's current state
+    /** The call is not allowed in the handle's current state
      * (for example pull before any push). */
     FLT_ERR_STATE = -3,
-    /* A fixed-capacity buffer is full; the message says what to do. */
+    /** A fixed-capacity buffer is full; the message says what to do. */
     FLT_ERR_BUFFER_FULL = -4,
-    /* A file could not be opened, read or written. */
+    /** A file could not be opened, read or written. */
     FLT_ERR_IO = -5,
-    /* A file or packet is malformed; the message names the field. */
+    /** A file or packet is malformed; the message names the field. */
     FLT_ERR_FORMAT = -6,
-    /* A camera or transport failed. */
+    /** A camera or transport failed. */
     FLT_ERR_DEVICE = -7,
-    /* A device did not answer in time. */
+    /** A device did not answer in time. */
     FLT_ERR_TIMEOUT = -8,
-    /* Something named (a device, a feature, an option) does not exist. */
+    /** Something named (a device, a feature, an option) does not exist. */
     FLT_ERR_NOT_FOUND = -9,
-    /* A numerical problem: a singular system or a failed estimate. */
+    /** A numerical problem: a singular system or a failed estimate. */
     FLT_ERR_NUMERIC = -10,
-    /* A bug in libflatline. Please report it with the message. */
+    /** A bug in libflatline. Please report it with the message. */
     FLT_ERR_INTERNAL = -99,
-    /* Not a status: makes every int a valid flt_status value, so a code from
+    /** Not a status: makes every int a valid flt_status value, so a code from
      * a newer library is safe to hold in an older program. */
     FLT_STATUS_MAX_ENUM_ = 0x7FFFFFFF
 } flt_status;
 
-/* The enumerator name of a status, e.g. "FLT_ERR_INVALID_ARGUMENT".
+/** The enumerator name of a status, e.g. "FLT_ERR_INVALID_ARGUMENT".
  * Never NULL; an unknown code gives "FLT_ERR_UNKNOWN". Static storage. */
 FLT_API const char *FLT_CALL flt_status_string(flt_status status);
 
-/* The message of the last failed call on this thread, naming the offending
+/** The message of the last failed call on this thread, naming the offending
  * argument and its value. Never NULL: "" when the last call succeeded.
  * Each public call clears it on entry. The pointer stays valid until the next
  * libflatline call on this thread. */
 FLT_API const char *FLT_CALL flt_last_error_message(void);
 
-/* The status of the last call on this thread (FLT_OK after a success). */
+/** The status of the last call on this thread (FLT_OK after a success). */
 FLT_API flt_status FLT_CALL flt_last_error_status(void);
 
 /* ---------------------------------------------------------------------- */
 /* Version                                                                 */
 /* ---------------------------------------------------------------------- */
 
-/* The library's FLT_VERSION_NUMBER, to compare with the headers' one. */
+/** The library's FLT_VERSION_NUMBER, to compare with the headers' one. */
 FLT_API int FLT_CALL flt_version(void);
-/* "MAJOR.MINOR.PATCH" of the library. Static storage, never NULL. */
+/** "MAJOR.MINOR.PATCH" of the library. Static storage, never NULL. */
 FLT_API const char *FLT_CALL flt_version_string(void);
 
 /* ---------------------------------------------------------------------- */
 /* Options                                                                 */
 /* ---------------------------------------------------------------------- */
 
-/* Option keys. Values are fixed forever; new keys are appended.
+/** Option keys. Values are fixed forever; new keys are appended.
  * Each key has a name (the snake_case word in quotes, which the Python and C#
  * bindings use as the keyword), bounds and a default; see flt_option_info().
  * Keys are numbered by component, a hundred each: 100s the reconstructor,
@@ -158,28 +162,28 @@ FLT_API const char *FLT_CALL flt_version_string(void);
  * calib_rational_distortion) take 0 or 1. */
 typedef enum flt_option {
     /* --- reconstructor (flatline/recon.h) --- */
-    /* "knot_spacing": distance L between spline knots along travel, mm.
+    /** "knot_spacing": distance L between spline knots along travel, mm.
      * 0 (the default) means "equal to laser_spacing"; at least
      * laser_spacing / 16 (a row spans about laser_spacing / L knots, and
      * the cost per mm of strip grows with the cube of that). */
     FLT_OPT_KNOT_SPACING = 100,
-    /* "laser_spacing": distance between the two laser lines along travel,
+    /** "laser_spacing": distance between the two laser lines along travel,
      * Delta-d, mm. Default 100. */
     FLT_OPT_LASER_SPACING = 101,
-    /* "height_sigma": standard deviation of one measured height, mm.
+    /** "height_sigma": standard deviation of one measured height, mm.
      * Default 2.5 (a vibrating strip: rigid bouncing moves both lines). */
     FLT_OPT_HEIGHT_SIGMA = 102,
-    /* "slope_sigma": standard deviation of one measured slope, mm/mm.
+    /** "slope_sigma": standard deviation of one measured slope, mm/mm.
      * Default 0.001 (bouncing cancels between the lines; what is left is
      * peak-detection noise divided by the laser spacing). */
     FLT_OPT_SLOPE_SIGMA = 103,
-    /* "curvature_weight": weight of the smoothness prior (the integral of
+    /** "curvature_weight": weight of the smoothness prior (the integral of
      * z'' squared), dimensionless, relative to one height sample: 1 means
      * bending one knot interval by 1 mm costs as much as one height sample
      * 1 mm off. It bridges stretches without data and keeps the system
      * regular. Default 1e-3. */
     FLT_OPT_CURVATURE_WEIGHT = 104,
-    /* "lag_knots": how many knots beyond a knot must be complete before the
+    /** "lag_knots": how many knots beyond a knot must be complete before the
      * streaming reconstructor emits it (integer). Larger is closer to the
      * whole-sheet solution and later. Default 64 (6.4 m of strip at the
      * default spacing, 3.2 s at 120 m/min): under 2.5 mm of vibration the
@@ -187,10 +191,10 @@ typedef enum flt_option {
      * shorter lag leaves the streamed level measurably noisier than the
      * whole-sheet one (tests/c/test_recon.c measures it). */
     FLT_OPT_LAG_KNOTS = 105,
-    /* "max_gap": rows in a run of invalid samples whose valid neighbours are
+    /** "max_gap": rows in a run of invalid samples whose valid neighbours are
      * more than this far apart are flagged FLT_FLAG_GAP, mm. Default 200. */
     FLT_OPT_MAX_GAP = 106,
-    /* "row_capacity": rows the streaming reconstructor can hold, pending
+    /** "row_capacity": rows the streaming reconstructor can hold, pending
      * and finished-but-not-pulled together (integer). It costs 9 bytes per
      * row and fiber, and robust mode queues up to a quarter of it per
      * reweighted pass (16 bytes per row and fiber). Default 8192: enough
@@ -198,7 +202,7 @@ typedef enum flt_option {
      * rigid_motion (a row finished about 18 m after it) at 3 mm. A push
      * that does not fit while no row is finished says so. */
     FLT_OPT_ROW_CAPACITY = 107,
-    /* "rigid_motion": 1 to model the strip's vibration as what it is, a
+    /** "rigid_motion": 1 to model the strip's vibration as what it is, a
      * rigid heave and roll of each frame: every fiber of a frame is offset
      * along one line across the strip. The reconstructor then splits each
      * row into that line (weighted by height_sigma) and the deviations from
@@ -209,11 +213,11 @@ typedef enum flt_option {
      * of about 150 knots. 0 (the default) fits every fiber on its own.
      * (integer 0 or 1) */
     FLT_OPT_RIGID_MOTION = 108,
-    /* "shape_sigma": with rigid_motion, the standard deviation of a height's
+    /** "shape_sigma": with rigid_motion, the standard deviation of a height's
      * deviation from its frame's line across the strip, mm: the peak
      * detection noise of the two lasers. Default 0.1. */
     FLT_OPT_SHAPE_SIGMA = 109,
-    /* "curvature_jump_weight": weight of the prior against jumps of z'' at
+    /** "curvature_jump_weight": weight of the prior against jumps of z'' at
      * the knots, relative to one height sample (the jump is measured as
      * m_{j-1} + 4 m_j + m_{j+1} - 3 (z_{j+1} - z_{j-1}), mm, m = L z').
      * A slope measured as a secant over Delta-d is blind to any shape that
@@ -225,7 +229,7 @@ typedef enum flt_option {
      * vibration it cuts the error about 2.8-fold and costs 0.02 um on the
      * noise-free reference sheet. Default 10. */
     FLT_OPT_CURVATURE_JUMP_WEIGHT = 110,
-    /* "robust" (flt_robust, recon.h): FLT_ROBUST_NONE (0, the default) for
+    /** "robust" (flt_robust, recon.h): FLT_ROBUST_NONE (0, the default) for
      * least squares; FLT_ROBUST_HUBER (1) for Huber and FLT_ROBUST_TUKEY (2)
      * for Tukey, an M-estimator that takes outliers such as the shear station's
      * ringing and spurious laser peaks out. Its noise levels are estimated
@@ -236,7 +240,7 @@ typedef enum flt_option {
      * Huber's 0.08 on the reference's sheet). See flatline/recon.h for how
      * it streams. (integer 0..2) */
     FLT_OPT_ROBUST = 111,
-    /* "robust_iterations": reweighted passes over the fibers after the plain
+    /** "robust_iterations": reweighted passes over the fibers after the plain
      * one (integer 1..10). Each costs about 15 ms per 2000 x 1150 sheet and,
      * streaming, about 13 knots of latency. Default 2. With rigid_motion the
      * fibers' deviations carry the peak noise and isolated spurious peaks
@@ -246,7 +250,7 @@ typedef enum flt_option {
      * squares: 0.40). Without rigid_motion the fibers carry the ringing
      * too: 2 passes leave 0.53 mm of it, 3 leave 0.39, 4 leave 0.32. */
     FLT_OPT_ROBUST_ITERATIONS = 112,
-    /* "robust_line_iterations": with rigid_motion and robust, the reweighted
+    /** "robust_line_iterations": with rigid_motion and robust, the reweighted
      * passes over the line across the strip (its offset and tilt), which
      * carries the shear station's ringing (integer 1..32). The line is one
      * value per row, so a pass costs about 0.5 ms per sheet, but streaming,
@@ -256,257 +260,257 @@ typedef enum flt_option {
     FLT_OPT_ROBUST_LINE_ITERATIONS = 113,
 
     /* --- calibration (flatline/calib.h) --- */
-    /* "calib_ransac": 1 to estimate laser homographies inside RANSAC
+    /** "calib_ransac": 1 to estimate laser homographies inside RANSAC
      * (integer 0 or 1). Default 0. */
     FLT_OPT_CALIB_RANSAC = 200,
-    /* "calib_ransac_threshold": a correspondence is an inlier when its
+    /** "calib_ransac_threshold": a correspondence is an inlier when its
      * reprojection error is below this, px. Default 1 (20 sigma of a 1/16 px
      * peak detector, far below a mis-identified target point). */
     FLT_OPT_CALIB_RANSAC_THRESHOLD = 201,
-    /* "calib_ransac_iterations": minimal samples drawn (integer). Default
+    /** "calib_ransac_iterations": minimal samples drawn (integer). Default
      * 1000: with 30% outliers a clean 4-point sample is missed with
      * probability (1 - 0.7^4)^1000 < 1e-100. */
     FLT_OPT_CALIB_RANSAC_ITERATIONS = 202,
-    /* "calib_ransac_seed": seed of RANSAC's random draws, so a calibration
+    /** "calib_ransac_seed": seed of RANSAC's random draws, so a calibration
      * is reproducible (integer). Default 1. */
     FLT_OPT_CALIB_RANSAC_SEED = 203,
-    /* "calib_rational_distortion": 1 to estimate the rational radial terms
+    /** "calib_rational_distortion": 1 to estimate the rational radial terms
      * k4..k6 as well as k1, k2, k3, p1, p2 (integer 0 or 1). Default 0. */
     FLT_OPT_CALIB_RATIONAL_DISTORTION = 204,
     /* --- simulated sensor (flatline/sim.h) --- */
-    /* "sim_seed": seed of every random draw (integer). Default 1. */
+    /** "sim_seed": seed of every random draw (integer). Default 1. */
     FLT_OPT_SIM_SEED = 300,
-    /* "sim_frame_spacing": encoder travel between frames, mm. Default 3. */
+    /** "sim_frame_spacing": encoder travel between frames, mm. Default 3. */
     FLT_OPT_SIM_FRAME_SPACING = 301,
-    /* "sim_start": encoder position of frame 0, mm. Default 0. */
+    /** "sim_start": encoder position of frame 0, mm. Default 0. */
     FLT_OPT_SIM_START = 302,
-    /* "sim_strip_width": strip width W for the defect shapes, mm (strip
+    /** "sim_strip_width": strip width W for the defect shapes, mm (strip
      * centred at x = 0). Default 2000. */
     FLT_OPT_SIM_STRIP_WIDTH = 303,
-    /* "sim_heave_sigma": rigid vertical motion per frame, mm. Default 0. */
+    /** "sim_heave_sigma": rigid vertical motion per frame, mm. Default 0. */
     FLT_OPT_SIM_HEAVE_SIGMA = 304,
-    /* "sim_tilt_sigma": rigid roll per frame (rotation about the travel
+    /** "sim_tilt_sigma": rigid roll per frame (rotation about the travel
      * axis, z += tilt * x), mm/mm. Default 0. */
     FLT_OPT_SIM_TILT_SIGMA = 305,
-    /* "sim_eccentricity_amplitude": leveler roll run-out, a sine of the
+    /** "sim_eccentricity_amplitude": leveler roll run-out, a sine of the
      * encoder position, mm. Default 0 (reference 0.5). */
     FLT_OPT_SIM_ECCENTRICITY_AMPLITUDE = 306,
-    /* "sim_eccentricity_period": its period along travel, mm. Default 50. */
+    /** "sim_eccentricity_period": its period along travel, mm. Default 50. */
     FLT_OPT_SIM_ECCENTRICITY_PERIOD = 307,
-    /* "sim_shear_amplitude": initial envelope of the shear-station damped
+    /** "sim_shear_amplitude": initial envelope of the shear-station damped
      * sine, mm. Default 0 (off; reference 50). */
     FLT_OPT_SIM_SHEAR_AMPLITUDE = 308,
-    /* "sim_shear_decay": its envelope decay, 1/mm. Default 0.07. */
+    /** "sim_shear_decay": its envelope decay, 1/mm. Default 0.07. */
     FLT_OPT_SIM_SHEAR_DECAY = 309,
-    /* "sim_shear_period": its period along the strip, mm. Default 10. */
+    /** "sim_shear_period": its period along the strip, mm. Default 10. */
     FLT_OPT_SIM_SHEAR_PERIOD = 310,
-    /* "sim_shear_interval": distance between cuts, mm. Default 3000. */
+    /** "sim_shear_interval": distance between cuts, mm. Default 3000. */
     FLT_OPT_SIM_SHEAR_INTERVAL = 311,
-    /* "sim_peak_sigma": laser peak-detection noise, px, independent per
+    /** "sim_peak_sigma": laser peak-detection noise, px, independent per
      * laser. Default 0 (reference 1/16). */
     FLT_OPT_SIM_PEAK_SIGMA = 312,
-    /* "sim_bit_depth": bits per pixel of rendered frames, 8 (Mono8), 10, 12
+    /** "sim_bit_depth": bits per pixel of rendered frames, 8 (Mono8), 10, 12
      * or 16 (16-bit words) (integer). Default 8. */
     FLT_OPT_SIM_BIT_DEPTH = 313,
-    /* "sim_line_sigma": laser line profile across rows, Gaussian sigma, px.
+    /** "sim_line_sigma": laser line profile across rows, Gaussian sigma, px.
      * Default 2. */
     FLT_OPT_SIM_LINE_SIGMA = 314,
-    /* "sim_line_peak": line peak intensity, fraction of full scale.
+    /** "sim_line_peak": line peak intensity, fraction of full scale.
      * Default 0.6. */
     FLT_OPT_SIM_LINE_PEAK = 315,
-    /* "sim_background": background level, fraction of full scale.
+    /** "sim_background": background level, fraction of full scale.
      * Default 0.03. */
     FLT_OPT_SIM_BACKGROUND = 316,
-    /* "sim_speckle": speckle contrast, the standard deviation of the
+    /** "sim_speckle": speckle contrast, the standard deviation of the
      * multiplicative per-pixel intensity factor. Default 0.05: a blue laser
      * (the reference's 450 nm, chosen against speckle) imaged so each pixel
      * integrates several speckle grains. */
     FLT_OPT_SIM_SPECKLE = 317,
-    /* "sim_full_well": electrons at full scale (shot noise); 0 = none.
+    /** "sim_full_well": electrons at full scale (shot noise); 0 = none.
      * Default 10000. */
     FLT_OPT_SIM_FULL_WELL = 318,
-    /* "sim_reflections": mean number of spurious reflections per frame.
+    /** "sim_reflections": mean number of spurious reflections per frame.
      * Default 0. */
     FLT_OPT_SIM_REFLECTIONS = 319,
 
     /* --- frame-to-profile extractor (flatline/extractor.h) --- */
-    /* "extract_laser0_first_row", "extract_laser0_rows": laser 0's band of
+    /** "extract_laser0_first_row", "extract_laser0_rows": laser 0's band of
      * rows (integers); rows = 0 (default) = automatic from the first frame. */
     FLT_OPT_EXTRACT_LASER0_FIRST_ROW = 400,
-    FLT_OPT_EXTRACT_LASER0_ROWS = 401,
-    /* "extract_laser1_first_row", "extract_laser1_rows": the same, laser 1. */
+    FLT_OPT_EXTRACT_LASER0_ROWS = 401, /**< "extract_laser0_rows": see above */
+    /** "extract_laser1_first_row", "extract_laser1_rows": the same, laser 1. */
     FLT_OPT_EXTRACT_LASER1_FIRST_ROW = 402,
-    FLT_OPT_EXTRACT_LASER1_ROWS = 403,
-    /* "extract_sg_window": Savitzky-Golay window, rows, odd (integer).
+    FLT_OPT_EXTRACT_LASER1_ROWS = 403, /**< "extract_laser1_rows": see above */
+    /** "extract_sg_window": Savitzky-Golay window, rows, odd (integer).
      * Default 11, about 5 line sigmas for a line of sigma 2 px: shorter
      * windows use too few of the line's pixels and are noisier under speckle
      * (tests/c/test_extractor.c uses 9, 11, 15 for sigma 1.5, 2, 3 px). */
     FLT_OPT_EXTRACT_SG_WINDOW = 404,
-    /* "extract_sg_order": Savitzky-Golay polynomial order (integer).
+    /** "extract_sg_order": Savitzky-Golay polynomial order (integer).
      * Default 2. */
     FLT_OPT_EXTRACT_SG_ORDER = 405,
-    /* "extract_min_peak": weakest accepted peak, fraction of full scale.
+    /** "extract_min_peak": weakest accepted peak, fraction of full scale.
      * Default 0.1. */
     FLT_OPT_EXTRACT_MIN_PEAK = 406,
-    /* "extract_max_width": widest accepted line, rows at or above half the
+    /** "extract_max_width": widest accepted line, rows at or above half the
      * peak, px. Default 12. */
     FLT_OPT_EXTRACT_MAX_WIDTH = 407,
 
     /* --- flatness metrics (flatline/flatness.h) --- */
-    /* "flat_window_length": streamed evaluation window, the last N mm of
+    /** "flat_window_length": streamed evaluation window, the last N mm of
      * strip. 0 = no automatic windows (only flt_flatness_finish evaluates,
      * one window per sheet). Default 3000: at least one period of the
      * longest flatness waves (500-3000 mm). */
     FLT_OPT_FLAT_WINDOW_LENGTH = 500,
-    /* "flat_update_interval": strip between two streamed evaluations, mm,
+    /** "flat_update_interval": strip between two streamed evaluations, mm,
      * at most flat_window_length; 0 = flat_window_length (windows side by
      * side). Default 1000 (0.5 s at 120 m/min). */
     FLT_OPT_FLAT_UPDATE_INTERVAL = 501,
-    /* "flat_zone_width": width of an I-Unit zone across the strip, mm.
+    /** "flat_zone_width": width of an I-Unit zone across the strip, mm.
      * Default 50. */
     FLT_OPT_FLAT_ZONE_WIDTH = 502,
-    /* "flat_reference" (flt_flat_reference, flatness.h): the I-Unit
+    /** "flat_reference" (flt_flat_reference, flatness.h): the I-Unit
      * reference length, FLT_FLAT_REFERENCE_SHORTEST (0, the default) the
      * shortest valid fiber, FLT_FLAT_REFERENCE_MEAN (1) the mean of the
      * valid fibers. */
     FLT_OPT_FLAT_REFERENCE = 503,
-    /* "flat_min_length": shortest window the metrics accept, mm: one
+    /** "flat_min_length": shortest window the metrics accept, mm: one
      * flatness wave. Default 500 (the shortest defect waves). */
     FLT_OPT_FLAT_MIN_LENGTH = 504,
-    /* "flat_min_coverage": the least share of a window a fiber's usable
+    /** "flat_min_coverage": the least share of a window a fiber's usable
      * rows must cover for the fiber to count, 0..1. Default 0.8. */
     FLT_OPT_FLAT_MIN_COVERAGE = 505,
-    /* "flat_wave_hysteresis": a crest or trough counts once the profile has
+    /** "flat_wave_hysteresis": a crest or trough counts once the profile has
      * retreated from it by this much, mm. Default 0.3: three times the
      * reconstruction noise under the reference vibration (0.1 mm rms). */
     FLT_OPT_FLAT_WAVE_HYSTERESIS = 506,
-    /* "flat_flat_limit": a window whose zone profile spans less than this
+    /** "flat_flat_limit": a window whose zone profile spans less than this
      * is flat, I-Units. Default 5. */
     FLT_OPT_FLAT_FLAT_LIMIT = 507,
-    /* "flat_bow_limit": |bow| from which FLT_SHAPE_HAS_BOW is set, mm of
+    /** "flat_bow_limit": |bow| from which FLT_SHAPE_HAS_BOW is set, mm of
      * sagitta over the window. Default 2. */
     FLT_OPT_FLAT_BOW_LIMIT = 508,
-    /* "flat_crossbow_limit": |crossbow| from which FLT_SHAPE_HAS_CROSSBOW
+    /** "flat_crossbow_limit": |crossbow| from which FLT_SHAPE_HAS_CROSSBOW
      * is set, mm of sagitta over the width. Default 2. */
     FLT_OPT_FLAT_CROSSBOW_LIMIT = 509,
-    /* "flat_row_capacity": rows one streamed window (or sheet) may hold
+    /** "flat_row_capacity": rows one streamed window (or sheet) may hold
      * (integer). It costs 9 bytes per row and fiber. Default 4096 (12 m of
      * strip at 3 mm rows). */
     FLT_OPT_FLAT_ROW_CAPACITY = 510,
 
     /* --- frame sources (flatline/source.h) --- */
-    /* "source_encoder_mode" (flt_encoder_mode, source.h): where a frame's
+    /** "source_encoder_mode" (flt_encoder_mode, source.h): where a frame's
      * encoder position comes from: FLT_ENCODER_AUTO (0, the default),
      * FLT_ENCODER_FIXED_STEP (1), FLT_ENCODER_HOST (2,
      * flt_source_set_encoder), FLT_ENCODER_CHUNK (3, the camera's chunk
      * counter); see flatline/source.h. */
     FLT_OPT_SOURCE_ENCODER_MODE = 600,
-    /* "source_encoder_step": travel per frame (per block id) in fixed-step
+    /** "source_encoder_step": travel per frame (per block id) in fixed-step
      * mode, mm. Default 3 (the reference sensor's frame spacing). */
     FLT_OPT_SOURCE_ENCODER_STEP = 601,
-    /* "source_encoder_start": encoder position of the first frame (fixed
+    /** "source_encoder_start": encoder position of the first frame (fixed
      * step) or of count 0 (chunk counter), mm. Default 0. */
     FLT_OPT_SOURCE_ENCODER_START = 602,
-    /* "source_encoder_mm_per_count": travel per encoder count of a chunk
+    /** "source_encoder_mm_per_count": travel per encoder count of a chunk
      * counter, mm. Default 0.01 (the reference sensor's encoder). */
     FLT_OPT_SOURCE_ENCODER_MM_PER_COUNT = 603,
-    /* "source_encoder_chunk_id": the chunk id of the camera's encoder
+    /** "source_encoder_chunk_id": the chunk id of the camera's encoder
      * counter (integer; camera specific, see its XML's ChunkID). Default
      * 0x4E434445, the simulated camera's. */
     FLT_OPT_SOURCE_ENCODER_CHUNK_ID = 604,
-    /* "source_image_bits": significant bits of 16-bit image files: 0 (the
+    /** "source_image_bits": significant bits of 16-bit image files: 0 (the
      * default) = Mono16, or 10 or 12 (integer). */
     FLT_OPT_SOURCE_IMAGE_BITS = 605,
-    /* "u3v_transfers": asynchronous bulk transfers kept in flight (integer).
+    /** "u3v_transfers": asynchronous bulk transfers kept in flight (integer).
      * Default 8: 8 MiB at the default size, half of Linux's default 16 MB
      * usbfs memory. */
     FLT_OPT_U3V_TRANSFERS = 606,
-    /* "u3v_transfer_size": largest payload transfer, bytes (integer; rounded
+    /** "u3v_transfer_size": largest payload transfer, bytes (integer; rounded
      * down to the camera's alignment). Default 1048576 (1 MiB). */
     FLT_OPT_U3V_TRANSFER_SIZE = 607,
-    /* "u3v_control_timeout": floor of the control channel timeout, ms
+    /** "u3v_control_timeout": floor of the control channel timeout, ms
      * (integer); the camera's max device response time is used when
      * larger. Default 200. */
     FLT_OPT_U3V_CONTROL_TIMEOUT = 608,
-    /* "u3v_pending_ack_limit": pending acknowledges accepted for one command
+    /** "u3v_pending_ack_limit": pending acknowledges accepted for one command
      * before giving up (integer). Default 5. */
     FLT_OPT_U3V_PENDING_ACK_LIMIT = 609,
-    /* "u3v_command_attempts": times a command is sent when no acknowledge
+    /** "u3v_command_attempts": times a command is sent when no acknowledge
      * comes (integer). Default 3. */
     FLT_OPT_U3V_COMMAND_ATTEMPTS = 610,
     /* --- the gauge (flatline/gauge.h) --- */
-    /* "gauge_workers": threads that process the frames (integer 0..64); 0
+    /** "gauge_workers": threads that process the frames (integer 0..64); 0
      * processes each frame on the thread that delivers it. Default 2. */
     FLT_OPT_GAUGE_WORKERS = 700,
-    /* "gauge_queue_frames": frames the queue between acquisition and
+    /** "gauge_queue_frames": frames the queue between acquisition and
      * processing holds (integer 1..4096); it costs width x height x 2 bytes
      * each. Default 64 (32 ms at 2000 frames/s). */
     FLT_OPT_GAUGE_QUEUE_FRAMES = 701,
-    /* "gauge_overflow": what a full queue does with the next frame
+    /** "gauge_overflow": what a full queue does with the next frame
      * (integer): 0 drops it and counts it (a live camera cannot wait), 1
      * makes the pushing thread wait for room (recorded frames). Default 0. */
     FLT_OPT_GAUGE_OVERFLOW = 702,
-    /* "gauge_frame_spacing": the least encoder advance past the furthest
+    /** "gauge_frame_spacing": the least encoder advance past the furthest
      * frame taken for a frame to be taken, mm; closer frames are a line
      * stop and skipped. It sizes the buffers (rows per mm of strip), so set
      * it near the real spacing. Default 1 (1 mm frames at 120 m/min are
      * 2000 frames/s). */
     FLT_OPT_GAUGE_FRAME_SPACING = 703,
-    /* "gauge_reversal_length": a strip that backs up by more than this, mm,
+    /** "gauge_reversal_length": a strip that backs up by more than this, mm,
      * behind its furthest position starts a new strip (an encoder reset for
      * a new coil is such a reversal); a shorter reversal is skipped until
      * the strip is past its furthest position again. Default 500. */
     FLT_OPT_GAUGE_REVERSAL_LENGTH = 704,
-    /* "gauge_strip_min_width": a frame shows the strip when its valid
+    /** "gauge_strip_min_width": a frame shows the strip when its valid
      * fibers span at least this, mm. Default 100. */
     FLT_OPT_GAUGE_STRIP_MIN_WIDTH = 705,
-    /* "gauge_tail_length": the strip has left (its tail passed) when no
+    /** "gauge_tail_length": the strip has left (its tail passed) when no
      * frame showed it over this much travel, mm; shorter runs of frames
      * without it are a gap inside the strip. Default 300 (more than the
      * reconstructor's max_gap, 200). */
     FLT_OPT_GAUGE_TAIL_LENGTH = 706,
-    /* "gauge_max_sheet_length": a sheet that grows this long without a cut
+    /** "gauge_max_sheet_length": a sheet that grows this long without a cut
      * is ended there, mm. It sizes the sheet buffers. Default 6000. */
     FLT_OPT_GAUGE_MAX_SHEET_LENGTH = 707,
-    /* "gauge_keep_maps": what each sheet keeps of its rows (integer): 0
+    /** "gauge_keep_maps": what each sheet keeps of its rows (integer): 0
      * nothing (the default), 1 the reconstructed height map, 2 that and the
      * measured heights. */
     FLT_OPT_GAUGE_KEEP_MAPS = 708,
-    /* "gauge_sheet_slots": sheets that can exist at once, waiting for the
+    /** "gauge_sheet_slots": sheets that can exist at once, waiting for the
      * caller or held by it (integer 1..1024). Default 4. */
     FLT_OPT_GAUGE_SHEET_SLOTS = 709,
-    /* Not an option: keeps the type int-sized whatever is added. Any int
+    /** Not an option: keeps the type int-sized whatever is added. Any int
      * can be passed as a key (the library reads an enum argument as the int
      * it is) and an unknown one is refused with a message. New keys go
      * above this line. */
     FLT_OPT_MAX_ENUM_ = 0x7FFFFFFF
 } flt_option;
 
-/* An opaque bag of option values. Keys not set keep their default. */
+/** An opaque bag of option values. Keys not set keep their default. */
 typedef struct flt_options flt_options;
 
-/* Allocates a bag holding every default. */
+/** Allocates a bag holding every default. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_options_create(flt_options **out);
-/* Frees a bag; NULL is a no-op. Handles created from it keep their own copy
+/** Frees a bag; NULL is a no-op. Handles created from it keep their own copy
  * of the values, so the bag may be freed right after use. */
 FLT_API void FLT_CALL flt_options_destroy(flt_options *options);
-/* Sets one value and marks the key as set (see the component rule above).
+/** Sets one value and marks the key as set (see the component rule above).
  * Fails, leaving the bag unchanged, with FLT_ERR_NOT_FOUND for an unknown
  * key (as flt_options_get and flt_option_info do), and with
  * FLT_ERR_INVALID_ARGUMENT for a NaN, a value outside the key's bounds or
  * a fraction for an integer key. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_options_set(flt_options *options, flt_option key,
                                                           double value);
-/* Reads one value (the default if never set). FLT_ERR_NOT_FOUND for an
+/** Reads one value (the default if never set). FLT_ERR_NOT_FOUND for an
  * unknown key. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_options_get(const flt_options *options,
                                                           flt_option key, double *out);
 
-/* Looks a key up by its name (e.g. "knot_spacing"). FLT_ERR_NOT_FOUND if no
+/** Looks a key up by its name (e.g. "knot_spacing"). FLT_ERR_NOT_FOUND if no
  * key has that name. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_option_find(const char *name, flt_option *out);
 
-/* Describes a key: its name (static storage), inclusive bounds, default and
+/** Describes a key: its name (static storage), inclusive bounds, default and
  * whether it takes whole numbers only. Any output pointer may be NULL.
  * FLT_ERR_NOT_FOUND for an unknown key. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_option_info(flt_option key, const char **name,
@@ -530,7 +534,7 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_option_choice_at(flt_option key, s
                                                                const char **name_out,
                                                                int *value_out);
 
-/* Enumerates the keys: the index-th key for index 0, 1, ...;
+/** Enumerates the keys: the index-th key for index 0, 1, ...;
  * FLT_ERR_NOT_FOUND past the last one. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_option_at(size_t index, flt_option *out);
 
