@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-/*
+/** @file
  * libflatline - the calibration model of a dual-line-laser sensor.
  *
  * What it holds
@@ -79,22 +79,23 @@
 extern "C" {
 #endif
 
-/* Number of lasers (and homographies) of the sensor. */
+/** Number of lasers (and homographies) of the sensor. */
 #define FLT_CALIB_LASERS            2
-/* Number of distortion coefficients, OpenCV order k1 k2 p1 p2 k3 k4 k5 k6. */
+/** Number of distortion coefficients, OpenCV order k1 k2 p1 p2 k3 k4 k5 k6. */
 #define FLT_CALIB_DISTORTION_COEFFS 8
-/* The version of the file format flt_calib_save() writes. */
+/** The version of the file format flt_calib_save() writes. */
 #define FLT_CALIB_FORMAT_VERSION    1
 
+/** A calibration model (opaque handle; immutable once finished). */
 typedef struct flt_calib flt_calib;
 
-/* Calibration target kinds for flt_calib_estimate_intrinsics(). */
+/** Calibration target kinds for flt_calib_estimate_intrinsics(). */
 typedef enum flt_calib_target {
-    /* Chessboard; columns x rows counts the *inner* corners. */
+    /** Chessboard; columns x rows counts the *inner* corners. */
     FLT_TARGET_CHESSBOARD = 0,
-    /* Symmetric grid of dark circles on white; columns x rows circles. */
+    /** Symmetric grid of dark circles on white; columns x rows circles. */
     FLT_TARGET_CIRCLE_GRID = 1,
-    /* Asymmetric circle grid (OpenCV's layout); pitch is the distance
+    /** Asymmetric circle grid (OpenCV's layout); pitch is the distance
      * between neighbouring circles of one row divided by two. */
     FLT_TARGET_ASYMMETRIC_CIRCLE_GRID = 2
 } flt_calib_target;
@@ -103,42 +104,43 @@ typedef enum flt_calib_target {
 /* Life cycle                                                              */
 /* ---------------------------------------------------------------------- */
 
-/* Allocates an empty, unfinished model. *out is NULL on failure. */
+/** Allocates an empty, unfinished model. *out is NULL on failure. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_create(flt_calib **out);
-/* Frees a model; NULL is a no-op. */
+/** Frees a model; NULL is a no-op. */
 FLT_API void FLT_CALL flt_calib_destroy(flt_calib *calib);
-/* Checks that intrinsics, frame size, both homographies, both laser
+/** Checks that intrinsics, frame size, both homographies, both laser
  * offsets (distinct), the encoder scale and the fiber grid are set, then
  * freezes the model. FLT_ERR_STATE names the first missing part (the model
  * stays unfinished and usable). Finishing twice is FLT_ERR_STATE. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_finish(flt_calib *calib);
-/* *out = 1 if finished, else 0. */
+/** *out = 1 if finished, else 0. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_is_finished(const flt_calib *calib, int *out);
 
 /* ---------------------------------------------------------------------- */
 /* Camera                                                                  */
 /* ---------------------------------------------------------------------- */
 
-/* Frame size in px (each 1 .. 65536). Needed before estimating intrinsics. */
+/** Frame size in px (each 1 .. 65536). Needed before estimating intrinsics. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_set_frame_size(flt_calib *calib, uint32_t width,
                                                                    uint32_t height);
+/** The frame size, px. FLT_ERR_STATE if unset. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_get_frame_size(const flt_calib *calib,
                                                                    uint32_t *width_out,
                                                                    uint32_t *height_out);
 
-/* Sets the intrinsics directly: camera = {fx, fy, cx, cy} (px, fx and fy
+/** Sets the intrinsics directly: camera = {fx, fy, cx, cy} (px, fx and fy
  * > 0, all finite) and distortion = FLT_CALIB_DISTORTION_COEFFS finite
  * coefficients (OpenCV order), or NULL for none. Both arrays are copied. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_set_intrinsics(flt_calib *calib,
                                                                    const double camera[4],
                                                                    const double *distortion);
-/* Copies the intrinsics out: camera_out[4], distortion_out[8] (either may
+/** Copies the intrinsics out: camera_out[4], distortion_out[8] (either may
  * be NULL). FLT_ERR_STATE if none are set. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_get_intrinsics(const flt_calib *calib,
                                                                    double *camera_out,
                                                                    double *distortion_out);
 
-/* Estimates the intrinsics from `views` images of a planar target, with
+/** Estimates the intrinsics from `views` images of a planar target, with
  * OpenCV's detection, sub-pixel corner refinement and calibrateCamera, and
  * stores them in the model (the frame size must be set; every image has that
  * size).
@@ -161,16 +163,16 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_estimate_intrinsics(
 /* Laser planes                                                            */
 /* ---------------------------------------------------------------------- */
 
-/* Sets laser `laser`'s homography directly: h[9], row-major, maps
+/** Sets laser `laser`'s homography directly: h[9], row-major, maps
  * undistorted (u, v, 1) px to (x, z, 1) mm. It must be finite and
  * invertible (FLT_ERR_INVALID_ARGUMENT otherwise). Copied. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_set_homography(flt_calib *calib, unsigned laser,
                                                                    const double h[9]);
-/* Copies laser `laser`'s homography into h_out[9]. FLT_ERR_STATE if unset. */
+/** Copies laser `laser`'s homography into h_out[9]. FLT_ERR_STATE if unset. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_get_homography(const flt_calib *calib,
                                                                    unsigned laser, double *h_out);
 
-/* Estimates laser `laser`'s homography from `count` correspondences and
+/** Estimates laser `laser`'s homography from `count` correspondences and
  * stores it (the intrinsics must be set: the image points are undistorted
  * through them first).
  *   image_px  count x 2 raw image points (u, v), px.
@@ -198,28 +200,31 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_estimate_homography(
 /* Sensor geometry                                                         */
 /* ---------------------------------------------------------------------- */
 
-/* Laser `laser`'s offset along travel, mm (finite). */
+/** Laser `laser`'s offset along travel, mm (finite). */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_set_laser_offset(flt_calib *calib,
                                                                      unsigned laser,
                                                                      double offset_mm);
+/** Laser `laser`'s offset along travel, mm. FLT_ERR_STATE if unset. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_get_laser_offset(const flt_calib *calib,
                                                                      unsigned laser, double *out);
-/* Delta-d = offset_1 - offset_0, mm. FLT_ERR_STATE unless both are set. */
+/** Delta-d = offset_1 - offset_0, mm. FLT_ERR_STATE unless both are set. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_laser_spacing(const flt_calib *calib,
                                                                   double *out);
 
-/* Encoder scale, mm of travel per count (finite, non-zero; negative when the
+/** Encoder scale, mm of travel per count (finite, non-zero; negative when the
  * encoder counts down as the strip moves forward). */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_set_encoder_scale(flt_calib *calib,
                                                                       double encoder_mm_per_count);
+/** The encoder scale, mm per count. FLT_ERR_STATE if unset. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_get_encoder_scale(const flt_calib *calib,
                                                                       double *out);
 
-/* Fiber grid: fiber k sits at x = first_x_mm + k * pitch_mm, k < count
+/** Fiber grid: fiber k sits at x = first_x_mm + k * pitch_mm, k < count
  * (pitch > 0, count >= 1, all finite). */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_set_fiber_grid(flt_calib *calib,
                                                                    double first_x_mm,
                                                                    double pitch_mm, size_t count);
+/** The fiber grid: first x (mm), pitch (mm), count. FLT_ERR_STATE if unset. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_get_fiber_grid(const flt_calib *calib,
                                                                    double *first_x_mm_out,
                                                                    double *pitch_mm_out,
@@ -229,7 +234,7 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_get_fiber_grid(const flt_cal
 /* Mapping (finished model only; thread-safe; no allocation)               */
 /* ---------------------------------------------------------------------- */
 
-/* Raw image points -> laser `laser`'s plane.
+/** Raw image points -> laser `laser`'s plane.
  *   image_px   count x 2 (u, v), px.   plane_out  count x 2 (x, z), mm.
  * A NaN input point gives a NaN output point (an invalid peak stays
  * invalid); so does a point whose ray is parallel to the plane. count = 0 is
@@ -239,7 +244,7 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_image_to_plane(const flt_cal
                                                                    const double *image_px,
                                                                    double *plane_out);
 
-/* Laser `laser`'s plane -> raw image points (the inverse of the above; for
+/** Laser `laser`'s plane -> raw image points (the inverse of the above; for
  * the simulator and diagnostics).
  *   plane_mm   count x 2 (x, z), mm.   image_out  count x 2 (u, v), px.
  * A point behind the camera or at infinity gives NaN. In-place allowed. */
@@ -248,7 +253,7 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_plane_to_image(const flt_cal
                                                                    const double *plane_mm,
                                                                    double *image_out);
 
-/* Raw image points -> undistorted image points, both count x 2 px.
+/** Raw image points -> undistorted image points, both count x 2 px.
  * The inverse of the distortion model is solved by damped Newton
  * iteration to about 1e-9 px (tests/c/test_calib.c measures it); a point
  * where it does not converge gives NaN. Needs only the
@@ -262,12 +267,12 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_undistort(const flt_calib *c
 /* Save and load                                                           */
 /* ---------------------------------------------------------------------- */
 
-/* Writes a finished model to `path` (see "File format"), through a
+/** Writes a finished model to `path` (see "File format"), through a
  * temporary file renamed into place, so a crash never leaves a half file.
  * FLT_ERR_IO if it cannot be written. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_save(const flt_calib *calib, const char *path);
 
-/* Writes the same text into text_out[capacity] with a terminating NUL.
+/** Writes the same text into text_out[capacity] with a terminating NUL.
  * *length_out = the text's length without the NUL, also when the buffer is
  * too small (then FLT_ERR_BUFFER_FULL; text_out may be NULL with capacity 0
  * to ask for the size). */
@@ -275,12 +280,12 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_save_text(const flt_calib *c
                                                               char *text_out, size_t capacity,
                                                               size_t *length_out);
 
-/* Reads a model from `path` and returns it finished in *out (NULL on any
+/** Reads a model from `path` and returns it finished in *out (NULL on any
  * failure). FLT_ERR_IO if the file cannot be read, FLT_ERR_FORMAT if it is
  * malformed. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_load(const char *path, flt_calib **out);
 
-/* The same from `length` bytes of text (need not be NUL-terminated). */
+/** The same from `length` bytes of text (need not be NUL-terminated). */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_load_text(const char *text, size_t length,
                                                               flt_calib **out);
 

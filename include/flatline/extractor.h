@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-/*
+/** @file
  * libflatline - the frame-to-profile extractor: camera frame -> one profile
  * row (height, slope and validity per fiber).
  *
@@ -82,19 +82,20 @@
 extern "C" {
 #endif
 
-/* Pixel formats of a frame; the value is the number of significant bits. */
+/** Pixel formats of a frame; the value is the number of significant bits. */
 typedef enum flt_pixel_format {
-    FLT_PIXEL_MONO8 = 8,
-    FLT_PIXEL_MONO10 = 10,
-    FLT_PIXEL_MONO12 = 12,
-    FLT_PIXEL_MONO16 = 16,
-    /* Not a format: makes every int a valid flt_pixel_format value. */
+    FLT_PIXEL_MONO8 = 8,   /**< 8 bits per pixel, one byte each */
+    FLT_PIXEL_MONO10 = 10, /**< 10 significant bits in a 16-bit word */
+    FLT_PIXEL_MONO12 = 12, /**< 12 significant bits in a 16-bit word */
+    FLT_PIXEL_MONO16 = 16, /**< 16 bits per pixel */
+    /** Not a format: makes every int a valid flt_pixel_format value. */
     FLT_PIXEL_MAX_ENUM_ = 0x7FFFFFFF
 } flt_pixel_format;
 
+/** A frame-to-profile extractor (opaque handle). */
 typedef struct flt_extractor flt_extractor;
 
-/* Creates an extractor for frames of a finished calibration.
+/** Creates an extractor for frames of a finished calibration.
  *   calib    finished model (FLT_ERR_STATE otherwise); copied, so it may be
  *            destroyed right after this call.
  *   options  NULL for the defaults, else read for the extract_* keys
@@ -107,21 +108,21 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_extractor_create(const flt_calib *
                                                                const flt_options *options,
                                                                flt_extractor **out);
 
-/* Frees everything. NULL is a no-op. */
+/** Frees everything. NULL is a no-op. */
 FLT_API void FLT_CALL flt_extractor_destroy(flt_extractor *extractor);
 
-/* The number of fibers of a profile row (the calibration's fiber count). */
+/** The number of fibers of a profile row (the calibration's fiber count). */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_extractor_fibers(const flt_extractor *extractor,
                                                                size_t *out);
 
-/* Laser `laser`'s band of rows: first row and row count (px). FLT_ERR_STATE
+/** Laser `laser`'s band of rows: first row and row count (px). FLT_ERR_STATE
  * while an automatic band waits for its first frame. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_extractor_band(const flt_extractor *extractor,
                                                              unsigned laser,
                                                              uint32_t *first_row_out,
                                                              uint32_t *rows_out);
 
-/* Turns one frame into one profile row.
+/** Turns one frame into one profile row.
  *   frame          width x height pixels of `format`, rows stride_bytes
  *                  apart. Not retained.
  *   encoder_mm     the encoder position of the frame, mm (finite).
@@ -137,14 +138,14 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_extractor_process(
     uint32_t height, size_t stride_bytes, double encoder_mm, size_t fibers, double *s_out,
     double *height_out, double *slope_out, uint8_t *valid_out);
 
-/* Diagnostics of the last processed frame: the sub-pixel peak row of every
+/** Diagnostics of the last processed frame: the sub-pixel peak row of every
  * column, rows_out[laser * width + u] (px, raw image rows), NaN where the
  * column has no valid peak. `width` must equal the frame width.
  * FLT_ERR_STATE before the first successful process(). */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_extractor_peaks(const flt_extractor *extractor,
                                                               size_t width, double *rows_out);
 
-/* Diagnostics of the last processed frame: each laser's z on the fiber grid,
+/** Diagnostics of the last processed frame: each laser's z on the fiber grid,
  * z_out[laser * fibers + k] (mm), NaN where invalid. The material position
  * of laser L's reading is s = encoder_mm - offset_L. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-/*
+/** @file
  * libflatline - flatness metrics: I-Units per fiber and per zone, the largest
  * wave, the shape class, bow and crossbow.
  *
@@ -105,38 +105,40 @@
 extern "C" {
 #endif
 
-/* Per-fiber result flags (bits combine). */
+/** Per-fiber result flags (bits combine). */
 enum {
-    /* Less than flat_min_coverage of the window usable: arc length, I-Units
+    /** Less than flat_min_coverage of the window usable: arc length, I-Units
      * and the wave are NaN. */
     FLT_FIBER_NO_DATA = 1,
-    /* No complete wave above flat_wave_hysteresis in the window (a flat
+    /** No complete wave above flat_wave_hysteresis in the window (a flat
      * fiber, or waves longer than the window): the wave height, period and
      * steepness are NaN. */
     FLT_FIBER_NO_WAVE = 2,
-    /* Some rows were unusable; the arc length is scaled from the covered
+    /** Some rows were unusable; the arc length is scaled from the covered
      * part (still at least flat_min_coverage). */
     FLT_FIBER_PARTIAL = 4
 };
 
-/* Per-zone result flag: no valid fiber in the zone, I-Units NaN. */
-enum { FLT_ZONE_NO_DATA = 1 };
-
-/* Per-window flags. */
+/** Per-zone result flag: no valid fiber in the zone, I-Units NaN. */
 enum {
-    /* Shorter than flat_min_length (shorter than one flatness wave):
+    FLT_ZONE_NO_DATA = 1 /**< no valid fiber in the zone: I-Units NaN */
+};
+
+/** Per-window flags. */
+enum {
+    /** Shorter than flat_min_length (shorter than one flatness wave):
      * I-Units are still the arc-length ratios of that material, but no wave
      * is reported and the shape is FLT_SHAPE_UNDETERMINED. */
     FLT_WINDOW_SHORT = 1,
-    /* No fiber is valid: every value is NaN and flagged. */
+    /** No fiber is valid: every value is NaN and flagged. */
     FLT_WINDOW_NO_VALID_FIBER = 2,
-    /* No valid fiber has 3 usable rows for a parabola: bow_mm is NaN. */
+    /** No valid fiber has 3 usable rows for a parabola: bow_mm is NaN. */
     FLT_WINDOW_NO_BOW = 4,
-    /* Fewer than 3 valid fibers: crossbow_mm is NaN. */
+    /** Fewer than 3 valid fibers: crossbow_mm is NaN. */
     FLT_WINDOW_NO_CROSSBOW = 8
 };
 
-/* The shape class of a window, from its zone I-Unit profile p (minus its
+/** The shape class of a window, from its zone I-Unit profile p (minus its
  * minimum). Let peak = max p. Below flat_flat_limit I-Units the window is
  * FLAT. Otherwise the "long" material is the part of p above peak / 2; its
  * share in each band of u = (x - centre) / (width / 2) decides:
@@ -150,31 +152,31 @@ enum {
  * margin a = min(1, peak / (2 limit)) (0.5 at the limit, 1 from twice the
  * limit) and e the share of the long material in the named components. */
 typedef enum flt_shape {
-    FLT_SHAPE_FLAT = 0,
-    FLT_SHAPE_CENTRE_BUCKLE = 1,
-    FLT_SHAPE_WAVY_EDGE_LEFT = 2, /* x < centre is left */
-    FLT_SHAPE_WAVY_EDGE_RIGHT = 3,
-    FLT_SHAPE_WAVY_EDGE_BOTH = 4,
-    FLT_SHAPE_QUARTER_BUCKLE = 5,
-    FLT_SHAPE_MIX = 6, /* see the component bits */
-    /* Too short a window, no valid fiber, or fewer than 5 valid zones. */
+    FLT_SHAPE_FLAT = 0,            /**< below flat_flat_limit I-Units */
+    FLT_SHAPE_CENTRE_BUCKLE = 1,   /**< the centre is long */
+    FLT_SHAPE_WAVY_EDGE_LEFT = 2,  /**< the left edge is long (x < centre is left) */
+    FLT_SHAPE_WAVY_EDGE_RIGHT = 3, /**< the right edge is long */
+    FLT_SHAPE_WAVY_EDGE_BOTH = 4,  /**< both edges are long */
+    FLT_SHAPE_QUARTER_BUCKLE = 5,  /**< the quarters are long */
+    FLT_SHAPE_MIX = 6,             /**< several of the above: see the component bits */
+    /** Too short a window, no valid fiber, or fewer than 5 valid zones. */
     FLT_SHAPE_UNDETERMINED = 7,
     FLT_SHAPE_MAX_ENUM_ = 0x7FFFFFFF
 } flt_shape;
 
-/* Components of a shape (bits combine). BOW and CROSSBOW are set when
+/** Components of a shape (bits combine). BOW and CROSSBOW are set when
  * |bow_mm| >= flat_bow_limit and |crossbow_mm| >= flat_crossbow_limit; they
  * do not change the class, which is about fiber lengths only. */
 enum {
-    FLT_SHAPE_HAS_CENTRE = 1,
-    FLT_SHAPE_HAS_EDGE_LEFT = 2,
-    FLT_SHAPE_HAS_EDGE_RIGHT = 4,
-    FLT_SHAPE_HAS_QUARTER = 8,
-    FLT_SHAPE_HAS_BOW = 16,
-    FLT_SHAPE_HAS_CROSSBOW = 32
+    FLT_SHAPE_HAS_CENTRE = 1,     /**< long centre */
+    FLT_SHAPE_HAS_EDGE_LEFT = 2,  /**< long left edge */
+    FLT_SHAPE_HAS_EDGE_RIGHT = 4, /**< long right edge */
+    FLT_SHAPE_HAS_QUARTER = 8,    /**< long quarters */
+    FLT_SHAPE_HAS_BOW = 16,       /**< bow at or above flat_bow_limit */
+    FLT_SHAPE_HAS_CROSSBOW = 32   /**< crossbow at or above flat_crossbow_limit */
 };
 
-/* A lower-case English name of a shape, e.g. "centre buckle". Never NULL;
+/** A lower-case English name of a shape, e.g. "centre buckle". Never NULL;
  * "unknown" for a value outside the enum. Static storage. */
 FLT_API const char *FLT_CALL flt_shape_string(flt_shape shape);
 
@@ -189,9 +191,10 @@ typedef enum flt_flat_reference {
     FLT_FLAT_REFERENCE_MAX_ENUM_ = 0x7FFFFFFF
 } flt_flat_reference;
 
+/** A flatness evaluator (opaque handle). */
 typedef struct flt_flatness flt_flatness;
 
-/* Creates the metrics for `fibers` fibers (>= 1) at fiber_x [fibers] (mm,
+/** Creates the metrics for `fibers` fibers (>= 1) at fiber_x [fibers] (mm,
  * finite, strictly increasing; copied).
  * options: NULL for the defaults, else read for the flat_* keys; copied.
  * Fails with FLT_ERR_INVALID_ARGUMENT for NULL, zero fibers, bad positions
@@ -200,22 +203,23 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_create(size_t fibers, con
                                                               const flt_options *options,
                                                               flt_flatness **out);
 
-/* The same with the fiber grid of a calibration (flt_calib_get_fiber_grid);
+/** The same with the fiber grid of a calibration (flt_calib_get_fiber_grid);
  * calib is only read during the call. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_create_from_calib(const flt_calib *calib,
                                                                          const flt_options *options,
                                                                          flt_flatness **out);
 
-/* Frees everything. NULL is a no-op. */
+/** Frees everything. NULL is a no-op. */
 FLT_API void FLT_CALL flt_flatness_destroy(flt_flatness *flatness);
 
-/* The fiber and zone counts. */
+/** The fiber and zone counts. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_fibers(const flt_flatness *flatness,
                                                               size_t *out);
+/** The zone count (flat_zones). */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_zones(const flt_flatness *flatness,
                                                              size_t *out);
 
-/* The zone layout: zone j covers [left_x[j], left_x[j] + zone width) mm,
+/** The zone layout: zone j covers [left_x[j], left_x[j] + zone width) mm,
  * centre_x[j] its middle, fiber_count[j] the fibers in it. `zones` must
  * equal flt_flatness_zones(). Any output may be NULL. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_zone_layout(const flt_flatness *flatness,
@@ -223,7 +227,7 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_zone_layout(const flt_fla
                                                                    double *centre_x_out,
                                                                    size_t *fiber_count_out);
 
-/* Evaluates one window from the caller's rows (a whole sheet):
+/** Evaluates one window from the caller's rows (a whole sheet):
  *   s      [rows]          material position, mm, finite, strictly
  *                          increasing.
  *   z      [rows * fibers] reconstructed heights, mm (NaN allowed where
@@ -238,7 +242,7 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_evaluate(flt_flatness *fl
                                                                 const double *z,
                                                                 const uint8_t *flags);
 
-/* Streaming: takes rows (arrays as in flt_flatness_evaluate; s continues to
+/** Streaming: takes rows (arrays as in flt_flatness_evaluate; s continues to
  * increase across calls) until a window completes. *consumed_out: the rows
  * taken (all of them unless a window completed first); *evaluated_out: 1 if
  * a window was evaluated (its results are now readable), else 0. Call again
@@ -253,17 +257,17 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_push(flt_flatness *flatne
                                                             size_t *consumed_out,
                                                             int *evaluated_out);
 
-/* Ends the current sheet: evaluates the rows since the current window's
+/** Ends the current sheet: evaluates the rows since the current window's
  * start as one window (*evaluated_out = 1; flagged FLT_WINDOW_SHORT if
  * shorter than flat_min_length), or does nothing (*evaluated_out = 0) when
  * fewer than 2 rows are pending. The next row pushed starts a new grid. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_finish(flt_flatness *flatness,
                                                               int *evaluated_out);
 
-/* Drops the pending rows and restarts the window grid; results stay. */
+/** Drops the pending rows and restarts the window grid; results stay. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_reset(flt_flatness *flatness);
 
-/* The last evaluated window: its first and last row's s (mm), its row
+/** The last evaluated window: its first and last row's s (mm), its row
  * count, FLT_WINDOW_* flags and its sequence number (1 for the first window
  * since create). Any output may be NULL. FLT_ERR_STATE before the first
  * window. */
@@ -273,7 +277,7 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_window(const flt_flatness
                                                               unsigned *window_flags_out,
                                                               size_t *index_out);
 
-/* Per-fiber results of the last window, [fibers] each (mm, I-Units, mm, mm,
+/** Per-fiber results of the last window, [fibers] each (mm, I-Units, mm, mm,
  * %, FLT_FIBER_* bits). Any output may be NULL. FLT_ERR_STATE before the
  * first window. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL
@@ -281,14 +285,14 @@ flt_flatness_fiber_results(const flt_flatness *flatness, size_t fibers, double *
                            double *i_units_out, double *wave_height_out, double *wave_period_out,
                            double *steepness_percent_out, uint8_t *flags_out);
 
-/* The zone profile of the last window, [zones] I-Units and FLT_ZONE_* bits.
+/** The zone profile of the last window, [zones] I-Units and FLT_ZONE_* bits.
  * Either output may be NULL. FLT_ERR_STATE before the first window. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_zone_results(const flt_flatness *flatness,
                                                                     size_t zones,
                                                                     double *i_units_out,
                                                                     uint8_t *flags_out);
 
-/* The shape of the last window: class, confidence in [0, 1],
+/** The shape of the last window: class, confidence in [0, 1],
  * FLT_SHAPE_HAS_* bits, bow and crossbow sagittas (mm; NaN only with
  * FLT_WINDOW_NO_BOW / FLT_WINDOW_NO_CROSSBOW). Any output may be NULL. FLT_ERR_STATE before
  * the first window. */

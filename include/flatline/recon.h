@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-/*
+/** @file
  * libflatline - the streaming Hermite reconstructor.
  *
  * What it does
@@ -104,15 +104,15 @@
 extern "C" {
 #endif
 
-/* Output flags, one byte per row and fiber; bits combine. */
+/** Output flags, one byte per row and fiber; bits combine. */
 enum {
-    /* This row's own sample of this fiber was invalid (height and slope both
+    /** This row's own sample of this fiber was invalid (height and slope both
      * missing); the value is bridged from the neighbouring samples. */
     FLT_FLAG_INVALID_INPUT = 1,
-    /* The row lies in a run of invalid samples longer than max_gap: the value
+    /** The row lies in a run of invalid samples longer than max_gap: the value
      * comes from the smoothness prior alone and is not a measurement. */
     FLT_FLAG_GAP = 2,
-    /* The fiber has had no valid height since the strip began (and no
+    /** The fiber has had no valid height since the strip began (and no
      * carry-over): its level is unknown and the value is NaN. */
     FLT_FLAG_NO_DATA = 4
 };
@@ -132,9 +132,10 @@ typedef enum flt_robust {
     FLT_ROBUST_MAX_ENUM_ = 0x7FFFFFFF
 } flt_robust;
 
+/** A streaming reconstructor (opaque handle). */
 typedef struct flt_recon flt_recon;
 
-/* Creates a streaming reconstructor for `fibers` fibers (>= 1), for lasers
+/** Creates a streaming reconstructor for `fibers` fibers (>= 1), for lasers
  * laser_spacing mm apart (default 100 mm: the reference sensor's). With a
  * calibration, use flt_recon_create_from_calib(), which takes both from it.
  * options: NULL for the defaults, else read for the FLT_OPT_* keys of the
@@ -180,19 +181,19 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_create_from_calib(const flt_
                                                                       const flt_options *options,
                                                                       flt_recon **out);
 
-/* Frees everything. NULL is a no-op. */
+/** Frees everything. NULL is a no-op. */
 FLT_API void FLT_CALL flt_recon_destroy(flt_recon *recon);
 
-/* The number of fibers the handle was created with. */
+/** The number of fibers the handle was created with. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_fibers(const flt_recon *recon, size_t *out);
 
-/* The effective value of an option (knot_spacing resolved to mm).
+/** The effective value of an option (knot_spacing resolved to mm).
  * FLT_ERR_NOT_FOUND for an unknown key, FLT_ERR_INVALID_ARGUMENT for a key
  * of another component. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_get_option(const flt_recon *recon,
                                                                flt_option key, double *out);
 
-/* Pushes `rows` rows (>= 1).
+/** Pushes `rows` rows (>= 1).
  *   s       [rows]          material position of each row, mm, strictly
  *                           increasing, also across calls and sheets, by
  *                           at most 1 km and 1000 knot intervals from one
@@ -211,7 +212,7 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_push(flt_recon *recon, size_
                                                          const double *height, const double *slope,
                                                          const uint8_t *valid);
 
-/* Pulls up to max_rows finished rows, oldest first.
+/** Pulls up to max_rows finished rows, oldest first.
  *   s_out     [max_rows]          their positions, mm.
  *   z_out     [max_rows * fibers] reconstructed heights, mm (NaN only where
  *                                 FLT_FLAG_NO_DATA is set).
@@ -223,26 +224,26 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_pull(flt_recon *recon, size_
                                                          double *z_out, uint8_t *flags_out,
                                                          size_t *rows_out);
 
-/* The number of finished rows waiting to be pulled. */
+/** The number of finished rows waiting to be pulled. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_ready(const flt_recon *recon, size_t *out);
 
-/* Finishes the current sheet: every pushed row becomes ready to pull, solved
+/** Finishes the current sheet: every pushed row becomes ready to pull, solved
  * with all data so far, and the last emitted knot becomes the hard boundary
  * condition of the next sheet (carry-over). FLT_ERR_STATE if no row was
  * pushed since the last end_sheet, create or reset. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_end_sheet(flt_recon *recon);
 
-/* Starts a new strip: drops every row not pulled yet and the carry-over. */
+/** Starts a new strip: drops every row not pulled yet and the carry-over. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_reset(flt_recon *recon);
 
-/* The boundary condition carried into the next sheet: the knot position
+/** The boundary condition carried into the next sheet: the knot position
  * (mm), and per fiber its height (mm) and slope (mm/mm). Any output may be
  * NULL. FLT_ERR_STATE before the first end_sheet of a strip. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_boundary(const flt_recon *recon, size_t fibers,
                                                              double *s_out, double *height_out,
                                                              double *slope_out);
 
-/* Reconstructs one whole sheet in one call: the least-squares spline of all
+/** Reconstructs one whole sheet in one call: the least-squares spline of all
  * rows at once (no lag, no carry-over). Arguments as in flt_recon_push;
  * z_out [rows * fibers] and flags_out [rows * fibers] (or NULL) as in
  * flt_recon_pull. Allocates its working memory for the duration of the call

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-/*
+/** @file
  * libflatline - the simulated sensor, the built-in default frame source.
  *
  * Vendors commission their HMI with it without a line; the tests measure
@@ -67,7 +67,7 @@
 extern "C" {
 #endif
 
-/* Parametric defects. Each is amplitude_mm * g(x) * w(s) with
+/** Parametric defects. Each is amplitude_mm * g(x) * w(s) with
  * w(s) = sin(2 pi s / period_mm) (w = 1 when period_mm = 0) and, with
  * W = sim_strip_width and x in [-W/2, W/2] (clamped outside):
  *   FLAT                 g = 0
@@ -80,20 +80,21 @@ extern "C" {
  *   CROSSBOW             g = (2x/W)^2   (period 0: a constant transverse bow)
  * Defects add up. */
 typedef enum flt_sim_defect {
-    FLT_SIM_FLAT = 0,
-    FLT_SIM_CENTRE_BUCKLE = 1,
-    FLT_SIM_WAVY_EDGE_LEFT = 2,
-    FLT_SIM_WAVY_EDGE_RIGHT = 3,
-    FLT_SIM_WAVY_EDGE_BOTH = 4,
-    FLT_SIM_QUARTER_BUCKLE = 5,
-    FLT_SIM_BOW = 6,
-    FLT_SIM_CROSSBOW = 7,
+    FLT_SIM_FLAT = 0,            /**< no defect (g = 0) */
+    FLT_SIM_CENTRE_BUCKLE = 1,   /**< long centre (profile above) */
+    FLT_SIM_WAVY_EDGE_LEFT = 2,  /**< long left edge */
+    FLT_SIM_WAVY_EDGE_RIGHT = 3, /**< long right edge */
+    FLT_SIM_WAVY_EDGE_BOTH = 4,  /**< both edges long */
+    FLT_SIM_QUARTER_BUCKLE = 5,  /**< long quarters */
+    FLT_SIM_BOW = 6,             /**< coil set: the whole width together */
+    FLT_SIM_CROSSBOW = 7,        /**< a constant transverse bow */
     FLT_SIM_DEFECT_MAX_ENUM_ = 0x7FFFFFFF
 } flt_sim_defect;
 
+/** A simulated sensor (opaque handle). */
 typedef struct flt_sim flt_sim;
 
-/* Creates a simulator of the sensor described by `calib` (finished; copied,
+/** Creates a simulator of the sensor described by `calib` (finished; copied,
  * so it may be destroyed right after), or of the reference sensor when calib
  * is NULL (flt_calib_create_reference(0, 2048, -1000, 2, 1001)).
  * options: NULL for the defaults, else read for the sim_* keys. The sheet
@@ -101,18 +102,18 @@ typedef struct flt_sim flt_sim;
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_create(const flt_calib *calib,
                                                          const flt_options *options, flt_sim **out);
 
-/* Frees everything. NULL is a no-op. */
+/** Frees everything. NULL is a no-op. */
 FLT_API void FLT_CALL flt_sim_destroy(flt_sim *sim);
 
-/* Adds a defect (see flt_sim_defect): amplitude_mm finite, period_mm >= 0
+/** Adds a defect (see flt_sim_defect): amplitude_mm finite, period_mm >= 0
  * finite. At most 64 defects. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_add_defect(flt_sim *sim, flt_sim_defect kind,
                                                              double amplitude_mm, double period_mm);
 
-/* Removes every defect and the height map: the sheet is flat again. */
+/** Removes every defect and the height map: the sheet is flat again. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_clear_sheet(flt_sim *sim);
 
-/* Adds a user height map to the sheet (replacing a previous map):
+/** Adds a user height map to the sheet (replacing a previous map):
  * heights [rows * cols] mm, row-major, row r at s = s0_mm + r * ds_mm, column
  * c at x = x0_mm + c * dx_mm (rows, cols >= 2; ds, dx > 0; all finite).
  * Interpolated bilinearly; clamped to the edge values outside. Copied. */
@@ -122,22 +123,23 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_set_height_map(flt_sim *sim, s
                                                                  double dx_mm,
                                                                  const double *heights);
 
-/* The ground truth z_sheet at count points (x[i], s[i]) (mm) into z_out. */
+/** The ground truth z_sheet at count points (x[i], s[i]) (mm) into z_out. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_surface(const flt_sim *sim, size_t count,
                                                           const double *x, const double *s,
                                                           double *z_out);
 
-/* The fiber count (the calibration's grid) and the frame size, px. */
+/** The fiber count (the calibration's grid) and the frame size, px. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_fibers(const flt_sim *sim, size_t *out);
+/** The frame size of flt_sim_next_frame(), px. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_frame_size(const flt_sim *sim,
                                                              uint32_t *width_out,
                                                              uint32_t *height_out);
-/* The pixel format of flt_sim_next_frame (from sim_bit_depth) and the bytes
+/** The pixel format of flt_sim_next_frame (from sim_bit_depth) and the bytes
  * one frame needs at a given stride. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_pixel_format(const flt_sim *sim,
                                                                flt_pixel_format *out);
 
-/* Generates the next `rows` profile rows (frames f .. f + rows - 1).
+/** Generates the next `rows` profile rows (frames f .. f + rows - 1).
  *   fibers          must equal flt_sim_fibers().
  *   encoder_mm_out  [rows] each frame's encoder position (may be NULL).
  *   s_out           [rows] each row's material position, mm.
@@ -151,7 +153,7 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_next_rows(flt_sim *sim, size_t
                                                             double *slope_out, uint8_t *valid_out,
                                                             double *truth_out);
 
-/* Renders the next frame.
+/** Renders the next frame.
  *   frame_out       height rows of stride_bytes (>= width * bytes per
  *                   pixel; 16-bit formats: even, 2-byte aligned buffer),
  *                   capacity_bytes >= stride_bytes * height.
@@ -166,10 +168,10 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL
 flt_sim_next_frame(flt_sim *sim, void *frame_out, size_t capacity_bytes, size_t stride_bytes,
                    double *encoder_mm_out, size_t fibers, double *truth_out, double *peak_rows_out);
 
-/* Back to frame 0: the following output repeats the first bytes exactly. */
+/** Back to frame 0: the following output repeats the first bytes exactly. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_rewind(flt_sim *sim);
 
-/* The reference sensor (docs/sensor.md) as a finished calibration,
+/** The reference sensor (docs/sensor.md) as a finished calibration,
  * for the simulator, tests and demos: a 2048 x 2048 camera, f = 6 mm lens,
  * 5.5 um pixels (fx = fy = 1090.9 px), principal point (1030.25, 1019.75),
  * the barrel distortion of a 6 mm lens (k1 = -0.08, k2 = 0.012, p1 = 1.5e-4,
