@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-/*
+/** @file
  * libflatline - online flatness gauge for steel strip from a dual-line-laser
  * and camera sensor. This umbrella header includes every public header.
  */

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-/*
+/** @file
  * libflatline - the gauge: one handle that runs a measuring line. Camera
  * frames and the shear's cut signal go in, measured sheets come out.
  *
@@ -134,6 +134,7 @@
 extern "C" {
 #endif
 
+/** A gauge: a whole measuring line (opaque handle). */
 typedef struct flt_gauge flt_gauge;
 /** One measured sheet (see "Sheets"). */
 typedef struct flt_sheet flt_sheet;
@@ -151,57 +152,57 @@ typedef enum flt_sheet_value {
      * first row of its strip (FLT_SHEET_FLAG_HEAD), or the last row of its
      * strip (TAIL, NEW_STRIP, FLUSHED), or where it was split (SPLIT). */
     FLT_SHEET_S_START = 3,
-    FLT_SHEET_S_END = 4,
+    FLT_SHEET_S_END = 4, /**< end, s in mm (see FLT_SHEET_S_START) */
     /** Rows (frames) in the sheet, and the s of its first and last row, mm
      * (NaN with FLT_SHEET_FLAG_EMPTY when it has none). */
     FLT_SHEET_ROWS = 5,
-    FLT_SHEET_S_FIRST = 6,
-    FLT_SHEET_S_LAST = 7,
+    FLT_SHEET_S_FIRST = 6, /**< s of the first row, mm */
+    FLT_SHEET_S_LAST = 7,  /**< s of the last row, mm */
     /** The strip's edges, width and centre across the sensor, mm (x of the
      * fiber grid): the outer fibers with enough valid data, plus half a
      * pitch. NaN with FLT_SHEET_FLAG_NO_EDGES. */
     FLT_SHEET_STRIP_LEFT = 8,
-    FLT_SHEET_STRIP_RIGHT = 9,
-    FLT_SHEET_STRIP_WIDTH = 10,
-    FLT_SHEET_STRIP_CENTRE = 11,
+    FLT_SHEET_STRIP_RIGHT = 9,   /**< right edge, mm */
+    FLT_SHEET_STRIP_WIDTH = 10,  /**< width, mm */
+    FLT_SHEET_STRIP_CENTRE = 11, /**< centre, mm */
     /** Shape class (an flt_shape value), its confidence in [0, 1] and its
      * FLT_SHAPE_HAS_* component bits (flatline/flatness.h). */
     FLT_SHEET_SHAPE = 12,
-    FLT_SHEET_CONFIDENCE = 13,
-    FLT_SHEET_COMPONENTS = 14,
+    FLT_SHEET_CONFIDENCE = 13, /**< confidence of the class, [0, 1] */
+    FLT_SHEET_COMPONENTS = 14, /**< FLT_SHAPE_HAS_* bits */
     /** Bow (coil set) and crossbow sagittas, mm (flatline/flatness.h); NaN
      * with FLT_WINDOW_NO_BOW / FLT_WINDOW_NO_CROSSBOW in the window flags. */
     FLT_SHEET_BOW = 15,
-    FLT_SHEET_CROSSBOW = 16,
+    FLT_SHEET_CROSSBOW = 16, /**< crossbow sagitta, mm */
     /** The largest wave over the fibers: peak-to-peak height (mm), period
      * (mm), steepness (%) and the x of its fiber (mm). NaN with
      * FLT_SHEET_FLAG_NO_WAVE. */
     FLT_SHEET_WAVE_HEIGHT = 17,
-    FLT_SHEET_WAVE_PERIOD = 18,
-    FLT_SHEET_WAVE_STEEPNESS = 19,
-    FLT_SHEET_WAVE_X = 20,
+    FLT_SHEET_WAVE_PERIOD = 18,    /**< its period, mm */
+    FLT_SHEET_WAVE_STEEPNESS = 19, /**< its steepness, % */
+    FLT_SHEET_WAVE_X = 20,         /**< x of its fiber, mm */
     /** The largest zone I-Units (NaN with FLT_WINDOW_NO_VALID_FIBER). */
     FLT_SHEET_MAX_I_UNITS = 21,
     /** FLT_SHEET_FLAG_* bits, and the flatness window's FLT_WINDOW_* bits. */
     FLT_SHEET_FLAGS = 22,
-    FLT_SHEET_WINDOW_FLAGS = 23,
+    FLT_SHEET_WINDOW_FLAGS = 23, /**< FLT_WINDOW_* bits */
     /** Counters over the sheet's stretch of strip: frames measured (its
      * rows), frames skipped (line stops, short reversals), frames dropped
      * (the queue was full), saturated peaks (reported by the extractor;
      * 0 until it counts them) and invalid samples (row and fiber without a
      * measurement, fibers outside a narrower strip included). */
     FLT_SHEET_FRAMES = 24,
-    FLT_SHEET_SKIPPED = 25,
-    FLT_SHEET_DROPPED = 26,
-    FLT_SHEET_SATURATED = 27,
-    FLT_SHEET_INVALID = 28,
+    FLT_SHEET_SKIPPED = 25,   /**< frames skipped */
+    FLT_SHEET_DROPPED = 26,   /**< frames dropped */
+    FLT_SHEET_SATURATED = 27, /**< saturated peaks */
+    FLT_SHEET_INVALID = 28,   /**< invalid samples */
     /** Strip the reconstructor had taken beyond S_END when the sheet's last
      * row was finished, mm (0 when the strip ended there). */
     FLT_SHEET_LOOKAHEAD = 29,
     /** The sizes of the per-fiber and per-zone arrays. */
     FLT_SHEET_FIBERS = 30,
-    FLT_SHEET_ZONES = 31,
-    /* Not a key: keeps the type int-sized whatever is added. */
+    FLT_SHEET_ZONES = 31, /**< zone count */
+    /** Not a key: keeps the type int-sized whatever is added. */
     FLT_SHEET_VALUE_MAX_ENUM_ = 0x7FFFFFFF
 } flt_sheet_value;
 
@@ -211,17 +212,17 @@ typedef enum flt_sheet_array {
      * (mm), largest wave height (mm), period (mm), steepness (%), and the
      * FLT_FIBER_* flag bits as whole numbers (flatline/flatness.h). */
     FLT_SHEET_FIBER_X = 0,
-    FLT_SHEET_FIBER_I_UNITS = 1,
-    FLT_SHEET_FIBER_ARC_LENGTH = 2,
-    FLT_SHEET_FIBER_WAVE_HEIGHT = 3,
-    FLT_SHEET_FIBER_WAVE_PERIOD = 4,
-    FLT_SHEET_FIBER_STEEPNESS = 5,
-    FLT_SHEET_FIBER_FLAGS = 6,
+    FLT_SHEET_FIBER_I_UNITS = 1,     /**< I-Units per fiber */
+    FLT_SHEET_FIBER_ARC_LENGTH = 2,  /**< arc length per fiber, mm */
+    FLT_SHEET_FIBER_WAVE_HEIGHT = 3, /**< largest wave height per fiber, mm */
+    FLT_SHEET_FIBER_WAVE_PERIOD = 4, /**< its period, mm */
+    FLT_SHEET_FIBER_STEEPNESS = 5,   /**< its steepness, % */
+    FLT_SHEET_FIBER_FLAGS = 6,       /**< FLT_FIBER_* bits */
     /** Per zone (FLT_SHEET_ZONES values): centre x (mm), I-Units, and the
      * FLT_ZONE_* flag bits as whole numbers. */
     FLT_SHEET_ZONE_CENTRE_X = 7,
-    FLT_SHEET_ZONE_I_UNITS = 8,
-    FLT_SHEET_ZONE_FLAGS = 9,
+    FLT_SHEET_ZONE_I_UNITS = 8, /**< I-Units per zone */
+    FLT_SHEET_ZONE_FLAGS = 9,   /**< FLT_ZONE_* bits */
     FLT_SHEET_ARRAY_MAX_ENUM_ = 0x7FFFFFFF
 } flt_sheet_array;
 
@@ -269,7 +270,7 @@ typedef enum flt_gauge_counter {
     FLT_GAUGE_COUNT_SHEETS_DROPPED = 8,
     /** Cuts given, and those ignored (at or before the open sheet's start). */
     FLT_GAUGE_COUNT_CUTS = 9,
-    FLT_GAUGE_COUNT_CUTS_IGNORED = 10,
+    FLT_GAUGE_COUNT_CUTS_IGNORED = 10, /**< cuts ignored */
     /** Strips ended by a long reversal or a jump of the encoder. */
     FLT_GAUGE_COUNT_REVERSALS = 11,
     /** Frames the extractor refused (their rows count as invalid). */
@@ -329,9 +330,13 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_get_option(const flt_gauge *
 /* ---------------------------------------------------------------------- */
 
 /** Pushes one frame.
+ * @param gauge         the gauge.
  * @param frame         height rows of stride_bytes, `format` pixels (as in
  *                      flt_extractor_process); copied.
+ * @param format        its pixel format.
  * @param width, height must equal the calibration's frame size.
+ * @param stride_bytes  bytes from one row to the next (at least width
+ *                      times the bytes per pixel).
  * @param encoder_mm    the strip position of the frame, mm (finite, at
  *                      most 1e12 in magnitude).
  * @return FLT_OK also when the frame was skipped (line stop, reversal) or
@@ -349,6 +354,8 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_push_frame(flt_gauge *gauge,
 /** Pushes one profile row instead of a frame (a sensor that extracts its
  * own profiles, or recorded rows): what flt_extractor_process() gives for
  * a frame taken at encoder_mm.
+ * @param gauge   the gauge.
+ * @param encoder_mm the strip position of the row, mm (as for a frame).
  * @param fibers  must equal the calibration's fiber count.
  * @param height, slope  [fibers] mm and mm/mm (NaN where not measured).
  * @param valid   [fibers] non-zero where valid, or NULL (then finite values

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-/*
+/** @file
  * libflatline - an offline view of a camera description (GenICam XML).
  *
  * What
@@ -150,6 +150,8 @@ FLT_API void FLT_CALL flt_genicam_destroy(flt_genicam *description);
 
 /**
  * A text of the description itself (vendor, model, schema version).
+ * @param description the description.
+ * @param which       the text wanted.
  * @param out receives a string owned by the handle ("" when the file has none).
  */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_get_text(const flt_genicam *description,
@@ -166,6 +168,8 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_feature_count(const flt_ge
 
 /**
  * Feature `index` (0 .. count-1, in document order).
+ * @param description the description.
+ * @param index       0 .. count-1.
  * @param out receives its name, owned by the handle.
  * @return FLT_ERR_NOT_FOUND past the last one.
  */
@@ -174,6 +178,8 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_feature_name(const flt_gen
 
 /**
  * What a feature is, without evaluating anything.
+ * @param description the description.
+ * @param feature the feature's name.
  * @param type  its interface (may be NULL).
  * @param kind  the XML element: "IntReg", "SwissKnife", "StructEntry", ... (may be NULL).
  * @param unit  its Unit, "" if none (may be NULL).
@@ -245,6 +251,8 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_get_flags(flt_genicam *des
 /**
  * The register holding the feature's value: the register node at the end of
  * its pValue chain (through Converters), its address evaluated now.
+ * @param description the description.
+ * @param feature    the feature's name.
  * @param address    bytes; @param length bytes;
  * @param lsb, msb   the bits of the register's value holding the feature;
  * @param big_endian 1 for a big-endian register. Any output may be NULL.
@@ -271,6 +279,8 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_get_float(flt_genicam *des
 
 /**
  * The value of a string feature, or the entry name of an enumeration.
+ * @param description the description.
+ * @param feature the feature's name.
  * @param out receives a string valid until the next call on the handle.
  */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_get_string(flt_genicam *description,
@@ -296,6 +306,9 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_enum_count(flt_genicam *de
 
 /**
  * Entry `index` of an enumeration.
+ * @param description the description.
+ * @param feature   the enumeration's name.
+ * @param index     0 .. count-1 (flt_genicam_enum_count()).
  * @param name      owned by the handle, valid until it is destroyed;
  * @param value     the entry's integer;
  * @param available 1 when the entry is implemented and available now.

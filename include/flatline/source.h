@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-/*
+/** @file
  * libflatline - frame sources: a USB3 Vision camera (over libusb-1.0, no
  * camera SDK), recorded image sequences and the simulator, behind one handle.
  *
@@ -105,12 +105,13 @@
 extern "C" {
 #endif
 
+/** A frame source (opaque handle). */
 typedef struct flt_source flt_source;
-/* A frame borrowed from its source (see "Frame memory and lifetime"). */
+/** A frame borrowed from its source (see "Frame memory and lifetime"). */
 typedef struct flt_frame flt_frame;
-/* A snapshot of the cameras present. */
+/** A snapshot of the cameras present. */
 typedef struct flt_camera_list flt_camera_list;
-/* A simulated USB bus with simulated USB3 Vision cameras (see below). */
+/** A simulated USB bus with simulated USB3 Vision cameras (see below). */
 typedef struct flt_u3v_sim flt_u3v_sim;
 
 /** Values of the option "source_encoder_mode" (FLT_OPT_SOURCE_ENCODER_MODE):
@@ -129,10 +130,11 @@ typedef enum flt_encoder_mode {
     FLT_ENCODER_MODE_MAX_ENUM_ = 0x7FFFFFFF
 } flt_encoder_mode;
 
+/** What a source reads its frames from. */
 typedef enum flt_source_kind {
-    FLT_SOURCE_SIMULATOR = 1,
-    FLT_SOURCE_IMAGES = 2,
-    FLT_SOURCE_U3V = 3,
+    FLT_SOURCE_SIMULATOR = 1, /**< a simulated sensor (flt_sim) */
+    FLT_SOURCE_IMAGES = 2,    /**< recorded images */
+    FLT_SOURCE_U3V = 3,       /**< a USB3 Vision camera */
     FLT_SOURCE_KIND_MAX_ENUM_ = 0x7FFFFFFF
 } flt_source_kind;
 
@@ -140,7 +142,7 @@ typedef enum flt_source_kind {
 /* Creating a source                                                       */
 /* ---------------------------------------------------------------------- */
 
-/* A source of rendered frames from a simulator (flt_sim_next_frame), each
+/** A source of rendered frames from a simulator (flt_sim_next_frame), each
  * with the simulator's own encoder position (encoder mode 0), or the mode's
  * value for modes 1 and 2; mode 3 is refused. `sim` is borrowed: it must
  * outlive the source, and the caller may still change its sheet between
@@ -150,7 +152,7 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_create_sim(flt_sim *sim,
                                                                 const flt_options *options,
                                                                 flt_source **out);
 
-/* A source reading `count` image files (PNG, TIFF or anything OpenCV's
+/** A source reading `count` image files (PNG, TIFF or anything OpenCV's
  * imread reads), in the given order. Every file must be single-channel, 8 or
  * 16 bits, and the size of the first. 8-bit files give Mono8; 16-bit files
  * give Mono16, or Mono10/Mono12 when the option source_image_bits says so.
@@ -173,7 +175,7 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_create_images(const char *c
                                                                    const flt_options *options,
                                                                    flt_source **out);
 
-/* The same for every *.png, *.tif and *.tiff file of `directory` (not its
+/** The same for every *.png, *.tif and *.tiff file of `directory` (not its
  * sub-folders), sorted by name (byte order). FLT_ERR_NOT_FOUND if there is
  * none. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_create_image_dir(const char *directory,
@@ -181,17 +183,19 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_create_image_dir(const char
                                                                       const flt_options *options,
                                                                       flt_source **out);
 
-/* Lists the USB3 Vision cameras present: on the USB bus through libusb when
+/** Lists the USB3 Vision cameras present: on the USB bus through libusb when
  * `bus` is NULL, else on a simulated bus. Devices that are not USB3 Vision are
  * skipped; cameras that cannot be opened to read their strings (no udev rule,
  * no WinUSB driver) are listed with vendor "?" and the reason as their
  * model. FLT_ERR_DEVICE if libusb cannot start. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_camera_list_create(flt_u3v_sim *bus,
                                                                  flt_camera_list **out);
+/** Frees the list; NULL is a no-op. */
 FLT_API void FLT_CALL flt_camera_list_destroy(flt_camera_list *list);
+/** The number of cameras in the list. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_camera_list_count(const flt_camera_list *list,
                                                                 size_t *out);
-/* Camera `index`: its strings (owned by the list, valid until it is
+/** Camera `index`: its strings (owned by the list, valid until it is
  * destroyed) and its link speed, Mbit/s (480 high speed, 5000 super speed,
  * 10000 super speed plus; 0 unknown). Any output may be NULL. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_camera_list_get(const flt_camera_list *list,
@@ -200,7 +204,7 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_camera_list_get(const flt_camera_l
                                                               const char **serial,
                                                               uint32_t *speed_mbps);
 
-/* Opens a USB3 Vision camera: on the USB bus when `bus` is NULL, else on a
+/** Opens a USB3 Vision camera: on the USB bus when `bus` is NULL, else on a
  * simulated bus (which must outlive the source). `serial` picks the camera
  * with that serial number; NULL takes the first one. Reads the bootstrap
  * registers and the GenICam XML, and leaves a camera that a killed process
@@ -213,10 +217,11 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_open_u3v(flt_u3v_sim *bus, 
                                                               const flt_options *options,
                                                               flt_source **out);
 
-/* Stops a streaming camera, releases it and frees everything. NULL is a
+/** Stops a streaming camera, releases it and frees everything. NULL is a
  * no-op. */
 FLT_API void FLT_CALL flt_source_destroy(flt_source *source);
 
+/** The kind of the source. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_kind_of(const flt_source *source,
                                                              flt_source_kind *out);
 
@@ -224,7 +229,7 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_kind_of(const flt_source *s
 /* Acquisition                                                             */
 /* ---------------------------------------------------------------------- */
 
-/* Starts acquisition. Camera: reads Width, Height, PixelFormat, sets
+/** Starts acquisition. Camera: reads Width, Height, PixelFormat, sets
  * AcquisitionMode = Continuous, sets up the stream interface (SIRM: payload
  * transfer size a multiple of the alignment, at most u3v_transfer_size),
  * allocates the pool of u3v_transfers bulk transfers and the frame buffer,
@@ -233,11 +238,11 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_kind_of(const flt_source *s
  * FLT_ERR_STATE if already started. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_start(flt_source *source);
 
-/* Stops acquisition: camera AcquisitionStop, SI control = 0, transfers
+/** Stops acquisition: camera AcquisitionStop, SI control = 0, transfers
  * cancelled. Stopping a stopped source is a no-op. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_stop(flt_source *source);
 
-/* Waits up to timeout_ms for the next good frame (see "Frame accounting").
+/** Waits up to timeout_ms for the next good frame (see "Frame accounting").
  * *out is the borrowed frame; NULL (with FLT_OK) at the end of an image
  * sequence. FLT_ERR_TIMEOUT when no good frame came in time,
  * FLT_ERR_DEVICE when the camera is gone, FLT_ERR_STATE before start. The
@@ -245,7 +250,7 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_stop(flt_source *source);
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_next(flt_source *source, uint32_t timeout_ms,
                                                           const flt_frame **out);
 
-/* Everything about a frame; any output may be NULL.
+/** Everything about a frame; any output may be NULL.
  *   pixels        height rows of stride_bytes, `format` pixels (16-bit
  *                 formats: host-order words, data in the low bits).
  *   width, height px; stride_bytes >= width * bytes per pixel.
@@ -261,40 +266,44 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_frame_info(const flt_frame *frame,
                                                          uint64_t *block_id, uint64_t *timestamp_ns,
                                                          double *encoder_mm);
 
-/* Encoder mode 2: the position the next frames carry, mm (finite).
+/** Encoder mode 2: the position the next frames carry, mm (finite).
  * FLT_ERR_STATE in any other mode. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_set_encoder(flt_source *source,
                                                                  double encoder_mm);
 
-/* Frame and channel counters, since the source was created. */
+/** Frame and channel counters, since the source was created. */
 typedef enum flt_source_counter {
-    FLT_COUNT_FRAMES = 0,  /* good frames delivered */
-    FLT_COUNT_DROPPED = 1, /* frames that arrived damaged (sum of the
+    FLT_COUNT_FRAMES = 0,  /**< good frames delivered */
+    FLT_COUNT_DROPPED = 1, /**< frames that arrived damaged (sum of the
                               next five and BAD_LEADERS) */
-    FLT_COUNT_SHORT = 2,
-    FLT_COUNT_INCOMPLETE = 3, /* a new leader arrived mid-frame */
-    FLT_COUNT_OVERFLOW = 4,
-    FLT_COUNT_SUBMIT_DROPPED = 5,  /* frames dropped after a refused submit */
-    FLT_COUNT_TIMEOUT_DROPPED = 6, /* partial frames dropped at a timeout */
-    FLT_COUNT_LOST = 7,            /* block ids skipped (frames never seen) */
-    FLT_COUNT_SUBMIT_REFUSED = 8,  /* bulk submissions refused */
-    FLT_COUNT_TIMEOUTS = 9,        /* flt_source_next() calls that timed out */
-    FLT_COUNT_DISCONNECTS = 10,
-    FLT_COUNT_BAD_PACKETS = 11, /* transfers that are no leader, payload
-                                   of an open frame, or trailer */
-    FLT_COUNT_BAD_LEADERS = 12, /* leaders with an unusable format/size */
-    FLT_COUNT_PENDING_ACKS = 13,
-    FLT_COUNT_STALE_ACKS = 14,
-    FLT_COUNT_COMMAND_RETRIES = 15,
-    FLT_COUNT_STREAM_RECOVERIES = 16, /* cameras found streaming on open */
+    FLT_COUNT_SHORT = 2,   /**< short frames: payload short of the trailer's or the image size, or a
+                              bad trailer status */
+    FLT_COUNT_INCOMPLETE = 3, /**< a new leader arrived mid-frame */
+    FLT_COUNT_OVERFLOW =
+        4, /**< a transfer bigger than its buffer, or more payload than set up for */
+    FLT_COUNT_SUBMIT_DROPPED = 5,  /**< frames dropped after a refused submit */
+    FLT_COUNT_TIMEOUT_DROPPED = 6, /**< partial frames dropped at a timeout */
+    FLT_COUNT_LOST = 7,            /**< block ids skipped (frames never seen) */
+    FLT_COUNT_SUBMIT_REFUSED = 8,  /**< bulk submissions refused */
+    FLT_COUNT_TIMEOUTS = 9,        /**< flt_source_next() calls that timed out */
+    FLT_COUNT_DISCONNECTS = 10,    /**< times the camera was unplugged */
+    FLT_COUNT_BAD_PACKETS = 11,    /**< transfers that are no leader, payload
+                                      of an open frame, or trailer */
+    FLT_COUNT_BAD_LEADERS = 12,    /**< leaders with an unusable format/size */
+    FLT_COUNT_PENDING_ACKS =
+        13,                    /**< GenCP pending acks received (the camera asked for more time) */
+    FLT_COUNT_STALE_ACKS = 14, /**< acks with another request id (stale), discarded */
+    FLT_COUNT_COMMAND_RETRIES = 15,   /**< GenCP commands sent again after no answer */
+    FLT_COUNT_STREAM_RECOVERIES = 16, /**< cameras found streaming on open */
     FLT_COUNT_MAX_ENUM_ = 0x7FFFFFFF
 } flt_source_counter;
 
+/** The value of one counter. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_count(const flt_source *source,
                                                            flt_source_counter counter,
                                                            uint64_t *out);
 
-/* Why the last frame was dropped or lost ("" if none was). Owned by the
+/** Why the last frame was dropped or lost ("" if none was). Owned by the
  * source, valid until its next call. Never NULL (for a NULL source too). */
 FLT_API const char *FLT_CALL flt_source_stream_error(const flt_source *source);
 
@@ -302,52 +311,54 @@ FLT_API const char *FLT_CALL flt_source_stream_error(const flt_source *source);
 /* USB3 Vision cameras                                                     */
 /* ---------------------------------------------------------------------- */
 
-/* Camera strings from the bootstrap registers (ABRM). */
+/** Camera strings from the bootstrap registers (ABRM). */
 typedef enum flt_camera_string {
-    FLT_CAMERA_VENDOR = 0,
-    FLT_CAMERA_MODEL = 1,
-    FLT_CAMERA_FAMILY = 2,
-    FLT_CAMERA_DEVICE_VERSION = 3,
-    FLT_CAMERA_MANUFACTURER_INFO = 4,
-    FLT_CAMERA_SERIAL = 5,
-    FLT_CAMERA_USER_NAME = 6,
+    FLT_CAMERA_VENDOR = 0,            /**< vendor name */
+    FLT_CAMERA_MODEL = 1,             /**< model name */
+    FLT_CAMERA_FAMILY = 2,            /**< family name */
+    FLT_CAMERA_DEVICE_VERSION = 3,    /**< device version */
+    FLT_CAMERA_MANUFACTURER_INFO = 4, /**< manufacturer information */
+    FLT_CAMERA_SERIAL = 5,            /**< serial number */
+    FLT_CAMERA_USER_NAME = 6,         /**< user-defined name */
     FLT_CAMERA_STRING_MAX_ENUM_ = 0x7FFFFFFF
 } flt_camera_string;
 
-/* The string (owned by the source, valid until it is destroyed).
+/** The string (owned by the source, valid until it is destroyed).
  * FLT_ERR_STATE for a source that is not a camera. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_camera_string(const flt_source *source,
                                                                    flt_camera_string which,
                                                                    const char **out);
 
-/* Camera values read from the registers or chosen for the stream. */
+/** Camera values read from the registers or chosen for the stream. */
 typedef enum flt_camera_value {
-    FLT_CAMERA_GENCP_VERSION = 0,      /* ABRM 0x000 (major << 16 | minor) */
-    FLT_CAMERA_U3V_VERSION = 1,        /* SBRM 0x00 */
-    FLT_CAMERA_RESPONSE_TIME_MS = 2,   /* ABRM max device response time */
-    FLT_CAMERA_CONTROL_TIMEOUT_MS = 3, /* max(u3v_control_timeout, above) */
-    FLT_CAMERA_MAX_COMMAND_BYTES = 4,  /* SBRM max command transfer */
-    FLT_CAMERA_MAX_ACK_BYTES = 5,      /* SBRM max ack transfer */
-    FLT_CAMERA_SIRM_ADDRESS = 6,
-    FLT_CAMERA_MANIFEST_ADDRESS = 7,
-    FLT_CAMERA_XML_BYTES = 8,  /* the XML file as stored (zipped size) */
-    FLT_CAMERA_XML_ZIPPED = 9, /* 1 when it was a ZIP */
-    FLT_CAMERA_SPEED_MBPS = 10,
-    FLT_CAMERA_ALIGNMENT = 11,      /* SIRM, bytes (after start) */
-    FLT_CAMERA_PAYLOAD_BYTES = 12,  /* SIRM required payload size */
-    FLT_CAMERA_TRANSFER_BYTES = 13, /* payload transfer size written */
-    FLT_CAMERA_TRANSFER_COUNT = 14,
-    FLT_CAMERA_FINAL_TRANSFER_BYTES = 15,
-    FLT_CAMERA_MAX_LEADER_BYTES = 16,
-    FLT_CAMERA_MAX_TRAILER_BYTES = 17,
+    FLT_CAMERA_GENCP_VERSION = 0,         /**< ABRM 0x000 (major << 16 | minor) */
+    FLT_CAMERA_U3V_VERSION = 1,           /**< SBRM 0x00 */
+    FLT_CAMERA_RESPONSE_TIME_MS = 2,      /**< ABRM max device response time */
+    FLT_CAMERA_CONTROL_TIMEOUT_MS = 3,    /**< max(u3v_control_timeout, above) */
+    FLT_CAMERA_MAX_COMMAND_BYTES = 4,     /**< SBRM max command transfer */
+    FLT_CAMERA_MAX_ACK_BYTES = 5,         /**< SBRM max ack transfer */
+    FLT_CAMERA_SIRM_ADDRESS = 6,          /**< SBRM: address of the SIRM */
+    FLT_CAMERA_MANIFEST_ADDRESS = 7,      /**< ABRM: address of the manifest table */
+    FLT_CAMERA_XML_BYTES = 8,             /**< the XML file as stored (zipped size) */
+    FLT_CAMERA_XML_ZIPPED = 9,            /**< 1 when it was a ZIP */
+    FLT_CAMERA_SPEED_MBPS = 10,           /**< link speed, Mbit/s */
+    FLT_CAMERA_ALIGNMENT = 11,            /**< SIRM, bytes (after start) */
+    FLT_CAMERA_PAYLOAD_BYTES = 12,        /**< SIRM required payload size */
+    FLT_CAMERA_TRANSFER_BYTES = 13,       /**< payload transfer size written */
+    FLT_CAMERA_TRANSFER_COUNT = 14,       /**< payload transfers per frame */
+    FLT_CAMERA_FINAL_TRANSFER_BYTES = 15, /**< final transfer size written */
+    FLT_CAMERA_MAX_LEADER_BYTES = 16,     /**< SIRM maximum leader size */
+    FLT_CAMERA_MAX_TRAILER_BYTES = 17,    /**< SIRM maximum trailer size */
     FLT_CAMERA_VALUE_MAX_ENUM_ = 0x7FFFFFFF
 } flt_camera_value;
 
+/** One camera value. FLT_ERR_STATE for a source that is not a camera. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_camera_value(const flt_source *source,
                                                                   flt_camera_value which,
                                                                   uint64_t *out);
 
-/* GenICam features by name (e.g. "Width", "ExposureTime", "TriggerMode").
+/** @{ */
+/** GenICam features by name (e.g. "Width", "ExposureTime", "TriggerMode").
  * Integers: IntReg, MaskedIntReg, Integer, Boolean, and Enumeration (its
  * value); floats: Float, FloatReg (and integers, converted); enumerations by
  * entry name ("Continuous"); commands write their command value. A value is
@@ -367,8 +378,9 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_set_enum(flt_source *source
                                                               const char *entry);
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_execute(flt_source *source,
                                                              const char *feature);
+/** @} */
 
-/* Gives feature `feature` a register instead of its XML node (for features
+/** Gives feature `feature` a register instead of its XML node (for features
  * the client cannot resolve, or to override one): `length` bytes (1, 2, 4 or
  * 8) at `address`, little-endian; an unsigned integer, or an IEEE float
  * (length 4 or 8) when is_float is non-zero. Commands write 1 to it.
@@ -378,7 +390,8 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_map_feature(flt_source *sou
                                                                  uint64_t address, uint32_t length,
                                                                  int is_float);
 
-/* Raw register access through GenCP (chunked to the camera's limits). */
+/** @{ */
+/** Raw register access through GenCP (chunked to the camera's limits). */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_read_memory(flt_source *source,
                                                                  uint64_t address, void *out,
                                                                  size_t bytes);
@@ -386,6 +399,7 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_write_memory(flt_source *so
                                                                   uint64_t address,
                                                                   const void *bytes_in,
                                                                   size_t bytes);
+/** @} */
 
 /* ---------------------------------------------------------------------- */
 /* Simulated USB3 Vision cameras (testing without hardware)                */
@@ -417,79 +431,83 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_write_memory(flt_source *so
  * encoder_mm_per_count), the simulator's position (else block * 300).
  */
 
+/** Parameters of a simulated camera (flt_u3v_sim_set(), flt_u3v_sim_get()). */
 typedef enum flt_u3v_sim_param {
     /* settable before a camera is opened */
-    FLT_U3V_SIM_RESPONSE_TIME_MS = 0,        /* ABRM; default 200 */
-    FLT_U3V_SIM_MAX_COMMAND_BYTES = 1,       /* SBRM; default 1024 */
-    FLT_U3V_SIM_MAX_ACK_BYTES = 2,           /* SBRM; default 1024 */
-    FLT_U3V_SIM_ALIGNMENT_LOG2 = 3,          /* SIRM info; default 9 (512 B) */
-    FLT_U3V_SIM_XML_ZIPPED = 4,              /* default 1 */
-    FLT_U3V_SIM_ENCODER_CHUNK = 5,           /* 1: append the encoder chunk */
-    FLT_U3V_SIM_ENCODER_CHUNK_ID = 6,        /* default 0x4E434445 */
-    FLT_U3V_SIM_ENCODER_MM_PER_COUNT_UM = 7, /* um per count; default 10 */
-    FLT_U3V_SIM_SPEED_MBPS = 8,              /* default 5000 */
-    /* 1: the camera was left streaming by a process that died: SI control 1,
+    FLT_U3V_SIM_RESPONSE_TIME_MS = 0,        /**< ABRM; default 200 */
+    FLT_U3V_SIM_MAX_COMMAND_BYTES = 1,       /**< SBRM; default 1024 */
+    FLT_U3V_SIM_MAX_ACK_BYTES = 2,           /**< SBRM; default 1024 */
+    FLT_U3V_SIM_ALIGNMENT_LOG2 = 3,          /**< SIRM info; default 9 (512 B) */
+    FLT_U3V_SIM_XML_ZIPPED = 4,              /**< default 1 */
+    FLT_U3V_SIM_ENCODER_CHUNK = 5,           /**< 1: append the encoder chunk */
+    FLT_U3V_SIM_ENCODER_CHUNK_ID = 6,        /**< default 0x4E434445 */
+    FLT_U3V_SIM_ENCODER_MM_PER_COUNT_UM = 7, /**< um per count; default 10 */
+    FLT_U3V_SIM_SPEED_MBPS = 8,              /**< default 5000 */
+    /** 1: the camera was left streaming by a process that died: SI control 1,
      * acquisition running, a half-sent frame in its FIFO; SIRM writes are
      * refused (access denied) until SI control is cleared. */
     FLT_U3V_SIM_LEFT_STREAMING = 9,
     /* read-only */
-    FLT_U3V_SIM_SI_CONTROL = 20,           /* SIRM SI control register */
-    FLT_U3V_SIM_ACQUIRING = 21,            /* 1 between AcquisitionStart/Stop */
-    FLT_U3V_SIM_COMMANDS = 22,             /* GenCP commands received */
-    FLT_U3V_SIM_LAST_READ_TIMEOUT_MS = 23, /* timeout of the last control read */
-    FLT_U3V_SIM_FRAMES_SENT = 24,          /* leaders sent */
-    FLT_U3V_SIM_OPEN = 25,                 /* 1 while a host holds it open */
+    FLT_U3V_SIM_SI_CONTROL = 20,           /**< SIRM SI control register */
+    FLT_U3V_SIM_ACQUIRING = 21,            /**< 1 between AcquisitionStart/Stop */
+    FLT_U3V_SIM_COMMANDS = 22,             /**< GenCP commands received */
+    FLT_U3V_SIM_LAST_READ_TIMEOUT_MS = 23, /**< timeout of the last control read */
+    FLT_U3V_SIM_FRAMES_SENT = 24,          /**< leaders sent */
+    FLT_U3V_SIM_OPEN = 25,                 /**< 1 while a host holds it open */
     FLT_U3V_SIM_PARAM_MAX_ENUM_ = 0x7FFFFFFF
 } flt_u3v_sim_param;
 
+/** Faults a simulated camera or bus can be told to make (flt_u3v_sim_inject()). */
 typedef enum flt_u3v_fault {
     /* stream faults, applied to the frame with block id `at` */
-    FLT_U3V_FAULT_SHORT_FRAME = 0,      /* last payload transfer not sent */
-    FLT_U3V_FAULT_LEADER_MID_FRAME = 1, /* no trailer: next leader mid-frame */
-    FLT_U3V_FAULT_OVERFLOW = 2,         /* last transfer 1 packet too long */
-    FLT_U3V_FAULT_SKIP_BLOCK_IDS = 3,   /* `count` block ids from `at` are
+    FLT_U3V_FAULT_SHORT_FRAME = 0,      /**< last payload transfer not sent */
+    FLT_U3V_FAULT_LEADER_MID_FRAME = 1, /**< no trailer: next leader mid-frame */
+    FLT_U3V_FAULT_OVERFLOW = 2,         /**< last transfer 1 packet too long */
+    FLT_U3V_FAULT_SKIP_BLOCK_IDS = 3,   /**< `count` block ids from `at` are
                                            never sent */
-    FLT_U3V_FAULT_STREAM_TIMEOUT = 4,   /* the camera stalls after the leader */
-    FLT_U3V_FAULT_UNPLUG = 5,           /* unplugged after the leader */
-    FLT_U3V_FAULT_GARBAGE = 6,          /* 100 random bytes before the leader */
-    FLT_U3V_FAULT_TRAILER_STATUS = 7,   /* trailer status 0xA101 (overrun) */
+    FLT_U3V_FAULT_STREAM_TIMEOUT = 4,   /**< the camera stalls after the leader */
+    FLT_U3V_FAULT_UNPLUG = 5,           /**< unplugged after the leader */
+    FLT_U3V_FAULT_GARBAGE = 6,          /**< 100 random bytes before the leader */
+    FLT_U3V_FAULT_TRAILER_STATUS = 7,   /**< trailer status 0xA101 (overrun) */
     /* host faults, `at` ignored: the next `count` operations */
-    FLT_U3V_FAULT_SUBMIT_REFUSED = 10,  /* bulk submits refused (no memory) */
-    FLT_U3V_FAULT_PENDING_ACK = 11,     /* each of the next commands first
+    FLT_U3V_FAULT_SUBMIT_REFUSED = 10,  /**< bulk submits refused (no memory) */
+    FLT_U3V_FAULT_PENDING_ACK = 11,     /**< each of the next commands first
                                            gets `count` pending acks */
-    FLT_U3V_FAULT_CONTROL_TIMEOUT = 12, /* `count` commands get no answer */
-    FLT_U3V_FAULT_LATE_ACK = 13,        /* the next command's ack comes only
+    FLT_U3V_FAULT_CONTROL_TIMEOUT = 12, /**< `count` commands get no answer */
+    FLT_U3V_FAULT_LATE_ACK = 13,        /**< the next command's ack comes only
                                            after the following command */
     FLT_U3V_FAULT_MAX_ENUM_ = 0x7FFFFFFF
 } flt_u3v_fault;
 
-/* An empty simulated bus (plus one device that is not a camera). */
+/** An empty simulated bus (plus one device that is not a camera). */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_u3v_sim_create(flt_u3v_sim **out);
-/* NULL is a no-op. Sources opened on the bus must be destroyed first. */
+/** NULL is a no-op. Sources opened on the bus must be destroyed first. */
 FLT_API void FLT_CALL flt_u3v_sim_destroy(flt_u3v_sim *bus);
 
-/* Adds a camera (at most 8): strings copied (at most 63 bytes each), a
+/** Adds a camera (at most 8): strings copied (at most 63 bytes each), a
  * width x height sensor (16..8192 px each) of format Mono8, 10, 12 or 16. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL
 flt_u3v_sim_add_camera(flt_u3v_sim *bus, const char *vendor, const char *model, const char *serial,
                        uint32_t width, uint32_t height, flt_pixel_format format, size_t *index_out);
 
-/* Renders the camera's frames with `sim` (borrowed; NULL: test pattern). The
+/** Renders the camera's frames with `sim` (borrowed; NULL: test pattern). The
  * camera takes the simulator's frame size and format. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_u3v_sim_set_frames(flt_u3v_sim *bus, size_t camera,
                                                                  flt_sim *sim);
 
+/** Sets a parameter of camera `camera` (a settable flt_u3v_sim_param). */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_u3v_sim_set(flt_u3v_sim *bus, size_t camera,
                                                           flt_u3v_sim_param param, uint64_t value);
+/** Reads a parameter of camera `camera`. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_u3v_sim_get(const flt_u3v_sim *bus, size_t camera,
                                                           flt_u3v_sim_param param, uint64_t *out);
 
-/* Schedules a fault (see flt_u3v_fault); faults add up. */
+/** Schedules a fault (see flt_u3v_fault); faults add up. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_u3v_sim_inject(flt_u3v_sim *bus, size_t camera,
                                                              flt_u3v_fault fault, uint64_t at,
                                                              uint32_t count);
 
-/* Reads a 32-bit register of the camera's map directly (no GenCP). */
+/** Reads a 32-bit register of the camera's map directly (no GenCP). */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_u3v_sim_peek(const flt_u3v_sim *bus, size_t camera,
                                                            uint64_t address, uint32_t *out);
 
