@@ -11,6 +11,11 @@ file member (function, typedef, enum, enumerator, macro) whose brief and
 detailed descriptions are both empty. The *_MAX_ENUM_ enumerators are
 not values (they keep each enum int-sized) and are skipped.
 
+In the headers listed in PARAMETERS_COMPLETE, every function must also
+document each parameter (@param) and, unless it returns void, its result
+(@return). The list grows header by header until it holds them all; the
+others describe their parameters in prose.
+
 Usage: check_documented.py XML_DIR
 """
 import sys
@@ -20,6 +25,29 @@ from pathlib import Path
 
 def has_text(element) -> bool:
     return element is not None and "".join(element.itertext()).strip() != ""
+
+
+# Headers whose functions document every parameter and their result.
+PARAMETERS_COMPLETE = {"gauge.h", "genicam.h"}
+
+
+def missing_parameters(member) -> list:
+    """The parameters (and "@return") a function's comment leaves out."""
+    documented_names = set()
+    for name in member.iter("parametername"):
+        for part in "".join(name.itertext()).split(","):
+            documented_names.add(part.strip())
+    missing = []
+    for param in member.findall("param"):
+        name = param.findtext("declname")
+        if name and name not in documented_names:
+            missing.append(name)
+    returns_void = "".join(member.find("type").itertext()).strip().endswith("void") \
+        and "*" not in "".join(member.find("type").itertext())
+    has_return = any(sect.get("kind") == "return" for sect in member.iter("simplesect"))
+    if not returns_void and not has_return:
+        missing.append("@return")
+    return missing
 
 
 def documented(member) -> bool:
@@ -48,6 +76,11 @@ def main() -> int:
             checked += 1
             if not documented(member):
                 missing.append(f"{header}: {kind} {member.findtext('name')}")
+            elif kind == "function" and header.split("/")[-1] in PARAMETERS_COMPLETE:
+                left_out = missing_parameters(member)
+                if left_out:
+                    missing.append(f"{header}: function {member.findtext('name')} does not "
+                                   f"document {', '.join(left_out)}")
             if kind != "enum":
                 continue
             for value in member.findall("enumvalue"):
@@ -59,7 +92,8 @@ def main() -> int:
                                    f"(of {member.findtext('name')})")
     if missing:
         print("check_documented: these public symbols have no documentation "
-              "(a /** ... */ or /**< ... */ comment):", file=sys.stderr)
+              "(a /** ... */ or /**< ... */ comment, with @param and @return "
+              "in the headers of PARAMETERS_COMPLETE):", file=sys.stderr)
         for line in missing:
             print("  " + line, file=sys.stderr)
         return 1

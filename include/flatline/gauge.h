@@ -316,12 +316,20 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_create(const flt_calib *cali
 /** Stops the acquisition thread and the workers, drops what is not
  * finished, and frees everything. Sheets the caller holds stay valid until
  * destroyed. NULL is a no-op, and so is a call from inside the gauge's own
- * callback (it would wait for itself). */
+ * callback (it would wait for itself).
+ * @param gauge the gauge, or NULL.
+ */
 FLT_API void FLT_CALL flt_gauge_destroy(flt_gauge *gauge);
 
 /** The effective value of an option: the gauge's keys, and the
  * reconstructor's as the gauge set them (laser_spacing, row_capacity).
- * FLT_ERR_NOT_FOUND for an unknown key. */
+ * FLT_ERR_NOT_FOUND for an unknown key.
+ * @param gauge the gauge.
+ * @param key an option key.
+ * @param out receives its value.
+ * @return FLT_OK; FLT_ERR_NOT_FOUND for an unknown key;
+ *         FLT_ERR_INVALID_ARGUMENT for a NULL argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_get_option(const flt_gauge *gauge,
                                                                flt_option key, double *out);
 
@@ -360,7 +368,9 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_push_frame(flt_gauge *gauge,
  * @param height, slope  [fibers] mm and mm/mm (NaN where not measured).
  * @param valid   [fibers] non-zero where valid, or NULL (then finite values
  *                are valid).
- * Counted, skipped and dropped like a frame. */
+ * Counted, skipped and dropped like a frame.
+ * @return as flt_gauge_push_frame().
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_push_row(flt_gauge *gauge, double encoder_mm,
                                                              size_t fibers, const double *height,
                                                              const double *slope,
@@ -369,7 +379,12 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_push_row(flt_gauge *gauge, d
 /** The shear cut the strip at encoder_mm (see "Cuts"): finite, at most
  * 1e12 in magnitude, beyond the previous cut unless the encoder went back
  * since. FLT_ERR_BUFFER_FULL when 256 cuts wait for strip (the strip has
- * not reached them). */
+ * not reached them).
+ * @param gauge the gauge.
+ * @param encoder_mm where the shear cut, mm of encoder position.
+ * @return FLT_OK; FLT_ERR_BUFFER_FULL as above; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong
+ * argument (a position not finite, too large, or not beyond the previous cut).
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_cut(flt_gauge *gauge, double encoder_mm);
 
 /** The end of the input so far: waits until every frame pushed before the
@@ -377,11 +392,19 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_cut(flt_gauge *gauge, double
  * is finished at its last row, FLT_SHEET_FLAG_FLUSHED) and waits until that
  * sheet is delivered. The next frame may begin a new strip. FLT_ERR_STATE
  * while an attached source is acquiring (stop it first) or from inside the
- * callback. */
+ * callback.
+ * @param gauge the gauge.
+ * @return FLT_OK; FLT_ERR_STATE as above; a failure of processing.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_flush(flt_gauge *gauge);
 
 /** Attaches a frame source (borrowed: it must outlive the gauge or be
- * detached with NULL first). FLT_ERR_STATE while acquiring. */
+ * detached with NULL first). FLT_ERR_STATE while acquiring.
+ * @param gauge the gauge.
+ * @param source the source, or NULL to detach it.
+ * @return FLT_OK; FLT_ERR_STATE while acquiring; FLT_ERR_INVALID_ARGUMENT
+ *         for a NULL gauge or a source that is not a live handle.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_attach_source(flt_gauge *gauge,
                                                                   flt_source *source);
 
@@ -390,7 +413,11 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_attach_source(flt_gauge *gau
  * (frames the source dropped on the way are counted by the source,
  * flt_source_count). The thread ends by itself at the end of an image
  * sequence or when the source fails. FLT_ERR_STATE without a source or
- * while acquiring; the source's own error if it does not start. */
+ * while acquiring; the source's own error if it does not start.
+ * @param gauge the gauge.
+ * @return FLT_OK; FLT_ERR_STATE as above; the source's status if it
+ *         does not start.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_start(flt_gauge *gauge);
 
 /** Stops the acquisition thread and the source (flt_source_stop), and waits
@@ -398,7 +425,11 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_start(flt_gauge *gauge);
  * ends it). Stopping a stopped gauge is a no-op. Returns the error that
  * ended the acquisition by itself (e.g. FLT_ERR_DEVICE for an unplugged
  * camera, with its message), else FLT_OK. FLT_ERR_STATE from inside the
- * callback. */
+ * callback.
+ * @param gauge the gauge.
+ * @return the status that ended the acquisition, else FLT_OK;
+ *         FLT_ERR_STATE from inside the callback.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_stop(flt_gauge *gauge);
 
 /* ---------------------------------------------------------------------- */
@@ -410,19 +441,37 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_stop(flt_gauge *gauge);
  * none came in time (FLT_OK). At most gauge_sheet_slots sheets exist at
  * once (waiting and held together): when the next sheet finds none free,
  * the oldest waiting one is dropped (FLT_GAUGE_COUNT_SHEETS_DROPPED).
- * FLT_ERR_STATE while a callback is set. */
+ * FLT_ERR_STATE while a callback is set.
+ * @param gauge the gauge.
+ * @param timeout_ms how long to wait, ms (0: do not wait).
+ * @param out receives the sheet, or NULL.
+ * @return FLT_OK (also when none came); FLT_ERR_STATE while a callback is
+ *         set; a failure of processing.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_next_sheet(flt_gauge *gauge,
                                                                uint32_t timeout_ms,
                                                                flt_sheet **out);
 
 /** Sets (or, with NULL, removes) the callback that receives every sheet
  * instead of flt_gauge_next_sheet(); sheets already waiting are handed to
- * it first. The callback must not block for long: the next sheet waits. */
+ * it first. The callback must not block for long: the next sheet waits.
+ * @param gauge the gauge.
+ * @param callback called with each sheet, or NULL.
+ * @param user passed to the callback as is.
+ * @return FLT_OK; FLT_ERR_STATE from inside the callback;
+ *         FLT_ERR_INVALID_ARGUMENT for a NULL gauge.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_set_callback(flt_gauge *gauge,
                                                                  flt_sheet_callback callback,
                                                                  void *user);
 
-/** A counter (flt_gauge_counter). */
+/** A counter (flt_gauge_counter).
+ * @param gauge the gauge.
+ * @param counter which counter.
+ * @param out receives its value.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL argument or an
+ *         unknown counter.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_count(const flt_gauge *gauge,
                                                           flt_gauge_counter counter, uint64_t *out);
 
@@ -431,16 +480,31 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_count(const flt_gauge *gauge
 /* ---------------------------------------------------------------------- */
 
 /** Gives a sheet from flt_gauge_next_sheet() back. NULL is a no-op; a
- * borrowed sheet (inside the callback) is left alone. */
+ * borrowed sheet (inside the callback) is left alone.
+ * @param sheet the sheet, or NULL.
+ */
 FLT_API void FLT_CALL flt_sheet_destroy(flt_sheet *sheet);
 
 /** One scalar result (flt_sheet_value). FLT_ERR_NOT_FOUND for an unknown
- * key. */
+ * key.
+ * @param sheet the sheet.
+ * @param key which result.
+ * @param out receives it.
+ * @return FLT_OK; FLT_ERR_NOT_FOUND for an unknown key;
+ *         FLT_ERR_INVALID_ARGUMENT for a NULL argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sheet_get(const flt_sheet *sheet, flt_sheet_value key,
                                                         double *out);
 
 /** One array (flt_sheet_array) into out[count]; count must equal its size
- * (FLT_SHEET_FIBERS or FLT_SHEET_ZONES). */
+ * (FLT_SHEET_FIBERS or FLT_SHEET_ZONES).
+ * @param sheet the sheet.
+ * @param key which array.
+ * @param count its size as the caller believes it.
+ * @param out receives `count` values.
+ * @return FLT_OK; FLT_ERR_NOT_FOUND for an unknown key;
+ *         FLT_ERR_INVALID_ARGUMENT for a NULL argument or a wrong count.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sheet_get_array(const flt_sheet *sheet,
                                                               flt_sheet_array key, size_t count,
                                                               double *out);
@@ -449,14 +513,30 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sheet_get_array(const flt_sheet *s
  * and fibers = FLT_SHEET_FIBERS must match; s_out [rows] (mm), z_out
  * [rows * fibers] (mm, NaN only where FLT_FLAG_NO_DATA), flags_out
  * [rows * fibers] FLT_FLAG_* bits. Any output may be NULL. FLT_ERR_STATE
- * when the gauge keeps no maps. */
+ * when the gauge keeps no maps.
+ * @param sheet the sheet.
+ * @param rows its rows (FLT_SHEET_ROWS).
+ * @param fibers its fibers (FLT_SHEET_FIBERS).
+ * @param s_out [rows] positions, mm, or NULL.
+ * @param z_out [rows * fibers] heights, mm, or NULL.
+ * @param flags_out [rows * fibers] FLT_FLAG_* bits, or NULL.
+ * @return FLT_OK; FLT_ERR_STATE as above; FLT_ERR_INVALID_ARGUMENT for a
+ *         NULL sheet or sizes that do not match.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sheet_height_map(const flt_sheet *sheet, size_t rows,
                                                                size_t fibers, double *s_out,
                                                                double *z_out, uint8_t *flags_out);
 
 /** The measured heights of the same rows (gauge_keep_maps = 2): what the
  * extractor gave, height_out [rows * fibers] mm, NaN where the sample was
- * invalid. FLT_ERR_STATE unless the gauge keeps them. */
+ * invalid. FLT_ERR_STATE unless the gauge keeps them.
+ * @param sheet the sheet.
+ * @param rows its rows (FLT_SHEET_ROWS).
+ * @param fibers its fibers (FLT_SHEET_FIBERS).
+ * @param height_out [rows * fibers] measured heights, mm.
+ * @return FLT_OK; FLT_ERR_STATE as above; FLT_ERR_INVALID_ARGUMENT for a
+ *         NULL argument or sizes that do not match.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sheet_measured_map(const flt_sheet *sheet,
                                                                  size_t rows, size_t fibers,
                                                                  double *height_out);

@@ -141,11 +141,16 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_load(const char *path, flt
  * Loads a description from memory (XML text or a ZIP archive, e.g. as read
  * from a camera's manifest). The bytes are copied.
  * @return as flt_genicam_load() (without FLT_ERR_IO).
+ * @param data  the XML text or ZIP archive.
+ * @param bytes its length in bytes.
+ * @param out   receives the handle; destroy it with flt_genicam_destroy().
  */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_load_memory(const void *data, size_t bytes,
                                                                   flt_genicam **out);
 
-/** Frees the handle; NULL is a no-op. */
+/** Frees the handle; NULL is a no-op.
+ * @param description the handle, or NULL.
+ */
 FLT_API void FLT_CALL flt_genicam_destroy(flt_genicam *description);
 
 /**
@@ -153,6 +158,8 @@ FLT_API void FLT_CALL flt_genicam_destroy(flt_genicam *description);
  * @param description the description.
  * @param which       the text wanted.
  * @param out receives a string owned by the handle ("" when the file has none).
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL argument or an
+ *         unknown `which`.
  */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_get_text(const flt_genicam *description,
                                                                flt_genicam_text which,
@@ -162,7 +169,11 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_get_text(const flt_genicam
 /* Features                                                                */
 /* ---------------------------------------------------------------------- */
 
-/** The number of features (value and command nodes; not categories or ports). */
+/** The number of features (value and command nodes; not categories or ports).
+ * @param description the description.
+ * @param out receives the number of features.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_feature_count(const flt_genicam *description,
                                                                     size_t *out);
 
@@ -171,7 +182,8 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_feature_count(const flt_ge
  * @param description the description.
  * @param index       0 .. count-1.
  * @param out receives its name, owned by the handle.
- * @return FLT_ERR_NOT_FOUND past the last one.
+ * @return FLT_OK; FLT_ERR_NOT_FOUND past the last one;
+ *         FLT_ERR_INVALID_ARGUMENT for a NULL argument.
  */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_feature_name(const flt_genicam *description,
                                                                    size_t index, const char **out);
@@ -202,6 +214,10 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_feature_info(const flt_gen
  * fails with FLT_ERR_NOT_FOUND naming the register.
  * @return FLT_ERR_INVALID_ARGUMENT for more than 64 MiB in one call, a range
  *         past 2^64, or an image beyond 256 MiB.
+ * @param description the description.
+ * @param address the device address of the first byte.
+ * @param bytes   the bytes.
+ * @param count   how many.
  */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_set_memory(flt_genicam *description,
                                                                  uint64_t address,
@@ -210,12 +226,19 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_set_memory(flt_genicam *de
 /**
  * Reads `count` bytes of the memory image (e.g. what a write put there).
  * @return FLT_ERR_NOT_FOUND when the image lacks one of them.
+ * @param description the description.
+ * @param address the device address of the first byte.
+ * @param out     receives `count` bytes.
+ * @param count   how many.
  */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_get_memory(const flt_genicam *description,
                                                                  uint64_t address, void *out,
                                                                  size_t count);
 
-/** Empties the memory image. */
+/** Empties the memory image.
+ * @param description the description.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL handle.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_clear_memory(flt_genicam *description);
 
 /**
@@ -223,6 +246,12 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_clear_memory(flt_genicam *
  * transport, a recorded dump). `write` may be NULL (writes then fail with
  * FLT_ERR_STATE); `read` NULL returns to the memory image. The callbacks
  * are called from the thread calling into the handle, only during calls.
+ * @param description the description.
+ * @param read  reads registers, or NULL for the memory image.
+ * @param write writes registers, or NULL.
+ * @param user  passed to both callbacks as is.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL handle, or a write
+ *         callback without a read one.
  */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_set_registers(flt_genicam *description,
                                                                     flt_genicam_read_fn read,
@@ -233,7 +262,12 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_set_registers(flt_genicam 
 /* Evaluation for the current register contents                            */
 /* ---------------------------------------------------------------------- */
 
-/** The feature's access mode (evaluates pIsImplemented, pIsAvailable, pIsLocked). */
+/** The feature's access mode (evaluates pIsImplemented, pIsAvailable, pIsLocked).
+ * @param description the description.
+ * @param feature the feature's name.
+ * @param out receives the access mode.
+ * @return FLT_OK, or a status as for flt_genicam_get_int().
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_get_access(flt_genicam *description,
                                                                  const char *feature,
                                                                  flt_genicam_access *out);
@@ -242,6 +276,12 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_get_access(flt_genicam *de
  * The feature's own pIsImplemented, pIsAvailable and pIsLocked, evaluated
  * now (1/1/0 where it has none). flt_genicam_get_access() combines them with
  * the access modes of the nodes the feature reads. Any output may be NULL.
+ * @param description the description.
+ * @param feature the feature's name.
+ * @param implemented 1 when implemented.
+ * @param available   1 when available.
+ * @param locked      1 when locked.
+ * @return FLT_OK, or a status as for flt_genicam_get_int().
  */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_get_flags(flt_genicam *description,
                                                                 const char *feature,
@@ -269,11 +309,25 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_register(flt_genicam *desc
 /**
  * The value of an integer, enumeration (its integer), boolean (0/1) or
  * float (when integral) feature.
+ * @param description the description.
+ * @param feature the feature's name.
+ * @param out receives the value.
+ * @return FLT_OK; FLT_ERR_NOT_FOUND for a feature the description does not
+ *         define or a register byte the memory image lacks;
+ *         FLT_ERR_INVALID_ARGUMENT for a NULL argument or a feature without
+ *         such a value; FLT_ERR_FORMAT for a node the description gets wrong,
+ *         FLT_ERR_DEVICE when the read callback fails (the message names the
+ *         chain of nodes).
  */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_get_int(flt_genicam *description,
                                                               const char *feature, int64_t *out);
 
-/** The value of a float or integer feature. */
+/** The value of a float or integer feature.
+ * @param description the description.
+ * @param feature the feature's name.
+ * @param out receives the value.
+ * @return FLT_OK, or a status as for flt_genicam_get_int().
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_get_float(flt_genicam *description,
                                                                 const char *feature, double *out);
 
@@ -282,6 +336,7 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_get_float(flt_genicam *des
  * @param description the description.
  * @param feature the feature's name.
  * @param out receives a string valid until the next call on the handle.
+ * @return FLT_OK, or a status as for flt_genicam_get_int().
  */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_get_string(flt_genicam *description,
                                                                  const char *feature,
@@ -290,17 +345,34 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_get_string(flt_genicam *de
 /**
  * An integer feature's bounds (pMin/pMax/pInc, or its register's range).
  * Without a bound: INT64_MIN / INT64_MAX, inc 1. Any output may be NULL.
+ * @param description the description.
+ * @param feature the feature's name.
+ * @param min receives the minimum.
+ * @param max receives the maximum.
+ * @param inc receives the increment.
+ * @return FLT_OK, or a status as for flt_genicam_get_int().
  */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_int_bounds(flt_genicam *description,
                                                                  const char *feature, int64_t *min,
                                                                  int64_t *max, int64_t *inc);
 
-/** A float feature's bounds; without a bound -DBL_MAX / DBL_MAX. */
+/** A float feature's bounds; without a bound -DBL_MAX / DBL_MAX.
+ * @param description the description.
+ * @param feature the feature's name.
+ * @param min receives the minimum.
+ * @param max receives the maximum.
+ * @return FLT_OK, or a status as for flt_genicam_get_int().
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_float_bounds(flt_genicam *description,
                                                                    const char *feature, double *min,
                                                                    double *max);
 
-/** The number of entries of an enumeration. */
+/** The number of entries of an enumeration.
+ * @param description the description.
+ * @param feature the enumeration's name.
+ * @param out receives the number of entries.
+ * @return FLT_OK, or a status as for flt_genicam_get_int().
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_enum_count(flt_genicam *description,
                                                                  const char *feature, size_t *out);
 
@@ -313,6 +385,7 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_enum_count(flt_genicam *de
  * @param value     the entry's integer;
  * @param available 1 when the entry is implemented and available now.
  * Any output may be NULL. FLT_ERR_NOT_FOUND past the last entry.
+ * @return FLT_OK, or a status as for flt_genicam_get_int().
  */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_enum_entry(flt_genicam *description,
                                                                  const char *feature, size_t index,
@@ -323,20 +396,55 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_enum_entry(flt_genicam *de
 /* Writes (into the memory image or through the write callback)            */
 /* ---------------------------------------------------------------------- */
 
-/** Writes an integer, enumeration (by integer), boolean or float feature. */
+/** Writes an integer, enumeration (by integer), boolean or float feature.
+ * @param description the description.
+ * @param feature the feature's name.
+ * @param value the value.
+ * @return FLT_OK; FLT_ERR_STATE for a feature a camera would not let be
+ *         written now (read-only, locked, unavailable, unimplemented), or
+ *         with a read callback but no write one; FLT_ERR_INVALID_ARGUMENT for a value
+ *         outside its bounds or a feature of another type; otherwise as
+ *         flt_genicam_get_int().
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_set_int(flt_genicam *description,
                                                               const char *feature, int64_t value);
 
-/** Writes a float feature (through its Converter formula if it has one). */
+/** Writes a float feature (through its Converter formula if it has one).
+ * @param description the description.
+ * @param feature the feature's name.
+ * @param value the value.
+ * @return FLT_OK; FLT_ERR_STATE for a feature a camera would not let be
+ *         written now (read-only, locked, unavailable, unimplemented), or
+ *         with a read callback but no write one; FLT_ERR_INVALID_ARGUMENT for a value
+ *         outside its bounds or a feature of another type; otherwise as
+ *         flt_genicam_get_int().
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_set_float(flt_genicam *description,
                                                                 const char *feature, double value);
 
-/** Writes a string feature, or an enumeration by entry name. */
+/** Writes a string feature, or an enumeration by entry name.
+ * @param description the description.
+ * @param feature the feature's name.
+ * @param value the string, or the entry name.
+ * @return FLT_OK; FLT_ERR_STATE for a feature a camera would not let be
+ *         written now (read-only, locked, unavailable, unimplemented), or
+ *         with a read callback but no write one; FLT_ERR_INVALID_ARGUMENT for a value
+ *         outside its bounds or a feature of another type; otherwise as
+ *         flt_genicam_get_int().
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_set_string(flt_genicam *description,
                                                                  const char *feature,
                                                                  const char *value);
 
-/** Executes a command (writes its command value). */
+/** Executes a command (writes its command value).
+ * @param description the description.
+ * @param feature the command's name.
+ * @return FLT_OK; FLT_ERR_STATE for a feature a camera would not let be
+ *         written now (read-only, locked, unavailable, unimplemented), or
+ *         with a read callback but no write one; FLT_ERR_INVALID_ARGUMENT for a value
+ *         outside its bounds or a feature of another type; otherwise as
+ *         flt_genicam_get_int().
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_execute(flt_genicam *description,
                                                               const char *feature);
 
