@@ -16,5 +16,6 @@
 #include "flatline/source.h"
 #include "flatline/gauge.h"
 #include "flatline/genicam.h"
+#include "flatline/verdict.h"
 
 #endif /* FLATLINE_FLATLINE_H */

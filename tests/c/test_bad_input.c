@@ -2989,6 +2989,249 @@ static void row_sheet_measured_map(void) {
 }
 
 /* ---------------------------------------------------------------------- */
+/* verdict.h                                                               */
+/* ---------------------------------------------------------------------- */
+
+static const char g_rules_text[] =
+    "{ \"format\": \"flatline-tolerances\", \"version\": 1, \"name\": \"bad input\",\n"
+    "  \"rules\": [\n"
+    "    { \"name\": \"1 m\", \"measure\": \"straightedge_along\", \"length_mm\": 1000,\n"
+    "      \"bands\": [ { \"thickness_mm\": [0, 50], \"width_mm\": [0, 5000], \"limit\": 3 } ] },\n"
+    "    { \"name\": \"IU\", \"measure\": \"zone_i_units\",\n"
+    "      \"bands\": [ { \"thickness_mm\": [0, 50], \"width_mm\": [0, 5000], \"limit\": 10 } ] }\n"
+    "  ] }\n";
+
+static flt_rules *new_rules(void) {
+    flt_rules *r = NULL;
+    if (flt_rules_load_text(g_rules_text, sizeof g_rules_text - 1, &r)) {
+        ERR("fixture rules: %s", flt_last_error_message());
+        exit(2);
+    }
+    return r;
+}
+
+static flt_verdict *new_verdict(void) {
+    flt_rules *r = new_rules();
+    flt_verdict *v = NULL;
+    if (flt_verdict_create(r, &v)) {
+        ERR("fixture verdict: %s", flt_last_error_message());
+        exit(2);
+    }
+    flt_rules_destroy(r);
+    return v;
+}
+
+static void row_rules_load(void) {
+    flt_rules *r = (flt_rules *)1;
+    char path[300], bad_path[300];
+    path_in_dir(path, sizeof path, "rules.json");
+    write_file(path, g_rules_text, sizeof g_rules_text - 1);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_rules_load(path, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'path'", flt_rules_load(NULL, &r));
+    BAD(FLT_ERR_IO, "no_such_file", flt_rules_load("/nonexistent/no_such_file.json", &r));
+    BAD(FLT_ERR_IO, NULL, flt_rules_load(g_dir, &r)); /* a directory */
+    path_in_dir(bad_path, sizeof bad_path, "rules_truncated.json");
+    write_file(bad_path, g_rules_text, (sizeof g_rules_text - 1) / 3);
+    BAD(FLT_ERR_FORMAT, "truncated", flt_rules_load(bad_path, &r));
+    write_file(bad_path, "", 0);
+    BAD(FLT_ERR_FORMAT, "empty", flt_rules_load(bad_path, &r));
+    write_file(bad_path, "\x89PNG\r\n\x1a\n\0\0\0", 11);
+    BAD(FLT_ERR_FORMAT, NULL, flt_rules_load(bad_path, &r));
+    ++g_checks;
+    if (r != NULL)
+        ERR("*out not NULL after a failure");
+    GOOD(flt_rules_load(path, &r));
+    flt_rules_destroy(r);
+}
+
+static void row_rules_load_text(void) {
+    flt_rules *r = NULL;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_rules_load_text(g_rules_text, 10, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'text'", flt_rules_load_text(NULL, 10, &r));
+    BAD(FLT_ERR_FORMAT, "empty", flt_rules_load_text(g_rules_text, 0, &r));
+    BAD(FLT_ERR_FORMAT, "'length'", flt_rules_load_text(g_rules_text, (size_t)-1, &r));
+    BAD(FLT_ERR_FORMAT, "truncated", flt_rules_load_text(g_rules_text, 40, &r));
+    static const char nan_limit[] =
+        "{ \"format\": \"flatline-tolerances\", \"version\": 1, \"name\": \"x\", \"rules\": [\n"
+        "  { \"name\": \"b\", \"measure\": \"bow\", \"bands\": [\n"
+        "    { \"thickness_mm\": [0, 5], \"width_mm\": [0, 5], \"limit\": NaN } ] } ] }";
+    BAD(FLT_ERR_FORMAT, "rules[0].bands[0].limit' is NaN",
+        flt_rules_load_text(nan_limit, sizeof nan_limit - 1, &r));
+    GOOD(flt_rules_load_text(g_rules_text, sizeof g_rules_text - 1, &r));
+    flt_rules_destroy(r);
+}
+
+static void row_rules_destroy(void) {
+    flt_rules_destroy(NULL);
+    uint64_t junk[32] = {0};
+    flt_rules_destroy((flt_rules *)junk); /* not a rule set: left alone */
+    g_checks += 2;
+}
+
+static void row_rules_count(void) {
+    flt_rules *r = new_rules();
+    size_t n;
+    uint64_t junk[32] = {0};
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'rules'", flt_rules_count(NULL, &n));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "not a live", flt_rules_count((flt_rules *)junk, &n));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_rules_count(r, NULL));
+    GOOD(flt_rules_count(r, &n));
+    flt_rules_destroy(r);
+}
+
+static void row_rules_rule(void) {
+    flt_rules *r = new_rules();
+    const char *name;
+    flt_measure m;
+    double len;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'rules'", flt_rules_rule(NULL, 0, &name, &m, &len));
+    BAD(FLT_ERR_NOT_FOUND, "'index' = 2", flt_rules_rule(r, 2, &name, &m, &len));
+    BAD(FLT_ERR_NOT_FOUND, "'index'", flt_rules_rule(r, (size_t)-1, &name, &m, &len));
+    GOOD(flt_rules_rule(r, 1, NULL, NULL, NULL));
+    GOOD(flt_rules_rule(r, 0, &name, &m, &len));
+    flt_rules_destroy(r);
+}
+
+static void row_straightedge_profile(void) {
+    const double p[4] = {0, 1, 2, 3}, z[4] = {0, -1, 0, 0.5};
+    const double bad_p[4] = {0, 1, 1, 3}, nan_p[4] = {0, NaN_, 2, 3};
+    const double inf_z[4] = {0, Inf_, 0, 0}, nan_z[4] = {NaN_, NaN_, NaN_, 1};
+    double d, at;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'deviation_mm'",
+        flt_straightedge_profile(p, z, 4, 2, NULL, &at));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'position_mm'",
+        flt_straightedge_profile(NULL, z, 4, 2, &d, &at));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'height_mm'", flt_straightedge_profile(p, NULL, 4, 2, &d, &at));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'count'",
+        flt_straightedge_profile(p, z, (size_t)-1, 2, &d, &at));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'length_mm'", flt_straightedge_profile(p, z, 4, 0, &d, &at));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'length_mm'", flt_straightedge_profile(p, z, 4, -1, &d, &at));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'length_mm'", flt_straightedge_profile(p, z, 4, NaN_, &d, &at));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'length_mm'", flt_straightedge_profile(p, z, 4, Inf_, &d, &at));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'length_mm'", flt_straightedge_profile(p, z, 4, 1e300, &d, &at));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "increase strictly",
+        flt_straightedge_profile(bad_p, z, 4, 2, &d, &at));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'position_mm'[1]",
+        flt_straightedge_profile(nan_p, z, 4, 2, &d, &at));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'height_mm'[1] is infinite",
+        flt_straightedge_profile(p, inf_z, 4, 2, &d, &at));
+    BAD(FLT_ERR_NOT_FOUND, "fewer than 2", flt_straightedge_profile(p, nan_z, 4, 2, &d, &at));
+    BAD(FLT_ERR_NOT_FOUND, "fewer than 2", flt_straightedge_profile(NULL, NULL, 0, 2, &d, &at));
+    GOOD(flt_straightedge_profile(p, z, 4, 2, &d, NULL));
+    ++g_checks;
+    if (d != 1.0) /* contacts 0 and 2 at height 0, the sample between at -1 */
+        ERR("deviation %g, not 1", d);
+}
+
+static void row_verdict_create(void) {
+    flt_rules *r = new_rules();
+    flt_verdict *v = (flt_verdict *)1;
+    uint64_t junk[32] = {0};
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_verdict_create(r, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'rules'", flt_verdict_create(NULL, &v));
+    ++g_checks;
+    if (v != NULL)
+        ERR("*out not NULL after a failure");
+    BAD(FLT_ERR_INVALID_ARGUMENT, "not a live", flt_verdict_create((flt_rules *)junk, &v));
+    GOOD(flt_verdict_create(r, &v));
+    flt_rules_destroy(r);
+    flt_verdict_destroy(v);
+}
+
+static void row_verdict_destroy(void) {
+    flt_verdict_destroy(NULL);
+    uint64_t junk[32] = {0};
+    flt_verdict_destroy((flt_verdict *)junk); /* not a verdict: left alone */
+    g_checks += 2;
+}
+
+static void row_verdict_set_measure(void) {
+    flt_verdict *v = new_verdict();
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'verdict'",
+        flt_verdict_set_measure(NULL, FLT_MEASURE_BOW, 1, 0, 0));
+    ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "'measure' = -1",
+                flt_verdict_set_measure(v, (flt_measure)-1, 1, 0, 0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'measure' = 7",
+        flt_verdict_set_measure(v, (flt_measure)7, 1, 0, 0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "straightedge",
+        flt_verdict_set_measure(v, FLT_MEASURE_STRAIGHTEDGE_ALONG, 1, 0, 0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'value' is infinite",
+        flt_verdict_set_measure(v, FLT_MEASURE_BOW, Inf_, 0, 0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "negative",
+        flt_verdict_set_measure(v, FLT_MEASURE_ZONE_I_UNITS, -1, 0, 0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'x_mm'",
+        flt_verdict_set_measure(v, FLT_MEASURE_BOW, 1, NaN_, 0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'s_mm'",
+        flt_verdict_set_measure(v, FLT_MEASURE_BOW, 1, 0, Inf_));
+    GOOD(flt_verdict_set_measure(v, FLT_MEASURE_BOW, -1, 0, 0));
+    GOOD(flt_verdict_set_measure(v, FLT_MEASURE_BOW, NaN_, NaN_, NaN_));
+    flt_verdict_destroy(v);
+}
+
+static void row_verdict_evaluate(void) {
+    flt_verdict *v = new_verdict();
+    enum { R = 3, K = 2 };
+    const double s[R] = {0, 1, 2}, x[K] = {0, 10}, z[R * K] = {0, 0, -1, -1, 0, 0};
+    const double bad_s[R] = {0, 2, 1}, inf_z[R * K] = {0, 0, Inf_, 0, 0, 0};
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'verdict'",
+        flt_verdict_evaluate(NULL, 2, 1000, R, K, s, x, z, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'thickness_mm'",
+        flt_verdict_evaluate(v, 0, 1000, R, K, s, x, z, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'thickness_mm'",
+        flt_verdict_evaluate(v, NaN_, 1000, R, K, s, x, z, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'thickness_mm'",
+        flt_verdict_evaluate(v, 1e6, 1000, R, K, s, x, z, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'width_mm'",
+        flt_verdict_evaluate(v, 2, -5, R, K, s, x, z, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'width_mm'",
+        flt_verdict_evaluate(v, 2, Inf_, R, K, s, x, z, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'rows'", flt_verdict_evaluate(v, 2, 1000, 0, K, s, x, z, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'s_mm'",
+        flt_verdict_evaluate(v, 2, 1000, R, K, NULL, x, z, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'x_mm'",
+        flt_verdict_evaluate(v, 2, 1000, R, K, s, NULL, z, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'z_mm'",
+        flt_verdict_evaluate(v, 2, 1000, R, K, s, x, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "overflow",
+        flt_verdict_evaluate(v, 2, 1000, (size_t)-1, (size_t)-1, s, x, z, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "increase strictly",
+        flt_verdict_evaluate(v, 2, 1000, R, K, bad_s, x, z, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'z_mm'[2] is infinite",
+        flt_verdict_evaluate(v, 2, 1000, R, K, s, x, inf_z, NULL));
+    GOOD(flt_verdict_evaluate(v, 2, 1000, R, K, s, x, z, NULL));
+    GOOD(flt_verdict_evaluate(v, 2, 1000, 0, 0, NULL, NULL, NULL, NULL));
+    flt_verdict_destroy(v);
+}
+
+static void row_verdict_get(void) {
+    flt_verdict *v = new_verdict();
+    double d;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'verdict'", flt_verdict_get(NULL, 0, FLT_VERDICT_STATE, &d));
+    BAD(FLT_ERR_STATE, "no sheet", flt_verdict_get(v, 0, FLT_VERDICT_STATE, &d));
+    const double s[2] = {0, 1}, x[2] = {0, 1}, z[4] = {0, 0, 0, 0};
+    if (flt_verdict_evaluate(v, 2, 1000, 2, 2, s, x, z, NULL))
+        ERR("evaluate: %s", flt_last_error_message());
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_verdict_get(v, 0, FLT_VERDICT_STATE, NULL));
+    BAD(FLT_ERR_NOT_FOUND, "'rule' = 2", flt_verdict_get(v, 2, FLT_VERDICT_STATE, &d));
+    ENUM_UB_BAD(FLT_ERR_NOT_FOUND, "'key' = -1", flt_verdict_get(v, 0, (flt_verdict_value)-1, &d));
+    BAD(FLT_ERR_NOT_FOUND, "'key' = 9", flt_verdict_get(v, 0, (flt_verdict_value)9, &d));
+    GOOD(flt_verdict_get(v, 0, FLT_VERDICT_MARGIN, &d));
+    flt_verdict_destroy(v);
+}
+
+static void row_verdict_failed(void) {
+    flt_verdict *v = new_verdict();
+    size_t n;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'verdict'", flt_verdict_failed(NULL, &n));
+    BAD(FLT_ERR_STATE, "no sheet", flt_verdict_failed(v, &n));
+    if (flt_verdict_evaluate(v, 2, 1000, 0, 0, NULL, NULL, NULL, NULL))
+        ERR("evaluate: %s", flt_last_error_message());
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_verdict_failed(v, NULL));
+    GOOD(flt_verdict_failed(v, &n));
+    flt_verdict_destroy(v);
+}
+
+/* ---------------------------------------------------------------------- */
 /* genicam.h                                                               */
 /* ---------------------------------------------------------------------- */
 
@@ -3510,6 +3753,19 @@ static const row k_rows[] = {
     ROW(genicam_set_float),
     ROW(genicam_set_string),
     ROW(genicam_execute),
+    /* verdict.h */
+    ROW(rules_load),
+    ROW(rules_load_text),
+    ROW(rules_destroy),
+    ROW(rules_count),
+    ROW(rules_rule),
+    ROW(straightedge_profile),
+    ROW(verdict_create),
+    ROW(verdict_destroy),
+    ROW(verdict_set_measure),
+    ROW(verdict_evaluate),
+    ROW(verdict_get),
+    ROW(verdict_failed),
 };
 #define N_ROWS (sizeof k_rows / sizeof k_rows[0])
 
