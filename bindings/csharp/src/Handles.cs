@@ -195,4 +195,22 @@ namespace Flatline
         protected override void Destroy(IntPtr native) => FlatlineNative.flt_genicam_destroy_handle(native);
         protected override void OnLive(int delta) => Interlocked.Add(ref live, delta);
     }
+
+    internal sealed class RulesHandle : FlatlineHandle
+    {
+        private static long live;
+        internal static long Live => Interlocked.Read(ref live);
+        public RulesHandle() { }
+        protected override void Destroy(IntPtr native) => FlatlineNative.flt_rules_destroy_handle(native);
+        protected override void OnLive(int delta) => Interlocked.Add(ref live, delta);
+    }
+
+    internal sealed class VerdictHandle : FlatlineHandle
+    {
+        private static long live;
+        internal static long Live => Interlocked.Read(ref live);
+        public VerdictHandle() { }
+        protected override void Destroy(IntPtr native) => FlatlineNative.flt_verdict_destroy_handle(native);
+        protected override void OnLive(int delta) => Interlocked.Add(ref live, delta);
+    }
 }

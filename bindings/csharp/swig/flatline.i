@@ -35,3 +35,4 @@
 %include "source.i"
 %include "gauge.i"
 %include "genicam.i"
+%include "verdict.i"

@@ -98,10 +98,19 @@ from ._source import (
     source_options,
 )
 
-# The gauge: exported here; its names join __all__ once the hand-written
+# The gauge and verdicts: exported here; their names join __all__ once the hand-written
 # __init__.pyi stub (which must list every name of __all__) is gone in
 # favour of the inline annotations it already has.
 from ._gauge import Gauge, Sheet, SheetFlag, SheetZones, gauge_options
+from ._verdict import (
+    Measure,
+    RuleResult,
+    ToleranceRule,
+    ToleranceRules,
+    Verdict,
+    VerdictState,
+    straightedge_deviation,
+)
 
 #: The version of the C headers this binding was built against.
 __version__: str = _capi.FLT_HEADER_VERSION
