@@ -79,13 +79,13 @@ typedef struct flt_verdict flt_verdict;
 
 /** What a rule measures (see "Measures"). */
 typedef enum flt_measure {
-    FLT_MEASURE_STRAIGHTEDGE_ALONG = 0,
-    FLT_MEASURE_STRAIGHTEDGE_ACROSS = 1,
-    FLT_MEASURE_ZONE_I_UNITS = 2,
-    FLT_MEASURE_WAVE_STEEPNESS = 3,
-    FLT_MEASURE_WAVE_HEIGHT = 4,
-    FLT_MEASURE_BOW = 5,
-    FLT_MEASURE_CROSSBOW = 6,
+    FLT_MEASURE_STRAIGHTEDGE_ALONG = 0,  /**< along every fiber, mm */
+    FLT_MEASURE_STRAIGHTEDGE_ACROSS = 1, /**< across every row, mm */
+    FLT_MEASURE_ZONE_I_UNITS = 2,        /**< the largest zone I-Units */
+    FLT_MEASURE_WAVE_STEEPNESS = 3,      /**< the largest wave's steepness, % */
+    FLT_MEASURE_WAVE_HEIGHT = 4,         /**< the largest wave's height, mm peak to peak */
+    FLT_MEASURE_BOW = 5,                 /**< bow (coil set), mm; its magnitude is judged */
+    FLT_MEASURE_CROSSBOW = 6,            /**< crossbow, mm; its magnitude is judged */
     /* Not a measure: keeps the type int-sized whatever is added. */
     FLT_MEASURE_MAX_ENUM_ = 0x7FFFFFFF
 } flt_measure;
@@ -119,9 +119,10 @@ typedef enum flt_verdict_value {
     FLT_VERDICT_LIMIT = 3,
     /** limit - worst: >= 0 passes, < 0 fails by that much. */
     FLT_VERDICT_MARGIN = 4,
-    /** Where the worst value is: x across the strip and s along it (mm);
-     * for a straightedge, its deepest point. */
+    /** Where the worst value is: x across the strip (mm); for a
+     * straightedge, its deepest point. */
     FLT_VERDICT_X = 5,
+    /** ... and s along it (mm). */
     FLT_VERDICT_S = 6,
     /** The band that applies (its index in the rule file), -1 with NO_BAND. */
     FLT_VERDICT_BAND = 7,
@@ -150,6 +151,8 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_rules_count(const flt_rules *rules
 
 /**
  * Rule `index`.
+ * @param rules     the rule set;
+ * @param index     0 .. flt_rules_count() - 1;
  * @param name      the rule's name, owned by the rule set;
  * @param measure   its flt_measure;
  * @param length_mm its straightedge length (0 for other measures).
@@ -205,6 +208,7 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_verdict_set_measure(flt_verdict *v
 
 /**
  * Judges one sheet against every rule.
+ * @param verdict                 the verdict;
  * @param thickness_mm, width_mm  the sheet's (choose each rule's band);
  * @param rows, fibers            the height map's size (both 0: no map,
  *                                straightedge rules are NOT_MEASURED);
