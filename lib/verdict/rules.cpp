@@ -92,11 +92,14 @@ rule read_rule(const json::node &n, const std::string &path) {
         for (std::size_t a = 0; a < r.bands.size(); ++a) {
             const band &y = r.bands[a];
             if (overlap(x.thickness_min, x.thickness_max, y.thickness_min, y.thickness_max) &&
-                overlap(x.width_min, x.width_max, y.width_min, y.width_max))
-                json::format_error("field '" + bp + "' (line " +
-                                   std::to_string(bands.items[b].line) + ") overlaps '" + path +
-                                   ".bands[" + std::to_string(a) +
-                                   "]': a sheet must fall in one band at most");
+                overlap(x.width_min, x.width_max, y.width_min, y.width_max)) {
+                std::string message = "field '" + bp;
+                message += "' (line " + std::to_string(bands.items[b].line);
+                message += ") overlaps '" + path;
+                message += ".bands[" + std::to_string(a);
+                message += "]': a sheet must fall in one band at most";
+                json::format_error(message);
+            }
         }
         r.bands.push_back(x);
     }
