@@ -65,9 +65,12 @@
  *
  *   Loading is strict: a truncated file, a missing, extra or duplicated
  *   field, a wrong type (string for number, fraction for integer), a NaN or
- *   infinity, a version other than 1, or a non-invertible homography fails
- *   with FLT_ERR_FORMAT and a message naming the field (e.g.
- *   "lasers[1].homography[4]"). A failed load never returns an object.
+ *   infinity, a version other than 1, a non-invertible homography, a value
+ *   outside its range (see "Physically meaningful ranges" below: the file
+ *   holds what the setters accept, no more), or more than
+ *   FLT_CALIB_MAX_FILE_BYTES of text fails with FLT_ERR_FORMAT and a
+ *   message naming the field (e.g. "lasers[1].homography[4]"). A failed load
+ *   never returns an object.
  *   Newer versions of the format get a new "version" number.
  */
 #ifndef FLATLINE_CALIB_H
@@ -78,6 +81,65 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/* ---------------------------------------------------------------------- */
+/* Physically meaningful ranges                                            */
+/* ---------------------------------------------------------------------- */
+/* Every setter and the loader refuse a value outside these ranges
+ * (FLT_ERR_INVALID_ARGUMENT from a setter, FLT_ERR_FORMAT from a file, the
+ * message naming the argument or field, its value and the range). They are
+ * far wider than any real dual-line-laser sensor and bound what the
+ * extractor, the simulator and the flatness metrics compute from a
+ * calibration, so a hand-edited file can neither overflow their arithmetic
+ * nor ask them for gigabytes. Estimates (flt_calib_estimate_*) that land
+ * outside are refused with FLT_ERR_NUMERIC and leave the model unchanged.
+ *
+ *   frame width, height     1 .. FLT_CALIB_MAX_FRAME_SIDE px (16384: 2^28
+ *                           pixels, more than any area-scan sensor made)
+ *   fx, fy                  FLT_CALIB_MIN_FOCAL_PX .. FLT_CALIB_MAX_FOCAL_PX
+ *                           (1 .. 1e6 px: a 1000 mm lens on 1 um pixels)
+ *   cx, cy                  |c| <= FLT_CALIB_MAX_PRINCIPAL_PX (65536 px,
+ *                           four of the largest frames from the image origin)
+ *   k1, k2, k3, k4, k5, k6  |k| <= FLT_CALIB_MAX_RADIAL (1000)
+ *   p1, p2                  |p| <= FLT_CALIB_MAX_TANGENTIAL (1)
+ *   homography              finite, invertible (reciprocal condition number
+ *                           above 1e-12), its largest |entry| in
+ *                           [FLT_CALIB_MIN_HOMOGRAPHY_SCALE,
+ *                            FLT_CALIB_MAX_HOMOGRAPHY_SCALE] (1e-100 .. 1e100;
+ *                           a homography is defined up to scale, so any
+ *                           can be scaled into that)
+ *   laser offset            |offset| <= FLT_CALIB_MAX_OFFSET_MM (10 m)
+ *   laser spacing           |offset_1 - offset_0| >=
+ *                           FLT_CALIB_MIN_LASER_SPACING_MM (1 mm; checked by
+ *                           flt_calib_finish and the loader)
+ *   encoder scale           FLT_CALIB_MIN_ENCODER_MM <= |mm per count| <=
+ *                           FLT_CALIB_MAX_ENCODER_MM (1e-9 .. 1e6, the
+ *                           range of source_encoder_mm_per_count)
+ *   fiber grid              pitch FLT_CALIB_MIN_PITCH_MM .. FLT_CALIB_MAX_PITCH_MM
+ *                           (1 um .. 10 m), count 1 .. FLT_MAX_FIBERS
+ *                           (16384, common.h), every fiber's |x| <=
+ *                           FLT_CALIB_MAX_X_MM
+ *                           (100 m: first_x_mm and the last fiber)
+ *   file                    at most FLT_CALIB_MAX_FILE_BYTES (64 KiB; a
+ *                           calibration is about 1.5 kB)
+ */
+#define FLT_CALIB_MAX_FRAME_SIDE       16384    /**< Largest frame width or height, px. */
+#define FLT_CALIB_MIN_FOCAL_PX         1.0      /**< Smallest fx, fy, px. */
+#define FLT_CALIB_MAX_FOCAL_PX         1.0e6    /**< Largest fx, fy, px. */
+#define FLT_CALIB_MAX_PRINCIPAL_PX     65536.0  /**< Largest |cx|, |cy|, px. */
+#define FLT_CALIB_MAX_RADIAL           1.0e3    /**< Largest |k1| .. |k6|. */
+#define FLT_CALIB_MAX_TANGENTIAL       1.0      /**< Largest |p1|, |p2|. */
+#define FLT_CALIB_MIN_HOMOGRAPHY_SCALE 1.0e-100 /**< Smallest largest |entry| of a homography. */
+#define FLT_CALIB_MAX_HOMOGRAPHY_SCALE 1.0e100  /**< Largest |entry| of a homography. */
+#define FLT_CALIB_MAX_OFFSET_MM        1.0e4    /**< Largest |laser offset|, mm. */
+#define FLT_CALIB_MIN_LASER_SPACING_MM \
+  1.0 /**< Smallest distance between the lasers along travel, mm. */
+#define FLT_CALIB_MIN_ENCODER_MM 1.0e-9 /**< Smallest |encoder scale|, mm per count. */
+#define FLT_CALIB_MAX_ENCODER_MM 1.0e6  /**< Largest |encoder scale|, mm per count. */
+#define FLT_CALIB_MIN_PITCH_MM   1.0e-3 /**< Smallest fiber pitch, mm. */
+#define FLT_CALIB_MAX_PITCH_MM   1.0e4  /**< Largest fiber pitch, mm. */
+#define FLT_CALIB_MAX_X_MM       1.0e5  /**< Largest |x| of a fiber, mm. */
+#define FLT_CALIB_MAX_FILE_BYTES 65536  /**< Largest calibration text, bytes. */
 
 /** Number of lasers (and homographies) of the sensor. */
 #define FLT_CALIB_LASERS            2
@@ -109,9 +171,10 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_create(flt_calib **out);
 /** Frees a model; NULL is a no-op. */
 FLT_API void FLT_CALL flt_calib_destroy(flt_calib *calib);
 /** Checks that intrinsics, frame size, both homographies, both laser
- * offsets (distinct), the encoder scale and the fiber grid are set, then
- * freezes the model. FLT_ERR_STATE names the first missing part (the model
- * stays unfinished and usable). Finishing twice is FLT_ERR_STATE. */
+ * offsets (at least FLT_CALIB_MIN_LASER_SPACING_MM apart), the encoder
+ * scale and the fiber grid are set, then freezes the model. FLT_ERR_STATE
+ * names the first missing part or the offsets (the model stays unfinished
+ * and usable). Finishing twice is FLT_ERR_STATE. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_finish(flt_calib *calib);
 /** *out = 1 if finished, else 0. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_is_finished(const flt_calib *calib, int *out);
@@ -120,7 +183,8 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_is_finished(const flt_calib 
 /* Camera                                                                  */
 /* ---------------------------------------------------------------------- */
 
-/** Frame size in px (each 1 .. 65536). Needed before estimating intrinsics. */
+/** Frame size in px (each 1 .. FLT_CALIB_MAX_FRAME_SIDE). Needed before
+ * estimating intrinsics. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_set_frame_size(flt_calib *calib, uint32_t width,
                                                                    uint32_t height);
 /** The frame size, px. FLT_ERR_STATE if unset. */
@@ -128,9 +192,10 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_get_frame_size(const flt_cal
                                                                    uint32_t *width_out,
                                                                    uint32_t *height_out);
 
-/** Sets the intrinsics directly: camera = {fx, fy, cx, cy} (px, fx and fy
- * > 0, all finite) and distortion = FLT_CALIB_DISTORTION_COEFFS finite
- * coefficients (OpenCV order), or NULL for none. Both arrays are copied. */
+/** Sets the intrinsics directly: camera = {fx, fy, cx, cy} (px) and
+ * distortion = FLT_CALIB_DISTORTION_COEFFS coefficients (OpenCV order), or
+ * NULL for none, each within its range (see "Physically meaningful
+ * ranges"). Both arrays are copied. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_set_intrinsics(flt_calib *calib,
                                                                    const double camera[4],
                                                                    const double *distortion);
@@ -164,8 +229,8 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_estimate_intrinsics(
 /* ---------------------------------------------------------------------- */
 
 /** Sets laser `laser`'s homography directly: h[9], row-major, maps
- * undistorted (u, v, 1) px to (x, z, 1) mm. It must be finite and
- * invertible (FLT_ERR_INVALID_ARGUMENT otherwise). Copied. */
+ * undistorted (u, v, 1) px to (x, z, 1) mm. It must be finite, invertible
+ * and within the scale range (FLT_ERR_INVALID_ARGUMENT otherwise). Copied. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_set_homography(flt_calib *calib, unsigned laser,
                                                                    const double h[9]);
 /** Copies laser `laser`'s homography into h_out[9]. FLT_ERR_STATE if unset. */
@@ -200,7 +265,9 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_estimate_homography(
 /* Sensor geometry                                                         */
 /* ---------------------------------------------------------------------- */
 
-/** Laser `laser`'s offset along travel, mm (finite). */
+/** Laser `laser`'s offset along travel, mm (|offset| <=
+ * FLT_CALIB_MAX_OFFSET_MM). flt_calib_finish() also wants the two offsets
+ * at least FLT_CALIB_MIN_LASER_SPACING_MM apart. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_set_laser_offset(flt_calib *calib,
                                                                      unsigned laser,
                                                                      double offset_mm);
@@ -211,7 +278,8 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_get_laser_offset(const flt_c
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_laser_spacing(const flt_calib *calib,
                                                                   double *out);
 
-/** Encoder scale, mm of travel per count (finite, non-zero; negative when the
+/** Encoder scale, mm of travel per count (its magnitude in
+ * [FLT_CALIB_MIN_ENCODER_MM, FLT_CALIB_MAX_ENCODER_MM]; negative when the
  * encoder counts down as the strip moves forward). */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_set_encoder_scale(flt_calib *calib,
                                                                       double encoder_mm_per_count);
@@ -220,7 +288,8 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_get_encoder_scale(const flt_
                                                                       double *out);
 
 /** Fiber grid: fiber k sits at x = first_x_mm + k * pitch_mm, k < count
- * (pitch > 0, count >= 1, all finite). */
+ * (pitch in [FLT_CALIB_MIN_PITCH_MM, FLT_CALIB_MAX_PITCH_MM], count in
+ * [1, FLT_MAX_FIBERS], every fiber's |x| <= FLT_CALIB_MAX_X_MM). */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_set_fiber_grid(flt_calib *calib,
                                                                    double first_x_mm,
                                                                    double pitch_mm, size_t count);
@@ -282,10 +351,12 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_save_text(const flt_calib *c
 
 /** Reads a model from `path` and returns it finished in *out (NULL on any
  * failure). FLT_ERR_IO if the file cannot be read, FLT_ERR_FORMAT if it is
- * malformed. */
+ * malformed, a value is outside its range, or the file is larger than
+ * FLT_CALIB_MAX_FILE_BYTES. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_load(const char *path, flt_calib **out);
 
-/** The same from `length` bytes of text (need not be NUL-terminated). */
+/** The same from `length` bytes of text (need not be NUL-terminated;
+ * length <= FLT_CALIB_MAX_FILE_BYTES, else FLT_ERR_FORMAT). */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_load_text(const char *text, size_t length,
                                                               flt_calib **out);
 

@@ -79,6 +79,12 @@
 #  define FLT_NODISCARD
 #endif
 
+/** The most fibers (longitudinal lines across the width) any handle takes:
+ * a calibration's fiber grid, a reconstructor, a flatness handle. 16384 is
+ * one per column of the widest frame a calibration accepts; a real sensor
+ * has a few thousand. */
+#define FLT_MAX_FIBERS 16384
+
 #ifdef __cplusplus
 extern "C" {
 #endif

@@ -20,7 +20,13 @@ using namespace flt;
 
 namespace {
 constexpr std::uint32_t k_calib_magic = 0x464c5443u;  // "FLTC"
-constexpr std::uint32_t k_max_frame_side = 65536;
+constexpr std::uint32_t k_max_frame_side = FLT_CALIB_MAX_FRAME_SIDE;
+
+// The argument names of flt_calib_set_intrinsics, for the range checks.
+const char *const k_intrinsics_names[12] = {
+    "camera[0] (fx)",     "camera[1] (fy)",     "camera[2] (cx)",     "camera[3] (cy)",
+    "distortion[0] (k1)", "distortion[1] (k2)", "distortion[2] (p1)", "distortion[3] (p2)",
+    "distortion[4] (k3)", "distortion[5] (k4)", "distortion[6] (k5)", "distortion[7] (k6)"};
 }  // namespace
 
 struct flt_calib {
@@ -77,6 +83,16 @@ flt_status check_points(const char *fn, const char *name, const double *pts, std
     return FLT_OK;
 }
 
+// The file's model, with every range of calib.h checked (FLT_ERR_FORMAT
+// naming the field): a loaded model is as sane as a set one.
+calib_model read_checked_model(const char *text, std::size_t length) {
+    calib_model model = read_model(text, length);
+    const std::string range = model_range_error(model);
+    if (!range.empty())
+        throw error(FLT_ERR_FORMAT, ("field " + range).c_str());
+    return model;
+}
+
 flt_status check_finite(const char *fn, const char *name, double v) {
     if (!std::isfinite(v))
         return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument '%s' = %g is not finite", fn, name, v);
@@ -113,6 +129,11 @@ FLT_API flt_status FLT_CALL flt_calib_finish(flt_calib *calib) {
             return st;
         if (const char *missing = missing_part(calib->model))
             return fail(FLT_ERR_STATE, "%s: the calibration lacks %s", fn, missing);
+        const calib_model &m = calib->model;
+        const std::string spacing =
+            spacing_range_error("the laser offsets", m.offset_mm[0], m.offset_mm[1]);
+        if (!spacing.empty())
+            return fail(FLT_ERR_STATE, "%s: %s; set them further apart", fn, spacing.c_str());
         calib->finished = true;
         return FLT_OK;
     });
@@ -191,6 +212,9 @@ FLT_API flt_status FLT_CALL flt_calib_set_intrinsics(flt_calib *calib, const dou
                                 distortion[k]);
                 cam.distortion[k] = distortion[k];
             }
+        const std::string range = camera_range_error(cam, k_intrinsics_names);
+        if (!range.empty())
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument %s", fn, range.c_str());
         calib->model.camera = cam;
         calib->model.has_camera = true;
         return FLT_OK;
@@ -266,6 +290,14 @@ FLT_API flt_status FLT_CALL flt_calib_estimate_intrinsics(
         } catch (const error &e) {
             return fail(e.status, "%s: %s", fn, e.what());
         }
+        static const char *const names[12] = {"fx", "fy", "cx", "cy", "k1", "k2",
+                                              "p1", "p2", "k3", "k4", "k5", "k6"};
+        const std::string range = camera_range_error(fit.camera, names);
+        if (!range.empty())
+            return fail(FLT_ERR_NUMERIC,
+                        "%s: the estimate failed: its %s (see calib.h for the ranges); the "
+                        "intrinsics are unchanged",
+                        fn, range.c_str());
         calib->model.camera = fit.camera;
         calib->model.has_camera = true;
         if (rms_px_out)
@@ -295,6 +327,9 @@ FLT_API flt_status FLT_CALL flt_calib_set_homography(flt_calib *calib, unsigned 
                         "%s: argument 'h' is not invertible (singular or nearly "
                         "so)",
                         fn);
+        const std::string range = homography_range_error("h", h);
+        if (!range.empty())
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument %s", fn, range.c_str());
         calib_model &m = calib->model;
         std::memcpy(m.h[laser], h, sizeof m.h[laser]);
         homography_inverse(m.h[laser], m.h_inv[laser]);
@@ -375,6 +410,10 @@ FLT_API flt_status FLT_CALL flt_calib_estimate_homography(
         } catch (const error &e) {
             return fail(e.status, "%s: laser %u: %s", fn, laser, e.what());
         }
+        const std::string range = homography_range_error("homography", fit.h);
+        if (!range.empty())
+            return fail(FLT_ERR_NUMERIC, "%s: laser %u: the estimated %s; the model is unchanged",
+                        fn, laser, range.c_str());
         std::memcpy(m.h[laser], fit.h, sizeof fit.h);
         homography_inverse(m.h[laser], m.h_inv[laser]);
         m.has_homography[laser] = true;
@@ -404,6 +443,9 @@ FLT_API flt_status FLT_CALL flt_calib_set_laser_offset(flt_calib *calib, unsigne
             return st;
         if (flt_status st = check_finite(fn, "offset_mm", offset_mm))
             return st;
+        const std::string range = offset_range_error("offset_mm", offset_mm);
+        if (!range.empty())
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument %s", fn, range.c_str());
         calib->model.offset_mm[laser] = offset_mm;
         calib->model.has_offset[laser] = true;
         return FLT_OK;
@@ -450,6 +492,9 @@ FLT_API flt_status FLT_CALL flt_calib_set_encoder_scale(flt_calib *calib,
             return st;
         if (encoder_mm_per_count == 0)
             return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'encoder_mm_per_count' is 0", fn);
+        const std::string range = encoder_range_error("encoder_mm_per_count", encoder_mm_per_count);
+        if (!range.empty())
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument %s", fn, range.c_str());
         calib->model.encoder_mm_per_count = encoder_mm_per_count;
         calib->model.has_encoder = true;
         return FLT_OK;
@@ -480,10 +525,14 @@ FLT_API flt_status FLT_CALL flt_calib_set_fiber_grid(flt_calib *calib, double fi
         if (!std::isfinite(pitch_mm) || !(pitch_mm > 0))
             return fail(FLT_ERR_INVALID_ARGUMENT,
                         "%s: argument 'pitch_mm' = %g must be finite and > 0", fn, pitch_mm);
-        // The file stores the count as a number: keep it exact in a double.
-        if (count == 0 || count > 1000000000u)
-            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'count' = %zu is outside [1, 1e9]",
-                        fn, count);
+        if (count == 0 || count > FLT_MAX_FIBERS)
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'count' = %zu is outside [1, %d]",
+                        fn, count, FLT_MAX_FIBERS);
+        static const char *const names[3] = {"first_x_mm", "pitch_mm", "count"};
+        const std::string range =
+            fiber_grid_range_error(names, first_x_mm, pitch_mm, double(count));
+        if (!range.empty())
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument %s", fn, range.c_str());
         calib_model &m = calib->model;
         m.first_x_mm = first_x_mm, m.pitch_mm = pitch_mm, m.fiber_count = count;
         m.has_fibers = true;
@@ -632,10 +681,15 @@ FLT_API flt_status FLT_CALL flt_calib_load_text(const char *text, size_t length,
         *out = nullptr;
         if (length > 0)
             FLT_CHECK_NOT_NULL(fn, text);
+        // A calibration is about 1.5 kB; refuse anything absurd before parsing.
+        if (length > FLT_CALIB_MAX_FILE_BYTES)
+            return fail(FLT_ERR_FORMAT,
+                        "%s: argument 'length' = %zu is more than %d bytes; not a calibration", fn,
+                        length, FLT_CALIB_MAX_FILE_BYTES);
         // Parse into a local model; the handle exists only once it is whole.
         calib_model model;
         try {
-            model = read_model(text ? text : "", length);
+            model = read_checked_model(text ? text : "", length);
         } catch (const error &e) {
             return fail(e.status, "%s: %s", fn, e.what());
         }
@@ -659,8 +713,8 @@ FLT_API flt_status FLT_CALL flt_calib_load(const char *path, flt_calib **out) {
         std::string text;
         char chunk[4096];
         std::size_t got;
-        // A calibration is a few kB; refuse anything absurd before reading it.
-        constexpr std::size_t k_max_bytes = 1 << 20;
+        // A calibration is about 1.5 kB; refuse anything absurd before reading it.
+        constexpr std::size_t k_max_bytes = FLT_CALIB_MAX_FILE_BYTES;
         while ((got = std::fread(chunk, 1, sizeof chunk, f)) > 0) {
             text.append(chunk, got);
             if (text.size() > k_max_bytes) {
@@ -677,7 +731,7 @@ FLT_API flt_status FLT_CALL flt_calib_load(const char *path, flt_calib **out) {
             return fail(FLT_ERR_IO, "%s: cannot read '%.300s'", fn, path);
         calib_model model;
         try {
-            model = read_model(text.data(), text.size());
+            model = read_checked_model(text.data(), text.size());
         } catch (const error &e) {
             return fail(e.status, "%s: '%.200s': %s", fn, path, e.what());
         }

@@ -419,8 +419,8 @@ calib_model read_model(const char *text, std::size_t length) {
     calib_model m;
 
     const auto frame = fields(*top[2], "frame", {"width", "height"});
-    m.width = std::uint32_t(integer(*frame[0], "frame.width", 1, 65536));
-    m.height = std::uint32_t(integer(*frame[1], "frame.height", 1, 65536));
+    m.width = std::uint32_t(integer(*frame[0], "frame.width", 1, FLT_CALIB_MAX_FRAME_SIDE));
+    m.height = std::uint32_t(integer(*frame[1], "frame.height", 1, FLT_CALIB_MAX_FRAME_SIDE));
     m.has_frame = true;
 
     const auto cam = fields(*top[3], "camera", {"fx", "fy", "cx", "cy", "distortion"});
@@ -473,7 +473,7 @@ calib_model read_model(const char *text, std::size_t length) {
     const auto fib = fields(*top[6], "fibers", {"first_x_mm", "pitch_mm", "count"});
     m.first_x_mm = number(*fib[0], "fibers.first_x_mm");
     m.pitch_mm = positive(*fib[1], "fibers.pitch_mm");
-    m.fiber_count = std::size_t(integer(*fib[2], "fibers.count", 1, 1e9));
+    m.fiber_count = std::size_t(integer(*fib[2], "fibers.count", 1, FLT_MAX_FIBERS));
     m.has_fibers = true;
     return m;
 }

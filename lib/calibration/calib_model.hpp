@@ -101,4 +101,26 @@ calib_model read_model(const char *text, std::size_t length);
 // Checks a model for completeness; returns nullptr or the missing part.
 const char *missing_part(const calib_model &model);
 
+// The ranges of calib.h ("Physically meaningful ranges"), calib_limits.cpp.
+// Each returns "" when the values are in range, else the end of a message
+// naming the value ("'fibers.pitch_mm' = 1e-300 is outside [0.001, 10000]
+// mm"); the names are the caller's (an argument, or a field of the file).
+std::string frame_range_error(const char *width_name, const char *height_name, double width,
+                              double height);
+// names: fx, fy, cx, cy, then the 8 distortion coefficients (OpenCV order).
+std::string camera_range_error(const camera_model &cam, const char *const names[12]);
+// Finite, largest |entry| within the scale range, invertible.
+std::string homography_range_error(const char *name, const double h[9]);
+std::string offset_range_error(const char *name, double offset_mm);
+// The two offsets at least FLT_CALIB_MIN_LASER_SPACING_MM apart; `names`
+// introduces them ("'lasers[0].offset_mm' and 'lasers[1].offset_mm'").
+std::string spacing_range_error(const char *names, double offset0, double offset1);
+std::string encoder_range_error(const char *name, double mm_per_count);
+// names: first x, pitch, count.
+std::string fiber_grid_range_error(const char *const names[3], double first_x_mm, double pitch_mm,
+                                   double count);
+// Every range of a whole model, named as the fields of the file; "" when
+// the model is in range (calib.cpp, for the loader).
+std::string model_range_error(const calib_model &model);
+
 }  // namespace flt

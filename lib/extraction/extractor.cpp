@@ -534,9 +534,17 @@ void flt_extractor::resample(unsigned laser) {
     const double inv_pitch = 1.0 / pitch, last = double(fibers - 1);
     const double half = support;
     enum : std::uint8_t { left = 1, right = 2, poisoned = 4 };
+    // The fibers with lo <= x_k <= hi. Clamped to [-1, fibers] while still a
+    // double: a column mapped far off the grid (an extreme homography, or
+    // the plane's horizon inside the frame) gives indices far beyond any
+    // integer, and converting those would be undefined.
     auto fiber_range = [&](double lo, double hi, long *k0, long *k1) {
-        *k0 = long(std::max(0.0, std::ceil((lo - first_x) * inv_pitch)));
-        *k1 = long(std::min(last, std::floor((hi - first_x) * inv_pitch)));
+        const double a = std::ceil((lo - first_x) * inv_pitch);
+        const double b = std::floor((hi - first_x) * inv_pitch);
+        *k0 = a > 0.0 ? long(std::min(a, last + 1.0)) : 0;  // NaN: 0
+        *k1 = b < last ? long(std::max(b, -1.0)) : long(last);
+        if (!(b == b))
+            *k1 = -1;  // NaN: no fiber
     };
     double previous_x = k_nan;
     bool gap = false;

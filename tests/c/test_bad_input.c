@@ -804,6 +804,10 @@ static void row_calib_finish(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'calib'", flt_calib_finish(NULL));
     BAD(FLT_ERR_STATE, "fiber", flt_calib_finish(c)); /* names the missing part */
     GOOD(flt_calib_set_fiber_grid(c, FIRST_X, PITCH, FIBERS));
+    /* Lasers 0.5 mm apart: less than FLT_CALIB_MIN_LASER_SPACING_MM. */
+    GOOD(flt_calib_set_laser_offset(c, 1, -49.5));
+    BAD(FLT_ERR_STATE, "apart", flt_calib_finish(c));
+    GOOD(flt_calib_set_laser_offset(c, 1, 50));
     GOOD(flt_calib_finish(c));
     BAD(FLT_ERR_STATE, NULL, flt_calib_finish(c)); /* twice */
     flt_calib_destroy(c);
@@ -828,6 +832,11 @@ static void row_calib_set_frame_size(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'height'", flt_calib_set_frame_size(c, 10, 0));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'width'", flt_calib_set_frame_size(c, UINT32_MAX, 10));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'height'", flt_calib_set_frame_size(c, 10, 65537));
+    /* Finite but absurd: a 65536 x 65536 frame is 4.3e9 pixels (the
+     * simulator would ask for 17 GB); the limit is FLT_CALIB_MAX_FRAME_SIDE. */
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'width'",
+        flt_calib_set_frame_size(c, FLT_CALIB_MAX_FRAME_SIDE + 1, 10));
+    GOOD(flt_calib_set_frame_size(c, FLT_CALIB_MAX_FRAME_SIDE, FLT_CALIB_MAX_FRAME_SIDE));
     GOOD(flt_calib_set_frame_size(c, WIDTH, ROI_ROWS));
     /* Wrong order: setters after finish. */
     BAD(FLT_ERR_STATE, "finished", flt_calib_set_frame_size(g_calib, 10, 10));
@@ -863,6 +872,22 @@ static void row_calib_set_intrinsics(void) {
     dist[4] = NaN_;
     BAD(FLT_ERR_INVALID_ARGUMENT, "distortion[4]", flt_calib_set_intrinsics(c, cam, dist));
     dist[4] = 0;
+    /* Finite but absurd (outside calib.h's ranges); each names its field. */
+    cam[0] = 1e300;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "fx", flt_calib_set_intrinsics(c, cam, NULL));
+    cam[0] = CAMERA[0];
+    cam[1] = 1e-300;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "fy", flt_calib_set_intrinsics(c, cam, NULL));
+    cam[1] = CAMERA[1];
+    cam[2] = -1e9;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "cx", flt_calib_set_intrinsics(c, cam, NULL));
+    cam[2] = CAMERA[2];
+    dist[0] = 1e200;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "k1", flt_calib_set_intrinsics(c, cam, dist));
+    dist[0] = 0;
+    dist[3] = 5;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "p2", flt_calib_set_intrinsics(c, cam, dist));
+    dist[3] = 0;
     GOOD(flt_calib_set_intrinsics(c, cam, dist));
     BAD(FLT_ERR_STATE, "finished", flt_calib_set_intrinsics(g_calib, CAMERA, NULL));
     flt_calib_destroy(c);
@@ -953,6 +978,10 @@ static void row_calib_set_homography(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "h[4]", flt_calib_set_homography(c, 0, h));
     memset(h, 0, sizeof h);
     BAD(FLT_ERR_INVALID_ARGUMENT, "invertible", flt_calib_set_homography(c, 0, h));
+    /* Invertible but scaled beyond FLT_CALIB_MAX_HOMOGRAPHY_SCALE (1e100). */
+    for (int k = 0; k < 9; ++k)
+        h[k] = H0[k] * 1e200;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "scale", flt_calib_set_homography(c, 0, h));
     GOOD(flt_calib_set_homography(c, 0, H0));
     BAD(FLT_ERR_STATE, "finished", flt_calib_set_homography(g_calib, 0, H0));
     flt_calib_destroy(c);
@@ -1023,6 +1052,9 @@ static void row_calib_set_laser_offset(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'laser'", flt_calib_set_laser_offset(c, 2, 1));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'offset_mm'", flt_calib_set_laser_offset(c, 0, NaN_));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'offset_mm'", flt_calib_set_laser_offset(c, 0, -Inf_));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'offset_mm'", flt_calib_set_laser_offset(c, 0, 1e300));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'offset_mm'",
+        flt_calib_set_laser_offset(c, 0, -FLT_CALIB_MAX_OFFSET_MM * 1.001));
     GOOD(flt_calib_set_laser_offset(c, 0, -50));
     BAD(FLT_ERR_STATE, "finished", flt_calib_set_laser_offset(g_calib, 0, 1));
     flt_calib_destroy(c);
@@ -1056,6 +1088,8 @@ static void row_calib_set_encoder_scale(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "encoder_mm_per_count", flt_calib_set_encoder_scale(c, 0.0));
     BAD(FLT_ERR_INVALID_ARGUMENT, "encoder_mm_per_count", flt_calib_set_encoder_scale(c, NaN_));
     BAD(FLT_ERR_INVALID_ARGUMENT, "encoder_mm_per_count", flt_calib_set_encoder_scale(c, Inf_));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "encoder_mm_per_count", flt_calib_set_encoder_scale(c, 1e-300));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "encoder_mm_per_count", flt_calib_set_encoder_scale(c, -1e300));
     GOOD(flt_calib_set_encoder_scale(c, -0.01)); /* counting down is allowed */
     BAD(FLT_ERR_STATE, "finished", flt_calib_set_encoder_scale(g_calib, 0.01));
     flt_calib_destroy(c);
@@ -1079,8 +1113,18 @@ static void row_calib_set_fiber_grid(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'pitch_mm'", flt_calib_set_fiber_grid(c, 0, -2, 10));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'pitch_mm'", flt_calib_set_fiber_grid(c, 0, Inf_, 10));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'count'", flt_calib_set_fiber_grid(c, 0, 1, 0));
-    /* (size_t)-1 fibers: the last fiber's x overflows nothing here, but no
-     * extractor row could hold it; refused or accepted, it must not crash. */
+    /* Finite but absurd: a pitch of 1e-300 mm (the extractor's resampling
+     * index overflowed), 2^32 mm (the flatness zones asked for 138 GB), 1e8
+     * fibers (11 s and 5.6 GB per extractor), a grid 1e300 mm off centre,
+     * a last fiber beyond FLT_CALIB_MAX_X_MM, (size_t)-1 fibers. */
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'pitch_mm'", flt_calib_set_fiber_grid(c, 0, 1e-300, 10));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'pitch_mm'", flt_calib_set_fiber_grid(c, 0, 4294967296.0, 10));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'count'", flt_calib_set_fiber_grid(c, 0, 1, 100000000));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'count'", flt_calib_set_fiber_grid(c, 0, 1, NEG));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'first_x_mm'", flt_calib_set_fiber_grid(c, 1e300, 1, 10));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "last fiber",
+        flt_calib_set_fiber_grid(c, 0, FLT_CALIB_MAX_PITCH_MM, FLT_MAX_FIBERS));
+    GOOD(flt_calib_set_fiber_grid(c, -FLT_CALIB_MAX_X_MM, FLT_CALIB_MIN_PITCH_MM, FLT_MAX_FIBERS));
     GOOD(flt_calib_set_fiber_grid(c, 0, 1, 10));
     BAD(FLT_ERR_STATE, "finished", flt_calib_set_fiber_grid(g_calib, 0, 1, 10));
     flt_calib_destroy(c);
@@ -1808,15 +1852,17 @@ static void row_recon_create_from_calib(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'extract_sg_window' belongs to the extractor",
         flt_recon_create_from_calib(g_calib, o, &r));
     flt_options_destroy(o);
-    /* Lasers 1 nm apart: finished (the offsets differ) but no spacing the
-     * reconstructor can work with. */
+    /* Lasers 1 nm apart: no spacing the reconstructor can work with. A
+     * calibration cannot be finished so (FLT_CALIB_MIN_LASER_SPACING_MM),
+     * so every finished one has a spacing inside laser_spacing's range. */
     c = almost_finished();
     if (flt_calib_set_laser_offset(c, 1, -50.0 + 1e-6) ||
-        flt_calib_set_fiber_grid(c, FIRST_X, PITCH, FIBERS) || flt_calib_finish(c)) {
+        flt_calib_set_fiber_grid(c, FIRST_X, PITCH, FIBERS)) {
         fprintf(stderr, "fixture: %s\n", flt_last_error_message());
         exit(2);
     }
-    BAD(FLT_ERR_INVALID_ARGUMENT, "between its lasers", flt_recon_create_from_calib(c, NULL, &r));
+    BAD(FLT_ERR_STATE, "apart", flt_calib_finish(c));
+    BAD(FLT_ERR_STATE, "not finished", flt_recon_create_from_calib(c, NULL, &r));
     flt_calib_destroy(c);
     GOOD(flt_recon_create_from_calib(g_calib, NULL, &r));
     size_t n = 0;

@@ -1,0 +1,333 @@
+// SPDX-License-Identifier: Apache-2.0
+/*
+ * Finite but absurd values and sizes, across components: what a
+ * hand-edited calibration file, an option at the edge of its documented
+ * range or a size no sensor has does to the chain calibration -> extractor
+ * -> reconstructor -> flatness.
+ *
+ * Each test is the regression test of one such defect:
+ *   - a calibration whose values are finite but absurd (pitch 1e-300 mm,
+ *     fx 1e300 px, ...) loaded, and the extractor's first frame wrote far
+ *     out of bounds: the loader refuses every value outside calib.h's
+ *     ranges, naming the field, and accepts the ranges' ends; a
+ *     calibration inside the ranges whose columns map far off the fiber
+ *     grid is processed without an out-of-range conversion;
+ *   - the flatness zones were sized by the fibers' span without a bound
+ *     (1e9 mm: 40 million zones; 1e300 mm: an undefined conversion);
+ *   - slope_sigma at its documented minimum made every reconstructed
+ *     value NaN without FLT_FLAG_NO_DATA, and heights of 1e8 mm in robust
+ *     mode with rigid motion half of them;
+ *   - sizes that passed the checks and then took the machine (a 65536 x
+ *     65536 frame, 1e8 fibers, a 100 MB calibration text, buffers of
+ *     terabytes), now refused before anything is allocated;
+ *   - sim_full_well near its documented minimum gave NaN pixels through an
+ *     undefined conversion (the asan preset, with float-cast-overflow,
+ *     reports it).
+ */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#ifdef _WIN32
+#  include <windows.h>
+#  include <psapi.h>
+#else
+#  include <sys/resource.h>
+#endif
+
+#include <cmocka.h>
+
+#include "flatline/flatline.h"
+
+static double now_s(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Peak resident memory of the process so far, MB. */
+static double peak_rss_mb(void) {
+#ifdef _WIN32
+    PROCESS_MEMORY_COUNTERS counters;
+    if (!GetProcessMemoryInfo(GetCurrentProcess(), &counters, sizeof counters))
+        return 0.0;
+    return (double)counters.PeakWorkingSetSize / (1024.0 * 1024.0);
+#else
+    struct rusage usage;
+    getrusage(RUSAGE_SELF, &usage);
+    return (double)usage.ru_maxrss / 1024.0; /* Linux: kB */
+#endif
+}
+
+/* The saved text of the reference sensor's calibration (malloc'd). */
+static char *reference_text(void) {
+    flt_calib *calib = NULL;
+    assert_int_equal(flt_calib_create_reference(0, 2048, -1000.0, 2.0, 1001, &calib), FLT_OK);
+    size_t length = 0;
+    assert_int_equal(flt_calib_save_text(calib, NULL, 0, &length), FLT_ERR_BUFFER_FULL);
+    char *text = malloc(length + 1);
+    assert_int_equal(flt_calib_save_text(calib, text, length + 1, &length), FLT_OK);
+    flt_calib_destroy(calib);
+    return text;
+}
+
+/* `text` with the line holding `key` replaced by `line` (malloc'd). */
+static char *with_line(const char *text, const char *key, const char *line) {
+    const char *at = strstr(text, key);
+    assert_non_null(at);
+    while (at > text && at[-1] != '\n')
+        --at;
+    const char *end = strchr(at, '\n');
+    assert_non_null(end);
+    const size_t head = (size_t)(at - text);
+    char *out = malloc(strlen(text) + strlen(line) + 2);
+    memcpy(out, text, head);
+    strcpy(out + head, line);
+    strcat(out, end);
+    return out;
+}
+
+/* Loads `text`; returns the model (NULL on failure) and the status. */
+static flt_status load(const char *text, flt_calib **out) {
+    *out = NULL;
+    return flt_calib_load_text(text, strlen(text), out);
+}
+
+/* ---------------------------------------------------------------------- */
+/* Calibration files                                                       */
+/* ---------------------------------------------------------------------- */
+
+typedef struct field_edit {
+    const char *key;   /* a unique text on the line to replace */
+    const char *line;  /* its replacement */
+    const char *field; /* the field the message must name */
+} field_edit;
+
+static void test_absurd_calibration_values_are_refused_naming_the_field(void **state) {
+    (void)state;
+    char *ref = reference_text();
+    /* The reported values first, then one past each range of calib.h. */
+    static const field_edit edits[] = {
+        {"\"pitch_mm\"", "    \"pitch_mm\": 1e-300,", "fibers.pitch_mm"},
+        {"\"fx\"", "    \"fx\": 1e300,", "camera.fx"},
+        {"\"width\"", "    \"width\": 65536,", "frame.width"},
+        {"\"count\"", "    \"count\": 100000000", "fibers.count"},
+        {"\"pitch_mm\"", "    \"pitch_mm\": 4294967296,", "fibers.pitch_mm"},
+        {"\"height\"", "    \"height\": 16385", "frame.height"},
+        {"\"fy\"", "    \"fy\": 0.5,", "camera.fy"},
+        {"\"cx\"", "    \"cx\": 70000,", "camera.cx"},
+        {"\"cy\"", "    \"cy\": -1e200,", "camera.cy"},
+        {"\"k1\"", "      \"k1\": 1001,", "camera.distortion.k1"},
+        {"\"k6\"", "      \"k6\": -1e300", "camera.distortion.k6"},
+        {"\"p2\"", "      \"p2\": 1.5,", "camera.distortion.p2"},
+        {"\"offset_mm\": -50", "      \"offset_mm\": -10001,", "lasers[0].offset_mm"},
+        {"\"offset_mm\": 50", "      \"offset_mm\": -49.5,", "lasers[0].offset_mm"},
+        {"\"encoder_mm_per_count\"", "  \"encoder_mm_per_count\": 1e-300,", "encoder_mm_per_count"},
+        {"\"encoder_mm_per_count\"", "  \"encoder_mm_per_count\": -2e6,", "encoder_mm_per_count"},
+        {"\"first_x_mm\"", "    \"first_x_mm\": 1e300,", "fibers.first_x_mm"},
+        {"\"first_x_mm\"", "    \"first_x_mm\": 99000,", "fibers.first_x_mm"},
+        {"\"count\"", "    \"count\": 16385", "fibers.count"},
+    };
+    for (size_t i = 0; i < sizeof edits / sizeof edits[0]; ++i) {
+        char *text = with_line(ref, edits[i].key, edits[i].line);
+        flt_calib *calib = (flt_calib *)ref; /* not NULL: must be cleared */
+        const flt_status st = flt_calib_load_text(text, strlen(text), &calib);
+        print_message("%-40s -> %s\n", edits[i].line, flt_last_error_message());
+        assert_int_equal(st, FLT_ERR_FORMAT);
+        assert_null(calib);
+        assert_non_null(strstr(flt_last_error_message(), edits[i].field));
+        free(text);
+    }
+    /* A homography scaled by 1e200: invertible (the identity's condition),
+     * but beyond FLT_CALIB_MAX_HOMOGRAPHY_SCALE. */
+    const char *h = strstr(ref, "\"homography\": [");
+    assert_non_null(h);
+    h += strlen("\"homography\": [");
+    const char *close = strchr(h, ']');
+    char *scaled = malloc(strlen(ref) + 128);
+    memcpy(scaled, ref, (size_t)(h - ref));
+    sprintf(scaled + (h - ref), "1e200, 0, 0, 0, 1e200, 0, 0, 0, 1e200%s", close);
+    flt_calib *calib = NULL;
+    assert_int_equal(load(scaled, &calib), FLT_ERR_FORMAT);
+    print_message("scaled homography -> %s\n", flt_last_error_message());
+    assert_non_null(strstr(flt_last_error_message(), "lasers[0].homography"));
+    assert_non_null(strstr(flt_last_error_message(), "largest |entry|"));
+    free(scaled);
+    free(ref);
+}
+
+/* The ends of the ranges load, and the whole chain runs on them: an
+ * extractor and a simulator are created and a frame is processed (under
+ * the asan preset: without an out-of-range conversion or access). */
+static void test_calibration_at_the_ends_of_its_ranges_runs_the_chain(void **state) {
+    (void)state;
+    char *ref = reference_text();
+    char line[128];
+    /* The finest pitch and the most fibers, at the grid's left limit. */
+    snprintf(line, sizeof line, "    \"first_x_mm\": %.17g,", -FLT_CALIB_MAX_X_MM);
+    char *a = with_line(ref, "\"first_x_mm\"", line);
+    snprintf(line, sizeof line, "    \"pitch_mm\": %.17g,", FLT_CALIB_MIN_PITCH_MM);
+    char *b = with_line(a, "\"pitch_mm\"", line);
+    snprintf(line, sizeof line, "    \"count\": %d", FLT_MAX_FIBERS);
+    char *text = with_line(b, "\"count\"", line);
+    flt_calib *calib = NULL;
+    assert_int_equal(load(text, &calib), FLT_OK);
+    flt_extractor *ex = NULL;
+    assert_int_equal(flt_extractor_create(calib, NULL, &ex), FLT_OK);
+    size_t fibers = 0;
+    assert_int_equal(flt_extractor_fibers(ex, &fibers), FLT_OK);
+    assert_int_equal(fibers, FLT_MAX_FIBERS);
+
+    /* A frame of the reference sensor (its lines are where this model's
+     * homographies put them; the grid is far off to the left, so every
+     * fiber is invalid). */
+    flt_sim *sim = NULL;
+    assert_int_equal(flt_sim_create(NULL, NULL, &sim), FLT_OK);
+    uint8_t *frame = malloc(2048 * 2048);
+    assert_int_equal(flt_sim_next_frame(sim, frame, 2048 * 2048, 2048, NULL, 0, NULL, NULL),
+                     FLT_OK);
+    double *height = malloc(fibers * sizeof(double)), *slope = malloc(fibers * sizeof(double));
+    const double t0 = now_s();
+    assert_int_equal(flt_extractor_process(ex, frame, FLT_PIXEL_MONO8, 2048, 2048, 2048, 0.0,
+                                           fibers, NULL, height, slope, NULL),
+                     FLT_OK);
+    const double seconds = now_s() - t0;
+    size_t valid = 0;
+    for (size_t k = 0; k < fibers; ++k)
+        valid += height[k] == height[k];
+    print_message("grid at x = -1e5 mm, pitch 1 um: %zu valid fibers, %.3f s\n", valid, seconds);
+    /* The camera sees about x in [-1500, 1500] mm; the grid ends at
+     * -1e5 + 16.4 mm. */
+    assert_int_equal(valid, 0);
+    /* About 10 ms on the development machine (the automatic band search
+     * and the column maps); 2 s bounds it with room for the asan build. */
+    assert_true(seconds < 2.0);
+    flt_extractor_destroy(ex);
+    flt_calib_destroy(calib);
+    free(a), free(b), free(text);
+
+    /* The largest frame and focal length: loads, and the extractor builds
+     * its maps (fixed bands). */
+    snprintf(line, sizeof line, "    \"width\": %d,", FLT_CALIB_MAX_FRAME_SIDE);
+    a = with_line(ref, "\"width\"", line);
+    snprintf(line, sizeof line, "    \"fx\": %.17g,", FLT_CALIB_MAX_FOCAL_PX);
+    text = with_line(a, "\"fx\"", line);
+    assert_int_equal(load(text, &calib), FLT_OK);
+    flt_options *options = NULL;
+    assert_int_equal(flt_options_create(&options), FLT_OK);
+    assert_int_equal(flt_options_set(options, FLT_OPT_EXTRACT_LASER0_FIRST_ROW, 900), FLT_OK);
+    assert_int_equal(flt_options_set(options, FLT_OPT_EXTRACT_LASER0_ROWS, 100), FLT_OK);
+    assert_int_equal(flt_options_set(options, FLT_OPT_EXTRACT_LASER1_FIRST_ROW, 1000), FLT_OK);
+    assert_int_equal(flt_options_set(options, FLT_OPT_EXTRACT_LASER1_ROWS, 100), FLT_OK);
+    assert_int_equal(flt_extractor_create(calib, options, &ex), FLT_OK);
+    flt_extractor_destroy(ex);
+    flt_options_destroy(options);
+    flt_calib_destroy(calib);
+    free(a), free(text);
+
+    free(height), free(slope), free(frame);
+    flt_sim_destroy(sim);
+    free(ref);
+}
+
+/* A model inside every range whose laser planes have their horizon on a
+ * camera column: the columns beside it map to x of order 1e17 mm, far off
+ * the fiber grid. The resampling used to convert (x - first_x) / pitch to
+ * an integer unchecked (an out-of-bounds write when positive). */
+static void test_columns_mapped_far_off_the_grid_are_skipped(void **state) {
+    (void)state;
+    flt_calib *calib = NULL;
+    assert_int_equal(flt_calib_create(&calib), FLT_OK);
+    assert_int_equal(flt_calib_set_frame_size(calib, 2048, 2048), FLT_OK);
+    /* No distortion, principal point on column 1000: that column's
+     * undistorted u is exactly 1000. */
+    const double camera[4] = {1090.909090909091, 1090.909090909091, 1000.0, 1023.5};
+    assert_int_equal(flt_calib_set_intrinsics(calib, camera, NULL), FLT_OK);
+    /* x = -100 u / (u - 1000 - 1.1e-13), z = v / (u - 1000 - 1.1e-13):
+     * the denominator vanishes between columns 1000 and 1001, so column
+     * 1000 maps to x = +9e17 mm. Largest entry 1000, well conditioned. */
+    const double h[9] = {-100, 0, 0, 0, 1, 0, 1, 0, -nextafter(1000.0, 2000.0)};
+    assert_int_equal(flt_calib_set_homography(calib, 0, h), FLT_OK);
+    assert_int_equal(flt_calib_set_homography(calib, 1, h), FLT_OK);
+    assert_int_equal(flt_calib_set_laser_offset(calib, 0, -50), FLT_OK);
+    assert_int_equal(flt_calib_set_laser_offset(calib, 1, 50), FLT_OK);
+    assert_int_equal(flt_calib_set_encoder_scale(calib, 0.01), FLT_OK);
+    /* The finest grid, where (x - first_x) / pitch is largest. */
+    assert_int_equal(flt_calib_set_fiber_grid(calib, -1000, FLT_CALIB_MIN_PITCH_MM, 4096), FLT_OK);
+    assert_int_equal(flt_calib_finish(calib), FLT_OK);
+    double plane[2];
+    const double pixel[2] = {1000.0, 1044.0};
+    assert_int_equal(flt_calib_image_to_plane(calib, 0, 1, pixel, plane), FLT_OK);
+    print_message("column 1000 maps to x = %g mm\n", plane[0]);
+    assert_true(plane[0] > 1e16); /* (x - first_x) / pitch > 1e19 > LONG_MAX */
+
+    flt_extractor *ex = NULL;
+    assert_int_equal(flt_extractor_create(calib, NULL, &ex), FLT_OK);
+    flt_sim *sim = NULL; /* the reference sensor's frame: two bright lines */
+    assert_int_equal(flt_sim_create(NULL, NULL, &sim), FLT_OK);
+    uint8_t *frame = malloc(2048 * 2048);
+    double *height = malloc(4096 * sizeof(double)), *slope = malloc(4096 * sizeof(double));
+    for (int f = 0; f < 3; ++f) {
+        assert_int_equal(flt_sim_next_frame(sim, frame, 2048 * 2048, 2048, NULL, 0, NULL, NULL),
+                         FLT_OK);
+        assert_int_equal(flt_extractor_process(ex, frame, FLT_PIXEL_MONO8, 2048, 2048, 2048,
+                                               3.0 * f, 4096, NULL, height, slope, NULL),
+                         FLT_OK);
+        /* A valid fiber is finite (x(u) = -100u/(u - 1000) crosses the
+         * grid near u = 1111, 8 mm per column). */
+        for (size_t k = 0; k < 4096; ++k)
+            assert_true(height[k] != height[k] || (isfinite(height[k]) && isfinite(slope[k])));
+    }
+    free(frame), free(height), free(slope);
+    flt_sim_destroy(sim);
+    flt_extractor_destroy(ex);
+    flt_calib_destroy(calib);
+}
+
+/* A text of 100 MB used to be parsed (6.4 GB, 8 s) before being refused. */
+static void test_oversized_calibration_text_is_refused_before_parsing(void **state) {
+    (void)state;
+    const size_t big = 100u << 20;
+    char *text = malloc(big);
+    memset(text, ' ', big);
+    text[0] = '{';
+    const double rss0 = peak_rss_mb(), t0 = now_s();
+    flt_calib *calib = NULL;
+    assert_int_equal(flt_calib_load_text(text, big, &calib), FLT_ERR_FORMAT);
+    const double seconds = now_s() - t0, grown = peak_rss_mb() - rss0;
+    print_message("100 MB text: %s (%.4f s, +%.1f MB)\n", flt_last_error_message(), seconds, grown);
+    assert_null(calib);
+    assert_non_null(strstr(flt_last_error_message(), "65536 bytes"));
+    /* Refused at its length: microseconds, no memory. 0.1 s and 1 MB leave
+     * room for a loaded machine; parsing it took 8 s and 6.4 GB. */
+    assert_true(seconds < 0.1);
+    assert_true(grown < 1.0);
+    free(text);
+
+    /* The limit itself: the reference padded with spaces to exactly
+     * FLT_CALIB_MAX_FILE_BYTES loads; one byte more does not. */
+    char *ref = reference_text();
+    char *padded = malloc(FLT_CALIB_MAX_FILE_BYTES + 2);
+    memset(padded, ' ', FLT_CALIB_MAX_FILE_BYTES + 1);
+    memcpy(padded, ref, strlen(ref));
+    assert_int_equal(flt_calib_load_text(padded, FLT_CALIB_MAX_FILE_BYTES, &calib), FLT_OK);
+    flt_calib_destroy(calib);
+    assert_int_equal(flt_calib_load_text(padded, FLT_CALIB_MAX_FILE_BYTES + 1, &calib),
+                     FLT_ERR_FORMAT);
+    free(padded);
+    free(ref);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_absurd_calibration_values_are_refused_naming_the_field),
+        cmocka_unit_test(test_calibration_at_the_ends_of_its_ranges_runs_the_chain),
+        cmocka_unit_test(test_columns_mapped_far_off_the_grid_are_skipped),
+        cmocka_unit_test(test_oversized_calibration_text_is_refused_before_parsing),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
