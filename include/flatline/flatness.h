@@ -52,7 +52,9 @@
  *   free of cancellation. See lib/flatness/flatness.cpp for the error bound.
  *
  * Invalid data (FLT_FLAG_NO_DATA, FLT_FLAG_GAP, non-finite z)
- *   A fiber's sample is usable when its z is finite and its flags carry
+ *   A fiber's sample is usable when its z is finite and at most 1e9 mm in
+ *   magnitude (as a reconstructor's sample: larger ones are no height, and
+ *   their squares would overflow the chords), and its flags carry
  *   neither FLT_FLAG_NO_DATA nor FLT_FLAG_GAP (a value the reconstructor
  *   bridged over a long run without measurements is not a measurement).
  *   FLT_FLAG_INVALID_INPUT alone is usable: the spline bridged a short run.
@@ -79,8 +81,12 @@
  *   hold the rows with s in [end - flat_window_length, end). A window is
  *   evaluated when the first row at or past its end arrives; push stops
  *   there (so no result is overwritten unseen) and tells how many rows it
- *   took. finish() evaluates the rows since the last window's start as a
- *   last window (the end of a sheet) and restarts the grid. A streamed
+ *   took. A window that would hold the same rows as the one before it
+ *   (flat_update_interval shorter than the rows' spacing), or no row at all
+ *   (a gap in the rows longer than flat_window_length), is skipped: the
+ *   next window reported is the first with other rows. finish() evaluates
+ *   the rows since the last window's start as a last window (the end of a
+ *   sheet) and restarts the grid. A streamed
  *   window that is too short or has no valid fiber is still reported, with
  *   FLT_WINDOW_SHORT / FLT_WINDOW_NO_VALID_FIBER set and the affected
  *   values NaN and flagged: the stream never stops on bad material.
@@ -194,11 +200,29 @@ typedef enum flt_flat_reference {
 /** A flatness evaluator (opaque handle). */
 typedef struct flt_flatness flt_flatness;
 
-/** Creates the metrics for `fibers` fibers (>= 1) at fiber_x [fibers] (mm,
- * finite, strictly increasing; copied).
+/** @name Sizes a real sensor never reaches
+ * A flatness handle takes at most FLT_MAX_FIBERS fibers (common.h) at
+ * positions |x| <= FLT_CALIB_MAX_X_MM (calib.h), in at most
+ * FLT_FLATNESS_MAX_ZONES zones (a zone narrower than the fiber pitch holds
+ * no fiber), and refuses options whose buffers would take more than
+ * FLT_FLATNESS_MAX_BYTES (flat_row_capacity rows of 9 bytes per fiber).
+ * @{ */
+#define FLT_FLATNESS_MAX_ZONES 16384        /**< Most zones of a flatness handle. */
+#define FLT_FLATNESS_MAX_BYTES 2147483648.0 /**< Most bytes of its buffers (2 GiB). */
+/** The largest |s| of a row, mm (1e6 km; a double's spacing there is
+ * 1e-4 mm). */
+#define FLT_FLATNESS_MAX_S_MM  1.0e12
+/** @} */
+
+/** Creates the metrics for `fibers` fibers (1 .. FLT_MAX_FIBERS) at
+ * fiber_x [fibers] (mm, finite, strictly increasing, |x| <=
+ * FLT_CALIB_MAX_X_MM; copied).
  * options: NULL for the defaults, else read for the flat_* keys; copied.
- * Fails with FLT_ERR_INVALID_ARGUMENT for NULL, zero fibers, bad positions
- * or inconsistent options (flat_update_interval > flat_window_length). */
+ * Fails with FLT_ERR_INVALID_ARGUMENT for NULL, zero or too many fibers,
+ * bad positions, inconsistent options (flat_update_interval >
+ * flat_window_length), more than FLT_FLATNESS_MAX_ZONES zones
+ * (flat_zone_width too narrow for the grid's width) or buffers beyond
+ * FLT_FLATNESS_MAX_BYTES. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_create(size_t fibers, const double *fiber_x,
                                                               const flt_options *options,
                                                               flt_flatness **out);
@@ -229,7 +253,7 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_zone_layout(const flt_fla
 
 /** Evaluates one window from the caller's rows (a whole sheet):
  *   s      [rows]          material position, mm, finite, strictly
- *                          increasing.
+ *                          increasing, |s| <= FLT_FLATNESS_MAX_S_MM.
  *   z      [rows * fibers] reconstructed heights, mm (NaN allowed where
  *                          flagged or invalid).
  *   flags  [rows * fibers] FLT_FLAG_* bits from the reconstructor, or NULL.

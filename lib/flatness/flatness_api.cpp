@@ -112,9 +112,13 @@ flt_status check_rows(const char *fn, std::size_t rows, std::size_t fibers, cons
         return fail(FLT_ERR_INVALID_ARGUMENT,
                     "%s: rows * fibers = %zu * %zu overflows the address space", fn, rows, fibers);
     for (std::size_t r = 0; r < rows; ++r) {
-        if (!std::isfinite(s[r]))
-            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 's[%zu]' = %g is not finite", fn, r,
-                        s[r]);
+        // Beyond FLT_FLATNESS_MAX_S_MM a double's spacing (1e-4 mm at 1e12)
+        // approaches the finest update interval, and the window grid could
+        // no longer advance.
+        if (!(std::fabs(s[r]) <= FLT_FLATNESS_MAX_S_MM))  // NaN too
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 's[%zu]' = %g is not finite or beyond +-%g mm", fn, r, s[r],
+                        FLT_FLATNESS_MAX_S_MM);
         const bool has_prev = r > 0 || has_previous;
         const double prev = r > 0 ? s[r - 1] : previous;
         if (has_prev && !(s[r] > prev))
@@ -133,10 +137,22 @@ flt_status create_handle(const char *fn, std::size_t fibers, const double *x,
         return st;
     if (flt_status st = read_params(fn, options, &p))
         return st;
-    if (p.row_capacity > std::numeric_limits<std::size_t>::max() / sizeof(double) / fibers)
+    // Sizes first, in double (no product can overflow), then allocate.
+    const double zones = fiber_layout::zones_needed(x, fibers, p.zone_width);
+    if (!(zones <= FLT_FLATNESS_MAX_ZONES))
         return fail(FLT_ERR_INVALID_ARGUMENT,
-                    "%s: flat_row_capacity * fibers = %zu * %zu is too large", fn, p.row_capacity,
-                    fibers);
+                    "%s: option 'flat_zone_width' = %g mm divides the fibers' %g mm into %.4g "
+                    "zones, more than %d; use wider zones",
+                    fn, p.zone_width, x[fibers - 1] - x[0], zones, FLT_FLATNESS_MAX_ZONES);
+    // The rows of a window (position, heights, flags) twice over with the
+    // evaluation's column scratch, and per fiber and zone a few results.
+    const double K = double(fibers), rows = double(p.row_capacity);
+    const double bytes = rows * (8 + 9 * K + 17) + K * 120 + zones * 60;
+    if (!(bytes <= FLT_FLATNESS_MAX_BYTES))
+        return fail(FLT_ERR_INVALID_ARGUMENT,
+                    "%s: flat_row_capacity = %zu rows of %zu fibers would take about %.3g GB, "
+                    "more than %.3g GB; use a smaller flat_row_capacity",
+                    fn, p.row_capacity, fibers, bytes * 1e-9, FLT_FLATNESS_MAX_BYTES * 1e-9);
     auto f = std::make_unique<flt_flatness>();
     f->params = p;
     f->layout.build(x, fibers, p.zone_width);
@@ -170,6 +186,26 @@ void trim_buffer(flt_flatness &f, double s_keep) {
     std::memmove(f.buffer_z.data(), f.buffer_z.data() + drop * n, keep * n * sizeof(double));
     std::memmove(f.buffer_flags.data(), f.buffer_flags.data() + drop * n, keep * n);
     f.buffered = keep;
+}
+
+// Moves the window grid to its first end strictly after `past` (mm). A
+// window ending at or before it would hold the same rows as the last one,
+// or none: evaluating each took a push call per update interval, 1e7 for
+// 10 m without rows at flat_update_interval = 1 um (the contract suite).
+void advance_grid(flt_flatness &f, double past) {
+    // An update interval below the spacing of doubles at these positions
+    // (5e-324 mm is inside the option's range) cannot move the grid: adding
+    // it changed nothing, and the loop below spun forever (the contract
+    // suite). The grid then steps by that spacing, which, the windows that
+    // hold the same rows being skipped, still makes a window per row.
+    const double at = std::max(std::fabs(f.window_end), std::fabs(past));
+    const double spacing = std::nextafter(at, k_inf) - at;
+    const double step = std::max(f.params.update_interval, spacing);
+    const double steps = std::floor((past - f.window_end) / step);
+    if (steps > 0)
+        f.window_end += steps * step;
+    while (!(f.window_end > past))  // rounding of the jump: a step or two
+        f.window_end = std::max(f.window_end + step, std::nextafter(f.window_end, k_inf));
 }
 
 void restart_grid(flt_flatness &f) {
@@ -216,14 +252,19 @@ FLT_API flt_status FLT_CALL flt_flatness_create(size_t fibers, const double *fib
         *out = nullptr;
         if (fibers == 0)
             return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'fibers' is 0", fn);
-        if (fibers > std::numeric_limits<std::size_t>::max() / sizeof(double))  // before reading
+        if (fibers > FLT_MAX_FIBERS)  // before reading
             return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'fibers' = %zu overflows the address space", fn, fibers);
+                        "%s: argument 'fibers' = %zu is too large (at most %d)", fn, fibers,
+                        FLT_MAX_FIBERS);
         FLT_CHECK_NOT_NULL(fn, fiber_x);
         for (std::size_t k = 0; k < fibers; ++k) {
             if (!std::isfinite(fiber_x[k]))
                 return fail(FLT_ERR_INVALID_ARGUMENT,
                             "%s: argument 'fiber_x[%zu]' = %g is not finite", fn, k, fiber_x[k]);
+            if (std::fabs(fiber_x[k]) > FLT_CALIB_MAX_X_MM)
+                return fail(FLT_ERR_INVALID_ARGUMENT,
+                            "%s: argument 'fiber_x[%zu]' = %g is outside [%g, %g] mm", fn, k,
+                            fiber_x[k], -FLT_CALIB_MAX_X_MM, FLT_CALIB_MAX_X_MM);
             if (k > 0 && !(fiber_x[k] > fiber_x[k - 1]))
                 return fail(FLT_ERR_INVALID_ARGUMENT,
                             "%s: argument 'fiber_x[%zu]' = %g does not increase "
@@ -367,11 +408,19 @@ FLT_API flt_status FLT_CALL flt_flatness_push(flt_flatness *flatness, size_t row
                 f.grid_started = true;
                 f.window_end = p.window_length > 0.0 ? s[r] + p.window_length : k_inf;
             }
+            if (s[r] >= f.window_end && f.buffered == 0)
+                // Every window ending at or before s[r] is empty (the rows
+                // before them were trimmed): skip to the first one row r
+                // falls in.
+                advance_grid(f, s[r]);
             if (s[r] >= f.window_end) {
                 // Row r belongs to a later window: evaluate this one first and
-                // hand control back so its results can be read.
+                // hand control back so its results can be read. The windows
+                // after it that hold the same rows (before row r comes in or
+                // the oldest row drops out) are skipped.
                 evaluate_buffer(f);
-                f.window_end += p.update_interval;
+                const double oldest = f.buffer_s[0] + p.window_length;
+                advance_grid(f, std::max(f.window_end, std::min(s[r], oldest)));
                 trim_buffer(f, f.window_end - p.window_length);
                 *evaluated_out = 1;
                 return FLT_OK;

@@ -13,6 +13,11 @@ namespace {
 constexpr double nan_value = std::numeric_limits<double>::quiet_NaN();
 // Reconstructor flags that mark a value as not measured (flatline/recon.h).
 constexpr std::uint8_t k_unusable = FLT_FLAG_NO_DATA | FLT_FLAG_GAP;
+// The largest |z| that is a height (mm), as for the reconstructor's
+// samples: no strip is a kilometre high, and the squares of larger heights
+// overflow the chord lengths (z = 1e300 made an arc length infinite
+// without a flag; found by the contract suite).
+constexpr double k_max_height = 1.0e9;
 // Shape bands in u = (x - centre) / half width (flatline/flatness.h).
 constexpr double k_centre_band = 0.3, k_edge_band = 0.7;
 // A crest makes its band a component of the shape when it stands out of the
@@ -59,18 +64,29 @@ void refine_extremum(double s0, double z0, double s1, double z1, double s2, doub
 
 }  // namespace
 
+namespace {
+// Each fiber stands for one pitch of strip, so the grid covers its span
+// plus one pitch.
+double covered_width(const double *x, std::size_t fibers, double width_of_zone) {
+    return fibers >= 2 ? (x[fibers - 1] - x[0]) * double(fibers) / double(fibers - 1)
+                       : width_of_zone;
+}
+}  // namespace
+
+double fiber_layout::zones_needed(const double *fiber_x, std::size_t fibers, double width_of_zone) {
+    return std::max(
+        1.0, std::ceil(covered_width(fiber_x, fibers, width_of_zone) / width_of_zone - 1e-9));
+}
+
 void fiber_layout::build(const double *fiber_x, std::size_t fibers, double width_of_zone) {
     x.assign(fiber_x, fiber_x + fibers);
     zone_width = width_of_zone;
     const double first = x.front(), last = x.back();
-    // Each fiber stands for one pitch of strip, so the grid covers its span
-    // plus one pitch.
-    const double covered =
-        fibers >= 2 ? (last - first) * double(fibers) / double(fibers - 1) : width_of_zone;
+    const double covered = covered_width(fiber_x, fibers, width_of_zone);
     centre = 0.5 * (first + last);
     half_width = 0.5 * covered;
-    const std::size_t zones =
-        std::max<std::size_t>(1, std::size_t(std::ceil(covered / width_of_zone - 1e-9)));
+    // Bounded by the caller (flatness_api.cpp), so the conversion is exact.
+    const std::size_t zones = std::size_t(zones_needed(fiber_x, fibers, width_of_zone));
     const double left0 = centre - 0.5 * double(zones) * width_of_zone;
     zone_left.resize(zones);
     for (std::size_t j = 0; j < zones; ++j)
@@ -79,7 +95,7 @@ void fiber_layout::build(const double *fiber_x, std::size_t fibers, double width
     zone_count.assign(zones, 0);
     for (std::size_t k = 0; k < fibers; ++k) {
         const double j = std::floor((x[k] - left0) / width_of_zone);
-        const std::size_t zj = j < 0.0 ? 0 : std::min(zones - 1, std::size_t(j));
+        const std::size_t zj = j > 0.0 ? std::size_t(std::min(double(zones - 1), j)) : 0;
         zone_of[k] = zj;
         ++zone_count[zj];
     }
@@ -255,7 +271,8 @@ void flatness_engine::evaluate(std::size_t rows, const double *s, const double *
         std::size_t usable = 0;
         for (std::size_t r = 0; r < rows; ++r) {
             const double zk = z[r * fibers + k];
-            const bool ok = std::isfinite(zk) && !(flags && (flags[r * fibers + k] & k_unusable));
+            const bool ok = std::fabs(zk) <= k_max_height &&  // NaN: false
+                            !(flags && (flags[r * fibers + k] & k_unusable));
             col_s_[r] = s[r];
             col_z_[r] = zk;
             col_ok_[r] = ok;

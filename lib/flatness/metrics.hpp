@@ -35,6 +35,9 @@ struct fiber_layout {
     std::vector<std::size_t> zone_of;     // [fibers]
     std::vector<std::size_t> zone_count;  // [zones]
 
+    // The zone count build() makes, as a double (the API bounds it before
+    // building: a wide grid of narrow zones is millions of them).
+    static double zones_needed(const double *fiber_x, std::size_t fibers, double width_of_zone);
     void build(const double *fiber_x, std::size_t fibers, double width_of_zone);
     std::size_t fibers() const { return x.size(); }
     std::size_t zones() const { return zone_left.size(); }

@@ -1794,8 +1794,24 @@ static void row_flatness_create(void) {
      * (ASan: global-buffer-overflow). */
     BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'", flt_flatness_create(NEG, g_x, NULL, &f));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'", flt_flatness_create(SIZE_MAX / 8 + 1, g_x, NULL, &f));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "too large",
+        flt_flatness_create(FLT_MAX_FIBERS + 1, g_x, NULL, &f));
     flt_options *o = options_with(FLT_OPT_FLAT_UPDATE_INTERVAL, 5000);
     BAD(FLT_ERR_INVALID_ARGUMENT, "flat_update_interval", flt_flatness_create(FIBERS, g_x, o, &f));
+    flt_options_destroy(o);
+    /* Finite but absurd: fibers spanning 2e300 mm (the zone count
+     * overflowed its conversion to an integer) and 1e9 mm (40 million
+     * zones, gigabytes). */
+    x[0] = -1e300, x[1] = 0, x[2] = 1e300;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "fiber_x[0]", flt_flatness_create(3, x, NULL, &f));
+    x[0] = -5e4, x[1] = 0, x[2] = 5e4;
+    o = options_with(FLT_OPT_FLAT_ZONE_WIDTH, 1e-3);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "zones", flt_flatness_create(3, x, o, &f));
+    flt_options_destroy(o);
+    /* flat_row_capacity at its bound: 1e8 rows x 101 fibers x 9 bytes =
+     * 91 GB, refused before allocating. */
+    o = options_with(FLT_OPT_FLAT_ROW_CAPACITY, 1e8);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "GB", flt_flatness_create(FIBERS, g_x, o, &f));
     flt_options_destroy(o);
     ++g_checks;
     if (f != NULL)

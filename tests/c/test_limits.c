@@ -322,12 +322,139 @@ static void test_oversized_calibration_text_is_refused_before_parsing(void **sta
     free(ref);
 }
 
+/* ---------------------------------------------------------------------- */
+/* Flatness zones                                                          */
+/* ---------------------------------------------------------------------- */
+
+static void test_flatness_zone_count_is_bounded(void **state) {
+    (void)state;
+    flt_flatness *f = NULL;
+    double x[3];
+    /* The reported spans: 1e9 mm (40 million zones of 50 mm) and 1e300 mm
+     * (the count overflowed its conversion and came out as 1 zone); both
+     * now fail on the positions, beyond FLT_CALIB_MAX_X_MM. */
+    x[0] = -5e8, x[1] = 0, x[2] = 5e8;
+    assert_int_equal(flt_flatness_create(3, x, NULL, &f), FLT_ERR_INVALID_ARGUMENT);
+    assert_non_null(strstr(flt_last_error_message(), "fiber_x[0]"));
+    x[0] = -5e299, x[1] = 0, x[2] = 5e299;
+    assert_int_equal(flt_flatness_create(3, x, NULL, &f), FLT_ERR_INVALID_ARGUMENT);
+    /* Inside the positions' range, narrow zones: 2e5 mm / 1 mm (3 fibers
+     * cover 1.5 times their span) = 300,000 zones > FLT_FLATNESS_MAX_ZONES. */
+    x[0] = -FLT_CALIB_MAX_X_MM, x[1] = 0, x[2] = FLT_CALIB_MAX_X_MM;
+    flt_options *o = NULL;
+    assert_int_equal(flt_options_create(&o), FLT_OK);
+    assert_int_equal(flt_options_set(o, FLT_OPT_FLAT_ZONE_WIDTH, 1.0), FLT_OK);
+    double t0 = now_s();
+    assert_int_equal(flt_flatness_create(3, x, o, &f), FLT_ERR_INVALID_ARGUMENT);
+    print_message("%s\n", flt_last_error_message());
+    assert_non_null(strstr(flt_last_error_message(), "zones"));
+    assert_null(f);
+    /* The limit itself: 3 fibers 1024 mm apart cover 3072 mm; 0.1875 mm
+     * zones make exactly 16384 of them. */
+    x[0] = -1024, x[1] = 0, x[2] = 1024;
+    assert_int_equal(flt_options_set(o, FLT_OPT_FLAT_ZONE_WIDTH, 0.1875), FLT_OK);
+    assert_int_equal(flt_flatness_create(3, x, o, &f), FLT_OK);
+    size_t zones = 0;
+    assert_int_equal(flt_flatness_zones(f, &zones), FLT_OK);
+    assert_int_equal(zones, FLT_FLATNESS_MAX_ZONES);
+    flt_flatness_destroy(f);
+    assert_int_equal(flt_options_set(o, FLT_OPT_FLAT_ZONE_WIDTH, 0.1874), FLT_OK);
+    assert_int_equal(flt_flatness_create(3, x, o, &f), FLT_ERR_INVALID_ARGUMENT);
+    /* Each call returns at once (the 1e9 mm grid took 1.3 s and 1.1 GB):
+     * 0.5 s bounds all of them together with room for the asan build. */
+    assert_true(now_s() - t0 < 0.5);
+    flt_options_destroy(o);
+}
+
+/* A gap in the rows with the finest update interval: every window of the
+ * gap used to be evaluated, one push call each (10 m of gap at 1 um: 1e7
+ * calls for one row; found by the contract suite). Windows holding the same
+ * rows as the one before, or none, are skipped now. */
+static void test_flatness_stream_crosses_a_gap_in_few_calls(void **state) {
+    (void)state;
+    flt_options *o = NULL;
+    assert_int_equal(flt_options_create(&o), FLT_OK);
+    assert_int_equal(flt_options_set(o, FLT_OPT_FLAT_WINDOW_LENGTH, 30), FLT_OK);
+    assert_int_equal(flt_options_set(o, FLT_OPT_FLAT_UPDATE_INTERVAL, 1e-3), FLT_OK);
+    assert_int_equal(flt_options_set(o, FLT_OPT_FLAT_MIN_LENGTH, 1e-3), FLT_OK);
+    const double x[2] = {0, 2};
+    flt_flatness *f = NULL;
+    assert_int_equal(flt_flatness_create(2, x, o, &f), FLT_OK);
+    double s[11], z[22];
+    for (int r = 0; r < 10; ++r)
+        s[r] = 3.0 * r, z[2 * r] = z[2 * r + 1] = 0.1 * r;
+    s[10] = 10030.0, z[20] = z[21] = 1.0;
+    size_t taken = 0, calls = 0, windows = 0, consumed = 0;
+    int evaluated = 0;
+    const double t0 = now_s();
+    while (taken < 11 && calls < 100000) {
+        assert_int_equal(flt_flatness_push(f, 11 - taken, 2, s + taken, z + 2 * taken, NULL,
+                                           &consumed, &evaluated),
+                         FLT_OK);
+        taken += consumed, windows += (size_t)evaluated, ++calls;
+    }
+    print_message("11 rows, the last 10 m on: %zu push calls, %zu windows, %.4f s\n", calls,
+                  windows, now_s() - t0);
+    /* One window as each of the 10 rows drops out of the 30 mm window (a
+     * row every 3 mm, windows every 1 um: the 2999 between hold the same
+     * rows), then the empty ones are skipped: 10 windows, 11 calls. */
+    assert_int_equal(taken, 11);
+    assert_int_equal(windows, 10);
+    assert_int_equal(calls, 11);
+    flt_flatness_destroy(f);
+    flt_options_destroy(o);
+}
+
+/* The smallest update interval the option takes (5e-324 mm, the smallest
+ * positive double) is below the spacing of doubles at any row position past
+ * 1e-308 mm: adding it to the window grid changed nothing, and push spun
+ * forever (found by the contract suite). A window per row now, as for any
+ * interval finer than the rows. */
+static void test_flatness_stream_with_a_denormal_update_interval_ends(void **state) {
+    (void)state;
+    flt_options *o = NULL;
+    assert_int_equal(flt_options_create(&o), FLT_OK);
+    assert_int_equal(flt_options_set(o, FLT_OPT_FLAT_UPDATE_INTERVAL, 4.9406564584124654e-324),
+                     FLT_OK);
+    assert_int_equal(flt_options_set(o, FLT_OPT_FLAT_MIN_LENGTH, 1e-3), FLT_OK);
+    const double x[2] = {0, 2};
+    flt_flatness *f = NULL;
+    assert_int_equal(flt_flatness_create(2, x, o, &f), FLT_OK);
+    enum { N = 2000 };
+    double s[N], z[2 * N];
+    for (int r = 0; r < N; ++r)
+        s[r] = 10000.0 + 3.0 * r, z[2 * r] = z[2 * r + 1] = sin(0.01 * r);
+    size_t taken = 0, calls = 0, windows = 0, consumed = 0;
+    int evaluated = 0;
+    const double t0 = now_s();
+    while (taken < N && calls < 10 * N) {
+        assert_int_equal(flt_flatness_push(f, N - taken, 2, s + taken, z + 2 * taken, NULL,
+                                           &consumed, &evaluated),
+                         FLT_OK);
+        taken += consumed, windows += (size_t)evaluated, ++calls;
+    }
+    const double seconds = now_s() - t0;
+    print_message("%d rows at 5e-324 mm updates: %zu push calls, %zu windows, %.3f s\n", N, calls,
+                  windows, seconds);
+    /* The 3000 mm window fills after 1000 rows; from then on every row
+     * starts a window: 1000 windows (one per row past the first window's
+     * end), a call each, and one more for the rows before. */
+    assert_int_equal(taken, N);
+    assert_int_equal(windows, N - 1000);
+    assert_int_equal(calls, N - 1000 + 1);
+    flt_flatness_destroy(f);
+    flt_options_destroy(o);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_absurd_calibration_values_are_refused_naming_the_field),
         cmocka_unit_test(test_calibration_at_the_ends_of_its_ranges_runs_the_chain),
         cmocka_unit_test(test_columns_mapped_far_off_the_grid_are_skipped),
         cmocka_unit_test(test_oversized_calibration_text_is_refused_before_parsing),
+        cmocka_unit_test(test_flatness_zone_count_is_bounded),
+        cmocka_unit_test(test_flatness_stream_crosses_a_gap_in_few_calls),
+        cmocka_unit_test(test_flatness_stream_with_a_denormal_update_interval_ends),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
