@@ -181,13 +181,19 @@ typedef enum flt_option {
     FLT_OPT_HEIGHT_SIGMA = 102,
     /** "slope_sigma": standard deviation of one measured slope, mm/mm.
      * Default 0.001 (bouncing cancels between the lines; what is left is
-     * peak-detection noise divided by the laser spacing). */
+     * peak-detection noise divided by the laser spacing). A slope sample
+     * weighs at most 1e8 height samples: a slope_sigma below
+     * height_sigma / (1e4 laser_spacing) acts as that value (only heights
+     * see a fiber's level, and double precision carries their share of
+     * the normal equations no further; flatline/recon.h). */
     FLT_OPT_SLOPE_SIGMA = 103,
     /** "curvature_weight": weight of the smoothness prior (the integral of
      * z'' squared), dimensionless, relative to one height sample: 1 means
      * bending one knot interval by 1 mm costs as much as one height sample
      * 1 mm off. It bridges stretches without data and keeps the system
-     * regular. Default 1e-3. */
+     * regular. Default 1e-3. Above 1e8 it acts as 1e8, and below
+     * curvature_jump_weight / 1e8 as that (flatline/recon.h: the most
+     * double precision carries). */
     FLT_OPT_CURVATURE_WEIGHT = 104,
     /** "lag_knots": how many knots beyond a knot must be complete before the
      * streaming reconstructor emits it (integer). Larger is closer to the
@@ -233,7 +239,8 @@ typedef enum flt_option {
      * it. A smooth shape has almost no curvature jumps, so this prior
      * removes the wiggle without bending the shape: under 2.5 mm of
      * vibration it cuts the error about 2.8-fold and costs 0.02 um on the
-     * noise-free reference sheet. Default 10. */
+     * noise-free reference sheet. Default 10. Above 1e8 it acts as 1e8
+     * (flatline/recon.h). */
     FLT_OPT_CURVATURE_JUMP_WEIGHT = 110,
     /** "robust" (flt_robust, recon.h): FLT_ROBUST_NONE (0, the default) for
      * least squares; FLT_ROBUST_HUBER (1) for Huber and FLT_ROBUST_TUKEY (2)

@@ -16,6 +16,17 @@
  *   The spline is fitted to exactly these operators by weighted least squares
  *   (weights 1/height_sigma^2 and 1/slope_sigma^2), plus a weak curvature
  *   prior (curvature_weight). The output is z at every input row.
+ *   Slopes and the priors are blind to a fiber's level, which only heights
+ *   give; so a slope sample weighs at most 1e8 height samples of its fiber
+ *   (also the weights robust mode estimates), curvature_weight and
+ *   curvature_jump_weight act as at most 1e8, and curvature_weight as at
+ *   least curvature_jump_weight / 1e8 (where no row is, only the curvature
+ *   prior damps the heights the jump prior leaves free): the most double
+ *   precision carries (beyond it, the rounding of the other terms swamps
+ *   what is left, and outputs came out NaN).
+ *   Slopes that precise already fix the shape, and priors that strong
+ *   already make the spline a cubic (or a line), to within 1e-8, so the
+ *   caps change no result beyond that.
  *
  * Coordinates
  *   s along travel in mm, material coordinate (a point on the strip keeps its

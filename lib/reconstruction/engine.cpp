@@ -21,11 +21,50 @@ constexpr double k_stiffness[4][4] = {
     {6.0, 2.0, -6.0, 4.0},
 };
 
-// The ridge on every knot height, relative to one height sample (or to one
-// slope sample when that weighs more, see the constructor). Only there so
-// that a fiber with no height at all still has a regular system; its effect
-// on measured fibers is below 1e-12 of the data.
+// The ridge on every knot height: k_ridge of the strongest term of its
+// fiber (a height sample, a slope sample, or a prior), so that it stays
+// above that term's rounding. Only there so that a fiber with no height at
+// all, or a stretch of knots without data, still has a regular system; its
+// effect on measured fibers is below 1e-12 of the data at the defaults and
+// below 1e-4 of one height sample per knot at the largest weights.
 constexpr double k_ridge = 1e-12;
+
+// The most a slope sample or a prior may weigh against a height sample of
+// its fiber (recon.h; slope_sigma, curvature_weight, curvature_jump_weight).
+// Only heights see a fiber's level: slopes and the priors are blind to it.
+// When another term weighs W times more, eliminating a knot subtracts
+// numbers of order W from each other to leave the heights' share, and the
+// rounding (W * 2e-16) swamps it: at slope_sigma = 1e-12 (W = 1e20) every
+// output was NaN, and at curvature_jump_weight = 1e10 a stretch of knots
+// without rows was. At 1e8 the rounding is 2e-8 of the heights' share and
+// the ridge above outweighs it 4500-fold. Slopes that precise already fit
+// the shape to within 1e-8 of the heights' influence, and priors that
+// strong already make the spline their own null space (a cubic, or a
+// line) to within 1e-8.
+constexpr double k_max_weight_ratio = 1e8;
+
+// The smallest pivot of the Cholesky factorisations, relative to the
+// largest diagonal entry of the fiber's window: below it a pivot is
+// rounding (450 times the double's epsilon), and the direction it belongs
+// to is not determined by the data and priors as far as double precision
+// can tell. Such a pivot used to be clamped to 1e-300, whose reciprocal
+// overflowed the solution into NaN (a strong curvature-jump prior over a
+// stretch of knots without rows, with the curvature prior at its minimum:
+// the contract suite); at the floor, that direction stays at what the
+// ridge and its neighbours give it. Well-posed systems have pivots far
+// above it and are solved exactly as before.
+constexpr double k_pivot_floor = 1e-13;
+
+// The weakest curvature prior, relative to the strongest sample of its
+// fiber (a height, or a slope) and to the jump prior: where no row is, the
+// curvature prior alone holds the knots' heights and slopes (the jump prior
+// leaves one height per knot free, and slopes are seen only under rows).
+// Weaker, it was rounding next to those terms: with the slopes at their
+// cap, curvature_weight at its minimum (1e-12) and rows 1000 knots apart,
+// or rigid_motion's deviation channel (its priors scale with (shape_sigma /
+// height_sigma)^2, 1e-42 at the options' ends), the outputs were NaN (the
+// contract suite). It bends a shape by 1e-8 of what the data says.
+constexpr double k_min_curvature_weight = 1.0 / k_max_weight_ratio;
 
 // Largest knot span of one row we size scratch arrays for (the API allows
 // D/L <= 16, recon_api.cpp; the engine itself takes up to 64).
@@ -270,17 +309,28 @@ recon_engine::recon_engine(std::size_t fibers, const recon_params &params,
 
     w_h_ = 1.0 / (p_.height_sigma * p_.height_sigma);
     const double slope_mm = D_ * p_.slope_sigma;  // sigma of D*slope, mm
-    w_g_ = 1.0 / (slope_mm * slope_mm);
+    w_g_ = std::min(1.0 / (slope_mm * slope_mm), k_max_weight_ratio * w_h_);
     // Priors are relative to one height sample: they live in Rp_ unweighted
     // and are scaled by each fiber's height weight.
-    w_curv_ = p_.curvature_weight;
+    w_curv_ = std::min(p_.curvature_weight, k_max_weight_ratio);
+    w_curv_jump_ = std::min(p_.curvature_jump_weight, k_max_weight_ratio);
+    // The jump prior leaves one free height per knot (a C2 spline through
+    // any heights), which only the curvature prior damps where no row is:
+    // a jump prior 1e17 times the curvature prior (1e5 and 1e-12) over
+    // knots without rows made NaN (the contract suite). The same ratio cap.
+    // Relative to the height weight here; relative to the slope weight the
+    // floor goes into Rg_ (add_priors_for_knot), so it follows each fiber's
+    // own weights, robust mode's too.
+    w_curv_ = std::max({w_curv_, w_curv_jump_ * k_min_curvature_weight, k_min_curvature_weight});
     // The ridge must stay above the rounding of the strongest term, or a
-    // fiber with slopes but no height yet has a numerically singular level
-    // (NaN knots that later heights cannot repair): relative to the slope
-    // weight too when that is the larger (a laser spacing of 0.36 mm puts
-    // the slope weight 5e7 times above the height weight; fuzz_recon).
-    w_ridge_ = k_ridge * std::max(1.0, w_g_ / w_h_);
-    w_curv_jump_ = p_.curvature_jump_weight;
+    // fiber with slopes but no height yet, or a stretch of knots without
+    // rows under a strong prior, has a numerically singular level (NaN
+    // knots that later heights cannot repair): k_ridge of a height sample
+    // or the strongest prior (relative to a height sample, in Rp_), plus
+    // k_ridge of a slope sample (in Rg_), per fiber, so it follows robust
+    // mode's weights too (a laser spacing of 0.36 mm puts the slope weight
+    // 5e7 times above the height weight; fuzz_recon).
+    w_ridge_ = k_ridge * std::max({1.0, w_curv_, w_curv_jump_});
 
     factor_cap_ = knot_capacity;
     hist_cap_ = knot_capacity + 2 * std::size_t(S_) + 4;
@@ -304,6 +354,7 @@ recon_engine::recon_engine(std::size_t fibers, const recon_params &params,
     hm_.assign(K_, 0.0);
     gm_.assign(K_, 0.0);
     ones_.assign(K_, 1.0);
+    pivot_floor_.assign(K_, 0.0);
     bad_.reserve(K_);
     last_valid_s_.assign(K_, 0.0);
     has_height_.assign(K_, 0);
@@ -338,7 +389,8 @@ void recon_engine::clear_shared() {
 
 void recon_engine::set_fiber_weights(const double *wh, const double *wg) {
     std::copy_n(wh, K_, next_wh_.data());
-    std::copy_n(wg, K_, next_wg_.data());
+    for (std::size_t k = 0; k < K_; ++k)
+        next_wg_[k] = std::min(wg[k], k_max_weight_ratio * wh[k]);
     weights_pending_ = true;
 }
 
@@ -432,7 +484,8 @@ void recon_engine::add_rank1_prior(const long *knot, const int *unit, const doub
 
 void recon_engine::add_priors_for_knot(long j) {
     const int wj = 2 * int(j - w0_);
-    Rp_[std::size_t(wj) * n_ + wj] += w_ridge_;
+    Rp_[std::size_t(wj) * n_ + wj] += w_ridge_;  // times the height weight
+    Rg_[std::size_t(wj) * n_ + wj] += k_ridge;   // times the slope weight
     {
         // The curvature-jump prior at knot j-1: z'' continuous there, which
         // for cubic Hermite pieces reads
@@ -454,22 +507,40 @@ void recon_engine::add_priors_for_knot(long j) {
         // Curvature of interval [j-1, j], both knots open.
         const int base = wj - 2;
         for (int a = 0; a < 4; ++a)
-            for (int b = 0; b < 4; ++b)
-                Rp_[std::size_t(base + a) * n_ + base + b] += w_curv_ * k_stiffness[a][b];
+            for (int b = 0; b < 4; ++b) {
+                const std::size_t rc = std::size_t(base + a) * n_ + base + b;
+                Rp_[rc] += w_curv_ * k_stiffness[a][b];                 // times the height weight
+                Rg_[rc] += k_min_curvature_weight * k_stiffness[a][b];  // times the slope weight
+            }
     } else if (j - 1 <= fixed_upto_ && j - 1 >= 0) {
         // Knot j-1 is a carried boundary condition: its part moves to the
         // right-hand side of every fiber.
         const double *left = hist_at(j - 1);
         for (int a = 0; a < 2; ++a) {
-            for (int b = 0; b < 2; ++b)
-                Rp_[std::size_t(wj + a) * n_ + wj + b] += w_curv_ * k_stiffness[2 + a][2 + b];
-            const double cz = w_curv_ * k_stiffness[2 + a][0];
-            const double cm = w_curv_ * k_stiffness[2 + a][1];
+            for (int b = 0; b < 2; ++b) {
+                const std::size_t rc = std::size_t(wj + a) * n_ + wj + b;
+                Rp_[rc] += w_curv_ * k_stiffness[2 + a][2 + b];
+                Rg_[rc] += k_min_curvature_weight * k_stiffness[2 + a][2 + b];
+            }
+            const double cz = k_stiffness[2 + a][0], cm = k_stiffness[2 + a][1];
+            const double g = k_min_curvature_weight;
             double *rhs = rhs_.data() + std::size_t(wj + a) * K_;
             for (std::size_t k = 0; k < K_; ++k)
-                rhs[k] -= wh_[k] * (cz * left[k] + cm * left[K_ + k]);
+                rhs[k] -= (wh_[k] * w_curv_ + wg_[k] * g) * (cz * left[k] + cm * left[K_ + k]);
         }
     }
+}
+
+void recon_engine::pivot_floors() {
+    double *floor = pivot_floor_.data();
+    std::fill_n(floor, K_, 0.0);
+    for (int j = 0; j < n_; ++j) {
+        const double *d = work_.data() + tri(j, j) * K_;
+        for (std::size_t k = 0; k < K_; ++k)
+            floor[k] = std::max(floor[k], d[k]);  // NaN-free: entries are finite sums
+    }
+    for (std::size_t k = 0; k < K_; ++k)
+        floor[k] = std::max(k_pivot_floor * floor[k], 1e-300);
 }
 
 // Eliminates the two unknowns of knot w0_ from W = schur + R - down, per fiber
@@ -493,12 +564,14 @@ void recon_engine::close_knot() {
     const double *a01 = work_.data() + tri(0, 1) * K_;
     const double *a11 = work_.data() + tri(1, 1) * K_;
     const double *b0 = rhs_.data(), *b1 = rhs_.data() + K_;
+    pivot_floors();
+    const double *floor = pivot_floor_.data();
     for (std::size_t k = 0; k < K_; ++k) {
-        const double l00 = std::sqrt(std::max(a00[k], 1e-300));
+        const double l00 = std::sqrt(std::max(a00[k], floor[k]));
         il00[k] = 1.0 / l00;
         l10[k] = a01[k] * il00[k];
         const double d11 = a11[k] - l10[k] * l10[k];
-        il11[k] = 1.0 / std::sqrt(std::max(d11, 1e-300));
+        il11[k] = 1.0 / std::sqrt(std::max(d11, floor[k]));
         y0[k] = b0[k] * il00[k];
         y1[k] = (b1[k] - l10[k] * y0[k]) * il11[k];
     }
@@ -564,6 +637,8 @@ void recon_engine::emit_upto(long last) {
         for (int c = r; c < n_; ++c) {
             assemble_entry(r, c);
         }
+    pivot_floors();
+    const double *floor = pivot_floor_.data();
     for (int j = 0; j < n_; ++j) {
         double *ujj = work_.data() + tri(j, j) * K_;
         for (int i = 0; i < j; ++i) {
@@ -572,7 +647,7 @@ void recon_engine::emit_upto(long last) {
                 ujj[k] -= uij[k] * uij[k];
         }
         for (std::size_t k = 0; k < K_; ++k)
-            ujj[k] = 1.0 / std::sqrt(std::max(ujj[k], 1e-300));  // keep 1/U_jj
+            ujj[k] = 1.0 / std::sqrt(std::max(ujj[k], floor[k]));  // keep 1/U_jj
         for (int c = j + 1; c < n_; ++c) {
             double *ujc = work_.data() + tri(j, c) * K_;
             for (int i = 0; i < j; ++i) {

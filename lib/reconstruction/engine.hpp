@@ -163,6 +163,9 @@ class recon_engine {
     void add_row_geometry(const double *ch, const double *cg, int off);
     void add_rank1_prior(const long *knot, const int *unit, const double *coef, int count,
                          double weight);
+    // pivot_floor_[k] = k_pivot_floor times the largest diagonal entry of
+    // fiber k's assembled window matrix (work_).
+    void pivot_floors();
     void close_knot();  // eliminate knot w0_
     void maybe_emit();  // emit knots whose lag is reached
     long emit_group() const { return p_.emit_group(); }
@@ -219,7 +222,8 @@ class recon_engine {
     std::vector<double> hv_, gv_;  // per fiber masked measurements
     std::vector<double> hm_, gm_;  // per fiber effective weight multipliers
     std::vector<double> ones_;
-    std::vector<int> bad_;  // fibers with an invalid sample this row
+    std::vector<double> pivot_floor_;  // per fiber, see pivot_floors()
+    std::vector<int> bad_;             // fibers with an invalid sample this row
 
     // ---- per fiber bookkeeping ----
     double bc_s_ = 0.0;  // carried boundary knot

@@ -446,6 +446,187 @@ static void test_flatness_stream_with_a_denormal_update_interval_ends(void **sta
     flt_options_destroy(o);
 }
 
+/* ---------------------------------------------------------------------- */
+/* Reconstructor                                                           */
+/* ---------------------------------------------------------------------- */
+
+/* A sine of 3 mm and 1885 mm period on a 5 mm level, seen by two lasers
+ * 100 mm apart, with 1 mm of height noise and 1e-6 of slope noise, rows 1
+ * to 5 mm apart. */
+enum { ROWS = 2000, K = 8 };
+static void noisy_sheet(double *s, double *h, double *g) {
+    uint64_t state = 88172645463325252ull;
+    double pos = 0;
+    for (int r = 0; r < ROWS; ++r) {
+        state ^= state << 13, state ^= state >> 7, state ^= state << 17;
+        pos += 1.0 + 4.0 * (double)(state >> 11) / 9007199254740992.0;
+        s[r] = pos;
+        const double z0 = 5 + 3 * sin((pos - 50) / 300), z1 = 5 + 3 * sin((pos + 50) / 300);
+        for (int k = 0; k < K; ++k) {
+            /* Irwin-Hall: the sum of 12 uniforms minus 6 is about N(0, 1). */
+            double n = -6;
+            for (int i = 0; i < 12; ++i) {
+                state ^= state << 13, state ^= state >> 7, state ^= state << 17;
+                n += (double)(state >> 11) / 9007199254740992.0;
+            }
+            h[r * K + k] = 0.5 * (z0 + z1) + n;
+            g[r * K + k] = (z1 - z0) / 100 + 1e-6 * n;
+        }
+    }
+}
+
+static void test_slope_sigma_at_its_minimum_gives_no_unflagged_nan(void **state) {
+    (void)state;
+    double *s = malloc(ROWS * sizeof(double)), *h = malloc(ROWS * K * sizeof(double));
+    double *g = malloc(ROWS * K * sizeof(double));
+    double *z = malloc(ROWS * K * sizeof(double)), *ref = malloc(ROWS * K * sizeof(double));
+    uint8_t *flags = malloc(ROWS * K);
+    noisy_sheet(s, h, g);
+    flt_options *o = NULL;
+    assert_int_equal(flt_options_create(&o), FLT_OK);
+    /* The reference: slopes weighed 1e8 times the heights (the most the
+     * reconstructor carries; recon.h). */
+    assert_int_equal(flt_options_set(o, FLT_OPT_SLOPE_SIGMA, 2.5e-6), FLT_OK);
+    assert_int_equal(flt_reconstruct(o, ROWS, K, s, h, g, NULL, ref, NULL), FLT_OK);
+    double min_slope_sigma = 0;
+    assert_int_equal(flt_option_info(FLT_OPT_SLOPE_SIGMA, NULL, &min_slope_sigma, NULL, NULL, NULL),
+                     FLT_OK);
+    assert_int_equal(flt_options_set(o, FLT_OPT_SLOPE_SIGMA, min_slope_sigma), FLT_OK);
+    for (int rigid = 0; rigid <= 1; ++rigid) {
+        assert_int_equal(flt_options_set(o, FLT_OPT_RIGID_MOTION, rigid), FLT_OK);
+        assert_int_equal(flt_reconstruct(o, ROWS, K, s, h, g, NULL, z, flags), FLT_OK);
+        double worst = 0;
+        for (int i = 0; i < ROWS * K; ++i) {
+            assert_true(isfinite(z[i])); /* every fiber has heights: no NaN at all */
+            assert_int_equal(flags[i] & FLT_FLAG_NO_DATA, 0);
+            worst = fmax(worst, fabs(z[i] - ref[i]));
+        }
+        print_message("slope_sigma = %g, rigid_motion = %d: batch within %.3g mm of the capped "
+                      "weights\n",
+                      min_slope_sigma, rigid, worst);
+        /* Without rigid motion the two are the same least-squares problem
+         * (the slope weight is capped at 1e8 heights): equal to rounding,
+         * 1e-6 mm on a 5 mm level. With it the line channels' slope
+         * weights (slope_sigma shrunk by the fibers) are capped at their
+         * own ratio, a different weighting: 0.05 mm (the heights carry 1 mm
+         * of noise). */
+        assert_true(worst < (rigid ? 0.05 : 1e-6));
+
+        /* Streaming, in blocks of 100 rows. */
+        flt_recon *r = NULL;
+        assert_int_equal(flt_recon_create(K, o, &r), FLT_OK);
+        size_t pulled = 0;
+        for (int r0 = 0; r0 < ROWS; r0 += 100) {
+            assert_int_equal(flt_recon_push(r, 100, K, s + r0, h + r0 * K, g + r0 * K, NULL),
+                             FLT_OK);
+            if (r0 + 100 == ROWS)
+                assert_int_equal(flt_recon_end_sheet(r), FLT_OK);
+            size_t got = 0;
+            assert_int_equal(flt_recon_pull(r, ROWS - pulled, K, s + pulled, z + pulled * K,
+                                            flags + pulled * K, &got),
+                             FLT_OK);
+            pulled += got;
+        }
+        assert_int_equal(pulled, ROWS);
+        for (int i = 0; i < ROWS * K; ++i)
+            assert_true(isfinite(z[i]) && (flags[i] & FLT_FLAG_NO_DATA) == 0);
+        flt_recon_destroy(r);
+    }
+    flt_options_destroy(o);
+    free(s), free(h), free(g), free(z), free(ref), free(flags);
+}
+
+/* Knots without rows under strong or lopsided weights (found by the
+ * contract suite): a curvature-jump prior 1e17 times the curvature prior,
+ * slopes weighing 1e8 heights beside a curvature prior of 1e-12, and
+ * rigid_motion's deviation channel, whose priors scale with (shape_sigma /
+ * height_sigma)^2, each made every output NaN without a flag. Rows up to
+ * 1000 knots apart, zeros and a few ones. */
+static void test_knots_without_rows_under_extreme_weights_give_no_nan(void **state) {
+    (void)state;
+    static const struct {
+        double laser, jump, curvature, slope_sigma, height_sigma;
+        int rigid;
+    } cases[] = {
+        {1.0, 1e5, 1e-12, 1.0, 2.5, 0},   {100, 1e12, 1e-12, 1e-12, 2.5, 0},
+        {0.001, 1e5, 1e-12, 1.0, 2.5, 0}, {0.001, 1e-11, 1e-12, 1e-3, 0.1, 0},
+        {0.001, 10, 1e-3, 1e-3, 1e6, 1},  {0.001, 10, 1e-3, 1e-6, 1e5, 1},
+        {100, 0, 1e-12, 1e3, 2.5, 0},
+    };
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; ++c) {
+        flt_options *o = NULL;
+        assert_int_equal(flt_options_create(&o), FLT_OK);
+        assert_int_equal(flt_options_set(o, FLT_OPT_LASER_SPACING, cases[c].laser), FLT_OK);
+        assert_int_equal(flt_options_set(o, FLT_OPT_CURVATURE_JUMP_WEIGHT, cases[c].jump), FLT_OK);
+        assert_int_equal(flt_options_set(o, FLT_OPT_CURVATURE_WEIGHT, cases[c].curvature), FLT_OK);
+        assert_int_equal(flt_options_set(o, FLT_OPT_SLOPE_SIGMA, cases[c].slope_sigma), FLT_OK);
+        assert_int_equal(flt_options_set(o, FLT_OPT_HEIGHT_SIGMA, cases[c].height_sigma), FLT_OK);
+        assert_int_equal(flt_options_set(o, FLT_OPT_RIGID_MOTION, cases[c].rigid), FLT_OK);
+        for (int spread = 0; spread < 3; ++spread) {
+            /* Rows 1, 10 or 1000 knots apart (knots = laser spacing). */
+            const double gap = cases[c].laser * (spread == 0 ? 1 : spread == 1 ? 10 : 1000);
+            const double s[5] = {0, gap, 2 * gap, 2 * gap + 0.5 * cases[c].laser, 3 * gap};
+            double h[10] = {0, 0, 1, 1, 0, 0, 2, 2, 0, 0}, g[10] = {0}, z[10];
+            uint8_t flags[10];
+            assert_int_equal(flt_reconstruct(o, 5, 2, s, h, g, NULL, z, flags), FLT_OK);
+            for (int i = 0; i < 10; ++i)
+                if (!isfinite(z[i])) {
+                    print_message("case %zu, rows %g mm apart: z[%d] = %g, flags %d\n", c, gap, i,
+                                  z[i], flags[i]);
+                    fail();
+                }
+        }
+        flt_options_destroy(o);
+    }
+}
+
+/* Heights of 1e8 mm (inside the documented 1e9) in robust Tukey mode with
+ * rigid motion: half of the outputs were NaN without a flag. The sheet is
+ * the noisy sine above lifted by 1e8 mm; every fiber has heights, so no
+ * output may be NaN at all, in batch or streaming. */
+static void test_huge_heights_in_robust_rigid_mode_give_no_unflagged_nan(void **state) {
+    (void)state;
+    double *s = malloc(ROWS * sizeof(double)), *h = malloc(ROWS * K * sizeof(double));
+    double *g = malloc(ROWS * K * sizeof(double)), *z = malloc(ROWS * K * sizeof(double));
+    uint8_t *flags = malloc(ROWS * K);
+    noisy_sheet(s, h, g);
+    for (int i = 0; i < ROWS * K; ++i)
+        h[i] += 1e8;
+    for (int robust = 1; robust <= 2; ++robust) {
+        flt_options *o = NULL;
+        assert_int_equal(flt_options_create(&o), FLT_OK);
+        assert_int_equal(flt_options_set(o, FLT_OPT_ROBUST, robust), FLT_OK);
+        assert_int_equal(flt_options_set(o, FLT_OPT_RIGID_MOTION, 1), FLT_OK);
+        assert_int_equal(flt_reconstruct(o, ROWS, K, s, h, g, NULL, z, flags), FLT_OK);
+        size_t unflagged = 0;
+        for (int i = 0; i < ROWS * K; ++i)
+            unflagged += !isfinite(z[i]) && (flags[i] & FLT_FLAG_NO_DATA) == 0;
+        print_message("robust = %d, rigid motion, heights 1e8 mm: %zu unflagged NaN of %d\n",
+                      robust, unflagged, ROWS * K);
+        assert_int_equal(unflagged, 0);
+        flt_recon *r = NULL;
+        assert_int_equal(flt_recon_create(K, o, &r), FLT_OK);
+        size_t pulled = 0;
+        for (int r0 = 0; r0 < ROWS; r0 += 100) {
+            assert_int_equal(flt_recon_push(r, 100, K, s + r0, h + r0 * K, g + r0 * K, NULL),
+                             FLT_OK);
+            if (r0 + 100 == ROWS)
+                assert_int_equal(flt_recon_end_sheet(r), FLT_OK);
+            size_t got = 0;
+            assert_int_equal(flt_recon_pull(r, ROWS - pulled, K, s + pulled, z + pulled * K,
+                                            flags + pulled * K, &got),
+                             FLT_OK);
+            pulled += got;
+        }
+        assert_int_equal(pulled, ROWS);
+        for (int i = 0; i < ROWS * K; ++i)
+            assert_true(isfinite(z[i]) || (flags[i] & FLT_FLAG_NO_DATA) != 0);
+        flt_recon_destroy(r);
+        flt_options_destroy(o);
+    }
+    free(s), free(h), free(g), free(z), free(flags);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_absurd_calibration_values_are_refused_naming_the_field),
@@ -455,6 +636,9 @@ int main(void) {
         cmocka_unit_test(test_flatness_zone_count_is_bounded),
         cmocka_unit_test(test_flatness_stream_crosses_a_gap_in_few_calls),
         cmocka_unit_test(test_flatness_stream_with_a_denormal_update_interval_ends),
+        cmocka_unit_test(test_slope_sigma_at_its_minimum_gives_no_unflagged_nan),
+        cmocka_unit_test(test_knots_without_rows_under_extreme_weights_give_no_nan),
+        cmocka_unit_test(test_huge_heights_in_robust_rigid_mode_give_no_unflagged_nan),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
