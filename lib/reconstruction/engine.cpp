@@ -771,8 +771,11 @@ void recon_engine::finish_row(double s, std::size_t nbad, HeightOk h_ok, SlopeOk
         return;
     }
 
-    // The row joins the ring as pending.
+    // The row joins the ring as pending. The API checks the room first; a
+    // full ring here would overwrite a row nobody pulled yet.
     const std::size_t cap = p_.row_capacity;
+    if (tail_ - head_ >= cap)
+        throw error(FLT_ERR_INTERNAL, "row ring overflow");
     const std::size_t r = tail_ % cap;
     ring_s_[r] = s;
     std::uint8_t *fl = ring_flags_ + r * K_;

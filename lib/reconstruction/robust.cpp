@@ -364,10 +364,19 @@ long recon_chain::latency_knots() const {
 }
 
 std::size_t recon_chain::free_rows() const {
-    std::size_t free = last().free_rows();
-    for (std::size_t i = 1; i < queues_.size(); ++i)
-        free = std::min(free, queue_capacity_ - (queues_[i].tail - queues_[i].head));
-    return free;
+    // Every queued row is on its way into the last stage's ring: it takes a
+    // slot there too. (Counting only the rows already in the ring let a
+    // push fill the queues beyond the ring, and end_sheet then wrote the
+    // last rows over the first ones: the contract suite, robust mode with
+    // row_capacity = 32.)
+    std::size_t queued = 0, free = last().free_rows();
+    for (std::size_t i = 1; i < queues_.size(); ++i) {
+        const std::size_t in_queue = queues_[i].tail - queues_[i].head;
+        queued += in_queue;
+        free = std::min(free, queue_capacity_ - in_queue);
+    }
+    const std::size_t ring = last().free_rows();
+    return std::min(free, ring > queued ? ring - queued : 0);
 }
 
 void recon_chain::enqueue(std::size_t stage, double s, const double *height, const double *slope,

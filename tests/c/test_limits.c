@@ -627,6 +627,36 @@ static void test_huge_heights_in_robust_rigid_mode_give_no_unflagged_nan(void **
     free(s), free(h), free(g), free(z), free(flags);
 }
 
+/* Robust mode with a small row_capacity: rows waiting in the reweighting
+ * stages' queues did not count against the capacity, so a push could take
+ * more rows than the ring holds, and end_sheet wrote the last over the
+ * first (a pulled row at s = 99 first, then 6, 9, ...; the contract
+ * suite). */
+static void test_robust_queues_count_against_the_row_capacity(void **state) {
+    (void)state;
+    flt_options *o = NULL;
+    assert_int_equal(flt_options_create(&o), FLT_OK);
+    assert_int_equal(flt_options_set(o, FLT_OPT_ROBUST, 2), FLT_OK);
+    assert_int_equal(flt_options_set(o, FLT_OPT_ROBUST_ITERATIONS, 1), FLT_OK);
+    assert_int_equal(flt_options_set(o, FLT_OPT_ROW_CAPACITY, 32), FLT_OK);
+    flt_recon *r = NULL;
+    assert_int_equal(flt_recon_create(1, o, &r), FLT_OK);
+    double s[40], zero[40] = {0}, s_out[40], z[40];
+    for (int i = 0; i < 40; ++i)
+        s[i] = 3.0 * (i + 1);
+    assert_int_equal(flt_recon_push(r, 3, 1, s, zero, zero, NULL), FLT_OK);
+    assert_int_equal(flt_recon_push(r, 30, 1, s + 3, zero, zero, NULL), FLT_ERR_BUFFER_FULL);
+    assert_int_equal(flt_recon_push(r, 29, 1, s + 3, zero, zero, NULL), FLT_OK);
+    assert_int_equal(flt_recon_end_sheet(r), FLT_OK);
+    size_t got = 0;
+    assert_int_equal(flt_recon_pull(r, 40, 1, s_out, z, NULL, &got), FLT_OK);
+    assert_int_equal(got, 32);
+    for (int i = 0; i < 32; ++i)
+        assert_true(s_out[i] == s[i]); /* every row, in order, once */
+    flt_recon_destroy(r);
+    flt_options_destroy(o);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_absurd_calibration_values_are_refused_naming_the_field),
@@ -639,6 +669,7 @@ int main(void) {
         cmocka_unit_test(test_slope_sigma_at_its_minimum_gives_no_unflagged_nan),
         cmocka_unit_test(test_knots_without_rows_under_extreme_weights_give_no_nan),
         cmocka_unit_test(test_huge_heights_in_robust_rigid_mode_give_no_unflagged_nan),
+        cmocka_unit_test(test_robust_queues_count_against_the_row_capacity),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
