@@ -143,20 +143,33 @@ typedef enum flt_robust {
     FLT_ROBUST_MAX_ENUM_ = 0x7FFFFFFF
 } flt_robust;
 
+/** Sizes a real sensor never reaches: the most bytes a reconstructor's
+ * buffers may take (2 GiB). A reconstructor takes at most FLT_MAX_FIBERS
+ * fibers (common.h). flt_recon_create() and flt_reconstruct() refuse, with
+ * FLT_ERR_INVALID_ARGUMENT and a message giving the estimate, a
+ * configuration whose buffers would take more: many fibers with a large
+ * row_capacity, lag_knots or robust_iterations, or a sheet for
+ * flt_reconstruct() whose rows are so sparse that it spans far more knots
+ * than it has rows (a long strip is streamed through flt_recon_push
+ * instead, which keeps only its lag). */
+#define FLT_RECON_MAX_BYTES 2147483648.0
+
 /** A streaming reconstructor (opaque handle). */
 typedef struct flt_recon flt_recon;
 
-/** Creates a streaming reconstructor for `fibers` fibers (>= 1), for lasers
- * laser_spacing mm apart (default 100 mm: the reference sensor's). With a
- * calibration, use flt_recon_create_from_calib(), which takes both from it.
+/** Creates a streaming reconstructor for `fibers` fibers (1 to
+ * FLT_MAX_FIBERS), for lasers laser_spacing mm apart (default 100 mm: the
+ * reference sensor's). With a calibration, use
+ * flt_recon_create_from_calib(), which takes both from it.
  * options: NULL for the defaults, else read for the FLT_OPT_* keys of the
  * reconstructor (knot_spacing, laser_spacing, height_sigma, slope_sigma,
  * curvature_weight, curvature_jump_weight, lag_knots, max_gap, row_capacity,
  * rigid_motion, shape_sigma, robust, robust_iterations,
  * robust_line_iterations); copied, not kept.
- * Fails with FLT_ERR_INVALID_ARGUMENT if fibers is 0, the options are
- * inconsistent or set a key of another component (common.h),
- * FLT_ERR_OUT_OF_MEMORY if the buffers do not fit. */
+ * Fails with FLT_ERR_INVALID_ARGUMENT if fibers is 0 or too many, the
+ * options are inconsistent or set a key of another component (common.h),
+ * or the buffers would pass FLT_RECON_MAX_BYTES; FLT_ERR_OUT_OF_MEMORY if
+ * they do not fit in memory. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_create(size_t fibers,
                                                            const flt_options *options,
                                                            flt_recon **out);
@@ -258,7 +271,9 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_boundary(const flt_recon *re
  * rows at once (no lag, no carry-over). Arguments as in flt_recon_push;
  * z_out [rows * fibers] and flags_out [rows * fibers] (or NULL) as in
  * flt_recon_pull. Allocates its working memory for the duration of the call
- * (about 100 doubles per fiber and knot); reentrant. */
+ * (about 20 doubles per fiber and knot at the default knot spacing, up to
+ * about 80 at the finest; at most FLT_RECON_MAX_BYTES, else
+ * FLT_ERR_INVALID_ARGUMENT); reentrant. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_reconstruct(const flt_options *options, size_t rows,
                                                           size_t fibers, const double *s,
                                                           const double *height, const double *slope,

@@ -274,6 +274,24 @@ void hermite_weights(double t, double w[4]) {
 
 }  // namespace
 
+double recon_engine::bytes_needed(std::size_t fibers, const recon_params &params,
+                                  std::size_t knot_capacity, bool owns_rows, bool keep_rows) {
+    // The same sizes as the constructor below.
+    const double K = double(fibers);
+    const double rows = keep_rows ? double(params.row_capacity) : 1.0;
+    const double S = std::ceil(params.laser_spacing / params.knot_spacing - 1e-9) + 2;
+    const double n = 2 * S, ntri = n * (n + 1) / 2, nf = 5 + 2 * (n - 2);
+    const double hist = double(knot_capacity) + 2 * S + 4;
+    double doubles_per_fiber = double(knot_capacity) * nf  // factor ring
+                               + hist * 2                  // knot states
+                               + 3 * ntri + 2 * n          // window, Schur, rhs
+                               + 16;                       // weights, scratch, bookkeeping
+    double bytes = 8 * K * doubles_per_fiber + 9 * rows + 24 * n * n;
+    if (owns_rows)
+        bytes += 9 * rows * K;  // z and flags of the row ring
+    return bytes;
+}
+
 recon_engine::recon_engine(std::size_t fibers, const recon_params &params,
                            std::size_t knot_capacity, double *z_store, std::uint8_t *flags_store,
                            bool keep_rows)

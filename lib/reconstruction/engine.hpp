@@ -81,6 +81,14 @@ class recon_engine {
                  double *z_store = nullptr, std::uint8_t *flags_store = nullptr,
                  bool keep_rows = true);
 
+    // The bytes a constructor with these arguments allocates (its large
+    // buffers; an upper bound within a few hundred bytes), computed in
+    // double so that no size can overflow: the API refuses configurations
+    // beyond FLT_RECON_MAX_BYTES before constructing anything.
+    // owns_rows: no z_store given (the engine keeps its own row ring).
+    static double bytes_needed(std::size_t fibers, const recon_params &params,
+                               std::size_t knot_capacity, bool owns_rows, bool keep_rows);
+
     std::size_t fibers() const { return K_; }
     const recon_params &params() const { return p_; }
     int knots_per_row() const { return S_; }

@@ -126,6 +126,24 @@ FLT_SPLIT_KERNEL void line_deviations(std::size_t K, double centre, double a, do
 }
 }  // namespace
 
+double recon_pipeline::bytes_needed(std::size_t fibers, const recon_config &config,
+                                    std::size_t knot_capacity, bool batch) {
+    // The channels of the constructor below; the line channels have one
+    // fiber each, and parameters that do not change their sizes.
+    const bool owns_rows = !batch;
+    double bytes = recon_chain::bytes_needed(fibers, config.params, config.robust, knot_capacity,
+                                             owns_rows, batch);
+    if (!config.rigid_motion)
+        return bytes;
+    robust_params line_robust = config.robust;
+    line_robust.iterations = config.line_iterations;
+    bytes +=
+        2 * recon_chain::bytes_needed(1, config.params, line_robust, knot_capacity, true, batch);
+    const double rows = double(config.params.row_capacity);
+    bytes += 8 * (3 * rows + (batch ? 4 * rows : 0) + 10 * double(fibers));
+    return bytes;
+}
+
 recon_pipeline::recon_pipeline(std::size_t fibers, const recon_config &config,
                                std::size_t knot_capacity, double *z_store,
                                std::uint8_t *flags_store, bool batch)

@@ -55,6 +55,12 @@ class recon_pipeline {
                    double *z_store = nullptr, std::uint8_t *flags_store = nullptr,
                    bool batch = false);
 
+    // The bytes the constructor with these arguments allocates (see
+    // recon_engine::bytes_needed); batch as in the constructor, with
+    // z_store given.
+    static double bytes_needed(std::size_t fibers, const recon_config &config,
+                               std::size_t knot_capacity, bool batch);
+
     std::size_t fibers() const { return K_; }
     const recon_config &config() const { return config_; }
     std::size_t free_rows() const;

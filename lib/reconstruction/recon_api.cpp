@@ -90,9 +90,35 @@ flt_status check_fibers(const char *fn, std::size_t fibers, std::size_t expected
     return FLT_OK;
 }
 
-// The kernels index fibers with 32-bit integers (which vectorise); a real
-// sensor has a few thousand.
-constexpr std::size_t k_max_fibers = 0x7fffffff;
+// A real sensor has a few thousand fibers (flatline/recon.h); the kernels
+// index them with 32-bit integers, which vectorise.
+constexpr std::size_t k_max_fibers = FLT_MAX_FIBERS;
+
+// Refuses a configuration whose buffers would pass FLT_RECON_MAX_BYTES,
+// before anything is allocated: beyond it, an allocation may succeed on an
+// overcommitting system and then take the machine page by page.
+flt_status check_bytes(const char *fn, std::size_t fibers, const recon_config &config,
+                       std::size_t knots, bool batch) {
+    const double bytes = recon_pipeline::bytes_needed(fibers, config, knots, batch);
+    if (bytes <= FLT_RECON_MAX_BYTES)
+        return FLT_OK;
+    const recon_params &p = config.params;
+    if (batch)
+        return fail(FLT_ERR_INVALID_ARGUMENT,
+                    "%s: the sheet spans %zu knots of %g mm for %zu rows x %zu fibers; "
+                    "reconstructing it at once would take about %.3g GB, more than %.3g GB "
+                    "(rows far sparser than the knots, or a long strip: push it through a "
+                    "flt_recon, or use a larger knot_spacing)",
+                    fn, knots, p.knot_spacing, p.row_capacity, fibers, bytes * 1e-9,
+                    FLT_RECON_MAX_BYTES * 1e-9);
+    return fail(FLT_ERR_INVALID_ARGUMENT,
+                "%s: %zu fibers with row_capacity = %zu, lag_knots = %ld%s would take about "
+                "%.3g GB, more than %.3g GB; use fewer fibers, a smaller row_capacity or "
+                "lag_knots",
+                fn, fibers, p.row_capacity, p.lag_knots,
+                config.robust.kind != robust_kind::none ? " and robust mode" : "", bytes * 1e-9,
+                FLT_RECON_MAX_BYTES * 1e-9);
+}
 
 // rows * fibers must be addressable as doubles.
 flt_status check_shape(const char *fn, std::size_t rows, std::size_t fibers) {
@@ -164,6 +190,8 @@ flt_status create(const char *fn, std::size_t fibers, const flt_options *options
     if (check_shape(fn, p.row_capacity, fibers) != FLT_OK)
         return fail(FLT_ERR_INVALID_ARGUMENT, "%s: row_capacity * fibers = %zu * %zu is too large",
                     fn, p.row_capacity, fibers);
+    if (flt_status st = check_bytes(fn, fibers, config, p.knot_capacity(), false))
+        return st;
     auto handle = std::make_unique<flt_recon>();
     handle->engine = std::make_unique<recon_pipeline>(fibers, config, p.knot_capacity());
     *out = handle.release();
@@ -467,6 +495,8 @@ FLT_API flt_status FLT_CALL flt_reconstruct(const flt_options *options, size_t r
         // Every knot of the sheet stays open until the end.
         const double span = s[rows - 1] - s[0] + p.laser_spacing;
         const std::size_t knots = std::size_t(span / p.knot_spacing) + 4;
+        if (flt_status st = check_bytes(fn, fibers, config, knots, true))
+            return st;
         recon_pipeline e(fibers, config, knots, z_out, flags_out, true);
         e.batch(rows, s, height, slope, valid, z_out);
         return FLT_OK;

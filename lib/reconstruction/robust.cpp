@@ -292,6 +292,30 @@ bool robust_scale::end_row() {
 
 // ---------------------------------------------------------------------------
 
+double recon_chain::bytes_needed(std::size_t fibers, const recon_params &params,
+                                 const robust_params &robust, std::size_t knot_capacity,
+                                 bool owns_rows, bool batch) {
+    // The same sizes as the constructor below.
+    const std::size_t n_stages =
+        robust.kind == robust_kind::none ? 1 : 1 + std::size_t(robust.iterations);
+    const double K = double(fibers);
+    const double final_stage =
+        recon_engine::bytes_needed(fibers, params, knot_capacity, owns_rows, true);
+    // Per reweighted stage: running scales (a ring of blocks, a few more
+    // per fiber) and the per-fiber residual scratch.
+    const double scales = 8 * K * (2 * double(robust.scale_blocks) + 16);
+    if (batch)  // one engine; the previous pass's knot states
+        return final_stage +
+               (n_stages > 1 ? 8 * K * 2 * (double(knot_capacity) + 200) + scales : 0);
+    recon_params stage = params;
+    stage.lag_knots = robust.stage_lag_knots;
+    const double intermediate =
+        recon_engine::bytes_needed(fibers, stage, stage.knot_capacity(), true, false);
+    const double queue_rows = std::max(256.0, std::floor(double(params.row_capacity) / 4.0));
+    const double queue = 8 * queue_rows * (2 * K + 1);
+    return final_stage + double(n_stages - 1) * (intermediate + queue + scales);
+}
+
 recon_chain::recon_chain(std::size_t fibers, const recon_params &params,
                          const robust_params &robust, std::size_t knot_capacity, double *z_store,
                          std::uint8_t *flags_store, bool batch)

@@ -110,6 +110,12 @@ class recon_chain {
                 std::size_t knot_capacity, double *z_store = nullptr,
                 std::uint8_t *flags_store = nullptr, bool batch = false);
 
+    // The bytes the constructor with these arguments allocates (see
+    // recon_engine::bytes_needed).
+    static double bytes_needed(std::size_t fibers, const recon_params &params,
+                               const robust_params &robust, std::size_t knot_capacity,
+                               bool owns_rows, bool batch);
+
     std::size_t fibers() const { return K_; }
     std::size_t free_rows() const;
     std::size_t ready_rows() const { return last().ready_rows(); }

@@ -501,28 +501,19 @@ static void row_recon_create(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'flat_reference' belongs to flatness, not to the reconstructor",
         flt_recon_create(FIBERS, o, &r));
     flt_options_destroy(o);
-    /* Buffers that fit size_t but not memory (1e7 rows x 2.5e4 fibers x 9
-     * bytes = 2.25 TB): out of memory, not a crash. Linux refuses it under its
-     * default heuristic overcommit; with overcommit_memory = 1 ("always")
-     * the kernel would grant it untouched, so the case is skipped there, and
-     * under ASan, whose operator new aborts instead of throwing bad_alloc.
-     * lag_knots = 0 keeps the per-fiber buffers allocated first small. */
+    /* One fiber more than a real sensor could have. */
+    BAD(FLT_ERR_INVALID_ARGUMENT, "too large", flt_recon_create(FLT_MAX_FIBERS + 1, NULL, &r));
+    /* Buffers beyond FLT_RECON_MAX_BYTES (1e7 rows x 2.5e3 fibers x 9 bytes
+     * = 225 GB): refused before anything is allocated, whatever the
+     * system's overcommit policy (an allocation granted untouched would take
+     * the machine page by page once written). */
     o = options_with(FLT_OPT_ROW_CAPACITY, 1e7);
-    GOOD(flt_options_set(o, FLT_OPT_LAG_KNOTS, 0));
-    FILE *oc = fopen("/proc/sys/vm/overcommit_memory", "r");
-    int overcommit = 0;
-    if (oc) {
-        if (fscanf(oc, "%d", &overcommit) != 1)
-            overcommit = 0;
-        fclose(oc);
-    }
-#if defined(__SANITIZE_ADDRESS__)
-    overcommit = 1;
-#endif
-    if (overcommit != 1)
-        BAD(FLT_ERR_OUT_OF_MEMORY, NULL, flt_recon_create(25000, o, &r));
-    else
-        printf("note: out-of-memory case skipped (ASan, or vm.overcommit_memory = 1)\n");
+    BAD(FLT_ERR_INVALID_ARGUMENT, "GB", flt_recon_create(2500, o, &r));
+    flt_options_destroy(o);
+    /* lag_knots at its bound with many fibers: the knot rings alone
+     * (100,000 knots x 17 doubles x 16384 fibers = 220 GB). */
+    o = options_with(FLT_OPT_LAG_KNOTS, 100000);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "lag_knots", flt_recon_create(FLT_MAX_FIBERS, o, &r));
     flt_options_destroy(o);
     GOOD(flt_recon_create(FIBERS, NULL, &r));
     flt_recon_destroy(r);

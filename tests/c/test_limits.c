@@ -657,6 +657,50 @@ static void test_robust_queues_count_against_the_row_capacity(void **state) {
     flt_options_destroy(o);
 }
 
+/* Buffers of a size no sensor needs are refused before allocation. */
+static void test_reconstructor_sizes_are_bounded(void **state) {
+    (void)state;
+    flt_recon *r = NULL;
+    flt_options *o = NULL;
+    assert_int_equal(flt_options_create(&o), FLT_OK);
+    const double rss0 = peak_rss_mb();
+    /* 1e8 fibers (a calibration with that many used to load). */
+    assert_int_equal(flt_recon_create(100000000, NULL, &r), FLT_ERR_INVALID_ARGUMENT);
+    /* row_capacity and lag_knots at their bounds with 1000 fibers: 900 GB
+     * of row ring, then 110 GB of knot rings. */
+    assert_int_equal(flt_options_set(o, FLT_OPT_ROW_CAPACITY, 1e8), FLT_OK);
+    assert_int_equal(flt_recon_create(1000, o, &r), FLT_ERR_INVALID_ARGUMENT);
+    print_message("%s\n", flt_last_error_message());
+    assert_non_null(strstr(flt_last_error_message(), "row_capacity = 100000000"));
+    assert_int_equal(flt_options_set(o, FLT_OPT_ROW_CAPACITY, 8192), FLT_OK);
+    assert_int_equal(flt_options_set(o, FLT_OPT_LAG_KNOTS, 100000), FLT_OK);
+    assert_int_equal(flt_recon_create(1000, o, &r), FLT_ERR_INVALID_ARGUMENT);
+    assert_null(r);
+    /* A batch whose rows lie 1000 knots apart: 24 GB of knots for 2000
+     * rows of 100 fibers (1.6 MB of input). */
+    double *s = malloc(2000 * sizeof(double)), *hg = calloc(2000 * 100, sizeof(double));
+    double *z = malloc(2000 * 100 * sizeof(double));
+    for (int i = 0; i < 2000; ++i)
+        s[i] = 1e5 * i;
+    assert_int_equal(flt_reconstruct(NULL, 2000, 100, s, hg, hg, NULL, z, NULL),
+                     FLT_ERR_INVALID_ARGUMENT);
+    print_message("%s\n", flt_last_error_message());
+    assert_non_null(strstr(flt_last_error_message(), "knots"));
+    /* Nothing of that was allocated: 64 MB covers the test's own arrays
+     * (4.8 MB) and allocator slack. */
+    assert_true(peak_rss_mb() - rss0 < 64.0);
+    /* A real sensor's configuration is well inside: robust mode with rigid
+     * motion at the defaults takes 0.16 GB per 1000 fibers (4000 would be
+     * 0.6 GB of the 2.1 allowed). */
+    assert_int_equal(flt_options_set(o, FLT_OPT_LAG_KNOTS, 64), FLT_OK);
+    assert_int_equal(flt_options_set(o, FLT_OPT_ROBUST, 1), FLT_OK);
+    assert_int_equal(flt_options_set(o, FLT_OPT_RIGID_MOTION, 1), FLT_OK);
+    assert_int_equal(flt_recon_create(1000, o, &r), FLT_OK);
+    flt_recon_destroy(r);
+    flt_options_destroy(o);
+    free(s), free(hg), free(z);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_absurd_calibration_values_are_refused_naming_the_field),
@@ -670,6 +714,7 @@ int main(void) {
         cmocka_unit_test(test_knots_without_rows_under_extreme_weights_give_no_nan),
         cmocka_unit_test(test_huge_heights_in_robust_rigid_mode_give_no_unflagged_nan),
         cmocka_unit_test(test_robust_queues_count_against_the_row_capacity),
+        cmocka_unit_test(test_reconstructor_sizes_are_bounded),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
