@@ -105,8 +105,17 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_create(const flt_calib *calib,
 /** Frees everything. NULL is a no-op. */
 FLT_API void FLT_CALL flt_sim_destroy(flt_sim *sim);
 
-/** Adds a defect (see flt_sim_defect): amplitude_mm finite, period_mm >= 0
- * finite. At most 64 defects. */
+/** The largest |height| a defect or a height map may give, mm (10 m, far
+ * beyond any sheet; the two lasers' difference of larger ones could leave
+ * the range of a double). */
+#define FLT_SIM_MAX_HEIGHT_MM 1.0e4
+/** The shortest defect period, mm (2 pi s / period must not overflow:
+ * sin(inf) is NaN). */
+#define FLT_SIM_MIN_PERIOD_MM 1.0e-3
+
+/** Adds a defect (see flt_sim_defect): |amplitude_mm| <=
+ * FLT_SIM_MAX_HEIGHT_MM, period_mm 0 or in [FLT_SIM_MIN_PERIOD_MM, 1e12].
+ * At most 64 defects. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_add_defect(flt_sim *sim, flt_sim_defect kind,
                                                              double amplitude_mm, double period_mm);
 
@@ -115,7 +124,8 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_clear_sheet(flt_sim *sim);
 
 /** Adds a user height map to the sheet (replacing a previous map):
  * heights [rows * cols] mm, row-major, row r at s = s0_mm + r * ds_mm, column
- * c at x = x0_mm + c * dx_mm (rows, cols >= 2; ds, dx > 0; all finite).
+ * c at x = x0_mm + c * dx_mm (rows, cols >= 2; ds, dx > 0; all finite;
+ * |heights| <= FLT_SIM_MAX_HEIGHT_MM).
  * Interpolated bilinearly; clamped to the edge values outside. Copied. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_set_height_map(flt_sim *sim, size_t rows,
                                                                  size_t cols, double s0_mm,

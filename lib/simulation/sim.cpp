@@ -364,7 +364,16 @@ struct flt_sim {
         const double fs = full_scale();
         // Shot noise: I counts hold I * full_well / fs electrons, whose
         // Poisson sigma is sqrt of that; back in counts sqrt(I * fs / full_well).
-        const float gain = params.full_well > 0 ? float(fs / params.full_well) : 0.0f;
+        // A tiny full well (1e-30 electrons is inside the option's range)
+        // makes fs / full_well overflow a float; 0 * inf or inf * 0 is then
+        // NaN, whose conversion to a pixel was undefined. The gain is capped
+        // at k_max_gain: a pixel of more than 1e-10 counts then still has a
+        // noise sigma beyond full scale (it clips to 0 or full scale as
+        // without the cap); only pixels dimmer than that get less noise than
+        // the formula. The clamp below is NaN-safe as well.
+        constexpr double k_max_gain = 1e20;
+        const float gain =
+            params.full_well > 0 ? float(std::min(fs / params.full_well, k_max_gain)) : 0.0f;
         const float top = float(fs);
         for (std::uint32_t v = 0; v < height; ++v) {
             Pixel *row = reinterpret_cast<Pixel *>(static_cast<unsigned char *>(frame_out) +
@@ -374,7 +383,8 @@ struct flt_sim {
                 float value = in[u];
                 if (gain > 0)
                     value += std::sqrt(std::max(value, 0.0f) * gain) * rng.fast_gauss();
-                value = std::min(std::max(value + 0.5f, 0.0f), top);
+                value += 0.5f;
+                value = value > 0.0f ? (value < top ? value : top) : 0.0f;  // NaN: 0
                 row[u] = Pixel(value);
             }
         }
@@ -534,12 +544,15 @@ FLT_API flt_status FLT_CALL flt_sim_add_defect(flt_sim *sim, flt_sim_defect kind
         if (enum_arg(kind) < int(FLT_SIM_FLAT) || enum_arg(kind) > int(FLT_SIM_CROSSBOW))
             return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'kind' = %d is unknown", fn,
                         enum_arg(kind));
-        if (!std::isfinite(amplitude_mm))
-            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'amplitude_mm' = %g is not finite",
-                        fn, amplitude_mm);
-        if (!std::isfinite(period_mm) || period_mm < 0)
+        if (!(std::fabs(amplitude_mm) <= FLT_SIM_MAX_HEIGHT_MM))  // NaN too
             return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'period_mm' = %g must be finite and >= 0", fn, period_mm);
+                        "%s: argument 'amplitude_mm' = %g is outside [%g, %g] mm", fn, amplitude_mm,
+                        -FLT_SIM_MAX_HEIGHT_MM, FLT_SIM_MAX_HEIGHT_MM);
+        // A shorter period makes 2 pi s / period overflow, and sin(inf) NaN.
+        if (!(period_mm == 0 || (period_mm >= FLT_SIM_MIN_PERIOD_MM && period_mm <= 1e12)))
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'period_mm' = %g must be 0 or in [%g, 1e12] mm", fn,
+                        period_mm, FLT_SIM_MIN_PERIOD_MM);
         if (sim->defects.size() >= k_max_defects)
             return fail(FLT_ERR_BUFFER_FULL, "%s: the sheet already has %zu defects", fn,
                         k_max_defects);
@@ -582,9 +595,10 @@ FLT_API flt_status FLT_CALL flt_sim_set_height_map(flt_sim *sim, size_t rows, si
                 return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument '%s' = %g is %s", fn, names[i],
                             values[i], i % 2 == 1 ? "not finite and > 0" : "not finite");
         for (std::size_t i = 0; i < rows * cols; ++i)
-            if (!std::isfinite(heights[i]))
+            if (!(std::fabs(heights[i]) <= FLT_SIM_MAX_HEIGHT_MM))  // NaN too
                 return fail(FLT_ERR_INVALID_ARGUMENT,
-                            "%s: argument 'heights[%zu]' = %g is not finite", fn, i, heights[i]);
+                            "%s: argument 'heights[%zu]' = %g is outside [%g, %g] mm", fn, i,
+                            heights[i], -FLT_SIM_MAX_HEIGHT_MM, FLT_SIM_MAX_HEIGHT_MM);
         std::vector<double> map(heights, heights + rows * cols);
         sim->map.swap(map);
         sim->map_rows = rows, sim->map_cols = cols;

@@ -1571,6 +1571,11 @@ static void row_sim_add_defect(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'amplitude_mm'", flt_sim_add_defect(s, FLT_SIM_BOW, Inf_, 100));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'period_mm'", flt_sim_add_defect(s, FLT_SIM_BOW, 1, -1));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'period_mm'", flt_sim_add_defect(s, FLT_SIM_BOW, 1, Inf_));
+    /* Finite but absurd: 2 pi s / 7e-307 overflowed and sin(inf) made the
+     * rows NaN (found by the contract suite); 1e300 mm of amplitude made
+     * the two lasers' difference infinite. */
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'period_mm'", flt_sim_add_defect(s, FLT_SIM_BOW, 1, 7e-307));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'amplitude_mm'", flt_sim_add_defect(s, FLT_SIM_BOW, 1e300, 100));
     for (int i = 0; i < 64; ++i)
         GOOD(flt_sim_add_defect(s, FLT_SIM_BOW, 0.01, 1000));
     BAD(FLT_ERR_BUFFER_FULL, "defects", flt_sim_add_defect(s, FLT_SIM_BOW, 1, 100));
@@ -1601,6 +1606,8 @@ static void row_sim_set_height_map(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'s0_mm'", flt_sim_set_height_map(s, 2, 3, NaN_, 1, 0, 1, hm));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'x0_mm'", flt_sim_set_height_map(s, 2, 3, 0, 1, Inf_, 1, hm));
     hm[4] = NaN_;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "heights[4]", flt_sim_set_height_map(s, 2, 3, 0, 1, 0, 1, hm));
+    hm[4] = -1.7e308; /* beside +1.7e308 the lasers' difference would be infinite */
     BAD(FLT_ERR_INVALID_ARGUMENT, "heights[4]", flt_sim_set_height_map(s, 2, 3, 0, 1, 0, 1, hm));
     hm[4] = 4;
     GOOD(flt_sim_set_height_map(s, 2, 3, 0, 1, 0, 1, hm));

@@ -701,6 +701,49 @@ static void test_reconstructor_sizes_are_bounded(void **state) {
     free(s), free(hg), free(z);
 }
 
+/* ---------------------------------------------------------------------- */
+/* Simulator                                                               */
+/* ---------------------------------------------------------------------- */
+
+static void test_tiny_full_well_gives_clipped_pixels(void **state) {
+    (void)state;
+    for (int bits = 8; bits <= 16; bits += 8) {
+        flt_options *o = NULL;
+        assert_int_equal(flt_options_create(&o), FLT_OK);
+        assert_int_equal(flt_options_set(o, FLT_OPT_SIM_FULL_WELL, 1e-30), FLT_OK);
+        assert_int_equal(flt_options_set(o, FLT_OPT_SIM_BIT_DEPTH, bits), FLT_OK);
+        flt_calib *calib = NULL; /* a 256-row window keeps the frame small */
+        assert_int_equal(flt_calib_create_reference(900, 256, -1000, 2, 1001, &calib), FLT_OK);
+        flt_sim *sim = NULL;
+        assert_int_equal(flt_sim_create(calib, o, &sim), FLT_OK);
+        const size_t bytes = bits / 8, pixels = 2048 * 256;
+        void *frame = malloc(pixels * bytes);
+        assert_int_equal(
+            flt_sim_next_frame(sim, frame, pixels * bytes, 2048 * bytes, NULL, 0, NULL, NULL),
+            FLT_OK);
+        const unsigned top = (1u << bits) - 1;
+        size_t high = 0, between = 0;
+        for (size_t i = 0; i < pixels; ++i) {
+            const unsigned p = bits == 8 ? ((uint8_t *)frame)[i] : ((uint16_t *)frame)[i];
+            high += p == top;
+            between += p != 0 && p != top;
+        }
+        print_message("%d bits, full well 1e-30: %.4f at full scale, %zu pixels between\n", bits,
+                      (double)high / (double)pixels, between);
+        /* The shot noise of every pixel (at least the 3 % background) is
+         * beyond full scale: it clips to 0 or full scale with odds 1:1 (the
+         * noise is symmetric). 0.5 +- 0.01 is 14 sigma of 524,288 draws. A
+         * pixel stays between only when its draw is exactly 0, about 1e-5
+         * of them: at most 1e-3. */
+        assert_true(fabs((double)high / (double)pixels - 0.5) < 0.01);
+        assert_true((double)between / (double)pixels < 1e-3);
+        free(frame);
+        flt_sim_destroy(sim);
+        flt_calib_destroy(calib);
+        flt_options_destroy(o);
+    }
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_absurd_calibration_values_are_refused_naming_the_field),
@@ -715,6 +758,7 @@ int main(void) {
         cmocka_unit_test(test_huge_heights_in_robust_rigid_mode_give_no_unflagged_nan),
         cmocka_unit_test(test_robust_queues_count_against_the_row_capacity),
         cmocka_unit_test(test_reconstructor_sizes_are_bounded),
+        cmocka_unit_test(test_tiny_full_well_gives_clipped_pixels),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
