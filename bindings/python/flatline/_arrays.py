@@ -140,4 +140,11 @@ def as_real(function: str, name: str, value: Any) -> float:
             f"{function}() argument '{name}' must be a real number, not "
             f"{type(value).__name__}"
         )
-    return float(value)
+    try:
+        return float(value)
+    except OverflowError:  # an int like 10**400
+        text = str(value)
+        text = text[:60] + "..." if len(text) > 60 else text
+        raise ValueError(
+            f"{function}() argument '{name}' = {text} is beyond the range of a double"
+        ) from None

@@ -21,7 +21,7 @@ from functools import lru_cache
 from typing import AbstractSet, Any, Dict, Iterable, Mapping, NamedTuple, Optional, Tuple
 
 from . import capi as _capi
-from ._errors import NotFoundError
+from ._errors import InvalidArgumentError, NotFoundError
 
 #: A keyword value: a number, a choice's name, or True/False for an on/off
 #: option (and for a choice whose first value is "none").
@@ -123,7 +123,17 @@ def _option_value(function: str, info: OptionInfo, value: OptionValue) -> float:
             + (f" or one of {', '.join(repr(c) for c in info.choices)}" if info.choices else "")
             + f", not {type(value).__name__}"
         )
-    return float(value)
+    try:
+        return float(value)
+    except OverflowError:  # an int like 10**400: out of range, as the C bag says
+        info = option_info(name)
+        text = str(value)
+        if len(text) > 60:
+            text = text[:60] + "..."
+        raise InvalidArgumentError(
+            f"{function}: option '{name}' = {text} is outside "
+            f"[{info.min_value:g}, {info.max_value:g}]"
+        ) from None
 
 
 def make_options(function: str, kwargs: Mapping[str, OptionValue],

@@ -50,6 +50,137 @@ static void flt_py_raise_last(flt_status status) {
 }
 %}
 
+/* Scalar arguments. SWIG's own conversions raise OverflowError for an int
+ * outside the C type (flatline.Reconstructor(2**64)) and for an int beyond
+ * a double's range, where the library raises InvalidArgumentError (a
+ * ValueError) for every other value out of range. These typemaps convert
+ * every integer and double argument through one helper each: anything with
+ * __index__ (int, bool, numpy integers) for an integer, anything float()
+ * takes for a double; TypeError for another type, InvalidArgumentError
+ * naming the function, the argument and the value when it does not fit. */
+%{
+#include <limits.h>
+#include <stdint.h>
+
+static void flt_py_out_of_range(const char *function, const char *name, PyObject *value,
+                                const char *range) {
+    char message[512];
+    PyObject *text = PyObject_Str(value);
+    const char *digits = text ? PyUnicode_AsUTF8(text) : NULL;
+    if (digits == NULL) {
+        PyErr_Clear();
+        digits = "?";
+    }
+    /* A 2**4000 has 1200 digits: the message keeps the first 60. */
+    PyOS_snprintf(message, sizeof message, "%s: argument '%s' = %.60s%s is outside %s", function,
+                  name, digits, strlen(digits) > 60 ? "..." : "", range);
+    Py_XDECREF(text);
+    flt_py_raise((int)FLT_ERR_INVALID_ARGUMENT, message);
+}
+
+/* An integer argument in [min, max] (signed types) or [0, umax] (unsigned),
+ * as the bits of an unsigned long long; 0 with an exception set if not. */
+static int flt_py_integer(PyObject *obj, const char *function, const char *name, int is_signed,
+                          long long min, unsigned long long umax, unsigned long long *bits) {
+    PyObject *index;
+    long long v;
+    unsigned long long u = 0;
+    int overflow = 0, ok;
+    char range[96];
+    index = PyNumber_Index(obj);
+    if (index == NULL) {
+        if (PyErr_ExceptionMatches(PyExc_TypeError)) {
+            PyErr_Clear();
+            PyErr_Format(PyExc_TypeError, "%s() argument '%s' must be an integer, not %.100s",
+                         function, name, Py_TYPE(obj)->tp_name);
+        }
+        return 0;
+    }
+    v = PyLong_AsLongLongAndOverflow(index, &overflow);
+    if (v == -1 && PyErr_Occurred()) {
+        Py_DECREF(index);
+        return 0;
+    }
+    if (overflow > 0) { /* above LLONG_MAX: an unsigned long long at most */
+        u = PyLong_AsUnsignedLongLong(index);
+        if (PyErr_Occurred()) {
+            PyErr_Clear();
+            ok = 0;
+        } else {
+            ok = !is_signed && u <= umax;
+        }
+    } else if (overflow < 0) {
+        ok = 0;
+    } else if (v < 0) {
+        ok = is_signed && v >= min;
+        u = (unsigned long long)v;
+    } else {
+        ok = (unsigned long long)v <= umax;
+        u = (unsigned long long)v;
+    }
+    if (!ok) {
+        if (is_signed)
+            PyOS_snprintf(range, sizeof range, "[%lld, %llu]", min, umax);
+        else
+            PyOS_snprintf(range, sizeof range, "[0, %llu]", umax);
+        flt_py_out_of_range(function, name, index, range);
+        Py_DECREF(index);
+        return 0;
+    }
+    Py_DECREF(index);
+    *bits = u;
+    return 1;
+}
+
+/* A double argument; 0 with an exception set if not. */
+static int flt_py_double(PyObject *obj, const char *function, const char *name, double *out) {
+    double v = PyFloat_AsDouble(obj); /* float, int, __float__, __index__ */
+    if (v == -1.0 && PyErr_Occurred()) {
+        if (PyErr_ExceptionMatches(PyExc_OverflowError)) { /* an int like 10**400 */
+            PyErr_Clear();
+            flt_py_out_of_range(function, name, obj, "the range of a double");
+        } else if (PyErr_ExceptionMatches(PyExc_TypeError)) {
+            PyErr_Clear();
+            PyErr_Format(PyExc_TypeError, "%s() argument '%s' must be a real number, not %.100s",
+                         function, name, Py_TYPE(obj)->tp_name);
+        }
+        return 0;
+    }
+    *out = v;
+    return 1;
+}
+%}
+
+%define FLT_PY_UNSIGNED(TYPE, UMAX)
+%typemap(in) TYPE {
+  unsigned long long flt_bits = 0;
+  if (!flt_py_integer($input, "$symname", "$1_name", 0, 0, UMAX, &flt_bits)) SWIG_fail;
+  $1 = ($1_ltype)flt_bits;
+}
+%enddef
+%define FLT_PY_SIGNED(TYPE, MIN, MAX)
+%typemap(in) TYPE {
+  unsigned long long flt_bits = 0;
+  if (!flt_py_integer($input, "$symname", "$1_name", 1, MIN, MAX, &flt_bits)) SWIG_fail;
+  $1 = ($1_ltype)(long long)flt_bits;
+}
+%enddef
+FLT_PY_UNSIGNED(size_t, SIZE_MAX)
+FLT_PY_UNSIGNED(unsigned int, UINT_MAX)
+FLT_PY_UNSIGNED(uint32_t, UINT32_MAX)
+FLT_PY_UNSIGNED(unsigned long long, ULLONG_MAX)
+FLT_PY_UNSIGNED(uint64_t, UINT64_MAX)
+FLT_PY_SIGNED(int, INT_MIN, INT_MAX)
+FLT_PY_SIGNED(long long, LLONG_MIN, LLONG_MAX)
+FLT_PY_SIGNED(int64_t, INT64_MIN, INT64_MAX)
+/* Enums are int-sized (common.h): any int is passed on, and the library
+ * refuses the ones it does not know with a message. */
+FLT_PY_SIGNED(enum SWIGTYPE, INT_MIN, INT_MAX)
+
+%typemap(in) double {
+  if (!flt_py_double($input, "$symname", "$1_name", &$1)) SWIG_fail;
+}
+
 /* The one error path for every flt_status-returning call. A helper that has
  * already set a Python exception (e.g. a shape check) returns a failure
  * status too; its exception is kept. */

@@ -136,6 +136,38 @@ def test_too_many_fibers_is_refused_naming_the_limit():
         flatline.Reconstructor(2**31, row_capacity=16)
 
 
+def test_integers_out_of_range_are_value_errors_not_overflow_errors():
+    # SWIG's conversions raised OverflowError for an int outside the C type
+    # (flatline.Reconstructor(2**64)); every out-of-range value is a
+    # ValueError (InvalidArgumentError from the binding's typemaps), naming
+    # the function, the argument and the value.
+    with pytest.raises(flatline.InvalidArgumentError,
+                       match=r"flt_recon_create: argument 'fibers' = 18446744073709551616 is outside"):
+        flatline.Reconstructor(2**64)
+    cases = [
+        lambda: capi.flt_recon_create(-1, None),             # size_t, negative
+        lambda: capi.flt_recon_create(2**64 + 5, None),      # size_t, too large
+        lambda: capi.flt_option_info(2**31),                 # an enum (int-sized)
+        lambda: capi.flt_options_set(capi.flt_options_create(), -2**40, 1.0),
+        lambda: capi.flt_calib_create_reference(2**32, 2, -1000.0, 2.0, 11),  # uint32_t
+        lambda: capi.flt_calib_get_laser_offset(flatline.Calibration.reference()._live(), 2**33),
+        lambda: capi.flt_options_set(capi.flt_options_create(), 100, 10**400),  # a double
+    ]
+    for case in cases:
+        with pytest.raises(ValueError) as info:
+            case()
+        assert isinstance(info.value, flatline.InvalidArgumentError), info.value
+        assert "is outside" in str(info.value)
+    # The Python layer's own conversions: options and real arguments.
+    with pytest.raises(flatline.InvalidArgumentError, match="'row_capacity' = 1000000"):
+        flatline.Reconstructor(3, row_capacity=10**400)
+    with pytest.raises(ValueError, match="'pitch_mm' = 1000000.*range of a double"):
+        flatline.Calibration.reference(pitch_mm=10**400)
+    # Not an integer at all is still a TypeError.
+    with pytest.raises(TypeError, match="must be an integer, not float"):
+        capi.flt_recon_create(1.5, None)
+
+
 def test_unknown_keyword_is_a_type_error_naming_it():
     with pytest.raises(TypeError, match="unexpected keyword argument 'knot_spcing'"):
         flatline.reconstruct([0.0, 3.0], np.zeros((2, 1)), np.zeros((2, 1)), knot_spcing=50)
