@@ -202,6 +202,32 @@ int main(int argc, char **argv) {
     put("extractor", "mono12_window9", ex2, sizeof ex2);
     const uint8_t ex3[] = {0, 0, 5, 0, 0};
     put("extractor", "mono16_nan_encoder", ex3, sizeof ex3);
+    /* chain: an 8-byte header (stages, extractor options, the synthetic
+     * lines' rows, encoder) and a calibration: the reference's rows 900..1139
+     * with the lines near rows 96 and 144 of the window, rendered by the
+     * simulator or drawn synthetic; fixed bands; 12-bit words with junk;
+     * and the finest, widest fiber grid the ranges allow. */
+    static uint8_t chain[8 + sizeof text];
+    const struct {
+        const char *name;
+        uint8_t header[8];
+        double first_x, pitch;
+        size_t fibers;
+    } chains[] = {
+        {"roi_sim_mono8", {1, 2, 102, 153, 0, 0, 0, 0}, -1000, 2, 1001},
+        {"roi_synthetic_fixed_bands", {0, 2 | 4 | (3 << 3), 102, 153, 0, 0, 0, 0}, -500, 10, 101},
+        {"roi_sim_mono12_junk", {1 | 2, 1, 102, 153, 100, 0, 0, 0}, -1000, 2, 1001},
+        {"roi_finest_grid", {0 | 4, 3, 102, 153, 0, 0, 0, 0}, -100000, 1e-3, 16384},
+    };
+    for (size_t i = 0; i < sizeof chains / sizeof chains[0]; ++i) {
+        check(flt_calib_create_reference(900, 240, chains[i].first_x, chains[i].pitch,
+                                         chains[i].fibers, &c));
+        check(flt_calib_save_text(c, text, sizeof text, &n));
+        memcpy(chain, chains[i].header, 8);
+        memcpy(chain + 8, text, n);
+        put("chain", chains[i].name, chain, 8 + n);
+        flt_calib_destroy(c);
+    }
     printf("seeds written to %s\n", g_root);
     return 0;
 }
