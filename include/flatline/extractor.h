@@ -103,20 +103,38 @@ typedef struct flt_extractor flt_extractor;
  *            extract_max_width); copied, not kept.
  * FLT_ERR_INVALID_ARGUMENT for a band outside the frame, an even or too
  * small Savitzky-Golay window (it must be >= order + 2), or a band shorter
- * than the window. */
+ * than the window.
+ * @param calib   a finished calibration (see above).
+ * @param options NULL, or the extract_* keys (see above).
+ * @param out     receives the handle; NULL on failure.
+ * @return FLT_OK; FLT_ERR_STATE for an unfinished calibration;
+ *         FLT_ERR_INVALID_ARGUMENT as above; FLT_ERR_OUT_OF_MEMORY.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_extractor_create(const flt_calib *calib,
                                                                const flt_options *options,
                                                                flt_extractor **out);
 
-/** Frees everything. NULL is a no-op. */
+/** Frees everything. NULL is a no-op.
+ * @param extractor the extractor, or NULL.
+ */
 FLT_API void FLT_CALL flt_extractor_destroy(flt_extractor *extractor);
 
-/** The number of fibers of a profile row (the calibration's fiber count). */
+/** The number of fibers of a profile row (the calibration's fiber count).
+ * @param extractor the extractor.
+ * @param out receives the fiber count.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_extractor_fibers(const flt_extractor *extractor,
                                                                size_t *out);
 
 /** Laser `laser`'s band of rows: first row and row count (px). FLT_ERR_STATE
- * while an automatic band waits for its first frame. */
+ * while an automatic band waits for its first frame.
+ * @param extractor the extractor.
+ * @param laser         0 or 1.
+ * @param first_row_out receives the band's first row, px.
+ * @param rows_out      receives its row count.
+ * @return FLT_OK; FLT_ERR_STATE as above; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_extractor_band(const flt_extractor *extractor,
                                                              unsigned laser,
                                                              uint32_t *first_row_out,
@@ -132,7 +150,21 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_extractor_band(const flt_extractor
  *   slope_out      [fibers] mm/mm, NaN where invalid.
  *   valid_out      [fibers] 1 where valid, else 0 (may be NULL).
  * A wrong size, format or stride fails with FLT_ERR_INVALID_ARGUMENT naming
- * the argument; the extractor stays usable. Allocates nothing. */
+ * the argument; the extractor stays usable. Allocates nothing.
+ * @param extractor the extractor.
+ * @param frame        the pixels (see above).
+ * @param format       their pixel format.
+ * @param width        frame width, px (the calibration's).
+ * @param height       frame height, px (the calibration's).
+ * @param stride_bytes bytes from one row to the next.
+ * @param encoder_mm   the frame's encoder position, mm.
+ * @param fibers       flt_extractor_fibers().
+ * @param s_out        the row's position, mm, or NULL.
+ * @param height_out   [fibers] heights, mm.
+ * @param slope_out    [fibers] slopes, mm/mm.
+ * @param valid_out    [fibers] validity, or NULL.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument (the message names it).
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_extractor_process(
     flt_extractor *extractor, const void *frame, flt_pixel_format format, uint32_t width,
     uint32_t height, size_t stride_bytes, double encoder_mm, size_t fibers, double *s_out,
@@ -141,13 +173,24 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_extractor_process(
 /** Diagnostics of the last processed frame: the sub-pixel peak row of every
  * column, rows_out[laser * width + u] (px, raw image rows), NaN where the
  * column has no valid peak. `width` must equal the frame width.
- * FLT_ERR_STATE before the first successful process(). */
+ * FLT_ERR_STATE before the first successful process().
+ * @param extractor the extractor.
+ * @param width    the frame width, px.
+ * @param rows_out [2 * width] peak rows, px.
+ * @return FLT_OK; FLT_ERR_STATE as above; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_extractor_peaks(const flt_extractor *extractor,
                                                               size_t width, double *rows_out);
 
 /** Diagnostics of the last processed frame: each laser's z on the fiber grid,
  * z_out[laser * fibers + k] (mm), NaN where invalid. The material position
- * of laser L's reading is s = encoder_mm - offset_L. */
+ * of laser L's reading is s = encoder_mm - offset_L.
+ * @param extractor the extractor.
+ * @param fibers the fiber count.
+ * @param z_out  [2 * fibers] heights, mm.
+ * @return FLT_OK; FLT_ERR_STATE before the first successful process();
+ *         FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL
 flt_extractor_laser_profiles(const flt_extractor *extractor, size_t fibers, double *z_out);
 

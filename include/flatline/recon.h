@@ -169,7 +169,12 @@ typedef struct flt_recon flt_recon;
  * Fails with FLT_ERR_INVALID_ARGUMENT if fibers is 0 or too many, the
  * options are inconsistent or set a key of another component (common.h),
  * or the buffers would pass FLT_RECON_MAX_BYTES; FLT_ERR_OUT_OF_MEMORY if
- * they do not fit in memory. */
+ * they do not fit in memory.
+ * @param fibers  the number of fibers (>= 1).
+ * @param options NULL, or the bag described above.
+ * @param out     receives the handle; NULL on failure.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT or FLT_ERR_OUT_OF_MEMORY as above.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_create(size_t fibers,
                                                            const flt_options *options,
                                                            flt_recon **out);
@@ -205,15 +210,27 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_create_from_calib(const flt_
                                                                       const flt_options *options,
                                                                       flt_recon **out);
 
-/** Frees everything. NULL is a no-op. */
+/** Frees everything. NULL is a no-op.
+ * @param recon the reconstructor, or NULL.
+ */
 FLT_API void FLT_CALL flt_recon_destroy(flt_recon *recon);
 
-/** The number of fibers the handle was created with. */
+/** The number of fibers the handle was created with.
+ * @param recon the reconstructor.
+ * @param out receives the fiber count.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_fibers(const flt_recon *recon, size_t *out);
 
 /** The effective value of an option (knot_spacing resolved to mm).
  * FLT_ERR_NOT_FOUND for an unknown key, FLT_ERR_INVALID_ARGUMENT for a key
- * of another component. */
+ * of another component.
+ * @param recon the reconstructor.
+ * @param key an option key.
+ * @param out receives its effective value.
+ * @return FLT_OK; FLT_ERR_NOT_FOUND for an unknown key; FLT_ERR_INVALID_ARGUMENT for a NULL or
+ * wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_get_option(const flt_recon *recon,
                                                                flt_option key, double *out);
 
@@ -230,7 +247,17 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_get_option(const flt_recon *
  * `fibers` must equal the handle's. The block is checked whole before any
  * row is taken: on failure nothing was pushed. Fails with
  * FLT_ERR_BUFFER_FULL when the rows do not fit in row_capacity: pull
- * finished rows, push smaller blocks, or create with a larger capacity. */
+ * finished rows, push smaller blocks, or create with a larger capacity.
+ * @param recon the reconstructor.
+ * @param rows   rows in the block (>= 1).
+ * @param fibers the handle's fiber count.
+ * @param s      [rows] positions, mm.
+ * @param height [rows * fibers] heights, mm.
+ * @param slope  [rows * fibers] slopes, mm/mm.
+ * @param valid  [rows * fibers] validity, or NULL.
+ * @return FLT_OK; FLT_ERR_BUFFER_FULL as above; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong
+ * argument (the message names it); nothing was pushed on failure.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_push(flt_recon *recon, size_t rows,
                                                          size_t fibers, const double *s,
                                                          const double *height, const double *slope,
@@ -242,27 +269,54 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_push(flt_recon *recon, size_
  *                                 FLT_FLAG_NO_DATA is set).
  *   flags_out [max_rows * fibers] FLT_FLAG_* bits, or NULL if unwanted.
  *   rows_out  the number of rows written (0 when none is finished yet).
- * FLT_ERR_STATE if nothing was pushed since create or reset. */
+ * FLT_ERR_STATE if nothing was pushed since create or reset.
+ * @param recon the reconstructor.
+ * @param max_rows  rows the outputs can hold.
+ * @param fibers    the handle's fiber count.
+ * @param s_out     [max_rows] positions, mm.
+ * @param z_out     [max_rows * fibers] heights, mm.
+ * @param flags_out [max_rows * fibers] flags, or NULL.
+ * @param rows_out  receives the number of rows written.
+ * @return FLT_OK (also when no row is finished); FLT_ERR_STATE as above;
+ *         FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_pull(flt_recon *recon, size_t max_rows,
                                                          size_t fibers, double *s_out,
                                                          double *z_out, uint8_t *flags_out,
                                                          size_t *rows_out);
 
-/** The number of finished rows waiting to be pulled. */
+/** The number of finished rows waiting to be pulled.
+ * @param recon the reconstructor.
+ * @param out receives the number of finished rows.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_ready(const flt_recon *recon, size_t *out);
 
 /** Finishes the current sheet: every pushed row becomes ready to pull, solved
  * with all data so far, and the last emitted knot becomes the hard boundary
  * condition of the next sheet (carry-over). FLT_ERR_STATE if no row was
- * pushed since the last end_sheet, create or reset. */
+ * pushed since the last end_sheet, create or reset.
+ * @param recon the reconstructor.
+ * @return FLT_OK; FLT_ERR_STATE as above; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_end_sheet(flt_recon *recon);
 
-/** Starts a new strip: drops every row not pulled yet and the carry-over. */
+/** Starts a new strip: drops every row not pulled yet and the carry-over.
+ * @param recon the reconstructor.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_reset(flt_recon *recon);
 
 /** The boundary condition carried into the next sheet: the knot position
  * (mm), and per fiber its height (mm) and slope (mm/mm). Any output may be
- * NULL. FLT_ERR_STATE before the first end_sheet of a strip. */
+ * NULL. FLT_ERR_STATE before the first end_sheet of a strip.
+ * @param recon the reconstructor.
+ * @param fibers     the handle's fiber count.
+ * @param s_out      receives the knot position, mm, or NULL.
+ * @param height_out [fibers] heights, mm, or NULL.
+ * @param slope_out  [fibers] slopes, mm/mm, or NULL.
+ * @return FLT_OK; FLT_ERR_STATE as above; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_boundary(const flt_recon *recon, size_t fibers,
                                                              double *s_out, double *height_out,
                                                              double *slope_out);
@@ -273,7 +327,18 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_boundary(const flt_recon *re
  * flt_recon_pull. Allocates its working memory for the duration of the call
  * (about 20 doubles per fiber and knot at the default knot spacing, up to
  * about 80 at the finest; at most FLT_RECON_MAX_BYTES, else
- * FLT_ERR_INVALID_ARGUMENT); reentrant. */
+ * FLT_ERR_INVALID_ARGUMENT); reentrant.
+ * @param options   NULL, or the reconstructor's options.
+ * @param rows      rows of the sheet (>= 1).
+ * @param fibers    fibers (>= 1).
+ * @param s         [rows] positions, mm, strictly increasing.
+ * @param height    [rows * fibers] heights, mm.
+ * @param slope     [rows * fibers] slopes, mm/mm.
+ * @param valid     [rows * fibers] validity, or NULL.
+ * @param z_out     [rows * fibers] reconstructed heights, mm.
+ * @param flags_out [rows * fibers] flags, or NULL.
+ * @return FLT_OK; FLT_ERR_OUT_OF_MEMORY; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_reconstruct(const flt_options *options, size_t rows,
                                                           size_t fibers, const double *s,
                                                           const double *height, const double *slope,
