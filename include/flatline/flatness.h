@@ -183,7 +183,10 @@ enum {
 };
 
 /** A lower-case English name of a shape, e.g. "centre buckle". Never NULL;
- * "unknown" for a value outside the enum. Static storage. */
+ * "unknown" for a value outside the enum. Static storage.
+ * @param shape a shape class.
+ * @return its name (static storage).
+ */
 FLT_API const char *FLT_CALL flt_shape_string(flt_shape shape);
 
 /** Values of the option "flat_reference" (FLT_OPT_FLAT_REFERENCE): the
@@ -222,30 +225,59 @@ typedef struct flt_flatness flt_flatness;
  * bad positions, inconsistent options (flat_update_interval >
  * flat_window_length), more than FLT_FLATNESS_MAX_ZONES zones
  * (flat_zone_width too narrow for the grid's width) or buffers beyond
- * FLT_FLATNESS_MAX_BYTES. */
+ * FLT_FLATNESS_MAX_BYTES.
+ * @param fibers  the number of fibers (>= 1).
+ * @param fiber_x [fibers] fiber positions across the strip, mm.
+ * @param options NULL, or the flat_* keys.
+ * @param out     receives the handle; NULL on failure.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT as above; FLT_ERR_OUT_OF_MEMORY.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_create(size_t fibers, const double *fiber_x,
                                                               const flt_options *options,
                                                               flt_flatness **out);
 
 /** The same with the fiber grid of a calibration (flt_calib_get_fiber_grid);
- * calib is only read during the call. */
+ * calib is only read during the call.
+ * @param calib   a finished calibration.
+ * @param options NULL, or the flat_* keys.
+ * @param out     receives the handle; NULL on failure.
+ * @return as flt_flatness_create(); FLT_ERR_INVALID_ARGUMENT also for a
+ *         calibration without a fiber grid.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_create_from_calib(const flt_calib *calib,
                                                                          const flt_options *options,
                                                                          flt_flatness **out);
 
-/** Frees everything. NULL is a no-op. */
+/** Frees everything. NULL is a no-op.
+ * @param flatness the handle, or NULL.
+ */
 FLT_API void FLT_CALL flt_flatness_destroy(flt_flatness *flatness);
 
-/** The fiber and zone counts. */
+/** The fiber and zone counts.
+ * @param flatness the flatness handle.
+ * @param out receives the fiber count.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_fibers(const flt_flatness *flatness,
                                                               size_t *out);
-/** The zone count (flat_zones). */
+/** The zone count (flat_zones).
+ * @param flatness the flatness handle.
+ * @param out receives the zone count.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_zones(const flt_flatness *flatness,
                                                              size_t *out);
 
 /** The zone layout: zone j covers [left_x[j], left_x[j] + zone width) mm,
  * centre_x[j] its middle, fiber_count[j] the fibers in it. `zones` must
- * equal flt_flatness_zones(). Any output may be NULL. */
+ * equal flt_flatness_zones(). Any output may be NULL.
+ * @param flatness the flatness handle.
+ * @param zones           flt_flatness_zones().
+ * @param left_x_out      [zones] left edges, mm, or NULL.
+ * @param centre_x_out    [zones] centres, mm, or NULL.
+ * @param fiber_count_out [zones] fibers per zone, or NULL.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_zone_layout(const flt_flatness *flatness,
                                                                    size_t zones, double *left_x_out,
                                                                    double *centre_x_out,
@@ -260,7 +292,15 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_zone_layout(const flt_fla
  * `fibers` must equal the handle's. Independent of the streaming state.
  * Fails with FLT_ERR_INVALID_ARGUMENT, keeping the previous results, for
  * NULL arrays, rows < 2, non-increasing s, a window shorter than
- * flat_min_length, or no fiber with flat_min_coverage of usable data. */
+ * flat_min_length, or no fiber with flat_min_coverage of usable data.
+ * @param flatness the flatness handle.
+ * @param rows   rows of the window (>= 2).
+ * @param fibers the handle's fiber count.
+ * @param s      [rows] positions, mm.
+ * @param z      [rows * fibers] heights, mm.
+ * @param flags  [rows * fibers] reconstructor flags, or NULL.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT as above.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_evaluate(flt_flatness *flatness, size_t rows,
                                                                 size_t fibers, const double *s,
                                                                 const double *z,
@@ -274,7 +314,18 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_evaluate(flt_flatness *fl
  * more than flat_row_capacity rows (create with a larger capacity); the
  * rows taken before are kept and counted in *consumed_out. Any other failure
  * takes no row. flat_window_length = 0 means no automatic windows: only
- * finish() evaluates, and a sheet must fit in flat_row_capacity rows. */
+ * finish() evaluates, and a sheet must fit in flat_row_capacity rows.
+ * @param flatness the flatness handle.
+ * @param rows          rows in the block.
+ * @param fibers        the handle's fiber count.
+ * @param s             [rows] positions, mm.
+ * @param z             [rows * fibers] heights, mm.
+ * @param flags         [rows * fibers] reconstructor flags, or NULL.
+ * @param consumed_out  receives the rows taken.
+ * @param evaluated_out receives 1 when a window was evaluated, else 0.
+ * @return FLT_OK; FLT_ERR_BUFFER_FULL as above; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong
+ * argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_push(flt_flatness *flatness, size_t rows,
                                                             size_t fibers, const double *s,
                                                             const double *z, const uint8_t *flags,
@@ -284,17 +335,33 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_push(flt_flatness *flatne
 /** Ends the current sheet: evaluates the rows since the current window's
  * start as one window (*evaluated_out = 1; flagged FLT_WINDOW_SHORT if
  * shorter than flat_min_length), or does nothing (*evaluated_out = 0) when
- * fewer than 2 rows are pending. The next row pushed starts a new grid. */
+ * fewer than 2 rows are pending. The next row pushed starts a new grid.
+ * @param flatness the flatness handle.
+ * @param evaluated_out receives 1 when a window was evaluated, else 0.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_finish(flt_flatness *flatness,
                                                               int *evaluated_out);
 
-/** Drops the pending rows and restarts the window grid; results stay. */
+/** Drops the pending rows and restarts the window grid; results stay.
+ * @param flatness the flatness handle.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_reset(flt_flatness *flatness);
 
 /** The last evaluated window: its first and last row's s (mm), its row
  * count, FLT_WINDOW_* flags and its sequence number (1 for the first window
  * since create). Any output may be NULL. FLT_ERR_STATE before the first
- * window. */
+ * window.
+ * @param flatness the flatness handle.
+ * @param s_first_out      first row's s, mm, or NULL.
+ * @param s_last_out       last row's s, mm, or NULL.
+ * @param rows_out         its row count, or NULL.
+ * @param window_flags_out its FLT_WINDOW_* bits, or NULL.
+ * @param index_out        its sequence number, or NULL.
+ * @return FLT_OK; FLT_ERR_STATE before the first window; FLT_ERR_INVALID_ARGUMENT for a NULL or
+ * wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_window(const flt_flatness *flatness,
                                                               double *s_first_out,
                                                               double *s_last_out, size_t *rows_out,
@@ -303,14 +370,32 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_window(const flt_flatness
 
 /** Per-fiber results of the last window, [fibers] each (mm, I-Units, mm, mm,
  * %, FLT_FIBER_* bits). Any output may be NULL. FLT_ERR_STATE before the
- * first window. */
+ * first window.
+ * @param flatness the flatness handle.
+ * @param fibers the fiber count.
+ * @param arc_length_out        [fibers] arc lengths, mm, or NULL.
+ * @param i_units_out           [fibers] I-Units, or NULL.
+ * @param wave_height_out       [fibers] largest wave heights, mm, or NULL.
+ * @param wave_period_out       [fibers] their periods, mm, or NULL.
+ * @param steepness_percent_out [fibers] their steepness, %, or NULL.
+ * @param flags_out             [fibers] FLT_FIBER_* bits, or NULL.
+ * @return FLT_OK; FLT_ERR_STATE before the first window; FLT_ERR_INVALID_ARGUMENT for a NULL or
+ * wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL
 flt_flatness_fiber_results(const flt_flatness *flatness, size_t fibers, double *arc_length_out,
                            double *i_units_out, double *wave_height_out, double *wave_period_out,
                            double *steepness_percent_out, uint8_t *flags_out);
 
 /** The zone profile of the last window, [zones] I-Units and FLT_ZONE_* bits.
- * Either output may be NULL. FLT_ERR_STATE before the first window. */
+ * Either output may be NULL. FLT_ERR_STATE before the first window.
+ * @param flatness the flatness handle.
+ * @param zones       the zone count.
+ * @param i_units_out [zones] I-Units, or NULL.
+ * @param flags_out   [zones] FLT_ZONE_* bits, or NULL.
+ * @return FLT_OK; FLT_ERR_STATE before the first window; FLT_ERR_INVALID_ARGUMENT for a NULL or
+ * wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_zone_results(const flt_flatness *flatness,
                                                                     size_t zones,
                                                                     double *i_units_out,
@@ -319,7 +404,16 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_zone_results(const flt_fl
 /** The shape of the last window: class, confidence in [0, 1],
  * FLT_SHAPE_HAS_* bits, bow and crossbow sagittas (mm; NaN only with
  * FLT_WINDOW_NO_BOW / FLT_WINDOW_NO_CROSSBOW). Any output may be NULL. FLT_ERR_STATE before
- * the first window. */
+ * the first window.
+ * @param flatness the flatness handle.
+ * @param shape_out      the shape class, or NULL.
+ * @param confidence_out its confidence, or NULL.
+ * @param components_out FLT_SHAPE_HAS_* bits, or NULL.
+ * @param bow_mm_out     bow sagitta, mm, or NULL.
+ * @param crossbow_mm_out crossbow sagitta, mm, or NULL.
+ * @return FLT_OK; FLT_ERR_STATE before the first window; FLT_ERR_INVALID_ARGUMENT for a NULL or
+ * wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL
 flt_flatness_shape(const flt_flatness *flatness, flt_shape *shape_out, double *confidence_out,
                    unsigned *components_out, double *bow_mm_out, double *crossbow_mm_out);
