@@ -98,11 +98,19 @@ typedef struct flt_sim flt_sim;
  * so it may be destroyed right after), or of the reference sensor when calib
  * is NULL (flt_calib_create_reference(0, 2048, -1000, 2, 1001)).
  * options: NULL for the defaults, else read for the sim_* keys. The sheet
- * starts flat. Allocates the frame scratch (4 bytes per pixel) here. */
+ * starts flat. Allocates the frame scratch (4 bytes per pixel) here.
+ * @param calib   a finished calibration, or NULL for the reference sensor.
+ * @param options NULL, or the sim_* keys.
+ * @param out     receives the handle; NULL on failure.
+ * @return FLT_OK; FLT_ERR_STATE for an unfinished calibration;
+ *         FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument; FLT_ERR_OUT_OF_MEMORY.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_create(const flt_calib *calib,
                                                          const flt_options *options, flt_sim **out);
 
-/** Frees everything. NULL is a no-op. */
+/** Frees everything. NULL is a no-op.
+ * @param sim the simulator, or NULL.
+ */
 FLT_API void FLT_CALL flt_sim_destroy(flt_sim *sim);
 
 /** The largest |height| a defect or a height map may give, mm (10 m, far
@@ -115,37 +123,77 @@ FLT_API void FLT_CALL flt_sim_destroy(flt_sim *sim);
 
 /** Adds a defect (see flt_sim_defect): |amplitude_mm| <=
  * FLT_SIM_MAX_HEIGHT_MM, period_mm 0 or in [FLT_SIM_MIN_PERIOD_MM, 1e12].
- * At most 64 defects. */
+ * At most 64 defects.
+ * @param sim the simulator.
+ * @param kind         the defect.
+ * @param amplitude_mm its amplitude, mm.
+ * @param period_mm    its period along travel, mm (0: constant).
+ * @return FLT_OK; FLT_ERR_BUFFER_FULL for a 65th defect; FLT_ERR_INVALID_ARGUMENT for a NULL or
+ * wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_add_defect(flt_sim *sim, flt_sim_defect kind,
                                                              double amplitude_mm, double period_mm);
 
-/** Removes every defect and the height map: the sheet is flat again. */
+/** Removes every defect and the height map: the sheet is flat again.
+ * @param sim the simulator.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_clear_sheet(flt_sim *sim);
 
 /** Adds a user height map to the sheet (replacing a previous map):
  * heights [rows * cols] mm, row-major, row r at s = s0_mm + r * ds_mm, column
  * c at x = x0_mm + c * dx_mm (rows, cols >= 2; ds, dx > 0; all finite;
  * |heights| <= FLT_SIM_MAX_HEIGHT_MM).
- * Interpolated bilinearly; clamped to the edge values outside. Copied. */
+ * Interpolated bilinearly; clamped to the edge values outside. Copied.
+ * @param sim the simulator.
+ * @param rows    rows of the map (>= 2).
+ * @param cols    columns (>= 2).
+ * @param s0_mm   s of row 0, mm.
+ * @param ds_mm   row spacing, mm.
+ * @param x0_mm   x of column 0, mm.
+ * @param dx_mm   column spacing, mm.
+ * @param heights [rows * cols] heights, mm.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_set_height_map(flt_sim *sim, size_t rows,
                                                                  size_t cols, double s0_mm,
                                                                  double ds_mm, double x0_mm,
                                                                  double dx_mm,
                                                                  const double *heights);
 
-/** The ground truth z_sheet at count points (x[i], s[i]) (mm) into z_out. */
+/** The ground truth z_sheet at count points (x[i], s[i]) (mm) into z_out.
+ * @param sim the simulator.
+ * @param count the number of points.
+ * @param x     [count] x, mm.
+ * @param s     [count] s, mm.
+ * @param z_out [count] receives z_sheet, mm.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_surface(const flt_sim *sim, size_t count,
                                                           const double *x, const double *s,
                                                           double *z_out);
 
-/** The fiber count (the calibration's grid) and the frame size, px. */
+/** The fiber count (the calibration's grid) and the frame size, px.
+ * @param sim the simulator.
+ * @param out receives the fiber count.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_fibers(const flt_sim *sim, size_t *out);
-/** The frame size of flt_sim_next_frame(), px. */
+/** The frame size of flt_sim_next_frame(), px.
+ * @param sim the simulator.
+ * @param width_out  receives the width, px.
+ * @param height_out receives the height, px.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_frame_size(const flt_sim *sim,
                                                              uint32_t *width_out,
                                                              uint32_t *height_out);
 /** The pixel format of flt_sim_next_frame (from sim_bit_depth) and the bytes
- * one frame needs at a given stride. */
+ * one frame needs at a given stride.
+ * @param sim the simulator.
+ * @param out receives the pixel format.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_pixel_format(const flt_sim *sim,
                                                                flt_pixel_format *out);
 
@@ -156,7 +204,18 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_pixel_format(const flt_sim *si
  *   height_out, slope_out  [rows * fibers] mm and mm/mm.
  *   valid_out       [rows * fibers] all 1 (may be NULL).
  *   truth_out       [rows * fibers] z_sheet(x_k, s_row), mm (may be NULL).
- * Allocates nothing. */
+ * Allocates nothing.
+ * @param sim the simulator.
+ * @param rows           the number of rows.
+ * @param fibers         flt_sim_fibers().
+ * @param encoder_mm_out [rows] encoder positions, or NULL.
+ * @param s_out          [rows] positions, mm.
+ * @param height_out     [rows * fibers] heights, mm.
+ * @param slope_out      [rows * fibers] slopes, mm/mm.
+ * @param valid_out      [rows * fibers] validity, or NULL.
+ * @param truth_out      [rows * fibers] ground truth, mm, or NULL.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_next_rows(flt_sim *sim, size_t rows,
                                                             size_t fibers, double *encoder_mm_out,
                                                             double *s_out, double *height_out,
@@ -178,7 +237,10 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL
 flt_sim_next_frame(flt_sim *sim, void *frame_out, size_t capacity_bytes, size_t stride_bytes,
                    double *encoder_mm_out, size_t fibers, double *truth_out, double *peak_rows_out);
 
-/** Back to frame 0: the following output repeats the first bytes exactly. */
+/** Back to frame 0: the following output repeats the first bytes exactly.
+ * @param sim the simulator.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_rewind(flt_sim *sim);
 
 /** The reference sensor (docs/sensor.md) as a finished calibration,
@@ -196,7 +258,15 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_rewind(flt_sim *sim);
  *                    sensor. The principal point moves with the ROI.
  *   first_x_mm, pitch_mm, fibers  the fiber grid (pitch > 0, fibers >= 1).
  * Declared here because the simulator is its user; it builds on the public
- * calibration API only. */
+ * calibration API only.
+ * @param first_row  the first row read out.
+ * @param rows       the rows read out.
+ * @param first_x_mm x of fiber 0, mm.
+ * @param pitch_mm   fiber pitch, mm.
+ * @param fibers     the fiber count.
+ * @param out        receives the finished calibration.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_create_reference(uint32_t first_row,
                                                                      uint32_t rows,
                                                                      double first_x_mm,
