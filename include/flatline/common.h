@@ -126,25 +126,36 @@ typedef enum flt_status {
 } flt_status;
 
 /** The enumerator name of a status, e.g. "FLT_ERR_INVALID_ARGUMENT".
- * Never NULL; an unknown code gives "FLT_ERR_UNKNOWN". Static storage. */
+ * Never NULL; an unknown code gives "FLT_ERR_UNKNOWN". Static storage.
+ * @param status a status code.
+ * @return its enumerator name (static storage).
+ */
 FLT_API const char *FLT_CALL flt_status_string(flt_status status);
 
 /** The message of the last failed call on this thread, naming the offending
  * argument and its value. Never NULL: "" when the last call succeeded.
  * Each public call clears it on entry. The pointer stays valid until the next
- * libflatline call on this thread. */
+ * libflatline call on this thread.
+ * @return the message (thread-local; see above).
+ */
 FLT_API const char *FLT_CALL flt_last_error_message(void);
 
-/** The status of the last call on this thread (FLT_OK after a success). */
+/** The status of the last call on this thread (FLT_OK after a success).
+ * @return the status of the last call on this thread.
+ */
 FLT_API flt_status FLT_CALL flt_last_error_status(void);
 
 /* ---------------------------------------------------------------------- */
 /* Version                                                                 */
 /* ---------------------------------------------------------------------- */
 
-/** The library's FLT_VERSION_NUMBER, to compare with the headers' one. */
+/** The library's FLT_VERSION_NUMBER, to compare with the headers' one.
+ * @return FLT_VERSION_NUMBER of the library.
+ */
 FLT_API int FLT_CALL flt_version(void);
-/** "MAJOR.MINOR.PATCH" of the library. Static storage, never NULL. */
+/** "MAJOR.MINOR.PATCH" of the library. Static storage, never NULL.
+ * @return the library's version string.
+ */
 FLT_API const char *FLT_CALL flt_version_string(void);
 
 /* ---------------------------------------------------------------------- */
@@ -502,25 +513,47 @@ typedef enum flt_option {
 /** An opaque bag of option values. Keys not set keep their default. */
 typedef struct flt_options flt_options;
 
-/** Allocates a bag holding every default. */
+/** Allocates a bag holding every default.
+ * @param out receives the bag; NULL on failure.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL out;
+ *         FLT_ERR_OUT_OF_MEMORY.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_options_create(flt_options **out);
 /** Frees a bag; NULL is a no-op. Handles created from it keep their own copy
- * of the values, so the bag may be freed right after use. */
+ * of the values, so the bag may be freed right after use.
+ * @param options the bag, or NULL.
+ */
 FLT_API void FLT_CALL flt_options_destroy(flt_options *options);
 /** Sets one value and marks the key as set (see the component rule above).
  * Fails, leaving the bag unchanged, with FLT_ERR_NOT_FOUND for an unknown
  * key (as flt_options_get and flt_option_info do), and with
  * FLT_ERR_INVALID_ARGUMENT for a NaN, a value outside the key's bounds or
- * a fraction for an integer key. */
+ * a fraction for an integer key.
+ * @param options the bag.
+ * @param key    the option key.
+ * @param value  its new value.
+ * @return FLT_OK; FLT_ERR_NOT_FOUND or FLT_ERR_INVALID_ARGUMENT as above.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_options_set(flt_options *options, flt_option key,
                                                           double value);
 /** Reads one value (the default if never set). FLT_ERR_NOT_FOUND for an
- * unknown key. */
+ * unknown key.
+ * @param options the bag.
+ * @param key    the option key.
+ * @param out    receives its value.
+ * @return FLT_OK; FLT_ERR_NOT_FOUND as above; FLT_ERR_INVALID_ARGUMENT
+ *         for a NULL argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_options_get(const flt_options *options,
                                                           flt_option key, double *out);
 
 /** Looks a key up by its name (e.g. "knot_spacing"). FLT_ERR_NOT_FOUND if no
- * key has that name. */
+ * key has that name.
+ * @param name the key's name.
+ * @param out  receives the key.
+ * @return FLT_OK; FLT_ERR_NOT_FOUND as above; FLT_ERR_INVALID_ARGUMENT
+ *         for a NULL argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_option_find(const char *name, flt_option *out);
 
 /** Describes a key: its name (static storage), inclusive bounds, default and
@@ -548,7 +581,12 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_option_choice_at(flt_option key, s
                                                                int *value_out);
 
 /** Enumerates the keys: the index-th key for index 0, 1, ...;
- * FLT_ERR_NOT_FOUND past the last one. */
+ * FLT_ERR_NOT_FOUND past the last one.
+ * @param index 0, 1, ...
+ * @param out   receives the key.
+ * @return FLT_OK; FLT_ERR_NOT_FOUND past the last key;
+ *         FLT_ERR_INVALID_ARGUMENT for a NULL out.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_option_at(size_t index, flt_option *out);
 
 #ifdef __cplusplus
