@@ -166,17 +166,29 @@ typedef enum flt_calib_target {
 /* Life cycle                                                              */
 /* ---------------------------------------------------------------------- */
 
-/** Allocates an empty, unfinished model. *out is NULL on failure. */
+/** Allocates an empty, unfinished model. *out is NULL on failure.
+ * @param out receives the model.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL out; FLT_ERR_OUT_OF_MEMORY.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_create(flt_calib **out);
-/** Frees a model; NULL is a no-op. */
+/** Frees a model; NULL is a no-op.
+ * @param calib the model, or NULL.
+ */
 FLT_API void FLT_CALL flt_calib_destroy(flt_calib *calib);
 /** Checks that intrinsics, frame size, both homographies, both laser
  * offsets (at least FLT_CALIB_MIN_LASER_SPACING_MM apart), the encoder
  * scale and the fiber grid are set, then freezes the model. FLT_ERR_STATE
  * names the first missing part or the offsets (the model stays unfinished
- * and usable). Finishing twice is FLT_ERR_STATE. */
+ * and usable). Finishing twice is FLT_ERR_STATE.
+ * @param calib the model.
+ * @return FLT_OK; FLT_ERR_STATE as above; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_finish(flt_calib *calib);
-/** *out = 1 if finished, else 0. */
+/** *out = 1 if finished, else 0.
+ * @param calib the model.
+ * @param out receives 1 or 0.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_is_finished(const flt_calib *calib, int *out);
 
 /* ---------------------------------------------------------------------- */
@@ -184,10 +196,21 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_is_finished(const flt_calib 
 /* ---------------------------------------------------------------------- */
 
 /** Frame size in px (each 1 .. FLT_CALIB_MAX_FRAME_SIDE). Needed before
- * estimating intrinsics. */
+ * estimating intrinsics.
+ * @param calib the model.
+ * @param width  frame width, px.
+ * @param height frame height, px.
+ * @return FLT_OK; FLT_ERR_STATE on a finished model; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong
+ * argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_set_frame_size(flt_calib *calib, uint32_t width,
                                                                    uint32_t height);
-/** The frame size, px. FLT_ERR_STATE if unset. */
+/** The frame size, px. FLT_ERR_STATE if unset.
+ * @param calib the model.
+ * @param width_out  receives the width, px.
+ * @param height_out receives the height, px.
+ * @return FLT_OK; FLT_ERR_STATE as above; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_get_frame_size(const flt_calib *calib,
                                                                    uint32_t *width_out,
                                                                    uint32_t *height_out);
@@ -218,7 +241,21 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_get_intrinsics(const flt_cal
  *   view_rms_px_out  `views` doubles (may be NULL): each view's RMS
  *               reprojection error in px, NaN where the target was not found.
  * Views without a detected target are skipped; fewer than 3 usable views is
- * FLT_ERR_NUMERIC and leaves the model unchanged. */
+ * FLT_ERR_NUMERIC and leaves the model unchanged.
+ * @param calib the model.
+ * @param views the number of images.
+ * @param images [views] the images.
+ * @param stride bytes from one image row to the next.
+ * @param target the target kind.
+ * @param columns target columns.
+ * @param rows target rows.
+ * @param pitch_mm target pitch, mm.
+ * @param options NULL, or calib_rational_distortion.
+ * @param rms_px_out overall RMS error, px, or NULL.
+ * @param view_rms_px_out [views] per-view RMS errors, px, or NULL.
+ * @return FLT_OK; FLT_ERR_NUMERIC as above; FLT_ERR_STATE on a finished model
+ *         or without a frame size; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_estimate_intrinsics(
     flt_calib *calib, size_t views, const uint8_t *const *images, size_t stride,
     flt_calib_target target, uint32_t columns, uint32_t rows, double pitch_mm,
@@ -255,7 +292,21 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_get_homography(const flt_cal
  *             NULL).
  * Needs count >= 4 with no three plane points collinear in practice;
  * a degenerate set is FLT_ERR_NUMERIC and leaves the model unchanged.
- * The estimation is deterministic (RANSAC draws from calib_ransac_seed). */
+ * The estimation is deterministic (RANSAC draws from calib_ransac_seed).
+ * @param calib the model.
+ * @param laser 0 or 1.
+ * @param count the number of correspondences.
+ * @param image_px [count * 2] image points, px.
+ * @param plane_mm [count * 2] plane points, mm.
+ * @param options NULL, or the calib_ransac* keys.
+ * @param residual_px_out [count] residuals, px, or NULL.
+ * @param residual_mm_out [count] residuals, mm, or NULL.
+ * @param inlier_out [count] inlier marks, or NULL.
+ * @param rms_px_out RMS over the inliers, px, or NULL.
+ * @param rms_mm_out RMS over the inliers, mm, or NULL.
+ * @return FLT_OK; FLT_ERR_NUMERIC as above; FLT_ERR_STATE on a finished model
+ *         or without intrinsics; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_estimate_homography(
     flt_calib *calib, unsigned laser, size_t count, const double *image_px, const double *plane_mm,
     const flt_options *options, double *residual_px_out, double *residual_mm_out,
@@ -267,33 +318,70 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_estimate_homography(
 
 /** Laser `laser`'s offset along travel, mm (|offset| <=
  * FLT_CALIB_MAX_OFFSET_MM). flt_calib_finish() also wants the two offsets
- * at least FLT_CALIB_MIN_LASER_SPACING_MM apart. */
+ * at least FLT_CALIB_MIN_LASER_SPACING_MM apart.
+ * @param calib the model.
+ * @param laser 0 or 1.
+ * @param offset_mm its offset along travel, mm.
+ * @return FLT_OK; FLT_ERR_STATE on a finished model; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong
+ * argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_set_laser_offset(flt_calib *calib,
                                                                      unsigned laser,
                                                                      double offset_mm);
-/** Laser `laser`'s offset along travel, mm. FLT_ERR_STATE if unset. */
+/** Laser `laser`'s offset along travel, mm. FLT_ERR_STATE if unset.
+ * @param calib the model.
+ * @param laser 0 or 1.
+ * @param out receives the offset, mm.
+ * @return FLT_OK; FLT_ERR_STATE as above; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_get_laser_offset(const flt_calib *calib,
                                                                      unsigned laser, double *out);
-/** Delta-d = offset_1 - offset_0, mm. FLT_ERR_STATE unless both are set. */
+/** Delta-d = offset_1 - offset_0, mm. FLT_ERR_STATE unless both are set.
+ * @param calib the model.
+ * @param out receives Delta-d, mm.
+ * @return FLT_OK; FLT_ERR_STATE as above; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_laser_spacing(const flt_calib *calib,
                                                                   double *out);
 
 /** Encoder scale, mm of travel per count (its magnitude in
  * [FLT_CALIB_MIN_ENCODER_MM, FLT_CALIB_MAX_ENCODER_MM]; negative when the
- * encoder counts down as the strip moves forward). */
+ * encoder counts down as the strip moves forward).
+ * @param calib the model.
+ * @param encoder_mm_per_count mm of travel per count.
+ * @return FLT_OK; FLT_ERR_STATE on a finished model; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong
+ * argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_set_encoder_scale(flt_calib *calib,
                                                                       double encoder_mm_per_count);
-/** The encoder scale, mm per count. FLT_ERR_STATE if unset. */
+/** The encoder scale, mm per count. FLT_ERR_STATE if unset.
+ * @param calib the model.
+ * @param out receives mm per count.
+ * @return FLT_OK; FLT_ERR_STATE as above; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_get_encoder_scale(const flt_calib *calib,
                                                                       double *out);
 
 /** Fiber grid: fiber k sits at x = first_x_mm + k * pitch_mm, k < count
  * (pitch in [FLT_CALIB_MIN_PITCH_MM, FLT_CALIB_MAX_PITCH_MM], count in
- * [1, FLT_MAX_FIBERS], every fiber's |x| <= FLT_CALIB_MAX_X_MM). */
+ * [1, FLT_MAX_FIBERS], every fiber's |x| <= FLT_CALIB_MAX_X_MM).
+ * @param calib the model.
+ * @param first_x_mm x of fiber 0, mm.
+ * @param pitch_mm   fiber pitch, mm.
+ * @param count      the number of fibers.
+ * @return FLT_OK; FLT_ERR_STATE on a finished model; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong
+ * argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_set_fiber_grid(flt_calib *calib,
                                                                    double first_x_mm,
                                                                    double pitch_mm, size_t count);
-/** The fiber grid: first x (mm), pitch (mm), count. FLT_ERR_STATE if unset. */
+/** The fiber grid: first x (mm), pitch (mm), count. FLT_ERR_STATE if unset.
+ * @param calib the model.
+ * @param first_x_mm_out receives x of fiber 0, mm.
+ * @param pitch_mm_out   receives the pitch, mm.
+ * @param count_out      receives the fiber count.
+ * @return FLT_OK; FLT_ERR_STATE as above; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_get_fiber_grid(const flt_calib *calib,
                                                                    double *first_x_mm_out,
                                                                    double *pitch_mm_out,
@@ -307,7 +395,15 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_get_fiber_grid(const flt_cal
  *   image_px   count x 2 (u, v), px.   plane_out  count x 2 (x, z), mm.
  * A NaN input point gives a NaN output point (an invalid peak stays
  * invalid); so does a point whose ray is parallel to the plane. count = 0 is
- * allowed and does nothing. In-place (plane_out == image_px) is allowed. */
+ * allowed and does nothing. In-place (plane_out == image_px) is allowed.
+ * @param calib the model.
+ * @param laser 0 or 1.
+ * @param count     the number of points.
+ * @param image_px  [count * 2] image points, px.
+ * @param plane_out [count * 2] plane points, mm.
+ * @return FLT_OK; FLT_ERR_STATE on an unfinished model; FLT_ERR_INVALID_ARGUMENT for a NULL or
+ * wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_image_to_plane(const flt_calib *calib,
                                                                    unsigned laser, size_t count,
                                                                    const double *image_px,
@@ -316,7 +412,15 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_image_to_plane(const flt_cal
 /** Laser `laser`'s plane -> raw image points (the inverse of the above; for
  * the simulator and diagnostics).
  *   plane_mm   count x 2 (x, z), mm.   image_out  count x 2 (u, v), px.
- * A point behind the camera or at infinity gives NaN. In-place allowed. */
+ * A point behind the camera or at infinity gives NaN. In-place allowed.
+ * @param calib the model.
+ * @param laser 0 or 1.
+ * @param count     the number of points.
+ * @param plane_mm  [count * 2] plane points, mm.
+ * @param image_out [count * 2] image points, px.
+ * @return FLT_OK; FLT_ERR_STATE on an unfinished model; FLT_ERR_INVALID_ARGUMENT for a NULL or
+ * wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_plane_to_image(const flt_calib *calib,
                                                                    unsigned laser, size_t count,
                                                                    const double *plane_mm,
@@ -327,7 +431,14 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_plane_to_image(const flt_cal
  * iteration to about 1e-9 px (tests/c/test_calib.c measures it); a point
  * where it does not converge gives NaN. Needs only the
  * intrinsics (works on an unfinished model too; then it is not
- * thread-safe against concurrent setters). */
+ * thread-safe against concurrent setters).
+ * @param calib the model.
+ * @param count           the number of points.
+ * @param image_px        [count * 2] raw image points, px.
+ * @param undistorted_out [count * 2] undistorted points, px.
+ * @return FLT_OK; FLT_ERR_STATE without intrinsics; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong
+ * argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_undistort(const flt_calib *calib, size_t count,
                                                               const double *image_px,
                                                               double *undistorted_out);
@@ -338,13 +449,25 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_undistort(const flt_calib *c
 
 /** Writes a finished model to `path` (see "File format"), through a
  * temporary file renamed into place, so a crash never leaves a half file.
- * FLT_ERR_IO if it cannot be written. */
+ * FLT_ERR_IO if it cannot be written.
+ * @param calib the model.
+ * @param path UTF-8 file name.
+ * @return FLT_OK; FLT_ERR_IO as above; FLT_ERR_STATE on an unfinished model;
+ *         FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_save(const flt_calib *calib, const char *path);
 
 /** Writes the same text into text_out[capacity] with a terminating NUL.
  * *length_out = the text's length without the NUL, also when the buffer is
  * too small (then FLT_ERR_BUFFER_FULL; text_out may be NULL with capacity 0
- * to ask for the size). */
+ * to ask for the size).
+ * @param calib the model.
+ * @param text_out   the buffer, or NULL with capacity 0.
+ * @param capacity   its size in bytes.
+ * @param length_out receives the text's length.
+ * @return FLT_OK; FLT_ERR_BUFFER_FULL as above; FLT_ERR_STATE on an
+ *         unfinished model; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_save_text(const flt_calib *calib,
                                                               char *text_out, size_t capacity,
                                                               size_t *length_out);
@@ -352,11 +475,22 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_save_text(const flt_calib *c
 /** Reads a model from `path` and returns it finished in *out (NULL on any
  * failure). FLT_ERR_IO if the file cannot be read, FLT_ERR_FORMAT if it is
  * malformed, a value is outside its range, or the file is larger than
- * FLT_CALIB_MAX_FILE_BYTES. */
+ * FLT_CALIB_MAX_FILE_BYTES.
+ * @param path UTF-8 file name.
+ * @param out  receives the finished model.
+ * @return FLT_OK; FLT_ERR_IO or FLT_ERR_FORMAT as above; FLT_ERR_INVALID_ARGUMENT for a NULL or
+ * wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_load(const char *path, flt_calib **out);
 
 /** The same from `length` bytes of text (need not be NUL-terminated;
- * length <= FLT_CALIB_MAX_FILE_BYTES, else FLT_ERR_FORMAT). */
+ * length <= FLT_CALIB_MAX_FILE_BYTES, else FLT_ERR_FORMAT).
+ * @param text   the text.
+ * @param length its length in bytes.
+ * @param out    receives the finished model.
+ * @return FLT_OK; FLT_ERR_FORMAT if it is malformed; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong
+ * argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_load_text(const char *text, size_t length,
                                                               flt_calib **out);
 
