@@ -147,7 +147,13 @@ typedef enum flt_source_kind {
  * value for modes 1 and 2; mode 3 is refused. `sim` is borrowed: it must
  * outlive the source, and the caller may still change its sheet between
  * frames. Block ids count from 0; timestamps are the host's monotonic clock,
- * ns. Allocates one frame buffer. */
+ * ns. Allocates one frame buffer.
+ * @param sim     the simulator (borrowed).
+ * @param options NULL, or the source_* keys.
+ * @param out     receives the source.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument (encoder mode 3, a
+ * simulator that cannot render frames); FLT_ERR_OUT_OF_MEMORY.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_create_sim(flt_sim *sim,
                                                                 const flt_options *options,
                                                                 flt_source **out);
@@ -168,7 +174,15 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_create_sim(flt_sim *sim,
  * Without a CSV the positions follow the fixed step. Block id = index of the
  * file. Timestamps are the host's monotonic clock, ns. The first file is read
  * here to learn the size. After the last image flt_source_next() gives
- * FLT_OK with *out = NULL. */
+ * FLT_OK with *out = NULL.
+ * @param paths       [count] file names.
+ * @param count       the number of files.
+ * @param encoder_csv NULL, or the CSV file of positions.
+ * @param options     NULL, or the source_* keys.
+ * @param out         receives the source.
+ * @return FLT_OK; FLT_ERR_IO for a file that cannot be read; FLT_ERR_FORMAT
+ *         as above; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_create_images(const char *const *paths,
                                                                    size_t count,
                                                                    const char *encoder_csv,
@@ -177,7 +191,13 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_create_images(const char *c
 
 /** The same for every *.png, *.tif and *.tiff file of `directory` (not its
  * sub-folders), sorted by name (byte order). FLT_ERR_NOT_FOUND if there is
- * none. */
+ * none.
+ * @param directory   the folder.
+ * @param encoder_csv NULL, or the CSV file of positions.
+ * @param options     NULL, or the source_* keys.
+ * @param out         receives the source.
+ * @return as flt_source_create_images(); FLT_ERR_NOT_FOUND as above.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_create_image_dir(const char *directory,
                                                                       const char *encoder_csv,
                                                                       const flt_options *options,
@@ -190,9 +210,15 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_create_image_dir(const char
  * model. FLT_ERR_DEVICE if libusb cannot start. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_camera_list_create(flt_u3v_sim *bus,
                                                                  flt_camera_list **out);
-/** Frees the list; NULL is a no-op. */
+/** Frees the list; NULL is a no-op.
+ * @param list the list, or NULL.
+ */
 FLT_API void FLT_CALL flt_camera_list_destroy(flt_camera_list *list);
-/** The number of cameras in the list. */
+/** The number of cameras in the list.
+ * @param list the list.
+ * @param out  receives the number of cameras.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_camera_list_count(const flt_camera_list *list,
                                                                 size_t *out);
 /** Camera `index`: its strings (owned by the list, valid until it is
@@ -218,10 +244,16 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_open_u3v(flt_u3v_sim *bus, 
                                                               flt_source **out);
 
 /** Stops a streaming camera, releases it and frees everything. NULL is a
- * no-op. */
+ * no-op.
+ * @param source the source, or NULL.
+ */
 FLT_API void FLT_CALL flt_source_destroy(flt_source *source);
 
-/** The kind of the source. */
+/** The kind of the source.
+ * @param source the source.
+ * @param out receives its kind.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_kind_of(const flt_source *source,
                                                              flt_source_kind *out);
 
@@ -235,18 +267,30 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_kind_of(const flt_source *s
  * allocates the pool of u3v_transfers bulk transfers and the frame buffer,
  * and executes AcquisitionStart. Simulator and images: resets the block ids
  * (a started source starts again from its first frame only for images).
- * FLT_ERR_STATE if already started. */
+ * FLT_ERR_STATE if already started.
+ * @param source the source.
+ * @return FLT_OK; FLT_ERR_STATE as above; FLT_ERR_DEVICE or
+ *         FLT_ERR_TIMEOUT from the camera; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_start(flt_source *source);
 
 /** Stops acquisition: camera AcquisitionStop, SI control = 0, transfers
- * cancelled. Stopping a stopped source is a no-op. */
+ * cancelled. Stopping a stopped source is a no-op.
+ * @param source the source.
+ * @return FLT_OK; FLT_ERR_DEVICE or FLT_ERR_TIMEOUT when a camera could not be stopped
+ *         (the host side is stopped anyway); FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_stop(flt_source *source);
 
 /** Waits up to timeout_ms for the next good frame (see "Frame accounting").
  * *out is the borrowed frame; NULL (with FLT_OK) at the end of an image
  * sequence. FLT_ERR_TIMEOUT when no good frame came in time,
  * FLT_ERR_DEVICE when the camera is gone, FLT_ERR_STATE before start. The
- * simulator and images never wait. */
+ * simulator and images never wait.
+ * @param source the source.
+ * @param timeout_ms how long to wait, ms.
+ * @param out        receives the borrowed frame, or NULL at the end.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_next(flt_source *source, uint32_t timeout_ms,
                                                           const flt_frame **out);
 
@@ -267,7 +311,11 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_frame_info(const flt_frame *frame,
                                                          double *encoder_mm);
 
 /** Encoder mode 2: the position the next frames carry, mm (finite).
- * FLT_ERR_STATE in any other mode. */
+ * FLT_ERR_STATE in any other mode.
+ * @param source the source.
+ * @param encoder_mm the position, mm.
+ * @return FLT_OK; FLT_ERR_STATE as above; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_set_encoder(flt_source *source,
                                                                  double encoder_mm);
 
@@ -298,13 +346,21 @@ typedef enum flt_source_counter {
     FLT_COUNT_MAX_ENUM_ = 0x7FFFFFFF
 } flt_source_counter;
 
-/** The value of one counter. */
+/** The value of one counter.
+ * @param source the source.
+ * @param counter which counter.
+ * @param out     receives its value.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_count(const flt_source *source,
                                                            flt_source_counter counter,
                                                            uint64_t *out);
 
 /** Why the last frame was dropped or lost ("" if none was). Owned by the
- * source, valid until its next call. Never NULL (for a NULL source too). */
+ * source, valid until its next call. Never NULL (for a NULL source too).
+ * @param source the source.
+ * @return the reason (see above).
+ */
 FLT_API const char *FLT_CALL flt_source_stream_error(const flt_source *source);
 
 /* ---------------------------------------------------------------------- */
@@ -324,7 +380,13 @@ typedef enum flt_camera_string {
 } flt_camera_string;
 
 /** The string (owned by the source, valid until it is destroyed).
- * FLT_ERR_STATE for a source that is not a camera. */
+ * FLT_ERR_STATE for a source that is not a camera.
+ * @param source the source.
+ * @param which the string wanted.
+ * @param out   receives it.
+ * @return FLT_OK; FLT_ERR_STATE for a source that is not a camera;
+ *         FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_camera_string(const flt_source *source,
                                                                    flt_camera_string which,
                                                                    const char **out);
@@ -352,7 +414,13 @@ typedef enum flt_camera_value {
     FLT_CAMERA_VALUE_MAX_ENUM_ = 0x7FFFFFFF
 } flt_camera_value;
 
-/** One camera value. FLT_ERR_STATE for a source that is not a camera. */
+/** One camera value. FLT_ERR_STATE for a source that is not a camera.
+ * @param source the source.
+ * @param which the value wanted.
+ * @param out   receives it.
+ * @return FLT_OK; FLT_ERR_STATE for a source that is not a camera;
+ *         FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_camera_value(const flt_source *source,
                                                                   flt_camera_value which,
                                                                   uint64_t *out);
@@ -384,7 +452,15 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_execute(flt_source *source,
  * the client cannot resolve, or to override one): `length` bytes (1, 2, 4 or
  * 8) at `address`, little-endian; an unsigned integer, or an IEEE float
  * (length 4 or 8) when is_float is non-zero. Commands write 1 to it.
- * Enumerations mapped this way take their integer values (set_int). */
+ * Enumerations mapped this way take their integer values (set_int).
+ * @param source the source.
+ * @param feature  the feature's name.
+ * @param address  the register's address.
+ * @param length   its length in bytes.
+ * @param is_float non-zero for an IEEE float.
+ * @return FLT_OK; FLT_ERR_STATE for a source that is not a camera;
+ *         FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_map_feature(flt_source *source,
                                                                  const char *feature,
                                                                  uint64_t address, uint32_t length,
