@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: Apache-2.0 */
-/*
+/** @file
  * libflatline - verdicts: a sheet against the flatness tolerances the user
  * delivers to.
  *
@@ -86,7 +86,7 @@ typedef enum flt_measure {
     FLT_MEASURE_WAVE_HEIGHT = 4,         /**< the largest wave's height, mm peak to peak */
     FLT_MEASURE_BOW = 5,                 /**< bow (coil set), mm; its magnitude is judged */
     FLT_MEASURE_CROSSBOW = 6,            /**< crossbow, mm; its magnitude is judged */
-    /* Not a measure: keeps the type int-sized whatever is added. */
+    /** Not a measure: keeps the type int-sized whatever is added. */
     FLT_MEASURE_MAX_ENUM_ = 0x7FFFFFFF
 } flt_measure;
 
