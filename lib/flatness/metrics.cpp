@@ -550,7 +550,10 @@ void flatness_engine::classify(window_result &out) {
     else
         out.shape = FLT_SHAPE_WAVY_EDGE_RIGHT;
     const double margin = limit > 0.0 ? std::min(1.0, 0.5 * peak / limit) : 1.0;
-    out.confidence = margin * explained / total;
+    // explained <= total, but the two sums round differently: the ratio
+    // came out 1.0000000000000002 (the contract suite); flatness.h
+    // promises [0, 1].
+    out.confidence = std::min(1.0, margin * explained / total);
 }
 
 }  // namespace flt

@@ -20,7 +20,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import assume, given, note, settings
+from hypothesis import assume, example, given, note, settings
 from hypothesis import strategies as st
 from hypothesis.stateful import (RuleBasedStateMachine, invariant, precondition, rule)
 
@@ -468,6 +468,10 @@ def check_flatness_result(what, result):
 
 
 @settings(max_examples=examples(100))
+# Found by the suite, kept as fixed cases: a shape confidence that rounded
+# to 1.0000000000000002.
+@example(x=-1e5 + 2.0 * np.arange(200), options={}, rows=20, seed=116, kinds=(2, 3), scale=1e-3,
+         flagged=False, chunk=1)
 @given(x=fiber_positions(), options=options_of((), names=FLAT_OPTIONS),
        rows=st.integers(1, 200), seed=st.integers(0, 2**32 - 1),
        kinds=st.tuples(st.integers(0, 3), st.integers(0, 3)), scale=SCALES,
