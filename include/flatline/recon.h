@@ -36,7 +36,11 @@
  * Validity
  *   A sample is used when its mask entry is non-zero (or the mask is NULL)
  *   and its value is finite and at most 1e9 in magnitude (mm, mm/mm: no
- *   measurement, and its square would overflow the sums). Height and slope are judged separately: a
+ *   measurement, and its square would overflow the sums). Heights are
+ *   solved relative to the strip's level (its first valid height since
+ *   create or reset; the sheet's first for flt_reconstruct()), so a result
+ *   does not depend on where the strip lies; a height more than 1e9 mm from
+ *   that level is not used either. Height and slope are judged separately: a
  * NaN slope with a finite height uses the height only. Output rows carry flags per fiber
  * (FLT_FLAG_*): a value is never invented silently.
  *

@@ -131,8 +131,10 @@ double recon_pipeline::bytes_needed(std::size_t fibers, const recon_config &conf
     // The channels of the constructor below; the line channels have one
     // fiber each, and parameters that do not change their sizes.
     const bool owns_rows = !batch;
-    double bytes = recon_chain::bytes_needed(fibers, config.params, config.robust, knot_capacity,
-                                             owns_rows, batch);
+    // batch(): the sheet's heights relative to its level.
+    double bytes = batch ? 8.0 * double(config.params.row_capacity) * double(fibers) : 0.0;
+    bytes += recon_chain::bytes_needed(fibers, config.params, config.robust, knot_capacity,
+                                       owns_rows, batch);
     if (!config.rigid_motion)
         return bytes;
     robust_params line_robust = config.robust;
@@ -148,6 +150,7 @@ recon_pipeline::recon_pipeline(std::size_t fibers, const recon_config &config,
                                std::size_t knot_capacity, double *z_store,
                                std::uint8_t *flags_store, bool batch)
     : K_(fibers), config_(config) {
+    rel_h_.assign(K_, 0.0);
     if (!config_.rigid_motion) {
         main_ = std::make_unique<recon_chain>(K_, config_.params, config_.robust, knot_capacity,
                                               z_store, flags_store, batch);
@@ -197,6 +200,37 @@ recon_pipeline::recon_pipeline(std::size_t fibers, const recon_config &config,
     line_a_.assign(config_.params.row_capacity, 0.0);
     line_b_.assign(config_.params.row_capacity, 0.0);
     line_s_.assign(config_.params.row_capacity, 0.0);
+}
+
+// Why heights are solved relative to the strip's level: only heights see a
+// fiber's level, and the ridge that keeps a fiber without heights regular
+// pulls every knot height towards 0 with a weight of up to 1e-12 of the
+// strongest term (engine.cpp). With slopes at their cap (1e8 height
+// samples) that is 1e-4 of a height sample per knot: a strip at 1e5 mm came
+// out 0.3 mm low in robust mode, and at 1e8 mm (inside the documented 1e9)
+// robust mode with rigid motion returned about 0. Relative to the first
+// valid height, the pull is on the strip's shape (millimetres), and the
+// result is the same wherever the strip lies. A height more than
+// k_max_sample from the level counts as invalid (recon.h).
+void recon_pipeline::find_level(const double *height, const std::uint8_t *valid) {
+    if (has_level_)
+        return;
+    for (std::size_t k = 0; k < K_; ++k)
+        if ((valid == nullptr || valid[k] != 0) && std::fabs(height[k]) <= k_max_sample) {
+            level_ = height[k];
+            has_level_ = true;
+            return;
+        }
+}
+
+void recon_pipeline::relative_heights(const double *height, double *out) const {
+    const double level = has_level_ ? level_ : 0.0;
+    for (std::size_t k = 0; k < K_; ++k) {
+        const double h = height[k], d = h - level;
+        // Invalid stays invalid (NaN here; the valid mask is passed on as it
+        // is), and a height too far from the level becomes invalid.
+        out[k] = std::fabs(h) <= k_max_sample && std::fabs(d) <= k_max_sample ? d : k_nan;
+    }
 }
 
 void recon_pipeline::split(double s, const double *value, const std::uint8_t *valid, bool is_height,
@@ -269,8 +303,11 @@ void recon_pipeline::split(double s, const double *value, const std::uint8_t *va
     }
 }
 
-void recon_pipeline::push_row(double s, const double *height, const double *slope,
+void recon_pipeline::push_row(double s, const double *raw_height, const double *slope,
                               const std::uint8_t *valid) {
+    find_level(raw_height, valid);
+    relative_heights(raw_height, rel_h_.data());
+    const double *height = rel_h_.data();
     if (!config_.rigid_motion) {
         main_->push_row(s, height, slope, valid);
         return;
@@ -304,8 +341,25 @@ void recon_pipeline::add_lines(std::size_t rows, const double *a, const double *
     }
 }
 
-void recon_pipeline::batch(std::size_t rows, const double *s, const double *height,
+void recon_pipeline::batch(std::size_t rows, const double *s, const double *raw_height,
                            const double *slope, const std::uint8_t *valid, double *z_store) {
+    const std::size_t K = K_;
+    // The sheet's heights relative to its level (find_level says why).
+    has_level_ = false;
+    for (std::size_t r = 0; r < rows && !has_level_; ++r)
+        find_level(raw_height + r * K, valid ? valid + r * K : nullptr);
+    std::vector<double> relative(rows * K);
+    for (std::size_t r = 0; r < rows; ++r)
+        relative_heights(raw_height + r * K, relative.data() + r * K);
+    const double *height = relative.data();
+    batch_fibers(rows, s, height, slope, valid, z_store);
+    if (has_level_)
+        for (std::size_t i = 0; i < rows * K; ++i)
+            z_store[i] += level_;  // NaN stays NaN
+}
+
+void recon_pipeline::batch_fibers(std::size_t rows, const double *s, const double *height,
+                                  const double *slope, const std::uint8_t *valid, double *z_store) {
     const std::size_t K = K_;
     if (!config_.rigid_motion) {
         struct raw_rows final : row_source {
@@ -424,13 +478,16 @@ std::size_t recon_pipeline::ready_rows() const {
 std::size_t recon_pipeline::pull(std::size_t max_rows, double *s_out, double *z_out,
                                  std::uint8_t *flags_out) {
     const std::size_t n = main_->pull(std::min(max_rows, ready_rows()), s_out, z_out, flags_out);
-    if (!config_.rigid_motion || n == 0)
-        return n;
-    // The line engines have finished these rows too (ready_rows).
-    if (offset_->pull(n, line_s_.data(), line_a_.data(), nullptr) != n ||
-        tilt_->pull(n, line_s_.data(), line_b_.data(), nullptr) != n)
-        throw error(FLT_ERR_INTERNAL, "line channels out of step with the fibers");
-    add_lines(n, line_a_.data(), line_b_.data(), z_out);
+    if (config_.rigid_motion && n > 0) {
+        // The line engines have finished these rows too (ready_rows).
+        if (offset_->pull(n, line_s_.data(), line_a_.data(), nullptr) != n ||
+            tilt_->pull(n, line_s_.data(), line_b_.data(), nullptr) != n)
+            throw error(FLT_ERR_INTERNAL, "line channels out of step with the fibers");
+        add_lines(n, line_a_.data(), line_b_.data(), z_out);
+    }
+    if (has_level_)
+        for (std::size_t i = 0; i < n * K_; ++i)
+            z_out[i] += level_;  // NaN stays NaN
     return n;
 }
 
@@ -444,6 +501,8 @@ void recon_pipeline::end_sheet() {
 
 void recon_pipeline::reset() {
     new_strip_ = true;
+    has_level_ = false;
+    level_ = 0.0;
     main_->reset();
     if (offset_)
         offset_->reset();
@@ -453,6 +512,9 @@ void recon_pipeline::reset() {
 
 void recon_pipeline::boundary(double *s_out, double *height_out, double *slope_out) const {
     main_->boundary(s_out, height_out, slope_out);
+    if (height_out && has_level_)
+        for (std::size_t k = 0; k < K_; ++k)
+            height_out[k] += level_;
     if (!config_.rigid_motion)
         return;
     double a = 0, b = 0, ga = 0, gb = 0;

@@ -89,10 +89,17 @@ class recon_pipeline {
   private:
     // Through a 32-bit integer, which vectorises (fibers < 2^31, recon_api.cpp).
     double xi(std::size_t k) const { return double(std::int32_t(k)) - 0.5 * double(K_ - 1); }
+    // Heights are solved relative to the strip's level (pipeline.cpp,
+    // relative_heights): the first valid height since reset, mm.
+    void find_level(const double *height, const std::uint8_t *valid);
+    void relative_heights(const double *height, double *out) const;
     // Splits one kind of measurement (heights or slopes) of a row.
     void split(double s, const double *value, const std::uint8_t *valid, bool is_height, double *a,
                double *b, double *dev);
     void add_lines(std::size_t rows, const double *a, const double *b, double *z) const;
+    // batch() on heights relative to the level.
+    void batch_fibers(std::size_t rows, const double *s, const double *height, const double *slope,
+                      const std::uint8_t *valid, double *z_store);
 
     std::size_t K_;
     recon_config config_;
@@ -110,6 +117,10 @@ class recon_pipeline {
     // Batch with rigid_motion: every row's line, heights' and slopes'.
     std::vector<double> batch_ha_, batch_hb_, batch_ga_, batch_gb_;
     bool new_strip_ = true;
+    // The strip's level (mm) and one row of heights relative to it.
+    double level_ = 0.0;
+    bool has_level_ = false;
+    std::vector<double> rel_h_;
 };
 
 }  // namespace flt
