@@ -4,7 +4,9 @@
 setuptools (Debian's python3-setuptools) is the build backend; the work is
 done by the project's own CMake build, so the wheel holds exactly what ctest
 tests: the extension flatline/_capi*.so, SWIG's proxy capi.py and
-libflatline.so.N beside them (the extension's rpath is $ORIGIN).
+libflatline.so.N beside them (the extension's rpath is $ORIGIN), and the
+testing tier's extension flatline/_testing_capi*.so with
+libflatline_testing.so.X.Y.Z (loaded only by `import flatline.testing`).
 
 Environment:
     FLATLINE_SOURCE_DIR   the libflatline source tree (default: ../.. of this
@@ -81,9 +83,15 @@ class CMakeBuild(build_ext):
         target.parent.mkdir(parents=True, exist_ok=True)
         shutil.copyfile(built / "_capi.so", target)
         shutil.copyfile(built / "capi.py", target.parent / "capi.py")
+        # The testing tier (flatline.testing over libflatline_testing): its
+        # own extension, loaded only by `import flatline.testing`.
+        shutil.copyfile(built / "_testing_capi.so",
+                        target.parent / target.name.replace("_capi", "_testing_capi", 1))
+        shutil.copyfile(built / "testing_capi.py", target.parent / "testing_capi.py")
         # libflatline.so.N is a real file in the package dir (copyfile would
         # follow a symlink anyway): wheels cannot hold symlinks.
-        for library in built.glob("libflatline.so*"):
+        for library in list(built.glob("libflatline.so*")) + list(
+                built.glob("libflatline_testing.so*")):
             shutil.copyfile(library, target.parent / library.name)
         # The licence and the third-party notices travel with the binaries
         # (the package holds libflatline.so, which NOTICE describes).

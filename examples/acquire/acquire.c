@@ -2,7 +2,9 @@
 /*
  * Acquisition loop: a real USB3 Vision camera when one is connected,
  * otherwise a simulated U3V camera rendering the simulated sensor, both
- * through the same flt_source calls. Prints throughput and the frame
+ * through the same flt_source calls. The simulated camera comes from the
+ * testing library (flatline/testing.h, libflatline_testing): a production
+ * program links libflatline only and passes NULL as the transport. Prints throughput and the frame
  * accounting (dropped, lost, timeouts) once a second and at the end.
  *
  *     flatline_acquire [frames] [serial]      (default 300 frames, first camera)
@@ -13,6 +15,7 @@
 
 #include "flatline/flatline.h"
 #include "flatline/source.h"
+#include "flatline/testing.h"
 
 static double now_s(void) {
     struct timespec t;
@@ -56,6 +59,7 @@ int main(int argc, char **argv) {
     const char *serial = argc > 2 ? argv[2] : NULL;
     flt_source *src = NULL;
     flt_u3v_sim *bus = NULL;
+    flt_usb_transport *usb = NULL;
     flt_sim *sim = NULL;
     flt_calib *calib = NULL;
 
@@ -89,7 +93,8 @@ int main(int argc, char **argv) {
                                          FLT_PIXEL_MONO8, NULL),
                   "camera") ||
             check(flt_u3v_sim_set_frames(bus, 0, sim), "frames") ||
-            check(flt_source_open_u3v(bus, NULL, NULL, &src), "open"))
+            check(flt_u3v_sim_transport(bus, &usb), "transport") ||
+            check(flt_source_open_u3v(usb, NULL, NULL, &src), "open"))
             return 1;
     }
     const char *vendor = "", *model = "";

@@ -145,6 +145,19 @@ FLT_API const char *FLT_CALL flt_last_error_message(void);
  */
 FLT_API flt_status FLT_CALL flt_last_error_status(void);
 
+/**
+ * Records a status and a message as this thread's last error, as a failing
+ * call of the library does: flt_last_error_status() and
+ * flt_last_error_message() then return them. For libraries built on
+ * libflatline that report through its error state (libflatline_testing,
+ * flatline/testing.h, does); an application has no need to call it.
+ * @param status  FLT_OK clears the error (the message is then ""); any
+ *                other value is recorded as it is.
+ * @param message UTF-8 text, copied and cut to 511 bytes; NULL or "" with
+ *                a failing status records "failed with <status name>".
+ */
+FLT_API void FLT_CALL flt_set_last_error(flt_status status, const char *message);
+
 /* ---------------------------------------------------------------------- */
 /* Version                                                                 */
 /* ---------------------------------------------------------------------- */

@@ -91,8 +91,12 @@
  *
  * Threads
  *   A source must not be used from two threads at once. Different sources
- *   are independent. flt_u3v_sim must not be used from two threads at once
- *   either, nor while a source opened on it is used from another thread.
+ *   are independent.
+ *
+ * Testing without a camera
+ *   flatline/testing.h (a separate library, outside the ABI promise) has a
+ *   simulated USB bus of simulated cameras with fault injection; its
+ *   transport goes where the functions below take a flt_usb_transport.
  */
 #ifndef FLATLINE_SOURCE_H
 #define FLATLINE_SOURCE_H
@@ -111,8 +115,14 @@ typedef struct flt_source flt_source;
 typedef struct flt_frame flt_frame;
 /** A snapshot of the cameras present. */
 typedef struct flt_camera_list flt_camera_list;
-/** A simulated USB bus with simulated USB3 Vision cameras (see below). */
-typedef struct flt_u3v_sim flt_u3v_sim;
+/**
+ * The USB access through which USB3 Vision cameras are found and opened.
+ * NULL, wherever a function takes one, is the computer's USB bus through
+ * libusb-1.0: the only transport of libflatline itself. Other transports
+ * (a simulated bus of simulated cameras) come only from the testing
+ * library, flatline/testing.h; they belong to whoever made them.
+ */
+typedef struct flt_usb_transport flt_usb_transport;
 
 /** Values of the option "source_encoder_mode" (FLT_OPT_SOURCE_ENCODER_MODE):
  * where a frame's encoder position comes from (see "Encoder positions");
@@ -203,12 +213,18 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_create_image_dir(const char
                                                                       const flt_options *options,
                                                                       flt_source **out);
 
-/** Lists the USB3 Vision cameras present: on the USB bus through libusb when
- * `bus` is NULL, else on a simulated bus. Devices that are not USB3 Vision are
- * skipped; cameras that cannot be opened to read their strings (no udev rule,
- * no WinUSB driver) are listed with vendor "?" and the reason as their
- * model. FLT_ERR_DEVICE if libusb cannot start. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL flt_camera_list_create(flt_u3v_sim *bus,
+/**
+ * Lists the USB3 Vision cameras present. Devices that are not USB3 Vision
+ * are skipped; cameras that cannot be opened to read their strings (no udev
+ * rule, no WinUSB driver) are listed with vendor "?" and the reason as their
+ * model.
+ * @param usb  NULL: the USB bus through libusb; else a transport of the
+ *             testing library (flatline/testing.h).
+ * @param out  the new list (flt_camera_list_destroy()).
+ * @return FLT_OK; FLT_ERR_DEVICE if libusb cannot start;
+ *         FLT_ERR_INVALID_ARGUMENT for a transport of another release.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_camera_list_create(flt_usb_transport *usb,
                                                                  flt_camera_list **out);
 /** Frees the list; NULL is a no-op.
  * @param list the list, or NULL.
@@ -230,16 +246,24 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_camera_list_get(const flt_camera_l
                                                               const char **serial,
                                                               uint32_t *speed_mbps);
 
-/** Opens a USB3 Vision camera: on the USB bus when `bus` is NULL, else on a
- * simulated bus (which must outlive the source). `serial` picks the camera
- * with that serial number; NULL takes the first one. Reads the bootstrap
- * registers and the GenICam XML, and leaves a camera that a killed process
- * left streaming stopped (AcquisitionStop, SI control = 0, stream endpoint
- * halt cleared). FLT_ERR_NOT_FOUND names a serial that is not present;
- * FLT_ERR_DEVICE says why a camera cannot be opened (permissions: see
- * lib/sources/deploy/). The stream buffers are allocated by
- * flt_source_start(). */
-FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_open_u3v(flt_u3v_sim *bus, const char *serial,
+/**
+ * Opens a USB3 Vision camera. Reads the bootstrap registers and the GenICam
+ * XML, and leaves a camera that a killed process left streaming stopped
+ * (AcquisitionStop, SI control = 0, stream endpoint halt cleared). The
+ * stream buffers are allocated by flt_source_start().
+ * @param usb     NULL: the USB bus through libusb; else a transport of the
+ *                testing library (flatline/testing.h), which must outlive
+ *                the source.
+ * @param serial  the camera with that serial number; NULL: the first one.
+ * @param options source_* and u3v_* options, or NULL for the defaults.
+ * @param out     the new source (flt_source_destroy()).
+ * @return FLT_OK; FLT_ERR_NOT_FOUND naming a serial that is not present;
+ *         FLT_ERR_DEVICE saying why a camera cannot be opened (permissions:
+ *         see lib/sources/deploy/); FLT_ERR_INVALID_ARGUMENT for a
+ *         transport of another release.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_open_u3v(flt_usb_transport *usb,
+                                                              const char *serial,
                                                               const flt_options *options,
                                                               flt_source **out);
 
@@ -476,116 +500,6 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_write_memory(flt_source *so
                                                                   const void *bytes_in,
                                                                   size_t bytes);
 /** @} */
-
-/* ---------------------------------------------------------------------- */
-/* Simulated USB3 Vision cameras (testing without hardware)                */
-/* ---------------------------------------------------------------------- */
-/*
- * A simulated USB bus behind the same transport interface as libusb: the
- * real client code talks to it. Each camera has the U3V descriptors, a
- * register map answering GenCP (ABRM, SBRM, SIRM, the feature registers),
- * a manifest with its GenICam XML (zipped or not) and a stream of leader,
- * payload and trailer transfers with USB packet semantics (512-byte packets,
- * a short packet ends a transfer, a packet larger than the space left
- * overflows). The bus also holds one device that is not a camera. Time is
- * virtual: a simulated timeout returns at once.
- *
- * Feature registers (Width at 0x10000, Height 0x10004, PixelFormat 0x10008,
- * OffsetY 0x1000C, AcquisitionMode 0x10010, AcquisitionStart 0x10014,
- * AcquisitionStop 0x10018, ExposureTimeRaw 0x1001C (us, integer),
- * TriggerSelector 0x10020, TriggerMode 0x10024, TriggerSource 0x10028,
- * Gain 0x1002C (float32)). The XML describes ExposureTime through a
- * Converter of ExposureTimeRaw, which the client does not evaluate: it is
- * the "feature the client cannot resolve" of the tests.
- *
- * Frames: without a simulator, byte i of the payload of block b is
- * (uint8_t)(b * 131 + i * 7 + (i >> 9)) (test pattern; 16-bit formats hold
- * the same bytes). With flt_u3v_sim_set_frames() the payload is the
- * simulator's rendered frame. With the encoder chunk on, the payload ends
- * with a chunk: the 64-bit little-endian encoder count, then the chunk id and
- * length (u32, little-endian each): count = round(encoder_mm /
- * encoder_mm_per_count), the simulator's position (else block * 300).
- */
-
-/** Parameters of a simulated camera (flt_u3v_sim_set(), flt_u3v_sim_get()). */
-typedef enum flt_u3v_sim_param {
-    /* settable before a camera is opened */
-    FLT_U3V_SIM_RESPONSE_TIME_MS = 0,        /**< ABRM; default 200 */
-    FLT_U3V_SIM_MAX_COMMAND_BYTES = 1,       /**< SBRM; default 1024 */
-    FLT_U3V_SIM_MAX_ACK_BYTES = 2,           /**< SBRM; default 1024 */
-    FLT_U3V_SIM_ALIGNMENT_LOG2 = 3,          /**< SIRM info; default 9 (512 B) */
-    FLT_U3V_SIM_XML_ZIPPED = 4,              /**< default 1 */
-    FLT_U3V_SIM_ENCODER_CHUNK = 5,           /**< 1: append the encoder chunk */
-    FLT_U3V_SIM_ENCODER_CHUNK_ID = 6,        /**< default 0x4E434445 */
-    FLT_U3V_SIM_ENCODER_MM_PER_COUNT_UM = 7, /**< um per count; default 10 */
-    FLT_U3V_SIM_SPEED_MBPS = 8,              /**< default 5000 */
-    /** 1: the camera was left streaming by a process that died: SI control 1,
-     * acquisition running, a half-sent frame in its FIFO; SIRM writes are
-     * refused (access denied) until SI control is cleared. */
-    FLT_U3V_SIM_LEFT_STREAMING = 9,
-    /* read-only */
-    FLT_U3V_SIM_SI_CONTROL = 20,           /**< SIRM SI control register */
-    FLT_U3V_SIM_ACQUIRING = 21,            /**< 1 between AcquisitionStart/Stop */
-    FLT_U3V_SIM_COMMANDS = 22,             /**< GenCP commands received */
-    FLT_U3V_SIM_LAST_READ_TIMEOUT_MS = 23, /**< timeout of the last control read */
-    FLT_U3V_SIM_FRAMES_SENT = 24,          /**< leaders sent */
-    FLT_U3V_SIM_OPEN = 25,                 /**< 1 while a host holds it open */
-    FLT_U3V_SIM_PARAM_MAX_ENUM_ = 0x7FFFFFFF
-} flt_u3v_sim_param;
-
-/** Faults a simulated camera or bus can be told to make (flt_u3v_sim_inject()). */
-typedef enum flt_u3v_fault {
-    /* stream faults, applied to the frame with block id `at` */
-    FLT_U3V_FAULT_SHORT_FRAME = 0,      /**< last payload transfer not sent */
-    FLT_U3V_FAULT_LEADER_MID_FRAME = 1, /**< no trailer: next leader mid-frame */
-    FLT_U3V_FAULT_OVERFLOW = 2,         /**< last transfer 1 packet too long */
-    FLT_U3V_FAULT_SKIP_BLOCK_IDS = 3,   /**< `count` block ids from `at` are
-                                           never sent */
-    FLT_U3V_FAULT_STREAM_TIMEOUT = 4,   /**< the camera stalls after the leader */
-    FLT_U3V_FAULT_UNPLUG = 5,           /**< unplugged after the leader */
-    FLT_U3V_FAULT_GARBAGE = 6,          /**< 100 random bytes before the leader */
-    FLT_U3V_FAULT_TRAILER_STATUS = 7,   /**< trailer status 0xA101 (overrun) */
-    /* host faults, `at` ignored: the next `count` operations */
-    FLT_U3V_FAULT_SUBMIT_REFUSED = 10,  /**< bulk submits refused (no memory) */
-    FLT_U3V_FAULT_PENDING_ACK = 11,     /**< each of the next commands first
-                                           gets `count` pending acks */
-    FLT_U3V_FAULT_CONTROL_TIMEOUT = 12, /**< `count` commands get no answer */
-    FLT_U3V_FAULT_LATE_ACK = 13,        /**< the next command's ack comes only
-                                           after the following command */
-    FLT_U3V_FAULT_MAX_ENUM_ = 0x7FFFFFFF
-} flt_u3v_fault;
-
-/** An empty simulated bus (plus one device that is not a camera). */
-FLT_API FLT_NODISCARD flt_status FLT_CALL flt_u3v_sim_create(flt_u3v_sim **out);
-/** NULL is a no-op. Sources opened on the bus must be destroyed first. */
-FLT_API void FLT_CALL flt_u3v_sim_destroy(flt_u3v_sim *bus);
-
-/** Adds a camera (at most 8): strings copied (at most 63 bytes each), a
- * width x height sensor (16..8192 px each) of format Mono8, 10, 12 or 16. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL
-flt_u3v_sim_add_camera(flt_u3v_sim *bus, const char *vendor, const char *model, const char *serial,
-                       uint32_t width, uint32_t height, flt_pixel_format format, size_t *index_out);
-
-/** Renders the camera's frames with `sim` (borrowed; NULL: test pattern). The
- * camera takes the simulator's frame size and format. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL flt_u3v_sim_set_frames(flt_u3v_sim *bus, size_t camera,
-                                                                 flt_sim *sim);
-
-/** Sets a parameter of camera `camera` (a settable flt_u3v_sim_param). */
-FLT_API FLT_NODISCARD flt_status FLT_CALL flt_u3v_sim_set(flt_u3v_sim *bus, size_t camera,
-                                                          flt_u3v_sim_param param, uint64_t value);
-/** Reads a parameter of camera `camera`. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL flt_u3v_sim_get(const flt_u3v_sim *bus, size_t camera,
-                                                          flt_u3v_sim_param param, uint64_t *out);
-
-/** Schedules a fault (see flt_u3v_fault); faults add up. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL flt_u3v_sim_inject(flt_u3v_sim *bus, size_t camera,
-                                                             flt_u3v_fault fault, uint64_t at,
-                                                             uint32_t count);
-
-/** Reads a 32-bit register of the camera's map directly (no GenCP). */
-FLT_API FLT_NODISCARD flt_status FLT_CALL flt_u3v_sim_peek(const flt_u3v_sim *bus, size_t camera,
-                                                           uint64_t address, uint32_t *out);
 
 #ifdef __cplusplus
 }

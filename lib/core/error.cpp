@@ -85,6 +85,21 @@ FLT_API flt_status FLT_CALL flt_last_error_status(void) {
     return flt::t_error.status;
 }
 
+FLT_API void FLT_CALL flt_set_last_error(flt_status status, const char *message) {
+    if (status == FLT_OK) {
+        flt::clear_error();
+        return;
+    }
+    // The message may be flt_last_error_message() itself: copy it first.
+    char text[sizeof flt::t_error.message] = {0};
+    if (message)
+        std::snprintf(text, sizeof text, "%s", message);
+    flt::t_error.message[0] = '\0';
+    if (text[0])
+        flt::fail(status, "%s", text);
+    flt::set_status(status);
+}
+
 FLT_API int FLT_CALL flt_version(void) {
     return FLT_VERSION_NUMBER;
 }

@@ -2,8 +2,7 @@
 // The frame-source handle (flatline/source.h), the one public face of every
 // kind of source: argument checks, the started state, the borrowed frame and
 // its encoder position live here; each kind implements source_impl
-// (source.hpp) in its folder: sim/, images/, u3v/. Also the camera list and
-// the C API of the simulated USB3 Vision bus.
+// (source.hpp) in its folder: sim/, images/, u3v/. Also the camera list.
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -19,7 +18,7 @@
 #include "sources/sim/sim_source.hpp"
 #include "sources/source.hpp"
 #include "sources/u3v/discovery.hpp"
-#include "sources/u3v/sim_camera.hpp"
+#include "sources/u3v/transport_handle.hpp"
 #include "sources/u3v/u3v_source.hpp"
 
 using namespace flt;
@@ -27,7 +26,6 @@ using namespace flt;
 namespace {
 constexpr std::uint32_t k_source_magic = 0x464c5443u;  // "FLTC"
 constexpr std::uint32_t k_frame_magic = 0x464c5446u;   // "FLTF"
-constexpr std::uint32_t k_bus_magic = 0x464c5455u;     // "FLTU"
 constexpr std::uint32_t k_list_magic = 0x464c544cu;    // "FLTL"
 constexpr double k_nan = std::numeric_limits<double>::quiet_NaN();
 }  // namespace
@@ -40,11 +38,6 @@ struct flt_frame {
     flt_pixel_format format = FLT_PIXEL_MONO8;
     std::uint64_t block_id = 0, timestamp_ns = 0;
     double encoder_mm = k_nan;
-};
-
-struct flt_u3v_sim {
-    std::uint32_t magic = k_bus_magic;
-    u3v::sim_bus bus;
 };
 
 struct flt_camera_list {
@@ -71,15 +64,21 @@ flt_status check_source(const char *fn, const flt_source *source) {
     return FLT_OK;
 }
 
-flt_status check_bus(const char *fn, const flt_u3v_sim *bus, std::size_t camera) {
-    if (bus == nullptr)
-        return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'bus' is NULL", fn);
-    if (bus->magic != k_bus_magic)
-        return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'bus' is not a live flt_u3v_sim", fn);
-    if (camera >= bus->bus.cameras())
+// The backend of a flt_usb_transport (NULL: libusb; `backend` stays NULL).
+flt_status check_transport(const char *fn, const flt_usb_transport *usb,
+                           u3v::usb_backend *&backend) {
+    backend = nullptr;
+    if (usb == nullptr)
+        return FLT_OK;
+    if (usb->magic != u3v::k_usb_transport_magic)
         return fail(FLT_ERR_INVALID_ARGUMENT,
-                    "%s: argument 'camera' = %zu but the bus has %zu camera(s)", fn, camera,
-                    bus->bus.cameras());
+                    "%s: argument 'usb' is not a live flt_usb_transport (its bus destroyed?)", fn);
+    if (usb->revision != u3v::k_usb_transport_revision || usb->backend == nullptr)
+        return fail(FLT_ERR_INVALID_ARGUMENT,
+                    "%s: argument 'usb' was made for another release of libflatline (transport "
+                    "revision %u, this library %u): use the testing library of the same release",
+                    fn, unsigned(usb->revision), unsigned(u3v::k_usb_transport_revision));
+    backend = usb->backend;
     return FLT_OK;
 }
 
@@ -179,20 +178,20 @@ FLT_API flt_status FLT_CALL flt_source_create_image_dir(const char *directory,
     });
 }
 
-FLT_API flt_status FLT_CALL flt_camera_list_create(flt_u3v_sim *bus, flt_camera_list **out) {
+FLT_API flt_status FLT_CALL flt_camera_list_create(flt_usb_transport *usb, flt_camera_list **out) {
     const char *fn = "flt_camera_list_create";
     return guard(fn, [&] {
         FLT_CHECK_NOT_NULL(fn, out);
         *out = nullptr;
-        if (bus && bus->magic != k_bus_magic)
-            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'bus' is not a live flt_u3v_sim",
-                        fn);
+        u3v::usb_backend *backend = nullptr;
+        if (flt_status st = check_transport(fn, usb, backend))
+            return st;
         auto list = std::make_unique<flt_camera_list>();
-        if (bus) {
-            list->cameras = u3v::list_cameras(bus->bus);
+        if (backend) {
+            list->cameras = u3v::list_cameras(*backend);
         } else {
-            auto usb = u3v::make_libusb_backend();
-            list->cameras = u3v::list_cameras(*usb);
+            auto libusb = u3v::make_libusb_backend();
+            list->cameras = u3v::list_cameras(*libusb);
         }
         *out = list.release();
         return FLT_OK;
@@ -246,15 +245,15 @@ FLT_API flt_status FLT_CALL flt_camera_list_get(const flt_camera_list *list, siz
     });
 }
 
-FLT_API flt_status FLT_CALL flt_source_open_u3v(flt_u3v_sim *bus, const char *serial,
+FLT_API flt_status FLT_CALL flt_source_open_u3v(flt_usb_transport *usb, const char *serial,
                                                 const flt_options *options, flt_source **out) {
     const char *fn = "flt_source_open_u3v";
     return guard(fn, [&] {
         FLT_CHECK_NOT_NULL(fn, out);
         *out = nullptr;
-        if (bus && bus->magic != k_bus_magic)
-            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'bus' is not a live flt_u3v_sim",
-                        fn);
+        u3v::usb_backend *backend = nullptr;
+        if (flt_status st = check_transport(fn, usb, backend))
+            return st;
         if (flt_status st = check_option_component(fn, options, {FLT_OPT_SOURCE_ENCODER_MODE}))
             return st;
         auto s = std::make_unique<flt_source>();
@@ -272,8 +271,8 @@ FLT_API flt_status FLT_CALL flt_source_open_u3v(flt_u3v_sim *bus, const char *se
         config.stream.want_chunk = s->encoder.mode() == sources::encoder_chunk;
         config.stream.chunk_id =
             std::uint32_t(option_value(options, FLT_OPT_SOURCE_ENCODER_CHUNK_ID));
-        if (bus)
-            s->impl = std::make_unique<u3v::u3v_camera>(bus->bus, serial, config);
+        if (backend)
+            s->impl = std::make_unique<u3v::u3v_camera>(*backend, serial, config);
         else
             s->impl = std::make_unique<u3v::u3v_camera>(u3v::make_libusb_backend(), serial, config);
         *out = s.release();
@@ -544,147 +543,6 @@ FLT_API flt_status FLT_CALL flt_source_write_memory(flt_source *source, uint64_t
         if (flt_status st = check_range(fn, address, bytes))
             return st;
         camera->write_memory(address, static_cast<const std::uint8_t *>(bytes_in), bytes);
-        return FLT_OK;
-    });
-}
-
-// --- simulated bus ------------------------------------------------------------------
-
-FLT_API flt_status FLT_CALL flt_u3v_sim_create(flt_u3v_sim **out) {
-    const char *fn = "flt_u3v_sim_create";
-    return guard(fn, [&] {
-        FLT_CHECK_NOT_NULL(fn, out);
-        *out = new flt_u3v_sim;
-        return FLT_OK;
-    });
-}
-
-FLT_API void FLT_CALL flt_u3v_sim_destroy(flt_u3v_sim *bus) {
-    guard_void([&] {
-        if (bus && bus->magic == k_bus_magic) {
-            bus->magic = 0;
-            delete bus;
-        }
-    });
-}
-
-FLT_API flt_status FLT_CALL flt_u3v_sim_add_camera(flt_u3v_sim *bus, const char *vendor,
-                                                   const char *model, const char *serial,
-                                                   uint32_t width, uint32_t height,
-                                                   flt_pixel_format format, size_t *index_out) {
-    const char *fn = "flt_u3v_sim_add_camera";
-    return guard(fn, [&] {
-        FLT_CHECK_NOT_NULL(fn, bus);
-        if (bus->magic != k_bus_magic)
-            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'bus' is not a live flt_u3v_sim",
-                        fn);
-        FLT_CHECK_NOT_NULL(fn, vendor);
-        FLT_CHECK_NOT_NULL(fn, model);
-        FLT_CHECK_NOT_NULL(fn, serial);
-        for (const char *s : {vendor, model, serial})
-            if (std::strlen(s) > 63)
-                return fail(FLT_ERR_INVALID_ARGUMENT,
-                            "%s: string '%.80s...' is longer than 63 "
-                            "bytes",
-                            fn, s);
-        if (bus->bus.cameras() >= 8)
-            return fail(FLT_ERR_BUFFER_FULL, "%s: the bus already holds 8 cameras", fn);
-        if (width < 16 || width > 8192)
-            return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'width' = %u is outside "
-                        "[16, 8192]",
-                        fn, width);
-        if (height < 16 || height > 8192)
-            return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'height' = %u is outside "
-                        "[16, 8192]",
-                        fn, height);
-        const int raw_format = enum_arg(format);
-        if (raw_format != FLT_PIXEL_MONO8 && raw_format != FLT_PIXEL_MONO10 &&
-            raw_format != FLT_PIXEL_MONO12 && raw_format != FLT_PIXEL_MONO16)
-            return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'format' = %d is not a pixel "
-                        "format",
-                        fn, raw_format);
-        const std::size_t index =
-            bus->bus.add_camera(vendor, model, serial, width, height, raw_format);
-        if (index_out)
-            *index_out = index;
-        return FLT_OK;
-    });
-}
-
-FLT_API flt_status FLT_CALL flt_u3v_sim_set_frames(flt_u3v_sim *bus, size_t camera, flt_sim *sim) {
-    const char *fn = "flt_u3v_sim_set_frames";
-    return guard(fn, [&] {
-        if (flt_status st = check_bus(fn, bus, camera))
-            return st;
-        u3v::sim_set_frames(bus->bus.camera(camera), sim);
-        return FLT_OK;
-    });
-}
-
-FLT_API flt_status FLT_CALL flt_u3v_sim_set(flt_u3v_sim *bus, size_t camera,
-                                            flt_u3v_sim_param param, uint64_t value) {
-    const char *fn = "flt_u3v_sim_set";
-    return guard(fn, [&] {
-        if (flt_status st = check_bus(fn, bus, camera))
-            return st;
-        if (enum_arg(param) < 0)
-            return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'param' = %d: the parameter is "
-                        "unknown",
-                        fn, enum_arg(param));
-        u3v::sim_set(bus->bus.camera(camera), param, value);
-        return FLT_OK;
-    });
-}
-
-FLT_API flt_status FLT_CALL flt_u3v_sim_get(const flt_u3v_sim *bus, size_t camera,
-                                            flt_u3v_sim_param param, uint64_t *out) {
-    const char *fn = "flt_u3v_sim_get";
-    return guard(fn, [&] {
-        if (flt_status st = check_bus(fn, bus, camera))
-            return st;
-        FLT_CHECK_NOT_NULL(fn, out);
-        if (enum_arg(param) < 0)
-            return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'param' = %d: the parameter is "
-                        "unknown",
-                        fn, enum_arg(param));
-        *out = u3v::sim_get(bus->bus.camera(camera), param);
-        return FLT_OK;
-    });
-}
-
-FLT_API flt_status FLT_CALL flt_u3v_sim_inject(flt_u3v_sim *bus, size_t camera, flt_u3v_fault fault,
-                                               uint64_t at, uint32_t count) {
-    const char *fn = "flt_u3v_sim_inject";
-    return guard(fn, [&] {
-        if (flt_status st = check_bus(fn, bus, camera))
-            return st;
-        if (enum_arg(fault) < 0)
-            return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'fault' = %d: the fault is "
-                        "unknown",
-                        fn, enum_arg(fault));
-        u3v::sim_inject(bus->bus.camera(camera), fault, at, count);
-        return FLT_OK;
-    });
-}
-
-FLT_API flt_status FLT_CALL flt_u3v_sim_peek(const flt_u3v_sim *bus, size_t camera,
-                                             uint64_t address, uint32_t *out) {
-    const char *fn = "flt_u3v_sim_peek";
-    return guard(fn, [&] {
-        if (flt_status st = check_bus(fn, bus, camera))
-            return st;
-        FLT_CHECK_NOT_NULL(fn, out);
-        if (!u3v::sim_peek(bus->bus.camera(camera), address, *out))
-            return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'address' = 0x%llx is outside "
-                        "the register map",
-                        fn, (unsigned long long)address);
         return FLT_OK;
     });
 }

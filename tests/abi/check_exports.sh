@@ -4,9 +4,12 @@
 # (the C++ runtime, Eigen, OpenCV, libusb, zlib, expat, the library's own
 # C++ internals) must stay hidden, or it would clash with the vendor's copies
 # inside the same HMI process.
-#   usage: check_exports.sh path/to/libflatline.so
+#   usage: check_exports.sh path/to/libflatline.so [FORBIDDEN_PREFIX...]
+# Each FORBIDDEN_PREFIX (e.g. flt_u3v_sim_: the test doubles, which live in
+# libflatline_testing) must not start any exported symbol either.
 set -eu
-lib=${1:?usage: check_exports.sh LIBRARY}
+lib=${1:?usage: check_exports.sh LIBRARY [FORBIDDEN_PREFIX...]}
+shift
 if ! command -v nm >/dev/null 2>&1; then
   echo "SKIP: nm (binutils) not found"; exit 77
 fi
@@ -21,7 +24,15 @@ if [ -n "$bad" ]; then
   echo "Give them hidden visibility (only FLT_API functions are exported)."
   exit 1
 fi
+for prefix in "$@"; do
+  found=$(printf '%s\n' "$all" | grep "^$prefix" || true)
+  if [ -n "$found" ]; then
+    echo "FAIL: $lib exports symbols it must not ($prefix*):"
+    printf '  %s\n' $found
+    exit 1
+  fi
+done
 if [ "$count" -lt 1 ]; then
   echo "FAIL: $lib exports no flt_* symbol at all"; exit 1
 fi
-echo "OK: $lib exports $count symbols, all flt_*"
+echo "OK: $lib exports $count symbols, all flt_*${1:+, none starting with $*}"

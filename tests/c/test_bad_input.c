@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 /*
- * The bad-input matrix: every exported function of libflatline
- * against the inputs a careless or hostile caller gives it.
+ * The bad-input matrix: every exported function of libflatline (and of its
+ * testing library, flatline/testing.h) against the inputs a careless or
+ * hostile caller gives it.
  *
  * The table at the bottom has one row per public function. Each row's
  * check runs the relevant cases for that function:
@@ -18,10 +19,11 @@
  * function and the problem (a substring is checked); then a valid call on
  * the same handle must succeed (the handle stayed usable).
  *
- * Completeness: the test reads the dynamic symbol table of the loaded
- * libflatline.so (ELF .dynsym, found through dladdr) and fails when an
- * exported function has no row, or a row names a function that is not
- * exported. A new public function therefore cannot land without its row.
+ * Completeness: the test reads the dynamic symbol tables of the loaded
+ * libflatline.so and libflatline_testing.so (ELF .dynsym, found through
+ * dladdr) and fails when an exported function has no row, or a row names a
+ * function that neither exports, or libflatline exports a test double
+ * (flt_u3v_sim_*). A new public function cannot land without its row.
  *
  * Known bugs: a case that returns the wrong status is written with
  * KNOWN_BUG(...) and reported, not silently dropped; it must keep failing
@@ -44,6 +46,7 @@
 #include <zlib.h>
 
 #include "flatline/flatline.h"
+#include "flatline/testing.h"
 
 /* ---------------------------------------------------------------------- */
 /* Checking                                                                */
@@ -347,6 +350,45 @@ static void row_last_error_status(void) {
     if (flt_last_error_status() != FLT_OK)
         ERR("not FLT_OK after a success");
     flt_options_destroy(o);
+}
+
+static void row_set_last_error(void) {
+    /* A failing status with a message; the message may be the library's own
+     * buffer; NULL and "" give the status's name; a long one is cut;
+     * FLT_OK clears; any int is a status. */
+    g_fn = "flt_set_last_error";
+    flt_set_last_error(FLT_ERR_DEVICE, "flt_set_last_error: relayed");
+    ++g_checks;
+    if (flt_last_error_status() != FLT_ERR_DEVICE ||
+        strcmp(flt_last_error_message(), "flt_set_last_error: relayed") != 0)
+        ERR("not recorded: %s \"%s\"", flt_status_string(flt_last_error_status()),
+            flt_last_error_message());
+    flt_set_last_error(FLT_ERR_TIMEOUT, flt_last_error_message());
+    ++g_checks;
+    if (flt_last_error_status() != FLT_ERR_TIMEOUT ||
+        strcmp(flt_last_error_message(), "flt_set_last_error: relayed") != 0)
+        ERR("its own message not kept: \"%s\"", flt_last_error_message());
+    ++g_checks;
+    flt_set_last_error(FLT_ERR_IO, NULL);
+    if (flt_last_error_status() != FLT_ERR_IO ||
+        strcmp(flt_last_error_message(), "failed with FLT_ERR_IO") != 0)
+        ERR("NULL message: \"%s\"", flt_last_error_message());
+    ++g_checks;
+    flt_set_last_error((flt_status)-12345, "");
+    if (flt_last_error_status() != (flt_status)-12345 ||
+        strcmp(flt_last_error_message(), "failed with FLT_ERR_UNKNOWN") != 0)
+        ERR("unknown status: \"%s\"", flt_last_error_message());
+    char longer[2000];
+    memset(longer, 'x', sizeof longer - 1);
+    longer[sizeof longer - 1] = 0;
+    flt_set_last_error(FLT_ERR_FORMAT, longer);
+    ++g_checks;
+    if (strlen(flt_last_error_message()) != 511)
+        ERR("a 1999-byte message kept %zu bytes", strlen(flt_last_error_message()));
+    flt_set_last_error(FLT_OK, "ignored");
+    ++g_checks;
+    if (flt_last_error_status() != FLT_OK || flt_last_error_message()[0] != 0)
+        ERR("FLT_OK did not clear: \"%s\"", flt_last_error_message());
 }
 
 static void row_version(void) {
@@ -2104,6 +2146,15 @@ static flt_source *new_sim_source(void) {
     return s;
 }
 
+/* The bus as the transport flt_source_open_u3v() and
+ * flt_camera_list_create() take (NULL for a NULL bus). */
+static flt_usb_transport *usb(flt_u3v_sim *bus) {
+    flt_usb_transport *t = NULL;
+    if (bus && flt_u3v_sim_transport(bus, &t) != FLT_OK)
+        abort();
+    return t;
+}
+
 /* A simulated bus with one small Mono8 camera, serial "S1". */
 static flt_u3v_sim *new_bus(void) {
     flt_u3v_sim *bus = NULL;
@@ -2118,7 +2169,7 @@ static flt_u3v_sim *new_bus(void) {
 
 static flt_source *open_camera(flt_u3v_sim *bus) {
     flt_source *s = NULL;
-    if (flt_source_open_u3v(bus, "S1", NULL, &s)) {
+    if (flt_source_open_u3v(usb(bus), "S1", NULL, &s)) {
         fprintf(stderr, "fixture: %s\n", flt_last_error_message());
         exit(2);
     }
@@ -2480,22 +2531,38 @@ static void row_source_write_memory(void) {
 static void row_source_open_u3v(void) {
     flt_u3v_sim *bus = new_bus();
     flt_source *s = NULL;
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_source_open_u3v(bus, "S1", NULL, NULL));
-    BAD(FLT_ERR_NOT_FOUND, "NOPE", flt_source_open_u3v(bus, "NOPE", NULL, &s));
+    flt_camera_list *l = NULL;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_source_open_u3v(usb(bus), "S1", NULL, NULL));
+    BAD(FLT_ERR_NOT_FOUND, "NOPE", flt_source_open_u3v(usb(bus), "NOPE", NULL, &s));
     flt_options *o = options_with(FLT_OPT_EXTRACT_MIN_PEAK, 0.2);
     BAD(FLT_ERR_INVALID_ARGUMENT, "'extract_min_peak' belongs to the extractor",
-        flt_source_open_u3v(bus, "S1", o, &s));
+        flt_source_open_u3v(usb(bus), "S1", o, &s));
     flt_options_destroy(o);
     flt_u3v_sim *empty = NULL;
     GOOD(flt_u3v_sim_create(&empty));
-    BAD(FLT_ERR_NOT_FOUND, NULL, flt_source_open_u3v(empty, NULL, NULL, &s));
+    BAD(FLT_ERR_NOT_FOUND, NULL, flt_source_open_u3v(usb(empty), NULL, NULL, &s));
     flt_u3v_sim_destroy(empty);
-    GOOD(flt_source_open_u3v(bus, NULL, NULL, &s));
+    /* A transport that is no live one, and one made for another release
+     * (the handle's first fields: magic "FLTX", revision, backend). */
+    struct {
+        uint32_t magic, revision;
+        void *backend;
+    } fake = {0, 0, NULL};
+    BAD(FLT_ERR_INVALID_ARGUMENT, "not a live flt_usb_transport",
+        flt_source_open_u3v((flt_usb_transport *)&fake, NULL, NULL, &s));
+    fake.magic = 0x464c5458u;
+    fake.revision = 7;
+    fake.backend = &fake;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "another release",
+        flt_source_open_u3v((flt_usb_transport *)&fake, NULL, NULL, &s));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "another release",
+        flt_camera_list_create((flt_usb_transport *)&fake, &l));
+    GOOD(flt_source_open_u3v(usb(bus), NULL, NULL, &s));
     /* Wrong order: the same camera opened twice. */
     flt_source *again = NULL;
-    BAD(FLT_ERR_DEVICE, NULL, flt_source_open_u3v(bus, "S1", NULL, &again));
+    BAD(FLT_ERR_DEVICE, NULL, flt_source_open_u3v(usb(bus), "S1", NULL, &again));
     flt_source_destroy(s);
-    GOOD(flt_source_open_u3v(bus, "S1", NULL, &s));
+    GOOD(flt_source_open_u3v(usb(bus), "S1", NULL, &s));
     flt_source_destroy(s);
     flt_u3v_sim_destroy(bus);
 }
@@ -2503,8 +2570,8 @@ static void row_source_open_u3v(void) {
 static void row_camera_list_create(void) {
     flt_u3v_sim *bus = new_bus();
     flt_camera_list *l = NULL;
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_camera_list_create(bus, NULL));
-    GOOD(flt_camera_list_create(bus, &l));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_camera_list_create(usb(bus), NULL));
+    GOOD(flt_camera_list_create(usb(bus), &l));
     flt_camera_list_destroy(l);
     flt_u3v_sim_destroy(bus);
 }
@@ -2518,7 +2585,7 @@ static void row_camera_list_count(void) {
     flt_u3v_sim *bus = new_bus();
     flt_camera_list *l = NULL;
     size_t n;
-    GOOD(flt_camera_list_create(bus, &l));
+    GOOD(flt_camera_list_create(usb(bus), &l));
     g_fn = "flt_camera_list_count";
     BAD(FLT_ERR_INVALID_ARGUMENT, "'list'", flt_camera_list_count(NULL, &n));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_camera_list_count(l, NULL));
@@ -2531,7 +2598,7 @@ static void row_camera_list_get(void) {
     flt_u3v_sim *bus = new_bus();
     flt_camera_list *l = NULL;
     const char *v;
-    GOOD(flt_camera_list_create(bus, &l));
+    GOOD(flt_camera_list_create(usb(bus), &l));
     g_fn = "flt_camera_list_get";
     BAD(FLT_ERR_INVALID_ARGUMENT, "'list'", flt_camera_list_get(NULL, 0, &v, NULL, NULL, NULL));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'index'", flt_camera_list_get(l, 1, &v, NULL, NULL, NULL));
@@ -2546,6 +2613,20 @@ static void row_u3v_sim_create(void) {
     flt_u3v_sim *bus = NULL;
     BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_u3v_sim_create(NULL));
     GOOD(flt_u3v_sim_create(&bus));
+    flt_u3v_sim_destroy(bus);
+}
+
+static void row_u3v_sim_transport(void) {
+    flt_u3v_sim *bus = new_bus();
+    flt_usb_transport *t = NULL;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_u3v_sim_transport(bus, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'bus'", flt_u3v_sim_transport(NULL, &t));
+    uint32_t garbage[8] = {0};
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'bus'", flt_u3v_sim_transport((flt_u3v_sim *)garbage, &t));
+    GOOD(flt_u3v_sim_transport(bus, &t));
+    flt_source *s = NULL;
+    GOOD(flt_source_open_u3v(t, "S1", NULL, &s));
+    flt_source_destroy(s);
     flt_u3v_sim_destroy(bus);
 }
 
@@ -3643,6 +3724,7 @@ static const row k_rows[] = {
     ROW(status_string),
     ROW(last_error_message),
     ROW(last_error_status),
+    ROW(set_last_error),
     ROW(version),
     ROW(version_string),
     ROW(options_create),
@@ -3760,8 +3842,10 @@ static const row k_rows[] = {
     ROW(source_map_feature),
     ROW(source_read_memory),
     ROW(source_write_memory),
+    /* testing.h (libflatline_testing) */
     ROW(u3v_sim_create),
     ROW(u3v_sim_destroy),
+    ROW(u3v_sim_transport),
     ROW(u3v_sim_add_camera),
     ROW(u3v_sim_set_frames),
     ROW(u3v_sim_set),
@@ -3833,10 +3917,11 @@ static const row k_rows[] = {
 /* The exported functions, from the library's ELF dynamic symbol table     */
 /* ---------------------------------------------------------------------- */
 
-static char **exported_functions(size_t *count) {
+/* The functions exported by the loaded library that holds `symbol`,
+ * appended to names[*count] (NULL on failure). */
+static char **exported_functions(void *symbol, char **names, size_t *count) {
     Dl_info info;
-    *count = 0;
-    if (!dladdr((void *)flt_version, &info) || !info.dli_fname)
+    if (!dladdr(symbol, &info) || !info.dli_fname)
         return NULL;
     FILE *f = fopen(info.dli_fname, "rb");
     if (!f)
@@ -3857,8 +3942,7 @@ static char **exported_functions(size_t *count) {
         return NULL;
     }
     const Elf64_Shdr *sh = (const Elf64_Shdr *)(elf + eh->e_shoff);
-    char **names = NULL;
-    size_t cap = 0;
+    size_t cap = *count;
     for (int i = 0; i < eh->e_shnum; ++i) {
         if (sh[i].sh_type != SHT_DYNSYM)
             continue;
@@ -3873,8 +3957,8 @@ static char **exported_functions(size_t *count) {
                 continue;
             if (type != STT_FUNC && type != STT_GNU_IFUNC)
                 continue;
-            if (*count == cap)
-                names = realloc(names, sizeof(char *) * (cap = cap ? 2 * cap : 256));
+            if (*count >= cap)
+                names = realloc(names, sizeof(char *) * (cap = *count ? 2 * *count : 256));
             names[(*count)++] = strdup(str + sym[k].st_name);
         }
     }
@@ -3885,11 +3969,24 @@ static char **exported_functions(size_t *count) {
 int main(void) {
     size_t n_exported = 0;
     setvbuf(stdout, NULL, _IONBF, 0);
-    char **exported = exported_functions(&n_exported);
+    /* libflatline, then libflatline_testing (flatline/testing.h): both
+     * check their arguments the same way. */
+    char **exported = exported_functions((void *)flt_version, NULL, &n_exported);
+    const size_t n_production = n_exported;
+    if (exported)
+        exported = exported_functions((void *)flt_u3v_sim_create, exported, &n_exported);
     g_fn = "completeness";
-    if (!exported || n_exported == 0) {
-        ERR("cannot read the exported functions of the loaded libflatline");
+    if (!exported || n_production == 0 || n_exported == n_production) {
+        ERR("cannot read the exported functions of the loaded libflatline and "
+            "libflatline_testing");
         return 1;
+    }
+    /* The test doubles stay out of the production library. */
+    for (size_t i = 0; i < n_production; ++i) {
+        ++g_checks;
+        if (strncmp(exported[i], "flt_u3v_sim_", 12) == 0)
+            ERR("libflatline exports the test double %s (it belongs to libflatline_testing)",
+                exported[i]);
     }
     /* Every exported function has a row; every row is exported. */
     for (size_t i = 0; i < n_exported; ++i) {
@@ -3930,8 +4027,9 @@ int main(void) {
     for (size_t i = 0; i < n_exported; ++i)
         free(exported[i]);
     free(exported);
-    printf("bad-input matrix: %zu exported functions, %zu rows, %d checks, %d failures, "
-           "%d known bugs (reported)\n",
-           n_exported, (size_t)N_ROWS, g_checks, g_failures, g_known);
+    printf("bad-input matrix: %zu exported functions (%zu libflatline, %zu "
+           "libflatline_testing), %zu rows, %d checks, %d failures, %d known bugs (reported)\n",
+           n_exported, n_production, n_exported - n_production, (size_t)N_ROWS, g_checks,
+           g_failures, g_known);
     return g_failures ? 1 : 0;
 }

@@ -19,6 +19,7 @@
 #include <cmocka.h>
 
 #include <flatline/flatline.h>
+#include <flatline/testing.h>
 
 #include "sheet.h"
 
@@ -1108,13 +1109,15 @@ static void acquisition_from_a_source(void **state) {
     /* A camera unplugged while acquiring: the acquisition ends by itself
      * and stop() says why. */
     flt_u3v_sim *bus = NULL;
+    flt_usb_transport *usb = NULL;
     OK(flt_u3v_sim_create(&bus));
     OK(flt_u3v_sim_add_camera(bus, "Flatline", "Gauge", "G-1", 64, 64, FLT_PIXEL_MONO8, NULL));
     OK(flt_u3v_sim_set_frames(bus, 0, sim));
     OK(flt_u3v_sim_inject(bus, 0, FLT_U3V_FAULT_UNPLUG, 20, 1));
     flt_options *co = bag();
     set(co, FLT_OPT_SOURCE_ENCODER_STEP, F_STEP);
-    OK(flt_source_open_u3v(bus, "G-1", co, &src));
+    OK(flt_u3v_sim_transport(bus, &usb));
+    OK(flt_source_open_u3v(usb, "G-1", co, &src));
     flt_options_destroy(co);
     OK(flt_gauge_create(calib, o, &g));
     OK(flt_gauge_attach_source(g, src));

@@ -19,6 +19,7 @@
 
 #include "flatline/flatline.h"
 #include "flatline/source.h"
+#include "flatline/testing.h"
 
 #define ok(call) assert_int_equal((call), FLT_OK)
 
@@ -33,6 +34,15 @@ static void assert_error(flt_status got, flt_status want, const char *needle) {
 /* The pattern the simulated camera sends (flatline/source.h). */
 static uint8_t pattern(uint64_t block, size_t i) {
     return (uint8_t)(block * 131u + i * 7u + (i >> 9));
+}
+
+/* The bus as the transport flt_source_open_u3v() and
+ * flt_camera_list_create() take (NULL for a NULL bus). */
+static flt_usb_transport *usb(flt_u3v_sim *bus) {
+    flt_usb_transport *t = NULL;
+    if (bus && flt_u3v_sim_transport(bus, &t) != FLT_OK)
+        abort();
+    return t;
 }
 
 /* A bus with two cameras: 100 x 30 Mono8 and 64 x 32 Mono16. */
@@ -51,7 +61,7 @@ static flt_u3v_sim *make_bus(void) {
 
 static flt_source *open_camera(flt_u3v_sim *bus, const char *serial, flt_options *options) {
     flt_source *src = NULL;
-    flt_status st = flt_source_open_u3v(bus, serial, options, &src);
+    flt_status st = flt_source_open_u3v(usb(bus), serial, options, &src);
     if (st != FLT_OK)
         fail_msg("open: %s", flt_last_error_message());
     return src;
@@ -82,7 +92,7 @@ static void test_discovery_lists_cameras_only(void **state) {
     flt_u3v_sim *bus = make_bus();
     ok(flt_u3v_sim_set(bus, 1, FLT_U3V_SIM_SPEED_MBPS, 480));
     flt_camera_list *list = NULL;
-    ok(flt_camera_list_create(bus, &list));
+    ok(flt_camera_list_create(usb(bus), &list));
     size_t n = 0;
     ok(flt_camera_list_count(list, &n));
     assert_int_equal(n, 2); /* the keyboard on the bus is skipped */
@@ -158,12 +168,13 @@ static void test_open_reads_bootstrap_registers(void **state) {
     assert_int_equal(sim_value(bus, 0, FLT_U3V_SIM_LAST_READ_TIMEOUT_MS), 1000);
     /* a camera already open elsewhere is busy */
     flt_source *again = NULL;
-    assert_error(flt_source_open_u3v(bus, "SN0001", NULL, &again), FLT_ERR_DEVICE, "busy");
+    assert_error(flt_source_open_u3v(usb(bus), "SN0001", NULL, &again), FLT_ERR_DEVICE, "busy");
     assert_null(again);
     flt_source_destroy(src);
     flt_options_destroy(o);
 
-    assert_error(flt_source_open_u3v(bus, "NOPE-7", NULL, &src), FLT_ERR_NOT_FOUND, "'NOPE-7'");
+    assert_error(flt_source_open_u3v(usb(bus), "NOPE-7", NULL, &src), FLT_ERR_NOT_FOUND,
+                 "'NOPE-7'");
     assert_non_null(strstr(flt_last_error_message(), "SN0001"));
     assert_null(src);
     flt_u3v_sim_destroy(bus);
@@ -523,7 +534,7 @@ static void test_unplug_mid_stream(void **state) {
     assert_int_equal(count(src, FLT_COUNT_DISCONNECTS), 1);
     flt_source_destroy(src); /* closing a vanished camera is clean */
     flt_camera_list *list = NULL;
-    ok(flt_camera_list_create(bus, &list));
+    ok(flt_camera_list_create(usb(bus), &list));
     size_t n = 0;
     ok(flt_camera_list_count(list, &n));
     assert_int_equal(n, 1);

@@ -21,6 +21,7 @@
 
 #include "flatline/flatline.h"
 #include "flatline/source.h"
+#include "flatline/testing.h"
 
 #define ok(call)                                           \
   do {                                                     \
@@ -30,6 +31,15 @@
   } while (0)
 
 enum { FRAMES = 120, FIBERS = 201, WIDTH = 2048, ROWS = 256 };
+
+/* The bus as the transport flt_source_open_u3v() and
+ * flt_camera_list_create() take (NULL for a NULL bus). */
+static flt_usb_transport *usb(flt_u3v_sim *bus) {
+    flt_usb_transport *t = NULL;
+    if (bus && flt_u3v_sim_transport(bus, &t) != FLT_OK)
+        abort();
+    return t;
+}
 
 static flt_sim *make_sim(const flt_calib *calib) {
     flt_sim *sim = NULL;
@@ -59,7 +69,7 @@ static void test_camera_path_gives_the_direct_path_rows(void **state) {
     ok(flt_options_set(o, FLT_OPT_SOURCE_ENCODER_MODE, FLT_ENCODER_CHUNK));
     ok(flt_options_set(o, FLT_OPT_SOURCE_ENCODER_MM_PER_COUNT, 0.5));
     flt_source *src = NULL;
-    ok(flt_source_open_u3v(bus, "LOOP-1", o, &src));
+    ok(flt_source_open_u3v(usb(bus), "LOOP-1", o, &src));
     ok(flt_source_start(src));
 
     flt_extractor *ex_direct = NULL, *ex_camera = NULL;

@@ -23,10 +23,12 @@
 
 #include "core/error.hpp"
 #include "sources/u3v/protocol.hpp"
-#include "sources/u3v/sim_camera.hpp"
 #include "sources/u3v/u3v_source.hpp"
+#include "testing/sim_camera.hpp"
 
 using namespace flt::u3v;
+using flt::testing::sim_bus;
+using flt::testing::sim_set;
 
 namespace {
 

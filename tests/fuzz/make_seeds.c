@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 /* Writes the seed corpus of the fuzzing harnesses into tests/fuzz/corpus/
  * (committed; rerun only to regenerate it):
- *   cc -std=c99 -Iinclude tests/fuzz/make_seeds.c -Lbuild/dev/lib -lflatline \
- *      -Wl,-rpath,build/dev/lib -o /tmp/make_seeds && /tmp/make_seeds tests/fuzz/corpus
+ *   cc -std=c99 -Iinclude tests/fuzz/make_seeds.c -Lbuild/dev/lib -lflatline_testing \
+ *      -lflatline -Wl,-rpath,build/dev/lib -o /tmp/make_seeds && /tmp/make_seeds tests/fuzz/corpus
  * Seeds are valid inputs the harnesses parse deeply (a real calibration
  * file, the simulated camera's GenICam XML plain and zipped, a well-formed
  * frame on the U3V stream), plus small structured ones. */
@@ -13,6 +13,7 @@
 #include <sys/stat.h>
 
 #include "flatline/flatline.h"
+#include "flatline/testing.h"
 
 static const char *g_root;
 
@@ -67,13 +68,15 @@ int main(int argc, char **argv) {
      * byte 0 picks the form (odd: ZIP). */
     for (int zipped = 0; zipped < 2; ++zipped) {
         flt_u3v_sim *bus = NULL;
+        flt_usb_transport *usb = NULL;
         flt_source *src = NULL;
         size_t idx;
         uint64_t bytes = 0, address = 0;
         check(flt_u3v_sim_create(&bus));
         check(flt_u3v_sim_add_camera(bus, "V", "M", "S1", 64, 32, FLT_PIXEL_MONO8, &idx));
         check(flt_u3v_sim_set(bus, idx, FLT_U3V_SIM_XML_ZIPPED, (uint64_t)zipped));
-        check(flt_source_open_u3v(bus, "S1", NULL, &src));
+        check(flt_u3v_sim_transport(bus, &usb));
+        check(flt_source_open_u3v(usb, "S1", NULL, &src));
         check(flt_source_camera_value(src, FLT_CAMERA_XML_BYTES, &bytes));
         /* The manifest's first entry holds the file's address (U3V). */
         uint8_t entry[16];

@@ -2,6 +2,7 @@
 using System;
 using System.Collections.Generic;
 using System.Runtime.InteropServices;
+using Flatline.Testing;
 
 namespace Flatline
 {
@@ -148,7 +149,8 @@ namespace Flatline
 
     /// <summary>
     /// A source of camera frames (flt_source): a USB3 Vision camera (over
-    /// libusb, no camera SDK; or a camera of a <see cref="U3VSimBus"/>),
+    /// libusb, no camera SDK; or a simulated camera of a
+    /// <see cref="Flatline.Testing.U3VSimBus"/>),
     /// recorded image files, or a <see cref="SimulatedLine"/>, behind one
     /// loop: <see cref="Start"/>, then <see cref="Next"/> until it returns
     /// null (end of images) or throws. Every frame carries its encoder
@@ -273,13 +275,17 @@ namespace Flatline
         public static FrameSource U3V(string serial = null, FlatlineOptions options = null, U3VSimBus bus = null)
         {
             NativeLoader.EnsureLoaded();
-            var busHandle = bus != null ? bus.LiveHandle : new U3VSimHandle();
             SourceHandle handle;
             using (var scope = FlatlineOptions.Borrow(options))
             {
-                FlatlineNative.flt_source_open_u3v(busHandle, serial, scope.Handle, out handle);
+                // IntPtr.Zero: the real USB bus (libusb); the testing tier is
+                // touched (and its library loaded) only when a bus is given.
+                IntPtr usb = bus != null ? bus.Transport : IntPtr.Zero;
+                FlatlineNative.flt_source_open_u3v(usb, serial, scope.Handle, out handle);
             }
-            handle.Hold(busHandle);
+            if (bus != null)
+                handle.Hold(bus.LiveHandle);
+            GC.KeepAlive(bus);
             return new FrameSource(handle, bus);
         }
 
@@ -289,9 +295,9 @@ namespace Flatline
         public static unsafe IReadOnlyList<CameraInfo> Cameras(U3VSimBus bus = null)
         {
             NativeLoader.EnsureLoaded();
-            var busHandle = bus != null ? bus.LiveHandle : new U3VSimHandle();
             var cameras = new List<CameraInfo>();
-            FlatlineNative.flt_camera_list_create(busHandle, out CameraListHandle list);
+            IntPtr usb = bus != null ? bus.Transport : IntPtr.Zero;
+            FlatlineNative.flt_camera_list_create(usb, out CameraListHandle list);
             using (list)
             {
                 FlatlineNative.flt_camera_list_count(list, out UIntPtr count);
@@ -509,163 +515,6 @@ namespace Flatline
         {
             for (int r = 0; r < rows; ++r)
                 Buffer.MemoryCopy(source + r * stride, target + (long)r * rowBytes, rowBytes, rowBytes);
-        }
-    }
-
-    /// <summary>Settings and read-outs of a simulated camera (flt_u3v_sim_param).</summary>
-    public enum U3VSimParam
-    {
-        ResponseTimeMs = NativeU3VSimParam.FLT_U3V_SIM_RESPONSE_TIME_MS,
-        MaxCommandBytes = NativeU3VSimParam.FLT_U3V_SIM_MAX_COMMAND_BYTES,
-        MaxAckBytes = NativeU3VSimParam.FLT_U3V_SIM_MAX_ACK_BYTES,
-        AlignmentLog2 = NativeU3VSimParam.FLT_U3V_SIM_ALIGNMENT_LOG2,
-        XmlZipped = NativeU3VSimParam.FLT_U3V_SIM_XML_ZIPPED,
-        /// <summary>1: append the encoder count as a chunk.</summary>
-        EncoderChunk = NativeU3VSimParam.FLT_U3V_SIM_ENCODER_CHUNK,
-        EncoderChunkId = NativeU3VSimParam.FLT_U3V_SIM_ENCODER_CHUNK_ID,
-        /// <summary>Micrometres of travel per encoder count.</summary>
-        EncoderMmPerCountUm = NativeU3VSimParam.FLT_U3V_SIM_ENCODER_MM_PER_COUNT_UM,
-        SpeedMbps = NativeU3VSimParam.FLT_U3V_SIM_SPEED_MBPS,
-        /// <summary>1: the camera was left streaming by a process that died.</summary>
-        LeftStreaming = NativeU3VSimParam.FLT_U3V_SIM_LEFT_STREAMING,
-        // read-only
-        SiControl = NativeU3VSimParam.FLT_U3V_SIM_SI_CONTROL,
-        Acquiring = NativeU3VSimParam.FLT_U3V_SIM_ACQUIRING,
-        Commands = NativeU3VSimParam.FLT_U3V_SIM_COMMANDS,
-        LastReadTimeoutMs = NativeU3VSimParam.FLT_U3V_SIM_LAST_READ_TIMEOUT_MS,
-        FramesSent = NativeU3VSimParam.FLT_U3V_SIM_FRAMES_SENT,
-        Open = NativeU3VSimParam.FLT_U3V_SIM_OPEN,
-    }
-
-    /// <summary>Faults a simulated camera can inject (flt_u3v_fault); see
-    /// include/flatline/source.h for what each does to the stream.</summary>
-    public enum U3VFault
-    {
-        ShortFrame = NativeU3VFault.FLT_U3V_FAULT_SHORT_FRAME,
-        LeaderMidFrame = NativeU3VFault.FLT_U3V_FAULT_LEADER_MID_FRAME,
-        Overflow = NativeU3VFault.FLT_U3V_FAULT_OVERFLOW,
-        SkipBlockIds = NativeU3VFault.FLT_U3V_FAULT_SKIP_BLOCK_IDS,
-        StreamTimeout = NativeU3VFault.FLT_U3V_FAULT_STREAM_TIMEOUT,
-        Unplug = NativeU3VFault.FLT_U3V_FAULT_UNPLUG,
-        Garbage = NativeU3VFault.FLT_U3V_FAULT_GARBAGE,
-        TrailerStatus = NativeU3VFault.FLT_U3V_FAULT_TRAILER_STATUS,
-        SubmitRefused = NativeU3VFault.FLT_U3V_FAULT_SUBMIT_REFUSED,
-        PendingAck = NativeU3VFault.FLT_U3V_FAULT_PENDING_ACK,
-        ControlTimeout = NativeU3VFault.FLT_U3V_FAULT_CONTROL_TIMEOUT,
-        LateAck = NativeU3VFault.FLT_U3V_FAULT_LATE_ACK,
-    }
-
-    /// <summary>
-    /// A simulated USB bus with simulated USB3 Vision cameras (flt_u3v_sim):
-    /// the real client code of <see cref="FrameSource.U3V"/> talks to it
-    /// through the same transport interface as libusb, so tests and
-    /// integrators run the whole camera path without hardware. Cameras answer
-    /// GenCP, describe themselves in a GenICam XML and stream leader, payload
-    /// and trailer transfers: a test pattern, or the frames of a
-    /// <see cref="SimulatedLine"/> (<see cref="SetFrames"/>), optionally with
-    /// an encoder chunk and injected faults. Time is virtual: a simulated
-    /// timeout returns at once.
-    /// </summary>
-    /// <remarks>
-    /// Sources opened on the bus hold it, and the bus holds the lines it
-    /// renders, so any dispose order is safe. Not thread-safe, nor to be used
-    /// while a source on it runs on another thread.
-    /// </remarks>
-    public sealed class U3VSimBus : IDisposable
-    {
-        private readonly U3VSimHandle handle;
-
-        static U3VSimBus() => NativeLoader.EnsureLoaded();
-
-        /// <summary>An empty bus (plus one device that is not a camera).</summary>
-        public U3VSimBus()
-        {
-            FlatlineNative.flt_u3v_sim_create(out handle);
-            handle.Track(0);
-        }
-
-        /// <summary>Adds a camera (at most 8) and returns its index: strings of
-        /// at most 63 bytes, a <paramref name="width"/> x <paramref name="height"/>
-        /// sensor (16..8192 px each).</summary>
-        public unsafe int AddCamera(string vendor, string model, string serial, int width, int height,
-                                    PixelFormat format = PixelFormat.Mono8)
-        {
-            var live = LiveHandle;
-            if (vendor == null)
-                throw new ArgumentNullException(nameof(vendor));
-            if (model == null)
-                throw new ArgumentNullException(nameof(model));
-            if (serial == null)
-                throw new ArgumentNullException(nameof(serial));
-            Shapes.AtLeast(width, 0, nameof(width));
-            Shapes.AtLeast(height, 0, nameof(height));
-            ulong index;
-            FlatlineNative.flt_u3v_sim_add_camera(live, vendor, model, serial, (uint)width, (uint)height, (int)format,
-                                                  &index);
-            return (int)index;
-        }
-
-        /// <summary>Renders camera <paramref name="camera"/>'s frames with
-        /// <paramref name="line"/> (held by the bus), or the test pattern for
-        /// null. The camera takes the line's frame size and format.</summary>
-        public void SetFrames(int camera, SimulatedLine line)
-        {
-            var live = LiveHandle;
-            var sim = line != null ? line.LiveHandle : new SimHandle();
-            FlatlineNative.flt_u3v_sim_set_frames(live, Camera(camera), sim);
-            live.Hold(sim);
-        }
-
-        /// <summary>Sets a parameter of a camera (before it is opened).</summary>
-        public void Set(int camera, U3VSimParam param, ulong value) =>
-            FlatlineNative.flt_u3v_sim_set(LiveHandle, Camera(camera), (int)param, value);
-
-        /// <summary>Reads a parameter or read-out of a camera.</summary>
-        public unsafe ulong Get(int camera, U3VSimParam param)
-        {
-            ulong value;
-            FlatlineNative.flt_u3v_sim_get(LiveHandle, Camera(camera), (int)param, &value);
-            return value;
-        }
-
-        /// <summary>Schedules a fault: stream faults on the frame with block id
-        /// <paramref name="at"/>; host faults on the next <paramref name="count"/>
-        /// operations. Faults add up.</summary>
-        public void Inject(int camera, U3VFault fault, ulong at = 0, uint count = 1) =>
-            FlatlineNative.flt_u3v_sim_inject(LiveHandle, Camera(camera), (int)fault, at, count);
-
-        /// <summary>A 32-bit register of the camera's map, read directly (no GenCP).</summary>
-        public unsafe uint Peek(int camera, ulong address)
-        {
-            uint value;
-            FlatlineNative.flt_u3v_sim_peek(LiveHandle, Camera(camera), address, &value);
-            return value;
-        }
-
-        /// <summary>Frees the bus now, or as soon as the last source opened on
-        /// it is disposed. Further calls throw <see cref="ObjectDisposedException"/>;
-        /// a second Dispose does nothing.</summary>
-        public void Dispose()
-        {
-            handle.Dispose();
-            GC.SuppressFinalize(this);
-        }
-
-        internal U3VSimHandle LiveHandle
-        {
-            get
-            {
-                if (handle.IsDisposed)
-                    throw new ObjectDisposedException(nameof(U3VSimBus));
-                return handle;
-            }
-        }
-
-        private static ulong Camera(int camera)
-        {
-            if (camera < 0)
-                throw new ArgumentOutOfRangeException(nameof(camera), camera, "camera must be >= 0");
-            return (ulong)camera;
         }
     }
 }

@@ -163,7 +163,7 @@ namespace Flatline
         private static long live;
         internal static long Live => Interlocked.Read(ref live);
         public U3VSimHandle() { }
-        protected override void Destroy(IntPtr native) => FlatlineNative.flt_u3v_sim_destroy_handle(native);
+        protected override void Destroy(IntPtr native) => FlatlineTestingNative.flt_u3v_sim_destroy_handle(native);
         protected override void OnLive(int delta) => Interlocked.Add(ref live, delta);
     }
 

@@ -18,6 +18,8 @@ namespace Flatline
     internal static class NativeLoader
     {
         internal const string GlueName = "flatline_csharp";
+        /// <summary>The testing tier's glue (Flatline.Testing), found beside the main one.</summary>
+        internal const string TestingGlueName = "flatline_testing_csharp";
         internal const string EnvironmentVariable = "FLATLINE_NATIVE_PATH";
 
         private static readonly object Gate = new object();
@@ -92,13 +94,15 @@ namespace Flatline
 
         private static IntPtr Resolve(string libraryName, Assembly assembly, DllImportSearchPath? searchPath)
         {
-            if (libraryName != GlueName)
+            if (libraryName != GlueName && libraryName != TestingGlueName)
                 return IntPtr.Zero;
             lock (Gate)
                 bound = true;
             string file = EffectiveOverride();
             if (file == null)
                 return IntPtr.Zero;  // the default probing
+            if (libraryName == TestingGlueName)
+                file = Path.Combine(Path.GetDirectoryName(file) ?? ".", PlatformFileName(TestingGlueName));
             if (!File.Exists(file))
                 throw new DllNotFoundException(
                     $"libflatline's C# glue was not found at '{file}' (from Library.NativeLibraryPath " +
@@ -110,6 +114,9 @@ namespace Flatline
         /// <summary>Nothing to do: the resolver is registered when the
         /// assembly loads.</summary>
         internal static void EnsureLoaded() { }
+
+        /// <summary>Nothing to do: the resolver finds the testing glue too.</summary>
+        internal static void EnsureTestingLoaded() { }
 #else
         // netstandard2.0 has no NativeLibrary: load the override by full path
         // before the first P/Invoke; the loader then binds DllImport
@@ -139,6 +146,35 @@ namespace Flatline
             PreloadCore(file, core => LoadLibraryW(core) != IntPtr.Zero);
             if (LoadLibraryW(file) == IntPtr.Zero)
                 throw new DllNotFoundException($"could not load '{file}' (error {Marshal.GetLastWin32Error()})");
+        }
+
+        private static bool testingPreloaded;
+
+        /// <summary>The testing tier's glue from the override's folder
+        /// (Windows), before the first call into Flatline.Testing.</summary>
+        internal static void EnsureTestingLoaded()
+        {
+            EnsureLoaded();
+            lock (Gate)
+            {
+                if (testingPreloaded)
+                    return;
+                testingPreloaded = true;
+            }
+            string file = EffectiveOverride();
+            if (file == null || !RuntimeInformation.IsOSPlatform(OSPlatform.Windows))
+                return;
+            string dir = Path.GetDirectoryName(file) ?? ".";
+            string testing = Path.Combine(dir, PlatformFileName(TestingGlueName));
+            if (File.Exists(testing))
+            {
+                // its own dependency, libflatline_testing, beside it
+                foreach (string library in Directory.GetFiles(dir, "*flatline_testing.dll"))
+                    LoadLibraryW(library);
+                if (LoadLibraryW(testing) == IntPtr.Zero)
+                    throw new DllNotFoundException(
+                        $"could not load '{testing}' (error {Marshal.GetLastWin32Error()})");
+            }
         }
 #endif
     }

@@ -1,16 +1,20 @@
 // SPDX-License-Identifier: Apache-2.0
-/* Frame sources and the simulated USB3 Vision bus
- * (include/flatline/source.h). */
+/* Frame sources (include/flatline/source.h). The simulated USB3 Vision bus
+ * of the testing tier is the module FlatlineTestingNative (testing.i). */
 %{
 #include "flatline/source.h"
 %}
 
 FLT_CS_HANDLE(flt_source, SourceHandle)
 FLT_CS_HANDLE(flt_camera_list, CameraListHandle)
-FLT_CS_HANDLE(flt_u3v_sim, U3VSimHandle)
-/* A NULL bus (the real USB bus) or NULL simulator (the test pattern) is
- * passed as a handle object that holds no native pointer: the marshaller
- * refuses a null SafeHandle reference, not a zero one. */
+/* The USB transport: IntPtr.Zero for the real USB bus (libusb), else the
+ * transport of a testing-tier bus (Flatline.Testing.U3VSimBus), which the
+ * source holds alive through the bus's handle. */
+%typemap(ctype) flt_usb_transport * "void *"
+%typemap(imtype) flt_usb_transport * "global::System.IntPtr"
+%typemap(cstype) flt_usb_transport * "global::System.IntPtr"
+%typemap(in) flt_usb_transport * %{ $1 = ($1_ltype)$input; %}
+%typemap(csin) flt_usb_transport * "$csinput"
 
 /* The enums travel as their int values; the public enums take their values
  * from the generated Native* enums. */
@@ -26,24 +30,19 @@ FLT_CS_INT_ENUM(flt_source_kind, NativeSourceKind)
 FLT_CS_INT_ENUM(flt_source_counter, NativeCounter)
 FLT_CS_INT_ENUM(flt_camera_string, NativeCameraString)
 FLT_CS_INT_ENUM(flt_camera_value, NativeCameraValue)
-FLT_CS_INT_ENUM(flt_u3v_sim_param, NativeU3VSimParam)
-FLT_CS_INT_ENUM(flt_u3v_fault, NativeU3VFault)
 FLT_CS_INT_ENUM(flt_encoder_mode, NativeEncoderMode)
 %ignore FLT_ENCODER_MODE_MAX_ENUM_;
 %ignore FLT_SOURCE_KIND_MAX_ENUM_;
 %ignore FLT_COUNT_MAX_ENUM_;
 %ignore FLT_CAMERA_STRING_MAX_ENUM_;
 %ignore FLT_CAMERA_VALUE_MAX_ENUM_;
-%ignore FLT_U3V_SIM_PARAM_MAX_ENUM_;
-%ignore FLT_U3V_FAULT_MAX_ENUM_;
 
 /* Outputs are raw pointers (&local in the public classes). */
 FLT_CS_OUT_POINTER(int, int, flt_source_kind *out)
 FLT_CS_OUT_POINTER(uint64_t, ulong, uint64_t *out, uint64_t *block_id, uint64_t *timestamp_ns)
 FLT_CS_OUT_POINTER(int64_t, long, int64_t *out)
-FLT_CS_OUT_POINTER(uint32_t, uint, uint32_t *speed_mbps, uint32_t *width, uint32_t *height,
-                   uint32_t *out)
-FLT_CS_OUT_POINTER(size_t, ulong, size_t *stride_bytes, size_t *index_out)
+FLT_CS_OUT_POINTER(uint32_t, uint, uint32_t *speed_mbps, uint32_t *width, uint32_t *height)
+FLT_CS_OUT_POINTER(size_t, ulong, size_t *stride_bytes)
 FLT_CS_OUT_POINTER(int, int, flt_pixel_format *format)
 /* Library-owned strings and the borrowed frame and its pixels: IntPtrs. */
 FLT_CS_OUT_POINTER(void, global::System.IntPtr,

@@ -5,6 +5,7 @@ using System.Runtime.CompilerServices;
 using System.Runtime.InteropServices;
 using Xunit;
 using Xunit.Abstractions;
+using Flatline.Testing;
 
 namespace Flatline.Tests
 {

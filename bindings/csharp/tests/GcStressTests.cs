@@ -5,6 +5,7 @@ using System.Diagnostics;
 using System.Runtime.CompilerServices;
 using Xunit;
 using Xunit.Abstractions;
+using Flatline.Testing;
 
 namespace Flatline.Tests
 {

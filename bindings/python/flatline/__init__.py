@@ -15,10 +15,11 @@ lengths in mm, slopes in mm/mm. Errors raise subclasses of FlatlineError.
 
 Components: the calibration model (Calibration), the simulated sensor
 (SimulatedLine), frame sources (Source: simulator, image sequences, USB3
-Vision cameras; U3VSimBus for simulated cameras), the frame-to-profile
-extractor (Extractor), the reconstructor (reconstruct, Reconstructor) and
-the flatness metrics (Flatness, i_units), and the gauge that runs them
-all on a line (Gauge: frames and cuts in, Sheet results out).
+Vision cameras), the frame-to-profile extractor (Extractor), the
+reconstructor (reconstruct, Reconstructor), the flatness metrics (Flatness,
+i_units), and the gauge that runs them all on a line (Gauge: frames and
+cuts in, Sheet results out). Simulated USB3 Vision cameras for tests are
+in flatline.testing (the testing tier, loaded only when imported).
 """
 
 from __future__ import annotations
@@ -91,9 +92,6 @@ from ._source import (
     Frame,
     Source,
     SourceKind,
-    U3VFault,
-    U3VSimBus,
-    U3VSimParam,
     list_cameras,
     source_options,
 )
@@ -193,9 +191,6 @@ __all__ = [
     "Frame",
     "CameraInfo",
     "Source",
-    "U3VFault",
-    "U3VSimParam",
-    "U3VSimBus",
     "list_cameras",
     "source_options",
 ]

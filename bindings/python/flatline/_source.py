@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: Apache-2.0
 """Frame sources (flatline/source.h): the simulator, recorded image
-sequences and USB3 Vision cameras behind one class, plus the simulated USB3
-Vision bus for testing acquisition without hardware."""
+sequences and USB3 Vision cameras behind one class. (Simulated USB3 Vision
+cameras, for testing acquisition without hardware, are in flatline.testing.)"""
 
 from __future__ import annotations
 
@@ -9,26 +9,26 @@ import enum
 import os
 import threading
 from contextlib import ExitStack
-from typing import Any, Dict, Iterator, List, NamedTuple, Optional, Sequence, Union
+from typing import (TYPE_CHECKING, Any, Dict, Iterator, List, NamedTuple, Optional, Sequence,
+                    Union)
 
 import numpy as np
 
 from . import capi as _capi
 from ._arrays import as_index, as_real
 from ._errors import StateError
-from ._extractor import _format as _pixel_format_arg
 from ._options import OptionValue, make_options, options_doc, prefixed_options
 from ._pixels import PixelFormat
 from ._sim import SimulatedLine
+
+if TYPE_CHECKING:  # the testing tier is imported only when a bus is given
+    from .testing import U3VSimBus
 
 __all__ = [
     "SourceKind",
     "Frame",
     "CameraInfo",
     "Source",
-    "U3VFault",
-    "U3VSimParam",
-    "U3VSimBus",
     "list_cameras",
     "source_options",
 ]
@@ -60,47 +60,6 @@ class CameraInfo(NamedTuple):
     model: str  #: the model, or why the camera could not be opened
     serial: str  #: the serial number (pass it to :meth:`Source.u3v`)
     speed_mbps: int  #: link speed, Mbit/s (480, 5000, 10000; 0 unknown)
-
-
-class U3VFault(enum.IntEnum):
-    """Faults of the simulated camera (:meth:`U3VSimBus.inject`). Stream
-    faults hit the frame with block id ``at``; host faults (SUBMIT_REFUSED
-    and the control faults) the next ``count`` operations."""
-
-    SHORT_FRAME = _capi.FLT_U3V_FAULT_SHORT_FRAME
-    LEADER_MID_FRAME = _capi.FLT_U3V_FAULT_LEADER_MID_FRAME
-    OVERFLOW = _capi.FLT_U3V_FAULT_OVERFLOW
-    SKIP_BLOCK_IDS = _capi.FLT_U3V_FAULT_SKIP_BLOCK_IDS
-    STREAM_TIMEOUT = _capi.FLT_U3V_FAULT_STREAM_TIMEOUT
-    UNPLUG = _capi.FLT_U3V_FAULT_UNPLUG
-    GARBAGE = _capi.FLT_U3V_FAULT_GARBAGE
-    TRAILER_STATUS = _capi.FLT_U3V_FAULT_TRAILER_STATUS
-    SUBMIT_REFUSED = _capi.FLT_U3V_FAULT_SUBMIT_REFUSED
-    PENDING_ACK = _capi.FLT_U3V_FAULT_PENDING_ACK
-    CONTROL_TIMEOUT = _capi.FLT_U3V_FAULT_CONTROL_TIMEOUT
-    LATE_ACK = _capi.FLT_U3V_FAULT_LATE_ACK
-
-
-class U3VSimParam(enum.IntEnum):
-    """Parameters of a simulated camera (:meth:`U3VSimBus.set` before a
-    camera is opened; the last seven are read-only, :meth:`U3VSimBus.get`)."""
-
-    RESPONSE_TIME_MS = _capi.FLT_U3V_SIM_RESPONSE_TIME_MS
-    MAX_COMMAND_BYTES = _capi.FLT_U3V_SIM_MAX_COMMAND_BYTES
-    MAX_ACK_BYTES = _capi.FLT_U3V_SIM_MAX_ACK_BYTES
-    ALIGNMENT_LOG2 = _capi.FLT_U3V_SIM_ALIGNMENT_LOG2
-    XML_ZIPPED = _capi.FLT_U3V_SIM_XML_ZIPPED
-    ENCODER_CHUNK = _capi.FLT_U3V_SIM_ENCODER_CHUNK
-    ENCODER_CHUNK_ID = _capi.FLT_U3V_SIM_ENCODER_CHUNK_ID
-    ENCODER_MM_PER_COUNT_UM = _capi.FLT_U3V_SIM_ENCODER_MM_PER_COUNT_UM
-    SPEED_MBPS = _capi.FLT_U3V_SIM_SPEED_MBPS
-    LEFT_STREAMING = _capi.FLT_U3V_SIM_LEFT_STREAMING
-    SI_CONTROL = _capi.FLT_U3V_SIM_SI_CONTROL
-    ACQUIRING = _capi.FLT_U3V_SIM_ACQUIRING
-    COMMANDS = _capi.FLT_U3V_SIM_COMMANDS
-    LAST_READ_TIMEOUT_MS = _capi.FLT_U3V_SIM_LAST_READ_TIMEOUT_MS
-    FRAMES_SENT = _capi.FLT_U3V_SIM_FRAMES_SENT
-    OPEN = _capi.FLT_U3V_SIM_OPEN
 
 
 #: flt_source_counter by its Python name (counters() keys), in C order.
@@ -192,148 +151,26 @@ def _enum(function: str, argument: str, value: Any, cls: type) -> int:
     return as_index(function, argument, value, -2**31, 2**31 - 1)
 
 
-class U3VSimBus:
-    """A simulated USB bus with simulated USB3 Vision cameras (at most 8, plus
-    one device that is not a camera): the real client code runs against it,
-    down to the USB transfers, so acquisition and its failure modes can be
-    tested without hardware. Time is virtual: simulated timeouts return at
-    once.
-
-    Frames are a test pattern (byte i of block b is (b*131 + i*7 + (i>>9))
-    mod 256) unless :meth:`set_frames` gives a camera a
-    :class:`SimulatedLine` to render. Feature registers: see
-    flatline/source.h.
-
-    Sources opened on the bus (:meth:`Source.u3v` with ``bus=``) keep the C
-    bus alive: :meth:`close` frees it once they are closed too. Not for use
-    from two threads at once (the binding serialises calls on it and on its
-    sources).
-    """
-
-    def __init__(self) -> None:
-        self._lock = threading.RLock()
-        self._handle: Optional[_capi.flt_u3v_sim] = _capi.flt_u3v_sim_create()
-        # camera index -> the SimulatedLine it renders (kept alive: the C bus
-        # borrows it).
-        self._frames: Dict[int, SimulatedLine] = {}
-        self._sim_handles: Dict[int, Any] = {}
-
-    def close(self) -> None:
-        """Releases the bus (freed once no source opened on it is left).
-        Idempotent; later calls raise StateError."""
-        with self._lock:
-            self._handle = None
-
-    @property
-    def closed(self) -> bool:
-        """True after :meth:`close`."""
-        return self._handle is None
-
-    def __enter__(self) -> "U3VSimBus":
-        self._live()
-        return self
-
-    def __exit__(self, *exc_info: Any) -> None:
-        self.close()
-
-    def _live(self) -> _capi.flt_u3v_sim:
-        handle = self._handle
-        if handle is None:
-            raise StateError("the U3VSimBus is closed")
-        return handle
-
-    def __repr__(self) -> str:
-        if getattr(self, "_handle", None) is None:
-            return "<flatline.U3VSimBus closed>"
-        return "<flatline.U3VSimBus>"
-
-    def add_camera(self, vendor: str, model: str, serial: str, width: int, height: int,
-                   pixel_format: Union[PixelFormat, str, int] = PixelFormat.MONO8) -> int:
-        """Adds a camera with a width x height sensor (16..8192 px each) of
-        Mono8/10/12/16 pixels; strings at most 63 bytes. Returns its index."""
-        fn = "add_camera"
-        fmt = _pixel_format_arg(fn, pixel_format)
-        args = (_str(fn, "vendor", vendor), _str(fn, "model", model),
-                _str(fn, "serial", serial), as_index(fn, "width", width, 0, 2**32 - 1),
-                as_index(fn, "height", height, 0, 2**32 - 1))
-        with self._lock:
-            return int(_capi.flt_u3v_sim_add_camera(self._live(), *args, int(fmt)))
-
-    def set_frames(self, camera: int, sim: Optional[SimulatedLine]) -> None:
-        """Camera `camera` renders `sim`'s frames (the bus keeps it; the
-        camera takes its frame size and format), or the test pattern with
-        None."""
-        fn = "set_frames"
-        camera = as_index(fn, "camera", camera)
-        if sim is not None and not isinstance(sim, SimulatedLine):
-            raise TypeError(f"{fn}() argument 'sim' must be a SimulatedLine or None, not "
-                            f"{type(sim).__name__}")
-        with self._lock:
-            sim_handle = sim._live() if sim is not None else None
-            _capi.flt_u3v_sim_set_frames(self._live(), camera, sim_handle)
-            if sim is None:
-                self._frames.pop(camera, None)
-                self._sim_handles.pop(camera, None)
-            else:
-                self._frames[camera] = sim
-                self._sim_handles[camera] = sim_handle
-
-    def set(self, camera: int, param: Union[U3VSimParam, str, int], value: int) -> None:
-        """Sets a parameter of camera `camera` (before it is opened)."""
-        fn = "set"
-        camera = as_index(fn, "camera", camera)
-        key = _enum(fn, "param", param, U3VSimParam)
-        value = as_index(fn, "value", value, 0, 2**64 - 1)
-        with self._lock:
-            _capi.flt_u3v_sim_set(self._live(), camera, key, value)
-
-    def get(self, camera: int, param: Union[U3VSimParam, str, int]) -> int:
-        """A parameter or read-only state of camera `camera`."""
-        fn = "get"
-        camera = as_index(fn, "camera", camera)
-        key = _enum(fn, "param", param, U3VSimParam)
-        with self._lock:
-            return int(_capi.flt_u3v_sim_get(self._live(), camera, key))
-
-    def inject(self, camera: int, fault: Union[U3VFault, str, int], at: int = 0,
-               count: int = 1) -> None:
-        """Schedules a fault (see :class:`U3VFault`): stream faults on the
-        frame with block id `at`, host faults on the next `count`
-        operations. Faults add up."""
-        fn = "inject"
-        camera = as_index(fn, "camera", camera)
-        key = _enum(fn, "fault", fault, U3VFault)
-        at = as_index(fn, "at", at, 0, 2**64 - 1)
-        count = as_index(fn, "count", count, 0, 2**32 - 1)
-        with self._lock:
-            _capi.flt_u3v_sim_inject(self._live(), camera, key, at, count)
-
-    def peek(self, camera: int, address: int) -> int:
-        """A 32-bit register of the camera's map, read directly (no GenCP)."""
-        fn = "peek"
-        camera = as_index(fn, "camera", camera)
-        address = as_index(fn, "address", address, 0, 2**64 - 1)
-        with self._lock:
-            return int(_capi.flt_u3v_sim_peek(self._live(), camera, address))
-
-    def cameras(self) -> List[CameraInfo]:
-        """The cameras on this bus, as :func:`list_cameras` finds them."""
-        return list_cameras(self)
+def _check_bus(function: str, bus: Any) -> None:
+    if bus is None:
+        return
+    from .testing import U3VSimBus  # the testing tier, only when one is given
+    if not isinstance(bus, U3VSimBus):
+        raise TypeError(f"{function}() argument 'bus' must be a flatline.testing.U3VSimBus "
+                        f"or None, not {type(bus).__name__}")
 
 
-def list_cameras(bus: Optional[U3VSimBus] = None) -> List[CameraInfo]:
+def list_cameras(bus: Optional["U3VSimBus"] = None) -> List[CameraInfo]:
     """The USB3 Vision cameras present: on the USB bus (libusb) when `bus` is
-    None, else on a simulated bus. Cameras that cannot be opened (no udev
-    rule) are listed with vendor "?" and the reason as their model.
-    DeviceError if libusb cannot start."""
+    None, else on a simulated bus (flatline.testing.U3VSimBus). Cameras that
+    cannot be opened (no udev rule) are listed with vendor "?" and the
+    reason as their model. DeviceError if libusb cannot start."""
     fn = "list_cameras"
-    if bus is not None and not isinstance(bus, U3VSimBus):
-        raise TypeError(f"{fn}() argument 'bus' must be a U3VSimBus or None, not "
-                        f"{type(bus).__name__}")
+    _check_bus(fn, bus)
     with ExitStack() as stack:
         if bus is not None:
             stack.enter_context(bus._lock)
-        handle = _capi.flt_camera_list_create(bus._live() if bus is not None else None)
+        handle = _capi.flt_camera_list_create(bus._transport() if bus is not None else None)
         count = int(_capi.flt_camera_list_count(handle))
         found = []
         for index in range(count):
@@ -374,7 +211,7 @@ class Source:
 
     @classmethod
     def _wrap(cls, handle: Any, keep: tuple, locks: tuple,
-              bus: Optional[U3VSimBus] = None) -> "Source":
+              bus: Optional["U3VSimBus"] = None) -> "Source":
         self = cls.__new__(cls)
         self._lock = threading.RLock()
         self._handle = handle
@@ -443,26 +280,25 @@ class Source:
         return cls._wrap(handle, (), ())
 
     @classmethod
-    def u3v(cls, serial: Optional[str] = None, bus: Optional[U3VSimBus] = None,
+    def u3v(cls, serial: Optional[str] = None, bus: Optional["U3VSimBus"] = None,
             **options: OptionValue) -> "Source":
         """Opens a USB3 Vision camera: the one with serial number `serial`
-        (None: the first), on the USB bus, or on the simulated `bus` (kept
-        alive by the source). Reads the bootstrap registers and the GenICam
-        XML; stops a camera a killed process left streaming. NotFoundError
-        for a serial that is not present, DeviceError when a camera cannot
-        be opened (permissions: lib/sources/deploy/)."""
+        (None: the first), on the USB bus, or on the simulated `bus` (a
+        flatline.testing.U3VSimBus, kept alive by the source). Reads the
+        bootstrap registers and the GenICam XML; stops a camera a killed
+        process left streaming. NotFoundError for a serial that is not
+        present, DeviceError when a camera cannot be opened (permissions:
+        lib/sources/deploy/)."""
         fn = "Source.u3v"
         if serial is not None:
             serial = _str(fn, "serial", serial)
-        if bus is not None and not isinstance(bus, U3VSimBus):
-            raise TypeError(f"{fn}() argument 'bus' must be a U3VSimBus or None, not "
-                            f"{type(bus).__name__}")
+        _check_bus(fn, bus)
         bag = make_options(fn, options, prefixes=("source_", "u3v_"))
         if bus is None:
             return cls._wrap(_capi.flt_source_open_u3v(None, serial, bag), (), ())
         with bus._lock:
             bus_handle = bus._live()
-            handle = _capi.flt_source_open_u3v(bus_handle, serial, bag)
+            handle = _capi.flt_source_open_u3v(bus._transport(), serial, bag)
         return cls._wrap(handle, (bus, bus_handle), (bus._lock,), bus)
 
     list_cameras = staticmethod(list_cameras)

@@ -1,11 +1,12 @@
 // SPDX-License-Identifier: Apache-2.0
 /*
  * flatline/source.h: frame sources (simulator, image sequences, USB3 Vision
- * cameras), the camera list and the simulated USB3 Vision bus.
+ * cameras) and the camera list. (The simulated USB3 Vision bus of
+ * flatline/testing.h is the module flatline.testing_capi, testing.i.)
  *
  * Wrapped as they are: the create/open calls, start, stop, set_encoder,
  * count, stream_error, camera strings and values, feature access by name,
- * map_feature, the camera list and every flt_u3v_sim_* call. Replaced:
+ * map_feature and the camera list. Replaced:
  * flt_source_create_images (a list of str), flt_source_next +
  * flt_frame_info (next_frame copies the borrowed frame into a numpy array,
  * with the GIL released while waiting) and the raw memory access (numpy
@@ -15,7 +16,6 @@
 
 %ignore flt_source_destroy;
 %ignore flt_camera_list_destroy;
-%ignore flt_u3v_sim_destroy;
 %ignore flt_source_create_images;
 %ignore flt_source_next;
 %ignore flt_frame_info;
@@ -30,10 +30,6 @@
 %typemap(argout) flt_camera_list **out {
   %append_output(SWIG_NewPointerObj(*$1, $descriptor(flt_camera_list *), SWIG_POINTER_OWN));
 }
-%typemap(in, numinputs=0) flt_u3v_sim **out (flt_u3v_sim *temp = NULL) { $1 = &temp; }
-%typemap(argout) flt_u3v_sim **out {
-  %append_output(SWIG_NewPointerObj(*$1, $descriptor(flt_u3v_sim *), SWIG_POINTER_OWN));
-}
 %typemap(in, numinputs=0) flt_source_kind *out (flt_source_kind temp) { $1 = &temp; }
 %typemap(argout) flt_source_kind *out { %append_output(PyLong_FromLong((long)*$1)); }
 %typemap(in, numinputs=0) uint64_t *out (uint64_t temp = 0) { $1 = &temp; }
@@ -47,8 +43,6 @@
 %typemap(argout) uint32_t *out, uint32_t *speed_mbps {
   %append_output(PyLong_FromUnsignedLong((unsigned long)*$1));
 }
-%typemap(in, numinputs=0) size_t *index_out (size_t temp = 0) { $1 = &temp; }
-%typemap(argout) size_t *index_out { %append_output(PyLong_FromSize_t(*$1)); }
 %typemap(in, numinputs=0) const char **out (const char *temp = NULL),
                           const char **vendor (const char *temp = NULL),
                           const char **model (const char *temp = NULL),
@@ -207,12 +201,6 @@ struct flt_source {};
 struct flt_camera_list {};
 %extend flt_camera_list {
   ~flt_camera_list() { flt_camera_list_destroy($self); }
-}
-
-%nodefaultctor flt_u3v_sim;
-struct flt_u3v_sim {};
-%extend flt_u3v_sim {
-  ~flt_u3v_sim() { flt_u3v_sim_destroy($self); }
 }
 
 /* flt_frame stays opaque and unused from Python. */

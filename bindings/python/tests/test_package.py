@@ -96,7 +96,7 @@ def test_py_typed_and_stub_cover_the_public_api():
     # Every public method and property of the classes over handles, and of
     # Intrinsics and PixelFormat...
     for name in ("Reconstructor", "Calibration", "SimulatedLine", "Extractor",
-                 "Intrinsics", "FiberGrid", "Flatness", "Source", "U3VSimBus"):
+                 "Intrinsics", "FiberGrid", "Flatness", "Source"):
         real = {m for m in vars(getattr(flatline, name)) if not m.startswith("_")}
         real -= {f for f in getattr(getattr(flatline, name), "_fields", ())}
         real -= {"fx", "fy", "cx", "cy", "k1", "k2", "k3", "k4", "k5", "k6", "p1", "p2"}
@@ -111,8 +111,7 @@ def test_py_typed_and_stub_cover_the_public_api():
         assert stub_members(name, ast.AnnAssign) == {
             f.name for f in dataclasses.fields(getattr(flatline, name))}, name
     # ...and every member of the enums.
-    for name in ("Target", "Defect", "PixelFormat", "Shape", "ShapeComponent", "SourceKind",
-                 "U3VFault", "U3VSimParam"):
+    for name in ("Target", "Defect", "PixelFormat", "Shape", "ShapeComponent", "SourceKind"):
         assert stub_members(name, ast.AnnAssign) == set(getattr(flatline, name).__members__), name
 
 
@@ -148,7 +147,8 @@ def test_enums_are_the_c_values():
     assert [int(s) for s in flatline.Shape] == list(range(8))
     assert int(flatline.ShapeComponent.CROSSBOW) == 32
     assert [int(k) for k in flatline.SourceKind] == [1, 2, 3]
-    assert flatline.U3VFault.LATE_ACK == 13 and flatline.U3VSimParam.OPEN == 25
+    from flatline.testing import U3VFault, U3VSimParam
+    assert U3VFault.LATE_ACK == 13 and U3VSimParam.OPEN == 25
     assert (flatline.FIBER_NO_DATA, flatline.FIBER_NO_WAVE, flatline.FIBER_PARTIAL) == (1, 2, 4)
     assert (flatline.WINDOW_SHORT, flatline.WINDOW_NO_VALID_FIBER, flatline.WINDOW_NO_BOW,
             flatline.WINDOW_NO_CROSSBOW, flatline.ZONE_NO_DATA) == (1, 2, 4, 8, 1)

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import flatline
+import flatline.testing
 
 from conftest import bits, roi_reference
 
@@ -27,7 +28,7 @@ def pattern(block, width=WIDTH, height=HEIGHT):
 
 @pytest.fixture
 def bus():
-    with flatline.U3VSimBus() as b:
+    with flatline.testing.U3VSimBus() as b:
         assert b.add_camera("Flatline", "Test camera", "S1", WIDTH, HEIGHT) == 0
         assert b.add_camera("Flatline", "Second", "S2", WIDTH, HEIGHT) == 1
         yield b
@@ -123,7 +124,7 @@ def test_injected_stream_faults_are_dropped_counted_and_reported(bus):
     # Block ids start at 1. A short frame at block 2 and a bad trailer at 4
     # are dropped; three ids skipped from 6 are lost; the frames around them
     # arrive intact.
-    bus.inject(0, flatline.U3VFault.SHORT_FRAME, at=2)
+    bus.inject(0, flatline.testing.U3VFault.SHORT_FRAME, at=2)
     bus.inject(0, "trailer_status", at=4)
     bus.inject(0, "skip_block_ids", at=6, count=3)
     with flatline.Source.u3v("S1", bus=bus) as cam:
@@ -166,7 +167,7 @@ def test_control_faults_are_retried_and_counted(bus):
 
 
 def test_a_camera_left_streaming_is_stopped_on_open(bus):
-    bus.set(0, flatline.U3VSimParam.LEFT_STREAMING, 1)
+    bus.set(0, flatline.testing.U3VSimParam.LEFT_STREAMING, 1)
     assert bus.get(0, "si_control") == 1
     with flatline.Source.u3v("S1", bus=bus) as cam:
         assert bus.get(0, "si_control") == 0 and bus.get(0, "acquiring") == 0
@@ -242,7 +243,7 @@ def test_a_source_keeps_its_simulated_line_alive(calib):
 
 
 def test_a_source_keeps_its_bus_alive():
-    bus = flatline.U3VSimBus()
+    bus = flatline.testing.U3VSimBus()
     bus.add_camera("V", "M", "S1", WIDTH, HEIGHT)
     ref = weakref.ref(bus)
     cam = flatline.Source.u3v(bus=bus)
@@ -322,7 +323,7 @@ def test_simulated_camera_to_source_to_extractor_to_reconstruct_round_trip(calib
         want = [direct.next_frame() for _ in range(frames)]
     sim = flatline.SimulatedLine(calib, sim_seed=11)
     sim.add_defect("centre_buckle", 8.0, 600.0)
-    with flatline.U3VSimBus() as bus:
+    with flatline.testing.U3VSimBus() as bus:
         bus.add_camera("Flatline", "Sensor", "SIM-1", 64, 32)
         bus.set_frames(0, sim)
         bus.set(0, "encoder_chunk", 1)
@@ -359,7 +360,7 @@ def test_create_destroy_cycles_of_sources_buses_and_flatness_keep_rss_flat():
     x = np.linspace(-500.0, 500.0, 51)
 
     def cycle(i):
-        with flatline.U3VSimBus() as bus:
+        with flatline.testing.U3VSimBus() as bus:
             bus.add_camera("V", "M", "S1", WIDTH, HEIGHT)
             with flatline.Source.u3v(bus=bus) as cam:
                 cam.start()
@@ -397,11 +398,11 @@ def test_host_encoder_positions_and_reprs(calib):
             with pytest.raises(flatline.StateError):
                 auto.set_encoder(1.0)
     assert repr(source) == "<flatline.Source closed>"
-    with flatline.U3VSimBus() as bus:
+    with flatline.testing.U3VSimBus() as bus:
         bus.add_camera("V", "M", "S1", WIDTH, HEIGHT)
         bus.set_frames(0, None)  # the test pattern (already the default)
-        assert repr(bus) == "<flatline.U3VSimBus>"
-    assert bus.closed and repr(bus) == "<flatline.U3VSimBus closed>"
+        assert repr(bus) == "<flatline.testing.U3VSimBus>"
+    assert bus.closed and repr(bus) == "<flatline.testing.U3VSimBus closed>"
     with pytest.raises(flatline.StateError, match="closed"):
         bus.add_camera("V", "M", "S2", WIDTH, HEIGHT)
 
@@ -444,7 +445,7 @@ def test_a_camera_source_serialises_with_the_simulator_it_renders(calib):
 
     with flatline.SimulatedLine(calib, sim_seed=4) as direct:
         want = direct.next_frame()
-    with flatline.U3VSimBus() as bus, flatline.SimulatedLine(calib, sim_seed=4) as sim:
+    with flatline.testing.U3VSimBus() as bus, flatline.SimulatedLine(calib, sim_seed=4) as sim:
         bus.add_camera("V", "M", "S1", WIDTH, HEIGHT)
         bus.set_frames(0, sim)
         with flatline.Source.u3v(bus=bus) as cam:

@@ -4,7 +4,7 @@
 // payload and trailer transfers with USB bulk packet semantics and
 // injectable faults. Time is virtual: waiting for nothing returns "timeout"
 // at once.
-#include "sources/u3v/sim_camera.hpp"
+#include "testing/sim_camera.hpp"
 
 #include <zlib.h>
 
@@ -16,7 +16,9 @@
 #include "core/error.hpp"
 #include "sources/u3v/protocol.hpp"
 
-namespace flt::u3v {
+namespace flt::testing {
+
+using namespace u3v;  // the wire format and the transport interface
 
 namespace {
 
@@ -708,7 +710,11 @@ class sim_device final : public usb_device {
             return usb_status::no_device;
         if (endpoint != k_ep_control_out)
             return usb_status::io;
-        cam_.command(data, length);
+        try {
+            cam_.command(data, length);
+        } catch (...) {  // out of memory: nothing may cross into libflatline
+            return usb_status::no_memory;
+        }
         sent = length;
         return usb_status::ok;
     }
@@ -735,9 +741,13 @@ class sim_device final : public usb_device {
             return usb_status::no_device;
         if (endpoint != k_ep_stream)
             return usb_status::io;
-        cam_.slot_buffers.assign(buffers, buffers + slots);
+        try {
+            cam_.slot_buffers.assign(buffers, buffers + slots);
+            cam_.slot_fill.assign(slots, 0);
+        } catch (...) {
+            return usb_status::no_memory;
+        }
         cam_.slot_capacity = capacity;
-        cam_.slot_fill.assign(slots, 0);
         cam_.submitted.clear();
         return usb_status::ok;
     }
@@ -748,8 +758,14 @@ class sim_device final : public usb_device {
             --cam_.refuse_submits;
             return usb_status::no_memory;
         }
-        cam_.slot_fill.at(slot) = 0;
-        cam_.submitted.push_back(slot);
+        if (slot >= cam_.slot_fill.size())
+            return usb_status::io;
+        try {
+            cam_.submitted.push_back(slot);
+        } catch (...) {
+            return usb_status::no_memory;
+        }
+        cam_.slot_fill[slot] = 0;
         return usb_status::ok;
     }
     usb_status async_reap(unsigned /*timeout_ms*/, usb_completion &out) override {
@@ -759,8 +775,15 @@ class sim_device final : public usb_device {
         usb_status st = usb_status::ok;
         if (cam_.unplugged) {
             st = usb_status::no_device;
-        } else if (!cam_.fill(slot, st)) {
-            return usb_status::timeout;
+        } else {
+            try {
+                if (!cam_.fill(slot, st))
+                    return usb_status::timeout;
+            } catch (...) {
+                // The simulator could not render the frame (or memory ran
+                // out): an I/O error, as a broken device would give.
+                return usb_status::io;
+            }
         }
         cam_.submitted.pop_front();
         out.slot = slot;
@@ -800,6 +823,15 @@ std::size_t sim_bus::add_camera(const std::string &vendor, const std::string &mo
 }
 
 usb_status sim_bus::list(std::vector<usb_device_desc> &out) {
+    try {
+        describe(out);
+    } catch (...) {  // out of memory: nothing may cross into libflatline
+        return usb_status::no_memory;
+    }
+    return usb_status::ok;
+}
+
+void sim_bus::describe(std::vector<usb_device_desc> &out) const {
     out.clear();
     // A device that is not a camera (a keyboard), which discovery must skip.
     usb_device_desc keyboard;
@@ -859,7 +891,6 @@ usb_status sim_bus::list(std::vector<usb_device_desc> &out) {
         d.interfaces = {control, event, stream};
         out.push_back(d);
     }
-    return usb_status::ok;
 }
 
 usb_status sim_bus::open(const usb_device_desc &desc, std::unique_ptr<usb_device> &out) {
@@ -870,7 +901,11 @@ usb_status sim_bus::open(const usb_device_desc &desc, std::unique_ptr<usb_device
         return usb_status::no_device;
     if (cameras_[i]->open)
         return usb_status::busy;
-    out = std::make_unique<sim_device>(*cameras_[i]);
+    try {
+        out = std::make_unique<sim_device>(*cameras_[i]);
+    } catch (...) {
+        return usb_status::no_memory;
+    }
     return usb_status::ok;
 }
 
@@ -1044,4 +1079,4 @@ void sim_set_frames(sim_camera &cam, flt_sim *sim) {
     cam.build();
 }
 
-}  // namespace flt::u3v
+}  // namespace flt::testing

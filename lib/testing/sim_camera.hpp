@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
-// Internal: a simulated USB bus with USB3 Vision cameras behind the
-// transport interface (see flatline/source.h, "Simulated USB3 Vision
-// cameras", for its behaviour as the tests see it).
+// Internal to libflatline_testing: a simulated USB bus with USB3 Vision
+// cameras behind libflatline's transport interface (flatline/testing.h
+// describes its behaviour as the tests see it). Its objects are called by
+// libflatline across the library boundary: no exception may leave a
+// usb_backend or usb_device method (each answers a usb_status instead).
 #pragma once
 
 #include <cstdint>
@@ -10,10 +12,15 @@
 #include <string>
 #include <vector>
 
-#include "flatline/source.h"
+#include "flatline/testing.h"
 #include "sources/u3v/transport.hpp"
 
-namespace flt::u3v {
+namespace flt::testing {
+
+using u3v::usb_backend;
+using u3v::usb_device;
+using u3v::usb_device_desc;
+using u3v::usb_status;
 
 // Register map of the simulated camera.
 namespace sim_map {
@@ -50,6 +57,7 @@ class sim_bus final : public usb_backend {
     const sim_camera &camera(std::size_t i) const { return *cameras_[i]; }
 
   private:
+    void describe(std::vector<usb_device_desc> &out) const;
     std::vector<std::unique_ptr<sim_camera>> cameras_;
 };
 
@@ -60,4 +68,4 @@ void sim_inject(sim_camera &cam, flt_u3v_fault fault, std::uint64_t at, std::uin
 bool sim_peek(const sim_camera &cam, std::uint64_t address, std::uint32_t &out);
 void sim_set_frames(sim_camera &cam, flt_sim *sim);
 
-}  // namespace flt::u3v
+}  // namespace flt::testing
