@@ -289,20 +289,32 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_kind_of(const flt_source *s
  * AcquisitionMode = Continuous, sets up the stream interface (SIRM: payload
  * transfer size a multiple of the alignment, at most u3v_transfer_size),
  * allocates the pool of u3v_transfers bulk transfers and the frame buffer,
- * and executes AcquisitionStart. Simulator and images: resets the block ids
- * (a started source starts again from its first frame only for images).
- * FLT_ERR_STATE if already started.
+ * and executes AcquisitionStart. A camera still streaming (SI control on,
+ * or left so by a stop or start that failed) is stopped first, as open
+ * does (FLT_COUNT_STREAM_RECOVERIES). When a start fails after SI control
+ * was set, it stops the camera again; if even that fails, the message says
+ * the camera may still be streaming, and the next start or stop stops it.
+ * Simulator and images: resets the block ids (a started source starts again
+ * from its first frame only for images). FLT_ERR_STATE if already started.
  * @param source the source.
  * @return FLT_OK; FLT_ERR_STATE as above; FLT_ERR_DEVICE or
  *         FLT_ERR_TIMEOUT from the camera; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
  */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_start(flt_source *source);
 
-/** Stops acquisition: camera AcquisitionStop, SI control = 0, transfers
- * cancelled. Stopping a stopped source is a no-op.
+/** Stops acquisition. The source is stopped on the host side whatever the
+ * camera answers (transfers cancelled, no frame until the next start).
+ * Camera: AcquisitionStop, then SI control = 0 read back as 0; a step whose
+ * answer timed out, was busy or malformed is sent again (up to
+ * u3v_command_attempts rounds, each command with its own attempts). A camera
+ * that was unplugged streams to no one: FLT_OK. Stopping a stopped source is
+ * a no-op, unless its camera may still be streaming.
  * @param source the source.
- * @return FLT_OK; FLT_ERR_DEVICE or FLT_ERR_TIMEOUT when a camera could not be stopped
- *         (the host side is stopped anyway); FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ * @return FLT_OK only when the camera took both; otherwise the last
+ *         failure's status (FLT_ERR_TIMEOUT, FLT_ERR_DEVICE) and a message
+ *         saying the camera may still be streaming: a later
+ *         flt_source_stop() or flt_source_start() stops it;
+ *         FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
  */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_stop(flt_source *source);
 
@@ -366,7 +378,7 @@ typedef enum flt_source_counter {
         13,                    /**< GenCP pending acks received (the camera asked for more time) */
     FLT_COUNT_STALE_ACKS = 14, /**< acks with another request id (stale), discarded */
     FLT_COUNT_COMMAND_RETRIES = 15,   /**< GenCP commands sent again after no answer */
-    FLT_COUNT_STREAM_RECOVERIES = 16, /**< cameras found streaming on open */
+    FLT_COUNT_STREAM_RECOVERIES = 16, /**< cameras found streaming on open or start */
     FLT_COUNT_MAX_ENUM_ = 0x7FFFFFFF
 } flt_source_counter;
 

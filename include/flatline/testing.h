@@ -117,6 +117,10 @@ typedef enum flt_u3v_sim_param {
     FLT_U3V_SIM_LAST_READ_TIMEOUT_MS = 23, /**< read-only: timeout of the last control read */
     FLT_U3V_SIM_FRAMES_SENT = 24,          /**< read-only: leaders sent */
     FLT_U3V_SIM_OPEN = 25,                 /**< read-only: 1 while a host holds it open */
+    /** read-only: control-channel and submit faults not yet applied in full
+     * (stream faults are not counted) */
+    FLT_U3V_SIM_FAULTS_PENDING = 26,
+    FLT_U3V_SIM_UNPLUGGED = 27, /**< read-only: 1 once the camera was unplugged */
     FLT_U3V_SIM_PARAM_MAX_ENUM_ = 0x7FFFFFFF
 } flt_u3v_sim_param;
 
@@ -131,11 +135,16 @@ typedef enum flt_u3v_fault {
     FLT_U3V_FAULT_UNPLUG = 5,           /**< unplugged after the leader */
     FLT_U3V_FAULT_GARBAGE = 6,          /**< 100 random bytes before the leader */
     FLT_U3V_FAULT_TRAILER_STATUS = 7,   /**< trailer status 0xA101 (overrun) */
-    /* host faults, `at` ignored: the next `count` operations */
+    /* host faults: they hit the `count` operations (commands on the
+     * control channel, or bulk submissions) that follow the next `at` ones
+     * (`at` = 0: from the next one on); faults of one kind add up */
     FLT_U3V_FAULT_SUBMIT_REFUSED = 10,  /**< bulk submits refused (no memory) */
-    FLT_U3V_FAULT_PENDING_ACK = 11,     /**< the command first gets `count` pending acks */
-    FLT_U3V_FAULT_CONTROL_TIMEOUT = 12, /**< `count` commands get no answer (lost) */
-    FLT_U3V_FAULT_LATE_ACK = 13,        /**< the command's ack comes only after the following one */
+    FLT_U3V_FAULT_PENDING_ACK = 11,     /**< one command first gets `count` pending acks */
+    FLT_U3V_FAULT_CONTROL_TIMEOUT = 12, /**< commands lost on the way: not executed, no answer */
+    FLT_U3V_FAULT_LATE_ACK = 13, /**< one command's ack comes only after the following one's */
+    FLT_U3V_FAULT_LOST_ACK = 14, /**< commands executed, their acks lost */
+    FLT_U3V_FAULT_BUSY = 15,     /**< commands answered "busy" (0x8007), not executed */
+    FLT_U3V_FAULT_CONTROL_UNPLUG = 16, /**< unplugged when one command arrives */
     FLT_U3V_FAULT_MAX_ENUM_ = 0x7FFFFFFF
 } flt_u3v_fault;
 

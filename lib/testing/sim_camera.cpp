@@ -229,10 +229,18 @@ struct sim_camera {
     unsigned last_read_timeout = 0;
     std::deque<std::vector<std::uint8_t>> acks;
     std::vector<std::uint8_t> held_ack;  // LATE_ACK: sent after the next command
-    bool hold_next_ack = false;
-    std::uint32_t pending_acks_next = 0, drop_answers = 0;
+    // Control-channel faults, by the index of the command they hit (counted
+    // from 0 with `commands`): commands first..last.
+    struct control_fault {
+        flt_u3v_fault kind;
+        std::uint64_t first, last;
+        std::uint32_t count;  // PENDING_ACK: pending acks per command
+    };
+    std::vector<control_fault> control_faults;
     std::deque<device_transfer> fifo;
-    std::uint32_t refuse_submits = 0;
+    // SUBMIT_REFUSED: the bulk submissions first..last (counted with `submits`).
+    std::uint64_t submits = 0;
+    std::vector<std::pair<std::uint64_t, std::uint64_t>> refused_submits;
 
     struct stream_fault {
         flt_u3v_fault kind;
@@ -407,21 +415,49 @@ struct sim_camera {
     }
 
     // --- control channel ------------------------------------------------------
-    void answer(std::vector<std::uint8_t> ack) {
-        if (hold_next_ack) {
-            hold_next_ack = false;
-            held_ack = std::move(ack);
+    // The faults of `kind` that hit command `index`, or nullptr.
+    const control_fault *control_fault_at(flt_u3v_fault kind, std::uint64_t index) const {
+        for (const control_fault &f : control_faults)
+            if (f.kind == kind && index >= f.first && index <= f.last)
+                return &f;
+        return nullptr;
+    }
+
+    // Schedules a control fault on the `count` commands after the next `at`
+    // ones; faults of one kind add up (a new one starts after the last one
+    // of its kind still pending).
+    void schedule_control(flt_u3v_fault kind, std::uint64_t at, std::uint32_t count) {
+        const bool single = kind == FLT_U3V_FAULT_PENDING_ACK || kind == FLT_U3V_FAULT_LATE_ACK ||
+                            kind == FLT_U3V_FAULT_CONTROL_UNPLUG;
+        const std::uint64_t n = single ? 1 : count;
+        if (n == 0)
             return;
-        }
+        std::uint64_t first = commands + at;
+        if (!single)
+            for (const control_fault &f : control_faults)
+                if (f.kind == kind && f.last >= first)
+                    first = f.last + 1;
+        control_faults.push_back({kind, first, first + n - 1, count});
+    }
+
+    // Queues an acknowledge (a late one waits for the next command's).
+    void answer(std::vector<std::uint8_t> ack, bool late) {
         if (!held_ack.empty()) {
             acks.push_back(std::move(held_ack));
             held_ack.clear();
         }
-        acks.push_back(std::move(ack));
+        if (late)
+            held_ack = std::move(ack);
+        else
+            acks.push_back(std::move(ack));
     }
 
     void command(const std::uint8_t *p, std::size_t n) {
-        ++commands;
+        const std::uint64_t index = commands++;
+        // Faults that hit no later command are done with.
+        control_faults.erase(std::remove_if(control_faults.begin(), control_faults.end(),
+                                            [&](const control_fault &f) { return f.last < index; }),
+                             control_faults.end());
         auto ack_of = [&](std::uint16_t status, std::uint16_t id, std::uint16_t request,
                           const std::uint8_t *body, std::size_t body_n) {
             std::vector<std::uint8_t> a(k_gencp_header + body_n);
@@ -434,46 +470,60 @@ struct sim_camera {
                 std::memcpy(&a[12], body, body_n);
             return a;
         };
+        if (control_fault_at(FLT_U3V_FAULT_CONTROL_UNPLUG, index)) {
+            unplugged = true;  // the command never arrives
+            return;
+        }
+        if (control_fault_at(FLT_U3V_FAULT_CONTROL_TIMEOUT, index))
+            return;  // lost on the way: neither executed nor answered
+        const bool lost_ack = control_fault_at(FLT_U3V_FAULT_LOST_ACK, index) != nullptr;
+        const bool late = control_fault_at(FLT_U3V_FAULT_LATE_ACK, index) != nullptr;
+        // The answer of this command (after any pending acks), unless lost.
+        auto reply = [&](std::vector<std::uint8_t> ack) {
+            if (!lost_ack)
+                answer(std::move(ack), late);
+        };
         if (n < k_gencp_header || get_u32(p) != k_prefix_control ||
             get_u16(p + 8) != n - k_gencp_header) {
-            answer(ack_of(gencp_invalid_header, 0x0801, n >= 12 ? get_u16(p + 10) : 0, nullptr, 0));
+            reply(ack_of(gencp_invalid_header, 0x0801, n >= 12 ? get_u16(p + 10) : 0, nullptr, 0));
             return;
         }
         const std::uint16_t cmd = get_u16(p + 6), request = get_u16(p + 10);
-        if (drop_answers > 0) {
-            --drop_answers;
-            return;
+        if (const control_fault *f = control_fault_at(FLT_U3V_FAULT_PENDING_ACK, index)) {
+            for (std::uint32_t i = 0; i < f->count; ++i) {
+                std::uint8_t body[4] = {0, 0, 0, 0};
+                put_u16(body + 2, 50);  // "wait 50 ms more"
+                acks.push_back(ack_of(gencp_ok, k_ack_pending, request, body, 4));
+            }
         }
-        for (std::uint32_t i = 0; i < pending_acks_next; ++i) {
-            std::uint8_t body[4] = {0, 0, 0, 0};
-            put_u16(body + 2, 50);  // "wait 50 ms more"
-            answer(ack_of(gencp_ok, k_ack_pending, request, body, 4));
+        if (control_fault_at(FLT_U3V_FAULT_BUSY, index)) {
+            reply(ack_of(gencp_busy, std::uint16_t(cmd + 1), request, nullptr, 0));
+            return;  // not executed
         }
-        pending_acks_next = 0;
         if (n > max_cmd) {
-            answer(ack_of(gencp_invalid_parameter, std::uint16_t(cmd + 1), request, nullptr, 0));
+            reply(ack_of(gencp_invalid_parameter, std::uint16_t(cmd + 1), request, nullptr, 0));
             return;
         }
         if (cmd == k_cmd_readmem && n == k_gencp_header + k_readmem_body) {
             const std::uint64_t a = get_u64(p + 12);
             const std::uint16_t count = get_u16(p + 22);
             if (k_gencp_header + count > max_ack) {
-                answer(ack_of(gencp_invalid_parameter, k_ack_readmem, request, nullptr, 0));
+                reply(ack_of(gencp_invalid_parameter, k_ack_readmem, request, nullptr, 0));
                 return;
             }
             std::vector<std::uint8_t> data(count);
             const std::uint16_t st = read_mem(a, count, data.data());
-            answer(ack_of(st, k_ack_readmem, request, st == gencp_ok ? data.data() : nullptr,
-                          st == gencp_ok ? count : 0));
+            reply(ack_of(st, k_ack_readmem, request, st == gencp_ok ? data.data() : nullptr,
+                         st == gencp_ok ? count : 0));
         } else if (cmd == k_cmd_writemem && n >= k_writemem_overhead) {
             const std::uint64_t a = get_u64(p + 12);
             const std::size_t count = n - k_writemem_overhead;
             const std::uint16_t st = write_mem(a, p + 20, count);
             std::uint8_t body[4] = {0, 0, 0, 0};
             put_u16(body + 2, std::uint16_t(st == gencp_ok ? count : 0));
-            answer(ack_of(st, k_ack_writemem, request, body, 4));
+            reply(ack_of(st, k_ack_writemem, request, body, 4));
         } else {
-            answer(ack_of(gencp_not_implemented, std::uint16_t(cmd + 1), request, nullptr, 0));
+            reply(ack_of(gencp_not_implemented, std::uint16_t(cmd + 1), request, nullptr, 0));
         }
     }
 
@@ -754,10 +804,10 @@ class sim_device final : public usb_device {
     usb_status async_submit(std::size_t slot) override {
         if (cam_.unplugged)
             return usb_status::no_device;
-        if (cam_.refuse_submits > 0) {
-            --cam_.refuse_submits;
-            return usb_status::no_memory;
-        }
+        const std::uint64_t index = cam_.submits++;
+        for (const auto &r : cam_.refused_submits)
+            if (index >= r.first && index <= r.second)
+                return usb_status::no_memory;
         if (slot >= cam_.slot_fill.size())
             return usb_status::io;
         try {
@@ -1013,6 +1063,16 @@ std::uint64_t sim_get(const sim_camera &cam, flt_u3v_sim_param param) {
             return cam.frames_sent;
         case FLT_U3V_SIM_OPEN:
             return cam.open;
+        case FLT_U3V_SIM_FAULTS_PENDING: {
+            std::uint64_t pending = 0;
+            for (const auto &f : cam.control_faults)
+                pending += f.last >= cam.commands;
+            for (const auto &r : cam.refused_submits)
+                pending += r.second >= cam.submits;
+            return pending;
+        }
+        case FLT_U3V_SIM_UNPLUGGED:
+            return cam.unplugged;
         default:
             break;
     }
@@ -1035,17 +1095,23 @@ void sim_inject(sim_camera &cam, flt_u3v_fault fault, std::uint64_t at, std::uin
                 throw error(FLT_ERR_INVALID_ARGUMENT, "count is 0: nothing to skip");
             cam.faults.push_back({fault, at, count});
             return;
-        case FLT_U3V_FAULT_SUBMIT_REFUSED:
-            cam.refuse_submits += count;
+        case FLT_U3V_FAULT_SUBMIT_REFUSED: {
+            if (count == 0)
+                return;
+            std::uint64_t first = cam.submits + at;
+            for (const auto &r : cam.refused_submits)  // faults add up
+                if (r.second >= first)
+                    first = r.second + 1;
+            cam.refused_submits.emplace_back(first, first + count - 1);
             return;
+        }
         case FLT_U3V_FAULT_PENDING_ACK:
-            cam.pending_acks_next = count;
-            return;
         case FLT_U3V_FAULT_CONTROL_TIMEOUT:
-            cam.drop_answers += count;
-            return;
         case FLT_U3V_FAULT_LATE_ACK:
-            cam.hold_next_ack = true;
+        case FLT_U3V_FAULT_LOST_ACK:
+        case FLT_U3V_FAULT_BUSY:
+        case FLT_U3V_FAULT_CONTROL_UNPLUG:
+            cam.schedule_control(fault, at, count);
             return;
         default:
             break;

@@ -455,7 +455,9 @@ static void test_each_failure_mode_is_counted_and_recovers(void **state) {
             ok(flt_frame_info(f, NULL, NULL, NULL, NULL, NULL, &block, NULL, NULL));
         }
         const uint64_t fault_at = fc->fault == FLT_U3V_FAULT_SUBMIT_REFUSED ? block + 1 : at;
-        ok(flt_u3v_sim_inject(bus, 0, fc->fault, at, fc->count));
+        /* stream faults hit block `at`; a host fault the next operations */
+        ok(flt_u3v_sim_inject(bus, 0, fc->fault, fc->fault >= FLT_U3V_FAULT_SUBMIT_REFUSED ? 0 : at,
+                              fc->count));
         uint8_t seen[4096] = {0};
         int timeouts = 0;
         size_t delivered = 0;

@@ -231,6 +231,25 @@ int main(int argc, char **argv) {
         put("chain", chains[i].name, chain, 8 + n);
         flt_calib_destroy(c);
     }
+    /* source_faults: byte 0 the options (22: 3 attempts per command, 5
+     * pending acks allowed, 2 transfers), then operations: 0 kind at count
+     * (control fault: 0 pending, 1 lost command, 2 late, 3 lost ack, 4
+     * busy), 1 kind at count (kind < 8: unplug, else refused submits),
+     * 2 kind at count (stream fault), 3 start, 5 stop, 6 k (k + 1 frames),
+     * 7 (a feature read). */
+    {
+        static const uint8_t lost_stop[] = {22, 3, 6, 2, 0, 1, 0, 11, 5, 5, 3, 6, 1, 5};
+        static const uint8_t pending_at_start[] = {22, 0, 0, 13, 6, 3, 6, 1, 5, 3, 5};
+        static const uint8_t busy_stop[] = {22, 3, 0, 4, 0, 11, 5, 3, 6, 1, 5};
+        static const uint8_t stream_faults[] = {22, 3, 2, 0, 1, 1, 6, 3, 1, 20, 0, 3, 6, 3, 5};
+        static const uint8_t unplug[] = {22, 3, 1, 0, 1, 0, 5, 3};
+        put("source_faults", "lost_stop", lost_stop, sizeof lost_stop);
+        put("source_faults", "pending_at_start", pending_at_start, sizeof pending_at_start);
+        put("source_faults", "busy_stop", busy_stop, sizeof busy_stop);
+        put("source_faults", "stream_faults", stream_faults, sizeof stream_faults);
+        put("source_faults", "unplug", unplug, sizeof unplug);
+    }
+
     printf("seeds written to %s\n", g_root);
     return 0;
 }

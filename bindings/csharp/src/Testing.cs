@@ -31,6 +31,10 @@ namespace Flatline.Testing
         LastReadTimeoutMs = NativeSimParam.FLT_U3V_SIM_LAST_READ_TIMEOUT_MS,
         FramesSent = NativeSimParam.FLT_U3V_SIM_FRAMES_SENT,
         Open = NativeSimParam.FLT_U3V_SIM_OPEN,
+        /// <summary>Control-channel and submit faults not yet applied in full.</summary>
+        FaultsPending = NativeSimParam.FLT_U3V_SIM_FAULTS_PENDING,
+        /// <summary>1 once the camera was unplugged.</summary>
+        Unplugged = NativeSimParam.FLT_U3V_SIM_UNPLUGGED,
     }
 
     /// <summary>Faults a simulated camera can inject (flt_u3v_fault); see
@@ -49,6 +53,12 @@ namespace Flatline.Testing
         PendingAck = NativeSimFault.FLT_U3V_FAULT_PENDING_ACK,
         ControlTimeout = NativeSimFault.FLT_U3V_FAULT_CONTROL_TIMEOUT,
         LateAck = NativeSimFault.FLT_U3V_FAULT_LATE_ACK,
+        /// <summary>Commands executed, their acknowledges lost.</summary>
+        LostAck = NativeSimFault.FLT_U3V_FAULT_LOST_ACK,
+        /// <summary>Commands answered "busy", not executed.</summary>
+        Busy = NativeSimFault.FLT_U3V_FAULT_BUSY,
+        /// <summary>Unplugged when a command arrives.</summary>
+        ControlUnplug = NativeSimFault.FLT_U3V_FAULT_CONTROL_UNPLUG,
     }
 
     /// <summary>
@@ -125,8 +135,9 @@ namespace Flatline.Testing
         }
 
         /// <summary>Schedules a fault: stream faults on the frame with block id
-        /// <paramref name="at"/>; host faults on the next <paramref name="count"/>
-        /// operations. Faults add up.</summary>
+        /// <paramref name="at"/>; host faults on <paramref name="count"/>
+        /// operations (commands, bulk submissions) after the next
+        /// <paramref name="at"/> ones. Faults add up.</summary>
         public void Inject(int camera, U3VFault fault, ulong at = 0, uint count = 1) =>
             FlatlineTestingNative.flt_u3v_sim_inject(LiveHandle, Camera(camera), (int)fault, at, count);
 

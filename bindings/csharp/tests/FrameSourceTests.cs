@@ -211,6 +211,28 @@ namespace Flatline.Tests
         }
 
         [Fact]
+        public void AStopTheCameraDidNotTakeSaysSoAndStartRecovers()
+        {
+            using var bus = new U3VSimBus();
+            bus.AddCamera("Flatline", "Faulty", "F", 64, 16);
+            using var camera = FrameSource.U3V("F", null, bus);
+            camera.Start();
+            Assert.Equal(64, camera.Next(1000).Width);
+            // Every command of the stop is lost: 3 rounds x 3 attempts x 2 steps.
+            bus.Inject(0, U3VFault.ControlTimeout, 0, 18);
+            var e = Assert.Throws<DeviceTimeoutException>(() => camera.Stop());
+            Assert.Contains("may still be streaming", e.Message);
+            Assert.Equal(1UL, bus.Get(0, U3VSimParam.SiControl));  // really streaming on
+            Assert.Equal(0UL, bus.Get(0, U3VSimParam.FaultsPending));
+            camera.Start();                                          // stops it first
+            Assert.Equal(1UL, camera.Count(SourceCounter.StreamRecoveries));
+            Assert.Equal(64, camera.Next(1000).Width);
+            camera.Stop();
+            Assert.Equal(0UL, bus.Get(0, U3VSimParam.SiControl));
+            Assert.Equal(0UL, bus.Get(0, U3VSimParam.Acquiring));
+        }
+
+        [Fact]
         public void ImageErrorsMapToTheirExceptions()
         {
             var image = new byte[8, 8];

@@ -34,7 +34,8 @@ __all__ = ["U3VFault", "U3VSimParam", "U3VSimBus"]
 class U3VFault(enum.IntEnum):
     """Faults of the simulated camera (:meth:`U3VSimBus.inject`). Stream
     faults hit the frame with block id ``at``; host faults (SUBMIT_REFUSED
-    and the control faults) the next ``count`` operations."""
+    and the control-channel faults) hit ``count`` operations (bulk
+    submissions, GenCP commands) after the next ``at`` ones."""
 
     SHORT_FRAME = _tcapi.FLT_U3V_FAULT_SHORT_FRAME
     LEADER_MID_FRAME = _tcapi.FLT_U3V_FAULT_LEADER_MID_FRAME
@@ -48,11 +49,14 @@ class U3VFault(enum.IntEnum):
     PENDING_ACK = _tcapi.FLT_U3V_FAULT_PENDING_ACK
     CONTROL_TIMEOUT = _tcapi.FLT_U3V_FAULT_CONTROL_TIMEOUT
     LATE_ACK = _tcapi.FLT_U3V_FAULT_LATE_ACK
+    LOST_ACK = _tcapi.FLT_U3V_FAULT_LOST_ACK
+    BUSY = _tcapi.FLT_U3V_FAULT_BUSY
+    CONTROL_UNPLUG = _tcapi.FLT_U3V_FAULT_CONTROL_UNPLUG
 
 
 class U3VSimParam(enum.IntEnum):
     """Parameters of a simulated camera (:meth:`U3VSimBus.set` before a
-    camera is opened; the last seven are read-only, :meth:`U3VSimBus.get`)."""
+    camera is opened; the last nine are read-only, :meth:`U3VSimBus.get`)."""
 
     RESPONSE_TIME_MS = _tcapi.FLT_U3V_SIM_RESPONSE_TIME_MS
     MAX_COMMAND_BYTES = _tcapi.FLT_U3V_SIM_MAX_COMMAND_BYTES
@@ -70,6 +74,8 @@ class U3VSimParam(enum.IntEnum):
     LAST_READ_TIMEOUT_MS = _tcapi.FLT_U3V_SIM_LAST_READ_TIMEOUT_MS
     FRAMES_SENT = _tcapi.FLT_U3V_SIM_FRAMES_SENT
     OPEN = _tcapi.FLT_U3V_SIM_OPEN
+    FAULTS_PENDING = _tcapi.FLT_U3V_SIM_FAULTS_PENDING
+    UNPLUGGED = _tcapi.FLT_U3V_SIM_UNPLUGGED
 
 
 class U3VSimBus:
@@ -183,8 +189,8 @@ class U3VSimBus:
     def inject(self, camera: int, fault: Union[U3VFault, str, int], at: int = 0,
                count: int = 1) -> None:
         """Schedules a fault (see :class:`U3VFault`): stream faults on the
-        frame with block id `at`, host faults on the next `count`
-        operations. Faults add up."""
+        frame with block id `at`, host faults on `count` operations after the
+        next `at` ones (0: from the next one on). Faults add up."""
         fn = "inject"
         camera = as_index(fn, "camera", camera)
         key = _enum(fn, "fault", fault, U3VFault)

@@ -177,6 +177,27 @@ def test_a_camera_left_streaming_is_stopped_on_open(bus):
         assert np.array_equal(frame.pixels, pattern(frame.block_id))
 
 
+def test_a_stop_the_camera_did_not_take_says_so_and_start_recovers(bus):
+    with flatline.Source.u3v("S1", bus=bus) as cam:
+        cam.start()
+        cam.next()
+        # Every command of the stop is lost (3 rounds of 3 attempts, 2 steps).
+        bus.inject(0, "control_timeout", count=18)
+        with pytest.raises(flatline.TimeoutError, match="may still be streaming"):
+            cam.stop()
+        # the camera really streams on; the host side is stopped
+        assert bus.get(0, "si_control") == 1 and bus.get(0, "acquiring") == 1
+        with pytest.raises(flatline.StateError):
+            cam.next()
+        assert bus.get(0, "faults_pending") == 0
+        cam.start()  # stops the camera first, then starts it again
+        assert cam.counters()["stream_recoveries"] == 1
+        frame = cam.next()
+        assert np.array_equal(frame.pixels, pattern(frame.block_id))
+        cam.stop()
+        assert bus.get(0, "si_control") == 0 and bus.get(0, "acquiring") == 0
+
+
 def test_u3v_errors(bus):
     with pytest.raises(flatline.NotFoundError, match="nope"):
         flatline.Source.u3v("nope", bus=bus)

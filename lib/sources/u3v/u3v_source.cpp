@@ -3,6 +3,9 @@
 // and the camera_device calls, over the protocol layers of this folder.
 #include "sources/u3v/u3v_source.hpp"
 
+#include <algorithm>
+#include <cstring>
+
 #include "core/error.hpp"
 #include "sources/u3v/protocol.hpp"
 
@@ -48,24 +51,96 @@ void u3v_camera::write_si_control(std::uint32_t value) {
     control_.write(boot_.sirm_address + sirm::control, b, 4);
 }
 
+bool u3v_camera::si_enabled() {
+    std::uint8_t b[4];
+    control_.read(boot_.sirm_address + sirm::control, b, 4);
+    return (get_u32(b) & sirm::control_enable) != 0;
+}
+
 void u3v_camera::recover_stream() {
     if (boot_.sirm_address == 0)
         return;
-    std::uint8_t b[4];
-    control_.read(boot_.sirm_address + sirm::control, b, 4);
-    if (!(get_u32(b) & sirm::control_enable))
+    if (!si_enabled())
         return;
-    // A process died while streaming: stop the camera so it accepts a
-    // new stream set-up. Either step may fail on a confused device; the
-    // SI control reset is what matters.
+    // A process died while streaming: stop the camera so it accepts a new
+    // stream set-up. The SI control reset is what a new set-up needs: an
+    // AcquisitionStop the camera refuses is left to the next start or stop.
     acc_.add(FLT_COUNT_STREAM_RECOVERIES);
-    try {
-        execute("AcquisitionStop");
-    } catch (const error &) {
+    may_stream_ = true;
+    halt_camera(false);
+}
+
+namespace {
+
+// What a message says when the camera may be left streaming (the tests
+// look for it).
+constexpr const char *k_may_stream = "may still be streaming";
+
+// Failures worth another attempt: no answer, too many pending acks, busy
+// (FLT_ERR_TIMEOUT) and a malformed answer (FLT_ERR_FORMAT). A status the
+// camera answered (FLT_ERR_DEVICE) would be answered again.
+bool retryable(flt_status status) {
+    return status == FLT_ERR_TIMEOUT || status == FLT_ERR_FORMAT;
+}
+
+}  // namespace
+
+void u3v_camera::halt_camera(bool need_acquisition_stop) {
+    // AcquisitionStop, then SI control = 0 read back as 0; each step again
+    // (up to u3v_command_attempts rounds, on top of the control channel's
+    // own attempts per command) while its failure is worth retrying.
+    bool stopped = false, si_off = false;
+    flt_status status = FLT_OK;
+    std::string why;
+    const unsigned rounds = std::max(1u, config_.control.command_attempts);
+    for (unsigned round = 0; round < rounds && !(stopped && si_off); ++round) {
+        bool again = false;
+        if (!stopped) {
+            try {
+                execute("AcquisitionStop");
+                stopped = true;
+            } catch (const error &e) {
+                if (link_.disconnected)
+                    throw;
+                if (e.status == FLT_ERR_NOT_FOUND) {
+                    stopped = true;  // no such command: SI control is all there is
+                } else {
+                    status = e.status;
+                    why = std::string("AcquisitionStop: ") + e.what();
+                    again = again || retryable(e.status);
+                }
+            }
+        }
+        if (!si_off) {
+            try {
+                write_si_control(0);
+                si_off = !si_enabled();
+                if (!si_off) {
+                    status = FLT_ERR_DEVICE;
+                    why = "SI control still reads 1 after writing 0";
+                    again = true;
+                }
+            } catch (const error &e) {
+                if (link_.disconnected)
+                    throw;
+                status = e.status;
+                why = std::string("SI control = 0: ") + e.what();
+                again = again || retryable(e.status);
+            }
+        }
+        if (!again)
+            break;
     }
-    write_si_control(0);
-    if (link_.ep_stream)
+    if (si_off && link_.ep_stream)
         link_.dev->clear_halt(link_.ep_stream);
+    if (si_off && stopped)
+        may_stream_ = false;
+    if (si_off && (stopped || !need_acquisition_stop))
+        return;
+    raise(status == FLT_OK ? FLT_ERR_DEVICE : status,
+          "the camera could not be stopped and %s (%s); flt_source_stop() or "
+          "flt_source_start() tries again",
+          k_may_stream, why.c_str());
 }
 
 // --- acquisition -----------------------------------------------------------------
@@ -77,6 +152,29 @@ void u3v_camera::start() {
         raise(FLT_ERR_DEVICE, "the camera was unplugged");
     if (boot_.sirm_address == 0 || link_.ep_stream == 0)
         raise(FLT_ERR_DEVICE, "the camera has no stream channel (SBRM lists 0)");
+    try {
+        start_sequence();
+    } catch (const error &e) {
+        // A failure before an earlier failure was mended: say so.
+        if (may_stream_ && !link_.disconnected && !std::strstr(e.what(), k_may_stream))
+            raise(e.status,
+                  "%s; the camera %s since an earlier stop or start: flt_source_stop() or "
+                  "flt_source_start() tries again",
+                  e.what(), k_may_stream);
+        throw;
+    }
+}
+
+void u3v_camera::start_sequence() {
+    // A camera left streaming (by a failed stop or start, or by another
+    // host since open) refuses a new stream set-up: stop it first, as open
+    // does. SI control = 0 is what the set-up needs.
+    if (si_enabled()) {
+        acc_.add(FLT_COUNT_STREAM_RECOVERIES);
+        may_stream_ = true;
+    }
+    if (may_stream_)
+        halt_camera(false);
     if (features_->is_mapped("AcquisitionMode"))
         set_int("AcquisitionMode", 0);
     else if (features_->kind_of("AcquisitionMode") == sources::feature_kind::enumeration)
@@ -92,8 +190,28 @@ void u3v_camera::start() {
               pfnc);
     try {
         stream_.prepare(boot_.sirm_address, width, height, bits);
+    } catch (...) {
+        stream_.release();
+        throw;
+    }
+    try {
+        // From here on the camera may stream whatever the answers say.
+        may_stream_ = true;
         write_si_control(sirm::control_enable);
         execute("AcquisitionStart");
+    } catch (const error &e) {
+        stream_.release();
+        if (link_.disconnected)
+            throw;
+        // Undo what may have reached the camera, so that a failed start
+        // leaves it stopped; else the next start or stop stops it.
+        std::string undo;
+        try {
+            halt_camera(true);
+        } catch (const error &u) {
+            undo = std::string("; stopping it again failed too: ") + u.what();
+        }
+        raise(e.status, "%s%s", e.what(), undo.c_str());
     } catch (...) {
         stream_.release();
         throw;
@@ -102,18 +220,27 @@ void u3v_camera::start() {
 }
 
 void u3v_camera::stop() {
-    if (!streaming_)
+    if (!streaming_ && !may_stream_)
         return;
     streaming_ = false;
-    if (!link_.disconnected) {
-        try {
-            execute("AcquisitionStop");
-        } catch (...) {
+    if (link_.disconnected) {
+        // Gone: it streams to no one, and a replugged camera starts afresh
+        // (open recovers one a host left streaming).
+        may_stream_ = false;
+        stream_.release();
+        return;
+    }
+    // The transfers stay in flight while the camera stops, so that what it
+    // still sends is taken; they are cancelled whatever happens.
+    try {
+        halt_camera(true);
+    } catch (const error &) {
+        stream_.release();
+        if (link_.disconnected) {
+            may_stream_ = false;
+            return;
         }
-        try {
-            write_si_control(0);
-        } catch (...) {
-        }
+        throw;
     }
     stream_.release();
 }

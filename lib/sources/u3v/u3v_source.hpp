@@ -70,8 +70,14 @@ class u3v_camera final : public sources::source_impl, public sources::camera_dev
 
   private:
     void open(usb_backend &bus, const char *serial);
+    void start_sequence();
     void recover_stream();
     void write_si_control(std::uint32_t value);
+    bool si_enabled();
+    // Stops the camera: AcquisitionStop, SI control = 0 read back, retried
+    // while worth it. Throws (the camera may still stream) unless SI control
+    // is off and, with need_acquisition_stop, AcquisitionStop was taken.
+    void halt_camera(bool need_acquisition_stop);
 
     std::unique_ptr<usb_backend> owned_bus_;  // declared first: destroyed last
     camera_config config_;
@@ -83,7 +89,11 @@ class u3v_camera final : public sources::source_impl, public sources::camera_dev
     std::uint64_t xml_bytes_ = 0;
     bool xml_zipped_ = false;
     std::unique_ptr<sources::feature_layer> features_;
-    bool streaming_ = false;
+    bool streaming_ = false;  // the host side: the stream is set up
+    // The camera may be streaming although the host is not: a stop or start
+    // failed between SI control = 1 and a confirmed stop. The next start or
+    // stop stops it first.
+    bool may_stream_ = false;
 };
 
 }  // namespace flt::u3v
