@@ -17,16 +17,16 @@
 
 #include "calibration/calib_model.hpp"
 #include "core/error.hpp"
+#include "core/number_text.hpp"
 
 namespace flt {
 namespace {
 
 // ------------------------------------------------------------------ writer
 
+// The shortest text that reads back bit-identical, '.' whatever the locale.
 void append_double(std::string &s, double v) {
-    char buf[40];
-    std::snprintf(buf, sizeof buf, "%.17g", v);
-    s += buf;
+    s += format_double(v);
 }
 
 void append_field(std::string &s, const char *indent, const char *name, double v,
@@ -312,10 +312,11 @@ double number(const node &n, const std::string &path) {
             format_error("field '" + path + "' is infinite (line " + std::to_string(n.line) + ")");
     }
     expect_kind(n, node::number, path);
-    errno = 0;
-    char *end = nullptr;
-    const double v = std::strtod(n.text.c_str(), &end);
-    if (!std::isfinite(v))
+    // parse_double reads the C syntax whatever LC_NUMERIC says (strtod
+    // would stop at the '.' of "1090.9" under a decimal-comma locale). The
+    // token is a JSON number (is_json_number), so it only fails on range.
+    double v = 0;
+    if (!parse_double(n.text, v))
         format_error("field '" + path + "' = " + n.text + " is outside the range of a double");
     return v;
 }
@@ -333,7 +334,7 @@ std::uint64_t integer(const node &n, const std::string &path, double min_value, 
         format_error("field '" + path + "' = " + n.text + " must be a whole number");
     if (v < min_value || v > max_value) {
         char range[96];
-        std::snprintf(range, sizeof range, " is outside [%.17g, %.17g]", min_value, max_value);
+        format_c(range, sizeof range, " is outside [%.17g, %.17g]", min_value, max_value);
         format_error("field '" + path + "' = " + n.text + range);
     }
     return std::uint64_t(v);

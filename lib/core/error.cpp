@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <string>
 
+#include "core/number_text.hpp"
+
 namespace flt {
 namespace {
 // Fixed-size per-thread storage: recording an error must not allocate (it is
@@ -19,7 +21,8 @@ thread_local thread_error t_error;
 flt_status fail(flt_status status, const char *format, ...) {
     va_list args;
     va_start(args, format);
-    std::vsnprintf(t_error.message, sizeof t_error.message, format, args);
+    // Numbers in messages are written the same under every LC_NUMERIC.
+    vformat_c(t_error.message, sizeof t_error.message, format, args);
     va_end(args);
     t_error.status = status;
     return status;

@@ -12,6 +12,7 @@
 #include <limits>
 
 #include "core/error.hpp"
+#include "core/number_text.hpp"
 #include "flatline/extractor.h"
 #include "flatline/source.h"
 #include "reconstruction/recon_internal.hpp"
@@ -223,14 +224,14 @@ void gauge::init(const flt_calib *calib, const flt_options *options) {
         constexpr double limit = 8.0 * 1024 * 1024 * 1024;
         if (bytes > limit) {
             char why[400];
-            std::snprintf(why, sizeof why,
-                          "the gauge's buffers would take %.1f GB (more than 8 GiB): the "
-                          "reconstructor holds %zu rows (its latency at gauge_frame_spacing = "
-                          "%g mm), a sheet %.0f rows (gauge_max_sheet_length / "
-                          "gauge_frame_spacing); raise gauge_frame_spacing or lower "
-                          "gauge_max_sheet_length, gauge_sheet_slots, gauge_keep_maps or "
-                          "gauge_queue_frames",
-                          bytes / 1.0e9, row_capacity_, cfg_.frame_spacing, sheet_rows);
+            format_c(why, sizeof why,
+                     "the gauge's buffers would take %.1f GB (more than 8 GiB): the "
+                     "reconstructor holds %zu rows (its latency at gauge_frame_spacing = "
+                     "%g mm), a sheet %.0f rows (gauge_max_sheet_length / "
+                     "gauge_frame_spacing); raise gauge_frame_spacing or lower "
+                     "gauge_max_sheet_length, gauge_sheet_slots, gauge_keep_maps or "
+                     "gauge_queue_frames",
+                     bytes / 1.0e9, row_capacity_, cfg_.frame_spacing, sheet_rows);
             throw error(FLT_ERR_INVALID_ARGUMENT, why);
         }
     }

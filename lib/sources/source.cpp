@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "core/error.hpp"
+#include "core/number_text.hpp"
 
 namespace flt::sources {
 
@@ -13,7 +14,7 @@ void raise(flt_status status, const char *format, ...) {
     char text[400];
     va_list args;
     va_start(args, format);
-    std::vsnprintf(text, sizeof text, format, args);
+    vformat_c(text, sizeof text, format, args);  // '.' whatever LC_NUMERIC says
     va_end(args);
     throw error(status, text);
 }

@@ -19,6 +19,7 @@
 #include <system_error>
 
 #include "core/error.hpp"
+#include "core/number_text.hpp"
 
 namespace flt::sources {
 
@@ -144,20 +145,20 @@ void image_source::read_csv(const std::string &csv) {
             continue;
         const std::size_t comma = line.rfind(',');
         const std::string value = comma == std::string::npos ? line : line.substr(comma + 1);
-        char *end = nullptr;
-        const double mm = std::strtod(value.c_str(), &end);
-        while (end && (*end == ' ' || *end == '\t'))
-            ++end;
-        const bool number = end && end != value.c_str() && *end == '\0';
+        // The C syntax whatever LC_NUMERIC says ("12.5", never "12,5": the
+        // comma separates the columns); spaces around the number are allowed.
+        const std::size_t first = value.find_first_not_of(" \t");
+        const std::size_t last = value.find_last_not_of(" \t");
+        double mm = 0;
+        const bool number =
+            first != std::string::npos &&
+            parse_double(std::string_view(value).substr(first, last - first + 1), mm);
         if (!number) {
             if (csv_encoder_.empty() && line_no == 1)
                 continue;  // a header
             raise(FLT_ERR_FORMAT, "encoder CSV '%.200s' line %zu: '%.60s' is not a number",
                   csv.c_str(), line_no, value.c_str());
         }
-        if (!std::isfinite(mm))
-            raise(FLT_ERR_FORMAT, "encoder CSV '%.200s' line %zu: %g mm is not finite", csv.c_str(),
-                  line_no, mm);
         const std::size_t row = csv_encoder_.size();
         if (comma != std::string::npos && row < paths_.size()) {
             std::string name = line.substr(0, line.find(','));

@@ -15,6 +15,7 @@
 #include <string>
 
 #include "core/error.hpp"
+#include "core/number_text.hpp"
 #include "sources/u3v/protocol.hpp"
 
 namespace flt::u3v {
@@ -53,12 +54,14 @@ std::int64_t saturated_int64(double f) {
     return std::int64_t(f);
 }
 
+// In the C syntax whatever LC_NUMERIC says (strtod would read "1.5" as 1
+// under a decimal-comma locale); white space around it is allowed.
 bool parse_float(const std::string &text, double &out) {
-    char *end = nullptr;
-    out = std::strtod(text.c_str(), &end);
-    while (end && (*end == ' ' || *end == '\n' || *end == '\r' || *end == '\t'))
-        ++end;
-    return end && *end == '\0' && end != text.c_str();
+    const std::size_t b = text.find_first_not_of(" \t\r\n");
+    if (b == std::string::npos)
+        return false;
+    const std::size_t e = text.find_last_not_of(" \t\r\n");
+    return parse_double(std::string_view(text).substr(b, e - b + 1), out);
 }
 
 // The node kinds whose elements carry a Name attribute and start a node.
