@@ -78,9 +78,10 @@ namespace Flatline
             return hash;
         }
 
+        // Invariant: the same text under every culture, as calibration files.
         public override string ToString() =>
-            $"fx {Fx:R} fy {Fy:R} cx {Cx:R} cy {Cy:R} px; k1 {K1:R} k2 {K2:R} p1 {P1:R} p2 {P2:R} " +
-            $"k3 {K3:R} k4 {K4:R} k5 {K5:R} k6 {K6:R}";
+            FormattableString.Invariant(
+                $"fx {Fx:R} fy {Fy:R} cx {Cx:R} cy {Cy:R} px; k1 {K1:R} k2 {K2:R} p1 {P1:R} p2 {P2:R} k3 {K3:R} k4 {K4:R} k5 {K5:R} k6 {K6:R}");
     }
 
     /// <summary>The fiber grid across the width: fiber k sits at
@@ -106,7 +107,8 @@ namespace Flatline
 
         public override bool Equals(object obj) => Equals(obj as FiberGrid);
         public override int GetHashCode() => (FirstXMm.GetHashCode() * 31 + PitchMm.GetHashCode()) * 31 + Count;
-        public override string ToString() => $"{Count} fibers from x = {FirstXMm:R} mm every {PitchMm:R} mm";
+        public override string ToString() =>
+            FormattableString.Invariant($"{Count} fibers from x = {FirstXMm:R} mm every {PitchMm:R} mm");
     }
 
     /// <summary>What <see cref="Calibration.EstimateIntrinsics"/> measured.</summary>

@@ -28,7 +28,9 @@ namespace Flatline
         /// name of each value (e.g. "huber" = 1, the value of
         /// <see cref="RobustMode.Huber"/>); empty for a number.</summary>
         public IReadOnlyDictionary<string, int> Choices { get; }
-        public override string ToString() => $"{Name} [{Min}, {Max}] default {Default}{(IsInteger ? " (integer)" : "")}";
+        // Invariant: the same text under every culture, as the C library writes numbers.
+        public override string ToString() =>
+            FormattableString.Invariant($"{Name} [{Min}, {Max}] default {Default}{(IsInteger ? " (integer)" : "")}");
     }
 
     /// <summary>

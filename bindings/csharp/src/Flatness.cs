@@ -117,7 +117,8 @@ namespace Flatline
         public int Rows { get; }
         public WindowFlags Flags { get; }
         public long Index { get; }
-        public override string ToString() => $"window {Index}: s {SFirstMm:F1} .. {SLastMm:F1} mm, {Rows} rows";
+        public override string ToString() =>
+            FormattableString.Invariant($"window {Index}: s {SFirstMm:F1} .. {SLastMm:F1} mm, {Rows} rows");
     }
 
     /// <summary>Per-fiber results of a window, [fibers] each.</summary>
@@ -194,7 +195,7 @@ namespace Flatline
         public ShapeComponents Components { get; }
         public double BowMm { get; }
         public double CrossbowMm { get; }
-        public override string ToString() => $"{Name} ({Confidence:P0})";
+        public override string ToString() => FormattableString.Invariant($"{Name} ({Confidence:P0})");
     }
 
     /// <summary>Everything about the last evaluated window.</summary>

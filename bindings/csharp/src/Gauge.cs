@@ -244,9 +244,10 @@ namespace Flatline
             return result;
         }
 
+        // Invariant: the same text under every culture, as the C library writes numbers.
         public override string ToString() =>
-            $"sheet {Id} (coil {Coil}): {SStartMm:F0} .. {SEndMm:F0} mm, {Rows} rows, {ShapeName}, " +
-            $"{MaxIUnits:F1} I-Units";
+            FormattableString.Invariant(
+                $"sheet {Id} (coil {Coil}): {SStartMm:F0} .. {SEndMm:F0} mm, {Rows} rows, {ShapeName}, {MaxIUnits:F1} I-Units");
     }
 
     /// <summary>The sheet of a <see cref="Gauge.SheetFinished"/> event.</summary>
