@@ -14,6 +14,7 @@
 #include "calibration/calib_model.hpp"
 #include "core/error.hpp"
 #include "core/options.hpp"
+#include "core/utf8_path.hpp"
 #include "flatline/calib.h"
 
 using namespace flt;
@@ -653,22 +654,24 @@ FLT_API flt_status FLT_CALL flt_calib_save(const flt_calib *calib, const char *p
             return st;
         FLT_CHECK_NOT_NULL(fn, path);
         const std::string text = write_model(calib->model);
+        // Written beside the target, then renamed over it: a reader never
+        // sees half a file, and an existing file is replaced (on Windows
+        // too, where rename refuses an existing target: replace_file).
         const std::string tmp = std::string(path) + ".tmp";
-        std::FILE *f = std::fopen(tmp.c_str(), "wb");
+        std::FILE *f = open_file(tmp, "wb");
         if (!f)
             return fail(FLT_ERR_IO, "%s: cannot create '%.300s': %s", fn, tmp.c_str(),
                         std::strerror(errno));
         const bool written = std::fwrite(text.data(), 1, text.size(), f) == text.size();
         const bool closed = std::fclose(f) == 0;
         if (!written || !closed) {
-            std::remove(tmp.c_str());
+            remove_file(tmp);
             return fail(FLT_ERR_IO, "%s: cannot write '%.300s'", fn, tmp.c_str());
         }
-        if (std::rename(tmp.c_str(), path) != 0) {
-            const int err = errno;
-            std::remove(tmp.c_str());
+        if (const std::error_code err = replace_file(tmp, path)) {
+            remove_file(tmp);
             return fail(FLT_ERR_IO, "%s: cannot rename onto '%.300s': %s", fn, path,
-                        std::strerror(err));
+                        err.message().c_str());
         }
         return FLT_OK;
     });
@@ -707,7 +710,7 @@ FLT_API flt_status FLT_CALL flt_calib_load(const char *path, flt_calib **out) {
         FLT_CHECK_NOT_NULL(fn, out);
         *out = nullptr;
         FLT_CHECK_NOT_NULL(fn, path);
-        std::FILE *f = std::fopen(path, "rb");
+        std::FILE *f = open_file(path, "rb");
         if (!f)
             return fail(FLT_ERR_IO, "%s: cannot open '%.300s': %s", fn, path, std::strerror(errno));
         std::string text;

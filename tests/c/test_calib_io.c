@@ -12,12 +12,12 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #include <cmocka.h>
 
 #include "calib_synth.h"
 #include "flatline/flatline.h"
+#include "test_files.h"
 
 /* A finished calibration of the synthetic sensor with estimated (so, not
  * round-number) homographies and distortion. */
@@ -116,10 +116,9 @@ static void save_load_save_is_byte_identical(void **state) {
     assert_int_equal(strlen(first), strlen(second));
     assert_int_equal(memcmp(first, second, strlen(first)), 0);
 
-    char path[] = "/tmp/flt_calib_io_XXXXXX";
-    const int fd = mkstemp(path);
-    assert_true(fd >= 0);
-    close(fd);
+    char dir[512], path[600];
+    assert_int_equal(tf_temp_dir(dir, sizeof dir, "calib_io"), 0);
+    snprintf(path, sizeof path, "%s/sensor.json", dir);
     assert_int_equal(flt_calib_save(loaded, path), FLT_OK);
     flt_calib *from_file = NULL;
     assert_int_equal(flt_calib_load(path, &from_file), FLT_OK);
@@ -134,6 +133,7 @@ static void save_load_save_is_byte_identical(void **state) {
     assert_int_equal(got, strlen(first));
     assert_int_equal(memcmp(bytes, first, got), 0);
     remove(path);
+    tf_remove(dir);
 
     /* identical mapping, both directions, both lasers */
     enum { n = 500 };
@@ -159,6 +159,92 @@ static void save_load_save_is_byte_identical(void **state) {
     free(bytes);
     free(first), free(second), free(third);
     flt_calib_destroy(original), flt_calib_destroy(loaded), flt_calib_destroy(from_file);
+}
+
+/* Bytes of a file (NUL-terminated; the caller frees), or NULL. */
+static char *file_bytes(const char *path) {
+    FILE *f = tf_fopen(path, "rb");
+    if (!f)
+        return NULL;
+    char *bytes = malloc(1 << 20);
+    const size_t got = fread(bytes, 1, (1 << 20) - 1, f);
+    bytes[got] = '\0';
+    fclose(f);
+    return bytes;
+}
+
+/* Saving onto an existing file replaces it (a calibration is saved again
+ * after every recalibration). The file is written beside the target and
+ * renamed over it; Windows' rename refuses an existing target, which
+ * failed this save with FLT_ERR_IO there. */
+static void save_replaces_an_existing_file(void **state) {
+    (void)state;
+    flt_calib *a = make_calibration();
+    flt_calib *b = NULL;
+    assert_int_equal(flt_calib_create_reference(0, 1024, -500, 2, 501, &b), FLT_OK);
+    char *text_a = save_text(a), *text_b = save_text(b);
+    assert_true(strcmp(text_a, text_b) != 0);
+    char dir[512], path[600], tmp[620];
+    assert_int_equal(tf_temp_dir(dir, sizeof dir, "calib_replace"), 0);
+    snprintf(path, sizeof path, "%s/sensor.json", dir);
+    snprintf(tmp, sizeof tmp, "%s.tmp", path);
+    assert_int_equal(flt_calib_save(a, path), FLT_OK);
+    assert_int_equal(flt_calib_save(b, path), FLT_OK);
+    char *on_disk = file_bytes(path);
+    assert_non_null(on_disk);
+    assert_string_equal(on_disk, text_b);
+    assert_false(tf_exists(tmp)); /* no temporary left behind */
+    /* and again over the second one */
+    assert_int_equal(flt_calib_save(a, path), FLT_OK);
+    free(on_disk);
+    on_disk = file_bytes(path);
+    assert_string_equal(on_disk, text_a);
+    assert_int_equal(tf_remove(path), 0);
+    assert_int_equal(tf_remove(dir), 0);
+    free(on_disk), free(text_a), free(text_b);
+    flt_calib_destroy(a), flt_calib_destroy(b);
+}
+
+/* Paths are UTF-8 (calib.h). A file saved as "Jürgen ø 測.json" in a folder
+ * "Kalibrierung-Größe" is exactly that name on disk (checked with the
+ * platform's UTF-16 calls on Windows, where the narrow C calls would have
+ * read the bytes in the ANSI code page and made "JÃ¼rgen ..."), and a file
+ * created under a non-ASCII name by the test is loaded by its UTF-8 path. */
+static void utf8_paths_name_the_files(void **state) {
+    (void)state;
+    flt_calib *calib = make_calibration();
+    char *text = save_text(calib);
+    char base[512], dir[600], path[700], other[700];
+    assert_int_equal(tf_temp_dir(base, sizeof base, "calib_utf8"), 0);
+    snprintf(dir, sizeof dir,
+             "%s/Kalibrierung-Gr\xc3\xb6\xc3\x9f"
+             "e",
+             base);
+    assert_int_equal(tf_mkdir(dir), 0);
+    snprintf(path, sizeof path, "%s/J\xc3\xbcrgen \xc3\xb8 \xe6\xb8\xac.json", dir);
+    assert_int_equal(flt_calib_save(calib, path), FLT_OK);
+    char *on_disk = file_bytes(path); /* opened by its real (UTF-16) name */
+    assert_non_null(on_disk);
+    assert_string_equal(on_disk, text);
+    flt_calib *loaded = NULL;
+    assert_int_equal(flt_calib_load(path, &loaded), FLT_OK);
+    flt_calib_destroy(loaded);
+    loaded = NULL;
+    /* a file the library did not write */
+    snprintf(other, sizeof other, "%s/\xc3\xa9talonnage-\xce\xb1\xce\xb2.json", dir);
+    FILE *f = tf_fopen(other, "wb");
+    assert_non_null(f);
+    fwrite(text, 1, strlen(text), f);
+    fclose(f);
+    assert_int_equal(flt_calib_load(other, &loaded), FLT_OK);
+    char *again = save_text(loaded);
+    assert_string_equal(again, text);
+    assert_int_equal(tf_remove(other), 0);
+    assert_int_equal(tf_remove(path), 0);
+    assert_int_equal(tf_remove(dir), 0);
+    assert_int_equal(tf_remove(base), 0);
+    free(again), free(on_disk), free(text);
+    flt_calib_destroy(loaded), flt_calib_destroy(calib);
 }
 
 /* The format is documented in calib.h: the fields appear in that order. */
@@ -325,6 +411,8 @@ int main(void) {
         cmocka_unit_test(save_load_save_is_byte_identical),
         cmocka_unit_test_setup_teardown(text_has_documented_layout, setup, teardown),
         cmocka_unit_test(unfinished_calibration_cannot_be_saved),
+        cmocka_unit_test(save_replaces_an_existing_file),
+        cmocka_unit_test(utf8_paths_name_the_files),
         cmocka_unit_test_setup_teardown(truncated_file_is_rejected, setup, teardown),
         cmocka_unit_test_setup_teardown(missing_field_is_rejected, setup, teardown),
         cmocka_unit_test_setup_teardown(extra_field_is_rejected, setup, teardown),

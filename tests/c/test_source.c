@@ -15,13 +15,13 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #include <cmocka.h>
 #include <zlib.h>
 
 #include "flatline/flatline.h"
 #include "flatline/source.h"
+#include "test_files.h"
 
 #define ok(call) assert_int_equal((call), FLT_OK)
 
@@ -60,7 +60,7 @@ static void png_chunk(FILE *f, const char *type, const uint8_t *body, uint32_t n
 /* 8-bit PNG, grey (channels 1) or RGB (channels 3). */
 static void write_png(const char *path, uint32_t w, uint32_t h, int channels,
                       const uint8_t *pixels) {
-    FILE *f = fopen(path, "wb");
+    FILE *f = tf_fopen(path, "wb");
     assert_non_null(f);
     static const uint8_t sig[8] = {0x89, 'P', 'N', 'G', 0x0D, 0x0A, 0x1A, 0x0A};
     fwrite(sig, 1, 8, f);
@@ -121,7 +121,7 @@ static void write_tiff16(const char *path, uint32_t w, uint32_t h, const uint16_
         else
             put32le(e + 8, tags[i][2]);
     }
-    FILE *f = fopen(path, "wb");
+    FILE *f = tf_fopen(path, "wb");
     assert_non_null(f);
     fwrite(head, 1, sizeof head, f);
     for (size_t i = 0; i < (size_t)w * h; ++i) {
@@ -133,7 +133,7 @@ static void write_tiff16(const char *path, uint32_t w, uint32_t h, const uint16_
 }
 
 static void write_text(const char *path, const char *text) {
-    FILE *f = fopen(path, "w");
+    FILE *f = tf_fopen(path, "wb");
     assert_non_null(f);
     fputs(text, f);
     fclose(f);
@@ -147,15 +147,12 @@ static char g_dir[256];
 
 static int make_dir(void **state) {
     (void)state;
-    strcpy(g_dir, "/tmp/flt_test_source_XXXXXX");
-    return mkdtemp(g_dir) ? 0 : -1;
+    return tf_temp_dir(g_dir, sizeof g_dir, "test_source");
 }
 
 static int remove_dir(void **state) {
     (void)state;
-    char cmd[300];
-    snprintf(cmd, sizeof cmd, "rm -rf '%s'", g_dir);
-    return system(cmd);
+    return tf_remove_tree(g_dir);
 }
 
 /* --- simulator ---------------------------------------------------------------- */
@@ -401,9 +398,64 @@ static void test_tiff16_list_with_fixed_step(void **state) {
                  "'paths[1]' is NULL");
     assert_error(flt_source_create_image_dir("/nonexistent-dir", NULL, NULL, &src), FLT_ERR_IO,
                  "cannot be opened");
-    assert_error(flt_source_create_image_dir("/proc/self", NULL, NULL, &src), FLT_ERR_NOT_FOUND,
+    char empty[600];
+    snprintf(empty, sizeof empty, "%s/empty", g_dir);
+    assert_int_equal(tf_mkdir(empty), 0);
+    assert_error(flt_source_create_image_dir(empty, NULL, NULL, &src), FLT_ERR_NOT_FOUND,
                  "no .png");
     flt_options_destroy(o);
+}
+
+/* Paths are UTF-8 (source.h): a folder, images and an encoder CSV with
+ * non-ASCII names are found and read by those names, and the CSV's file
+ * names are compared as UTF-8. On Windows the narrow C calls and
+ * cv::imread would read the bytes in the ANSI code page and miss them. */
+static void test_utf8_paths(void **state) {
+    (void)state;
+    enum { W = 12, H = 6 };
+    char dir[512], path[3][600], csv[600];
+    /* "Bänder-テスト", "bild-ä0.png", "Geber-ö.csv" */
+    snprintf(dir, sizeof dir, "%s/B\xc3\xa4nder-\xe3\x83\x86\xe3\x82\xb9\xe3\x83\x88", g_dir);
+    assert_int_equal(tf_mkdir(dir), 0);
+    uint8_t pixels[W * H];
+    for (int k = 0; k < 3; ++k) {
+        for (uint32_t y = 0; y < H; ++y)
+            for (uint32_t x = 0; x < W; ++x)
+                pixels[y * W + x] = grey(k, x, y);
+        snprintf(path[k], sizeof path[k], "%s/bild-\xc3\xa4%d.png", dir, k);
+        write_png(path[k], W, H, 1, pixels);
+    }
+    snprintf(csv, sizeof csv, "%s/Geber-\xc3\xb6.csv", dir);
+    write_text(csv, "bild-\xc3\xa4"
+                    "0.png,10\nbild-\xc3\xa4"
+                    "1.png,20\nbild-\xc3\xa4"
+                    "2.png,30\n");
+    for (int by_list = 0; by_list < 2; ++by_list) {
+        flt_source *src = NULL;
+        const char *list[3] = {path[0], path[1], path[2]};
+        if (by_list)
+            ok(flt_source_create_images(list, 3, csv, NULL, &src));
+        else
+            ok(flt_source_create_image_dir(dir, csv, NULL, &src));
+        ok(flt_source_start(src));
+        for (int k = 0; k < 3; ++k) {
+            const flt_frame *f = NULL;
+            ok(flt_source_next(src, 0, &f));
+            assert_non_null(f);
+            const void *p;
+            size_t stride;
+            double enc;
+            ok(flt_frame_info(f, &p, NULL, NULL, &stride, NULL, NULL, NULL, &enc));
+            assert_true(enc == 10.0 * (k + 1));
+            const uint8_t *px = p;
+            for (uint32_t y = 0; y < H; ++y)
+                for (uint32_t x = 0; x < W; ++x)
+                    if (px[y * stride + x] != grey(k, x, y))
+                        fail_msg("%s: frame %d pixel (%u, %u)", by_list ? "list" : "folder", k, x,
+                                 y);
+        }
+        flt_source_destroy(src);
+    }
 }
 
 int main(void) {
@@ -411,6 +463,7 @@ int main(void) {
         cmocka_unit_test(test_sim_source_gives_the_simulator_frames),
         cmocka_unit_test(test_png_directory_with_encoder_csv),
         cmocka_unit_test(test_tiff16_list_with_fixed_step),
+        cmocka_unit_test(test_utf8_paths),
     };
     return cmocka_run_group_tests(tests, make_dir, remove_dir);
 }

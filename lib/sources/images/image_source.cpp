@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // Recorded image sequences as a frame source. OpenCV decodes one file per
 // next() into the same cv::Mat (its decoder allocates: an offline path).
+// Files are named by UTF-8 paths (core/utf8_path).
 // Block id = index of the file; the position comes from the CSV file or
 // follows the fixed step.
 #include "sources/images/image_source.hpp"
@@ -20,6 +21,7 @@
 
 #include "core/error.hpp"
 #include "core/number_text.hpp"
+#include "core/utf8_path.hpp"
 
 namespace flt::sources {
 
@@ -102,11 +104,18 @@ class image_source final : public source_impl {
     // Reads image `index` into image_ and checks it.
     void load(std::size_t index) {
         const std::string &path = paths_[index];
-        // Checked first so that OpenCV does not print its own warning.
-        if (!std::ifstream(path).good())
-            raise(FLT_ERR_IO, "image %zu '%.200s' cannot be read (missing or not readable)", index,
-                  path.c_str());
-        image_ = cv::imread(path, cv::IMREAD_UNCHANGED);
+        // Read here and decoded from memory: cv::imread takes a narrow
+        // path, which Windows reads in the ANSI code page, not UTF-8
+        // (core/utf8_path). 1 GiB is far beyond any camera frame and below
+        // INT_MAX, the longest row a cv::Mat can have.
+        constexpr std::size_t k_max_image_bytes = std::size_t(1) << 30;
+        if (const std::error_code err = read_file(path, file_bytes_, k_max_image_bytes))
+            raise(FLT_ERR_IO, "image %zu '%.200s' cannot be read (missing or not readable: %s)",
+                  index, path.c_str(), err.message().c_str());
+        image_ = file_bytes_.empty()
+                     ? cv::Mat()
+                     : cv::imdecode(cv::Mat(1, int(file_bytes_.size()), CV_8U, file_bytes_.data()),
+                                    cv::IMREAD_UNCHANGED);
         if (image_.empty())
             raise(FLT_ERR_IO,
                   "image %zu '%.200s' cannot be read (missing, or not an "
@@ -128,11 +137,12 @@ class image_source final : public source_impl {
     int bits_ = 8;         // of the frames delivered: 8, 10, 12 or 16
     std::uint32_t width_ = 0, height_ = 0;
     cv::Mat image_;
+    std::string file_bytes_;  // the current image file, decoded into image_
     std::uint64_t next_index_ = 0;
 };
 
 void image_source::read_csv(const std::string &csv) {
-    std::ifstream in(csv);
+    std::ifstream in(utf8_path(csv));
     if (!in)
         raise(FLT_ERR_IO, "encoder CSV '%.200s' cannot be opened", csv.c_str());
     std::string line;
@@ -202,12 +212,12 @@ std::unique_ptr<source_impl> make_image_source(std::vector<std::string> paths,
 std::vector<std::string> list_image_files(const std::string &directory) {
     namespace fs = std::filesystem;
     std::error_code ec;
-    fs::directory_iterator it(fs::u8path(directory), ec);
+    fs::directory_iterator it(utf8_path(directory), ec);
     if (ec)
         raise(FLT_ERR_IO, "directory '%.200s' cannot be opened", directory.c_str());
     std::vector<std::string> names;
     for (; it != fs::directory_iterator(); it.increment(ec)) {
-        const std::string name = it->path().filename().u8string();
+        const std::string name = utf8_string(it->path().filename());
         if (has_image_suffix(name))
             names.push_back(name);
     }
