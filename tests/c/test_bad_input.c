@@ -20,9 +20,10 @@
  * the same handle must succeed (the handle stayed usable).
  *
  * Completeness: the test reads the dynamic symbol tables of the loaded
- * libflatline.so and libflatline_testing.so (ELF .dynsym, found through
- * dladdr) and fails when an exported function has no row, or a row names a
- * function that neither exports, or libflatline exports a test double
+ * libflatline and libflatline_testing (ELF .dynsym found through dladdr on
+ * Linux, the PE export directory found through GetModuleHandleEx on
+ * Windows) and fails when an exported function has no row, or a row names
+ * a function that neither exports, or libflatline exports a test double
  * (flt_u3v_sim_*). A new public function cannot land without its row.
  *
  * Known bugs: a case that returns the wrong status is written with
@@ -32,21 +33,24 @@
  * FLT_BAD_INPUT_CRASHERS=1 in the environment.
  */
 #define _GNU_SOURCE
-#include <dlfcn.h>
-#include <elf.h>
 #include <errno.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 #include <time.h>
-#include <unistd.h>
 #include <zlib.h>
+#ifdef _WIN32
+#  include <windows.h>
+#else
+#  include <dlfcn.h>
+#  include <elf.h>
+#endif
 
 #include "flatline/flatline.h"
 #include "flatline/testing.h"
+#include "test_files.h"
 
 /* ---------------------------------------------------------------------- */
 /* Checking                                                                */
@@ -249,8 +253,7 @@ static void write_png(const char *path, const uint8_t *pixels, uint32_t w, uint3
 }
 
 static void setup(void) {
-    snprintf(g_dir, sizeof g_dir, "/tmp/flt_bad_input_%ld", (long)getpid());
-    if (mkdir(g_dir, 0700) != 0 && errno != EEXIST)
+    if (tf_temp_dir(g_dir, sizeof g_dir, "bad_input") != 0)
         exit(2);
     if (flt_calib_create_reference(ROI_FIRST, ROI_ROWS, FIRST_X, PITCH, FIBERS, &g_calib) ||
         flt_sim_create(g_calib, NULL, &g_sim) ||
@@ -268,9 +271,7 @@ static void setup(void) {
 }
 
 static void teardown(void) {
-    char cmd[300];
-    snprintf(cmd, sizeof cmd, "rm -rf '%s'", g_dir);
-    if (system(cmd) != 0)
+    if (tf_remove_tree(g_dir) != 0)
         fprintf(stderr, "could not remove %s\n", g_dir);
     free(g_frame);
     flt_sim_destroy(g_sim);
@@ -2251,8 +2252,8 @@ static void row_source_create_image_dir(void) {
     char empty[300], d[300], png[400];
     path_in_dir(empty, sizeof empty, "empty");
     path_in_dir(d, sizeof d, "images");
-    mkdir(empty, 0700);
-    mkdir(d, 0700);
+    tf_mkdir(empty);
+    tf_mkdir(d);
     snprintf(png, sizeof png, "%s/0001.png", d);
     uint8_t px[64 * 32] = {0};
     write_png(png, px, 64, 32);
@@ -3915,8 +3916,51 @@ static const row k_rows[] = {
 
 /* ---------------------------------------------------------------------- */
 /* The exported functions, from the library's ELF dynamic symbol table     */
+/* (Linux) or PE export table (Windows)                                    */
 /* ---------------------------------------------------------------------- */
 
+#ifdef _WIN32
+/* The names in the export directory of the module holding `symbol`, whose
+ * address lies in an executable section (functions, not data), appended to
+ * names[*count]; forwarders (an address inside the export directory) are
+ * skipped. NULL on failure. */
+static char **exported_functions(void *symbol, char **names, size_t *count) {
+    HMODULE module = NULL;
+    if (!GetModuleHandleExA(GET_MODULE_HANDLE_EX_FLAG_FROM_ADDRESS |
+                                GET_MODULE_HANDLE_EX_FLAG_UNCHANGED_REFCOUNT,
+                            (LPCSTR)symbol, &module))
+        return NULL;
+    const unsigned char *base = (const unsigned char *)module;
+    const IMAGE_DOS_HEADER *dos = (const IMAGE_DOS_HEADER *)base;
+    const IMAGE_NT_HEADERS64 *nt = (const IMAGE_NT_HEADERS64 *)(base + dos->e_lfanew);
+    if (dos->e_magic != IMAGE_DOS_SIGNATURE || nt->Signature != IMAGE_NT_SIGNATURE ||
+        nt->OptionalHeader.Magic != IMAGE_NT_OPTIONAL_HDR64_MAGIC)
+        return NULL;
+    const IMAGE_DATA_DIRECTORY dir = nt->OptionalHeader.DataDirectory[IMAGE_DIRECTORY_ENTRY_EXPORT];
+    if (dir.VirtualAddress == 0)
+        return NULL;
+    const IMAGE_EXPORT_DIRECTORY *exports =
+        (const IMAGE_EXPORT_DIRECTORY *)(base + dir.VirtualAddress);
+    const DWORD *name_rvas = (const DWORD *)(base + exports->AddressOfNames);
+    const WORD *ordinals = (const WORD *)(base + exports->AddressOfNameOrdinals);
+    const DWORD *functions = (const DWORD *)(base + exports->AddressOfFunctions);
+    const IMAGE_SECTION_HEADER *sections = IMAGE_FIRST_SECTION(nt);
+    names = realloc(names, sizeof(char *) * (*count + exports->NumberOfNames + 1));
+    for (DWORD i = 0; i < exports->NumberOfNames; ++i) {
+        const DWORD rva = functions[ordinals[i]];
+        if (rva >= dir.VirtualAddress && rva < dir.VirtualAddress + dir.Size)
+            continue; /* a forwarder */
+        int code = 0;
+        for (WORD k = 0; k < nt->FileHeader.NumberOfSections; ++k)
+            if (rva >= sections[k].VirtualAddress &&
+                rva < sections[k].VirtualAddress + sections[k].Misc.VirtualSize)
+                code = (sections[k].Characteristics & IMAGE_SCN_MEM_EXECUTE) != 0;
+        if (code)
+            names[(*count)++] = strdup((const char *)(base + name_rvas[i]));
+    }
+    return names;
+}
+#else
 /* The functions exported by the loaded library that holds `symbol`,
  * appended to names[*count] (NULL on failure). */
 static char **exported_functions(void *symbol, char **names, size_t *count) {
@@ -3965,6 +4009,7 @@ static char **exported_functions(void *symbol, char **names, size_t *count) {
     free(elf);
     return names;
 }
+#endif
 
 int main(void) {
     size_t n_exported = 0;

@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 /* "No allocation in per-row hot paths": counts every malloc/calloc/realloc
  * made by libflatline (and the C++ runtime under it) while a reconstructor
- * streams rows, finishes sheets and resets. The counting allocator interposes
- * the C library's through ELF symbol interposition, so it sees the shared
- * library's calls too. Not built under sanitizers, which own malloc. */
+ * streams rows, finishes sheets and resets. The counting allocator
+ * (alloc_count.h) sees the shared library's calls too. Not built under
+ * sanitizers, which own malloc. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -14,34 +14,8 @@
 
 #include <flatline/flatline.h>
 
+#include "alloc_count.h"
 #include "sheet.h"
-
-extern void *__libc_malloc(size_t);
-extern void *__libc_calloc(size_t, size_t);
-extern void *__libc_realloc(void *, size_t);
-extern void __libc_free(void *);
-
-static int g_counting;
-static size_t g_allocations;
-
-void *malloc(size_t n) {
-    if (g_counting)
-        ++g_allocations;
-    return __libc_malloc(n);
-}
-void *calloc(size_t n, size_t size) {
-    if (g_counting)
-        ++g_allocations;
-    return __libc_calloc(n, size);
-}
-void *realloc(void *p, size_t n) {
-    if (g_counting)
-        ++g_allocations;
-    return __libc_realloc(p, n);
-}
-void free(void *p) {
-    __libc_free(p);
-}
 
 static void stream_and_count(const flt_options *options);
 
@@ -118,10 +92,16 @@ static void stream_and_count(const flt_options *options) {
     test_sheet_free(t);
 }
 
+/* The counter must be in place, or every count below would be 0. */
+static int install_counter(void **state) {
+    (void)state;
+    return alloc_count_install() >= 1 ? 0 : -1;
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(streaming_allocates_nothing_after_create),
         cmocka_unit_test(robust_rigid_streaming_allocates_nothing_after_create),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return cmocka_run_group_tests(tests, install_counter, NULL);
 }
