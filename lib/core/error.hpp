@@ -18,12 +18,18 @@
 
 namespace flt {
 
-// Records status and a printf-style message for this thread; returns status.
-flt_status fail(flt_status status, const char *format, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 2, 3)))
+// printf-style format checks: MinGW's C99 printf (__USE_MINGW_ANSI_STDIO,
+// set by the build) is gnu_printf there, not the msvcrt `printf` format.
+#if defined(__MINGW32__)
+#  define FLT_PRINTF_FORMAT(fmt, args) __attribute__((format(__MINGW_PRINTF_FORMAT, fmt, args)))
+#elif defined(__GNUC__)
+#  define FLT_PRINTF_FORMAT(fmt, args) __attribute__((format(printf, fmt, args)))
+#else
+#  define FLT_PRINTF_FORMAT(fmt, args)
 #endif
-    ;
+
+// Records status and a printf-style message for this thread; returns status.
+flt_status fail(flt_status status, const char *format, ...) FLT_PRINTF_FORMAT(2, 3);
 
 // Clears the thread-local state (called on entry of every public function).
 void clear_error();

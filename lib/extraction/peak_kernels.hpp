@@ -20,7 +20,8 @@
 
 namespace flt {
 
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && \
+// target_clones needs the ELF loader's ifunc (not on Windows).
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) && \
     !defined(__SANITIZE_ADDRESS__)
 #  define FLT_PEAK_KERNEL __attribute__((target_clones("avx2", "default")))
 #else

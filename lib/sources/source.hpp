@@ -17,16 +17,13 @@
 #include <limits>
 #include <string>
 
+#include "core/error.hpp"
 #include "flatline/source.h"
 
 namespace flt::sources {
 
 // Throws flt::error(status) with a printf-style message (at most 400 bytes).
-[[noreturn]] void raise(flt_status status, const char *format, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 2, 3)))
-#endif
-    ;
+[[noreturn]] void raise(flt_status status, const char *format, ...) FLT_PRINTF_FORMAT(2, 3);
 
 // One frame as a source kind delivers it; the pixels are borrowed until
 // the kind's next call of next(), stop() or its destruction.

@@ -78,15 +78,16 @@ int alloc_count_install(void) {
     unsigned char *base = (unsigned char *)module;
     const IMAGE_DOS_HEADER *dos = (const IMAGE_DOS_HEADER *)base;
     const IMAGE_NT_HEADERS64 *nt = (const IMAGE_NT_HEADERS64 *)(base + dos->e_lfanew);
-    const IMAGE_DATA_DIRECTORY dir =
-        nt->OptionalHeader.DataDirectory[IMAGE_DIRECTORY_ENTRY_IMPORT];
+    const IMAGE_DATA_DIRECTORY dir = nt->OptionalHeader.DataDirectory[IMAGE_DIRECTORY_ENTRY_IMPORT];
     if (dir.VirtualAddress == 0)
         return 0;
-    for (const IMAGE_IMPORT_DESCRIPTOR *d = (const IMAGE_IMPORT_DESCRIPTOR *)(base + dir.VirtualAddress);
+    for (const IMAGE_IMPORT_DESCRIPTOR *d =
+             (const IMAGE_IMPORT_DESCRIPTOR *)(base + dir.VirtualAddress);
          d->Name != 0; ++d) {
         /* The names (original thunks) beside the addresses the loader wrote. */
-        const IMAGE_THUNK_DATA64 *names = (const IMAGE_THUNK_DATA64 *)(
-            base + (d->OriginalFirstThunk ? d->OriginalFirstThunk : d->FirstThunk));
+        const IMAGE_THUNK_DATA64 *names =
+            (const IMAGE_THUNK_DATA64 *)(base + (d->OriginalFirstThunk ? d->OriginalFirstThunk
+                                                                       : d->FirstThunk));
         IMAGE_THUNK_DATA64 *iat = (IMAGE_THUNK_DATA64 *)(base + d->FirstThunk);
         for (; names->u1.AddressOfData != 0; ++names, ++iat) {
             if (IMAGE_SNAP_BY_ORDINAL64(names->u1.Ordinal))
