@@ -16,10 +16,16 @@
 // its height map, kept here to check it). Each sheet's accuracy against the
 // simulator's ground truth is printed per zone across the width, and its
 // zone I-Units beside those of the true heights.
+//
+// `--dump FILE` also writes every sheet's reconstructed rows (s, then z per
+// fiber, round-trip decimal text) to FILE: ctest runs the example on Linux
+// and as a self-contained win-x64 program under wine and compares the two.
 #nullable enable
 using System;
 using System.Collections.Concurrent;
 using System.Collections.Generic;
+using System.Globalization;
+using System.IO;
 using System.Threading;
 using Flatline;
 
@@ -33,8 +39,16 @@ internal static class Program
     private const int Zones = 5;                // accuracy columns across the width
     private const double ZoneWidth = 200.0;     // mm: I-Unit tags across the width
 
-    private static int Main()
+    private static int Main(string[] args)
     {
+        StreamWriter? dump = null;
+        if (args.Length == 2 && args[0] == "--dump")
+            dump = new StreamWriter(args[1]);
+        else if (args.Length != 0)
+        {
+            Console.Error.WriteLine("usage: FlatlineExample [--dump FILE]");
+            return 2;
+        }
         Console.WriteLine($"libflatline {Library.VersionString} through the Flatline NuGet package");
         using var calibration = Calibration.Reference(firstRow: 960, rows: 128,
                                                       firstXMm: -0.5 * FiberPitch * (Fibers - 1),
@@ -89,6 +103,14 @@ internal static class Program
             var samples = new int[Zones];
             double worst = 0;
             var truth = new double[sheet.Rows, Fibers];
+            if (dump != null)
+                for (int r = 0; r < sheet.Rows; ++r)
+                {
+                    var text = new System.Text.StringBuilder(sheet.S![r].ToString("R", CultureInfo.InvariantCulture));
+                    for (int k = 0; k < Fibers; ++k)
+                        text.Append(' ').Append(sheet.Z![r, k].ToString("R", CultureInfo.InvariantCulture));
+                    dump.WriteLine(text.ToString());
+                }
             for (int r = 0; r < sheet.Rows; ++r)
             {
                 double[] expected = truthByRow[(long)Math.Round(sheet.S![r] / FrameSpacing)];
@@ -159,6 +181,7 @@ internal static class Program
                           $"{gauge.Count(GaugeCounter.Dropped)} dropped, reconstructor rows held " +
                           $"{gauge.GetOption("row_capacity")}");
         allWithin &= published == Sheets;
+        dump?.Dispose();
         Console.WriteLine(allWithin ? "all sheets within tolerance" : "some sheets out of tolerance");
         return allWithin ? 0 : 1;
     }

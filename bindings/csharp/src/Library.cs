@@ -31,7 +31,7 @@ namespace Flatline
         /// Where to load the native glue library from, instead of the default
         /// .NET probing (application folder, runtimes/&lt;rid&gt;/native): a
         /// folder holding libflatline_csharp.so / flatline_csharp.dll (and
-        /// libflatline.so.0 / flatline.dll beside it), or the glue file
+        /// libflatline.so.0 / libflatline.dll beside it), or the glue file
         /// itself. Set it before the first call into the library; the
         /// environment variable FLATLINE_NATIVE_PATH does the same when this
         /// is null. Setting it after the library is loaded throws

@@ -71,14 +71,19 @@ namespace Flatline
             return ResolveOverride(path);
         }
 
+        /// <summary>The core library's file name on Windows: libflatline.dll,
+        /// never flatline.dll, which on a case-insensitive file system is this
+        /// managed assembly, Flatline.dll.</summary>
+        internal const string WindowsCoreFile = "libflatline.dll";
+
         /// <summary>On Windows, a DLL loaded by full path does not find its
-        /// own dependencies beside it; load flatline.dll from the same folder
-        /// first. (On Linux the glue carries RPATH $ORIGIN.)</summary>
+        /// own dependencies beside it; load libflatline.dll from the same
+        /// folder first. (On Linux the glue carries RPATH $ORIGIN.)</summary>
         private static void PreloadCore(string glueFile, Func<string, bool> tryLoad)
         {
             if (!RuntimeInformation.IsOSPlatform(OSPlatform.Windows))
                 return;
-            string core = Path.Combine(Path.GetDirectoryName(glueFile) ?? ".", "flatline.dll");
+            string core = Path.Combine(Path.GetDirectoryName(glueFile) ?? ".", WindowsCoreFile);
             if (File.Exists(core))
                 tryLoad(core);
         }

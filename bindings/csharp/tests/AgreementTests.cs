@@ -4,7 +4,6 @@ using System.IO;
 using System.Reflection;
 using System.Runtime.InteropServices;
 using Xunit;
-using Xunit.Abstractions;
 
 namespace Flatline.Tests
 {
@@ -24,7 +23,7 @@ namespace Flatline.Tests
             {
                 if (name != Core)
                     return IntPtr.Zero;
-                string file = OperatingSystem.IsWindows() ? "flatline.dll" : "libflatline.so.0";
+                string file = OperatingSystem.IsWindows() ? "libflatline.dll" : "libflatline.so.0";
                 return NativeLibrary.Load(Path.Combine(AppContext.BaseDirectory, file));
             });
         }

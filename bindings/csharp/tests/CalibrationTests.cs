@@ -4,7 +4,6 @@ using System.Collections.Generic;
 using System.IO;
 using System.Linq;
 using Xunit;
-using Xunit.Abstractions;
 
 namespace Flatline.Tests
 {
@@ -362,6 +361,7 @@ namespace Flatline.Tests
         [Fact]
         public void DisposeIsImmediateIdempotentAndFinal()
         {
+            Finalizers.Settle();
             long before = CalibHandle.Live;
             var calib = Calibration.Reference(892, 256, -500, 100, 11);
             Assert.Equal(before + 1, CalibHandle.Live);

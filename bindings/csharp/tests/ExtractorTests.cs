@@ -4,7 +4,6 @@ using System.Linq;
 using System.Runtime.CompilerServices;
 using System.Threading;
 using Xunit;
-using Xunit.Abstractions;
 
 namespace Flatline.Tests
 {
@@ -290,6 +289,7 @@ namespace Flatline.Tests
         public void DisposeIsImmediateIdempotentAndFinal()
         {
             using var calib = Sensor();
+            Finalizers.Settle();
             long before = ExtractorHandle.Live;
             var extractor = new Extractor(calib);
             Assert.Equal(before + 1, ExtractorHandle.Live);

@@ -4,7 +4,6 @@ using System.Runtime.CompilerServices;
 using System.Runtime.InteropServices;
 using System.Threading;
 using Xunit;
-using Xunit.Abstractions;
 
 namespace Flatline.Tests
 {
@@ -409,6 +408,7 @@ namespace Flatline.Tests
         [Fact]
         public void DisposeIsImmediateIdempotentAndFinal()
         {
+            Finalizers.Settle();
             long before = FlatnessHandle.Live;
             var flatness = new Flatness(Grid(5, 0, 100));
             Assert.Equal(before + 1, FlatnessHandle.Live);

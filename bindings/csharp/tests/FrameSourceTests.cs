@@ -4,7 +4,6 @@ using System.IO;
 using System.Runtime.CompilerServices;
 using System.Runtime.InteropServices;
 using Xunit;
-using Xunit.Abstractions;
 using Flatline.Testing;
 
 namespace Flatline.Tests
@@ -453,6 +452,7 @@ namespace Flatline.Tests
                 Assert.Equal(10.0, source.Next().EncoderMm);
             }
 
+            Finalizers.Settle();
             long busesBefore = U3VSimHandle.Live, linesBefore = SimHandle.Live;
             var bus = new U3VSimBus();
             bus.AddCamera("Flatline", "Held", "H", 64, 16);
@@ -487,6 +487,7 @@ namespace Flatline.Tests
         {
             using var bus = new U3VSimBus();
             bus.AddCamera("Flatline", "D", "D", 64, 16);
+            Finalizers.Settle();
             long before = SourceHandle.Live;
             var source = FrameSource.U3V(null, null, bus);   // the first camera
             Assert.Equal(before + 1, SourceHandle.Live);

@@ -4,7 +4,6 @@ using System.Collections.Generic;
 using System.Diagnostics;
 using System.Runtime.CompilerServices;
 using Xunit;
-using Xunit.Abstractions;
 using Flatline.Testing;
 
 namespace Flatline.Tests

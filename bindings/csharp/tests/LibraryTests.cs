@@ -18,6 +18,30 @@ namespace Flatline.Tests
             Assert.Equal(Library.Version, number);
         }
 
+        /// <summary>The native files sit beside the managed assemblies (the
+        /// application folder, as a published program has them). On a
+        /// case-insensitive file system (Windows) no native file may share a
+        /// name with a managed one: a core library named flatline.dll *is*
+        /// the managed Flatline.dll there (one overwrote the other, and the
+        /// glue's import bound to the managed file: EntryPointNotFound).</summary>
+        [Fact]
+        public void NativeFilesDoNotCollideWithManagedAssemblies()
+        {
+            string folder = AppContext.BaseDirectory;
+            string core = OperatingSystem.IsWindows() ? "libflatline.dll" : "libflatline.so.0";
+            string glue = NativeLoader.PlatformFileName(NativeLoader.GlueName);
+            Assert.True(File.Exists(Path.Combine(folder, core)), $"{core} is beside the program");
+            Assert.True(File.Exists(Path.Combine(folder, glue)), $"{glue} is beside the program");
+            Assert.True(File.Exists(Path.Combine(folder, "Flatline.dll")), "the managed assembly too");
+            var managed = AppDomain.CurrentDomain.GetAssemblies()
+                .Select(a => a.GetName().Name + ".dll").ToList();
+            Assert.Contains("Flatline.dll", managed);
+            foreach (string native in new[] { core, glue, NativeLoader.WindowsCoreFile })
+                Assert.DoesNotContain(managed, m => string.Equals(m, native, StringComparison.OrdinalIgnoreCase));
+            // The whole chain binds: managed Flatline -> glue -> core.
+            Assert.Equal(Library.BindingVersion, Library.Version);
+        }
+
         [Fact]
         public void StatusNamesComeFromTheCLibrary()
         {

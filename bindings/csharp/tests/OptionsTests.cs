@@ -169,6 +169,7 @@ namespace Flatline.Tests
         [Fact]
         public void DisposeIsImmediateIdempotentAndFinal()
         {
+            Finalizers.Settle();
             long before = OptionsHandle.Live;
             var options = new FlatlineOptions();
             Assert.Equal(before + 1, OptionsHandle.Live);

@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 using System;
 using Xunit;
-using Xunit.Abstractions;
 
 namespace Flatline.Tests
 {
@@ -248,6 +247,7 @@ namespace Flatline.Tests
         [Fact]
         public void DisposeIsImmediateIdempotentAndFinal()
         {
+            Finalizers.Settle();
             long before = ReconHandle.Live;
             var recon = new Reconstructor(2);
             Assert.Equal(before + 1, ReconHandle.Live);

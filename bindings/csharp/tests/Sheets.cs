@@ -3,10 +3,23 @@ using System;
 using Xunit;
 
 // The GC-stress test measures process memory: no other test may run beside it.
-[assembly: CollectionBehavior(DisableTestParallelization = true)]
+[assembly: Xunit.v3.Parallelization(Mode = Xunit.Sdk.ParallelMode.None)]
 
 namespace Flatline.Tests
 {
+    /// <summary>Live-handle counts are process-wide: an object another test
+    /// left for the finalizer can be freed in the middle of a test that
+    /// counts. Settle() finalizes every such object first.</summary>
+    internal static class Finalizers
+    {
+        public static void Settle()
+        {
+            GC.Collect();
+            GC.WaitForPendingFinalizers();
+            GC.Collect();
+        }
+    }
+
     /// <summary>Synthetic dual-laser measurements of known surfaces.</summary>
     internal sealed class Sheet
     {

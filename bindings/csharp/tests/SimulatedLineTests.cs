@@ -3,7 +3,6 @@ using System;
 using System.Runtime.CompilerServices;
 using System.Threading;
 using Xunit;
-using Xunit.Abstractions;
 
 namespace Flatline.Tests
 {
@@ -401,6 +400,7 @@ namespace Flatline.Tests
         public void DisposeIsImmediateIdempotentAndFinal()
         {
             using var calib = SmallSensor();
+            Finalizers.Settle();
             long before = SimHandle.Live;
             var line = new SimulatedLine(calib);
             Assert.Equal(before + 1, SimHandle.Live);
@@ -425,6 +425,7 @@ namespace Flatline.Tests
             own.Dispose();
             Assert.Equal(10, second.NextRows(10).Rows);
             // The reference calibration a default line made for itself goes with it.
+            Finalizers.Settle();
             long calibs = CalibHandle.Live;
             var byDefault = new SimulatedLine();
             Assert.Equal(calibs + 1, CalibHandle.Live);
