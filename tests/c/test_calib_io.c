@@ -19,6 +19,15 @@
 #include "flatline/flatline.h"
 #include "test_files.h"
 
+/* The first n bytes of s as a new string (strndup, which Windows lacks). */
+static char *prefix_copy(const char *s, size_t n) {
+    const size_t length = strlen(s) < n ? strlen(s) : n;
+    char *copy = malloc(length + 1);
+    memcpy(copy, s, length);
+    copy[length] = '\0';
+    return copy;
+}
+
 /* A finished calibration of the synthetic sensor with estimated (so, not
  * round-number) homographies and distortion. */
 static flt_calib *make_calibration(void) {
@@ -285,12 +294,12 @@ static void truncated_file_is_rejected(void **state) {
     (void)state;
     /* cut inside the second laser's homography */
     const char *cut = strstr(strstr(g_text, "\"homography\"") + 1, "\"homography\"");
-    char *text = strndup(g_text, (size_t)(cut - g_text) + 30);
+    char *text = prefix_copy(g_text, (size_t)(cut - g_text) + 30);
     expect_format_error(text, "truncated");
     expect_format_error(text, "lasers[1].homography");
     free(text);
     /* cut after the last number but before the closing braces */
-    text = strndup(g_text, strlen(g_text) - 6);
+    text = prefix_copy(g_text, strlen(g_text) - 6);
     expect_format_error(text, "truncated");
     free(text);
     expect_format_error("", "empty");
@@ -300,7 +309,7 @@ static void missing_field_is_rejected(void **state) {
     (void)state;
     const char *fy = strstr(g_text, "    \"fy\": ");
     const char *eol = strchr(fy, '\n');
-    char *line = strndup(fy, (size_t)(eol - fy + 1));
+    char *line = prefix_copy(fy, (size_t)(eol - fy + 1));
     char *text = replace(g_text, line, "");
     expect_format_error(text, "missing field 'camera.fy'");
     free(line), free(text);
@@ -337,7 +346,7 @@ static void wrong_type_is_rejected(void **state) {
     expect_format_error(text, "field 'frame.height' = 2048.5 must be a whole number");
     free(text);
     const char *e = strstr(g_text, "\"encoder_mm_per_count\": ");
-    char *field = strndup(e, (size_t)(strchr(e, ',') - e));
+    char *field = prefix_copy(e, (size_t)(strchr(e, ',') - e));
     text = replace(g_text, field, "\"encoder_mm_per_count\": true");
     expect_format_error(text, "field 'encoder_mm_per_count' (line 42) must be a number, "
                               "found a bare word 'true'");
@@ -348,7 +357,7 @@ static void nan_is_rejected(void **state) {
     (void)state;
     const char *k1 = strstr(g_text, "\"k1\": ");
     const char *comma = strchr(k1, ',');
-    char *field = strndup(k1, (size_t)(comma - k1));
+    char *field = prefix_copy(k1, (size_t)(comma - k1));
     char *text = replace(g_text, field, "\"k1\": NaN");
     expect_format_error(text, "field 'camera.distortion.k1' is NaN");
     free(text);
@@ -376,7 +385,7 @@ static void non_invertible_homography_is_rejected(void **state) {
     /* laser 1's homography replaced by a rank-2 matrix (row 2 = 2 x row 1) */
     const char *h = strstr(strstr(g_text, "\"homography\": [") + 1, "\"homography\": [");
     const char *end = strchr(h, ']');
-    char *old = strndup(h, (size_t)(end - h + 1));
+    char *old = prefix_copy(h, (size_t)(end - h + 1));
     char *text = replace(g_text, old, "\"homography\": [1, 2, 3, 2, 4, 6, 0, 0, 1]");
     expect_format_error(text, "field 'lasers[1].homography' is not invertible");
     free(text);
