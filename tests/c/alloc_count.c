@@ -8,8 +8,8 @@
 
 #include "flatline/flatline.h"
 
-volatile int g_counting;
-volatile size_t g_allocations;
+atomic_int g_counting;
+atomic_size_t g_allocations;
 
 #ifdef _WIN32
 #  include <malloc.h>
@@ -23,8 +23,8 @@ static void *(*real_aligned_realloc)(void *, size_t, size_t);
 static void *(*real_recalloc)(void *, size_t, size_t);
 
 static void count(void) {
-    if (g_counting)
-        ++g_allocations;
+    if (atomic_load(&g_counting))
+        atomic_fetch_add(&g_allocations, 1);
 }
 static void *counting_malloc(size_t n) {
     count();
@@ -118,18 +118,18 @@ extern void *__libc_realloc(void *, size_t);
 extern void __libc_free(void *);
 
 void *malloc(size_t n) {
-    if (g_counting)
-        ++g_allocations;
+    if (atomic_load(&g_counting))
+        atomic_fetch_add(&g_allocations, 1);
     return __libc_malloc(n);
 }
 void *calloc(size_t n, size_t size) {
-    if (g_counting)
-        ++g_allocations;
+    if (atomic_load(&g_counting))
+        atomic_fetch_add(&g_allocations, 1);
     return __libc_calloc(n, size);
 }
 void *realloc(void *p, size_t n) {
-    if (g_counting)
-        ++g_allocations;
+    if (atomic_load(&g_counting))
+        atomic_fetch_add(&g_allocations, 1);
     return __libc_realloc(p, n);
 }
 void free(void *p) {

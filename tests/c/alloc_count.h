@@ -16,15 +16,18 @@
  * and is a no-op returning 1 on Linux.
  *
  * The tests keep a control: the counter must see the allocations a create
- * call makes, so a hook that does not work fails the test.
+ * call makes, so a hook that does not work fails the test. The counter and
+ * the switch are atomics: the gauge allocates (or must not) on threads of
+ * its own.
  */
 #ifndef FLT_ALLOC_COUNT_H
 #define FLT_ALLOC_COUNT_H
 
+#include <stdatomic.h>
 #include <stddef.h>
 
-extern volatile int g_counting;
-extern volatile size_t g_allocations;
+extern atomic_int g_counting;
+extern atomic_size_t g_allocations;
 
 int alloc_count_install(void);
 
