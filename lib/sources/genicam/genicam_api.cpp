@@ -19,11 +19,13 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/utf8_path.hpp"
 #include "sources/genicam/node_map.hpp"
 #include "sources/genicam/text.hpp"
 
 using flt::fail;
 using flt::guard;
+using flt::utf8_path;
 
 namespace {
 
@@ -223,9 +225,9 @@ FLT_API flt_status FLT_CALL flt_genicam_load(const char *path, flt_genicam **out
         *out = nullptr;
         FLT_CHECK_NOT_NULL(fn, path);
         std::error_code ec;
-        if (std::filesystem::is_directory(std::filesystem::u8path(path), ec))
+        if (std::filesystem::is_directory(utf8_path(path), ec))
             return fail(FLT_ERR_IO, "%s: '%.300s' is a folder, not a file", fn, path);
-        std::ifstream in(std::filesystem::u8path(path), std::ios::binary);
+        std::ifstream in(utf8_path(path), std::ios::binary);
         if (!in)
             return fail(FLT_ERR_IO, "%s: cannot open '%.300s'", fn, path);
         // Read in chunks, at most 64 MiB: no size is trusted before reading.
