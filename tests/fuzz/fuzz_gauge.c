@@ -36,13 +36,15 @@ static double value(const flt_sheet *sheet, flt_sheet_value key) {
 
 /* Every value of a sheet, and the NaN policy of gauge.h. */
 static void check_sheet(const flt_sheet *sheet, int maps) {
+    /* (isnan is only "nonzero" for a NaN: MinGW-w64's is not 1, so it is
+     * compared through !!.) */
     const unsigned flags = (unsigned)value(sheet, FLT_SHEET_FLAGS);
     const unsigned window = (unsigned)value(sheet, FLT_SHEET_WINDOW_FLAGS);
-    if (isnan(value(sheet, FLT_SHEET_S_FIRST)) != !!(flags & FLT_SHEET_FLAG_EMPTY))
+    if (!!isnan(value(sheet, FLT_SHEET_S_FIRST)) != !!(flags & FLT_SHEET_FLAG_EMPTY))
         abort();
-    if (isnan(value(sheet, FLT_SHEET_STRIP_WIDTH)) != !!(flags & FLT_SHEET_FLAG_NO_EDGES))
+    if (!!isnan(value(sheet, FLT_SHEET_STRIP_WIDTH)) != !!(flags & FLT_SHEET_FLAG_NO_EDGES))
         abort();
-    if (isnan(value(sheet, FLT_SHEET_WAVE_HEIGHT)) != !!(flags & FLT_SHEET_FLAG_NO_WAVE))
+    if (!!isnan(value(sheet, FLT_SHEET_WAVE_HEIGHT)) != !!(flags & FLT_SHEET_FLAG_NO_WAVE))
         abort();
     if (isnan(value(sheet, FLT_SHEET_BOW)) && !(window & FLT_WINDOW_NO_BOW))
         abort();
