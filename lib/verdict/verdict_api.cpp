@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/utf8_path.hpp"
 #include "flatline/recon.h"
 #include "flatline/verdict.h"
 #include "verdict/rules.hpp"
@@ -106,7 +107,7 @@ flt_status check_heights(const char *fn, const char *name, const double *z, std:
 }
 
 flt_status read_file(const char *fn, const char *path, std::string &text) {
-    std::FILE *f = std::fopen(path, "rb");
+    std::FILE *f = flt::open_file(path, "rb");  // UTF-8 path, on Windows too
     if (f == nullptr)
         return fail(FLT_ERR_IO, "%s: cannot open '%.300s': %s", fn, path, std::strerror(errno));
     char chunk[4096];

@@ -18,6 +18,8 @@
 
 #include <flatline/flatline.h>
 
+#include "test_files.h"
+
 #define OK(call) assert_int_equal((call), FLT_OK)
 
 static const double PI = 3.14159265358979323846;
@@ -224,9 +226,22 @@ static void rule_file_is_read(void **state) {
     assert_true(len == 0.0);
     flt_rules_destroy(r);
 
-    /* The same from a file. */
-    const char *path = "test_verdict_rules.json";
-    FILE *f = fopen(path, "wb");
+    /* The same from a file, named by a UTF-8 path outside any ANSI code
+     * page ("Prüfregeln 測.json" in "Toleranz-Größe"): on Windows the file
+     * is created by its UTF-16 name, which a narrow fopen of the UTF-8
+     * bytes would not find. */
+    char dir[512], sub[600], path[700];
+    assert_int_equal(tf_temp_dir(dir, sizeof dir, "verdict"), 0);
+    snprintf(sub, sizeof sub,
+             "%s/Toleranz-Gr\xc3\xb6\xc3\x9f"
+             "e",
+             dir);
+    assert_int_equal(tf_mkdir(sub), 0);
+    snprintf(path, sizeof path,
+             "%s/Pr\xc3\xbc"
+             "fregeln \xe6\xb8\xac.json",
+             sub);
+    FILE *f = tf_fopen(path, "wb");
     assert_non_null(f);
     fwrite(k_rules, 1, sizeof k_rules - 1, f);
     fclose(f);
@@ -235,7 +250,9 @@ static void rule_file_is_read(void **state) {
     OK(flt_rules_count(r, &n));
     assert_int_equal(n, 6);
     flt_rules_destroy(r);
-    remove(path);
+    assert_int_equal(tf_remove(path), 0);
+    assert_int_equal(tf_remove(sub), 0);
+    assert_int_equal(tf_remove(dir), 0);
 }
 
 /* Replaces the first `from` in k_rules with `to`; loading must fail with
