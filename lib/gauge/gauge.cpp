@@ -353,8 +353,34 @@ void gauge::init(const flt_calib *calib, const flt_options *options) {
     jobs_.reserve(4);
     flag_scratch_.assign(std::max(K_, zones_), 0);
 
+    first_use_of_sync_objects();
     for (unsigned i = 0; i < cfg_.workers; ++i)
         workers_.emplace_back([this, i] { worker_main(i); });
+}
+
+// Some threading runtimes make their objects on first use: MinGW-w64's
+// winpthreads (under std::mutex and std::condition_variable on Windows)
+// allocates a mutex's and a condition variable's kernel object at its
+// first lock or wait, and MinGW's emulated thread-local storage allocates
+// a thread's copy of a thread_local at its first access. Done here, and by
+// each worker when it starts, instead of in the first frames' path, which
+// allocates nothing (test_gauge_alloc). On Linux this costs a few
+// uncontended locks.
+void gauge::first_use_of_sync_objects() {
+    touch_thread_locals();
+    { std::lock_guard<std::mutex> lock(pool_->m); }
+    { std::lock_guard<std::mutex> lock(deliver_m_); }
+    std::unique_lock<std::mutex> lock(m_);
+    // A wait that times out at once (a wait, not a notify, makes the
+    // runtime's object).
+    for (std::condition_variable *cv : {&work_cv_, &room_cv_, &idle_cv_, &sheet_cv_})
+        cv->wait_for(lock, std::chrono::nanoseconds(0));
+}
+
+void gauge::touch_thread_locals() {
+    const void *volatile callback = t_in_callback;  // volatile: the read is kept
+    (void)callback;
+    (void)flt_last_error_message();  // the thread's error state (core/error.cpp)
 }
 
 gauge::~gauge() {
@@ -650,6 +676,7 @@ void gauge::run_jobs_inline() {
 // ---------------------------------------------------------------- workers
 
 void gauge::worker_main(unsigned index) {
+    touch_thread_locals();
     std::unique_lock<std::mutex> lock(m_);
     while (!stopping_) {
         if (failed_ || !run_one(lock, index))

@@ -148,6 +148,8 @@ class gauge {
                  flt_extractor *extractor, bool *error_out) const;
     void resolve_band(frame_slot &slot);
     // Workers.
+    void first_use_of_sync_objects();
+    static void touch_thread_locals();
     void worker_main(unsigned index);
     bool run_one(std::unique_lock<std::mutex> &lock, unsigned index);
     void run_inline();
