@@ -18,8 +18,10 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 
 # Declared: "FLT_API ... FLT_CALL flt_name(" in every public header (a
-# declaration may span lines).
-cat "$include"/flatline/*.h | tr '\n' ' ' |
+# declaration may span lines; one per ';'). Only FLT_API ones: a companion
+# library's header declares its own functions with its own export macro.
+cat "$include"/flatline/*.h | tr '\n' ' ' | tr ';' '\n' |
+  grep -E '(^|[^A-Za-z0-9_])FLT_API([^A-Za-z0-9_]|$)' |
   grep -o 'FLT_CALL *flt_[A-Za-z0-9_]* *(' | sed 's/FLT_CALL *//; s/ *(//' | sort -u >"$tmp/declared"
 # Exported: the names of the export table ("[Ordinal/Name Pointer] Table").
 "$objdump" -p "$dll" | awk '
