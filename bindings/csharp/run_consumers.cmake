@@ -14,7 +14,9 @@ set(restore -p:FlatlineVersion=${VERSION} -p:RestorePackagesPath=${PACKAGES}
 # "compile" asset of Flatline in its project.assets.json.
 function(compiled_against project out)
   file(READ ${ARTIFACTS}/obj/${project}/project.assets.json assets)
-  if(assets MATCHES "\"Flatline/${VERSION}\": {[^}]*\"compile\": {[ \r\n]*\"lib/([^/]+)/Flatline.dll\"")
+  # (Flatline's entry holds nested braces, its dependencies; only its own
+  # compile asset names lib/<tfm>/Flatline.dll.)
+  if(assets MATCHES "\"Flatline/${VERSION}\": {.*\"compile\": {[ \r\n]*\"lib/([^/]+)/Flatline.dll\"")
     set(${out} ${CMAKE_MATCH_1} PARENT_SCOPE)
   else()
     message(FATAL_ERROR "${project}: no Flatline ${VERSION} compile asset in its project.assets.json")
