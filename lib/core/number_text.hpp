@@ -36,7 +36,9 @@ bool parse_double(std::string_view text, double &out);
 // with it, also on out-of-memory).
 int vformat_c(char *out, std::size_t size, const char *format, va_list args);
 int format_c(char *out, std::size_t size, const char *format, ...)
-#if defined(__GNUC__)
+#if defined(__MINGW32__)  // MinGW's C99 printf (__USE_MINGW_ANSI_STDIO) is gnu_printf
+    __attribute__((format(__MINGW_PRINTF_FORMAT, 3, 4)))
+#elif defined(__GNUC__)
     __attribute__((format(printf, 3, 4)))
 #endif
     ;
