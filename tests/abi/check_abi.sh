@@ -54,8 +54,9 @@ if [ $rc -ne 0 ]; then
   echo "      $baseline (abidiff exit $rc):"
   echo "$report" | sed 's/^/  | /'
   echo
-  echo "If the break is deliberate (a new SONAME, FLT_VERSION_MAJOR bumped; see"
-  echo "tests/abi/README.md), record the new ABI with:"
+  echo "If the break is deliberate (a new SONAME: FLT_VERSION_MINOR bumped while"
+  echo "MAJOR is 0, FLT_VERSION_MAJOR after; see tests/abi/README.md), record"
+  echo "the new ABI with:"
   echo "  tests/abi/update_baseline.sh [build-dir]"
   echo "and commit tests/abi/libflatline.abi with the change."
   exit 1

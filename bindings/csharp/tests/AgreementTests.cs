@@ -23,7 +23,10 @@ namespace Flatline.Tests
             {
                 if (name != Core)
                     return IntPtr.Zero;
-                string file = OperatingSystem.IsWindows() ? "libflatline.dll" : "libflatline.so.0";
+                // The SONAME: libflatline.so.0.MINOR while MAJOR is 0, else libflatline.so.MAJOR.
+                int version = Library.Version, major = version / 10000, minor = version / 100 % 100;
+                string soname = major == 0 ? $"libflatline.so.0.{minor}" : $"libflatline.so.{major}";
+                string file = OperatingSystem.IsWindows() ? "libflatline.dll" : soname;
                 return NativeLibrary.Load(Path.Combine(AppContext.BaseDirectory, file));
             });
         }

@@ -120,8 +120,14 @@ def version() -> str:
 
 
 # SQLite's check: the loaded library must be the one the binding was built
-# for (same major version, and not older than the headers).
-if (_capi.flt_version() // 10000 != _capi.FLT_HEADER_VERSION_NUMBER // 10000
+# for (same ABI, and not older than the headers). The ABI is the major
+# version, and while that is 0 the minor version too (the SONAME rule).
+def _abi(number: int) -> "tuple[int, int]":
+    major, minor = number // 10000, number // 100 % 100
+    return (major, minor if major == 0 else 0)
+
+
+if (_abi(_capi.flt_version()) != _abi(_capi.FLT_HEADER_VERSION_NUMBER)
         or _capi.flt_version() < _capi.FLT_HEADER_VERSION_NUMBER):
     raise ImportError(
         f"flatline {__version__} was built for libflatline "
