@@ -43,7 +43,7 @@ int main(int argc, char **argv) {
     double encoder[FRAMES];
     for (int f = 0; f < FRAMES; ++f)
         CHECK(flt_sim_next_frame(sim, frames + (size_t)f * W * H, (size_t)W * H, W, &encoder[f], 0,
-                                 NULL, NULL));
+                                 NULL, NULL, 0));
     flt_options *o = NULL;
     CHECK(flt_options_create(&o));
     CHECK(flt_options_set(o, FLT_OPT_EXTRACT_LASER1_FIRST_ROW, 892));

@@ -214,7 +214,7 @@ int main(int argc, char **argv) {
         return 1;
     for (int f = 0; f < FRAMES; ++f) {
         CHECK(flt_sim_next_frame(sim, pixels + (size_t)f * W * H, (size_t)W * H, W, NULL, 0, NULL,
-                                 NULL));
+                                 NULL, 0));
         if (f % 20 == 0)
             fprintf(stderr, "\r  rendering frames %3d of %d", f, FRAMES);
     }

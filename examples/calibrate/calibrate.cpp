@@ -138,7 +138,9 @@ int main(int argc, char **argv) {
                     "intrinsics");
     if (!bad) {
         double cam[4], dist[8];
-        bad = check(flt_calib_get_intrinsics(calib, cam, dist), "get intrinsics");
+        bad = check(flt_calib_get_intrinsics(calib, cam, FLT_CALIB_CAMERA_VALUES, dist,
+                                             FLT_CALIB_DISTORTION_COEFFS),
+                    "get intrinsics");
         std::printf("intrinsics: fx %.3f fy %.3f cx %.3f cy %.3f px; k1 %.5f k2 %.5f "
                     "p1 %.2e p2 %.2e k3 %.5f\n",
                     cam[0], cam[1], cam[2], cam[3], dist[0], dist[1], dist[2], dist[3], dist[4]);

@@ -674,7 +674,7 @@ int main(int argc, char **argv) {
         const double t0 = thread_cpu_s();
         truth.resize((frames + 1) * fibers);
         CHECK(flt_sim_next_frame(sim, frame.data(), frame_bytes, k_camera_width, &e, fibers,
-                                 &truth[frames * fibers], nullptr));
+                                 &truth[frames * fibers], nullptr, 0));
         render += thread_cpu_s() - t0;
         if (e >= total_length)
             break;

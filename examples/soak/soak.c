@@ -227,7 +227,7 @@ int main(int argc, char **argv) {
         if (frames) {
             double encoder;
             check(flt_sim_next_frame(sim, frame, (size_t)WIDTH * ROI_ROWS, WIDTH, &encoder, fibers,
-                                     truth, NULL),
+                                     truth, NULL, 0),
                   "frame");
             check(flt_gauge_push_frame(g, frame, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, encoder),
                   "push_frame");
@@ -301,7 +301,7 @@ int main(int argc, char **argv) {
             if (frames) {
                 double encoder;
                 check(flt_sim_next_frame(sim, frame, (size_t)WIDTH * ROI_ROWS, WIDTH, &encoder,
-                                         fibers, truth, NULL),
+                                         fibers, truth, NULL, 0),
                       "frame");
                 check(flt_extractor_process(ex, frame, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH,
                                             encoder, fibers, s + r, h + r * fibers, k + r * fibers,

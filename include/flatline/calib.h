@@ -142,11 +142,15 @@ extern "C" {
 #define FLT_CALIB_MAX_FILE_BYTES 65536  /**< Largest calibration text, bytes. */
 
 /** Number of lasers (and homographies) of the sensor. */
-#define FLT_CALIB_LASERS            2
+#define FLT_CALIB_LASERS             2
 /** Number of distortion coefficients, OpenCV order k1 k2 p1 p2 k3 k4 k5 k6. */
-#define FLT_CALIB_DISTORTION_COEFFS 8
+#define FLT_CALIB_DISTORTION_COEFFS  8
+/** Values of the camera: fx, fy, cx, cy (flt_calib_set_intrinsics). */
+#define FLT_CALIB_CAMERA_VALUES      4
+/** Entries of a homography: 3 x 3, row-major. */
+#define FLT_CALIB_HOMOGRAPHY_ENTRIES 9
 /** The version of the file format flt_calib_save() writes. */
-#define FLT_CALIB_FORMAT_VERSION    1
+#define FLT_CALIB_FORMAT_VERSION     1
 
 /** A calibration model (opaque handle; immutable once finished). */
 typedef struct flt_calib flt_calib;
@@ -215,18 +219,28 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_get_frame_size(const flt_cal
                                                                    uint32_t *width_out,
                                                                    uint32_t *height_out);
 
-/** Sets the intrinsics directly: camera = {fx, fy, cx, cy} (px) and
- * distortion = FLT_CALIB_DISTORTION_COEFFS coefficients (OpenCV order), or
- * NULL for none, each within its range (see "Physically meaningful
- * ranges"). Both arrays are copied. */
+/** Sets the intrinsics directly, copying both arrays; each value within its
+ * range (see "Physically meaningful ranges").
+ *   camera, camera_count   {fx, fy, cx, cy} px; camera_count must be
+ *            FLT_CALIB_CAMERA_VALUES.
+ *   distortion, distortion_count   the FLT_CALIB_DISTORTION_COEFFS
+ *            coefficients (OpenCV order; distortion_count must be that), or
+ *            NULL (distortion_count ignored) for none. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_set_intrinsics(flt_calib *calib,
-                                                                   const double camera[4],
-                                                                   const double *distortion);
-/** Copies the intrinsics out: camera_out[4], distortion_out[8] (either may
- * be NULL). FLT_ERR_STATE if none are set. */
+                                                                   const double *camera,
+                                                                   size_t camera_count,
+                                                                   const double *distortion,
+                                                                   size_t distortion_count);
+/** Copies the intrinsics out: camera_out[camera_count] = {fx, fy, cx, cy}
+ * (camera_count = FLT_CALIB_CAMERA_VALUES) and
+ * distortion_out[distortion_count] (= FLT_CALIB_DISTORTION_COEFFS); either
+ * array may be NULL (its count is then ignored). FLT_ERR_STATE if none are
+ * set. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_get_intrinsics(const flt_calib *calib,
                                                                    double *camera_out,
-                                                                   double *distortion_out);
+                                                                   size_t camera_count,
+                                                                   double *distortion_out,
+                                                                   size_t distortion_count);
 
 /** Estimates the intrinsics from `views` images of a planar target, with
  * OpenCV's detection, sub-pixel corner refinement and calibrateCamera, and
@@ -265,14 +279,17 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_estimate_intrinsics(
 /* Laser planes                                                            */
 /* ---------------------------------------------------------------------- */
 
-/** Sets laser `laser`'s homography directly: h[9], row-major, maps
- * undistorted (u, v, 1) px to (x, z, 1) mm. It must be finite, invertible
- * and within the scale range (FLT_ERR_INVALID_ARGUMENT otherwise). Copied. */
+/** Sets laser `laser`'s homography directly: h[h_count], 3 x 3 row-major
+ * (h_count = FLT_CALIB_HOMOGRAPHY_ENTRIES), maps undistorted (u, v, 1) px
+ * to (x, z, 1) mm. It must be finite, invertible and within the scale range
+ * (FLT_ERR_INVALID_ARGUMENT otherwise). Copied. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_set_homography(flt_calib *calib, unsigned laser,
-                                                                   const double h[9]);
-/** Copies laser `laser`'s homography into h_out[9]. FLT_ERR_STATE if unset. */
+                                                                   const double *h, size_t h_count);
+/** Copies laser `laser`'s homography into h_out[h_count], h_count =
+ * FLT_CALIB_HOMOGRAPHY_ENTRIES. FLT_ERR_STATE if unset. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_calib_get_homography(const flt_calib *calib,
-                                                                   unsigned laser, double *h_out);
+                                                                   unsigned laser, double *h_out,
+                                                                   size_t h_count);
 
 /** Estimates laser `laser`'s homography from `count` correspondences and
  * stores it (the intrinsics must be set: the image points are undistorted

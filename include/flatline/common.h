@@ -572,9 +572,9 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_option_find(const char *name, flt_
 /** Describes a key: its name (static storage), inclusive bounds, default and
  * whether it takes whole numbers only. Any output pointer may be NULL.
  * FLT_ERR_NOT_FOUND for an unknown key. */
-FLT_API FLT_NODISCARD flt_status FLT_CALL flt_option_info(flt_option key, const char **name,
-                                                          double *min_value, double *max_value,
-                                                          double *default_value, int *is_integer);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_option_info(flt_option key, const char **name_out,
+                                                          double *min_out, double *max_out,
+                                                          double *default_out, int *is_integer_out);
 
 /**
  * Names the values of an option whose value is a choice: the index-th

@@ -229,13 +229,16 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_next_rows(flt_sim *sim, size_t
  *   encoder_mm_out  the frame's encoder position (may be NULL).
  *   fibers, truth_out  [fibers] z_sheet(x_k, s_row) (truth_out may be NULL,
  *                   then fibers is ignored).
- *   peak_rows_out   [2 * width] (may be NULL): the exact row of each laser's
- *                   line centre per column, [laser * width + u], px, after
- *                   the peak noise; NaN where the line is outside the frame.
+ *   peak_rows_out, peak_rows_count   [peak_rows_count] = [2 * width] (may be
+ *                   NULL, then peak_rows_count is ignored): the exact row of
+ *                   each laser's line centre per column, [laser * width + u],
+ *                   px, after the peak noise; NaN where the line is outside
+ *                   the frame.
  * Allocates nothing. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL
 flt_sim_next_frame(flt_sim *sim, void *frame_out, size_t capacity_bytes, size_t stride_bytes,
-                   double *encoder_mm_out, size_t fibers, double *truth_out, double *peak_rows_out);
+                   double *encoder_mm_out, size_t fibers, double *truth_out, double *peak_rows_out,
+                   size_t peak_rows_count);
 
 /** Back to frame 0: the following output repeats the first bytes exactly.
  * @param sim the simulator.

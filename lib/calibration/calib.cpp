@@ -94,6 +94,14 @@ calib_model read_checked_model(const char *text, std::size_t length) {
     return model;
 }
 
+// An array's size as the caller believes it: it must be the one the model has.
+flt_status check_count(const char *fn, const char *name, std::size_t count, std::size_t expected) {
+    if (count != expected)
+        return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument '%s' = %zu, the array has %zu values",
+                    fn, name, count, expected);
+    return FLT_OK;
+}
+
 flt_status check_finite(const char *fn, const char *name, double v) {
     if (!std::isfinite(v))
         return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument '%s' = %g is not finite", fn, name, v);
@@ -186,13 +194,20 @@ FLT_API flt_status FLT_CALL flt_calib_get_frame_size(const flt_calib *calib, uin
     });
 }
 
-FLT_API flt_status FLT_CALL flt_calib_set_intrinsics(flt_calib *calib, const double camera[4],
-                                                     const double *distortion) {
+FLT_API flt_status FLT_CALL flt_calib_set_intrinsics(flt_calib *calib, const double *camera,
+                                                     size_t camera_count, const double *distortion,
+                                                     size_t distortion_count) {
     const char *fn = "flt_calib_set_intrinsics";
     return guard(fn, [&] {
         if (flt_status st = check_mutable(fn, calib))
             return st;
         FLT_CHECK_NOT_NULL(fn, camera);
+        if (flt_status st = check_count(fn, "camera_count", camera_count, FLT_CALIB_CAMERA_VALUES))
+            return st;
+        if (distortion)
+            if (flt_status st = check_count(fn, "distortion_count", distortion_count,
+                                            FLT_CALIB_DISTORTION_COEFFS))
+                return st;
         static const char *const names[4] = {"camera[0] (fx)", "camera[1] (fy)", "camera[2] (cx)",
                                              "camera[3] (cy)"};
         for (int k = 0; k < 4; ++k)
@@ -223,11 +238,20 @@ FLT_API flt_status FLT_CALL flt_calib_set_intrinsics(flt_calib *calib, const dou
 }
 
 FLT_API flt_status FLT_CALL flt_calib_get_intrinsics(const flt_calib *calib, double *camera_out,
-                                                     double *distortion_out) {
+                                                     size_t camera_count, double *distortion_out,
+                                                     size_t distortion_count) {
     const char *fn = "flt_calib_get_intrinsics";
     return guard(fn, [&] {
         if (flt_status st = check_handle(fn, calib))
             return st;
+        if (camera_out)
+            if (flt_status st =
+                    check_count(fn, "camera_count", camera_count, FLT_CALIB_CAMERA_VALUES))
+                return st;
+        if (distortion_out)
+            if (flt_status st = check_count(fn, "distortion_count", distortion_count,
+                                            FLT_CALIB_DISTORTION_COEFFS))
+                return st;
         if (!calib->model.has_camera)
             return fail(FLT_ERR_STATE, "%s: the intrinsics are not set", fn);
         const camera_model &c = calib->model.camera;
@@ -311,7 +335,7 @@ FLT_API flt_status FLT_CALL flt_calib_estimate_intrinsics(
 }
 
 FLT_API flt_status FLT_CALL flt_calib_set_homography(flt_calib *calib, unsigned laser,
-                                                     const double h[9]) {
+                                                     const double *h, size_t h_count) {
     const char *fn = "flt_calib_set_homography";
     return guard(fn, [&] {
         if (flt_status st = check_mutable(fn, calib))
@@ -319,6 +343,8 @@ FLT_API flt_status FLT_CALL flt_calib_set_homography(flt_calib *calib, unsigned 
         if (flt_status st = check_laser(fn, laser))
             return st;
         FLT_CHECK_NOT_NULL(fn, h);
+        if (flt_status st = check_count(fn, "h_count", h_count, FLT_CALIB_HOMOGRAPHY_ENTRIES))
+            return st;
         for (int k = 0; k < 9; ++k)
             if (!std::isfinite(h[k]))
                 return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'h[%d]' = %g is not finite", fn,
@@ -340,7 +366,7 @@ FLT_API flt_status FLT_CALL flt_calib_set_homography(flt_calib *calib, unsigned 
 }
 
 FLT_API flt_status FLT_CALL flt_calib_get_homography(const flt_calib *calib, unsigned laser,
-                                                     double *h_out) {
+                                                     double *h_out, size_t h_count) {
     const char *fn = "flt_calib_get_homography";
     return guard(fn, [&] {
         if (flt_status st = check_handle(fn, calib))
@@ -348,6 +374,8 @@ FLT_API flt_status FLT_CALL flt_calib_get_homography(const flt_calib *calib, uns
         if (flt_status st = check_laser(fn, laser))
             return st;
         FLT_CHECK_NOT_NULL(fn, h_out);
+        if (flt_status st = check_count(fn, "h_count", h_count, FLT_CALIB_HOMOGRAPHY_ENTRIES))
+            return st;
         if (!calib->model.has_homography[laser])
             return fail(FLT_ERR_STATE, "%s: laser %u's homography is not set", fn, laser);
         std::memcpy(h_out, calib->model.h[laser], sizeof calib->model.h[laser]);

@@ -264,24 +264,24 @@ FLT_API flt_status FLT_CALL flt_option_find(const char *name, flt_option *out) {
     });
 }
 
-FLT_API flt_status FLT_CALL flt_option_info(flt_option key, const char **name, double *min_value,
-                                            double *max_value, double *default_value,
-                                            int *is_integer) {
+FLT_API flt_status FLT_CALL flt_option_info(flt_option key, const char **name_out, double *min_out,
+                                            double *max_out, double *default_out,
+                                            int *is_integer_out) {
     const char *fn = "flt_option_info";
     return guard(fn, [&] {
         const option_spec *spec = enum_arg(key) < 0 ? nullptr : find_option(key);
         if (!spec)
             return unknown_key(fn, enum_arg(key));
-        if (name)
-            *name = spec->name;
-        if (min_value)
-            *min_value = spec->min_value;
-        if (max_value)
-            *max_value = spec->max_value;
-        if (default_value)
-            *default_value = spec->default_value;
-        if (is_integer)
-            *is_integer = spec->is_integer ? 1 : 0;
+        if (name_out)
+            *name_out = spec->name;
+        if (min_out)
+            *min_out = spec->min_value;
+        if (max_out)
+            *max_out = spec->max_value;
+        if (default_out)
+            *default_out = spec->default_value;
+        if (is_integer_out)
+            *is_integer_out = spec->is_integer ? 1 : 0;
         return FLT_OK;
     });
 }

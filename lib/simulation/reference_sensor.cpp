@@ -75,7 +75,8 @@ FLT_API flt_status FLT_CALL flt_calib_create_reference(uint32_t first_row, uint3
         // Reading out an ROI shifts the image rows, hence the principal point.
         const double cy = k_cy - double(first_row);
         const double camera[4] = {k_focal_px, k_focal_px, k_cx, cy};
-        check(flt_calib_set_intrinsics(c.calib, camera, k_distortion));
+        check(flt_calib_set_intrinsics(c.calib, camera, FLT_CALIB_CAMERA_VALUES, k_distortion,
+                                       FLT_CALIB_DISTORTION_COEFFS));
         // Camera at (x, s, z) = (0, -h, h) looking at the origin at 45 deg:
         // X_c = x, Y_c = -(s + z)/sqrt2 (image down), Z_c = (s - z + 2h)/sqrt2.
         // On laser plane s = o a plane point (x, z, 1) maps to the camera ray
@@ -96,7 +97,7 @@ FLT_API flt_status FLT_CALL flt_calib_create_reference(uint32_t first_row, uint3
                 }
             double hom[9];
             inverse3(g, hom);
-            check(flt_calib_set_homography(c.calib, laser, hom));
+            check(flt_calib_set_homography(c.calib, laser, hom, FLT_CALIB_HOMOGRAPHY_ENTRIES));
             check(flt_calib_set_laser_offset(c.calib, laser, o));
         }
         check(flt_calib_set_encoder_scale(c.calib, 0.01));

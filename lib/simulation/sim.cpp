@@ -688,7 +688,7 @@ FLT_API flt_status FLT_CALL flt_sim_next_rows(flt_sim *sim, size_t rows, size_t 
 FLT_API flt_status FLT_CALL flt_sim_next_frame(flt_sim *sim, void *frame_out, size_t capacity_bytes,
                                                size_t stride_bytes, double *encoder_mm_out,
                                                size_t fibers, double *truth_out,
-                                               double *peak_rows_out) {
+                                               double *peak_rows_out, size_t peak_rows_count) {
     const char *fn = "flt_sim_next_frame";
     return guard(fn, [&] {
         if (flt_status st = check_handle(fn, sim))
@@ -715,6 +715,11 @@ FLT_API flt_status FLT_CALL flt_sim_next_frame(flt_sim *sim, void *frame_out, si
         if (truth_out)
             if (flt_status st = check_fibers(fn, sim, fibers))
                 return st;
+        if (peak_rows_out && peak_rows_count != 2 * std::size_t(sim->width))
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'peak_rows_count' = %zu, but the frame needs 2 x width "
+                        "= %zu (a row per laser and column)",
+                        fn, peak_rows_count, 2 * std::size_t(sim->width));
         sim->render(sim->frame, frame_out, stride_bytes);
         const double e = sim->encoder_of(sim->frame);
         if (encoder_mm_out)

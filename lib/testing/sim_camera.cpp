@@ -558,7 +558,7 @@ struct sim_camera {
         if (frames) {
             if (flt_sim_next_frame(frames, body.data(), image,
                                    std::size_t(width) * (bits() > 8 ? 2 : 1), &encoder_mm, 0,
-                                   nullptr, nullptr) != FLT_OK)
+                                   nullptr, nullptr, 0) != FLT_OK)
                 throw std::runtime_error(std::string("simulated camera: ") +
                                          flt_last_error_message());
         } else {

@@ -263,7 +263,7 @@ static void setup(void) {
     }
     g_frame = malloc((size_t)WIDTH * ROI_ROWS);
     if (flt_sim_next_frame(g_sim, g_frame, (size_t)WIDTH * ROI_ROWS, WIDTH, &g_frame_encoder, 0,
-                           NULL, NULL) ||
+                           NULL, NULL, 0) ||
         flt_calib_save_text(g_calib, g_calib_text, sizeof g_calib_text, &g_calib_text_length)) {
         fprintf(stderr, "fixture: %s\n", flt_last_error_message());
         exit(2);
@@ -811,8 +811,10 @@ static flt_calib *new_unfinished(void) {
 /* An unfinished model with everything set but the fiber grid. */
 static flt_calib *almost_finished(void) {
     flt_calib *c = new_unfinished();
-    if (flt_calib_set_frame_size(c, WIDTH, ROI_ROWS) || flt_calib_set_intrinsics(c, CAMERA, NULL) ||
-        flt_calib_set_homography(c, 0, H0) || flt_calib_set_homography(c, 1, H1) ||
+    if (flt_calib_set_frame_size(c, WIDTH, ROI_ROWS) ||
+        flt_calib_set_intrinsics(c, CAMERA, FLT_CALIB_CAMERA_VALUES, NULL, 0) ||
+        flt_calib_set_homography(c, 0, H0, FLT_CALIB_HOMOGRAPHY_ENTRIES) ||
+        flt_calib_set_homography(c, 1, H1, FLT_CALIB_HOMOGRAPHY_ENTRIES) ||
         flt_calib_set_laser_offset(c, 0, -50) || flt_calib_set_laser_offset(c, 1, 50) ||
         flt_calib_set_encoder_scale(c, 0.01)) {
         fprintf(stderr, "fixture: %s\n", flt_last_error_message());
@@ -892,49 +894,81 @@ static void row_calib_get_frame_size(void) {
 static void row_calib_set_intrinsics(void) {
     flt_calib *c = new_unfinished();
     double cam[4], dist[8] = {0};
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'calib'", flt_calib_set_intrinsics(NULL, CAMERA, NULL));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'camera'", flt_calib_set_intrinsics(c, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'calib'",
+        flt_calib_set_intrinsics(NULL, CAMERA, FLT_CALIB_CAMERA_VALUES, NULL, 0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'camera'", flt_calib_set_intrinsics(c, NULL, 0, NULL, 0));
     memcpy(cam, CAMERA, sizeof cam);
     cam[0] = NaN_;
-    BAD(FLT_ERR_INVALID_ARGUMENT, "fx", flt_calib_set_intrinsics(c, cam, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "fx",
+        flt_calib_set_intrinsics(c, cam, FLT_CALIB_CAMERA_VALUES, NULL, 0));
     cam[0] = -1.0;
-    BAD(FLT_ERR_INVALID_ARGUMENT, "fx", flt_calib_set_intrinsics(c, cam, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "fx",
+        flt_calib_set_intrinsics(c, cam, FLT_CALIB_CAMERA_VALUES, NULL, 0));
     cam[0] = CAMERA[0];
     cam[3] = Inf_;
-    BAD(FLT_ERR_INVALID_ARGUMENT, "cy", flt_calib_set_intrinsics(c, cam, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "cy",
+        flt_calib_set_intrinsics(c, cam, FLT_CALIB_CAMERA_VALUES, NULL, 0));
     cam[3] = CAMERA[3];
     dist[4] = NaN_;
-    BAD(FLT_ERR_INVALID_ARGUMENT, "distortion[4]", flt_calib_set_intrinsics(c, cam, dist));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "distortion[4]",
+        flt_calib_set_intrinsics(c, cam, FLT_CALIB_CAMERA_VALUES, dist,
+                                 FLT_CALIB_DISTORTION_COEFFS));
     dist[4] = 0;
     /* Finite but absurd (outside calib.h's ranges); each names its field. */
     cam[0] = 1e300;
-    BAD(FLT_ERR_INVALID_ARGUMENT, "fx", flt_calib_set_intrinsics(c, cam, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "fx",
+        flt_calib_set_intrinsics(c, cam, FLT_CALIB_CAMERA_VALUES, NULL, 0));
     cam[0] = CAMERA[0];
     cam[1] = 1e-300;
-    BAD(FLT_ERR_INVALID_ARGUMENT, "fy", flt_calib_set_intrinsics(c, cam, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "fy",
+        flt_calib_set_intrinsics(c, cam, FLT_CALIB_CAMERA_VALUES, NULL, 0));
     cam[1] = CAMERA[1];
     cam[2] = -1e9;
-    BAD(FLT_ERR_INVALID_ARGUMENT, "cx", flt_calib_set_intrinsics(c, cam, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "cx",
+        flt_calib_set_intrinsics(c, cam, FLT_CALIB_CAMERA_VALUES, NULL, 0));
     cam[2] = CAMERA[2];
     dist[0] = 1e200;
-    BAD(FLT_ERR_INVALID_ARGUMENT, "k1", flt_calib_set_intrinsics(c, cam, dist));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "k1",
+        flt_calib_set_intrinsics(c, cam, FLT_CALIB_CAMERA_VALUES, dist,
+                                 FLT_CALIB_DISTORTION_COEFFS));
     dist[0] = 0;
     dist[3] = 5;
-    BAD(FLT_ERR_INVALID_ARGUMENT, "p2", flt_calib_set_intrinsics(c, cam, dist));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "p2",
+        flt_calib_set_intrinsics(c, cam, FLT_CALIB_CAMERA_VALUES, dist,
+                                 FLT_CALIB_DISTORTION_COEFFS));
     dist[3] = 0;
-    GOOD(flt_calib_set_intrinsics(c, cam, dist));
-    BAD(FLT_ERR_STATE, "finished", flt_calib_set_intrinsics(g_calib, CAMERA, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'camera_count'", flt_calib_set_intrinsics(c, cam, 3, dist, 8));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'camera_count'", flt_calib_set_intrinsics(c, cam, 0, NULL, 0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'distortion_count'",
+        flt_calib_set_intrinsics(c, cam, 4, dist, 5));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'distortion_count'",
+        flt_calib_set_intrinsics(c, cam, 4, dist, SIZE_MAX));
+    GOOD(flt_calib_set_intrinsics(c, cam, FLT_CALIB_CAMERA_VALUES, dist,
+                                  FLT_CALIB_DISTORTION_COEFFS));
+    BAD(FLT_ERR_STATE, "finished",
+        flt_calib_set_intrinsics(g_calib, CAMERA, FLT_CALIB_CAMERA_VALUES, NULL, 0));
     flt_calib_destroy(c);
 }
 
 static void row_calib_get_intrinsics(void) {
     flt_calib *c = new_unfinished();
     double cam[4], dist[8];
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'calib'", flt_calib_get_intrinsics(NULL, cam, dist));
-    BAD(FLT_ERR_STATE, "not set", flt_calib_get_intrinsics(c, cam, dist));
-    GOOD(flt_calib_set_intrinsics(c, CAMERA, NULL));
-    GOOD(flt_calib_get_intrinsics(c, cam, dist));
-    GOOD(flt_calib_get_intrinsics(c, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'calib'",
+        flt_calib_get_intrinsics(NULL, cam, FLT_CALIB_CAMERA_VALUES, dist,
+                                 FLT_CALIB_DISTORTION_COEFFS));
+    BAD(FLT_ERR_STATE, "not set",
+        flt_calib_get_intrinsics(c, cam, FLT_CALIB_CAMERA_VALUES, dist,
+                                 FLT_CALIB_DISTORTION_COEFFS));
+    GOOD(flt_calib_set_intrinsics(c, CAMERA, FLT_CALIB_CAMERA_VALUES, NULL, 0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'camera_count'", flt_calib_get_intrinsics(c, cam, 5, dist, 8));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'distortion_count'",
+        flt_calib_get_intrinsics(c, cam, 4, dist, 4));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'distortion_count'",
+        flt_calib_get_intrinsics(c, NULL, 0, dist, 0));
+    GOOD(flt_calib_get_intrinsics(c, cam, FLT_CALIB_CAMERA_VALUES, dist,
+                                  FLT_CALIB_DISTORTION_COEFFS));
+    GOOD(flt_calib_get_intrinsics(c, NULL, 0, NULL, 0));
+    GOOD(flt_calib_get_intrinsics(c, cam, 4, NULL, 0));
     flt_calib_destroy(c);
 }
 
@@ -990,12 +1024,14 @@ static void row_calib_estimate_intrinsics(void) {
         flt_calib_estimate_intrinsics(c, 3, views, 64, FLT_TARGET_CHESSBOARD, 9, 6, 10, NULL, &rms,
                                       NULL));
     double cam[4];
-    BAD(FLT_ERR_STATE, "not set", flt_calib_get_intrinsics(c, cam, NULL));
+    BAD(FLT_ERR_STATE, "not set",
+        flt_calib_get_intrinsics(c, cam, FLT_CALIB_CAMERA_VALUES, NULL, 0));
     g_fn = "flt_calib_estimate_intrinsics";
     BAD(FLT_ERR_STATE, "finished",
         flt_calib_estimate_intrinsics(g_calib, 3, views, 64, FLT_TARGET_CHESSBOARD, 9, 6, 10, NULL,
                                       &rms, NULL));
-    GOOD(flt_calib_set_intrinsics(c, CAMERA, NULL)); /* the handle is usable */
+    GOOD(flt_calib_set_intrinsics(c, CAMERA, FLT_CALIB_CAMERA_VALUES, NULL,
+                                  0)); /* the handle is usable */
     free(blank);
     flt_calib_destroy(c);
 }
@@ -1003,32 +1039,45 @@ static void row_calib_estimate_intrinsics(void) {
 static void row_calib_set_homography(void) {
     flt_calib *c = new_unfinished();
     double h[9];
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'calib'", flt_calib_set_homography(NULL, 0, H0));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'laser'", flt_calib_set_homography(c, 2, H0));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'laser'", flt_calib_set_homography(c, UINT32_MAX, H0));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'h'", flt_calib_set_homography(c, 0, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'calib'",
+        flt_calib_set_homography(NULL, 0, H0, FLT_CALIB_HOMOGRAPHY_ENTRIES));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'laser'",
+        flt_calib_set_homography(c, 2, H0, FLT_CALIB_HOMOGRAPHY_ENTRIES));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'laser'",
+        flt_calib_set_homography(c, UINT32_MAX, H0, FLT_CALIB_HOMOGRAPHY_ENTRIES));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'h'", flt_calib_set_homography(c, 0, NULL, 0));
     memcpy(h, H0, sizeof h);
     h[4] = NaN_;
-    BAD(FLT_ERR_INVALID_ARGUMENT, "h[4]", flt_calib_set_homography(c, 0, h));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "h[4]",
+        flt_calib_set_homography(c, 0, h, FLT_CALIB_HOMOGRAPHY_ENTRIES));
     memset(h, 0, sizeof h);
-    BAD(FLT_ERR_INVALID_ARGUMENT, "invertible", flt_calib_set_homography(c, 0, h));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "invertible",
+        flt_calib_set_homography(c, 0, h, FLT_CALIB_HOMOGRAPHY_ENTRIES));
     /* Invertible but scaled beyond FLT_CALIB_MAX_HOMOGRAPHY_SCALE (1e100). */
     for (int k = 0; k < 9; ++k)
         h[k] = H0[k] * 1e200;
-    BAD(FLT_ERR_INVALID_ARGUMENT, "scale", flt_calib_set_homography(c, 0, h));
-    GOOD(flt_calib_set_homography(c, 0, H0));
-    BAD(FLT_ERR_STATE, "finished", flt_calib_set_homography(g_calib, 0, H0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "scale",
+        flt_calib_set_homography(c, 0, h, FLT_CALIB_HOMOGRAPHY_ENTRIES));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'h_count'", flt_calib_set_homography(c, 0, H0, 8));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'h_count'", flt_calib_set_homography(c, 0, H0, 0));
+    GOOD(flt_calib_set_homography(c, 0, H0, FLT_CALIB_HOMOGRAPHY_ENTRIES));
+    BAD(FLT_ERR_STATE, "finished",
+        flt_calib_set_homography(g_calib, 0, H0, FLT_CALIB_HOMOGRAPHY_ENTRIES));
     flt_calib_destroy(c);
 }
 
 static void row_calib_get_homography(void) {
     flt_calib *c = new_unfinished();
     double h[9];
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'calib'", flt_calib_get_homography(NULL, 0, h));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'laser'", flt_calib_get_homography(g_calib, 2, h));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'h_out'", flt_calib_get_homography(g_calib, 0, NULL));
-    BAD(FLT_ERR_STATE, "not set", flt_calib_get_homography(c, 1, h));
-    GOOD(flt_calib_get_homography(g_calib, 1, h));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'calib'",
+        flt_calib_get_homography(NULL, 0, h, FLT_CALIB_HOMOGRAPHY_ENTRIES));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'laser'",
+        flt_calib_get_homography(g_calib, 2, h, FLT_CALIB_HOMOGRAPHY_ENTRIES));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'h_out'", flt_calib_get_homography(g_calib, 0, NULL, 0));
+    BAD(FLT_ERR_STATE, "not set", flt_calib_get_homography(c, 1, h, FLT_CALIB_HOMOGRAPHY_ENTRIES));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'h_count'", flt_calib_get_homography(g_calib, 1, h, 3));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'h_count'", flt_calib_get_homography(g_calib, 1, h, 10));
+    GOOD(flt_calib_get_homography(g_calib, 1, h, FLT_CALIB_HOMOGRAPHY_ENTRIES));
     flt_calib_destroy(c);
 }
 
@@ -1049,7 +1098,7 @@ static void row_calib_estimate_homography(void) {
     /* Wrong order: intrinsics first. */
     BAD(FLT_ERR_STATE, "intrinsics",
         flt_calib_estimate_homography(c, 0, 4, image, plane, NULL, NULL, NULL, NULL, NULL, NULL));
-    GOOD(flt_calib_set_intrinsics(c, CAMERA, NULL));
+    GOOD(flt_calib_set_intrinsics(c, CAMERA, FLT_CALIB_CAMERA_VALUES, NULL, 0));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'laser'",
         flt_calib_estimate_homography(c, 5, 4, image, plane, NULL, NULL, NULL, NULL, NULL, NULL));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'image_px'",
@@ -1729,36 +1778,43 @@ static void row_sim_next_frame(void) {
     uint8_t *buf = malloc(cap + 2);
     double enc, truth[FIBERS];
     BAD(FLT_ERR_INVALID_ARGUMENT, "'sim'",
-        flt_sim_next_frame(NULL, buf, cap, WIDTH, &enc, 0, NULL, NULL));
+        flt_sim_next_frame(NULL, buf, cap, WIDTH, &enc, 0, NULL, NULL, 0));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'frame_out'",
-        flt_sim_next_frame(s, NULL, cap, WIDTH, &enc, 0, NULL, NULL));
+        flt_sim_next_frame(s, NULL, cap, WIDTH, &enc, 0, NULL, NULL, 0));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'stride_bytes'",
-        flt_sim_next_frame(s, buf, cap, WIDTH - 1, &enc, 0, NULL, NULL));
+        flt_sim_next_frame(s, buf, cap, WIDTH - 1, &enc, 0, NULL, NULL, 0));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'stride_bytes'",
-        flt_sim_next_frame(s, buf, cap, 0, &enc, 0, NULL, NULL));
+        flt_sim_next_frame(s, buf, cap, 0, &enc, 0, NULL, NULL, 0));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'capacity_bytes'",
-        flt_sim_next_frame(s, buf, cap - 1, WIDTH, &enc, 0, NULL, NULL));
+        flt_sim_next_frame(s, buf, cap - 1, WIDTH, &enc, 0, NULL, NULL, 0));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'capacity_bytes'",
-        flt_sim_next_frame(s, buf, 0, WIDTH, &enc, 0, NULL, NULL));
+        flt_sim_next_frame(s, buf, 0, WIDTH, &enc, 0, NULL, NULL, 0));
     /* stride * height overflows size_t: refused, never written. */
     BAD(FLT_ERR_INVALID_ARGUMENT, NULL,
-        flt_sim_next_frame(s, buf, cap, SIZE_MAX / 8, &enc, 0, NULL, NULL));
+        flt_sim_next_frame(s, buf, cap, SIZE_MAX / 8, &enc, 0, NULL, NULL, 0));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'",
-        flt_sim_next_frame(s, buf, cap, WIDTH, &enc, FIBERS + 1, truth, NULL));
-    GOOD(flt_sim_next_frame(s, buf, cap, WIDTH, &enc, FIBERS, truth, NULL));
-    GOOD(flt_sim_next_frame(s, buf, cap, WIDTH, NULL, 0, NULL, NULL));
+        flt_sim_next_frame(s, buf, cap, WIDTH, &enc, FIBERS + 1, truth, NULL, 0));
+    GOOD(flt_sim_next_frame(s, buf, cap, WIDTH, &enc, FIBERS, truth, NULL, 0));
+    GOOD(flt_sim_next_frame(s, buf, cap, WIDTH, NULL, 0, NULL, NULL, 0));
+    double *peaks = malloc(sizeof(double) * 2 * WIDTH);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'peak_rows_count'",
+        flt_sim_next_frame(s, buf, cap, WIDTH, &enc, 0, NULL, peaks, WIDTH));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'peak_rows_count'",
+        flt_sim_next_frame(s, buf, cap, WIDTH, &enc, 0, NULL, peaks, 2 * WIDTH + 1));
+    GOOD(flt_sim_next_frame(s, buf, cap, WIDTH, &enc, 0, NULL, peaks, 2 * WIDTH));
+    free(peaks);
     flt_sim_destroy(s);
     /* 16-bit output: odd stride, misaligned buffer. */
     flt_options *o = options_with(FLT_OPT_SIM_BIT_DEPTH, 12);
     GOOD(flt_sim_create(g_calib, o, &s));
     uint8_t *buf16 = malloc(2 * cap + 4);
     BAD(FLT_ERR_INVALID_ARGUMENT, "'stride_bytes'",
-        flt_sim_next_frame(s, buf16, 2 * cap + 4, 2 * WIDTH + 1, &enc, 0, NULL, NULL));
+        flt_sim_next_frame(s, buf16, 2 * cap + 4, 2 * WIDTH + 1, &enc, 0, NULL, NULL, 0));
     BAD(FLT_ERR_INVALID_ARGUMENT, "align",
-        flt_sim_next_frame(s, buf16 + 1, 2 * cap, 2 * WIDTH, &enc, 0, NULL, NULL));
+        flt_sim_next_frame(s, buf16 + 1, 2 * cap, 2 * WIDTH, &enc, 0, NULL, NULL, 0));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'capacity_bytes'",
-        flt_sim_next_frame(s, buf16, cap, 2 * WIDTH, &enc, 0, NULL, NULL));
-    GOOD(flt_sim_next_frame(s, buf16, 2 * cap, 2 * WIDTH, &enc, 0, NULL, NULL));
+        flt_sim_next_frame(s, buf16, cap, 2 * WIDTH, &enc, 0, NULL, NULL, 0));
+    GOOD(flt_sim_next_frame(s, buf16, 2 * cap, 2 * WIDTH, &enc, 0, NULL, NULL, 0));
     flt_sim_destroy(s);
     flt_options_destroy(o);
     free(buf);
@@ -4055,7 +4111,8 @@ int main(void) {
 
     setup();
     /* Homographies of the fixture calibration for the unfinished models. */
-    if (flt_calib_get_homography(g_calib, 0, H0) || flt_calib_get_homography(g_calib, 1, H1))
+    if (flt_calib_get_homography(g_calib, 0, H0, FLT_CALIB_HOMOGRAPHY_ENTRIES) ||
+        flt_calib_get_homography(g_calib, 1, H1, FLT_CALIB_HOMOGRAPHY_ENTRIES))
         return 2;
     make_flat_sheet();
     for (size_t r = 0; r < N_ROWS; ++r) {

@@ -72,7 +72,9 @@ static flt_calib *calibrate_sensor(double noise_px, double outlier_fraction,
     flt_calib *calib = NULL;
     assert_int_equal(flt_calib_create(&calib), FLT_OK);
     set_geometry(calib);
-    assert_int_equal(flt_calib_set_intrinsics(calib, synth_camera, synth_distortion), FLT_OK);
+    assert_int_equal(flt_calib_set_intrinsics(calib, synth_camera, FLT_CALIB_CAMERA_VALUES,
+                                              synth_distortion, FLT_CALIB_DISTORTION_COEFFS),
+                     FLT_OK);
     for (unsigned laser = 0; laser < 2; ++laser) {
         double image[2 * max_points], plane[2 * max_points];
         double res_px[max_points], res_mm[max_points];
@@ -205,7 +207,9 @@ static void homography_residuals_are_consistent(void **state) {
     (void)state;
     flt_calib *calib = NULL;
     assert_int_equal(flt_calib_create(&calib), FLT_OK);
-    assert_int_equal(flt_calib_set_intrinsics(calib, synth_camera, synth_distortion), FLT_OK);
+    assert_int_equal(flt_calib_set_intrinsics(calib, synth_camera, FLT_CALIB_CAMERA_VALUES,
+                                              synth_distortion, FLT_CALIB_DISTORTION_COEFFS),
+                     FLT_OK);
     double image[2 * max_points], plane[2 * max_points];
     double res_px[max_points], res_mm[max_points], rms_px, rms_mm;
     const size_t n = make_correspondences(0, 0.05, 0.0, 99, image, plane, NULL);
@@ -232,7 +236,9 @@ static void undistort_inverts_distortion(void **state) {
     (void)state;
     flt_calib *calib = NULL;
     assert_int_equal(flt_calib_create(&calib), FLT_OK);
-    assert_int_equal(flt_calib_set_intrinsics(calib, synth_camera, synth_distortion), FLT_OK);
+    assert_int_equal(flt_calib_set_intrinsics(calib, synth_camera, FLT_CALIB_CAMERA_VALUES,
+                                              synth_distortion, FLT_CALIB_DISTORTION_COEFFS),
+                     FLT_OK);
     assert_int_equal(flt_calib_set_frame_size(calib, SYNTH_WIDTH, SYNTH_HEIGHT), FLT_OK);
     enum { n = 33 * 33 };
     static double raw[2 * n], ideal[2 * n];
@@ -314,7 +320,9 @@ static void geometry_round_trips(void **state) {
     assert_int_equal(flt_calib_get_frame_size(calib, &w, &h), FLT_OK);
     assert_int_equal(w, 2048);
     double cam[4], dist[8];
-    assert_int_equal(flt_calib_get_intrinsics(calib, cam, dist), FLT_OK);
+    assert_int_equal(flt_calib_get_intrinsics(calib, cam, FLT_CALIB_CAMERA_VALUES, dist,
+                                              FLT_CALIB_DISTORTION_COEFFS),
+                     FLT_OK);
     assert_near(cam[0], SYNTH_FOCAL_PX, 0.0);
     assert_near(dist[0], -0.08, 0.0);
     flt_calib_destroy(calib);
@@ -334,11 +342,14 @@ static void life_cycle_and_bad_arguments(void **state) {
     assert_int_equal(flt_calib_set_frame_size(calib, 0, 10), FLT_ERR_INVALID_ARGUMENT);
     assert_non_null(strstr(flt_last_error_message(), "'width' = 0"));
     const double bad_cam[4] = {-5, 1000, 1024, 1024};
-    assert_int_equal(flt_calib_set_intrinsics(calib, bad_cam, NULL), FLT_ERR_INVALID_ARGUMENT);
+    assert_int_equal(flt_calib_set_intrinsics(calib, bad_cam, FLT_CALIB_CAMERA_VALUES, NULL, 0),
+                     FLT_ERR_INVALID_ARGUMENT);
     const double singular[9] = {1, 2, 3, 2, 4, 6, 0, 0, 1};
-    assert_int_equal(flt_calib_set_homography(calib, 0, singular), FLT_ERR_INVALID_ARGUMENT);
+    assert_int_equal(flt_calib_set_homography(calib, 0, singular, FLT_CALIB_HOMOGRAPHY_ENTRIES),
+                     FLT_ERR_INVALID_ARGUMENT);
     const double identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-    assert_int_equal(flt_calib_set_homography(calib, 2, identity), FLT_ERR_INVALID_ARGUMENT);
+    assert_int_equal(flt_calib_set_homography(calib, 2, identity, FLT_CALIB_HOMOGRAPHY_ENTRIES),
+                     FLT_ERR_INVALID_ARGUMENT);
     assert_non_null(strstr(flt_last_error_message(), "'laser' = 2"));
     assert_int_equal(flt_calib_set_laser_offset(calib, 0, NAN), FLT_ERR_INVALID_ARGUMENT);
     assert_int_equal(flt_calib_set_encoder_scale(calib, 0.0), FLT_ERR_INVALID_ARGUMENT);
@@ -349,7 +360,8 @@ static void life_cycle_and_bad_arguments(void **state) {
         flt_calib_estimate_homography(calib, 0, 4, img, pl, NULL, NULL, NULL, NULL, NULL, NULL),
         FLT_ERR_STATE);
     /* collinear correspondences are degenerate */
-    assert_int_equal(flt_calib_set_intrinsics(calib, synth_camera, NULL), FLT_OK);
+    assert_int_equal(
+        flt_calib_set_intrinsics(calib, synth_camera, FLT_CALIB_CAMERA_VALUES, NULL, 0), FLT_OK);
     double line_img[10] = {0, 0, 1, 1, 2, 2, 3, 3, 4, 4};
     double line_pl[10] = {0, 0, 1, 0, 2, 0, 3, 0, 4, 0};
     assert_int_equal(flt_calib_estimate_homography(calib, 0, 5, line_img, line_pl, NULL, NULL, NULL,

@@ -76,7 +76,9 @@ static void chessboard_views_give_the_camera(void **state) {
                                                    squares_y - 1, square_mm, NULL, &rms, view_rms),
                      FLT_OK);
     double cam[4], dist[8];
-    assert_int_equal(flt_calib_get_intrinsics(calib, cam, dist), FLT_OK);
+    assert_int_equal(flt_calib_get_intrinsics(calib, cam, FLT_CALIB_CAMERA_VALUES, dist,
+                                              FLT_CALIB_DISTORTION_COEFFS),
+                     FLT_OK);
     const double fx_err = cam[0] / synth_camera[0] - 1;
     const double fy_err = cam[1] / synth_camera[1] - 1;
     print_message("rms %.4f px; fx %.3f (%+.4f %%), fy %.3f (%+.4f %%), cx %.2f "
@@ -113,7 +115,9 @@ static void chessboard_views_give_the_camera(void **state) {
      * corners, 1445 px out, are extrapolation and are not judged. */
     flt_calib *true_cam = NULL;
     assert_int_equal(flt_calib_create(&true_cam), FLT_OK);
-    assert_int_equal(flt_calib_set_intrinsics(true_cam, synth_camera, synth_distortion), FLT_OK);
+    assert_int_equal(flt_calib_set_intrinsics(true_cam, synth_camera, FLT_CALIB_CAMERA_VALUES,
+                                              synth_distortion, FLT_CALIB_DISTORTION_COEFFS),
+                     FLT_OK);
     const double probe[8] = {1030 - 600, 1020 - 600, 1030 + 600, 1020 - 600,
                              1030 - 600, 1020 + 600, 1030 + 600, 1020 + 600};
     double est[8], truth[8], worst_px = 0;
@@ -166,7 +170,9 @@ static double estimate_from(render_fn render, flt_calib_target target, uint32_t 
                                                    SYNTH_WIDTH, target, columns, rows, pitch_mm,
                                                    options, &rms, view_rms),
                      FLT_OK);
-    assert_int_equal(flt_calib_get_intrinsics(calib, cam, dist), FLT_OK);
+    assert_int_equal(flt_calib_get_intrinsics(calib, cam, FLT_CALIB_CAMERA_VALUES, dist,
+                                              FLT_CALIB_DISTORTION_COEFFS),
+                     FLT_OK);
     *found = 0;
     for (int v = 0; v < views; ++v)
         *found += !isnan(view_rms[v]);
@@ -174,7 +180,9 @@ static double estimate_from(render_fn render, flt_calib_target target, uint32_t 
      * targets were seen (see chessboard_views_give_the_camera). */
     flt_calib *true_cam = NULL;
     assert_int_equal(flt_calib_create(&true_cam), FLT_OK);
-    assert_int_equal(flt_calib_set_intrinsics(true_cam, synth_camera, synth_distortion), FLT_OK);
+    assert_int_equal(flt_calib_set_intrinsics(true_cam, synth_camera, FLT_CALIB_CAMERA_VALUES,
+                                              synth_distortion, FLT_CALIB_DISTORTION_COEFFS),
+                     FLT_OK);
     const double probe[8] = {1030 - 600, 1020 - 600, 1030 + 600, 1020 - 600,
                              1030 - 600, 1020 + 600, 1030 + 600, 1020 + 600};
     double est[8], truth[8];
@@ -283,7 +291,7 @@ static void views_without_target_are_skipped(void **state) {
                                                    squares_y - 1, square_mm, NULL, NULL, view_rms),
                      FLT_ERR_NUMERIC);
     assert_non_null(strstr(flt_last_error_message(), "found in 2 of 4 views"));
-    assert_int_equal(flt_calib_get_intrinsics(calib, NULL, NULL), FLT_ERR_STATE);
+    assert_int_equal(flt_calib_get_intrinsics(calib, NULL, 0, NULL, 0), FLT_ERR_STATE);
     /* bad arguments are named */
     assert_int_equal(flt_calib_estimate_intrinsics(calib, 4, images, 100, FLT_TARGET_CHESSBOARD, 9,
                                                    6, 60.0, NULL, NULL, NULL),

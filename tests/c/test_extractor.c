@@ -94,9 +94,9 @@ static void peak_rows_within_a_sixteenth_of_a_pixel(void **state) {
         size_t count = 0, valid = 0;
         for (int f = 0; f < 4; ++f) {
             double e, s, h[101], g[101];
-            assert_int_equal(
-                flt_sim_next_frame(sim, frame, (size_t)W * ROI_ROWS, W, &e, 0, NULL, truth_rows),
-                FLT_OK);
+            assert_int_equal(flt_sim_next_frame(sim, frame, (size_t)W * ROI_ROWS, W, &e, 0, NULL,
+                                                truth_rows, 2 * (size_t)W),
+                             FLT_OK);
             assert_int_equal(flt_extractor_process(ex, frame, FLT_PIXEL_MONO8, W, ROI_ROWS, W, e,
                                                    101, &s, h, g, NULL),
                              FLT_OK);
@@ -146,8 +146,8 @@ static void heights_within_0_1_mm_two_sigma(void **state) {
     for (int f = 0; f < FRAMES; ++f) {
         double e, s, h[N], g[N], z[2 * N];
         uint8_t valid[N];
-        assert_int_equal(flt_sim_next_frame(sim, frame, (size_t)W * ROI_ROWS, W, &e, 0, NULL, NULL),
-                         FLT_OK);
+        assert_int_equal(
+            flt_sim_next_frame(sim, frame, (size_t)W * ROI_ROWS, W, &e, 0, NULL, NULL, 0), FLT_OK);
         assert_int_equal(flt_extractor_process(ex, frame, FLT_PIXEL_MONO8, W, ROI_ROWS, W, e, N, &s,
                                                h, g, valid),
                          FLT_OK);
@@ -204,7 +204,8 @@ static void mono12_frames_give_the_same_accuracy(void **state) {
     for (int f = 0; f < FRAMES; ++f) {
         double e, s, h[N], g[N], z[2 * N];
         assert_int_equal(
-            flt_sim_next_frame(sim, frame, stride * ROI_ROWS, stride, &e, 0, NULL, NULL), FLT_OK);
+            flt_sim_next_frame(sim, frame, stride * ROI_ROWS, stride, &e, 0, NULL, NULL, 0),
+            FLT_OK);
         assert_int_equal(
             flt_extractor_process(ex, frame, format, W, ROI_ROWS, stride, e, N, &s, h, g, NULL),
             FLT_OK);
@@ -255,9 +256,9 @@ static void reflections_run(double line_sigma, double sg_window) {
     for (int f = 0; f < FRAMES; ++f) {
         double e, s, h[N], g[N], truth[N];
         uint8_t valid[N];
-        assert_int_equal(
-            flt_sim_next_frame(sim, frame, (size_t)W * ROI_ROWS, W, &e, 0, NULL, truth_rows),
-            FLT_OK);
+        assert_int_equal(flt_sim_next_frame(sim, frame, (size_t)W * ROI_ROWS, W, &e, 0, NULL,
+                                            truth_rows, 2 * (size_t)W),
+                         FLT_OK);
         assert_int_equal(flt_extractor_process(ex, frame, FLT_PIXEL_MONO8, W, ROI_ROWS, W, e, N, &s,
                                                h, g, valid),
                          FLT_OK);
@@ -336,7 +337,7 @@ static void end_to_end_reference_sheet_within_half_a_millimetre(void **state) {
     for (int f = 0; f < FRAMES; ++f) {
         double e;
         assert_int_equal(flt_sim_next_frame(sim, frame, (size_t)W * ROI_ROWS, W, &e, N,
-                                            truth + (size_t)f * N, NULL),
+                                            truth + (size_t)f * N, NULL, 0),
                          FLT_OK);
         assert_int_equal(flt_extractor_process(ex, frame, FLT_PIXEL_MONO8, W, ROI_ROWS, W, e, N,
                                                &s[f], h + (size_t)f * N, g + (size_t)f * N,
@@ -374,7 +375,7 @@ static void same_frame_same_bytes(void **state) {
                   *b = make_extractor(calib, 0, NULL, NULL);
     uint8_t *frame = malloc((size_t)W * ROI_ROWS);
     double e, s[3], h[3][N], g[3][N], pa[2 * W], pb[2 * W];
-    assert_int_equal(flt_sim_next_frame(sim, frame, (size_t)W * ROI_ROWS, W, &e, 0, NULL, NULL),
+    assert_int_equal(flt_sim_next_frame(sim, frame, (size_t)W * ROI_ROWS, W, &e, 0, NULL, NULL, 0),
                      FLT_OK);
     assert_int_equal(flt_extractor_process(a, frame, FLT_PIXEL_MONO8, W, ROI_ROWS, W, e, N, &s[0],
                                            h[0], g[0], NULL),
@@ -413,7 +414,7 @@ static void bad_input_is_rejected_by_name(void **state) {
     flt_extractor *ex = make_extractor(calib, 0, NULL, NULL), *none = NULL;
     uint8_t *frame = malloc((size_t)W * ROI_ROWS + 1);
     double e, s, h[N], g[N], peaks[2 * W];
-    assert_int_equal(flt_sim_next_frame(sim, frame, (size_t)W * ROI_ROWS, W, &e, 0, NULL, NULL),
+    assert_int_equal(flt_sim_next_frame(sim, frame, (size_t)W * ROI_ROWS, W, &e, 0, NULL, NULL, 0),
                      FLT_OK);
     expect_error(flt_extractor_create(NULL, NULL, &none), FLT_ERR_INVALID_ARGUMENT, "'calib'");
     expect_error(flt_extractor_create(calib, NULL, NULL), FLT_ERR_INVALID_ARGUMENT, "'out'");

@@ -76,7 +76,8 @@ static void frames_and_rows_allocate_nothing(int bit_depth) {
     flt_status st = FLT_OK;
     for (int f = 0; f < FRAMES && st == FLT_OK; ++f) {
         double e, row_s;
-        st = flt_sim_next_frame(sim, frame, stride * ROWS, stride, &e, FIBERS, truth, peaks);
+        st = flt_sim_next_frame(sim, frame, stride * ROWS, stride, &e, FIBERS, truth, peaks,
+                                2 * (size_t)W);
         if (st == FLT_OK)
             st = flt_extractor_process(ex, frame, format, W, ROWS, stride, e, FIBERS, &row_s,
                                        height, slope, valid);

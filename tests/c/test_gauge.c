@@ -341,7 +341,7 @@ static void frames_against_hand_chain(void **state) {
     const int n_frames = 20 + 300 + 20;
     for (int f = 0; f < n_frames; ++f) {
         double e = 0;
-        OK(flt_sim_next_frame(sim, frame, (size_t)WIDTH * ROI_ROWS, WIDTH, &e, 0, NULL, NULL));
+        OK(flt_sim_next_frame(sim, frame, (size_t)WIDTH * ROI_ROWS, WIDTH, &e, 0, NULL, NULL, 0));
         const int strip = f >= 20 && f < 20 + 300;
         const uint8_t *px = strip ? frame : blank;
         hand_frame(&h, px, e, strip);

@@ -118,7 +118,7 @@ static void frames_allocate_nothing(void **state) {
     double e[FRAMES];
     for (int f = 0; f < FRAMES; ++f)
         OK(flt_sim_next_frame(sim, frames + (size_t)f * W * H, (size_t)W * H, W, &e[f], 0, NULL,
-                              NULL));
+                              NULL, 0));
     flt_gauge *g = NULL;
     OK(flt_gauge_create(calib, o, &g));
     /* The first frame shows the lines: the workers' extractors are made

@@ -188,7 +188,7 @@ static void test_calibration_at_the_ends_of_its_ranges_runs_the_chain(void **sta
     flt_sim *sim = NULL;
     assert_int_equal(flt_sim_create(NULL, NULL, &sim), FLT_OK);
     uint8_t *frame = malloc(2048 * 2048);
-    assert_int_equal(flt_sim_next_frame(sim, frame, 2048 * 2048, 2048, NULL, 0, NULL, NULL),
+    assert_int_equal(flt_sim_next_frame(sim, frame, 2048 * 2048, 2048, NULL, 0, NULL, NULL, 0),
                      FLT_OK);
     double *height = malloc(fibers * sizeof(double)), *slope = malloc(fibers * sizeof(double));
     const double t0 = now_s();
@@ -246,13 +246,14 @@ static void test_columns_mapped_far_off_the_grid_are_skipped(void **state) {
     /* No distortion, principal point on column 1000: that column's
      * undistorted u is exactly 1000. */
     const double camera[4] = {1090.909090909091, 1090.909090909091, 1000.0, 1023.5};
-    assert_int_equal(flt_calib_set_intrinsics(calib, camera, NULL), FLT_OK);
+    assert_int_equal(flt_calib_set_intrinsics(calib, camera, FLT_CALIB_CAMERA_VALUES, NULL, 0),
+                     FLT_OK);
     /* x = -100 u / (u - 1000 - 1.1e-13), z = v / (u - 1000 - 1.1e-13):
      * the denominator vanishes between columns 1000 and 1001, so column
      * 1000 maps to x = +9e17 mm. Largest entry 1000, well conditioned. */
     const double h[9] = {-100, 0, 0, 0, 1, 0, 1, 0, -nextafter(1000.0, 2000.0)};
-    assert_int_equal(flt_calib_set_homography(calib, 0, h), FLT_OK);
-    assert_int_equal(flt_calib_set_homography(calib, 1, h), FLT_OK);
+    assert_int_equal(flt_calib_set_homography(calib, 0, h, FLT_CALIB_HOMOGRAPHY_ENTRIES), FLT_OK);
+    assert_int_equal(flt_calib_set_homography(calib, 1, h, FLT_CALIB_HOMOGRAPHY_ENTRIES), FLT_OK);
     assert_int_equal(flt_calib_set_laser_offset(calib, 0, -50), FLT_OK);
     assert_int_equal(flt_calib_set_laser_offset(calib, 1, 50), FLT_OK);
     assert_int_equal(flt_calib_set_encoder_scale(calib, 0.01), FLT_OK);
@@ -272,7 +273,7 @@ static void test_columns_mapped_far_off_the_grid_are_skipped(void **state) {
     uint8_t *frame = malloc(2048 * 2048);
     double *height = malloc(4096 * sizeof(double)), *slope = malloc(4096 * sizeof(double));
     for (int f = 0; f < 3; ++f) {
-        assert_int_equal(flt_sim_next_frame(sim, frame, 2048 * 2048, 2048, NULL, 0, NULL, NULL),
+        assert_int_equal(flt_sim_next_frame(sim, frame, 2048 * 2048, 2048, NULL, 0, NULL, NULL, 0),
                          FLT_OK);
         assert_int_equal(flt_extractor_process(ex, frame, FLT_PIXEL_MONO8, 2048, 2048, 2048,
                                                3.0 * f, 4096, NULL, height, slope, NULL),
@@ -746,7 +747,7 @@ static void test_tiny_full_well_gives_clipped_pixels(void **state) {
         const size_t bytes = bits / 8, pixels = 2048 * 256;
         void *frame = malloc(pixels * bytes);
         assert_int_equal(
-            flt_sim_next_frame(sim, frame, pixels * bytes, 2048 * bytes, NULL, 0, NULL, NULL),
+            flt_sim_next_frame(sim, frame, pixels * bytes, 2048 * bytes, NULL, 0, NULL, NULL, 0),
             FLT_OK);
         const unsigned top = (1u << bits) - 1;
         size_t high = 0, between = 0;

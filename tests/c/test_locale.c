@@ -63,7 +63,9 @@ static flt_calib *make_calibration(void) {
     flt_calib *calib = NULL;
     assert_int_equal(flt_calib_create(&calib), FLT_OK);
     assert_int_equal(flt_calib_set_frame_size(calib, SYNTH_WIDTH, SYNTH_HEIGHT), FLT_OK);
-    assert_int_equal(flt_calib_set_intrinsics(calib, synth_camera, synth_distortion), FLT_OK);
+    assert_int_equal(flt_calib_set_intrinsics(calib, synth_camera, FLT_CALIB_CAMERA_VALUES,
+                                              synth_distortion, FLT_CALIB_DISTORTION_COEFFS),
+                     FLT_OK);
     uint64_t rng = 11;
     for (unsigned laser = 0; laser < 2; ++laser) {
         double image[2 * 50], plane[2 * 50];

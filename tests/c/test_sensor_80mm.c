@@ -51,7 +51,9 @@ static flt_calib *sensor_80mm(void) {
     /* Reading out an ROI moves the principal point with it. */
     const double camera[4] = {synth_camera[0], synth_camera[1], synth_camera[2],
                               synth_camera[3] - ROI_FIRST};
-    assert_int_equal(flt_calib_set_intrinsics(c, camera, synth_distortion), FLT_OK);
+    assert_int_equal(flt_calib_set_intrinsics(c, camera, FLT_CALIB_CAMERA_VALUES, synth_distortion,
+                                              FLT_CALIB_DISTORTION_COEFFS),
+                     FLT_OK);
     const double offset[2] = {-0.5 * SPACING, 0.5 * SPACING};
     enum { NX = 21, NZ = 9, N = NX * NZ };
     double image[2 * N], plane[2 * N];
@@ -116,7 +118,7 @@ static strip *measure(const flt_calib *calib) {
     for (size_t f = 0; f < FRAMES; ++f) {
         double e;
         assert_int_equal(flt_sim_next_frame(sim, frame, (size_t)W * ROI_ROWS, W, &e, FIBERS,
-                                            m->truth + f * FIBERS, NULL),
+                                            m->truth + f * FIBERS, NULL, 0),
                          FLT_OK);
         assert_int_equal(flt_extractor_process(ex, frame, FLT_PIXEL_MONO8, W, ROI_ROWS, W, e,
                                                FIBERS, &m->s[f], m->height + f * FIBERS,

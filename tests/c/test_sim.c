@@ -319,7 +319,9 @@ static void frames_draw_the_lines_where_the_calibration_says(void **state) {
     uint8_t *frame = malloc((size_t)w * h);
     double *peaks = malloc(2 * w * sizeof(double));
     double e;
-    assert_int_equal(flt_sim_next_frame(sim, frame, (size_t)w * h, w, &e, 0, NULL, peaks), FLT_OK);
+    assert_int_equal(
+        flt_sim_next_frame(sim, frame, (size_t)w * h, w, &e, 0, NULL, peaks, 2 * (size_t)w),
+        FLT_OK);
     assert_near(e, 321, 1e-12);
     size_t checked = 0;
     for (unsigned laser = 0; laser < 2; ++laser) {
@@ -361,11 +363,14 @@ static void same_seed_same_bytes(void **state) {
         uint8_t *fa = malloc(bytes), *fb = malloc(bytes), *fc = malloc(bytes);
         for (int f = 0; f < 3; ++f) {
             assert_int_equal(
-                flt_sim_next_frame(a, fa, bytes, 2048 * (depth / 8), NULL, 0, NULL, NULL), FLT_OK);
+                flt_sim_next_frame(a, fa, bytes, 2048 * (depth / 8), NULL, 0, NULL, NULL, 0),
+                FLT_OK);
             assert_int_equal(
-                flt_sim_next_frame(b, fb, bytes, 2048 * (depth / 8), NULL, 0, NULL, NULL), FLT_OK);
+                flt_sim_next_frame(b, fb, bytes, 2048 * (depth / 8), NULL, 0, NULL, NULL, 0),
+                FLT_OK);
             assert_int_equal(
-                flt_sim_next_frame(c, fc, bytes, 2048 * (depth / 8), NULL, 0, NULL, NULL), FLT_OK);
+                flt_sim_next_frame(c, fc, bytes, 2048 * (depth / 8), NULL, 0, NULL, NULL, 0),
+                FLT_OK);
             assert_memory_equal(fa, fb, bytes);
             assert_memory_not_equal(fa, fc, bytes);
         }
@@ -375,11 +380,11 @@ static void same_seed_same_bytes(void **state) {
         /* rewind: frame 0 again */
         assert_int_equal(flt_sim_rewind(a), FLT_OK);
         assert_int_equal(flt_sim_rewind(b), FLT_OK);
-        assert_int_equal(flt_sim_next_frame(a, fa, bytes, 2048 * (depth / 8), NULL, 0, NULL, NULL),
-                         FLT_OK);
+        assert_int_equal(
+            flt_sim_next_frame(a, fa, bytes, 2048 * (depth / 8), NULL, 0, NULL, NULL, 0), FLT_OK);
         assert_int_equal(flt_sim_rewind(b), FLT_OK);
-        assert_int_equal(flt_sim_next_frame(b, fb, bytes, 2048 * (depth / 8), NULL, 0, NULL, NULL),
-                         FLT_OK);
+        assert_int_equal(
+            flt_sim_next_frame(b, fb, bytes, 2048 * (depth / 8), NULL, 0, NULL, NULL, 0), FLT_OK);
         assert_memory_equal(fa, fb, bytes);
         free_rows(&ra), free_rows(&rb);
         free(fa), free(fb), free(fc);
@@ -415,9 +420,9 @@ static void bad_input_is_rejected_by_name(void **state) {
                  "'fibers' = 12");
     expect_error(flt_sim_next_rows(sim, 1, 11, d, NULL, d, d, NULL, NULL), FLT_ERR_INVALID_ARGUMENT,
                  "'s_out'");
-    expect_error(flt_sim_next_frame(sim, frame, sizeof frame, 2047, NULL, 0, NULL, NULL),
+    expect_error(flt_sim_next_frame(sim, frame, sizeof frame, 2047, NULL, 0, NULL, NULL, 0),
                  FLT_ERR_INVALID_ARGUMENT, "'stride_bytes' = 2047");
-    expect_error(flt_sim_next_frame(sim, frame, sizeof frame, 2048, NULL, 0, NULL, NULL),
+    expect_error(flt_sim_next_frame(sim, frame, sizeof frame, 2048, NULL, 0, NULL, NULL, 0),
                  FLT_ERR_INVALID_ARGUMENT, "'capacity_bytes' = 64");
     expect_error(flt_sim_set_height_map(sim, 1, 5, 0, 1, 0, 1, d), FLT_ERR_INVALID_ARGUMENT,
                  "'rows' = 1");

@@ -193,7 +193,7 @@ static void test_sim_source_gives_the_simulator_frames(void **state) {
         assert_int_equal(stride, 2048);
         assert_int_equal(format, FLT_PIXEL_MONO8);
         assert_int_equal(block, (uint64_t)k);
-        ok(flt_sim_next_frame(b, expected, 2048 * 256, 2048, &enc_b, 0, NULL, NULL));
+        ok(flt_sim_next_frame(b, expected, 2048 * 256, 2048, &enc_b, 0, NULL, NULL, 0));
         assert_true(enc == enc_b);   /* the simulator's own position */
         assert_true(enc == 3.0 * k); /* frame spacing 3 mm */
         assert_memory_equal(pixels, expected, 2048 * 256);

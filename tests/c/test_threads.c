@@ -90,8 +90,8 @@ static void run_line(result *out) {
 
     for (int f = 0; f < FRAMES; ++f) {
         double encoder;
-        TRY(flt_sim_next_frame(sim, frame, (size_t)WIDTH * ROI_ROWS, WIDTH, &encoder, 0, NULL,
-                               NULL));
+        TRY(flt_sim_next_frame(sim, frame, (size_t)WIDTH * ROI_ROWS, WIDTH, &encoder, 0, NULL, NULL,
+                               0));
         TRY(flt_extractor_process(ex, frame, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, encoder,
                                   FIBERS, &s, h, k, v));
         memcpy(out->height + (size_t)f * FIBERS, h, sizeof h);

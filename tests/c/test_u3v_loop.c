@@ -85,7 +85,8 @@ static void test_camera_path_gives_the_direct_path_rows(void **state) {
     size_t valid = 0;
     for (int f = 0; f < FRAMES; ++f) {
         double e1 = 0, s1 = 0, s2 = 0;
-        ok(flt_sim_next_frame(direct_sim, frame, (size_t)WIDTH * ROWS, WIDTH, &e1, 0, NULL, NULL));
+        ok(flt_sim_next_frame(direct_sim, frame, (size_t)WIDTH * ROWS, WIDTH, &e1, 0, NULL, NULL,
+                              0));
         ok(flt_extractor_process(ex_direct, frame, FLT_PIXEL_MONO8, WIDTH, ROWS, WIDTH, e1, FIBERS,
                                  &s1, h1, g1, v1));
         const flt_frame *cf = NULL;

@@ -134,7 +134,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
             double encoder = encoder0 + 3.0 * f;
             if (sim) {
                 st = flt_sim_next_frame(sim, frame, pixels * (size_t)bytes, (size_t)width * bytes,
-                                        &encoder, 0, NULL, NULL);
+                                        &encoder, 0, NULL, NULL, 0);
                 expect(st);
                 if (st != FLT_OK)
                     break;

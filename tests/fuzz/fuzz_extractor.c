@@ -30,22 +30,26 @@ static void init(void) {
     double cam[4], dist[8], h[2][9], offset[2], scale, x0, pitch;
     size_t count;
     if (flt_calib_create_reference(ROI_FIRST, ROWS, -200.0, 20.0, FIBERS, &full) ||
-        flt_calib_get_intrinsics(full, cam, dist) || flt_calib_get_encoder_scale(full, &scale) ||
+        flt_calib_get_intrinsics(full, cam, FLT_CALIB_CAMERA_VALUES, dist,
+                                 FLT_CALIB_DISTORTION_COEFFS) ||
+        flt_calib_get_encoder_scale(full, &scale) ||
         flt_calib_get_fiber_grid(full, &x0, &pitch, &count))
         abort();
     /* Moving the window right by COL_FIRST px moves the principal point
      * left, and each homography takes u + COL_FIRST: H' = H T. */
     cam[2] -= COL_FIRST;
     if (flt_calib_create(&c) || flt_calib_set_frame_size(c, WIDTH, ROWS) ||
-        flt_calib_set_intrinsics(c, cam, dist))
+        flt_calib_set_intrinsics(c, cam, FLT_CALIB_CAMERA_VALUES, dist,
+                                 FLT_CALIB_DISTORTION_COEFFS))
         abort();
     for (unsigned l = 0; l < 2; ++l) {
-        if (flt_calib_get_homography(full, l, h[l]) ||
+        if (flt_calib_get_homography(full, l, h[l], FLT_CALIB_HOMOGRAPHY_ENTRIES) ||
             flt_calib_get_laser_offset(full, l, &offset[l]))
             abort();
         for (int r = 0; r < 3; ++r)
             h[l][3 * r + 2] += COL_FIRST * h[l][3 * r];
-        if (flt_calib_set_homography(c, l, h[l]) || flt_calib_set_laser_offset(c, l, offset[l]))
+        if (flt_calib_set_homography(c, l, h[l], FLT_CALIB_HOMOGRAPHY_ENTRIES) ||
+            flt_calib_set_laser_offset(c, l, offset[l]))
             abort();
     }
     if (flt_calib_set_encoder_scale(c, scale) || flt_calib_set_fiber_grid(c, x0, pitch, count) ||
@@ -55,7 +59,7 @@ static void init(void) {
     g_calib = c;
     if (flt_sim_create(g_calib, NULL, &sim) ||
         flt_sim_add_defect(sim, FLT_SIM_CENTRE_BUCKLE, 5.0, 700.0) ||
-        flt_sim_next_frame(sim, g_frame8, sizeof g_frame8, WIDTH, NULL, 0, NULL, NULL))
+        flt_sim_next_frame(sim, g_frame8, sizeof g_frame8, WIDTH, NULL, 0, NULL, NULL, 0))
         abort();
     flt_sim_destroy(sim);
 }

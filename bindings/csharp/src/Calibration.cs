@@ -353,7 +353,7 @@ namespace Flatline
                 var distortion = new double[FlatlineNative.FLT_CALIB_DISTORTION_COEFFS];
                 fixed (double* pc = camera, pd = distortion)
                 {
-                    FlatlineNative.flt_calib_get_intrinsics(live, pc, pd);
+                    FlatlineNative.flt_calib_get_intrinsics(live, pc, (ulong)camera.Length, pd, (ulong)distortion.Length);
                 }
                 return new CameraIntrinsics(camera, distortion);
             }
@@ -364,7 +364,8 @@ namespace Flatline
                 var live = LiveHandle;
                 fixed (double* pc = value.Camera, pd = value.Distortion)
                 {
-                    FlatlineNative.flt_calib_set_intrinsics(live, pc, pd);
+                    FlatlineNative.flt_calib_set_intrinsics(live, pc, (ulong)value.Camera.Length, pd,
+                                                            (ulong)value.Distortion.Length);
                 }
             }
         }
@@ -456,7 +457,7 @@ namespace Flatline
             var h = new double[3, 3];
             fixed (double* ph = h)
             {
-                FlatlineNative.flt_calib_get_homography(live, l, ph);
+                FlatlineNative.flt_calib_get_homography(live, l, ph, (ulong)h.Length);
             }
             return h;
         }
@@ -475,7 +476,7 @@ namespace Flatline
                     nameof(homography));
             fixed (double* ph = homography)
             {
-                FlatlineNative.flt_calib_set_homography(live, l, ph);
+                FlatlineNative.flt_calib_set_homography(live, l, ph, (ulong)homography.Length);
             }
         }
 

@@ -348,7 +348,8 @@ namespace Flatline
             fixed (double* pt = truth, pk = peakRows)
             {
                 FlatlineNative.flt_sim_next_frame(live, pixels, stride * (ulong)FrameHeight, stride, &encoder,
-                                                  truth == null ? 0UL : (ulong)Fibers, pt, pk);
+                                                  truth == null ? 0UL : (ulong)Fibers, pt, pk,
+                                                  peakRows == null ? 0UL : (ulong)peakRows.Length);
             }
             return encoder;
         }

@@ -80,9 +80,9 @@ FLT_CS_OUT_SIZE(size_t *out, size_t *rows_out, size_t *count_out, size_t *length
 %typemap(in) NAMES %{ $1 = $input; %}
 %typemap(csin) NAMES "out $csinput"
 %enddef
-FLT_CS_OUT_SCALAR(double, double, double *out, double *min_value,
-                  double *max_value, double *default_value)
-FLT_CS_OUT_SCALAR(int, int, int *is_integer, int *out, int *value_out)
+FLT_CS_OUT_SCALAR(double, double, double *out, double *min_out, double *max_out,
+                  double *default_out)
+FLT_CS_OUT_SCALAR(int, int, int *is_integer_out, int *out, int *value_out)
 FLT_CS_OUT_SCALAR(uint32_t, uint, uint32_t *width_out, uint32_t *height_out,
                   uint32_t *first_row_out, uint32_t *rows_out)
 

@@ -28,7 +28,8 @@ namespace Flatline.Tests
         [DllImport(Core)] private static extern int flt_sim_next_rows(IntPtr sim, UIntPtr rows, UIntPtr fibers,
             double* encoder, double* s, double* height, double* slope, byte* valid, double* truth);
         [DllImport(Core)] private static extern int flt_sim_next_frame(IntPtr sim, void* frame, UIntPtr capacity,
-            UIntPtr stride, double* encoder, UIntPtr fibers, double* truth, double* peakRows);
+            UIntPtr stride, double* encoder, UIntPtr fibers, double* truth, double* peakRows,
+            UIntPtr peakRowsCount);
 
         /// <summary>The three mappings of the reference sensor (ROI rows
         /// firstRow .. firstRow + rows), each over the same flat points.</summary>
@@ -88,7 +89,8 @@ namespace Flatline.Tests
             var frame = new byte[width * height];
             fixed (byte* pf = frame)
             {
-                Ok(flt_sim_next_frame(sim, pf, (UIntPtr)frame.Length, (UIntPtr)width, null, UIntPtr.Zero, null, null));
+                Ok(flt_sim_next_frame(sim, pf, (UIntPtr)frame.Length, (UIntPtr)width, null, UIntPtr.Zero, null, null,
+                                     UIntPtr.Zero));
             }
             flt_sim_destroy(sim);
             if (calib != IntPtr.Zero)

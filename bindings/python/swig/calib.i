@@ -99,7 +99,7 @@ struct flt_calib {};
     if (distortion_count != FLT_CALIB_DISTORTION_COEFFS)
         return flt_py_shape_error("flt_calib_set_intrinsics", "distortion.shape[0]",
                                   distortion_count, FLT_CALIB_DISTORTION_COEFFS);
-    return flt_calib_set_intrinsics($self, camera, distortion);
+    return flt_calib_set_intrinsics($self, camera, camera_count, distortion, distortion_count);
   }
 
   flt_status get_intrinsics_into(double *camera_out, size_t camera_out_count,
@@ -110,7 +110,8 @@ struct flt_calib {};
     if (distortion_out_count != FLT_CALIB_DISTORTION_COEFFS)
         return flt_py_shape_error("flt_calib_get_intrinsics", "distortion_out.shape[0]",
                                   distortion_out_count, FLT_CALIB_DISTORTION_COEFFS);
-    return flt_calib_get_intrinsics($self, camera_out, distortion_out);
+    return flt_calib_get_intrinsics($self, camera_out, camera_out_count, distortion_out,
+                                    distortion_out_count);
   }
 
   /* images (views, height, width) uint8, one C-contiguous block: view i
@@ -172,7 +173,7 @@ struct flt_calib {};
         return flt_py_shape_error("flt_calib_set_homography", "h.shape[0]", h_rows, 3);
     if (h_cols != 3)
         return flt_py_shape_error("flt_calib_set_homography", "h.shape[1]", h_cols, 3);
-    return flt_calib_set_homography($self, laser, h);
+    return flt_calib_set_homography($self, laser, h, h_rows * h_cols);
   }
 
   flt_status get_homography_into(unsigned laser, double *h_out, size_t h_out_rows,
@@ -180,7 +181,7 @@ struct flt_calib {};
     if (h_out_rows != 3 || h_out_cols != 3)
         return flt_py_shape_error("flt_calib_get_homography", "h_out.size",
                                   h_out_rows * h_out_cols, 9);
-    return flt_calib_get_homography($self, laser, h_out);
+    return flt_calib_get_homography($self, laser, h_out, h_out_rows * h_out_cols);
   }
 
   /* image_px and plane_mm (N, 2); residuals (N,), inliers (N,) uint8.

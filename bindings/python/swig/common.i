@@ -200,11 +200,11 @@ FLT_PY_SIGNED(enum SWIGTYPE, INT_MIN, INT_MAX)
 %typemap(argout) size_t *out { %append_output(PyLong_FromSize_t(*$1)); }
 
 %typemap(in, numinputs=0) double *out (double temp = 0.0),
-                          double *min_value (double temp = 0.0),
-                          double *max_value (double temp = 0.0),
-                          double *default_value (double temp = 0.0) { $1 = &temp; }
-%typemap(argout) double *out, double *min_value, double *max_value,
-                 double *default_value { %append_output(PyFloat_FromDouble(*$1)); }
+                          double *min_out (double temp = 0.0),
+                          double *max_out (double temp = 0.0),
+                          double *default_out (double temp = 0.0) { $1 = &temp; }
+%typemap(argout) double *out, double *min_out, double *max_out,
+                 double *default_out { %append_output(PyFloat_FromDouble(*$1)); }
 
 /* ...and the named scalar outputs of the calibration and the simulator. */
 %typemap(in, numinputs=0) size_t *count_out (size_t temp = 0) { $1 = &temp; }
@@ -228,8 +228,8 @@ FLT_PY_SIGNED(enum SWIGTYPE, INT_MIN, INT_MAX)
 %typemap(in, numinputs=0) int *out (int temp = 0) { $1 = &temp; }
 %typemap(argout) int *out { %append_output(PyLong_FromLong((long)*$1)); }
 
-%typemap(in, numinputs=0) int *is_integer (int temp = 0) { $1 = &temp; }
-%typemap(argout) int *is_integer { %append_output(PyBool_FromLong(*$1)); }
+%typemap(in, numinputs=0) int *is_integer_out (int temp = 0) { $1 = &temp; }
+%typemap(argout) int *is_integer_out { %append_output(PyBool_FromLong(*$1)); }
 
 %typemap(in, numinputs=0) flt_option *out (flt_option temp) { $1 = &temp; }
 %typemap(argout) flt_option *out { %append_output(PyLong_FromLong((long)*$1)); }

@@ -92,7 +92,7 @@ static flt_status flt_py_sim_frame(flt_sim *sim, void *frame, size_t frame_rows,
     Py_BEGIN_ALLOW_THREADS
     status = flt_sim_next_frame(sim, frame, frame_rows * frame_cols * bytes_per_pixel,
                                 frame_cols * bytes_per_pixel, encoder_mm, fibers,
-                                truth, peak_rows);
+                                truth, peak_rows, peak_rows ? peak_lasers * peak_width : 0);
     Py_END_ALLOW_THREADS
     return status;
 }

@@ -91,7 +91,7 @@ class CLib:
         lib.flt_sim_destroy.argtypes = [P]
         lib.flt_sim_add_defect.argtypes = [P, ctypes.c_int, ctypes.c_double, ctypes.c_double]
         lib.flt_sim_next_rows.argtypes = [P, sz, sz, dp, dp, dp, dp, up, dp]
-        lib.flt_sim_next_frame.argtypes = [P, P, sz, sz, dp, sz, dp, dp]
+        lib.flt_sim_next_frame.argtypes = [P, P, sz, sz, dp, sz, dp, dp, sz]
         lib.flt_extractor_create.argtypes = [P, P, PP]
         lib.flt_extractor_destroy.argtypes = [P]
         lib.flt_sim_fibers.argtypes = [P, ctypes.POINTER(sz)]

@@ -32,7 +32,7 @@ class sim_source final : public source_impl {
     bool next(unsigned /*timeout_ms*/, raw_frame &out) override {
         double encoder_mm = 0.0;
         if (flt_sim_next_frame(sim_, pixels_.data(), pixels_.size(), stride_, &encoder_mm, 0,
-                               nullptr, nullptr) != FLT_OK)
+                               nullptr, nullptr, 0) != FLT_OK)
             raise(flt_last_error_status(), "the simulator failed: %s", flt_last_error_message());
         out.pixels = pixels_.data();
         out.width = width_;
