@@ -96,9 +96,6 @@ from ._source import (
     source_options,
 )
 
-# The gauge and verdicts: exported here; their names join __all__ once the hand-written
-# __init__.pyi stub (which must list every name of __all__) is gone in
-# favour of the inline annotations it already has.
 from ._gauge import Gauge, Sheet, SheetFlag, SheetZones, gauge_options
 from ._verdict import (
     Measure,
@@ -199,4 +196,16 @@ __all__ = [
     "Source",
     "list_cameras",
     "source_options",
+    "Gauge",
+    "Sheet",
+    "SheetFlag",
+    "SheetZones",
+    "gauge_options",
+    "Measure",
+    "RuleResult",
+    "ToleranceRule",
+    "ToleranceRules",
+    "Verdict",
+    "VerdictState",
+    "straightedge_deviation",
 ]

@@ -9,7 +9,7 @@ from __future__ import annotations
 import enum
 import math
 from dataclasses import dataclass
-from typing import Any, List, Optional, Tuple, Union
+from typing import Any, Iterator, List, Optional, Tuple, Union
 
 import numpy as np
 
@@ -134,7 +134,7 @@ class ToleranceRules:
         name, measure, length = _capi.flt_rules_rule(self._handle, index)
         return ToleranceRule(name, Measure(measure), length)
 
-    def __iter__(self):  # type: ignore[no-untyped-def]
+    def __iter__(self) -> Iterator["ToleranceRule"]:
         return (self[i] for i in range(len(self)))
 
     def __repr__(self) -> str:
