@@ -32,7 +32,9 @@ __all__ = [
 #: Number of lasers (and laser planes) of the sensor, numbered 0 and 1.
 LASERS: int = _capi.FLT_CALIB_LASERS
 
-PathLike = Union[str, bytes, "os.PathLike[str]", "os.PathLike[bytes]"]
+# (A runtime alias, not a string: forward references would resolve in the
+# importing module, which need not import os.)
+PathLike = Union[str, bytes, os.PathLike]
 
 
 class Target(enum.IntEnum):
