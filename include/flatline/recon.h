@@ -44,6 +44,16 @@
  * NaN slope with a finite height uses the height only. Output rows carry flags per fiber
  * (FLT_FLAG_*): a value is never invented silently.
  *
+ * The strip's edges
+ *   flt_recon_push_flagged() takes the extractor's per-fiber flags instead
+ *   of a mask: FLT_FLAG_OFF_STRIP marks a fiber beyond the strip's edges in
+ *   that row. Such a sample is not used, and the output row of that fiber
+ *   is NaN with FLT_FLAG_OFF_STRIP (and no other bit), whatever the spline
+ *   bridges there: a strip that wanders sideways, narrows at a coil change
+ *   or leaves at its tail never has material invented beyond its edges.
+ *   A fiber off the strip since the strip began is NO_DATA where it comes
+ *   onto the strip until its first height, as any fiber without data.
+ *
  * Streaming
  *   push() takes rows; pull() returns finished rows. A knot is complete once
  *   no later row can touch it (rows are increasing, so this is known after
@@ -129,7 +139,13 @@ enum {
     FLT_FLAG_GAP = 2,
     /** The fiber has had no valid height since the strip began (and no
      * carry-over): its level is unknown and the value is NaN. */
-    FLT_FLAG_NO_DATA = 4
+    FLT_FLAG_NO_DATA = 4,
+    /** The fiber lies off the strip in this row (beyond its edges, or no
+     * strip under a laser: flatline/extractor.h). Not invalid data: there is
+     * nothing to measure. Input through flt_recon_push_flagged; the output
+     * row carries this bit alone and its value is NaN: a fiber off the strip
+     * is never reconstructed as strip. */
+    FLT_FLAG_OFF_STRIP = 8
 };
 
 /** Values of the option "robust" (FLT_OPT_ROBUST); the bindings' names in
@@ -267,10 +283,36 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_push(flt_recon *recon, size_
                                                          const double *height, const double *slope,
                                                          const uint8_t *valid);
 
+/**
+ * Pushes `rows` rows with the extractor's per-fiber flags
+ * (flt_extractor_fiber_flags) instead of a validity mask: otherwise as
+ * flt_recon_push.
+ *
+ * @param recon   the reconstructor.
+ * @param rows    rows in the block (>= 1).
+ * @param fibers  must equal the handle's.
+ * @param s       [rows] material positions, mm (as flt_recon_push).
+ * @param height  [rows * fibers] measured heights, mm.
+ * @param slope   [rows * fibers] measured slopes, mm/mm.
+ * @param flags  [rows * fibers] FLT_FLAG_* bits per sample: 0 a valid
+ *               sample, FLT_FLAG_INVALID_INPUT an invalid one (bridged as
+ *               with a 0 mask entry), FLT_FLAG_OFF_STRIP a fiber off the
+ *               strip (not used; its output is NaN flagged
+ *               FLT_FLAG_OFF_STRIP). Any other bit set makes the sample
+ *               invalid. Not NULL.
+ * @return as flt_recon_push; FLT_ERR_INVALID_ARGUMENT for NULL flags.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_push_flagged(flt_recon *recon, size_t rows,
+                                                                 size_t fibers, const double *s,
+                                                                 const double *height,
+                                                                 const double *slope,
+                                                                 const uint8_t *flags);
+
 /** Pulls up to max_rows finished rows, oldest first.
  *   s_out     [max_rows]          their positions, mm.
  *   z_out     [max_rows * fibers] reconstructed heights, mm (NaN only where
- *                                 FLT_FLAG_NO_DATA is set).
+ *                                 FLT_FLAG_NO_DATA or FLT_FLAG_OFF_STRIP
+ *                                 is set).
  *   flags_out [max_rows * fibers] FLT_FLAG_* bits, or NULL if unwanted.
  *   rows_out  the number of rows written (0 when none is finished yet).
  * FLT_ERR_STATE if nothing was pushed since create or reset.
@@ -348,6 +390,26 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_reconstruct(const flt_options *opt
                                                           const double *height, const double *slope,
                                                           const uint8_t *valid, double *z_out,
                                                           uint8_t *flags_out);
+
+/**
+ * flt_reconstruct with the extractor's per-fiber flags instead of a mask
+ * (as flt_recon_push_flagged): off-strip samples come out NaN flagged
+ * FLT_FLAG_OFF_STRIP.
+ *
+ * @param options    NULL for the defaults, else the recon keys.
+ * @param rows       rows (>= 1).
+ * @param fibers     fibers per row (>= 1).
+ * @param s          [rows] material positions, mm, strictly increasing.
+ * @param height     [rows * fibers] measured heights, mm.
+ * @param slope      [rows * fibers] measured slopes, mm/mm.
+ * @param flags      [rows * fibers] FLT_FLAG_* input bits, not NULL.
+ * @param z_out      [rows * fibers] mm.
+ * @param flags_out  [rows * fibers] or NULL.
+ * @return as flt_reconstruct.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_reconstruct_flagged(
+    const flt_options *options, size_t rows, size_t fibers, const double *s, const double *height,
+    const double *slope, const uint8_t *flags, double *z_out, uint8_t *flags_out);
 
 #ifdef __cplusplus
 }

@@ -34,9 +34,67 @@ constexpr double k_max_jump_knots = 1000.0;
 constexpr double k_max_knots_per_laser_spacing = 16.0;
 }  // namespace
 
+// The off-strip bits of the rows held (pushed, not yet pulled), oldest
+// first: the engine sees an off-strip sample as an invalid one, and pull()
+// turns its output into NaN flagged FLT_FLAG_OFF_STRIP. Rows leave the
+// engine in the order they came, so a FIFO of row_capacity rows (one bit per
+// fiber, and one byte per row saying whether it has any) follows them.
+class off_strip_fifo {
+  public:
+    void allocate(std::size_t rows, std::size_t fibers) {
+        stride_ = (fibers + 7) / 8;
+        fibers_ = fibers;
+        any_.assign(rows, 0);
+        bits_.assign(rows * stride_, 0);
+        valid_.assign(fibers, 1);
+        head_ = count_ = 0;
+    }
+    void clear() { head_ = count_ = 0; }
+    // Appends a row; flags NULL (a plain push) has no off-strip fiber. The
+    // valid mask for the engine is written to valid() (from flags).
+    void push(const std::uint8_t *flags) {
+        const std::size_t slot = (head_ + count_) % any_.size();
+        ++count_;
+        any_[slot] = 0;
+        if (!flags)
+            return;
+        std::uint8_t *bits = &bits_[slot * stride_];
+        std::memset(bits, 0, stride_);
+        for (std::size_t k = 0; k < fibers_; ++k) {
+            valid_[k] = flags[k] == 0 ? 1 : 0;
+            if (flags[k] & FLT_FLAG_OFF_STRIP) {
+                bits[k / 8] |= std::uint8_t(1u << (k % 8));
+                any_[slot] = 1;
+            }
+        }
+    }
+    const std::uint8_t *valid() const { return valid_.data(); }
+    // Applies the oldest `rows` rows' bits to pulled output and drops them.
+    void pop(std::size_t rows, double *z, std::uint8_t *flags) {
+        for (std::size_t r = 0; r < rows && count_ > 0; ++r, --count_) {
+            const std::size_t slot = head_;
+            head_ = (head_ + 1) % any_.size();
+            if (!any_[slot])
+                continue;
+            const std::uint8_t *bits = &bits_[slot * stride_];
+            for (std::size_t k = 0; k < fibers_; ++k)
+                if (bits[k / 8] & (1u << (k % 8))) {
+                    z[r * fibers_ + k] = std::numeric_limits<double>::quiet_NaN();
+                    if (flags)
+                        flags[r * fibers_ + k] = FLT_FLAG_OFF_STRIP;
+                }
+        }
+    }
+
+  private:
+    std::size_t stride_ = 0, fibers_ = 0, head_ = 0, count_ = 0;
+    std::vector<std::uint8_t> any_, bits_, valid_;
+};
+
 struct flt_recon {
     std::uint32_t magic = k_recon_magic;
     std::unique_ptr<recon_pipeline> engine;
+    off_strip_fifo off_strip;
 };
 
 namespace {
@@ -194,8 +252,114 @@ flt_status create(const char *fn, std::size_t fibers, const flt_options *options
         return st;
     auto handle = std::make_unique<flt_recon>();
     handle->engine = std::make_unique<recon_pipeline>(fibers, config, p.knot_capacity());
+    handle->off_strip.allocate(p.row_capacity, fibers);
     *out = handle.release();
     return FLT_OK;
+}
+
+}  // namespace
+
+namespace {
+
+// flt_recon_push and flt_recon_push_flagged: `valid` a mask (plain push) or
+// `flags` the extractor's FLT_FLAG_* bits (one of the two, or neither).
+flt_status push_rows(const char *fn, flt_recon *recon, std::size_t rows, std::size_t fibers,
+                     const double *s, const double *height, const double *slope,
+                     const std::uint8_t *valid, const std::uint8_t *flags, bool flagged) {
+    {
+        if (flt_status st = check_handle(fn, recon))
+            return st;
+        recon_pipeline &e = *recon->engine;
+        if (flt_status st = check_push_arrays(fn, s, height, slope))
+            return st;
+        if (flagged)
+            FLT_CHECK_NOT_NULL(fn, flags);
+        if (flt_status st = check_shape(fn, rows, fibers))
+            return st;
+        if (flt_status st = check_fibers(fn, fibers, e.fibers()))
+            return st;
+        if (flt_status st = check_positions(fn, rows, s, e.has_last_s(), e.last_s(),
+                                            e.config().params.knot_spacing))
+            return st;
+        if (rows > e.free_rows()) {
+            if (e.ready_rows() == 0 && e.free_rows() < rows) {
+                // Nothing to pull: the rows held are all waiting for the
+                // strip the reconstructor needs beyond them.
+                const long knots = e.latency_knots();
+                const bool robust = e.config().robust.kind != robust_kind::none;
+                return fail(FLT_ERR_BUFFER_FULL,
+                            "%s: %zu rows do not fit, and no row is finished yet: a row is "
+                            "finished about %ld knots (%.0f mm) of strip after it, and "
+                            "row_capacity = %zu%s; create the reconstructor with a larger "
+                            "row_capacity or a shorter lag, or end the sheet",
+                            fn, rows, knots, double(knots) * e.config().params.knot_spacing,
+                            e.config().params.row_capacity,
+                            robust ? " (robust mode queues up to a quarter of it per pass)" : "");
+            }
+            return fail(FLT_ERR_BUFFER_FULL,
+                        "%s: %zu rows do not fit: %zu of row_capacity = %zu are "
+                        "free (%zu finished rows wait to be pulled)",
+                        fn, rows, e.free_rows(), e.config().params.row_capacity, e.ready_rows());
+        }
+        for (std::size_t r = 0; r < rows; ++r) {
+            const std::uint8_t *row_flags = flagged ? flags + r * fibers : nullptr;
+            recon->off_strip.push(row_flags);
+            const std::uint8_t *mask =
+                flagged ? recon->off_strip.valid() : (valid ? valid + r * fibers : nullptr);
+            e.push_row(s[r], height + r * fibers, slope + r * fibers, mask);
+        }
+        return FLT_OK;
+    }
+}
+
+}  // namespace
+
+namespace {
+
+flt_status reconstruct_sheet(const char *fn, const flt_options *options, std::size_t rows,
+                             std::size_t fibers, const double *s, const double *height,
+                             const double *slope, const std::uint8_t *valid,
+                             const std::uint8_t *flags, bool flagged, double *z_out,
+                             std::uint8_t *flags_out) {
+    {
+        if (flt_status st = check_push_arrays(fn, s, height, slope))
+            return st;
+        if (flagged)
+            FLT_CHECK_NOT_NULL(fn, flags);
+        FLT_CHECK_NOT_NULL(fn, z_out);
+        if (flt_status st = check_shape(fn, rows, fibers))
+            return st;
+        recon_config config;
+        if (flt_status st = read_params(fn, options, &config))
+            return st;
+        recon_params &p = config.params;
+        if (flt_status st = check_positions(fn, rows, s, false, 0.0, p.knot_spacing))
+            return st;
+        p.lag_knots = recon_params::no_lag;  // one solve with every row
+        p.row_capacity = rows;
+        // Every knot of the sheet stays open until the end.
+        const double span = s[rows - 1] - s[0] + p.laser_spacing;
+        const std::size_t knots = std::size_t(span / p.knot_spacing) + 4;
+        if (flt_status st = check_bytes(fn, fibers, config, knots, true))
+            return st;
+        std::vector<std::uint8_t> mask;
+        if (flagged) {
+            mask.resize(rows * fibers);
+            for (std::size_t i = 0; i < rows * fibers; ++i)
+                mask[i] = flags[i] == 0 ? 1 : 0;
+            valid = mask.data();
+        }
+        recon_pipeline e(fibers, config, knots, z_out, flags_out, true);
+        e.batch(rows, s, height, slope, valid, z_out);
+        if (flagged)
+            for (std::size_t i = 0; i < rows * fibers; ++i)
+                if (flags[i] & FLT_FLAG_OFF_STRIP) {
+                    z_out[i] = std::numeric_limits<double>::quiet_NaN();
+                    if (flags_out)
+                        flags_out[i] = FLT_FLAG_OFF_STRIP;
+                }
+        return FLT_OK;
+    }
 }
 
 }  // namespace
@@ -351,42 +515,16 @@ FLT_API flt_status FLT_CALL flt_recon_push(flt_recon *recon, size_t rows, size_t
                                            const double *slope, const uint8_t *valid) {
     const char *fn = "flt_recon_push";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, recon))
-            return st;
-        recon_pipeline &e = *recon->engine;
-        if (flt_status st = check_push_arrays(fn, s, height, slope))
-            return st;
-        if (flt_status st = check_shape(fn, rows, fibers))
-            return st;
-        if (flt_status st = check_fibers(fn, fibers, e.fibers()))
-            return st;
-        if (flt_status st = check_positions(fn, rows, s, e.has_last_s(), e.last_s(),
-                                            e.config().params.knot_spacing))
-            return st;
-        if (rows > e.free_rows()) {
-            if (e.ready_rows() == 0 && e.free_rows() < rows) {
-                // Nothing to pull: the rows held are all waiting for the
-                // strip the reconstructor needs beyond them.
-                const long knots = e.latency_knots();
-                const bool robust = e.config().robust.kind != robust_kind::none;
-                return fail(FLT_ERR_BUFFER_FULL,
-                            "%s: %zu rows do not fit, and no row is finished yet: a row is "
-                            "finished about %ld knots (%.0f mm) of strip after it, and "
-                            "row_capacity = %zu%s; create the reconstructor with a larger "
-                            "row_capacity or a shorter lag, or end the sheet",
-                            fn, rows, knots, double(knots) * e.config().params.knot_spacing,
-                            e.config().params.row_capacity,
-                            robust ? " (robust mode queues up to a quarter of it per pass)" : "");
-            }
-            return fail(FLT_ERR_BUFFER_FULL,
-                        "%s: %zu rows do not fit: %zu of row_capacity = %zu are "
-                        "free (%zu finished rows wait to be pulled)",
-                        fn, rows, e.free_rows(), e.config().params.row_capacity, e.ready_rows());
-        }
-        for (std::size_t r = 0; r < rows; ++r)
-            e.push_row(s[r], height + r * fibers, slope + r * fibers,
-                       valid ? valid + r * fibers : nullptr);
-        return FLT_OK;
+        return push_rows(fn, recon, rows, fibers, s, height, slope, valid, nullptr, false);
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_recon_push_flagged(flt_recon *recon, size_t rows, size_t fibers,
+                                                   const double *s, const double *height,
+                                                   const double *slope, const uint8_t *flags) {
+    const char *fn = "flt_recon_push_flagged";
+    return guard(fn, [&] {
+        return push_rows(fn, recon, rows, fibers, s, height, slope, nullptr, flags, true);
     });
 }
 
@@ -414,6 +552,7 @@ FLT_API flt_status FLT_CALL flt_recon_pull(flt_recon *recon, size_t max_rows, si
                         "created or reset",
                         fn);
         *rows_out = e.pull(max_rows, s_out, z_out, flags_out);
+        recon->off_strip.pop(*rows_out, z_out, flags_out);
         return FLT_OK;
     });
 }
@@ -450,6 +589,7 @@ FLT_API flt_status FLT_CALL flt_recon_reset(flt_recon *recon) {
         if (flt_status st = check_handle(fn, recon))
             return st;
         recon->engine->reset();
+        recon->off_strip.clear();
         return FLT_OK;
     });
 }
@@ -479,27 +619,20 @@ FLT_API flt_status FLT_CALL flt_reconstruct(const flt_options *options, size_t r
                                             double *z_out, uint8_t *flags_out) {
     const char *fn = "flt_reconstruct";
     return guard(fn, [&] {
-        if (flt_status st = check_push_arrays(fn, s, height, slope))
-            return st;
-        FLT_CHECK_NOT_NULL(fn, z_out);
-        if (flt_status st = check_shape(fn, rows, fibers))
-            return st;
-        recon_config config;
-        if (flt_status st = read_params(fn, options, &config))
-            return st;
-        recon_params &p = config.params;
-        if (flt_status st = check_positions(fn, rows, s, false, 0.0, p.knot_spacing))
-            return st;
-        p.lag_knots = recon_params::no_lag;  // one solve with every row
-        p.row_capacity = rows;
-        // Every knot of the sheet stays open until the end.
-        const double span = s[rows - 1] - s[0] + p.laser_spacing;
-        const std::size_t knots = std::size_t(span / p.knot_spacing) + 4;
-        if (flt_status st = check_bytes(fn, fibers, config, knots, true))
-            return st;
-        recon_pipeline e(fibers, config, knots, z_out, flags_out, true);
-        e.batch(rows, s, height, slope, valid, z_out);
-        return FLT_OK;
+        return reconstruct_sheet(fn, options, rows, fibers, s, height, slope, valid, nullptr, false,
+                                 z_out, flags_out);
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_reconstruct_flagged(const flt_options *options, size_t rows,
+                                                    size_t fibers, const double *s,
+                                                    const double *height, const double *slope,
+                                                    const uint8_t *flags, double *z_out,
+                                                    uint8_t *flags_out) {
+    const char *fn = "flt_reconstruct_flagged";
+    return guard(fn, [&] {
+        return reconstruct_sheet(fn, options, rows, fibers, s, height, slope, nullptr, flags, true,
+                                 z_out, flags_out);
     });
 }
 

@@ -666,6 +666,46 @@ static void row_recon_push(void) {
     flt_recon_destroy(r);
 }
 
+/* push_flagged: push's cases, NULL flags, and off-strip samples pass
+ * through (they are not errors). */
+static void row_recon_push_flagged(void) {
+    flt_recon *r = new_recon();
+    make_rows(8);
+    double *s = g_rows.s, *h = g_rows.h, *k = g_rows.k;
+    uint8_t *flags = calloc(8 * FIBERS, 1);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'recon'",
+        flt_recon_push_flagged(NULL, 8, FIBERS, s, h, k, flags));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'s'", flt_recon_push_flagged(r, 8, FIBERS, NULL, h, k, flags));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'height'",
+        flt_recon_push_flagged(r, 8, FIBERS, s, NULL, k, flags));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'slope'",
+        flt_recon_push_flagged(r, 8, FIBERS, s, h, NULL, flags));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'flags'", flt_recon_push_flagged(r, 8, FIBERS, s, h, k, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'rows' is 0",
+        flt_recon_push_flagged(r, 0, FIBERS, s, h, k, flags));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'",
+        flt_recon_push_flagged(r, 8, FIBERS + 1, s, h, k, flags));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "overflows",
+        flt_recon_push_flagged(r, NEG, FIBERS, s, h, k, flags));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "overflows",
+        flt_recon_push_flagged(r, overflow_rows(FIBERS), FIBERS, s, h, k, flags));
+    double bad_s[8];
+    memcpy(bad_s, s, sizeof bad_s);
+    bad_s[3] = NaN_;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "not finite",
+        flt_recon_push_flagged(r, 8, FIBERS, bad_s, h, k, flags));
+    /* Every bit pattern is a valid flag byte: off strip, invalid, unknown
+     * bits (invalid), all set. */
+    for (int i = 0; i < 8 * FIBERS; ++i)
+        flags[i] = (uint8_t)(i % 4 == 0   ? FLT_FLAG_OFF_STRIP
+                             : i % 4 == 1 ? 0xFF
+                             : i % 4 == 2 ? 1
+                                          : 0);
+    GOOD(flt_recon_push_flagged(r, 8, FIBERS, s, h, k, flags));
+    flt_recon_destroy(r);
+    free(flags);
+}
+
 static void row_recon_pull(void) {
     flt_recon *r = new_recon();
     make_rows(8);
@@ -792,6 +832,43 @@ static void row_reconstruct(void) {
     flt_options_destroy(o);
     GOOD(flt_reconstruct(NULL, 40, FIBERS, s, h, k, NULL, z, NULL));
     free(z);
+}
+
+static void row_reconstruct_flagged(void) {
+    make_rows(40);
+    double *s = g_rows.s, *h = g_rows.h, *k = g_rows.k;
+    double *z = malloc(sizeof(double) * 40 * FIBERS);
+    uint8_t *flags = calloc(40 * FIBERS, 1), *out = malloc(40 * FIBERS);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'s'",
+        flt_reconstruct_flagged(NULL, 40, FIBERS, NULL, h, k, flags, z, out));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'height'",
+        flt_reconstruct_flagged(NULL, 40, FIBERS, s, NULL, k, flags, z, out));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'slope'",
+        flt_reconstruct_flagged(NULL, 40, FIBERS, s, h, NULL, flags, z, out));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'flags'",
+        flt_reconstruct_flagged(NULL, 40, FIBERS, s, h, k, NULL, z, out));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'z_out'",
+        flt_reconstruct_flagged(NULL, 40, FIBERS, s, h, k, flags, NULL, out));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'rows' is 0",
+        flt_reconstruct_flagged(NULL, 0, FIBERS, s, h, k, flags, z, out));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "overflows",
+        flt_reconstruct_flagged(NULL, NEG, FIBERS, s, h, k, flags, z, out));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "overflows",
+        flt_reconstruct_flagged(NULL, overflow_rows(FIBERS), FIBERS, s, h, k, flags, z, out));
+    double bad_s[40];
+    memcpy(bad_s, s, sizeof bad_s);
+    bad_s[39] = Inf_;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "not finite",
+        flt_reconstruct_flagged(NULL, 40, FIBERS, bad_s, h, k, flags, z, out));
+    /* A whole fiber off the strip: NaN with its flag, never an error. */
+    for (int r = 0; r < 40; ++r)
+        flags[r * FIBERS + 2] = FLT_FLAG_OFF_STRIP;
+    GOOD(flt_reconstruct_flagged(NULL, 40, FIBERS, s, h, k, flags, z, out));
+    ++g_checks;
+    if (!(isnan(z[2]) && out[2] == FLT_FLAG_OFF_STRIP))
+        ERR("an off-strip sample came out %g with flags %d", z[2], out[2]);
+    GOOD(flt_reconstruct_flagged(NULL, 40, FIBERS, s, h, k, flags, z, NULL));
+    free(z), free(flags), free(out);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -2113,7 +2190,6 @@ static void row_flatness_push(void) {
     flt_options_destroy(o);
     flt_flatness_destroy(f);
 }
-
 static void row_flatness_finish(void) {
     flt_flatness *f = new_flatness();
     int ev = -1;
@@ -3799,12 +3875,14 @@ static const row k_rows[] = {
     ROW(recon_fibers),
     ROW(recon_get_option),
     ROW(recon_push),
+    ROW(recon_push_flagged),
     ROW(recon_pull),
     ROW(recon_ready),
     ROW(recon_end_sheet),
     ROW(recon_reset),
     ROW(recon_boundary),
     ROW(reconstruct),
+    ROW(reconstruct_flagged),
     /* calib.h */
     ROW(calib_create),
     ROW(calib_destroy),
