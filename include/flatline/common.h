@@ -321,8 +321,9 @@ typedef enum flt_option {
     FLT_OPT_SIM_FRAME_SPACING = 301,
     /** "sim_start": encoder position of frame 0, mm. Default 0. */
     FLT_OPT_SIM_START = 302,
-    /** "sim_strip_width": strip width W for the defect shapes, mm (strip
-     * centred at x = 0). Default 2000. */
+    /** "sim_strip_width": strip width W, mm: the defect shapes' width and,
+     * with sim_surround != 0, the strip's edges at its centre line -+ W / 2
+     * (see flatline/sim.h). Default 2000. */
     FLT_OPT_SIM_STRIP_WIDTH = 303,
     /** "sim_heave_sigma": rigid vertical motion per frame, mm. Default 0. */
     FLT_OPT_SIM_HEAVE_SIGMA = 304,
@@ -369,6 +370,57 @@ typedef enum flt_option {
     /** "sim_reflections": mean number of spurious reflections per frame.
      * Default 0. */
     FLT_OPT_SIM_REFLECTIONS = 319,
+    /** "sim_surround": what the lasers fall on beyond the strip's edges, an
+     * flt_sim_surround (flatline/sim.h): 0 the strip fills the field of
+     * view (no edges; the default), 1 nothing, 2 the roller table
+     * (integer 0..2). */
+    FLT_OPT_SIM_SURROUND = 320,
+    /** "sim_strip_offset": the mean lateral position of the strip's centre
+     * line, x of the sensor, mm. Default 0. */
+    FLT_OPT_SIM_STRIP_OFFSET = 321,
+    /** "sim_wander_amplitude": amplitude of the sine in the strip's lateral
+     * wander, mm. Default 0. */
+    FLT_OPT_SIM_WANDER_AMPLITUDE = 322,
+    /** "sim_wander_period": its period in encoder travel, mm. Default 30000. */
+    FLT_OPT_SIM_WANDER_PERIOD = 323,
+    /** "sim_wander_sigma": standard deviation of the slow random walk in the
+     * lateral wander (a mean-reverting walk, so it stays bounded), mm.
+     * Default 0. */
+    FLT_OPT_SIM_WANDER_SIGMA = 324,
+    /** "sim_wander_length": the encoder travel over which the random walk
+     * forgets its position (its correlation length), mm. Default 20000. */
+    FLT_OPT_SIM_WANDER_LENGTH = 325,
+    /** "sim_coil_length": length of each coil's strip along travel, mm;
+     * 0 (the default) is one endless strip. Coil k occupies material
+     * positions [k (sim_coil_length + sim_coil_gap), + sim_coil_length). */
+    FLT_OPT_SIM_COIL_LENGTH = 326,
+    /** "sim_coil_gap": travel between one coil's tail and the next coil's
+     * head, mm (0: the coils follow each other directly, welded). Default
+     * 5000. */
+    FLT_OPT_SIM_COIL_GAP = 327,
+    /** "sim_second_width": width of every second coil (coils 1, 3, 5, ...),
+     * mm; 0 (the default) = sim_strip_width for every coil. */
+    FLT_OPT_SIM_SECOND_WIDTH = 328,
+    /** "sim_table_depth": the roller table's top below the pass line (z = 0),
+     * mm. Default 300. */
+    FLT_OPT_SIM_TABLE_DEPTH = 329,
+    /** "sim_roller_pitch": the table's lit segments repeat every this many
+     * mm across the width. Default 200. */
+    FLT_OPT_SIM_ROLLER_PITCH = 330,
+    /** "sim_roller_gap": the laser falls through a gap this wide (mm) in
+     * every sim_roller_pitch. Default 60. */
+    FLT_OPT_SIM_ROLLER_GAP = 331,
+    /** "sim_table_brightness": the table line's peak intensity relative to
+     * the strip's line. Default 0.5 (dull rollers). */
+    FLT_OPT_SIM_TABLE_BRIGHTNESS = 332,
+    /** "sim_edge_glints": probability of a specular glint at each strip
+     * edge, per laser and frame (the burr of a sheared edge), 0..1.
+     * Default 0. */
+    FLT_OPT_SIM_EDGE_GLINTS = 333,
+    /** "sim_blooming": share of the charge above full scale that spills into
+     * the neighbouring rows of its column (half up, half down), 0..1.
+     * Default 0: clipped at full scale. */
+    FLT_OPT_SIM_BLOOMING = 334,
 
     /* --- frame-to-profile extractor (flatline/extractor.h) --- */
     /** "extract_laser0_first_row", "extract_laser0_rows": laser 0's band of

@@ -8,10 +8,42 @@
  * The sheet
  *   z_sheet(x, s) in mm: the sum of parametric defects (flt_sim_add_defect)
  *   and an optional user height map (flt_sim_set_height_map). x across the
- *   width (mm, strip centred at x = 0, width sim_strip_width), s the material
- *   coordinate along travel (mm). This is the ground truth: what a perfect
- *   gauge would report. Motion and shear transients are disturbances, not
- *   part of it.
+ *   width in strip coordinates (mm from the strip's centre line, width
+ *   sim_strip_width, or sim_second_width for every second coil), s the
+ *   material coordinate along travel (mm). This is the ground truth: what a
+ *   perfect gauge would report. Motion and shear transients are
+ *   disturbances, not part of it.
+ *
+ * The strip in the field
+ *   Lateral position: in frame f (encoder e) the strip's centre line lies at
+ *   sensor x = c(e) = sim_strip_offset + sim_wander_amplitude sin(2 pi e /
+ *   sim_wander_period) + w(e), where w is a slow mean-reverting random walk
+ *   of standard deviation sim_wander_sigma and correlation length
+ *   sim_wander_length (knots every sim_wander_length / 16 of encoder
+ *   travel from sim_start, each step drawn from (sim_seed, knot), joined by
+ *   a C1 cubic). The strip moves sideways as a rigid body: both lasers see
+ *   the same c(e), and the sheet point at strip coordinate x_s lies at
+ *   sensor x = c(e) + x_s.
+ *   Coils: with sim_coil_length > 0, coil k (k >= 0) is the material s in
+ *   [k P, k P + sim_coil_length), P = sim_coil_length + sim_coil_gap; coil k
+ *   is sim_strip_width wide, or sim_second_width for odd k when that is set
+ *   (a width change at every coil change). A laser whose material s_L lies
+ *   outside every coil sees no strip: heads and tails enter and leave the
+ *   field of view one laser after the other.
+ *   Surround (sim_surround, flt_sim_surround): the strip fills the field of
+ *   view (no lateral edges), or beyond its edges c(e) -+ width / 2 the lasers
+ *   fall on nothing or on the roller table: a line at z = -sim_table_depth
+ *   (no motion), lit except for a sim_roller_gap wide gap in every
+ *   sim_roller_pitch across the width, sim_table_brightness times as bright
+ *   as the strip's line; the strip's shadow on the table is not modelled.
+ *   A column partly covered by the strip gets that share of the line's
+ *   light (the pixel integrates over its width). Glints at the edges
+ *   (sim_edge_glints): a saturating specular spot (1.5-4 times full scale)
+ *   on the line just inside the edge, 1-6 columns long.
+ *   Saturation: sim_line_peak may exceed 1 (a line brighter than full
+ *   scale); with sim_blooming the charge above full scale spills into the
+ *   neighbouring rows of its column, half up and half down, filling the
+ *   first unsaturated pixels.
  *
  * Frames and lasers
  *   Frame f is taken at encoder position e_f = sim_start + f * sim_frame_spacing
@@ -37,6 +69,9 @@
  *     height = (z_behind + z_ahead) / 2,  slope = (z_ahead - z_behind) / Delta-d
  *   at s = e - (offset_0 + offset_1) / 2, where the peak noise enters z_L as
  *   sim_peak_sigma px times the calibration's local dz/dv (mm/px) there.
+ *   A fiber is on the strip when its x lies between the strip's edges for
+ *   both lasers (a perfect extractor's rule, flatline/extractor.h); off the
+ *   strip its height and slope are NaN and its valid byte 0.
  *   flt_sim_next_frame(): camera frames rendered through the calibration:
  *   both lines as Gaussian profiles across rows (sigma sim_line_sigma px,
  *   peak sim_line_peak of full scale) centred on the exact image of z_L(x),
@@ -69,7 +104,9 @@ extern "C" {
 
 /** Parametric defects. Each is amplitude_mm * g(x) * w(s) with
  * w(s) = sin(2 pi s / period_mm) (w = 1 when period_mm = 0) and, with
- * W = sim_strip_width and x in [-W/2, W/2] (clamped outside):
+ * W the strip's width (sim_strip_width, or sim_second_width for every
+ * second coil) and x in strip coordinates in [-W/2, W/2] (clamped
+ * outside):
  *   FLAT                 g = 0
  *   CENTRE_BUCKLE        g = cos^2(pi x / W)        long centre, flat edges
  *   WAVY_EDGE_LEFT       g = (max(0, -2x/W))^4      x < 0 is the left edge
@@ -90,6 +127,17 @@ typedef enum flt_sim_defect {
     FLT_SIM_CROSSBOW = 7,        /**< a constant transverse bow */
     FLT_SIM_DEFECT_MAX_ENUM_ = 0x7FFFFFFF
 } flt_sim_defect;
+
+/** What the lasers fall on beyond the strip's edges (option sim_surround). */
+typedef enum flt_sim_surround {
+    /** The strip fills the field of view: no lateral edge is ever seen. */
+    FLT_SIM_SURROUND_STRIP = 0,
+    /** Nothing: no line beyond the edges (or between coils). */
+    FLT_SIM_SURROUND_NOTHING = 1,
+    /** The roller table, sim_table_depth below the pass line. */
+    FLT_SIM_SURROUND_ROLLER_TABLE = 2,
+    FLT_SIM_SURROUND_MAX_ENUM_ = 0x7FFFFFFF
+} flt_sim_surround;
 
 /** A simulated sensor (opaque handle). */
 typedef struct flt_sim flt_sim;
@@ -201,18 +249,22 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_pixel_format(const flt_sim *si
  *   fibers          must equal flt_sim_fibers().
  *   encoder_mm_out  [rows] each frame's encoder position (may be NULL).
  *   s_out           [rows] each row's material position, mm.
- *   height_out, slope_out  [rows * fibers] mm and mm/mm.
- *   valid_out       [rows * fibers] all 1 (may be NULL).
- *   truth_out       [rows * fibers] z_sheet(x_k, s_row), mm (may be NULL).
+ *   height_out, slope_out  [rows * fibers] mm and mm/mm; NaN off the strip.
+ *   valid_out       [rows * fibers] 1 on the strip, 0 off it. May be NULL
+ *                   only while the strip fills the field of view
+ *                   (sim_surround = 0 and no coils): otherwise its NaNs
+ *                   need their flag, and NULL is refused.
+ *   truth_out       [rows * fibers] z_sheet(x_k - c(e), s_row), mm, NaN
+ *                   where the fiber is off the strip (may be NULL).
  * Allocates nothing.
  * @param sim the simulator.
  * @param rows           the number of rows.
  * @param fibers         flt_sim_fibers().
  * @param encoder_mm_out [rows] encoder positions, or NULL.
  * @param s_out          [rows] positions, mm.
- * @param height_out     [rows * fibers] heights, mm.
- * @param slope_out      [rows * fibers] slopes, mm/mm.
- * @param valid_out      [rows * fibers] validity, or NULL.
+ * @param height_out     [rows * fibers] heights, mm (NaN off the strip).
+ * @param slope_out      [rows * fibers] slopes, mm/mm (NaN off the strip).
+ * @param valid_out      [rows * fibers] validity (see above), or NULL.
  * @param truth_out      [rows * fibers] ground truth, mm, or NULL.
  * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
  */
@@ -227,13 +279,15 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_next_rows(flt_sim *sim, size_t
  *                   pixel; 16-bit formats: even, 2-byte aligned buffer),
  *                   capacity_bytes >= stride_bytes * height.
  *   encoder_mm_out  the frame's encoder position (may be NULL).
- *   fibers, truth_out  [fibers] z_sheet(x_k, s_row) (truth_out may be NULL,
+ *   fibers, truth_out  [fibers] z_sheet(x_k - c(e), s_row), NaN off the
+ *                   strip as in flt_sim_next_rows (truth_out may be NULL,
  *                   then fibers is ignored).
  *   peak_rows_out, peak_rows_count   [peak_rows_count] = [2 * width] (may be
  *                   NULL, then peak_rows_count is ignored): the exact row of
  *                   each laser's line centre per column, [laser * width + u],
  *                   px, after the peak noise; NaN where the line is outside
- *                   the frame.
+ *                   the frame or the column sees no strip (the roller
+ *                   table's line is not reported).
  * Allocates nothing. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL
 flt_sim_next_frame(flt_sim *sim, void *frame_out, size_t capacity_bytes, size_t stride_bytes,
@@ -245,6 +299,46 @@ flt_sim_next_frame(flt_sim *sim, void *frame_out, size_t capacity_bytes, size_t 
  * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
  */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_rewind(flt_sim *sim);
+
+/**
+ * Ground truth of the strip's edges: where laser `laser` sees them at the
+ * given encoder positions (any order; no frame is generated).
+ *
+ * @param sim           the simulator.
+ * @param laser         0 or 1, or 2 for a profile row: the mean of the two
+ *                      lasers' edges (the strip at the row's material
+ *                      position), present only where both lasers see it.
+ * @param count         number of encoder positions (0 is a no-op).
+ * @param encoder_mm    [count] encoder positions, mm, finite.
+ * @param left_mm_out   [count] the edge at the lower sensor x, mm.
+ * @param right_mm_out  [count] the edge at the higher sensor x, mm.
+ * @param present_out   [count] 1 where the laser sees the strip, 0 where
+ *                      its material lies outside every coil: both edges
+ *                      are NaN there, flagged by this 0 (may be NULL). With
+ *                      sim_surround = 0 the edges are the strip's nominal
+ *                      ones, c(e) -+ width / 2, which the field of view
+ *                      never shows.
+ * @return FLT_OK, or FLT_ERR_INVALID_ARGUMENT for a NULL array, a laser
+ *         above 2 or a non-finite position.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_sim_strip_edges(const flt_sim *sim, unsigned laser, size_t count, const double *encoder_mm,
+                    double *left_mm_out, double *right_mm_out, uint8_t *present_out);
+
+/**
+ * Ground truth of a frame's fiber flags: what a perfect extractor reports
+ * for a frame at `encoder_mm` (flt_extractor_fiber_flags): 0 for a fiber on
+ * the strip for both lasers, FLT_FLAG_OFF_STRIP (flatline/recon.h)
+ * otherwise. All 0 with sim_surround = 0 while a coil is under both lasers.
+ *
+ * @param sim         the simulator.
+ * @param encoder_mm  the frame's encoder position, mm, finite.
+ * @param fibers      must equal flt_sim_fibers().
+ * @param flags_out   [fibers] FLT_FLAG_* bits.
+ * @return FLT_OK or FLT_ERR_INVALID_ARGUMENT.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sim_fiber_flags(const flt_sim *sim, double encoder_mm,
+                                                              size_t fibers, uint8_t *flags_out);
 
 /** The reference sensor (docs/sensor.md) as a finished calibration,
  * for the simulator, tests and demos: a 2048 x 2048 camera, f = 6 mm lens,

@@ -106,6 +106,22 @@ const option_spec k_options[] = {
     {FLT_OPT_GAUGE_MAX_SHEET_LENGTH, "gauge_max_sheet_length", 1.0, 1.0e7, 6000.0, false},
     {FLT_OPT_GAUGE_KEEP_MAPS, "gauge_keep_maps", 0.0, 2.0, 0.0, true},
     {FLT_OPT_GAUGE_SHEET_SLOTS, "gauge_sheet_slots", 1.0, 1024.0, 4.0, true},
+    // simulated sensor: the line in the field (appended)
+    {FLT_OPT_SIM_SURROUND, "sim_surround", 0.0, 2.0, 0.0, true},
+    {FLT_OPT_SIM_STRIP_OFFSET, "sim_strip_offset", -1.0e5, 1.0e5, 0.0, false},
+    {FLT_OPT_SIM_WANDER_AMPLITUDE, "sim_wander_amplitude", 0.0, 1.0e4, 0.0, false},
+    {FLT_OPT_SIM_WANDER_PERIOD, "sim_wander_period", 1.0, 1.0e9, 30000.0, false},
+    {FLT_OPT_SIM_WANDER_SIGMA, "sim_wander_sigma", 0.0, 1.0e4, 0.0, false},
+    {FLT_OPT_SIM_WANDER_LENGTH, "sim_wander_length", 100.0, 1.0e9, 20000.0, false},
+    {FLT_OPT_SIM_COIL_LENGTH, "sim_coil_length", 0.0, 1.0e9, 0.0, false},
+    {FLT_OPT_SIM_COIL_GAP, "sim_coil_gap", 0.0, 1.0e9, 5000.0, false},
+    {FLT_OPT_SIM_SECOND_WIDTH, "sim_second_width", 0.0, 1.0e5, 0.0, false},
+    {FLT_OPT_SIM_TABLE_DEPTH, "sim_table_depth", 1.0, 1.0e4, 300.0, false},
+    {FLT_OPT_SIM_ROLLER_PITCH, "sim_roller_pitch", 1.0, 1.0e5, 200.0, false},
+    {FLT_OPT_SIM_ROLLER_GAP, "sim_roller_gap", 0.0, 1.0e5, 60.0, false},
+    {FLT_OPT_SIM_TABLE_BRIGHTNESS, "sim_table_brightness", 0.0, 10.0, 0.5, false},
+    {FLT_OPT_SIM_EDGE_GLINTS, "sim_edge_glints", 0.0, 1.0, 0.0, false},
+    {FLT_OPT_SIM_BLOOMING, "sim_blooming", 0.0, 1.0, 0.0, false},
 };
 constexpr std::size_t k_option_count = sizeof k_options / sizeof k_options[0];
 

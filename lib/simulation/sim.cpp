@@ -11,6 +11,7 @@
 
 #include "core/error.hpp"
 #include "core/options.hpp"
+#include "flatline/recon.h"
 #include "flatline/sim.h"
 #include "simulation/sim_random.hpp"
 
@@ -29,7 +30,9 @@ enum stream : std::uint64_t {
     stream_row_noise = 2,
     stream_peak_noise = 3,
     stream_pixels = 4,
-    stream_reflections = 5
+    stream_reflections = 5,
+    stream_wander = 6,  // seeded with the knot index, not the frame
+    stream_edge_glints = 7
 };
 
 struct defect {
@@ -46,6 +49,12 @@ struct sim_params {
     double peak_sigma_px;
     int bit_depth;
     double line_sigma_px, line_peak, background, speckle, full_well, reflections;
+    // The line in the field.
+    flt_sim_surround surround;
+    double strip_offset, wander_amplitude, wander_period, wander_sigma, wander_length;
+    double coil_length, coil_gap, second_width;
+    double table_depth, roller_pitch, roller_gap, table_brightness;
+    double edge_glints, blooming;
 };
 
 sim_params read_params(const flt_options *o) {
@@ -70,6 +79,21 @@ sim_params read_params(const flt_options *o) {
     p.speckle = option_value(o, FLT_OPT_SIM_SPECKLE);
     p.full_well = option_value(o, FLT_OPT_SIM_FULL_WELL);
     p.reflections = option_value(o, FLT_OPT_SIM_REFLECTIONS);
+    p.surround = flt_sim_surround(int(option_value(o, FLT_OPT_SIM_SURROUND)));
+    p.strip_offset = option_value(o, FLT_OPT_SIM_STRIP_OFFSET);
+    p.wander_amplitude = option_value(o, FLT_OPT_SIM_WANDER_AMPLITUDE);
+    p.wander_period = option_value(o, FLT_OPT_SIM_WANDER_PERIOD);
+    p.wander_sigma = option_value(o, FLT_OPT_SIM_WANDER_SIGMA);
+    p.wander_length = option_value(o, FLT_OPT_SIM_WANDER_LENGTH);
+    p.coil_length = option_value(o, FLT_OPT_SIM_COIL_LENGTH);
+    p.coil_gap = option_value(o, FLT_OPT_SIM_COIL_GAP);
+    p.second_width = option_value(o, FLT_OPT_SIM_SECOND_WIDTH);
+    p.table_depth = option_value(o, FLT_OPT_SIM_TABLE_DEPTH);
+    p.roller_pitch = option_value(o, FLT_OPT_SIM_ROLLER_PITCH);
+    p.roller_gap = option_value(o, FLT_OPT_SIM_ROLLER_GAP);
+    p.table_brightness = option_value(o, FLT_OPT_SIM_TABLE_BRIGHTNESS);
+    p.edge_glints = option_value(o, FLT_OPT_SIM_EDGE_GLINTS);
+    p.blooming = option_value(o, FLT_OPT_SIM_BLOOMING);
     return p;
 }
 
@@ -91,6 +115,38 @@ flt_calib *copy_calib(const flt_calib *calib) {
     check(flt_calib_load_text(text.data(), length, &copy));
     clear_error();  // the size query above left a BUFFER_FULL message
     return copy;
+}
+
+// The random walk of the strip's lateral wander: knots every
+// sim_wander_length / 16 of encoder travel from sim_start, a discrete
+// Ornstein-Uhlenbeck process w_{n+1} = a w_n + sigma sqrt(1 - a^2) xi_{n+1}
+// (a = exp(-1/16), stationary standard deviation sigma, w_0 = sigma xi_0),
+// each xi_n drawn from (sim_seed, n). The cursor keeps the last four knots,
+// so frames in order cost one step per knot; a query behind it restarts
+// from knot 0 (flt_sim_strip_edges may be asked anything).
+constexpr int k_walk_knots_per_length = 16;
+
+struct walk_cursor {
+    long long last = -1;         // index of the newest knot in w
+    double w[4] = {0, 0, 0, 0};  // w[i] = knot last - 3 + i
+};
+
+// Length of [a, b] (a <= b) lying in the roller table's gaps: [k pitch,
+// k pitch + gap) for every integer k; G is its cumulative function.
+double table_gap_length(double a, double b, double pitch, double gap) {
+    auto cumulative = [&](double x) {
+        const double k = std::floor(x / pitch);
+        return k * gap + std::min(x - k * pitch, gap);
+    };
+    return cumulative(b) - cumulative(a);
+}
+
+// The share of [lo, hi] (column interval, mm) inside [left, right].
+double overlap_share(double lo, double hi, double left, double right) {
+    if (!(hi > lo))
+        return (lo >= left && lo <= right) ? 1.0 : 0.0;
+    const double a = std::max(lo, left), b = std::min(hi, right);
+    return b > a ? (b - a) / (hi - lo) : 0.0;
 }
 
 }  // namespace
@@ -119,13 +175,24 @@ struct flt_sim {
     std::vector<double> plane_points, image_points;  // 2 * max samples
     std::vector<double> centre_row[2];               // [width], px
     std::vector<float> intensity;                    // [width * height]
+    // The line in the field, per laser and column of the current frame: x
+    // of the column's centre on the strip's line (mm) and the share of the
+    // column the strip covers; the table line's row and the share of the
+    // column where it is lit (static: the table does not move).
+    std::vector<double> strip_x[2], strip_cover[2];                          // [width]
+    std::vector<double> table_row[2], table_cover_lo[2], table_cover_hi[2];  // [width]
+    std::vector<float> spill;  // [width * height] with blooming
+    std::vector<float> carry;  // [width] with blooming
+    mutable walk_cursor walk;  // lateral wander
 
     ~flt_sim() { flt_calib_destroy(calib); }
 
     double full_scale() const { return double((1u << params.bit_depth) - 1u); }
 
-    double sheet(double x, double s) const {
-        const double half = 0.5 * params.strip_width;
+    // The sheet at strip coordinate x (mm from the centre line) and material
+    // position s, for a strip `strip_width` wide.
+    double sheet(double x, double s, double strip_width) const {
+        const double half = 0.5 * strip_width;
         const double xc = std::min(std::max(x, -half), half);
         const double q = xc / half;  // -1 .. 1
         double z = 0;
@@ -136,7 +203,7 @@ struct flt_sim {
                     g = 0;
                     break;
                 case FLT_SIM_CENTRE_BUCKLE: {
-                    const double c = std::cos(k_pi * xc / params.strip_width);
+                    const double c = std::cos(k_pi * xc / strip_width);
                     g = c * c;
                     break;
                 }
@@ -150,8 +217,7 @@ struct flt_sim {
                     g = q * q * q * q;
                     break;
                 case FLT_SIM_QUARTER_BUCKLE: {
-                    const double a =
-                        (std::fabs(xc) - 0.25 * params.strip_width) / (0.125 * params.strip_width);
+                    const double a = (std::fabs(xc) - 0.25 * strip_width) / (0.125 * strip_width);
                     g = std::exp(-a * a);
                     break;
                 }
@@ -224,10 +290,93 @@ struct flt_sim {
         return m;
     }
 
-    // What laser L sees at x in frame f (mm), before peak noise.
-    double laser_z(unsigned laser, double e, const motion &m, double x) const {
+    bool has_edges() const { return params.surround != FLT_SIM_SURROUND_STRIP; }
+    bool has_coils() const { return params.coil_length > 0; }
+
+    // The coil at material position s: false between coils; its width.
+    bool coil_at(double s, double *strip_width) const {
+        *strip_width = params.strip_width;
+        if (!has_coils())
+            return true;
+        const double period = params.coil_length + params.coil_gap;
+        const double k = std::floor(s / period);
+        if (std::fmod(k, 2.0) != 0.0 && params.second_width > 0)
+            *strip_width = params.second_width;
+        return k >= 0 && s - k * period < params.coil_length;
+    }
+
+    // Knot n of the wander's random walk, moving `cursor` (see walk_cursor).
+    void walk_to(walk_cursor &cursor, long long n) const {
+        if (n < cursor.last - 3)
+            cursor = walk_cursor();
+        const double a = std::exp(-1.0 / k_walk_knots_per_length);
+        const double step = params.wander_sigma * std::sqrt(1 - a * a);
+        while (cursor.last < n) {
+            ++cursor.last;
+            sim_rng rng(params.seed, std::uint64_t(cursor.last), stream_wander);
+            const double xi = rng.gauss();
+            const double next =
+                cursor.last == 0 ? params.wander_sigma * xi : a * cursor.w[3] + step * xi;
+            cursor.w[0] = cursor.w[1], cursor.w[1] = cursor.w[2], cursor.w[2] = cursor.w[3];
+            cursor.w[3] = next;
+        }
+    }
+    double walk_value(walk_cursor &cursor, double e) const {
+        if (!(params.wander_sigma > 0))
+            return 0;
+        const double spacing = params.wander_length / k_walk_knots_per_length;
+        const double u = std::max(0.0, (e - params.start) / spacing);
+        const long long n = (long long)std::floor(u);
+        const double t = u - double(n);
+        walk_to(cursor, n + 2);
+        // cursor.w = knots n - 1 .. n + 2 (knot -1 is knot 0).
+        const double w0 = n == 0 ? cursor.w[1] : cursor.w[0], w1 = cursor.w[1], w2 = cursor.w[2],
+                     w3 = cursor.w[3];
+        // Catmull-Rom: C1, through the knots.
+        return 0.5 * (2 * w1 + (w2 - w0) * t + (2 * w0 - 5 * w1 + 4 * w2 - w3) * t * t +
+                      (3 * w1 - w0 - 3 * w2 + w3) * t * t * t);
+    }
+    // The strip's centre line at encoder position e, sensor x, mm.
+    double centre_at(walk_cursor &cursor, double e) const {
+        double c = params.strip_offset + walk_value(cursor, e);
+        if (params.wander_amplitude > 0)
+            c += params.wander_amplitude * std::sin(2 * k_pi * e / params.wander_period);
+        return c;
+    }
+
+    // What laser L sees of the strip in a frame at e whose centre line is c.
+    struct strip_view {
+        bool present;
+        double width, left, right;  // mm; left < right
+    };
+    strip_view view_of(unsigned laser, double e, double c) const {
+        strip_view v;
+        v.present = coil_at(e - offset_mm[laser], &v.width);
+        v.left = c - 0.5 * v.width;
+        v.right = c + 0.5 * v.width;
+        return v;
+    }
+    // Whether sensor x is on the strip for that view.
+    bool on_strip(const strip_view &v, double x) const {
+        return v.present && (!has_edges() || (x >= v.left && x <= v.right));
+    }
+
+    // What laser L sees at sensor x in frame f (mm), before peak noise, on
+    // a strip of that view centred at c.
+    double laser_z(unsigned laser, double e, const motion &m, double x, double c,
+                   const strip_view &v) const {
         const double s = e - offset_mm[laser];
-        return sheet(x, s) + shear(s) + m.heave + m.tilt * x + m.eccentricity;
+        return sheet(x - c, s, v.width) + shear(s) + m.heave + m.tilt * x + m.eccentricity;
+    }
+
+    // The truth at fiber x of a row at e whose centre line is c: NaN off the
+    // strip.
+    double row_truth(double x, double e, double c, const strip_view *views) const {
+        if (!on_strip(views[0], x) || !on_strip(views[1], x))
+            return k_nan;
+        double strip_width;
+        coil_at(row_position(e), &strip_width);
+        return sheet(x - c, row_position(e), strip_width);
     }
 
     void make_rows(std::size_t rows, double *encoder_out, double *s_out, double *height_out,
@@ -239,6 +388,8 @@ struct flt_sim {
             const motion m = motion_of(frame);
             sim_rng rng(params.seed, frame, stream_row_noise);
             const double s_row = row_position(e);
+            const double c = centre_at(walk, e);
+            const strip_view views[2] = {view_of(0, e, c), view_of(1, e, c)};
             if (encoder_out)
                 encoder_out[r] = e;
             s_out[r] = s_row;
@@ -246,31 +397,36 @@ struct flt_sim {
                 const double x = fiber_x[k];
                 double z[2];
                 for (unsigned laser = 0; laser < 2; ++laser) {
-                    z[laser] = laser_z(laser, e, m, x);
-                    if (params.peak_sigma_px > 0)
+                    z[laser] = laser_z(laser, e, m, x, c, views[laser]);
+                    if (params.peak_sigma_px > 0)  // drawn on or off the strip alike
                         z[laser] += params.peak_sigma_px * dz_dv[laser][k] * rng.gauss();
                 }
-                height_out[r * n + k] = 0.5 * (z[0] + z[1]);
-                slope[r * n + k] = (z[ahead] - z[behind]) / laser_spacing;
+                const bool on = on_strip(views[0], x) && on_strip(views[1], x);
+                height_out[r * n + k] = on ? 0.5 * (z[0] + z[1]) : k_nan;
+                slope[r * n + k] = on ? (z[ahead] - z[behind]) / laser_spacing : k_nan;
                 if (valid)
-                    valid[r * n + k] = 1;
+                    valid[r * n + k] = on ? 1 : 0;
                 if (truth)
-                    truth[r * n + k] = sheet(x, s_row);
+                    truth[r * n + k] = row_truth(x, e, c, views);
             }
         }
     }
 
-    // Each column's line centre row for both lasers in frame f.
+    // Each column's line centre row for both lasers in frame f, and where
+    // the strip is: the x of each column's centre on the strip's line and
+    // the share of the column the strip covers.
     void line_centres(std::uint64_t f) {
         const double e = encoder_of(f);
         const motion m = motion_of(f);
         sim_rng rng(params.seed, f, stream_peak_noise);
+        const double c = centre_at(walk, e);
         for (unsigned laser = 0; laser < 2; ++laser) {
+            const strip_view view = view_of(laser, e, c);
             const std::size_t ns = samples[laser];
             for (std::size_t i = 0; i < ns; ++i) {
                 const double x = x_lo[laser] + double(i) * x_step[laser];
                 plane_points[2 * i] = x;
-                plane_points[2 * i + 1] = laser_z(laser, e, m, x);
+                plane_points[2 * i + 1] = laser_z(laser, e, m, x, c, view);
             }
             check(flt_calib_plane_to_image(calib, laser, ns, plane_points.data(),
                                            image_points.data()));
@@ -284,22 +440,62 @@ struct flt_sim {
             auto v_at = [&](std::size_t i) {
                 return image_points[2 * (u_increasing[laser] ? i : ns - 1 - i) + 1];
             };
+            auto x_at = [&](std::size_t i) {
+                return plane_points[2 * (u_increasing[laser] ? i : ns - 1 - i)];
+            };
+            double *column_x = strip_x[laser].data();
             for (std::uint32_t u = 0; u < width; ++u) {
                 while (j + 2 < ns && !(u_at(j + 1) >= double(u)))
                     ++j;
                 const double u0 = u_at(j), u1 = u_at(j + 1);
-                double v = k_nan;
+                double v = k_nan, x = k_nan;
                 if (u0 <= double(u) && double(u) <= u1 && u1 > u0) {
                     const double t = (double(u) - u0) / (u1 - u0);
                     v = v_at(j) + t * (v_at(j + 1) - v_at(j));
+                    x = x_at(j) + t * (x_at(j + 1) - x_at(j));
                 }
                 if (params.peak_sigma_px > 0)
                     v += params.peak_sigma_px * rng.gauss();
                 if (!(v >= 0 && v <= double(height - 1)))
                     v = k_nan;
                 centre[u] = v;
+                column_x[u] = x;
+            }
+            // The share of each column on the strip: its interval runs
+            // halfway to its neighbours' centres.
+            double *cover = strip_cover[laser].data();
+            for (std::uint32_t u = 0; u < width; ++u) {
+                if (!view.present) {
+                    cover[u] = 0;
+                } else if (!has_edges()) {
+                    cover[u] = 1;
+                } else {
+                    const double xc = column_x[u];
+                    const double xl = u > 0 ? column_x[u - 1] : 2 * xc - column_x[u + 1];
+                    const double xr = u + 1 < width ? column_x[u + 1] : 2 * xc - column_x[u - 1];
+                    const double a = 0.5 * (xl + xc), b = 0.5 * (xc + xr);
+                    cover[u] = xc == xc ? overlap_share(std::min(a, b), std::max(a, b), view.left,
+                                                        view.right)
+                                        : 0.0;
+                }
+                if (cover[u] == 0)
+                    centre[u] = k_nan;
             }
         }
+    }
+
+    // The share of column u's interval [lo, hi] on the table (mm) that is
+    // lit: not in a roller gap and not under the strip.
+    double table_share(double lo, double hi, const strip_view &view) const {
+        if (!(hi > lo))
+            return 0;
+        double lit = (hi - lo) - table_gap_length(lo, hi, params.roller_pitch, params.roller_gap);
+        if (view.present) {
+            const double a = std::max(lo, view.left), b = std::min(hi, view.right);
+            if (b > a)
+                lit -= (b - a) - table_gap_length(a, b, params.roller_pitch, params.roller_gap);
+        }
+        return std::max(0.0, lit / (hi - lo));
     }
 
     // Adds a Gaussian ridge along columns [u_first, u_last] with centre row
@@ -381,11 +577,106 @@ struct flt_sim {
             const float *in = &intensity[std::size_t(v) * width];
             for (std::uint32_t u = 0; u < width; ++u) {
                 float value = in[u];
-                if (gain > 0)
-                    value += std::sqrt(std::max(value, 0.0f) * gain) * rng.fast_gauss();
-                value += 0.5f;
-                value = value > 0.0f ? (value < top ? value : top) : 0.0f;  // NaN: 0
+                // Drawn for every pixel, so the stream does not depend on
+                // which pixels saturate.
+                const float noise = gain > 0 ? rng.fast_gauss() : 0.0f;
+                if (value >= top) {
+                    value = top;  // a full well reads full scale, noise or not
+                } else {
+                    value += std::sqrt(std::max(value, 0.0f) * gain) * noise;
+                    value += 0.5f;
+                    value = value > 0.0f ? (value < top ? value : top) : 0.0f;  // NaN: 0
+                }
                 row[u] = Pixel(value);
+            }
+        }
+    }
+
+    // The roller table's line where the strip does not cover it.
+    void add_table(std::uint64_t f, double amplitude, sim_rng &rng) {
+        const double e = encoder_of(f);
+        const double c = centre_at(walk, e);
+        for (unsigned laser = 0; laser < 2; ++laser) {
+            const strip_view view = view_of(laser, e, c);
+            for (std::uint32_t u = 0; u < width; ++u) {
+                const double share =
+                    table_share(table_cover_lo[laser][u], table_cover_hi[laser][u], view);
+                if (share > 0)
+                    add_ridge(u, table_row[laser][u], params.line_sigma_px,
+                              amplitude * params.table_brightness * share, rng);
+            }
+        }
+    }
+
+    // Specular glints on the line just inside the strip's edges (a sheared
+    // edge's burr): saturating, 1-6 columns long, ending at the edge.
+    void add_edge_glints(std::uint64_t f, sim_rng &pixel_rng) {
+        sim_rng rng(params.seed, f, stream_edge_glints);
+        const double fs = full_scale();
+        for (unsigned laser = 0; laser < 2; ++laser) {
+            const double *cover = strip_cover[laser].data();
+            for (int side = 0; side < 2; ++side) {
+                const bool glint = rng.uniform() < params.edge_glints;
+                const double length = 1 + 5 * rng.uniform();
+                const double sigma = 1 + 2 * rng.uniform();
+                const double peak = (1.5 + 2.5 * rng.uniform()) * fs;
+                if (!glint)
+                    continue;
+                // The edge: the last column (from this side's end of the
+                // strip inwards) that the strip covers at all.
+                const long inward = side == 0 ? 1 : -1;
+                long edge = -1;
+                if (side == 0) {
+                    for (long u = 0; u < long(width) && edge < 0; ++u)
+                        if (cover[u] > 0)
+                            edge = u;
+                } else {
+                    for (long u = long(width) - 1; u >= 0 && edge < 0; --u)
+                        if (cover[u] > 0)
+                            edge = u;
+                }
+                if (edge < 0 || (side == 0 && edge == 0) || (side == 1 && edge == long(width) - 1))
+                    continue;  // the strip reaches the frame's border: no edge seen
+                for (long i = 0; i < long(std::ceil(length)); ++i) {
+                    const long u = edge + inward * i;
+                    if (u < 0 || u >= long(width) || !(cover[u] > 0))
+                        break;
+                    const double t = (double(i) + 0.5) / length;  // 0..1 from the edge
+                    const double envelope = std::cos(0.5 * k_pi * std::min(1.0, t));
+                    const double row = centre_row[laser][u];
+                    add_ridge(std::uint32_t(u), row, sigma, peak * envelope * envelope * cover[u],
+                              pixel_rng);
+                }
+            }
+        }
+    }
+
+    // Blooming: a share of the charge above full scale spills along the
+    // column, half down and half up, into the first pixels with room.
+    void bloom() {
+        const float fs = float(full_scale());
+        const float share = float(params.blooming);
+        bool any = false;
+        for (std::size_t i = 0; i < intensity.size(); ++i) {
+            const float excess = intensity[i] > fs ? share * (intensity[i] - fs) : 0.0f;
+            spill[i] = 0.5f * excess;
+            intensity[i] -= excess;
+            any = any || excess > 0;
+        }
+        if (!any)
+            return;
+        for (int pass = 0; pass < 2; ++pass) {  // down, then up
+            std::fill(carry.begin(), carry.end(), 0.0f);
+            for (std::uint32_t step = 0; step < height; ++step) {
+                const std::uint32_t v = pass == 0 ? step : height - 1 - step;
+                float *row = &intensity[std::size_t(v) * width];
+                const float *out = &spill[std::size_t(v) * width];
+                for (std::uint32_t u = 0; u < width; ++u) {
+                    const float room = std::max(0.0f, fs - row[u]);
+                    const float take = std::min(carry[u], room);
+                    row[u] += take;
+                    carry[u] += out[u] - take;
+                }
             }
         }
     }
@@ -397,10 +688,20 @@ struct flt_sim {
         sim_rng rng(params.seed, f, stream_pixels);
         const double amplitude = params.line_peak * fs;
         for (unsigned laser = 0; laser < 2; ++laser)
-            for (std::uint32_t u = 0; u < width; ++u)
-                add_ridge(u, centre_row[laser][u], params.line_sigma_px, amplitude, rng);
+            for (std::uint32_t u = 0; u < width; ++u) {
+                const double cover = strip_cover[laser][u];
+                if (cover > 0)
+                    add_ridge(u, centre_row[laser][u], params.line_sigma_px, amplitude * cover,
+                              rng);
+            }
+        if (params.surround == FLT_SIM_SURROUND_ROLLER_TABLE)
+            add_table(f, amplitude, rng);
+        if (params.edge_glints > 0 && has_edges())
+            add_edge_glints(f, rng);
         if (params.reflections > 0)
             add_reflections(f, amplitude, rng);
+        if (params.blooming > 0)
+            bloom();
         if (params.bit_depth == 8)
             quantise<std::uint8_t>(frame_out, stride, rng);
         else
@@ -425,6 +726,42 @@ flt_status check_fibers(const char *fn, const flt_sim *sim, std::size_t fibers) 
                     "%s: argument 'fibers' = %zu but the simulator has %zu", fn, fibers,
                     sim->fiber_x.size());
     return FLT_OK;
+}
+
+// The roller table's line in the image (it does not move): per column its
+// row and the x interval the column spans on the table, mm.
+void setup_table(flt_sim &sim) {
+    for (unsigned laser = 0; laser < 2; ++laser) {
+        // Each column's x on the table: map the column at the table's row
+        // under the middle of the frame back to the plane.
+        double probe[2] = {0, -sim.params.table_depth}, img[2];
+        check(flt_calib_plane_to_image(sim.calib, laser, 1, probe, img));
+        std::vector<double> pts(2 * std::size_t(sim.width));
+        for (std::size_t u = 0; u < sim.width; ++u)
+            pts[2 * u] = double(u), pts[2 * u + 1] = img[1];
+        // Two passes: x at the row of z = -depth, then the row of that x
+        // exactly on z = -depth (the line is not straight in the image).
+        check(flt_calib_image_to_plane(sim.calib, laser, sim.width, pts.data(), pts.data()));
+        std::vector<double> xs(sim.width);
+        for (std::size_t u = 0; u < sim.width; ++u) {
+            xs[u] = pts[2 * u];
+            pts[2 * u + 1] = -sim.params.table_depth;
+        }
+        check(flt_calib_plane_to_image(sim.calib, laser, sim.width, pts.data(), pts.data()));
+        for (std::uint32_t u = 0; u < sim.width; ++u) {
+            const double v = pts[2 * u + 1];
+            sim.table_row[laser][u] =
+                std::isfinite(v) && v >= 0 && v <= double(sim.height - 1) ? v : k_nan;
+        }
+        for (std::uint32_t u = 0; u < sim.width; ++u) {
+            const double xc = xs[u];
+            const double xl = u > 0 ? xs[u - 1] : 2 * xc - xs[u + 1];
+            const double xr = u + 1 < sim.width ? xs[u + 1] : 2 * xc - xs[u - 1];
+            const double a = 0.5 * (xl + xc), b = 0.5 * (xc + xr);
+            sim.table_cover_lo[laser][u] = std::min(a, b);
+            sim.table_cover_hi[laser][u] = std::max(a, b);
+        }
+    }
 }
 
 // Sets up the geometry of a simulator from its (private) calibration.
@@ -481,6 +818,17 @@ void setup_geometry(flt_sim &sim) {
         sim.samples[laser] = std::size_t((hi - lo + 2 * margin) / sim.x_step[laser]) + 2;
         sim.u_increasing[laser] = edges[0] < edges[2];
         sim.centre_row[laser].assign(sim.width, k_nan);
+        sim.strip_x[laser].assign(sim.width, k_nan);
+        sim.strip_cover[laser].assign(sim.width, 1.0);
+        sim.table_row[laser].assign(sim.width, k_nan);
+        sim.table_cover_lo[laser].assign(sim.width, k_nan);
+        sim.table_cover_hi[laser].assign(sim.width, k_nan);
+    }
+    if (sim.params.surround == FLT_SIM_SURROUND_ROLLER_TABLE)
+        setup_table(sim);
+    if (sim.params.blooming > 0) {
+        sim.spill.assign(std::size_t(sim.width) * sim.height, 0.0f);
+        sim.carry.assign(sim.width, 0.0f);
     }
     const std::size_t ns = std::max(sim.samples[0], sim.samples[1]);
     sim.plane_points.assign(2 * ns, 0);
@@ -506,6 +854,11 @@ FLT_API flt_status FLT_CALL flt_sim_create(const flt_calib *calib, const flt_opt
             return fail(FLT_ERR_INVALID_ARGUMENT,
                         "%s: option 'sim_bit_depth' = %d is not 8, 10, 12 or 16", fn,
                         params.bit_depth);
+        if (params.roller_gap >= params.roller_pitch)
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: option 'sim_roller_gap' = %g mm is not less than "
+                        "'sim_roller_pitch' = %g mm: the table would be all gap",
+                        fn, params.roller_gap, params.roller_pitch);
         auto sim = std::make_unique<flt_sim>();
         sim->params = params;
         if (calib) {
@@ -621,8 +974,11 @@ FLT_API flt_status FLT_CALL flt_sim_surface(const flt_sim *sim, size_t count, co
         if (count > std::numeric_limits<std::size_t>::max() / sizeof(double))
             return fail(FLT_ERR_INVALID_ARGUMENT,
                         "%s: argument 'count' = %zu overflows the address space", fn, count);
-        for (std::size_t i = 0; i < count; ++i)
-            z_out[i] = sim->sheet(x[i], s[i]);
+        for (std::size_t i = 0; i < count; ++i) {
+            double strip_width;
+            sim->coil_at(s[i], &strip_width);
+            z_out[i] = sim->sheet(x[i], s[i], strip_width);
+        }
         return FLT_OK;
     });
 }
@@ -680,6 +1036,12 @@ FLT_API flt_status FLT_CALL flt_sim_next_rows(flt_sim *sim, size_t rows, size_t 
         FLT_CHECK_NOT_NULL(fn, s_out);
         FLT_CHECK_NOT_NULL(fn, height_out);
         FLT_CHECK_NOT_NULL(fn, slope_out);
+        if (!valid_out && (sim->has_edges() || sim->has_coils()))
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'valid_out' is NULL, but the strip has edges or coils "
+                        "(sim_surround = %d, sim_coil_length = %g): its off-strip NaNs need "
+                        "their flag",
+                        fn, int(sim->params.surround), sim->params.coil_length);
         sim->make_rows(rows, encoder_mm_out, s_out, height_out, slope_out, valid_out, truth_out);
         return FLT_OK;
     });
@@ -725,9 +1087,10 @@ FLT_API flt_status FLT_CALL flt_sim_next_frame(flt_sim *sim, void *frame_out, si
         if (encoder_mm_out)
             *encoder_mm_out = e;
         if (truth_out) {
-            const double s_row = sim->row_position(e);
+            const double c = sim->centre_at(sim->walk, e);
+            const flt_sim::strip_view views[2] = {sim->view_of(0, e, c), sim->view_of(1, e, c)};
             for (std::size_t k = 0; k < fibers; ++k)
-                truth_out[k] = sim->sheet(sim->fiber_x[k], s_row);
+                truth_out[k] = sim->row_truth(sim->fiber_x[k], e, c, views);
         }
         if (peak_rows_out)
             for (unsigned laser = 0; laser < 2; ++laser)
@@ -738,12 +1101,80 @@ FLT_API flt_status FLT_CALL flt_sim_next_frame(flt_sim *sim, void *frame_out, si
     });
 }
 
+FLT_API flt_status FLT_CALL flt_sim_strip_edges(const flt_sim *sim, unsigned laser, size_t count,
+                                                const double *encoder_mm, double *left_mm_out,
+                                                double *right_mm_out, uint8_t *present_out) {
+    const char *fn = "flt_sim_strip_edges";
+    return guard(fn, [&] {
+        if (flt_status st = check_handle(fn, sim))
+            return st;
+        if (laser > 2)
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'laser' = %u is not 0, 1 or 2 (the row)", fn, laser);
+        if (count == 0)
+            return FLT_OK;
+        FLT_CHECK_NOT_NULL(fn, encoder_mm);
+        FLT_CHECK_NOT_NULL(fn, left_mm_out);
+        FLT_CHECK_NOT_NULL(fn, right_mm_out);
+        for (std::size_t i = 0; i < count; ++i)
+            if (!std::isfinite(encoder_mm[i]))
+                return fail(FLT_ERR_INVALID_ARGUMENT,
+                            "%s: argument 'encoder_mm[%zu]' = %g is not finite", fn, i,
+                            encoder_mm[i]);
+        walk_cursor cursor;  // a query must not move the frames' walk
+        for (std::size_t i = 0; i < count; ++i) {
+            const double e = encoder_mm[i];
+            const double c = sim->centre_at(cursor, e);
+            const flt_sim::strip_view v0 = sim->view_of(0, e, c), v1 = sim->view_of(1, e, c);
+            bool present;
+            double left, right;
+            if (laser < 2) {
+                const flt_sim::strip_view &v = laser == 0 ? v0 : v1;
+                present = v.present, left = v.left, right = v.right;
+            } else {
+                present = v0.present && v1.present;
+                left = 0.5 * (v0.left + v1.left), right = 0.5 * (v0.right + v1.right);
+            }
+            left_mm_out[i] = present ? left : k_nan;
+            right_mm_out[i] = present ? right : k_nan;
+            if (present_out)
+                present_out[i] = present ? 1 : 0;
+        }
+        return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_sim_fiber_flags(const flt_sim *sim, double encoder_mm,
+                                                size_t fibers, uint8_t *flags_out) {
+    const char *fn = "flt_sim_fiber_flags";
+    return guard(fn, [&] {
+        if (flt_status st = check_handle(fn, sim))
+            return st;
+        if (flt_status st = check_fibers(fn, sim, fibers))
+            return st;
+        FLT_CHECK_NOT_NULL(fn, flags_out);
+        if (!std::isfinite(encoder_mm))
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'encoder_mm' = %g is not finite",
+                        fn, encoder_mm);
+        walk_cursor cursor;
+        const double c = sim->centre_at(cursor, encoder_mm);
+        const flt_sim::strip_view v0 = sim->view_of(0, encoder_mm, c),
+                                  v1 = sim->view_of(1, encoder_mm, c);
+        for (std::size_t k = 0; k < fibers; ++k) {
+            const double x = sim->fiber_x[k];
+            flags_out[k] = sim->on_strip(v0, x) && sim->on_strip(v1, x) ? 0 : FLT_FLAG_OFF_STRIP;
+        }
+        return FLT_OK;
+    });
+}
+
 FLT_API flt_status FLT_CALL flt_sim_rewind(flt_sim *sim) {
     const char *fn = "flt_sim_rewind";
     return guard(fn, [&] {
         if (flt_status st = check_handle(fn, sim))
             return st;
         sim->frame = 0;
+        sim->walk = walk_cursor();
         return FLT_OK;
     });
 }

@@ -1720,6 +1720,24 @@ static void row_sim_create(void) {
         ERR("*out not NULL after a failure");
     GOOD(flt_sim_create(g_calib, NULL, &s));
     flt_sim_destroy(s);
+    /* A roller table that would be all gap. */
+    o = options_with(FLT_OPT_SIM_ROLLER_GAP, 300);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "sim_roller_gap", flt_sim_create(g_calib, o, &s));
+    /* Every field feature at once, at its extremes: a valid simulator. */
+    GOOD(flt_options_set(o, FLT_OPT_SIM_ROLLER_GAP, 0));
+    GOOD(flt_options_set(o, FLT_OPT_SIM_SURROUND, 2));
+    GOOD(flt_options_set(o, FLT_OPT_SIM_STRIP_WIDTH, 1.0));
+    GOOD(flt_options_set(o, FLT_OPT_SIM_STRIP_OFFSET, -1e5));
+    GOOD(flt_options_set(o, FLT_OPT_SIM_COIL_LENGTH, 1e9));
+    GOOD(flt_options_set(o, FLT_OPT_SIM_LINE_PEAK, 10));
+    GOOD(flt_options_set(o, FLT_OPT_SIM_BLOOMING, 1));
+    GOOD(flt_options_set(o, FLT_OPT_SIM_EDGE_GLINTS, 1));
+    GOOD(flt_sim_create(g_calib, o, &s));
+    uint8_t *frame = malloc((size_t)WIDTH * ROI_ROWS);
+    GOOD(flt_sim_next_frame(s, frame, (size_t)WIDTH * ROI_ROWS, WIDTH, NULL, 0, NULL, NULL));
+    free(frame);
+    flt_sim_destroy(s);
+    flt_options_destroy(o);
     flt_calib_destroy(c);
 }
 
@@ -1902,6 +1920,47 @@ static void row_sim_rewind(void) {
     flt_sim *s = new_sim();
     BAD(FLT_ERR_INVALID_ARGUMENT, "'sim'", flt_sim_rewind(NULL));
     GOOD(flt_sim_rewind(s));
+    flt_sim_destroy(s);
+}
+
+static void row_sim_strip_edges(void) {
+    flt_sim *s = new_sim();
+    double e[3] = {0, 100, -5e8}, l[3], r[3];
+    uint8_t p[3];
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'sim'", flt_sim_strip_edges(NULL, 0, 3, e, l, r, p));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'laser'", flt_sim_strip_edges(s, 3, 3, e, l, r, p));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'encoder_mm'", flt_sim_strip_edges(s, 0, 3, NULL, l, r, p));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'left_mm_out'", flt_sim_strip_edges(s, 0, 3, e, NULL, r, p));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'right_mm_out'", flt_sim_strip_edges(s, 0, 3, e, l, NULL, p));
+    double bad[3] = {0, NaN_, 1};
+    BAD(FLT_ERR_INVALID_ARGUMENT, "encoder_mm[1]", flt_sim_strip_edges(s, 0, 3, bad, l, r, p));
+    bad[1] = Inf_;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "encoder_mm[1]", flt_sim_strip_edges(s, 2, 3, bad, l, r, p));
+    GOOD(flt_sim_strip_edges(s, 0, 0, NULL, NULL, NULL, NULL)); /* nothing asked */
+    GOOD(flt_sim_strip_edges(s, 2, 3, e, l, r, NULL));
+    flt_sim_destroy(s);
+    /* A random walk far from the start (a long way to step) stays finite. */
+    flt_options *o = options_with(FLT_OPT_SIM_WANDER_SIGMA, 10);
+    GOOD(flt_options_set(o, FLT_OPT_SIM_WANDER_LENGTH, 100));
+    GOOD(flt_sim_create(g_calib, o, &s));
+    double far = 1e6;
+    GOOD(flt_sim_strip_edges(s, 1, 1, &far, l, r, p));
+    ++g_checks;
+    if (!(isfinite(l[0]) && isfinite(r[0]) && p[0] == 1))
+        ERR("edges at 1 km: %g, %g, present %d", l[0], r[0], p[0]);
+    flt_sim_destroy(s);
+    flt_options_destroy(o);
+}
+
+static void row_sim_fiber_flags(void) {
+    flt_sim *s = new_sim();
+    uint8_t flags[FIBERS];
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'sim'", flt_sim_fiber_flags(NULL, 0, FIBERS, flags));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'flags_out'", flt_sim_fiber_flags(s, 0, FIBERS, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'", flt_sim_fiber_flags(s, 0, FIBERS + 1, flags));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'encoder_mm'", flt_sim_fiber_flags(s, NaN_, FIBERS, flags));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'encoder_mm'", flt_sim_fiber_flags(s, -Inf_, FIBERS, flags));
+    GOOD(flt_sim_fiber_flags(s, 1e9, FIBERS, flags));
     flt_sim_destroy(s);
 }
 
@@ -3931,6 +3990,8 @@ static const row k_rows[] = {
     ROW(sim_next_rows),
     ROW(sim_next_frame),
     ROW(sim_rewind),
+    ROW(sim_strip_edges),
+    ROW(sim_fiber_flags),
     ROW(calib_create_reference),
     /* flatness.h */
     ROW(shape_string),
