@@ -444,6 +444,16 @@ typedef enum flt_option {
     /** "extract_max_width": widest accepted line, rows at or above half the
      * peak, px. Default 12. */
     FLT_OPT_EXTRACT_MAX_WIDTH = 407,
+    /* "extract_strip_min_z": a line lower than this is not on the strip
+     * (the roller table below the pass line), mm. Default -100. */
+    FLT_OPT_EXTRACT_STRIP_MIN_Z = 408,
+    /* "extract_edge_gap": the widest stretch across the strip without any
+     * light (dust, scale) that is not taken for the strip's end, mm.
+     * Default 50. */
+    FLT_OPT_EXTRACT_EDGE_GAP = 409,
+    /* "extract_min_strip_width": the narrowest run of line taken for the
+     * strip, mm. Default 100 (a glint or a reflection is narrower). */
+    FLT_OPT_EXTRACT_MIN_STRIP_WIDTH = 410,
 
     /* --- flatness metrics (flatline/flatness.h) --- */
     /** "flat_window_length": streamed evaluation window, the last N mm of

@@ -7,11 +7,14 @@
  *   Per camera column u and per laser L, inside that laser's band of rows
  *   (its region of interest):
  *     1. finds the strongest valid peak: the brightest pixel of the column,
- *        rejected when it is saturated (the format's full scale), too weak
- *        (below extract_min_peak of full scale) or too wide (more than
- *        extract_max_width rows at or above half its maximum); after a
- *        rejection the next brightest peak outside the rejected one is tried
- *        (at most 3 candidates per column and laser). Once the row of
+ *        rejected when it is too weak (below extract_min_peak of full
+ *        scale) or too wide (more than extract_max_width rows at or above
+ *        half its maximum; "half" is half way between the local background,
+ *        the higher of the lowest pixels either side of it, and the
+ *        maximum); after a rejection the next brightest peak outside the
+ *        rejected one is tried (at most 3 candidates per column and laser).
+ *        A saturated peak (at the format's full scale) is measured, not
+ *        dropped: see "Saturation" below. Once the row of
  *        columns is known, a peak is also rejected when its shape departs
  *        from the line's in the other columns of its 256-column block
  *        (wider at half maximum, more light within 1.5 Savitzky-Golay
@@ -24,7 +27,8 @@
  *        the measured rates;
  *     2. refines its row to sub-pixel accuracy at the zero crossing of the
  *        Savitzky-Golay derivative (window extract_sg_window rows, polynomial
- *        order extract_sg_order) next to the maximum;
+ *        order extract_sg_order) next to the maximum (a saturated peak: the
+ *        middle of its plateau);
  *     3. undistorts (u, v) and maps it through the laser's homography to
  *        (x, z) on the laser plane. The exact map is tabulated at create time
  *        (or at the first frame for an automatic band) as a polynomial in v
@@ -44,7 +48,58 @@
  *   |offset_1 - offset_0|; the row sits at s = e - (offset_0 + offset_1) / 2.
  *   A fiber is valid only when both lasers gave a valid z; otherwise its
  *   height and slope are NaN and its validity byte 0. These rows are exactly
- *   what flt_recon_push() takes.
+ *   what flt_recon_push() takes; with flt_extractor_fiber_flags() they are
+ *   what flt_recon_push_flagged() takes, which keeps the strip's edges.
+ *
+ * Saturation
+ *   Bright or oiled steel drives the line past full scale. Such a peak is
+ *   measured, not dropped: its plateau is the rows at full scale around the
+ *   maximum (within 1/32 of it, across dips of up to 2 rows, as a
+ *   compressed or noisy image ripples there; a plateau wider than
+ *   extract_max_width rows is no line); its local background is the foot of
+ *   the line's flank on either side (where the pixels stop falling, within
+ *   2 extract_max_width rows: a saturated line glows wide, and beyond the
+ *   foot may lie dark features that are no part of it), the higher of the
+ *   two; its row is the middle between the two crossings of half the
+ *   maximum above that background, each interpolated linearly between the
+ *   pixels either side (a line that blooms into its neighbouring rows stays
+ *   symmetric about its centre). Saturated peaks are checked for
+ *   continuity with their neighbours, not for shape: only a run of them
+ *   longer than the continuity window vouches for its neighbours (a line
+ *   saturated all along); a shorter one (a glint, or a line that touches
+ *   full scale here and there) is judged by the unsaturated line around
+ *   it, and where it does not continue that line the column's next
+ *   candidate is taken if it does (the line under a glint). The frame's
+ *   counts are in flt_extractor_saturation(), for an exposure controller.
+ *
+ * The strip's edges
+ *   The sensor is sized for the widest strip; beside a narrower one the
+ *   lasers fall on the roller table or on nothing. Per laser, a column
+ *   holds the strip's line when it has a valid peak at least
+ *   extract_strip_min_z high (a lower line is the roller table). The strip
+ *   is the widest run of such columns, at least extract_min_strip_width mm
+ *   across; a run continues over columns whose peak was rejected (there is
+ *   light there: a reflection, a glint) and over dark stretches (no peak,
+ *   or the table's line) up to extract_edge_gap mm wide (dust, scale). Each
+ *   end of the run is refined to a fraction of a column: the columns there
+ *   hold a share of the line's light equal to the share of their width the
+ *   strip covers (clamped at 1, so a glint on the edge cannot push it
+ *   out), against the median light of the line a few columns inwards. A
+ *   run that reaches the frame's border has that edge open (not seen).
+ *   Edges are in sensor x, mm, through the column map at the line's row.
+ *   Fibers and the edges:
+ *     - a fiber belongs to the strip when its x lies between the laser's
+ *       edges; otherwise it is off the strip for that laser. A fiber is
+ *       off the strip in the row (FLT_FLAG_OFF_STRIP) when it is off for
+ *       either laser, or a laser sees no strip at all (a head or tail);
+ *     - the partly covered edge fiber (its resampling window reaches past
+ *       the edge) is fitted from the strip's columns on its own side only,
+ *       the window cut at the edge, and needs 2 of them; otherwise it is
+ *       invalid data (FLT_FLAG_INVALID_INPUT);
+ *     - columns beyond the strip's ends take no part in any fiber, and a
+ *       missing peak inside the strip still makes the fibers around it
+ *       invalid.
+ *   A frame that shows no line at all has no strip: every fiber is off it.
  *
  * Bands of rows
  *   Laser L's band is rows [extract_laserL_first_row, + extract_laserL_rows)
@@ -82,6 +137,18 @@
 extern "C" {
 #endif
 
+/** What flt_extractor_strip() could not see (bits combine). */
+enum {
+    /** No strip under the laser (no run of line wide enough): a head or a
+     * tail between coils, or no line at all. Both open bits are set too. */
+    FLT_STRIP_NONE = 1,
+    /** The strip reaches the frame's border at low sensor x: that edge lies
+     * beyond the field of view and is NaN. */
+    FLT_STRIP_LEFT_OPEN = 2,
+    /** The same at high sensor x. */
+    FLT_STRIP_RIGHT_OPEN = 4
+};
+
 /** Pixel formats of a frame; the value is the number of significant bits. */
 typedef enum flt_pixel_format {
     FLT_PIXEL_MONO8 = 8,   /**< 8 bits per pixel, one byte each */
@@ -100,7 +167,8 @@ typedef struct flt_extractor flt_extractor;
  *            destroyed right after this call.
  *   options  NULL for the defaults, else read for the extract_* keys
  *            (bands, extract_sg_window, extract_sg_order, extract_min_peak,
- *            extract_max_width); copied, not kept.
+ *            extract_max_width, extract_strip_min_z, extract_edge_gap,
+ *            extract_min_strip_width); copied, not kept.
  * FLT_ERR_INVALID_ARGUMENT for a band outside the frame, an even or too
  * small Savitzky-Golay window (it must be >= order + 2), or a band shorter
  * than the window.
@@ -181,6 +249,65 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_extractor_process(
  */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_extractor_peaks(const flt_extractor *extractor,
                                                               size_t width, double *rows_out);
+
+/**
+ * The last processed frame's flags per fiber: what flt_recon_push_flagged()
+ * takes. 0 for a valid fiber, FLT_FLAG_OFF_STRIP (flatline/recon.h) for a
+ * fiber off the strip (see "The strip's edges"), FLT_FLAG_INVALID_INPUT for
+ * a fiber on the strip without a valid z from both lasers.
+ *
+ * @param extractor  the extractor.
+ * @param fibers     must equal flt_extractor_fibers().
+ * @param flags_out  [fibers] FLT_FLAG_* bits.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT; FLT_ERR_STATE before the first
+ *         successful process().
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_extractor_fiber_flags(const flt_extractor *extractor,
+                                                                    size_t fibers,
+                                                                    uint8_t *flags_out);
+
+/**
+ * Where the last processed frame shows the strip: its edges across the
+ * width, width and centre, in sensor x (mm), to a fraction of a column.
+ *
+ * @param extractor        the extractor.
+ * @param laser            0 or 1; 2 for the profile row: the mean of the
+ *                         two lasers' edges (the strip at the row's
+ *                         material position s), an edge seen only where
+ *                         both lasers see it.
+ * @param left_mm_out      the edge at low x, NaN when FLT_STRIP_LEFT_OPEN.
+ * @param right_mm_out     the edge at high x, NaN when FLT_STRIP_RIGHT_OPEN.
+ * @param width_mm_out     right - left, NaN unless both edges are seen.
+ * @param centre_mm_out    (left + right) / 2, NaN unless both are seen.
+ * @param strip_flags_out  FLT_STRIP_* bits: which values are NaN and why.
+ *                         Any output may be NULL.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a laser above 2;
+ *         FLT_ERR_STATE before the first successful process().
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_extractor_strip(
+    const flt_extractor *extractor, unsigned laser, double *left_mm_out, double *right_mm_out,
+    double *width_mm_out, double *centre_mm_out, unsigned *strip_flags_out);
+
+/**
+ * The last processed frame's saturation: the strip's columns with a valid
+ * peak (the roller table's line and anything beside the strip do not
+ * count) and how many of those peaks were saturated (measured as a
+ * plateau), for an exposure controller.
+ *
+ * @param extractor      the extractor.
+ * @param laser          0 or 1; 2 for both lasers together.
+ * @param peaks_out      columns with a valid peak.
+ * @param saturated_out  of those, the saturated ones.
+ * @param fraction_out   saturated / peaks, 0 when there is no peak. Any
+ *                       output may be NULL.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a laser above 2;
+ *         FLT_ERR_STATE before the first successful process().
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_extractor_saturation(const flt_extractor *extractor,
+                                                                   unsigned laser,
+                                                                   size_t *peaks_out,
+                                                                   size_t *saturated_out,
+                                                                   double *fraction_out);
 
 /** Diagnostics of the last processed frame: each laser's z on the fiber grid,
  * z_out[laser * fibers + k] (mm), NaN where invalid. The material position

@@ -122,6 +122,10 @@ const option_spec k_options[] = {
     {FLT_OPT_SIM_TABLE_BRIGHTNESS, "sim_table_brightness", 0.0, 10.0, 0.5, false},
     {FLT_OPT_SIM_EDGE_GLINTS, "sim_edge_glints", 0.0, 1.0, 0.0, false},
     {FLT_OPT_SIM_BLOOMING, "sim_blooming", 0.0, 1.0, 0.0, false},
+    // extractor: the strip's edges (appended)
+    {FLT_OPT_EXTRACT_STRIP_MIN_Z, "extract_strip_min_z", -1.0e5, 1.0e5, -100.0, false},
+    {FLT_OPT_EXTRACT_EDGE_GAP, "extract_edge_gap", 0.0, 1.0e5, 50.0, false},
+    {FLT_OPT_EXTRACT_MIN_STRIP_WIDTH, "extract_min_strip_width", 0.0, 1.0e5, 100.0, false},
 };
 constexpr std::size_t k_option_count = sizeof k_options / sizeof k_options[0];
 

@@ -17,6 +17,7 @@
 #include "core/options.hpp"
 #include "extraction/peak_kernels.hpp"
 #include "flatline/extractor.h"
+#include "flatline/recon.h"
 
 using namespace flt;
 
@@ -79,6 +80,24 @@ struct band {
     bool automatic = false;
 };
 
+// Where one laser sees the strip in a frame (flt_extractor::find_strip).
+// Sides are in sensor x: 0 the low-x edge ("left"), 1 the high-x edge.
+struct strip_view {
+    bool present = false;
+    bool open[2] = {true, true};    // that edge is not seen (beyond the view)
+    double edge[2] = {0, 0};        // mm; NaN where open or absent
+    long u_first = 0, u_last = -1;  // the strip's outermost line columns
+};
+
+// Edge refinement (flt_extractor::edge_column): the partly covered column's
+// share of the line's light, summed over this many columns either side of
+// the strip's last line column, against the median light of the line
+// columns between k_edge_reference_near and k_edge_reference_far inwards.
+constexpr long k_edge_columns = 3;
+constexpr long k_edge_reference_near = 4, k_edge_reference_far = 28;
+// Background rows either side of the light's window.
+constexpr long k_edge_background_rows = 3;
+
 }  // namespace
 
 struct flt_extractor {
@@ -96,6 +115,7 @@ struct flt_extractor {
     int sg_half = 3;
     std::vector<float> sg_derivative;  // 2 * sg_half + 1 taps
     double min_peak = 0.1, max_width = 12;
+    double strip_min_z = -100, edge_gap = 50, min_strip_width = 100;  // mm
 
     // Per laser: the map of column u is x(t), z(t), t = (v - v_mid) / v_half,
     // coefficients poly[laser][(u * 2 + {0: x, 1: z}) * k_map_terms + k].
@@ -121,6 +141,25 @@ struct flt_extractor {
     double support = 1;           // half-width of a fiber's resampling window, mm
     std::vector<double> row_sum;  // [height], auto band
     bool has_frame = false;
+    // The line in the field, per frame: accepted saturated peaks, the
+    // neighbours' median row (continuity check), the strip each laser sees,
+    // its fibers off the strip, the row's flags, the saturation counts.
+    std::vector<std::uint8_t> saturated_column;  // [width]
+    // Where the peak is saturated: the column's best peak without it (the
+    // line under a glint, if it shows), and its shape.
+    std::vector<double> alternative_row;        // [width], px; read only where saturated
+    std::vector<peak_shape> alternative_shape;  // [width]
+    std::vector<std::uint32_t> saturated_run;   // [width], columns
+    // A peak lower than extract_strip_min_z: the roller table's line (or
+    // another line below the strip), not the strip's; the shape and
+    // continuity checks leave it out of their references.
+    std::vector<std::uint8_t> low_column;  // [width]
+    std::size_t changed_rows = 0;          // peaks the checks rejected or replaced, this laser
+    std::vector<double> edge_light;        // [width] scratch
+    strip_view strip[2];
+    std::vector<std::uint8_t> fiber_off[2];  // [fibers]
+    std::vector<std::uint8_t> row_flags;     // [fibers], FLT_FLAG_*
+    std::size_t peak_count[2] = {0, 0}, saturated_count[2] = {0, 0};
 
     ~flt_extractor() { flt_calib_destroy(calib); }
 
@@ -131,6 +170,13 @@ struct flt_extractor {
     void resample(unsigned laser);
     void reject_glint_fringes(double *rows);
     void reject_misshapen(double *rows);
+    template <class Pixel>
+    void find_strip(const unsigned char *frame, std::size_t stride, unsigned laser,
+                    std::uint32_t min_value);
+    template <class Pixel>
+    double edge_column(const unsigned char *frame, std::size_t stride, unsigned laser, long end,
+                       long direction);
+    double column_map_x(unsigned laser, double u, double v) const;
 };
 
 namespace {
@@ -233,8 +279,28 @@ void flt_extractor::build_maps() {
 }
 
 // The two brightest rows of the frame's row sums (every 4th column) are the
-// lines; each band reaches halfway to the other line on both sides.
+// lines; each band reaches halfway to the other line on both sides. Only
+// rows where either laser's line can lie on the strip are searched: those
+// of heights within -+extract_strip_min_z of the pass line under the middle
+// of the fiber grid (the roller table's line, far lower, is brighter than
+// a narrow strip's, and a head or tail shows only the table).
 void flt_extractor::detect_bands(const unsigned char *frame, std::size_t stride, int bytes) {
+    long allowed_lo = long(height), allowed_hi = -1;
+    for (unsigned laser = 0; laser < 2; ++laser) {
+        const double x_mid = first_x + 0.5 * pitch * double(fibers - 1);
+        double p[4] = {x_mid, strip_min_z, x_mid, -strip_min_z}, img[4];
+        check(flt_calib_plane_to_image(calib, laser, 2, p, img));
+        for (int i = 0; i < 2; ++i)
+            if (std::isfinite(img[2 * i + 1])) {
+                const double v = std::min(std::max(img[2 * i + 1], -1.0), double(height));
+                allowed_lo = std::min(allowed_lo, long(std::floor(v)));
+                allowed_hi = std::max(allowed_hi, long(std::ceil(v)));
+            }
+    }
+    allowed_lo = std::max(0L, allowed_lo);
+    allowed_hi = std::min(long(height) - 1, allowed_hi);
+    if (allowed_hi < allowed_lo)
+        allowed_lo = 0, allowed_hi = long(height) - 1;  // the prediction failed: search all
     for (std::uint32_t v = 0; v < height; ++v) {
         const unsigned char *row = frame + std::size_t(v) * stride;
         double sum = 0;
@@ -247,11 +313,12 @@ void flt_extractor::detect_bands(const unsigned char *frame, std::size_t stride,
         row_sum[v] = sum;
     }
     const double floor_level = *std::min_element(row_sum.begin(), row_sum.end());
-    const auto first = std::max_element(row_sum.begin(), row_sum.end());
+    const auto first =
+        std::max_element(row_sum.begin() + allowed_lo, row_sum.begin() + allowed_hi + 1);
     const long r1 = long(first - row_sum.begin());
     const long exclusion = long(std::ceil(2 * max_width));
     long r2 = -1;
-    for (long v = 0; v < long(height); ++v)
+    for (long v = allowed_lo; v <= allowed_hi; ++v)
         if (std::labs(v - r1) > exclusion && (r2 < 0 || row_sum[v] > row_sum[r2]))
             r2 = v;
     if (r2 < 0 || !(row_sum[r2] - floor_level > 0.25 * (row_sum[r1] - floor_level)))
@@ -307,19 +374,24 @@ void flt_extractor::extract(const unsigned char *frame, std::size_t stride,
         const double inv_half = 1.0 / v_half[laser], mid = v_mid[laser];
         bool any_suspect = false;
         for (std::uint32_t u = 0; u < width; ++u) {
-            bool suspect = false;
-            rows_out[u] = column_peak<Pixel>(frame, stride, u, b.first, b.rows, best_value[u],
-                                             best_row[u], params, &suspect, &shape[u]);
+            bool suspect = false, saturated = false;
+            rows_out[u] =
+                column_peak<Pixel>(frame, stride, u, b.first, b.rows, best_value[u], best_row[u],
+                                   params, true, &suspect, &saturated, &shape[u]);
             suspect_column[u] = suspect;
+            saturated_column[u] = saturated;
             any_suspect = any_suspect || suspect;
+            if (saturated) {
+                // The reading without the saturated peak, for the
+                // continuity check to choose from (a glint over the line).
+                bool unused_suspect = false, unused_saturated = false;
+                alternative_row[u] = column_peak<Pixel>(
+                    frame, stride, u, b.first, b.rows, best_value[u], best_row[u], params, false,
+                    &unused_suspect, &unused_saturated, &alternative_shape[u]);
+            }
         }
-        // Shape first, so that the continuity check's medians see only
-        // well-formed peaks.
-        reject_misshapen(rows_out);
-        if (any_suspect)
-            reject_glint_fringes(rows_out);
-        for (std::uint32_t u = 0; u < width; ++u) {
-            const double v = rows_out[u];
+        // (x, z) of column u's peak at row v through the column map.
+        auto map_column = [&](std::uint32_t u, double v, double *x_out, double *z_out) {
             double x = k_nan, z = k_nan;
             if (v == v) {
                 const double t = (v - mid) * inv_half;
@@ -329,10 +401,212 @@ void flt_extractor::extract(const unsigned char *frame, std::size_t stride,
                 for (int k = k_map_degree - 1; k >= 0; --k)
                     x = x * t + cx[k], z = z * t + cz[k];
             }
-            column_x[laser][u] = x;
-            column_z[laser][u] = z;
+            *x_out = x, *z_out = z;
+        };
+        // Lines below the strip (the roller table) are told apart first,
+        // so that the checks' references are the strip's line alone; a
+        // reading under a saturated peak that lies that low is no
+        // alternative to it.
+        double *xs = column_x[laser].data(), *zs = column_z[laser].data();
+        for (std::uint32_t u = 0; u < width; ++u) {
+            map_column(u, rows_out[u], &xs[u], &zs[u]);
+            low_column[u] = zs[u] < strip_min_z;
+            if (saturated_column[u] && alternative_row[u] == alternative_row[u]) {
+                double x, z;
+                map_column(u, alternative_row[u], &x, &z);
+                if (z < strip_min_z)
+                    alternative_row[u] = k_nan;
+            }
         }
+        // Shape first, so that the continuity check's medians see only
+        // well-formed peaks.
+        changed_rows = 0;
+        reject_misshapen(rows_out);
+        if (any_suspect)
+            reject_glint_fringes(rows_out);
+        // The checks reject peaks or take the reading under a saturated
+        // one (rarely): then the columns are mapped again.
+        if (changed_rows)
+            for (std::uint32_t u = 0; u < width; ++u)
+                map_column(u, rows_out[u], &xs[u], &zs[u]);
+        find_strip<Pixel>(frame, stride, laser, params.min_value);
         resample(laser);
+    }
+}
+
+// x (mm) of the column map of laser L at a fractional column u and row v:
+// linear between the two columns around u. NaN outside the frame.
+double flt_extractor::column_map_x(unsigned laser, double u, double v) const {
+    if (!(u >= 0 && u <= double(width - 1)))
+        return k_nan;
+    const std::size_t u0 = std::min(std::size_t(u), std::size_t(width > 1 ? width - 2 : 0));
+    const double t = (v - v_mid[laser]) / v_half[laser];
+    double x[2];
+    for (int i = 0; i < 2; ++i) {
+        const double *cx = &poly[laser][((u0 + std::size_t(i)) * 2) * k_map_terms];
+        double value = cx[k_map_degree];
+        for (int k = k_map_degree - 1; k >= 0; --k)
+            value = value * t + cx[k];
+        x[i] = value;
+    }
+    return width > 1 ? x[0] + (u - double(u0)) * (x[1] - x[0]) : x[0];
+}
+
+// The light of the line in column u around row v (counts x rows): the sum
+// over rows v -+ reach above the column's background there (the mean of
+// the k_edge_background_rows rows beyond either end). A column the strip
+// covers in part gets that share of the line's light (the pixel integrates
+// over its width), which makes the edge measurable to a fraction of a
+// column. NaN where the rows leave the frame.
+template <class Pixel>
+static double line_light(const unsigned char *frame, std::size_t stride, std::uint32_t height,
+                         long u, double v, long reach) {
+    const long centre = long(std::lround(v));
+    const long first = centre - reach - k_edge_background_rows;
+    const long last = centre + reach + k_edge_background_rows;
+    if (first < 0 || last >= long(height))
+        return k_nan;
+    auto px = [&](long row) -> double {
+        return double(reinterpret_cast<const Pixel *>(frame + std::size_t(row) * stride)[u]);
+    };
+    double light = 0, background = 0;
+    for (long row = centre - reach; row <= centre + reach; ++row)
+        light += px(row);
+    for (long j = 1; j <= k_edge_background_rows; ++j)
+        background += px(centre - reach - j) + px(centre + reach + j);
+    background /= double(2 * k_edge_background_rows);
+    return light - double(2 * reach + 1) * background;
+}
+
+// The strip's edge beyond its last line column `end`, the strip lying
+// towards -direction: a fractional column, NaN when it is not seen. The
+// columns end -+ k_edge_columns each hold a share phi = light / reference
+// (clamped to [0, 1]: a glint cannot cover more than the whole column) of
+// the line's light, so the strip covers sum(phi) columns of them:
+//   edge = end - direction (k_edge_columns + 1/2) + direction sum(phi)
+// (pixel u spans u -+ 1/2). The reference is the median light of the line
+// columns k_edge_reference_near..far inwards, each at its own row.
+template <class Pixel>
+double flt_extractor::edge_column(const unsigned char *frame, std::size_t stride, unsigned laser,
+                                  long end, long direction) {
+    const long w = long(width);
+    if (end - direction * k_edge_columns < 0 || end - direction * k_edge_columns >= w ||
+        end + direction * (k_edge_columns + 1) < 0 || end + direction * (k_edge_columns + 1) >= w)
+        return k_nan;  // the strip reaches (nearly) the frame's border: not seen
+    const double *rows = peak_row[laser].data();
+    const long reach = sg_half + 2;
+    std::size_t n = 0;
+    for (long i = k_edge_reference_near; i <= k_edge_reference_far; ++i) {
+        const long u = end - direction * i;
+        if (u < 0 || u >= w || !(rows[u] == rows[u]))
+            continue;
+        const double light = line_light<Pixel>(frame, stride, height, u, rows[u], reach);
+        if (light == light)
+            edge_light[n++] = light;
+    }
+    if (n < 3)
+        return k_nan;
+    std::nth_element(edge_light.begin(), edge_light.begin() + long(n / 2),
+                     edge_light.begin() + long(n));
+    const double reference = edge_light[n / 2];
+    if (!(reference > 0))
+        return k_nan;
+    const double v = rows[end];
+    double covered = 0;
+    for (long i = -k_edge_columns; i <= k_edge_columns; ++i) {
+        const double light =
+            line_light<Pixel>(frame, stride, height, end + direction * i, v, reach);
+        if (!(light == light))
+            return k_nan;
+        covered += std::min(1.0, std::max(0.0, light / reference));
+    }
+    return double(end) - double(direction) * (double(k_edge_columns) + 0.5) +
+           double(direction) * covered;
+}
+
+// Where laser L sees the strip in this frame. A column holds the strip's
+// line when it has a valid peak at least extract_strip_min_z high (a lower
+// line is the roller table). Runs of such columns continue across columns
+// whose peak was rejected (there is light: a reflection, a glint) and
+// across dark stretches (no peak above extract_min_peak, or the table) up to
+// extract_edge_gap mm wide (dust, scale); the widest run at least
+// extract_min_strip_width mm wide is the strip. Its ends are refined to a
+// fraction of a column from the light the partly covered columns hold
+// (edge_column), and mapped to x through the column map at the end
+// column's row.
+template <class Pixel>
+void flt_extractor::find_strip(const unsigned char *frame, std::size_t stride, unsigned laser,
+                               std::uint32_t min_value) {
+    strip_view &sv = strip[laser];
+    sv = strip_view();
+    sv.edge[0] = sv.edge[1] = k_nan;
+    const double *xs = column_x[laser].data(), *zs = column_z[laser].data();
+    const long w = long(width);
+    auto is_line = [&](long u) {
+        return xs[u] == xs[u] && zs[u] >= strip_min_z;
+    };
+    auto is_dark = [&](long u) {
+        return best_value[std::size_t(u)] < min_value || (zs[u] == zs[u] && zs[u] < strip_min_z);
+    };
+    // best_value holds this laser's band maximum (band_maximum ran last for
+    // it in extract()).
+    // Per run: its line columns and the saturated ones among them (the
+    // strip's saturation, for flt_extractor_saturation: a line beside the
+    // strip is no reason to change the exposure).
+    long best_first = 0, best_last = -1;
+    double best_extent = -1;
+    long run_first = -1, run_last = -1;
+    std::size_t run_peaks = 0, run_saturated = 0;
+    peak_count[laser] = saturated_count[laser] = 0;
+    auto close_run = [&]() {
+        if (run_first < 0)
+            return;
+        const double extent = std::fabs(xs[run_last] - xs[run_first]);
+        if (extent > best_extent) {
+            best_extent = extent, best_first = run_first, best_last = run_last;
+            peak_count[laser] = run_peaks, saturated_count[laser] = run_saturated;
+        }
+    };
+    for (long u = 0; u < w; ++u) {
+        if (!is_line(u))
+            continue;
+        if (run_first >= 0 && u > run_last + 1) {
+            // The longest dark stretch between the two line columns.
+            long longest = 0, current = 0;
+            for (long g = run_last + 1; g < u; ++g) {
+                current = is_dark(g) ? current + 1 : 0;
+                longest = std::max(longest, current);
+            }
+            const double mm_per_column = std::fabs(xs[u] - xs[run_last]) / double(u - run_last);
+            if (double(longest) * mm_per_column > edge_gap) {
+                close_run();
+                run_first = -1;
+            }
+        }
+        if (run_first < 0)
+            run_first = u, run_peaks = run_saturated = 0;
+        run_last = u;
+        ++run_peaks;
+        run_saturated += saturated_column[std::size_t(u)];
+    }
+    close_run();
+    if (best_last < 0 || best_extent < min_strip_width) {
+        peak_count[laser] = saturated_count[laser] = 0;
+        return;  // no strip under this laser
+    }
+    sv.present = true;
+    sv.u_first = best_first;
+    sv.u_last = best_last;
+    const double u_edge[2] = {edge_column<Pixel>(frame, stride, laser, best_first, -1),
+                              edge_column<Pixel>(frame, stride, laser, best_last, +1)};
+    const double x_edge[2] = {column_map_x(laser, u_edge[0], peak_row[laser][best_first]),
+                              column_map_x(laser, u_edge[1], peak_row[laser][best_last])};
+    // Sensor x may run either way with u.
+    const bool increasing = xs[best_last] > xs[best_first];
+    for (int end = 0; end < 2; ++end) {
+        const int side = increasing ? end : 1 - end;
+        sv.open[side] = !(x_edge[end] == x_edge[end]);
+        sv.edge[side] = x_edge[end];
     }
 }
 
@@ -379,8 +653,8 @@ void flt_extractor::reject_misshapen(double *rows) {
         block_width[b] = block_area[b] = k_nan;
         std::size_t n = 0;
         for (std::uint32_t u = u0; u < u1; u += k_shape_sampling)
-            if (rows[u] == rows[u] && shape[u].width == shape[u].width &&
-                shape[u].area == shape[u].area)
+            if (rows[u] == rows[u] && !saturated_column[u] && !low_column[u] &&
+                shape[u].width == shape[u].width && shape[u].area == shape[u].area)
                 ++n;
         if (n < k_shape_min_peaks)
             continue;
@@ -388,8 +662,8 @@ void flt_extractor::reject_misshapen(double *rows) {
         for (int which = 0; which < 3; ++which) {
             std::size_t m = 0;
             for (std::uint32_t u = u0; u < u1; u += k_shape_sampling)
-                if (rows[u] == rows[u] && shape[u].width == shape[u].width &&
-                    shape[u].area == shape[u].area)
+                if (rows[u] == rows[u] && !saturated_column[u] && !low_column[u] &&
+                    shape[u].width == shape[u].width && shape[u].area == shape[u].area)
                     values[m++] = which == 0   ? shape[u].width
                                   : which == 1 ? shape[u].area
                                                : std::fabs(shape[u].skew);
@@ -452,17 +726,29 @@ void flt_extractor::reject_misshapen(double *rows) {
         const double area_step =
             b1 == b0 ? 0 : (block_area[b1] - block_area[b0]) / double(k_shape_block);
         for (long u = u_first; u <= std::min(u_last, long(width) - 1); ++u) {
-            if (!(rows[u] == rows[u]))
-                continue;
             const double offset = segment == 0 ? 0 : double(u) - c0;
             const double ref_width = block_width[b0] + offset * width_step;
             const double ref_area = block_area[b0] + offset * area_step;
+            // The reading under a saturated peak is judged like any peak.
+            double &alternative = alternative_row[std::size_t(u)];
+            if (saturated_column[std::size_t(u)] && alternative == alternative) {
+                const peak_shape &sh = alternative_shape[std::size_t(u)];
+                if (!(sh.width <= width_limit * ref_width && sh.area <= area_limit * ref_area &&
+                      std::fabs(sh.skew) <= skew_limit * ref_width))
+                    alternative = k_nan;
+            }
+            // Saturated peaks have the plateau's shape, not the line's:
+            // the continuity check alone judges them. The table's line is
+            // not the strip's and is not judged by its shape.
+            if (!(rows[u] == rows[u]) || saturated_column[std::size_t(u)] ||
+                low_column[std::size_t(u)])
+                continue;
             const peak_shape &sh = shape[std::size_t(u)];
             const bool well_formed = sh.width <= width_limit * ref_width &&
                                      sh.area <= area_limit * ref_area &&
                                      std::fabs(sh.skew) <= skew_limit * ref_width;
             if (!well_formed)
-                rows[u] = k_nan;  // also when the shape is NaN
+                rows[u] = k_nan, ++changed_rows;  // also when the shape is NaN
         }
     }
 }
@@ -475,6 +761,17 @@ void flt_extractor::reject_misshapen(double *rows) {
 // more than k_glint_tolerance_px off the median of the valid peaks around it
 // is rejected (the line is continuous across columns: the reference strip's
 // steepest cross slope moves it < 0.2 px over the window).
+//
+// A saturated peak is measured (the plateau's middle), so a glint over the
+// line is the column's peak. Such a column also has the reading without it
+// (alternative_row: the line under the glint, if it shows). A saturated
+// peak vouches for its neighbours only within a run of at least a window's
+// width of saturated peaks that continue each other (a line saturated all
+// along; a glint is shorter), so a glint cannot vouch for itself, and a
+// line that just touches full scale here and there (a bright real line:
+// short saturated stretches on the line) is judged by its unsaturated
+// columns. A column keeps its peak if it continues the line, else the
+// reading without it if that does (the line under a glint), else nothing.
 void flt_extractor::reject_glint_fringes(double *rows) {
     constexpr long reach = 10, window = 12;
     constexpr double k_glint_tolerance_px = 0.5;
@@ -493,14 +790,39 @@ void flt_extractor::reject_glint_fringes(double *rows) {
             last_suspect = u;
         tainted_column[u] = tainted_column[u] || last_suspect - u <= reach;
     }
+    // Runs of saturated peaks that continue each other (within 1 px from
+    // column to column), their length at every column of the run.
+    constexpr double k_run_step_px = 1.0;
+    constexpr std::uint32_t k_min_saturated_run = 2 * window + 1;
+    {
+        long start = 0;
+        for (long u = 0; u <= w; ++u) {
+            const bool continues = u < w && u > start && saturated_column[std::size_t(u)] &&
+                                   saturated_column[std::size_t(u - 1)] &&
+                                   std::fabs(rows[u] - rows[u - 1]) <= k_run_step_px;
+            if (continues)
+                continue;
+            for (long j = start; j < u; ++j)
+                saturated_run[std::size_t(j)] =
+                    saturated_column[std::size_t(j)] ? std::uint32_t(u - start) : 0;
+            start = u;
+        }
+    }
     for (long u = 0; u < w; ++u) {
-        if (!tainted_column[u] || !(rows[u] == rows[u]))
+        if (!tainted_column[u] || !(rows[u] == rows[u]) || low_column[std::size_t(u)])
             continue;
+        // The neighbours' readings of the line: unsaturated peaks, and
+        // saturated ones within a long run of them (a line saturated all
+        // along). A short run of saturated peaks may be a glint, on the
+        // line or off it: it does not vouch, the line around it decides.
         double around[2 * window + 1];
         int n = 0;
-        for (long j = std::max(0L, u - window); j <= std::min(w - 1, u + window); ++j)
-            if (rows[j] == rows[j])
+        for (long j = std::max(0L, u - window); j <= std::min(w - 1, u + window); ++j) {
+            const bool glint = saturated_column[std::size_t(j)] &&
+                               saturated_run[std::size_t(j)] < k_min_saturated_run;
+            if (!glint && !low_column[std::size_t(j)] && rows[j] == rows[j])
                 around[n++] = rows[j];
+        }
         // Too few neighbours to confirm the peak (itself among the n): a
         // glint's fringe column amid rejected ones looks just like that.
         if (n <= k_min_neighbours) {
@@ -508,14 +830,28 @@ void flt_extractor::reject_glint_fringes(double *rows) {
             continue;
         }
         std::nth_element(around, around + n / 2, around + n);
-        if (std::fabs(rows[u] - around[n / 2]) > k_glint_tolerance_px)
-            fringe_row[u] = 1;
-        else
+        const double median = around[n / 2];
+
+        // The peak if it continues the line, else the reading under it.
+        if (std::fabs(rows[u] - median) <= k_glint_tolerance_px)
             fringe_row[u] = 0;
+        else if (saturated_column[std::size_t(u)] &&
+                 std::fabs(alternative_row[std::size_t(u)] - median) <= k_glint_tolerance_px)
+            fringe_row[u] = 2;
+        else
+            fringe_row[u] = 1;
     }
-    for (long u = 0; u < w; ++u)
-        if (tainted_column[u] && fringe_row[u])
-            rows[u] = k_nan, fringe_row[u] = 0;
+    for (long u = 0; u < w; ++u) {
+        if (!tainted_column[u] || !(rows[u] == rows[u]))
+            continue;
+        if (fringe_row[u] == 2) {
+            rows[u] = alternative_row[std::size_t(u)], ++changed_rows;
+            saturated_column[std::size_t(u)] = 0;
+        } else if (fringe_row[u] == 1) {
+            rows[u] = k_nan, ++changed_rows;
+        }
+        fringe_row[u] = 0;
+    }
 }
 
 // Resampling onto the fiber grid: a least-squares line z = a + b (x - x_k)
@@ -527,7 +863,13 @@ void flt_extractor::reject_glint_fringes(double *rows) {
 // bridged across a missing peak).
 void flt_extractor::resample(unsigned laser) {
     double *out = fiber_z[laser].data();
+    std::uint8_t *off = fiber_off[laser].data();
     std::fill(out, out + fibers, k_nan);
+    const strip_view &sv = strip[laser];
+    if (!sv.present) {
+        std::fill(off, off + fibers, std::uint8_t(1));
+        return;
+    }
     std::fill(fit_sums.begin(), fit_sums.end(), 0.0);
     std::fill(fit_flags.begin(), fit_flags.end(), std::uint8_t(0));
     const double *xs = column_x[laser].data(), *zs = column_z[laser].data();
@@ -548,7 +890,8 @@ void flt_extractor::resample(unsigned laser) {
     };
     double previous_x = k_nan;
     bool gap = false;
-    for (std::uint32_t u = 0; u < width; ++u) {
+    // Only the strip's columns: beyond its ends there is no strip to miss.
+    for (long u = sv.u_first; u <= sv.u_last; ++u) {
         const double x = xs[u];
         if (!(x == x)) {
             gap = true;
@@ -573,14 +916,29 @@ void flt_extractor::resample(unsigned laser) {
         }
     }
     for (std::size_t k = 0; k < fibers; ++k) {
-        if (fit_flags[k] != (left | right))
+        const double x_k = first_x + double(k) * pitch;
+        // The edge rule: a fiber belongs to the strip when its x lies
+        // between the edges; one whose window reaches past a seen edge is
+        // fitted from the strip's side alone.
+        off[k] = (!sv.open[0] && x_k < sv.edge[0]) || (!sv.open[1] && x_k > sv.edge[1]);
+        if (off[k])
+            continue;
+        std::uint8_t required = left | right;
+        if (!sv.open[0] && x_k - half < sv.edge[0])
+            required &= std::uint8_t(~left);
+        if (!sv.open[1] && x_k + half > sv.edge[1])
+            required &= std::uint8_t(~right);
+        const std::uint8_t got = fit_flags[k];
+        if ((got & poisoned) || (got & required) != required || !(got & (left | right)))
             continue;
         const double *sums = &fit_sums[5 * k];
         const double det = sums[0] * sums[2] - sums[1] * sums[1];
-        if (sums[0] == 1)
-            out[k] = sums[3];  // a column exactly on the fiber
-        else if (det > 1e-12 * sums[0] * sums[2])
+        if (sums[0] == 1) {
+            if (got == (left | right))
+                out[k] = sums[3];  // a column exactly on the fiber
+        } else if (det > 1e-12 * sums[0] * sums[2]) {
             out[k] = (sums[3] * sums[2] - sums[1] * sums[4]) / det;
+        }
     }
 }
 
@@ -642,6 +1000,9 @@ FLT_API flt_status FLT_CALL flt_extractor_create(const flt_calib *calib, const f
         ex->sg_derivative = sg_derivative_taps(ex->sg_half, order);
         ex->min_peak = option_value(options, FLT_OPT_EXTRACT_MIN_PEAK);
         ex->max_width = option_value(options, FLT_OPT_EXTRACT_MAX_WIDTH);
+        ex->strip_min_z = option_value(options, FLT_OPT_EXTRACT_STRIP_MIN_Z);
+        ex->edge_gap = option_value(options, FLT_OPT_EXTRACT_EDGE_GAP);
+        ex->min_strip_width = option_value(options, FLT_OPT_EXTRACT_MIN_STRIP_WIDTH);
 
         const flt_option first_key[2] = {FLT_OPT_EXTRACT_LASER0_FIRST_ROW,
                                          FLT_OPT_EXTRACT_LASER1_FIRST_ROW};
@@ -677,7 +1038,16 @@ FLT_API flt_status FLT_CALL flt_extractor_create(const flt_calib *calib, const f
             ex->column_x[laser].assign(w, k_nan);
             ex->column_z[laser].assign(w, k_nan);
             ex->fiber_z[laser].assign(ex->fibers, k_nan);
+            ex->fiber_off[laser].assign(ex->fibers, 0);
         }
+        ex->row_flags.assign(ex->fibers, 0);
+        ex->saturated_column.assign(w, 0);
+        ex->alternative_row.assign(w, k_nan);
+        ex->alternative_shape.assign(w, peak_shape{k_nan, k_nan, k_nan});
+        ex->saturated_run.assign(w, 0);
+        ex->low_column.assign(w, 0);
+
+        ex->edge_light.assign(std::size_t(k_edge_reference_far - k_edge_reference_near + 1), 0);
         ex->suspect_column.assign(w, 0);
         ex->tainted_column.assign(w, 0);
         ex->fringe_row.assign(w, 0);
@@ -803,12 +1173,17 @@ FLT_API flt_status FLT_CALL flt_extractor_process(flt_extractor *extractor, cons
         const unsigned ahead = ex.ahead, behind = 1 - ahead;
         const double inv_spacing = 1.0 / ex.laser_spacing;
         const double *za = ex.fiber_z[ahead].data(), *zb = ex.fiber_z[behind].data();
+        const std::uint8_t *off_a = ex.fiber_off[ahead].data(),
+                           *off_b = ex.fiber_off[behind].data();
         for (std::size_t k = 0; k < fibers; ++k) {
             const bool valid = za[k] == za[k] && zb[k] == zb[k];
             height_out[k] = valid ? 0.5 * (za[k] + zb[k]) : k_nan;
             slope_out[k] = valid ? (za[k] - zb[k]) * inv_spacing : k_nan;
             if (valid_out)
                 valid_out[k] = valid ? 1 : 0;
+            ex.row_flags[k] = valid                  ? 0
+                              : off_a[k] || off_b[k] ? std::uint8_t(FLT_FLAG_OFF_STRIP)
+                                                     : std::uint8_t(FLT_FLAG_INVALID_INPUT);
         }
         if (s_out)
             *s_out = encoder_mm - 0.5 * (ex.offset_mm[0] + ex.offset_mm[1]);
@@ -833,6 +1208,107 @@ FLT_API flt_status FLT_CALL flt_extractor_peaks(const flt_extractor *extractor, 
         for (unsigned laser = 0; laser < 2; ++laser)
             std::memcpy(rows_out + laser * width, extractor->peak_row[laser].data(),
                         width * sizeof(double));
+        return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_extractor_fiber_flags(const flt_extractor *extractor, size_t fibers,
+                                                      uint8_t *flags_out) {
+    const char *fn = "flt_extractor_fiber_flags";
+    return guard(fn, [&] {
+        if (flt_status st = check_handle(fn, extractor))
+            return st;
+        FLT_CHECK_NOT_NULL(fn, flags_out);
+        if (fibers != extractor->fibers)
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'fibers' = %zu but the calibration has %zu", fn, fibers,
+                        extractor->fibers);
+        if (!extractor->has_frame)
+            return fail(FLT_ERR_STATE, "%s: no frame has been processed yet", fn);
+        std::memcpy(flags_out, extractor->row_flags.data(), fibers);
+        return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_extractor_strip(const flt_extractor *extractor, unsigned laser,
+                                                double *left_mm_out, double *right_mm_out,
+                                                double *width_mm_out, double *centre_mm_out,
+                                                unsigned *strip_flags_out) {
+    const char *fn = "flt_extractor_strip";
+    return guard(fn, [&] {
+        if (flt_status st = check_handle(fn, extractor))
+            return st;
+        if (laser > FLT_CALIB_LASERS)
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'laser' = %u is not 0, 1 or 2 (the row)", fn, laser);
+        if (!extractor->has_frame)
+            return fail(FLT_ERR_STATE, "%s: no frame has been processed yet", fn);
+        bool present;
+        bool open[2];
+        double edge[2];
+        if (laser < FLT_CALIB_LASERS) {
+            const strip_view &sv = extractor->strip[laser];
+            present = sv.present;
+            for (int side = 0; side < 2; ++side)
+                open[side] = sv.open[side], edge[side] = sv.edge[side];
+        } else {
+            // The row's material lies between the two lasers' readings: the
+            // mean of their edges, seen only where both see that edge.
+            const strip_view &a = extractor->strip[0], &b = extractor->strip[1];
+            present = a.present && b.present;
+            for (int side = 0; side < 2; ++side) {
+                open[side] = a.open[side] || b.open[side];
+                edge[side] = 0.5 * (a.edge[side] + b.edge[side]);
+            }
+        }
+        unsigned flags = 0;
+        if (!present) {
+            flags = FLT_STRIP_NONE | FLT_STRIP_LEFT_OPEN | FLT_STRIP_RIGHT_OPEN;
+        } else {
+            flags |= open[0] ? unsigned(FLT_STRIP_LEFT_OPEN) : 0u;
+            flags |= open[1] ? unsigned(FLT_STRIP_RIGHT_OPEN) : 0u;
+        }
+        const double left = present && !open[0] ? edge[0] : k_nan;
+        const double right = present && !open[1] ? edge[1] : k_nan;
+        const bool both = left == left && right == right;
+        if (left_mm_out)
+            *left_mm_out = left;
+        if (right_mm_out)
+            *right_mm_out = right;
+        if (width_mm_out)
+            *width_mm_out = both ? right - left : k_nan;
+        if (centre_mm_out)
+            *centre_mm_out = both ? 0.5 * (left + right) : k_nan;
+        if (strip_flags_out)
+            *strip_flags_out = flags;
+        return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_extractor_saturation(const flt_extractor *extractor, unsigned laser,
+                                                     size_t *peaks_out, size_t *saturated_out,
+                                                     double *fraction_out) {
+    const char *fn = "flt_extractor_saturation";
+    return guard(fn, [&] {
+        if (flt_status st = check_handle(fn, extractor))
+            return st;
+        if (laser > FLT_CALIB_LASERS)
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'laser' = %u is not 0, 1 or 2 (both)", fn, laser);
+        if (!extractor->has_frame)
+            return fail(FLT_ERR_STATE, "%s: no frame has been processed yet", fn);
+        std::size_t peaks = 0, saturated = 0;
+        for (unsigned l = 0; l < FLT_CALIB_LASERS; ++l)
+            if (laser == l || laser == FLT_CALIB_LASERS) {
+                peaks += extractor->peak_count[l];
+                saturated += extractor->saturated_count[l];
+            }
+        if (peaks_out)
+            *peaks_out = peaks;
+        if (saturated_out)
+            *saturated_out = saturated;
+        if (fraction_out)
+            *fraction_out = peaks ? double(saturated) / double(peaks) : 0.0;
         return FLT_OK;
     });
 }

@@ -13,9 +13,11 @@
 // other columns' and so runs once the whole row is known.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstdlib>
 #include <limits>
 
 namespace flt {
@@ -77,12 +79,19 @@ inline void band_maximum(const unsigned char *frame, std::size_t stride, std::ui
 
 // The shape of an accepted peak, which a reflection overlapping the line
 // changes while a clean line keeps its neighbours' shape:
-//   width  px, between the two crossings of half the maximum pixel, each
-//          interpolated linearly between the pixels either side;
-//   skew   px, the crossings' midpoint minus the sub-pixel row;
+//   width  px, between the two crossings of half the maximum above the
+//          local background, each interpolated linearly between the pixels
+//          either side;
+//   skew   px, the crossings' midpoint minus the sub-pixel row (0 for a
+//          saturated peak, whose row is that midpoint);
 //   area   counts x rows, the sum over rows maximum +- shape_reach of the
 //          pixels minus the lowest of them (the local background).
 // All NaN when the rows they need leave the frame.
+//
+// The local background of a peak: the higher of the lowest pixels on
+// either side within +- gather_reach rows (a line on a bright or sloping
+// background, as a real board or strip gives, still crosses its half level
+// on both sides). Half the maximum is half way between it and the maximum.
 struct peak_shape {
     double width, skew, area;
 };
@@ -107,10 +116,20 @@ constexpr long k_max_gather_reach = 31;
 // column's maximum from band_maximum. *suspect is set when the column's
 // maximum is saturated or a brighter peak had to be rejected: the extractor
 // then checks the peak's continuity with its neighbours.
+//
+// A saturated maximum (at full scale) is measured, not dropped, when
+// accept_saturated: its row is the middle of the plateau, between the two
+// crossings of half the maximum above the local background, each
+// interpolated linearly between the pixels either side (the
+// Savitzky-Golay derivative is zero all along a plateau). *saturated then
+// says so. Without accept_saturated (a second look at a saturated column
+// whose peak a continuity check refused: a glint over the line) the
+// saturated peak is passed over for the next candidate.
 template <class Pixel>
-inline double column_peak(const unsigned char *frame, std::size_t stride, std::uint32_t u,
-                          std::uint32_t first, std::uint32_t rows, std::uint32_t value, long row,
-                          const peak_params &p, bool *suspect, peak_shape *shape) {
+__attribute__((always_inline)) inline double
+column_peak(const unsigned char *frame, std::size_t stride, std::uint32_t u, std::uint32_t first,
+            std::uint32_t rows, std::uint32_t value, long row, const peak_params &p,
+            bool accept_saturated, bool *suspect, bool *saturated_out, peak_shape *shape) {
     constexpr double nan = std::numeric_limits<double>::quiet_NaN();
     auto px = [&](long v) -> std::uint32_t {
         return reinterpret_cast<const Pixel *>(frame + std::size_t(v) * stride)[u];
@@ -134,41 +153,145 @@ inline double column_peak(const unsigned char *frame, std::size_t stride, std::u
     };
     long excluded_lo[3], excluded_hi[3];
     int excluded = 0;
+    *saturated_out = false;
     for (int candidate = 0; candidate < 3; ++candidate) {
         if (value < p.min_value || value == 0)
             return nan;  // the rest is weaker still
+        // The column's pixels around the maximum, copied once (NaN outside
+        // the frame), with the area's sums and the lowest pixel on either
+        // side of the maximum on the way (whole counts, exact).
+        const long r = p.shape_reach;
+        std::uint32_t floor_value = value, sum = 0;
+        std::uint32_t low_left = value, low_right = value;
+        const bool inside = row - reach >= 0 && row + reach <= last;
+        if (inside) {
+            const unsigned char *pixel = frame + std::size_t(row - reach) * stride;
+            for (long j = -reach; j < -r; ++j, pixel += stride) {
+                const std::uint32_t count = reinterpret_cast<const Pixel *>(pixel)[u];
+                low_left = std::min(low_left, count);
+                gathered[j + reach] = float(count);
+            }
+            for (long j = -r; j < 0; ++j, pixel += stride) {
+                const std::uint32_t count = reinterpret_cast<const Pixel *>(pixel)[u];
+                floor_value = std::min(floor_value, count);
+                sum += count;
+                low_left = std::min(low_left, count);
+                gathered[j + reach] = float(count);
+            }
+            {
+                const std::uint32_t count = reinterpret_cast<const Pixel *>(pixel)[u];
+                floor_value = std::min(floor_value, count);
+                sum += count;
+                gathered[reach] = float(count);
+                pixel += stride;
+            }
+            for (long j = 1; j <= r; ++j, pixel += stride) {
+                const std::uint32_t count = reinterpret_cast<const Pixel *>(pixel)[u];
+                floor_value = std::min(floor_value, count);
+                sum += count;
+                low_right = std::min(low_right, count);
+                gathered[j + reach] = float(count);
+            }
+            for (long j = r + 1; j <= reach; ++j, pixel += stride) {
+                const std::uint32_t count = reinterpret_cast<const Pixel *>(pixel)[u];
+                low_right = std::min(low_right, count);
+                gathered[j + reach] = float(count);
+            }
+        } else {
+            for (long j = -reach; j <= reach; ++j) {
+                const bool in_frame = row + j >= 0 && row + j <= last;
+                const std::uint32_t count = in_frame ? px(row + j) : value;
+                if (j < 0)
+                    low_left = std::min(low_left, count);
+                else if (j > 0)
+                    low_right = std::min(low_right, count);
+                gathered[j + reach] =
+                    in_frame ? float(count) : std::numeric_limits<float>::quiet_NaN();
+            }
+        }
+        // The local background: the higher of the lowest pixels on either
+        // side (rows outside the frame do not count).
+        const std::uint32_t background = std::max(low_left, low_right);
+        // "At or above half the maximum": 2 px >= value + background.
+        const std::uint32_t level2 = value + background;
         // Rows at or above half the maximum around it (the line's extent).
         long lo = row, hi = row;
-        while (lo > band_lo && 2 * px(lo - 1) >= value && row - lo <= p.max_width)
+        while (lo > band_lo && 2 * px(lo - 1) >= level2 && row - lo <= p.max_width)
             --lo;
-        while (hi < band_hi && 2 * px(hi + 1) >= value && hi - row <= p.max_width)
+        while (hi < band_hi && 2 * px(hi + 1) >= level2 && hi - row <= p.max_width)
             ++hi;
         const bool saturated = value >= p.full_scale;
         *suspect = *suspect || saturated;
         const bool too_wide = hi - lo + 1 > p.max_width;
-        if (!saturated && !too_wide) {
-            // The area's sums on the way (whole counts, exact).
-            const long r = p.shape_reach;
-            std::uint32_t floor_value = value, sum = 0;
-            const bool inside = row - reach >= 0 && row + reach <= last;
-            if (inside) {
-                const unsigned char *pixel = frame + std::size_t(row - reach) * stride;
-                for (long j = -reach; j < -r; ++j, pixel += stride)
-                    gathered[j + reach] = float(reinterpret_cast<const Pixel *>(pixel)[u]);
-                for (long j = -r; j <= r; ++j, pixel += stride) {
-                    const std::uint32_t count = reinterpret_cast<const Pixel *>(pixel)[u];
-                    floor_value = std::min(floor_value, count);
-                    sum += count;
-                    gathered[j + reach] = float(count);
+        if (saturated && accept_saturated) {
+            // The plateau: the rows at full scale around the maximum (within
+            // 1/32 of it, across dips of up to 2 rows: a compressed or
+            // noisy image ripples there). Too wide a plateau is no line.
+            const std::uint32_t plateau_level = p.full_scale - p.full_scale / 32;
+            const long most = p.max_width + 1;
+            auto plateau_end = [&](long from, long step) {
+                long end = from;
+                for (long v = from + step; v >= 0 && v <= last && std::labs(v - row) <= most;
+                     v += step) {
+                    if (px(v) >= plateau_level)
+                        end = v;
+                    else if (std::labs(v - end) > 2)
+                        break;
                 }
-                for (long j = r + 1; j <= reach; ++j, pixel += stride)
-                    gathered[j + reach] = float(reinterpret_cast<const Pixel *>(pixel)[u]);
-            } else {
-                for (long j = -reach; j <= reach; ++j)
-                    gathered[j + reach] = row + j >= 0 && row + j <= last
-                                              ? float(px(row + j))
-                                              : std::numeric_limits<float>::quiet_NaN();
+                return end;
+            };
+            const long p_lo = plateau_end(row, -1), p_hi = plateau_end(row, 1);
+            // The local background on either side: the foot of the line's
+            // flank, found by walking away from the plateau until the
+            // pixels stop falling (less than 1/64 of full scale over 3
+            // rows), at most 2 extract_max_width rows (a saturated line
+            // glows wide); the higher of the two feet. Not the lowest pixel
+            // around: beyond the foot the strip (or a board) may hold dark
+            // features that are no part of the line.
+            const long far = 2 * long(p.max_width);
+            const std::uint32_t flat = std::max<std::uint32_t>(2, p.full_scale / 64);
+            std::uint32_t foot[2];
+            for (int side = 0; side < 2; ++side) {
+                const long step = side == 0 ? -1 : 1;
+                const long start = side == 0 ? p_lo : p_hi;
+                std::uint32_t lowest = value;
+                for (long j = 1; j <= far; ++j) {
+                    const long v = start + step * j;
+                    if (v < 0 || v > last)
+                        break;
+                    const std::uint32_t count = px(v);
+                    if (j > 3) {
+                        const std::uint32_t before = px(v - 3 * step);
+                        if (before < count + flat)
+                            break;  // flat: the foot
+                    }
+                    lowest = std::min(lowest, count);
+                }
+                foot[side] = lowest;
             }
+            const std::uint32_t floor_level = std::max(foot[0], foot[1]);
+            const std::uint32_t half2 = value + floor_level;  // 2 x half level
+            // Its half-maximum crossings, at most `far` rows out.
+            long left = p_lo, right = p_hi;
+            while (left > 0 && 2 * px(left - 1) >= half2 && p_lo - left < far)
+                --left;
+            while (right < last && 2 * px(right + 1) >= half2 && right - p_hi < far)
+                ++right;
+            if (p_hi - p_lo + 1 <= p.max_width && left > 0 && right < last &&
+                2 * px(left - 1) < half2 && 2 * px(right + 1) < half2) {
+                const double half = 0.5 * double(half2);
+                const double in_l = double(px(left)), out_l = double(px(left - 1));
+                const double in_r = double(px(right)), out_r = double(px(right + 1));
+                const double cross_l = double(left) - (in_l - half) / (in_l - out_l);
+                const double cross_r = double(right) + (in_r - half) / (in_r - out_r);
+                shape->width = cross_r - cross_l;
+                shape->skew = 0;
+                shape->area = inside ? double(sum) - double(2 * r + 1) * double(floor_value) : nan;
+                *suspect = true;
+                *saturated_out = true;
+                return 0.5 * (cross_l + cross_r);
+            }
+        } else if (!saturated && !too_wide) {
             // Zero crossing (+ above, - below) of the derivative next to the
             // maximum: at most 2 rows away, linearly interpolated.
             long i = row;
@@ -194,14 +317,14 @@ inline double column_peak(const unsigned char *frame, std::size_t stride, std::u
                 const long most = p.max_width + 1;
                 long left = lo, right = hi;  // lo, hi stopped at half or at the band
                 if (left == band_lo)
-                    while (left > 0 && 2 * px(left - 1) >= value && row - left <= most)
+                    while (left > 0 && 2 * px(left - 1) >= level2 && row - left <= most)
                         --left;
                 if (right == band_hi)
-                    while (right < last && 2 * px(right + 1) >= value && right - row <= most)
+                    while (right < last && 2 * px(right + 1) >= level2 && right - row <= most)
                         ++right;
-                if (left > 0 && right < last && 2 * px(left - 1) < value &&
-                    2 * px(right + 1) < value) {
-                    const double half = 0.5 * double(value);
+                if (left > 0 && right < last && 2 * px(left - 1) < level2 &&
+                    2 * px(right + 1) < level2) {
+                    const double half = 0.5 * double(level2);
                     const double in_l = double(px(left)), out_l = double(px(left - 1));
                     const double in_r = double(px(right)), out_r = double(px(right + 1));
                     const double cross_l = double(left) - (in_l - half) / (in_l - out_l);

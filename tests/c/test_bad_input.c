@@ -1690,6 +1690,57 @@ static void row_extractor_laser_profiles(void) {
     flt_extractor_destroy(e);
 }
 
+static void row_extractor_fiber_flags(void) {
+    flt_extractor *e = new_extractor();
+    uint8_t flags[FIBERS];
+    double h[FIBERS], k[FIBERS];
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'extractor'", flt_extractor_fiber_flags(NULL, FIBERS, flags));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'flags_out'", flt_extractor_fiber_flags(e, FIBERS, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'", flt_extractor_fiber_flags(e, FIBERS + 1, flags));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'", flt_extractor_fiber_flags(e, NEG, flags));
+    BAD(FLT_ERR_STATE, "no frame", flt_extractor_fiber_flags(e, FIBERS, flags));
+    GOOD(flt_extractor_process(e, g_frame, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, g_frame_encoder,
+                               FIBERS, NULL, h, k, NULL));
+    GOOD(flt_extractor_fiber_flags(e, FIBERS, flags));
+    flt_extractor_destroy(e);
+}
+
+static void row_extractor_strip(void) {
+    flt_extractor *e = new_extractor();
+    double l, r, w, c, h[FIBERS], k[FIBERS];
+    unsigned sf;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'extractor'", flt_extractor_strip(NULL, 0, &l, &r, &w, &c, &sf));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'laser'", flt_extractor_strip(e, 3, &l, &r, &w, &c, &sf));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'laser'",
+        flt_extractor_strip(e, (unsigned)-1, &l, &r, &w, &c, &sf));
+    BAD(FLT_ERR_STATE, "no frame", flt_extractor_strip(e, 0, &l, &r, &w, &c, &sf));
+    GOOD(flt_extractor_process(e, g_frame, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, g_frame_encoder,
+                               FIBERS, NULL, h, k, NULL));
+    for (unsigned laser = 0; laser <= 2; ++laser)
+        GOOD(flt_extractor_strip(e, laser, &l, &r, &w, &c, &sf));
+    GOOD(flt_extractor_strip(e, 2, NULL, NULL, NULL, NULL, NULL));
+    flt_extractor_destroy(e);
+}
+
+static void row_extractor_saturation(void) {
+    flt_extractor *e = new_extractor();
+    size_t peaks, saturated;
+    double fraction, h[FIBERS], k[FIBERS];
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'extractor'",
+        flt_extractor_saturation(NULL, 0, &peaks, &saturated, &fraction));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'laser'",
+        flt_extractor_saturation(e, 3, &peaks, &saturated, &fraction));
+    BAD(FLT_ERR_STATE, "no frame", flt_extractor_saturation(e, 2, &peaks, &saturated, &fraction));
+    GOOD(flt_extractor_process(e, g_frame, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, g_frame_encoder,
+                               FIBERS, NULL, h, k, NULL));
+    GOOD(flt_extractor_saturation(e, 2, &peaks, &saturated, &fraction));
+    ++g_checks;
+    if (!(fraction >= 0 && fraction <= 1))
+        ERR("saturation fraction %g outside [0, 1]", fraction);
+    GOOD(flt_extractor_saturation(e, 0, NULL, NULL, NULL));
+    flt_extractor_destroy(e);
+}
+
 /* ---------------------------------------------------------------------- */
 /* sim.h                                                                   */
 /* ---------------------------------------------------------------------- */
@@ -3977,6 +4028,9 @@ static const row k_rows[] = {
     ROW(extractor_process),
     ROW(extractor_peaks),
     ROW(extractor_laser_profiles),
+    ROW(extractor_fiber_flags),
+    ROW(extractor_strip),
+    ROW(extractor_saturation),
     /* sim.h */
     ROW(sim_create),
     ROW(sim_destroy),

@@ -142,7 +142,7 @@ def test_component_option_tables_are_the_c_defaults():
     extract = flatline.extractor_options()
     assert extract["extract_sg_window"] == 11.0 and extract["extract_sg_order"] == 2.0
     assert extract["extract_laser0_rows"] == 0.0  # automatic band
-    assert all(name.startswith("extract_") for name in extract) and len(extract) == 8
+    assert all(name.startswith("extract_") for name in extract) and len(extract) == 11
     source = flatline.source_options()
     assert source["source_encoder_step"] == 3.0 and source["u3v_transfers"] == 8.0
     assert all(name.startswith(("source_", "u3v_")) for name in source) and len(source) == 11
