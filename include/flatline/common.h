@@ -444,14 +444,14 @@ typedef enum flt_option {
     /** "extract_max_width": widest accepted line, rows at or above half the
      * peak, px. Default 12. */
     FLT_OPT_EXTRACT_MAX_WIDTH = 407,
-    /* "extract_strip_min_z": a line lower than this is not on the strip
+    /** "extract_strip_min_z": a line lower than this is not on the strip
      * (the roller table below the pass line), mm. Default -100. */
     FLT_OPT_EXTRACT_STRIP_MIN_Z = 408,
-    /* "extract_edge_gap": the widest stretch across the strip without any
+    /** "extract_edge_gap": the widest stretch across the strip without any
      * light (dust, scale) that is not taken for the strip's end, mm.
      * Default 50. */
     FLT_OPT_EXTRACT_EDGE_GAP = 409,
-    /* "extract_min_strip_width": the narrowest run of line taken for the
+    /** "extract_min_strip_width": the narrowest run of line taken for the
      * strip, mm. Default 100 (a glint or a reflection is narrower). */
     FLT_OPT_EXTRACT_MIN_STRIP_WIDTH = 410,
 
@@ -496,6 +496,20 @@ typedef enum flt_option {
      * (integer). It costs 9 bytes per row and fiber. Default 4096 (12 m of
      * strip at 3 mm rows). */
     FLT_OPT_FLAT_ROW_CAPACITY = 510,
+    /** "flat_zone_count": zones across the strip, each a flat_zone_count-th
+     * of its width (integer); 0 (the default) lays zones of
+     * flat_zone_width. */
+    FLT_OPT_FLAT_ZONE_COUNT = 511,
+    /** "flat_drive_side": the sensor side of the leveler's drive side, an
+     * flt_side (flatline/flatness.h): 0 at low x (the default), 1 at high
+     * x. Strip coordinates, fibers and zones run from the drive side to the
+     * operator side (integer 0 or 1). */
+    FLT_OPT_FLAT_DRIVE_SIDE = 512,
+    /** "flat_zones_on": where zones are laid, an flt_zones_on
+     * (flatline/flatness.h): 0 on the strip, from its edges (the default),
+     * 1 on the sensor's fiber grid whatever the strip does (integer 0 or
+     * 1). */
+    FLT_OPT_FLAT_ZONES_ON = 513,
 
     /* --- frame sources (flatline/source.h) --- */
     /** "source_encoder_mode" (flt_encoder_mode, source.h): where a frame's

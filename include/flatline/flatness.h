@@ -27,11 +27,14 @@
  *     cancels) and P = the distance between the outer two. Extremum heights
  *     and positions are refined with a parabola through three rows.
  *   per zone
- *     the mean I-Units of the valid fibers in the zone. Zones are
- *     flat_zone_width mm wide, laid out symmetrically about the centre of
- *     the fiber grid and covering it: n = ceil(width / flat_zone_width) with
- *     width = x[last] - x[0] + the mean fiber pitch; the outer two zones may
- *     hold fewer fibers. This is the profile a leveler operator reads.
+ *     the mean I-Units of the valid fibers in the zone. Zones are laid on
+ *     the strip (see "Zones on the strip" below), or on the fiber grid when
+ *     the strip's edges are not known: flat_zone_width mm wide (or
+ *     flat_zone_count equal zones), laid out symmetrically about the centre
+ *     and covering the width: n = ceil(width / flat_zone_width) with width
+ *     = x[last] - x[0] + the mean fiber pitch for the grid; the outer two
+ *     zones may hold fewer fibers. This is the profile a leveler operator
+ *     reads.
  *   per window
  *     the shape class with a confidence in [0, 1] (see flt_shape), and
  *     bow_mm: coil set, from the mean longitudinal curvature kappa (1/mm) of
@@ -51,12 +54,60 @@
  *   dz^2 / (sqrt(ds^2 + dz^2) + ds), which keeps the 1e-5-level differences
  *   free of cancellation. See lib/flatness/flatness.cpp for the error bound.
  *
- * Invalid data (FLT_FLAG_NO_DATA, FLT_FLAG_GAP, non-finite z)
+ * Zones on the strip
+ *   An operator reads the zone profile from the strip's edges, drive side
+ *   and operator side, not from the sensor's: a strip narrower than the
+ *   sensor, off-centre, or wandering sideways gives the same profile and
+ *   class as the same strip centred. So, unless flat_zones_on = 1, a
+ *   window in which the strip's edges are known is measured in strip
+ *   coordinates:
+ *     - per row the strip's edges in sensor x: given by the caller
+ *       (flt_flatness_push_strip / flt_flatness_evaluate_strip, from
+ *       flt_extractor_strip with laser 2), or else taken from the
+ *       reconstructor's FLT_FLAG_OFF_STRIP bits (the edge half way between
+ *       the last fiber off the strip and the first on it: to half a pitch);
+ *       an edge is known in a row where it lies inside the fiber grid;
+ *     - the strip's width W is the median over the rows where both edges
+ *       are known; its centre line per row is the mean of the edges (or one
+ *       edge -+ W / 2), smoothed along travel by a moving least-squares
+ *       line over +-100 mm of strip (the edges' measurement noise would
+ *       otherwise move the strip under the fibers from row to row);
+ *     - strip coordinate x_s: mm from the centre line towards the
+ *       operator side (flat_drive_side says which sensor side the drive
+ *       side is on); result fiber k lies at x_s = (k - (K - 1) / 2) p,
+ *       p the mean fiber pitch, so slot k keeps its place on the strip
+ *       whatever the strip does; its heights in a row are interpolated
+ *       linearly between the two sensor fibers around c_row -+ x_s
+ *       (both must be usable); slots beyond -+W/2 are off the strip
+ *       (FLT_FIBER_OFF_STRIP with FLT_FIBER_NO_DATA);
+ *     - zones: n = ceil((W - p) / flat_zone_width) zones of
+ *       flat_zone_width (a strip wider than n zones by less than a pitch
+ *       keeps n; its outermost fibers count in the outer zones; at most
+ *       the grid's zone count, flt_flatness_zones()) or flat_zone_count
+ *       zones of W / flat_zone_count, centred on the centre line, numbered
+ *       from the drive side; a fiber on a zone boundary belongs to the
+ *       zone nearer the centre line (so the layout reads the same from
+ *       either side), on the centre line to the operator side's; the
+ *       zones beyond n are FLT_ZONE_OFF_STRIP with FLT_ZONE_NO_DATA;
+ *     - the shape's bands, crossbow and edges are relative to the strip:
+ *       u = x_s / (W / 2); "left" is the drive side (low x_s).
+ *   flt_flatness_fiber_positions() and flt_flatness_zone_positions() give
+ *   each result's place in strip and in sensor coordinates (the window's
+ *   mean), flt_flatness_strip() the strip's width and lateral position
+ *   over the window. A window without known edges (the strip fills the
+ *   grid, or nothing marks its edges) is measured on the fiber grid as
+ *   before (FLT_WINDOW_ON_STRIP is set only where the strip was used):
+ *   result slot k is sensor fiber k (with the drive side at low x; at high
+ *   x the slots run the other way).
+ *
+ * Invalid data (FLT_FLAG_NO_DATA, FLT_FLAG_GAP, FLT_FLAG_OFF_STRIP,
+ * non-finite z)
  *   A fiber's sample is usable when its z is finite and at most 1e9 mm in
  *   magnitude (as a reconstructor's sample: larger ones are no height, and
  *   their squares would overflow the chords), and its flags carry
- *   neither FLT_FLAG_NO_DATA nor FLT_FLAG_GAP (a value the reconstructor
- *   bridged over a long run without measurements is not a measurement).
+ *   neither FLT_FLAG_NO_DATA, FLT_FLAG_GAP nor FLT_FLAG_OFF_STRIP (a value
+ *   the reconstructor bridged over a long run without measurements is not a
+ *   measurement; a fiber off the strip has none).
  *   FLT_FLAG_INVALID_INPUT alone is usable: the spline bridged a short run.
  *   Chords are summed only between two usable consecutive rows; the fiber's
  *   arc length is then its covered excess per covered mm, scaled to the
@@ -122,12 +173,19 @@ enum {
     FLT_FIBER_NO_WAVE = 2,
     /** Some rows were unusable; the arc length is scaled from the covered
      * part (still at least flat_min_coverage). */
-    FLT_FIBER_PARTIAL = 4
+    FLT_FIBER_PARTIAL = 4,
+    /** The result slot lies beyond the strip's edges (zones on the strip):
+     * there is no strip there. FLT_FIBER_NO_DATA is set too. */
+    FLT_FIBER_OFF_STRIP = 8
 };
 
-/** Per-zone result flag: no valid fiber in the zone, I-Units NaN. */
+/** Per-zone result flags. */
 enum {
-    FLT_ZONE_NO_DATA = 1 /**< no valid fiber in the zone: I-Units NaN */
+    /** No valid fiber in the zone: I-Units NaN. */
+    FLT_ZONE_NO_DATA = 1,
+    /** The zone is beyond the strip's zones (a strip narrower than the
+     * grid): FLT_ZONE_NO_DATA is set too. */
+    FLT_ZONE_OFF_STRIP = 2
 };
 
 /** Per-window flags. */
@@ -141,8 +199,31 @@ enum {
     /** No valid fiber has 3 usable rows for a parabola: bow_mm is NaN. */
     FLT_WINDOW_NO_BOW = 4,
     /** Fewer than 3 valid fibers: crossbow_mm is NaN. */
-    FLT_WINDOW_NO_CROSSBOW = 8
+    FLT_WINDOW_NO_CROSSBOW = 8,
+    /** The strip's edges were known in the window: fibers and zones lie on
+     * the strip (see "Zones on the strip"). Without it they lie on the
+     * fiber grid, as for a strip filling it, and flt_flatness_strip()
+     * reports the grid's width and centre. */
+    FLT_WINDOW_ON_STRIP = 16
 };
+
+/** Where zones are laid (option flat_zones_on). */
+typedef enum flt_zones_on {
+    /** On the strip, from its edges, where they are known (the default). */
+    FLT_ZONES_ON_STRIP = 0,
+    /** On the sensor's fiber grid, whatever the strip does. */
+    FLT_ZONES_ON_GRID = 1,
+    FLT_ZONES_ON_MAX_ENUM_ = 0x7FFFFFFF
+} flt_zones_on;
+
+/** The sensor side of the leveler's drive side (option flat_drive_side). */
+typedef enum flt_side {
+    /** The drive side is at the sensor's low x (the default). */
+    FLT_SIDE_LOW_X = 0,
+    /** The drive side is at the sensor's high x. */
+    FLT_SIDE_HIGH_X = 1,
+    FLT_SIDE_MAX_ENUM_ = 0x7FFFFFFF
+} flt_side;
 
 /** The shape class of a window, from its zone I-Unit profile p (minus its
  * minimum). Let peak = max p. Below flat_flat_limit I-Units the window is
@@ -158,13 +239,16 @@ enum {
  * margin a = min(1, peak / (2 limit)) (0.5 at the limit, 1 from twice the
  * limit) and e the share of the long material in the named components. */
 typedef enum flt_shape {
-    FLT_SHAPE_FLAT = 0,            /**< below flat_flat_limit I-Units */
-    FLT_SHAPE_CENTRE_BUCKLE = 1,   /**< the centre is long */
-    FLT_SHAPE_WAVY_EDGE_LEFT = 2,  /**< the left edge is long (x < centre is left) */
+    FLT_SHAPE_FLAT = 0,           /**< below flat_flat_limit I-Units */
+    FLT_SHAPE_CENTRE_BUCKLE = 1,  /**< the centre is long */
+    FLT_SHAPE_WAVY_EDGE_LEFT = 2, /**< the left edge is long (x < centre is left: the drive side) */
     FLT_SHAPE_WAVY_EDGE_RIGHT = 3, /**< the right edge is long */
-    FLT_SHAPE_WAVY_EDGE_BOTH = 4,  /**< both edges are long */
-    FLT_SHAPE_QUARTER_BUCKLE = 5,  /**< the quarters are long */
-    FLT_SHAPE_MIX = 6,             /**< several of the above: see the component bits */
+    /** The same two by the operator's names (flat_drive_side). */
+    FLT_SHAPE_WAVY_EDGE_DRIVE_SIDE = 2,
+    FLT_SHAPE_WAVY_EDGE_OPERATOR_SIDE = 3, /**< see FLT_SHAPE_WAVY_EDGE_DRIVE_SIDE */
+    FLT_SHAPE_WAVY_EDGE_BOTH = 4,          /**< both edges are long */
+    FLT_SHAPE_QUARTER_BUCKLE = 5,          /**< the quarters are long */
+    FLT_SHAPE_MIX = 6,                     /**< several of the above: see the component bits */
     /** Too short a window, no valid fiber, or fewer than 5 valid zones. */
     FLT_SHAPE_UNDETERMINED = 7,
     FLT_SHAPE_MAX_ENUM_ = 0x7FFFFFFF
@@ -175,7 +259,7 @@ typedef enum flt_shape {
  * do not change the class, which is about fiber lengths only. */
 enum {
     FLT_SHAPE_HAS_CENTRE = 1,     /**< long centre */
-    FLT_SHAPE_HAS_EDGE_LEFT = 2,  /**< long left edge */
+    FLT_SHAPE_HAS_EDGE_LEFT = 2,  /**< long left edge (the drive side) */
     FLT_SHAPE_HAS_EDGE_RIGHT = 4, /**< long right edge */
     FLT_SHAPE_HAS_QUARTER = 8,    /**< long quarters */
     FLT_SHAPE_HAS_BOW = 16,       /**< bow at or above flat_bow_limit */
@@ -253,14 +337,15 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_create_from_calib(const f
  */
 FLT_API void FLT_CALL flt_flatness_destroy(flt_flatness *flatness);
 
-/** The fiber and zone counts.
+/** The fiber count.
  * @param flatness the flatness handle.
  * @param out receives the fiber count.
  * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
  */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_fibers(const flt_flatness *flatness,
                                                               size_t *out);
-/** The zone count (flat_zones).
+/** The zone count: the grid's (or flat_zone_count); a window on a
+ * narrower strip uses the first ones.
  * @param flatness the flatness handle.
  * @param out receives the zone count.
  * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
@@ -268,9 +353,11 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_fibers(const flt_flatness
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_zones(const flt_flatness *flatness,
                                                              size_t *out);
 
-/** The zone layout: zone j covers [left_x[j], left_x[j] + zone width) mm,
- * centre_x[j] its middle, fiber_count[j] the fibers in it. `zones` must
- * equal flt_flatness_zones(). Any output may be NULL.
+/** The zone layout on the fiber grid (fixed at create; a window on the
+ * strip has its own, flt_flatness_zone_positions): zone j covers
+ * [left_x[j], left_x[j] + zone width) mm, centre_x[j] its middle,
+ * fiber_count[j] the fibers in it. `zones` must equal flt_flatness_zones().
+ * Any output may be NULL.
  * @param flatness the flatness handle.
  * @param zones           flt_flatness_zones().
  * @param left_x_out      [zones] left edges, mm, or NULL.
@@ -400,6 +487,92 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_zone_results(const flt_fl
                                                                     size_t zones,
                                                                     double *i_units_out,
                                                                     uint8_t *flags_out);
+
+/**
+ * flt_flatness_evaluate with the strip's edges per row (see "Zones on the
+ * strip").
+ *
+ * @param flatness  the handle.
+ * @param rows      rows in the window (>= 2).
+ * @param fibers    must equal the handle's.
+ * @param s         [rows] material positions, mm, strictly increasing.
+ * @param z         [rows * fibers] reconstructed heights, mm.
+ * @param flags     [rows * fibers] FLT_FLAG_* bits, or NULL.
+ * @param left_mm   [rows] the strip's edge at low sensor x, mm, NaN where
+ *                  not known (beyond the view, or no strip); NULL: all
+ *                  unknown (then the flags' FLT_FLAG_OFF_STRIP bits tell).
+ * @param right_mm  [rows] the edge at high x, likewise. Where both are
+ *                  finite, left < right. Infinities are refused.
+ * @return as flt_flatness_evaluate; FLT_ERR_INVALID_ARGUMENT for a bad
+ *         edge (named with its row).
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_evaluate_strip(
+    flt_flatness *flatness, size_t rows, size_t fibers, const double *s, const double *z,
+    const uint8_t *flags, const double *left_mm, const double *right_mm);
+
+/**
+ * flt_flatness_push with the strip's edges per row (arrays as in
+ * flt_flatness_evaluate_strip; NULL: unknown). Rows pushed through
+ * flt_flatness_push have unknown edges.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_flatness_push_strip(flt_flatness *flatness, size_t rows, size_t fibers, const double *s,
+                        const double *z, const uint8_t *flags, const double *left_mm,
+                        const double *right_mm, size_t *consumed_out, int *evaluated_out);
+
+/**
+ * The strip over the last window: its width and the sensor x of its centre
+ * line, each as {mean, min, max} over the rows (mm, from the smoothed
+ * per-row values). Without FLT_WINDOW_ON_STRIP: the fiber grid's covered
+ * width and centre.
+ *
+ * @param flatness       the handle.
+ * @param width_mm_out   [3] or NULL.
+ * @param centre_mm_out  [3] or NULL.
+ * @return FLT_OK; FLT_ERR_STATE before the first window.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_strip(const flt_flatness *flatness,
+                                                             double *width_mm_out,
+                                                             double *centre_mm_out);
+
+/**
+ * Where the last window's zones lie: each zone's centre in strip
+ * coordinates (mm from the centre line towards the operator side) and in
+ * sensor x (at the window's mean strip position), its width (mm) and the
+ * result fibers it holds on the strip. On the grid (no
+ * FLT_WINDOW_ON_STRIP) the strip coordinate is measured from the grid's
+ * centre. Zones off the strip: NaN positions (FLT_ZONE_OFF_STRIP), width 0, no fiber.
+ *
+ * @param flatness              the handle.
+ * @param zones                 must equal flt_flatness_zones().
+ * @param strip_centre_mm_out   [zones] or NULL: centre in strip
+ *                              coordinates, mm.
+ * @param sensor_centre_mm_out  [zones] or NULL: centre in sensor x, mm.
+ * @param width_mm_out          [zones] or NULL: zone width, mm.
+ * @param fiber_count_out       [zones] or NULL: result fibers in the zone.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT; FLT_ERR_STATE before the first
+ *         window.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_zone_positions(
+    const flt_flatness *flatness, size_t zones, double *strip_centre_mm_out,
+    double *sensor_centre_mm_out, double *width_mm_out, size_t *fiber_count_out);
+
+/**
+ * Where the last window's result fibers lie: strip coordinate x_s (mm from
+ * the centre line towards the operator side) and sensor x at the window's
+ * mean strip position.
+ *
+ * @param flatness         the handle.
+ * @param fibers           must equal flt_flatness_fibers().
+ * @param strip_x_mm_out   [fibers] or NULL: strip coordinate x_s, mm.
+ * @param sensor_x_mm_out  [fibers] or NULL: sensor x, mm.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT; FLT_ERR_STATE before the first
+ *         window.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_flatness_fiber_positions(const flt_flatness *flatness,
+                                                                       size_t fibers,
+                                                                       double *strip_x_mm_out,
+                                                                       double *sensor_x_mm_out);
 
 /** The shape of the last window: class, confidence in [0, 1],
  * FLT_SHAPE_HAS_* bits, bow and crossbow sagittas (mm; NaN only with

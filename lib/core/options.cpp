@@ -126,6 +126,10 @@ const option_spec k_options[] = {
     {FLT_OPT_EXTRACT_STRIP_MIN_Z, "extract_strip_min_z", -1.0e5, 1.0e5, -100.0, false},
     {FLT_OPT_EXTRACT_EDGE_GAP, "extract_edge_gap", 0.0, 1.0e5, 50.0, false},
     {FLT_OPT_EXTRACT_MIN_STRIP_WIDTH, "extract_min_strip_width", 0.0, 1.0e5, 100.0, false},
+    // flatness: zones on the strip (appended)
+    {FLT_OPT_FLAT_ZONE_COUNT, "flat_zone_count", 0.0, 100000.0, 0.0, true},
+    {FLT_OPT_FLAT_DRIVE_SIDE, "flat_drive_side", 0.0, 1.0, 0.0, true},
+    {FLT_OPT_FLAT_ZONES_ON, "flat_zones_on", 0.0, 1.0, 0.0, true},
 };
 constexpr std::size_t k_option_count = sizeof k_options / sizeof k_options[0];
 

@@ -13,12 +13,14 @@
 #include "core/options.hpp"
 #include "flatline/flatness.h"
 #include "flatness/metrics.hpp"
+#include "flatness/strip.hpp"
 
 using namespace flt;
 
 namespace {
 constexpr std::uint32_t k_flatness_magic = 0x464c5446u;  // "FLTF"
 constexpr double k_inf = std::numeric_limits<double>::infinity();
+constexpr double k_nan = std::numeric_limits<double>::quiet_NaN();
 }  // namespace
 
 struct flt_flatness {
@@ -26,11 +28,13 @@ struct flt_flatness {
     flatness_params params{};
     fiber_layout layout;
     std::unique_ptr<flatness_engine> engine;
+    strip_resampler strip;  // windows whose strip edges are known
 
     // Streaming: the rows of the current window, oldest first, row-major
     // (row_capacity rows allocated at create).
     std::vector<double> buffer_s, buffer_z;
     std::vector<std::uint8_t> buffer_flags;
+    std::vector<double> buffer_left, buffer_right;  // the strip's edges, NaN = unknown
     std::size_t buffered = 0;
     bool grid_started = false;
     double window_end = k_inf;  // rows at or past it complete the window
@@ -68,6 +72,9 @@ flt_status read_params(const char *fn, const flt_options *options, flatness_para
     p.bow_limit = option_value(options, FLT_OPT_FLAT_BOW_LIMIT);
     p.crossbow_limit = option_value(options, FLT_OPT_FLAT_CROSSBOW_LIMIT);
     p.row_capacity = std::size_t(option_value(options, FLT_OPT_FLAT_ROW_CAPACITY));
+    p.zone_count = std::size_t(option_value(options, FLT_OPT_FLAT_ZONE_COUNT));
+    p.drive_side_high = option_value(options, FLT_OPT_FLAT_DRIVE_SIDE) != 0.0;
+    p.zones_on_grid = option_value(options, FLT_OPT_FLAT_ZONES_ON) != 0.0;
     if (p.window_length > 0.0 && p.update_interval > p.window_length)
         return fail(FLT_ERR_INVALID_ARGUMENT,
                     "%s: option 'flat_update_interval' = %g mm is longer than "
@@ -138,16 +145,20 @@ flt_status create_handle(const char *fn, std::size_t fibers, const double *x,
     if (flt_status st = read_params(fn, options, &p))
         return st;
     // Sizes first, in double (no product can overflow), then allocate.
-    const double zones = fiber_layout::zones_needed(x, fibers, p.zone_width);
+    const double zones = fiber_layout::zones_needed(x, fibers, p.zone_width, p.zone_count);
+    if (p.zone_count > FLT_FLATNESS_MAX_ZONES)
+        return fail(FLT_ERR_INVALID_ARGUMENT, "%s: option 'flat_zone_count' = %zu is more than %d",
+                    fn, p.zone_count, FLT_FLATNESS_MAX_ZONES);
     if (!(zones <= FLT_FLATNESS_MAX_ZONES))
         return fail(FLT_ERR_INVALID_ARGUMENT,
                     "%s: option 'flat_zone_width' = %g mm divides the fibers' %g mm into %.4g "
                     "zones, more than %d; use wider zones",
                     fn, p.zone_width, x[fibers - 1] - x[0], zones, FLT_FLATNESS_MAX_ZONES);
-    // The rows of a window (position, heights, flags) twice over with the
-    // evaluation's column scratch, and per fiber and zone a few results.
+    // The rows of a window (position, heights, flags, edges) twice over
+    // with the evaluation's column scratch and the strip's resampled copy,
+    // and per fiber and zone a few results.
     const double K = double(fibers), rows = double(p.row_capacity);
-    const double bytes = rows * (8 + 9 * K + 17) + K * 120 + zones * 60;
+    const double bytes = rows * (8 + 18 * K + 17 + 64) + K * 120 + zones * 60;
     if (!(bytes <= FLT_FLATNESS_MAX_BYTES))
         return fail(FLT_ERR_INVALID_ARGUMENT,
                     "%s: flat_row_capacity = %zu rows of %zu fibers would take about %.3g GB, "
@@ -155,23 +166,119 @@ flt_status create_handle(const char *fn, std::size_t fibers, const double *x,
                     fn, p.row_capacity, fibers, bytes * 1e-9, FLT_FLATNESS_MAX_BYTES * 1e-9);
     auto f = std::make_unique<flt_flatness>();
     f->params = p;
-    f->layout.build(x, fibers, p.zone_width);
+    f->layout.build(x, fibers, p.zone_width, p.zone_count);
     f->engine = std::make_unique<flatness_engine>(f->params, f->layout);
+    f->strip.reserve(p.row_capacity, fibers, f->layout.zones());
     f->buffer_s.resize(p.row_capacity);
     f->buffer_z.resize(p.row_capacity * fibers);
     f->buffer_flags.resize(p.row_capacity * fibers);
+    f->buffer_left.resize(p.row_capacity);
+    f->buffer_right.resize(p.row_capacity);
     for (window_result &r : f->results)
         r.allocate(fibers, f->layout.zones());
     *out = f.release();
     return FLT_OK;
 }
 
+// One window into r: on the strip where its edges are known (strip.hpp),
+// else on the fiber grid; then where every result lies.
+void evaluate_window(flt_flatness &f, std::size_t rows, const double *s, const double *z,
+                     const std::uint8_t *flags, const double *left, const double *right,
+                     window_result &r) {
+    const flatness_params &p = f.params;
+    const fiber_layout &grid = f.layout;
+    const std::size_t fibers = grid.fibers(), zones = grid.zones();
+    const int side = p.drive_side_high ? -1 : 1;
+    const bool on_strip = !p.zones_on_grid && f.strip.locate(grid, rows, s, flags, left, right);
+    if (!on_strip && side > 0) {
+        // The grid as it is: result fiber k is sensor fiber k.
+        f.engine->evaluate(rows, s, z, flags, r);
+        for (int i = 0; i < 3; ++i) {
+            r.strip_width[i] = 2.0 * grid.half_width;
+            r.strip_centre[i] = grid.centre;
+        }
+        for (std::size_t k = 0; k < fibers; ++k) {
+            r.fiber_strip_x[k] = grid.x[k] - grid.centre;
+            r.fiber_sensor_x[k] = grid.x[k];
+        }
+        for (std::size_t j = 0; j < zones; ++j) {
+            const double centre = grid.zone_left[j] + 0.5 * grid.zone_width;
+            r.zone_strip_x[j] = centre - grid.centre;
+            r.zone_sensor_x[j] = centre;
+            r.zone_width_mm[j] = grid.zone_width;
+            r.zone_fibers[j] = grid.zone_count[j];
+        }
+        return;
+    }
+    if (!on_strip)
+        f.strip.locate_grid(grid, rows);  // the grid seen from the other side
+    f.strip.resample(grid, side, rows, z, flags, p.zone_width, p.zone_count, zones);
+    const fiber_layout &lay = f.strip.layout();
+    f.engine->use_layout(lay);
+    f.engine->evaluate(rows, s, f.strip.z(), f.strip.flags(), r);
+    f.engine->use_layout(grid);
+    // The engine sized the zone results for the strip's zones: the rest
+    // (up to the grid's count) are off the strip.
+    const std::size_t used = lay.zones();
+    r.zone_i_units.resize(zones, k_nan);
+    r.zone_flags.resize(zones, std::uint8_t(FLT_ZONE_NO_DATA | FLT_ZONE_OFF_STRIP));
+    r.zone_strip_x.assign(zones, k_nan);
+    r.zone_sensor_x.assign(zones, k_nan);
+    r.zone_width_mm.assign(zones, 0.0);
+    r.zone_fibers.assign(zones, 0);
+    const double centre = on_strip ? f.strip.mean_centre() : grid.centre;
+    for (std::size_t k = 0; k < fibers; ++k) {
+        r.fiber_strip_x[k] = lay.x[k];
+        r.fiber_sensor_x[k] = centre + double(side) * lay.x[k];
+        if (std::fabs(lay.x[k]) > lay.half_width * (1 + 1e-12))
+            r.fiber_flags[k] |= FLT_FIBER_OFF_STRIP | FLT_FIBER_NO_DATA;
+    }
+    for (std::size_t j = 0; j < used; ++j) {
+        const double middle = lay.zone_left[j] + 0.5 * lay.zone_width;
+        r.zone_strip_x[j] = middle;
+        r.zone_sensor_x[j] = centre + double(side) * middle;
+        r.zone_width_mm[j] = lay.zone_width;
+        r.zone_fibers[j] = lay.zone_count[j];
+    }
+    if (on_strip) {
+        f.strip.statistics(r.strip_width, r.strip_centre);
+        r.flags |= FLT_WINDOW_ON_STRIP;
+    } else {
+        for (int i = 0; i < 3; ++i) {
+            r.strip_width[i] = 2.0 * grid.half_width;
+            r.strip_centre[i] = grid.centre;
+        }
+    }
+}
+
 // Evaluates the buffered rows as one streamed window (flagged, never an
 // error) and publishes the result.
 void evaluate_buffer(flt_flatness &f) {
     window_result &r = f.spare();
-    f.engine->evaluate(f.buffered, f.buffer_s.data(), f.buffer_z.data(), f.buffer_flags.data(), r);
+    evaluate_window(f, f.buffered, f.buffer_s.data(), f.buffer_z.data(), f.buffer_flags.data(),
+                    f.buffer_left.data(), f.buffer_right.data(), r);
     f.publish();
+}
+
+// The strip's edges given per row: finite or NaN (unknown), left < right.
+flt_status check_edges(const char *fn, std::size_t rows, const double *left, const double *right) {
+    for (std::size_t r = 0; r < rows; ++r) {
+        const double l = left ? left[r] : k_nan, h = right ? right[r] : k_nan;
+        if (std::isinf(l))
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'left_mm[%zu]' = %g is infinite (NaN means unknown)", fn, r,
+                        l);
+        if (std::isinf(h))
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'right_mm[%zu]' = %g is infinite (NaN means unknown)", fn, r,
+                        h);
+        if (l == l && h == h && !(l < h))
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: arguments 'left_mm[%zu]' = %g and 'right_mm[%zu]' = %g: the left "
+                        "edge must lie below the right one",
+                        fn, r, l, r, h);
+    }
+    return FLT_OK;
 }
 
 // Drops the buffered rows before s_keep (they belong to no later window).
@@ -185,6 +292,8 @@ void trim_buffer(flt_flatness &f, double s_keep) {
     std::memmove(f.buffer_s.data(), f.buffer_s.data() + drop, keep * sizeof(double));
     std::memmove(f.buffer_z.data(), f.buffer_z.data() + drop * n, keep * n * sizeof(double));
     std::memmove(f.buffer_flags.data(), f.buffer_flags.data() + drop * n, keep * n);
+    std::memmove(f.buffer_left.data(), f.buffer_left.data() + drop, keep * sizeof(double));
+    std::memmove(f.buffer_right.data(), f.buffer_right.data() + drop, keep * sizeof(double));
     f.buffered = keep;
 }
 
@@ -213,6 +322,108 @@ void restart_grid(flt_flatness &f) {
     f.grid_started = false;
     f.window_end = k_inf;
     f.has_last_s = false;
+}
+
+flt_status evaluate_rows(const char *fn, flt_flatness *flatness, std::size_t rows,
+                         std::size_t fibers, const double *s, const double *z,
+                         const std::uint8_t *flags, const double *left, const double *right) {
+    {
+        if (flt_status st = check_handle(fn, flatness))
+            return st;
+        flt_flatness &f = *flatness;
+        if (flt_status st = check_count(fn, "fibers", fibers, f.fibers()))
+            return st;
+        if (flt_status st = check_rows(fn, rows, fibers, s, z, false, 0.0))
+            return st;
+        if (flt_status st = check_edges(fn, rows, left, right))
+            return st;
+        if (rows < 2)
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'rows' = %zu: a window needs at least 2 rows", fn, rows);
+        const double length = s[rows - 1] - s[0];
+        if (length < f.params.min_length)
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 's' spans %g mm, shorter than one wave "
+                        "(flat_min_length = %g mm)",
+                        fn, length, f.params.min_length);
+        window_result &r = f.spare();
+        f.strip.reserve(rows, f.fibers(), f.layout.zones());  // grows for a long sheet
+        evaluate_window(f, rows, s, z, flags, left, right, r);
+        if (r.flags & FLT_WINDOW_NO_VALID_FIBER)
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'z' has no fiber with usable heights over "
+                        "flat_min_coverage = %g of the window (NaN, or flagged "
+                        "FLT_FLAG_NO_DATA / FLT_FLAG_GAP in 'flags')",
+                        fn, f.params.min_coverage);
+        f.publish();
+        return FLT_OK;
+    }
+}
+
+flt_status push_rows(const char *fn, flt_flatness *flatness, std::size_t rows, std::size_t fibers,
+                     const double *s, const double *z, const std::uint8_t *flags,
+                     const double *left, const double *right, std::size_t *consumed_out,
+                     int *evaluated_out) {
+    {
+        if (flt_status st = check_handle(fn, flatness))
+            return st;
+        flt_flatness &f = *flatness;
+        FLT_CHECK_NOT_NULL(fn, consumed_out);
+        FLT_CHECK_NOT_NULL(fn, evaluated_out);
+        *consumed_out = 0;
+        *evaluated_out = 0;
+        if (flt_status st = check_count(fn, "fibers", fibers, f.fibers()))
+            return st;
+        if (flt_status st = check_rows(fn, rows, fibers, s, z, f.has_last_s, f.last_s))
+            return st;
+        if (flt_status st = check_edges(fn, rows, left, right))
+            return st;
+        const flatness_params &p = f.params;
+        for (std::size_t r = 0; r < rows; ++r) {
+            if (!f.grid_started) {
+                f.grid_started = true;
+                f.window_end = p.window_length > 0.0 ? s[r] + p.window_length : k_inf;
+            }
+            if (s[r] >= f.window_end && f.buffered == 0)
+                // Every window ending at or before s[r] is empty (the rows
+                // before them were trimmed): skip to the first one row r
+                // falls in.
+                advance_grid(f, s[r]);
+            if (s[r] >= f.window_end) {
+                // Row r belongs to a later window: evaluate this one first and
+                // hand control back so its results can be read. The windows
+                // after it that hold the same rows (before row r comes in or
+                // the oldest row drops out) are skipped.
+                evaluate_buffer(f);
+                const double oldest = f.buffer_s[0] + p.window_length;
+                advance_grid(f, std::max(f.window_end, std::min(s[r], oldest)));
+                trim_buffer(f, f.window_end - p.window_length);
+                *evaluated_out = 1;
+                return FLT_OK;
+            }
+            if (f.buffered == p.row_capacity)
+                return fail(FLT_ERR_BUFFER_FULL,
+                            "%s: row %zu does not fit: the window already holds "
+                            "flat_row_capacity = %zu rows (%zu of %zu rows taken); "
+                            "create with a larger flat_row_capacity or a shorter "
+                            "flat_window_length",
+                            fn, r, p.row_capacity, r, rows);
+            const std::size_t n = f.fibers(), at = f.buffered;
+            f.buffer_s[at] = s[r];
+            std::memcpy(&f.buffer_z[at * n], z + r * n, n * sizeof(double));
+            if (flags)
+                std::memcpy(&f.buffer_flags[at * n], flags + r * n, n);
+            else
+                std::memset(&f.buffer_flags[at * n], 0, n);
+            f.buffer_left[at] = left ? left[r] : k_nan;
+            f.buffer_right[at] = right ? right[r] : k_nan;
+            ++f.buffered;
+            f.has_last_s = true;
+            f.last_s = s[r];
+            *consumed_out = r + 1;
+        }
+        return FLT_OK;
+    }
 }
 
 }  // namespace
@@ -356,32 +567,18 @@ FLT_API flt_status FLT_CALL flt_flatness_evaluate(flt_flatness *flatness, size_t
                                                   const uint8_t *flags) {
     const char *fn = "flt_flatness_evaluate";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, flatness))
-            return st;
-        flt_flatness &f = *flatness;
-        if (flt_status st = check_count(fn, "fibers", fibers, f.fibers()))
-            return st;
-        if (flt_status st = check_rows(fn, rows, fibers, s, z, false, 0.0))
-            return st;
-        if (rows < 2)
-            return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'rows' = %zu: a window needs at least 2 rows", fn, rows);
-        const double length = s[rows - 1] - s[0];
-        if (length < f.params.min_length)
-            return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 's' spans %g mm, shorter than one wave "
-                        "(flat_min_length = %g mm)",
-                        fn, length, f.params.min_length);
-        window_result &r = f.spare();
-        f.engine->evaluate(rows, s, z, flags, r);
-        if (r.flags & FLT_WINDOW_NO_VALID_FIBER)
-            return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'z' has no fiber with usable heights over "
-                        "flat_min_coverage = %g of the window (NaN, or flagged "
-                        "FLT_FLAG_NO_DATA / FLT_FLAG_GAP in 'flags')",
-                        fn, f.params.min_coverage);
-        f.publish();
-        return FLT_OK;
+        return evaluate_rows(fn, flatness, rows, fibers, s, z, flags, nullptr, nullptr);
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_flatness_evaluate_strip(flt_flatness *flatness, size_t rows,
+                                                        size_t fibers, const double *s,
+                                                        const double *z, const uint8_t *flags,
+                                                        const double *left_mm,
+                                                        const double *right_mm) {
+    const char *fn = "flt_flatness_evaluate_strip";
+    return guard(fn, [&] {
+        return evaluate_rows(fn, flatness, rows, fibers, s, z, flags, left_mm, right_mm);
     });
 }
 
@@ -391,60 +588,20 @@ FLT_API flt_status FLT_CALL flt_flatness_push(flt_flatness *flatness, size_t row
                                               int *evaluated_out) {
     const char *fn = "flt_flatness_push";
     return guard(fn, [&] {
-        if (flt_status st = check_handle(fn, flatness))
-            return st;
-        flt_flatness &f = *flatness;
-        FLT_CHECK_NOT_NULL(fn, consumed_out);
-        FLT_CHECK_NOT_NULL(fn, evaluated_out);
-        *consumed_out = 0;
-        *evaluated_out = 0;
-        if (flt_status st = check_count(fn, "fibers", fibers, f.fibers()))
-            return st;
-        if (flt_status st = check_rows(fn, rows, fibers, s, z, f.has_last_s, f.last_s))
-            return st;
-        const flatness_params &p = f.params;
-        for (std::size_t r = 0; r < rows; ++r) {
-            if (!f.grid_started) {
-                f.grid_started = true;
-                f.window_end = p.window_length > 0.0 ? s[r] + p.window_length : k_inf;
-            }
-            if (s[r] >= f.window_end && f.buffered == 0)
-                // Every window ending at or before s[r] is empty (the rows
-                // before them were trimmed): skip to the first one row r
-                // falls in.
-                advance_grid(f, s[r]);
-            if (s[r] >= f.window_end) {
-                // Row r belongs to a later window: evaluate this one first and
-                // hand control back so its results can be read. The windows
-                // after it that hold the same rows (before row r comes in or
-                // the oldest row drops out) are skipped.
-                evaluate_buffer(f);
-                const double oldest = f.buffer_s[0] + p.window_length;
-                advance_grid(f, std::max(f.window_end, std::min(s[r], oldest)));
-                trim_buffer(f, f.window_end - p.window_length);
-                *evaluated_out = 1;
-                return FLT_OK;
-            }
-            if (f.buffered == p.row_capacity)
-                return fail(FLT_ERR_BUFFER_FULL,
-                            "%s: row %zu does not fit: the window already holds "
-                            "flat_row_capacity = %zu rows (%zu of %zu rows taken); "
-                            "create with a larger flat_row_capacity or a shorter "
-                            "flat_window_length",
-                            fn, r, p.row_capacity, r, rows);
-            const std::size_t n = f.fibers(), at = f.buffered;
-            f.buffer_s[at] = s[r];
-            std::memcpy(&f.buffer_z[at * n], z + r * n, n * sizeof(double));
-            if (flags)
-                std::memcpy(&f.buffer_flags[at * n], flags + r * n, n);
-            else
-                std::memset(&f.buffer_flags[at * n], 0, n);
-            ++f.buffered;
-            f.has_last_s = true;
-            f.last_s = s[r];
-            *consumed_out = r + 1;
-        }
-        return FLT_OK;
+        return push_rows(fn, flatness, rows, fibers, s, z, flags, nullptr, nullptr, consumed_out,
+                         evaluated_out);
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_flatness_push_strip(flt_flatness *flatness, size_t rows,
+                                                    size_t fibers, const double *s, const double *z,
+                                                    const uint8_t *flags, const double *left_mm,
+                                                    const double *right_mm, size_t *consumed_out,
+                                                    int *evaluated_out) {
+    const char *fn = "flt_flatness_push_strip";
+    return guard(fn, [&] {
+        return push_rows(fn, flatness, rows, fibers, s, z, flags, left_mm, right_mm, consumed_out,
+                         evaluated_out);
     });
 }
 
@@ -544,6 +701,75 @@ FLT_API flt_status FLT_CALL flt_flatness_zone_results(const flt_flatness *flatne
             std::copy(r.zone_i_units.begin(), r.zone_i_units.end(), i_units_out);
         if (flags_out)
             std::copy(r.zone_flags.begin(), r.zone_flags.end(), flags_out);
+        return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_flatness_strip(const flt_flatness *flatness, double *width_mm_out,
+                                               double *centre_mm_out) {
+    const char *fn = "flt_flatness_strip";
+    return guard(fn, [&] {
+        if (flt_status st = check_handle(fn, flatness))
+            return st;
+        if (flt_status st = check_has_result(fn, flatness))
+            return st;
+        const window_result &r = flatness->results[flatness->current];
+        for (int i = 0; i < 3; ++i) {
+            if (width_mm_out)
+                width_mm_out[i] = r.strip_width[i];
+            if (centre_mm_out)
+                centre_mm_out[i] = r.strip_centre[i];
+        }
+        return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_flatness_zone_positions(const flt_flatness *flatness, size_t zones,
+                                                        double *strip_centre_mm_out,
+                                                        double *sensor_centre_mm_out,
+                                                        double *width_mm_out,
+                                                        size_t *fiber_count_out) {
+    const char *fn = "flt_flatness_zone_positions";
+    return guard(fn, [&] {
+        if (flt_status st = check_handle(fn, flatness))
+            return st;
+        if (flt_status st = check_count(fn, "zones", zones, flatness->layout.zones()))
+            return st;
+        if (flt_status st = check_has_result(fn, flatness))
+            return st;
+        const window_result &r = flatness->results[flatness->current];
+        for (std::size_t j = 0; j < zones; ++j) {
+            if (strip_centre_mm_out)
+                strip_centre_mm_out[j] = r.zone_strip_x[j];
+            if (sensor_centre_mm_out)
+                sensor_centre_mm_out[j] = r.zone_sensor_x[j];
+            if (width_mm_out)
+                width_mm_out[j] = r.zone_width_mm[j];
+            if (fiber_count_out)
+                fiber_count_out[j] = r.zone_fibers[j];
+        }
+        return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_flatness_fiber_positions(const flt_flatness *flatness,
+                                                         size_t fibers, double *strip_x_mm_out,
+                                                         double *sensor_x_mm_out) {
+    const char *fn = "flt_flatness_fiber_positions";
+    return guard(fn, [&] {
+        if (flt_status st = check_handle(fn, flatness))
+            return st;
+        if (flt_status st = check_count(fn, "fibers", fibers, flatness->fibers()))
+            return st;
+        if (flt_status st = check_has_result(fn, flatness))
+            return st;
+        const window_result &r = flatness->results[flatness->current];
+        for (std::size_t k = 0; k < fibers; ++k) {
+            if (strip_x_mm_out)
+                strip_x_mm_out[k] = r.fiber_strip_x[k];
+            if (sensor_x_mm_out)
+                sensor_x_mm_out[k] = r.fiber_sensor_x[k];
+        }
         return FLT_OK;
     });
 }

@@ -12,7 +12,7 @@ namespace {
 
 constexpr double nan_value = std::numeric_limits<double>::quiet_NaN();
 // Reconstructor flags that mark a value as not measured (flatline/recon.h).
-constexpr std::uint8_t k_unusable = FLT_FLAG_NO_DATA | FLT_FLAG_GAP;
+constexpr std::uint8_t k_unusable = FLT_FLAG_NO_DATA | FLT_FLAG_GAP | FLT_FLAG_OFF_STRIP;
 // The largest |z| that is a height (mm), as for the reconstructor's
 // samples: no strip is a kilometre high, and the squares of larger heights
 // overflow the chord lengths (z = 1e300 made an arc length infinite
@@ -66,42 +66,70 @@ void refine_extremum(double s0, double z0, double s1, double z1, double s2, doub
 
 namespace {
 // Each fiber stands for one pitch of strip, so the grid covers its span
-// plus one pitch.
-double covered_width(const double *x, std::size_t fibers, double width_of_zone) {
-    return fibers >= 2 ? (x[fibers - 1] - x[0]) * double(fibers) / double(fibers - 1)
-                       : width_of_zone;
+// plus one pitch (one fiber: its zones).
+double covered_width(const double *x, std::size_t fibers, double width_of_zone,
+                     std::size_t count_of_zones) {
+    return fibers >= 2          ? (x[fibers - 1] - x[0]) * double(fibers) / double(fibers - 1)
+           : count_of_zones > 0 ? double(count_of_zones) * width_of_zone
+                                : width_of_zone;
 }
 }  // namespace
 
-double fiber_layout::zones_needed(const double *fiber_x, std::size_t fibers, double width_of_zone) {
+double fiber_layout::zones_needed(const double *fiber_x, std::size_t fibers, double width_of_zone,
+                                  std::size_t count_of_zones) {
+    if (count_of_zones > 0)
+        return double(count_of_zones);
     return std::max(
-        1.0, std::ceil(covered_width(fiber_x, fibers, width_of_zone) / width_of_zone - 1e-9));
+        1.0, std::ceil(covered_width(fiber_x, fibers, width_of_zone, 0) / width_of_zone - 1e-9));
 }
 
-void fiber_layout::build(const double *fiber_x, std::size_t fibers, double width_of_zone) {
+void fiber_layout::build(const double *fiber_x, std::size_t fibers, double width_of_zone,
+                         std::size_t count_of_zones) {
     x.assign(fiber_x, fiber_x + fibers);
-    zone_width = width_of_zone;
     const double first = x.front(), last = x.back();
-    const double covered = covered_width(fiber_x, fibers, width_of_zone);
+    const double covered = covered_width(fiber_x, fibers, width_of_zone, count_of_zones);
     centre = 0.5 * (first + last);
     half_width = 0.5 * covered;
     // Bounded by the caller (flatness_api.cpp), so the conversion is exact.
-    const std::size_t zones = std::size_t(zones_needed(fiber_x, fibers, width_of_zone));
-    const double left0 = centre - 0.5 * double(zones) * width_of_zone;
+    const std::size_t zones =
+        std::size_t(zones_needed(fiber_x, fibers, width_of_zone, count_of_zones));
+    lay_zones(count_of_zones > 0 ? covered / double(count_of_zones) : width_of_zone, zones);
+}
+
+void fiber_layout::lay_zones(double width_of_zone, std::size_t zones, bool ties_to_centre) {
+    zone_width = width_of_zone;
+    const double left0 = centre - 0.5 * double(zones) * zone_width;
     zone_left.resize(zones);
     for (std::size_t j = 0; j < zones; ++j)
-        zone_left[j] = left0 + double(j) * width_of_zone;
+        zone_left[j] = left0 + double(j) * zone_width;
+    const std::size_t fibers = x.size();
     zone_of.resize(fibers);
     zone_count.assign(zones, 0);
     for (std::size_t k = 0; k < fibers; ++k) {
-        const double j = std::floor((x[k] - left0) / width_of_zone);
+        const double position = (x[k] - left0) / zone_width;
+        double j = std::floor(position);
+        // A fiber on a boundary (to rounding): in the zone nearer the
+        // centre, so that the layout seen from either side is the same.
+        const double nearest = std::round(position);
+        if (ties_to_centre && std::fabs(position - nearest) < 1e-9)
+            j = x[k] > centre ? nearest - 1 : nearest;
         const std::size_t zj = j > 0.0 ? std::size_t(std::min(double(zones - 1), j)) : 0;
         zone_of[k] = zj;
-        ++zone_count[zj];
+        // A fiber beyond the covered width is off the strip (strip layouts).
+        if (std::fabs(x[k] - centre) <= half_width * (1 + 1e-12))
+            ++zone_count[zj];
     }
 }
 
 void window_result::allocate(std::size_t fibers, std::size_t zones) {
+    fiber_strip_x.assign(fibers, nan_value);
+    fiber_sensor_x.assign(fibers, nan_value);
+    zone_strip_x.assign(zones, nan_value);
+    zone_sensor_x.assign(zones, nan_value);
+    zone_width_mm.assign(zones, 0.0);
+    zone_fibers.assign(zones, 0);
+    for (int i = 0; i < 3; ++i)
+        strip_width[i] = strip_centre[i] = nan_value;
     arc_length.assign(fibers, nan_value);
     i_units.assign(fibers, nan_value);
     wave_height.assign(fibers, nan_value);
@@ -113,7 +141,7 @@ void window_result::allocate(std::size_t fibers, std::size_t zones) {
 }
 
 flatness_engine::flatness_engine(const flatness_params &params, const fiber_layout &layout)
-    : p_(params), layout_(layout) {
+    : p_(params), layout_(&layout) {
     const std::size_t fibers = layout.fibers();
     stretch_.resize(fibers);
     bow_coef_.resize(fibers);
@@ -243,8 +271,8 @@ bool flatness_engine::largest_wave(std::size_t rows, wave &best) const {
 // square root per sample, and need nothing but the rows.
 void flatness_engine::evaluate(std::size_t rows, const double *s, const double *z,
                                const std::uint8_t *flags, window_result &out) {
-    const std::size_t fibers = layout_.fibers();
-    const std::size_t zones = layout_.zones();
+    const std::size_t fibers = layout_->fibers();
+    const std::size_t zones = layout_->zones();
     reserve_rows(rows);
     out.allocate(fibers, zones);
     out.rows = rows;
@@ -355,7 +383,7 @@ void flatness_engine::evaluate(std::size_t rows, const double *s, const double *
         for (std::size_t j = 0; j < zones; ++j) {
             std::size_t n = 0;
             double sum = 0.0;
-            for (; k < fibers && layout_.zone_of[k] == j; ++k) {
+            for (; k < fibers && layout_->zone_of[k] == j; ++k) {
                 if (out.fiber_flags[k] & FLT_FIBER_NO_DATA)
                     continue;
                 sum += out.i_units[k];
@@ -400,7 +428,7 @@ void flatness_engine::evaluate(std::size_t rows, const double *s, const double *
         for (std::size_t k = 0; k < fibers; ++k) {
             if (out.fiber_flags[k] & FLT_FIBER_NO_DATA)
                 continue;
-            const double u = (layout_.x[k] - layout_.centre) / layout_.half_width;
+            const double u = (layout_->x[k] - layout_->centre) / layout_->half_width;
             const double u2 = u * u, zk = mean_z_[k];
             S[0] += 1.0;
             S[1] += u;
@@ -428,7 +456,7 @@ void flatness_engine::evaluate(std::size_t rows, const double *s, const double *
 
 // The shape class from the zone profile (flatline/flatness.h, flt_shape).
 void flatness_engine::classify(window_result &out) {
-    const std::size_t zones = layout_.zones();
+    const std::size_t zones = layout_->zones();
     std::size_t valid_zones = 0;
     double low = std::numeric_limits<double>::infinity(), high = -low;
     for (std::size_t j = 0; j < zones; ++j) {
@@ -454,11 +482,11 @@ void flatness_engine::classify(window_result &out) {
     for (std::size_t j = 0; j < zones; ++j) {
         if (out.zone_flags[j] & FLT_ZONE_NO_DATA)
             continue;
-        const double centre_x = layout_.zone_left[j] + 0.5 * layout_.zone_width;
-        const double u = (centre_x - layout_.centre) / layout_.half_width;
+        const double centre_x = layout_->zone_left[j] + 0.5 * layout_->zone_width;
+        const double u = (centre_x - layout_->centre) / layout_->half_width;
         const double a = std::fabs(u);
         zone_value_[n] = out.zone_i_units[j] - low;
-        zone_weight_[n] = double(layout_.zone_count[j]);
+        zone_weight_[n] = double(layout_->zone_count[j]);
         zone_band_[n] = a < k_centre_band ? centre
                         : a < k_edge_band ? quarter
                         : u < 0.0         ? left

@@ -23,9 +23,13 @@ struct flatness_params {
     double bow_limit;        // mm
     double crossbow_limit;   // mm
     std::size_t row_capacity;
+    std::size_t zone_count;  // 0 = zones of zone_width
+    bool drive_side_high;    // the drive side is at high sensor x
+    bool zones_on_grid;      // never lay zones on the strip
 };
 
-// The fiber grid and its zones: fixed at create time.
+// Fibers across the width and their zones: the sensor's fiber grid (fixed
+// at create time), or a window's fibers in strip coordinates (strip.hpp).
 struct fiber_layout {
     std::vector<double> x;                // [fibers] mm
     double centre = 0.0;                  // mm, middle of the grid
@@ -37,8 +41,18 @@ struct fiber_layout {
 
     // The zone count build() makes, as a double (the API bounds it before
     // building: a wide grid of narrow zones is millions of them).
-    static double zones_needed(const double *fiber_x, std::size_t fibers, double width_of_zone);
-    void build(const double *fiber_x, std::size_t fibers, double width_of_zone);
+    static double zones_needed(const double *fiber_x, std::size_t fibers, double width_of_zone,
+                               std::size_t count_of_zones);
+    // The grid: zones of zone_width, or zone_count equal zones (> 0).
+    void build(const double *fiber_x, std::size_t fibers, double width_of_zone,
+               std::size_t count_of_zones);
+    // `zones` zones of zone_width centred on `centre`, the fibers already
+    // in x; fibers beyond the half width belong to no zone's count (they
+    // are off the strip). A fiber on a zone boundary belongs to the zone
+    // above it, or with ties_to_centre to the one nearer the centre (the
+    // strip's layouts: the same from the drive and the operator side).
+    // Reuses the capacity: no allocation once reserved.
+    void lay_zones(double width_of_zone, std::size_t zones, bool ties_to_centre = false);
     std::size_t fibers() const { return x.size(); }
     std::size_t zones() const { return zone_left.size(); }
 };
@@ -58,6 +72,12 @@ struct window_result {
     double confidence = 0.0;
     unsigned components = 0;
     double bow_mm = 0.0, crossbow_mm = 0.0;
+    // Where the results lie (flt_flatness_fiber_positions/zone_positions)
+    // and the strip over the window (flt_flatness_strip).
+    std::vector<double> fiber_strip_x, fiber_sensor_x;               // [fibers] mm
+    std::vector<double> zone_strip_x, zone_sensor_x, zone_width_mm;  // [zones] mm
+    std::vector<std::size_t> zone_fibers;                            // [zones]
+    double strip_width[3] = {0, 0, 0}, strip_centre[3] = {0, 0, 0};  // mean, min, max
 
     void allocate(std::size_t fibers, std::size_t zones);
 };
@@ -65,7 +85,12 @@ struct window_result {
 // Scratch reused by every evaluation: one fiber's column and per-fiber sums.
 class flatness_engine {
   public:
+    // layout: the grid; zone scratch is sized for its zones (the most any
+    // layout given to evaluate may have).
     flatness_engine(const flatness_params &params, const fiber_layout &layout);
+    // The fibers and zones the next evaluations use (the grid, or a
+    // window's strip layout with the same fiber count). Kept by reference.
+    void use_layout(const fiber_layout &layout) { layout_ = &layout; }
 
     // Grows the column scratch to `rows` (the only allocation after create;
     // never on the streaming path, whose windows are capped at row_capacity).
@@ -85,7 +110,7 @@ class flatness_engine {
     void classify(window_result &out);
 
     const flatness_params &p_;
-    const fiber_layout &layout_;
+    const fiber_layout *layout_;
     // Column of one fiber: position, height, usable.
     std::vector<double> col_s_, col_z_;
     std::vector<std::uint8_t> col_ok_;

@@ -2300,6 +2300,72 @@ static void row_flatness_push(void) {
     flt_options_destroy(o);
     flt_flatness_destroy(f);
 }
+
+/* The strip variants: the plain calls' cases (shared code), and the edges:
+ * infinite, crossed, NaN (unknown: fine), NULL (unknown: fine). */
+static void row_flatness_evaluate_strip(void) {
+    flt_flatness *f = new_flatness();
+    double left[FROWS], right[FROWS];
+    for (int r = 0; r < FROWS; ++r)
+        left[r] = FIRST_X + 3, right[r] = FIRST_X + PITCH * (FIBERS - 1) - 3;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'flatness'",
+        flt_flatness_evaluate_strip(NULL, FROWS, FIBERS, g_fs, g_fz, NULL, left, right));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'s'",
+        flt_flatness_evaluate_strip(f, FROWS, FIBERS, NULL, g_fz, NULL, left, right));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'rows' is 0",
+        flt_flatness_evaluate_strip(f, 0, FIBERS, g_fs, g_fz, NULL, left, right));
+    BAD(FLT_ERR_INVALID_ARGUMENT, NULL,
+        flt_flatness_evaluate_strip(f, NEG, FIBERS, g_fs, g_fz, NULL, left, right));
+    left[7] = -Inf_;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "left_mm[7]",
+        flt_flatness_evaluate_strip(f, FROWS, FIBERS, g_fs, g_fz, NULL, left, right));
+    left[7] = right[7] + 1;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "left_mm[7]",
+        flt_flatness_evaluate_strip(f, FROWS, FIBERS, g_fs, g_fz, NULL, left, right));
+    left[7] = NaN_;
+    right[9] = Inf_;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "right_mm[9]",
+        flt_flatness_evaluate_strip(f, FROWS, FIBERS, g_fs, g_fz, NULL, left, right));
+    right[9] = right[8];
+    GOOD(flt_flatness_evaluate_strip(f, FROWS, FIBERS, g_fs, g_fz, NULL, left, right));
+    GOOD(flt_flatness_evaluate_strip(f, FROWS, FIBERS, g_fs, g_fz, NULL, NULL, right));
+    GOOD(flt_flatness_evaluate_strip(f, FROWS, FIBERS, g_fs, g_fz, NULL, NULL, NULL));
+    /* Absurd but finite edges (a strip far beyond the grid): measured as a
+     * strip no fiber sees: no valid fiber, an error that names it. */
+    for (int r = 0; r < FROWS; ++r)
+        left[r] = 1e12, right[r] = 1e12 + 1000;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "fiber",
+        flt_flatness_evaluate_strip(f, FROWS, FIBERS, g_fs, g_fz, NULL, left, right));
+    for (int r = 0; r < FROWS; ++r)
+        left[r] = -1e300, right[r] = 1e300;
+    GOOD(flt_flatness_evaluate_strip(f, FROWS, FIBERS, g_fs, g_fz, NULL, left, right));
+    flt_flatness_destroy(f);
+}
+
+static void row_flatness_push_strip(void) {
+    flt_flatness *f = new_flatness();
+    size_t used;
+    int ev;
+    double left[FROWS], right[FROWS];
+    for (int r = 0; r < FROWS; ++r)
+        left[r] = FIRST_X + 3, right[r] = FIRST_X + PITCH * (FIBERS - 1) - 3;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'flatness'",
+        flt_flatness_push_strip(NULL, 10, FIBERS, g_fs, g_fz, NULL, left, right, &used, &ev));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'consumed_out'",
+        flt_flatness_push_strip(f, 10, FIBERS, g_fs, g_fz, NULL, left, right, NULL, &ev));
+    right[3] = -Inf_;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "right_mm[3]",
+        flt_flatness_push_strip(f, 10, FIBERS, g_fs, g_fz, NULL, left, right, &used, &ev));
+    ++g_checks;
+    if (used != 0)
+        ERR("a bad edge took %zu rows", used);
+    right[3] = right[2];
+    GOOD(flt_flatness_push_strip(f, 10, FIBERS, g_fs, g_fz, NULL, left, right, &used, &ev));
+    GOOD(flt_flatness_push_strip(f, 10, FIBERS, g_fs + 10, g_fz + 10 * FIBERS, NULL, NULL, NULL,
+                                 &used, &ev));
+    flt_flatness_destroy(f);
+}
+
 static void row_flatness_finish(void) {
     flt_flatness *f = new_flatness();
     int ev = -1;
@@ -2373,6 +2439,50 @@ static void row_flatness_shape(void) {
     BAD(FLT_ERR_STATE, "no window", flt_flatness_shape(f, &sh, NULL, NULL, NULL, NULL));
     GOOD(flt_flatness_evaluate(f, FROWS, FIBERS, g_fs, g_fz, NULL));
     GOOD(flt_flatness_shape(f, &sh, NULL, NULL, NULL, NULL));
+    flt_flatness_destroy(f);
+}
+
+static void row_flatness_strip(void) {
+    flt_flatness *f = new_flatness();
+    double w[3], c[3];
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'flatness'", flt_flatness_strip(NULL, w, c));
+    BAD(FLT_ERR_STATE, "no window", flt_flatness_strip(f, w, c));
+    GOOD(flt_flatness_evaluate(f, FROWS, FIBERS, g_fs, g_fz, NULL));
+    GOOD(flt_flatness_strip(f, w, c));
+    GOOD(flt_flatness_strip(f, NULL, NULL));
+    ++g_checks;
+    if (!(isfinite(w[0]) && isfinite(c[2])))
+        ERR("the grid's strip is not finite: %g, %g", w[0], c[2]);
+    flt_flatness_destroy(f);
+}
+
+static void row_flatness_zone_positions(void) {
+    flt_flatness *f = new_flatness();
+    size_t zones;
+    GOOD(flt_flatness_zones(f, &zones));
+    double *a = malloc(sizeof(double) * zones);
+    size_t *n = malloc(sizeof(size_t) * zones);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'flatness'",
+        flt_flatness_zone_positions(NULL, zones, a, NULL, NULL, n));
+    BAD(FLT_ERR_STATE, "no window", flt_flatness_zone_positions(f, zones, a, NULL, NULL, n));
+    GOOD(flt_flatness_evaluate(f, FROWS, FIBERS, g_fs, g_fz, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'zones'",
+        flt_flatness_zone_positions(f, zones + 1, a, NULL, NULL, n));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'zones'", flt_flatness_zone_positions(f, NEG, a, NULL, NULL, n));
+    GOOD(flt_flatness_zone_positions(f, zones, a, a, a, n));
+    free(a), free(n);
+    flt_flatness_destroy(f);
+}
+
+static void row_flatness_fiber_positions(void) {
+    flt_flatness *f = new_flatness();
+    double xs[FIBERS], x[FIBERS];
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'flatness'", flt_flatness_fiber_positions(NULL, FIBERS, xs, x));
+    BAD(FLT_ERR_STATE, "no window", flt_flatness_fiber_positions(f, FIBERS, xs, x));
+    GOOD(flt_flatness_evaluate(f, FROWS, FIBERS, g_fs, g_fz, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'", flt_flatness_fiber_positions(f, FIBERS - 1, xs, x));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'", flt_flatness_fiber_positions(f, NEG, xs, x));
+    GOOD(flt_flatness_fiber_positions(f, FIBERS, xs, x));
     flt_flatness_destroy(f);
 }
 
@@ -4057,6 +4167,11 @@ static const row k_rows[] = {
     ROW(flatness_zone_layout),
     ROW(flatness_evaluate),
     ROW(flatness_push),
+    ROW(flatness_evaluate_strip),
+    ROW(flatness_push_strip),
+    ROW(flatness_strip),
+    ROW(flatness_zone_positions),
+    ROW(flatness_fiber_positions),
     ROW(flatness_finish),
     ROW(flatness_reset),
     ROW(flatness_window),

@@ -123,6 +123,106 @@ static void mono12_allocates_nothing_per_frame(void **state) {
     frames_and_rows_allocate_nothing(12);
 }
 
+/* The line in the field, per frame: a narrow strip wandering over the
+ * roller table, coils with heads and tails, glints at the edges, lines at
+ * 1.5 x full scale blooming; the extractor's edges, flags and saturation;
+ * the reconstructor with the flags (push, end of sheet, pull) and the
+ * streamed flatness on the strip (a window evaluated on the way). Nothing
+ * allocates once created. */
+static void the_line_in_the_field_allocates_nothing_per_frame(void **state) {
+    (void)state;
+    enum { N = 40 };
+    flt_calib *calib = NULL;
+    assert_int_equal(flt_calib_create_reference(892, ROWS, -1000, 10, FIBERS, &calib), FLT_OK);
+    const flt_option keys[] = {
+        FLT_OPT_SIM_SURROUND,     FLT_OPT_SIM_STRIP_WIDTH,   FLT_OPT_SIM_WANDER_AMPLITUDE,
+        FLT_OPT_SIM_WANDER_SIGMA, FLT_OPT_SIM_COIL_LENGTH,   FLT_OPT_SIM_COIL_GAP,
+        FLT_OPT_SIM_SECOND_WIDTH, FLT_OPT_SIM_EDGE_GLINTS,   FLT_OPT_SIM_LINE_PEAK,
+        FLT_OPT_SIM_BLOOMING,     FLT_OPT_SIM_FRAME_SPACING, FLT_OPT_SIM_START};
+    const double values[] = {2, 1200, 40, 10, 6000, 600, 900, 0.5, 1.5, 1, 200, 5000};
+    flt_options *so = NULL, *eo = NULL;
+    assert_int_equal(flt_options_create(&so), FLT_OK);
+    for (int i = 0; i < 12; ++i)
+        assert_int_equal(flt_options_set(so, keys[i], values[i]), FLT_OK);
+    assert_int_equal(flt_options_create(&eo), FLT_OK);
+    assert_int_equal(flt_options_set(eo, FLT_OPT_EXTRACT_LASER0_FIRST_ROW, 128), FLT_OK);
+    assert_int_equal(flt_options_set(eo, FLT_OPT_EXTRACT_LASER0_ROWS, 112), FLT_OK);
+    assert_int_equal(flt_options_set(eo, FLT_OPT_EXTRACT_LASER1_FIRST_ROW, 64), FLT_OK);
+    assert_int_equal(flt_options_set(eo, FLT_OPT_EXTRACT_LASER1_ROWS, 64), FLT_OK);
+    flt_sim *sim = NULL;
+    flt_extractor *ex = NULL;
+    flt_recon *recon = NULL;
+    flt_flatness *flat = NULL;
+    assert_int_equal(flt_sim_create(calib, so, &sim), FLT_OK);
+    assert_int_equal(flt_extractor_create(calib, eo, &ex), FLT_OK);
+    assert_int_equal(flt_recon_create(FIBERS, NULL, &recon), FLT_OK);
+    assert_int_equal(flt_flatness_create_from_calib(calib, NULL, &flat), FLT_OK);
+    assert_int_equal(flt_sim_add_defect(sim, FLT_SIM_WAVY_EDGE_BOTH, 6, 1500), FLT_OK);
+    uint8_t *frame = malloc((size_t)W * ROWS), *flags = malloc(N * FIBERS),
+            *out_flags = malloc(N * FIBERS);
+    double *s = malloc(N * sizeof(double)), *h = malloc(N * FIBERS * sizeof(double)),
+           *g = malloc(N * FIBERS * sizeof(double)), *z = malloc(N * FIBERS * sizeof(double)),
+           *s_out = malloc(N * sizeof(double)), *left = malloc(N * sizeof(double)),
+           *right = malloc(N * sizeof(double));
+    size_t on_strip = 0, saturated_frames = 0, windows = 0;
+
+    start_counting();
+    flt_status st = FLT_OK;
+    for (int f = 0; f < N && st == FLT_OK; ++f) {
+        double e, width, centre, fraction;
+        unsigned strip_flags;
+        size_t peaks, saturated;
+        st = flt_sim_next_frame(sim, frame, (size_t)W * ROWS, W, &e, 0, NULL, NULL);
+        if (st == FLT_OK)
+            st = flt_extractor_process(ex, frame, FLT_PIXEL_MONO8, W, ROWS, W, e, FIBERS, &s[f],
+                                       h + (size_t)f * FIBERS, g + (size_t)f * FIBERS, NULL);
+        if (st == FLT_OK)
+            st = flt_extractor_fiber_flags(ex, FIBERS, flags + (size_t)f * FIBERS);
+        if (st == FLT_OK)
+            st = flt_extractor_strip(ex, 2, &left[f], &right[f], &width, &centre, &strip_flags);
+        if (st == FLT_OK)
+            st = flt_extractor_saturation(ex, 2, &peaks, &saturated, &fraction);
+        saturated_frames += fraction > 0.9;
+        for (size_t k = 0; k < FIBERS; ++k)
+            on_strip += flags[(size_t)f * FIBERS + k] == 0;
+    }
+    if (st == FLT_OK)
+        st = flt_recon_push_flagged(recon, N, FIBERS, s, h, g, flags);
+    if (st == FLT_OK)
+        st = flt_recon_end_sheet(recon);
+    size_t pulled = 0, fed = 0;
+    if (st == FLT_OK)
+        st = flt_recon_pull(recon, N, FIBERS, s_out, z, out_flags, &pulled);
+    while (st == FLT_OK && fed < pulled) {
+        size_t used = 0;
+        int evaluated = 0;
+        st = flt_flatness_push_strip(flat, pulled - fed, FIBERS, s_out + fed, z + fed * FIBERS,
+                                     out_flags + fed * FIBERS, left + fed, right + fed, &used,
+                                     &evaluated);
+        fed += used;
+        windows += (size_t)evaluated;
+    }
+    const size_t per_frame = stop_counting();
+    assert_int_equal(st, FLT_OK);
+    print_message("the line in the field: %zu allocations over %d frames (render, extract, "
+                  "edges, flags, saturation), the reconstructor with flags and %zu streamed "
+                  "window(s) on the strip; %zu fibers on the strip, %zu saturated frames\n",
+                  per_frame, N, windows, on_strip, saturated_frames);
+    assert_int_equal(per_frame, 0);
+    /* It did the work: strip, saturation, a head or tail and a window. */
+    assert_true(on_strip > N * 50 && saturated_frames > N / 2 && windows >= 1);
+    assert_int_equal(pulled, N);
+    free(frame), free(flags), free(out_flags), free(s), free(h), free(g), free(z), free(s_out);
+    free(left), free(right);
+    flt_flatness_destroy(flat);
+    flt_recon_destroy(recon);
+    flt_extractor_destroy(ex);
+    flt_sim_destroy(sim);
+    flt_options_destroy(so);
+    flt_options_destroy(eo);
+    flt_calib_destroy(calib);
+}
+
 /* The counter must be in place, or every count below would be 0. */
 static int install_counter(void **state) {
     (void)state;
@@ -134,6 +234,7 @@ int main(void) {
         cmocka_unit_test(mono8_allocates_nothing_per_frame),
         cmocka_unit_test(mono16_allocates_nothing_per_frame),
         cmocka_unit_test(mono12_allocates_nothing_per_frame),
+        cmocka_unit_test(the_line_in_the_field_allocates_nothing_per_frame),
     };
     return cmocka_run_group_tests(tests, install_counter, NULL);
 }

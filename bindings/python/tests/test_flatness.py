@@ -227,7 +227,8 @@ def test_options_table_and_docstring():
     assert set(opts) == {"flat_window_length", "flat_update_interval", "flat_zone_width",
                          "flat_reference", "flat_min_length", "flat_min_coverage",
                          "flat_wave_hysteresis", "flat_flat_limit", "flat_bow_limit",
-                         "flat_crossbow_limit", "flat_row_capacity"}
+                         "flat_crossbow_limit", "flat_row_capacity", "flat_zone_count",
+                         "flat_drive_side", "flat_zones_on"}
     assert "{options}" not in flatline.Flatness.__doc__
     assert "flat_zone_width (float)" in flatline.Flatness.__doc__
 
