@@ -8,6 +8,7 @@
 #include "core/error.hpp"
 #include "flatline/flatness.h"
 #include "flatline/recon.h"
+#include "flatline/sim.h"
 #include "flatline/source.h"
 
 namespace flt {
@@ -145,6 +146,13 @@ const option_choice k_choices[] = {
     {FLT_OPT_SOURCE_ENCODER_MODE, "fixed_step", FLT_ENCODER_FIXED_STEP},
     {FLT_OPT_SOURCE_ENCODER_MODE, "host", FLT_ENCODER_HOST},
     {FLT_OPT_SOURCE_ENCODER_MODE, "chunk", FLT_ENCODER_CHUNK},
+    {FLT_OPT_SIM_SURROUND, "strip", FLT_SIM_SURROUND_STRIP},
+    {FLT_OPT_SIM_SURROUND, "nothing", FLT_SIM_SURROUND_NOTHING},
+    {FLT_OPT_SIM_SURROUND, "roller_table", FLT_SIM_SURROUND_ROLLER_TABLE},
+    {FLT_OPT_FLAT_DRIVE_SIDE, "low_x", FLT_SIDE_LOW_X},
+    {FLT_OPT_FLAT_DRIVE_SIDE, "high_x", FLT_SIDE_HIGH_X},
+    {FLT_OPT_FLAT_ZONES_ON, "strip", FLT_ZONES_ON_STRIP},
+    {FLT_OPT_FLAT_ZONES_ON, "grid", FLT_ZONES_ON_GRID},
 };
 
 // The components by the hundreds of their keys (common.h).

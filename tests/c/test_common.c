@@ -159,7 +159,9 @@ static void choices_name_every_value_of_a_choice_option(void **state) {
             assert_true(lo == 0 && hi == (double)(n - 1)); /* every value named */
         }
     }
-    assert_int_equal(with_choices, 3); /* robust, flat_reference, source_encoder_mode */
+    /* robust, flat_reference, source_encoder_mode, sim_surround, flat_drive_side,
+     * flat_zones_on */
+    assert_int_equal(with_choices, 6);
     const char *name;
     int value;
     assert_int_equal(flt_option_choice_at(FLT_OPT_ROBUST, FLT_ROBUST_TUKEY, &name, &value), FLT_OK);
@@ -173,6 +175,13 @@ static void choices_name_every_value_of_a_choice_option(void **state) {
         flt_option_choice_at(FLT_OPT_SOURCE_ENCODER_MODE, FLT_ENCODER_CHUNK, &name, &value),
         FLT_OK);
     assert_string_equal(name, "chunk");
+    assert_int_equal(
+        flt_option_choice_at(FLT_OPT_SIM_SURROUND, FLT_SIM_SURROUND_ROLLER_TABLE, &name, &value),
+        FLT_OK);
+    assert_string_equal(name, "roller_table");
+    assert_int_equal(flt_option_choice_at(FLT_OPT_FLAT_ZONES_ON, FLT_ZONES_ON_GRID, &name, &value),
+                     FLT_OK);
+    assert_string_equal(name, "grid");
 }
 
 int main(void) {
