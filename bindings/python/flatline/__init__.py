@@ -96,6 +96,18 @@ from ._source import (
     source_options,
 )
 
+# The line in the field (strip edges, off-strip flags, saturation, zones on
+# the strip).
+from ._recon import FLAG_OFF_STRIP, reconstruct_flagged
+from ._extractor import (
+    STRIP_LEFT_OPEN,
+    STRIP_NONE,
+    STRIP_RIGHT_OPEN,
+    Saturation,
+    StripEdges,
+)
+from ._flatness import FIBER_OFF_STRIP, WINDOW_ON_STRIP, ZONE_OFF_STRIP, StripWindow
+
 from ._gauge import Gauge, Sheet, SheetFlag, SheetZones, gauge_options
 from ._verdict import (
     Measure,
@@ -208,4 +220,15 @@ __all__ = [
     "Verdict",
     "VerdictState",
     "straightedge_deviation",
+    "FLAG_OFF_STRIP",
+    "reconstruct_flagged",
+    "STRIP_LEFT_OPEN",
+    "STRIP_NONE",
+    "STRIP_RIGHT_OPEN",
+    "Saturation",
+    "StripEdges",
+    "FIBER_OFF_STRIP",
+    "WINDOW_ON_STRIP",
+    "ZONE_OFF_STRIP",
+    "StripWindow",
 ]

@@ -16,7 +16,16 @@ from ._errors import StateError
 from ._options import OptionValue, make_options, options_doc, prefixed_options
 from ._pixels import PixelFormat
 
-__all__ = ["ExtractedRow", "Extractor", "extractor_options"]
+__all__ = ["ExtractedRow", "Extractor", "Saturation", "StripEdges", "STRIP_LEFT_OPEN", "STRIP_NONE",
+           "STRIP_RIGHT_OPEN", "extractor_options"]
+
+#: No strip under the laser (a head or tail between coils, or no line): both
+#: edges, the width and the centre are NaN (the open bits are set too).
+STRIP_NONE: int = _capi.FLT_STRIP_NONE
+#: The strip reaches the frame's border at low sensor x: left_mm is NaN.
+STRIP_LEFT_OPEN: int = _capi.FLT_STRIP_LEFT_OPEN
+#: The same at high sensor x: right_mm is NaN.
+STRIP_RIGHT_OPEN: int = _capi.FLT_STRIP_RIGHT_OPEN
 
 
 class ExtractedRow(NamedTuple):
@@ -27,6 +36,27 @@ class ExtractedRow(NamedTuple):
     height: np.ndarray  #: (K,) mean of the two lasers' z, mm; NaN where invalid
     slope: np.ndarray  #: (K,) (z_ahead - z_behind) / laser spacing, mm/mm; NaN where invalid
     valid: np.ndarray  #: (K,) bool: both lasers gave a z for this fiber
+
+
+class StripEdges(NamedTuple):
+    """Where the last frame shows the strip (:meth:`Extractor.strip`), sensor
+    x in mm; a value is NaN exactly where ``flags`` says why."""
+
+    left_mm: float  #: the edge at low sensor x (NaN with STRIP_LEFT_OPEN)
+    right_mm: float  #: the edge at high sensor x (NaN with STRIP_RIGHT_OPEN)
+    width_mm: float  #: right - left, NaN unless both edges are seen
+    centre_mm: float  #: (left + right) / 2, NaN unless both edges are seen
+    flags: int  #: STRIP_* bits
+
+
+class Saturation(NamedTuple):
+    """The last frame's saturated peaks (:meth:`Extractor.saturation`): the
+    strip's columns with a valid peak, how many of them were saturated
+    (measured as a plateau), and their share, for an exposure controller."""
+
+    peaks: int  #: the strip's columns with a valid peak
+    saturated: int  #: of those, the saturated ones
+    fraction: float  #: saturated / peaks, 0 without a peak
 
 
 def extractor_options() -> Dict[str, float]:
@@ -228,6 +258,40 @@ class Extractor:
         with self._lock:
             self._live().peaks_into(rows)
         return rows
+
+    def fiber_flags(self) -> np.ndarray:
+        """The last processed frame's flags per fiber, (K,) uint8: 0 valid,
+        FLAG_OFF_STRIP for a fiber off the strip (beyond its edges, or no
+        strip under a laser), FLAG_INVALID_INPUT for a fiber on the strip
+        without a valid z from both lasers. Exactly what
+        :meth:`Reconstructor.push_flagged` takes. StateError before the
+        first frame."""
+        flags = np.empty(self._fibers, dtype=np.uint8)
+        with self._lock:
+            self._live().fiber_flags_into(flags)
+        return flags
+
+    def strip(self, laser: int = 2) -> StripEdges:
+        """Where the last processed frame shows the strip: its edges, width
+        and centre in sensor x (mm) under laser 0 or 1, or 2 (the default)
+        for the profile row (the mean of both lasers' edges, an edge seen
+        only where both see it). StateError before the first frame."""
+        laser = as_index("strip", "laser", laser, 0, 2)
+        out = np.empty(5)
+        with self._lock:
+            self._live().strip_into(laser, out)
+        return StripEdges(float(out[0]), float(out[1]), float(out[2]), float(out[3]),
+                          int(out[4]))
+
+    def saturation(self, laser: int = 2) -> Saturation:
+        """The last processed frame's saturated peaks on the strip, under
+        laser 0 or 1, or 2 (the default) for both. StateError before the
+        first frame."""
+        laser = as_index("saturation", "laser", laser, 0, 2)
+        out = np.empty(3)
+        with self._lock:
+            self._live().saturation_into(laser, out)
+        return Saturation(int(out[0]), int(out[1]), float(out[2]))
 
     def laser_profiles(self) -> np.ndarray:
         """Each laser's z on the fiber grid for the last processed frame,

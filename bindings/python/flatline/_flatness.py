@@ -27,6 +27,9 @@ __all__ = [
     "WINDOW_NO_VALID_FIBER",
     "WINDOW_NO_BOW",
     "WINDOW_NO_CROSSBOW",
+    "FIBER_OFF_STRIP",
+    "ZONE_OFF_STRIP",
+    "WINDOW_ON_STRIP",
     "Shape",
     "ShapeComponent",
     "FiberResults",
@@ -34,6 +37,7 @@ __all__ = [
     "ShapeResult",
     "WindowInfo",
     "FlatnessResult",
+    "StripWindow",
     "Flatness",
     "flatness_options",
     "i_units",
@@ -55,6 +59,15 @@ WINDOW_NO_VALID_FIBER: int = _capi.FLT_WINDOW_NO_VALID_FIBER
 WINDOW_NO_BOW: int = _capi.FLT_WINDOW_NO_BOW
 #: Fewer than 3 valid fibers: crossbow_mm is NaN.
 WINDOW_NO_CROSSBOW: int = _capi.FLT_WINDOW_NO_CROSSBOW
+#: The result slot lies beyond the strip's edges (zones on the strip);
+#: FIBER_NO_DATA is set too.
+FIBER_OFF_STRIP: int = _capi.FLT_FIBER_OFF_STRIP
+#: The zone lies beyond the strip's zones (a strip narrower than the grid);
+#: ZONE_NO_DATA is set too.
+ZONE_OFF_STRIP: int = _capi.FLT_ZONE_OFF_STRIP
+#: The strip's edges were known in the window: fibers and zones lie on the
+#: strip (strip coordinates), not on the sensor's fiber grid.
+WINDOW_ON_STRIP: int = _capi.FLT_WINDOW_ON_STRIP
 
 
 class Shape(enum.IntEnum):
@@ -66,6 +79,10 @@ class Shape(enum.IntEnum):
     CENTRE_BUCKLE = _capi.FLT_SHAPE_CENTRE_BUCKLE
     WAVY_EDGE_LEFT = _capi.FLT_SHAPE_WAVY_EDGE_LEFT
     WAVY_EDGE_RIGHT = _capi.FLT_SHAPE_WAVY_EDGE_RIGHT
+    #: WAVY_EDGE_LEFT by the operator's name (flat_drive_side says where it is)
+    WAVY_EDGE_DRIVE_SIDE = _capi.FLT_SHAPE_WAVY_EDGE_DRIVE_SIDE
+    #: WAVY_EDGE_RIGHT by the operator's name
+    WAVY_EDGE_OPERATOR_SIDE = _capi.FLT_SHAPE_WAVY_EDGE_OPERATOR_SIDE
     WAVY_EDGE_BOTH = _capi.FLT_SHAPE_WAVY_EDGE_BOTH
     QUARTER_BUCKLE = _capi.FLT_SHAPE_QUARTER_BUCKLE
     MIX = _capi.FLT_SHAPE_MIX
@@ -143,6 +160,25 @@ class WindowInfo:
 
 
 @dataclass(frozen=True)
+class StripWindow:
+    """Where one window's results lie on the strip. With WINDOW_ON_STRIP
+    (the strip's edges were known) result fiber k is the strip coordinate
+    ``fiber_strip_x[k]`` (mm from the strip's centre line towards the
+    operator side), not sensor fiber k, and zones are laid on the strip;
+    without it, on the fiber grid (strip coordinates from its centre)."""
+
+    on_strip: bool  #: WINDOW_ON_STRIP was set
+    width_mm: Tuple[float, float, float]  #: the strip's width (mean, min, max) over the window
+    centre_mm: Tuple[float, float, float]  #: its centre line's sensor x (mean, min, max)
+    fiber_strip_x: np.ndarray  #: (K,) each result fiber's strip coordinate, mm
+    fiber_sensor_x: np.ndarray  #: (K,) its sensor x at the window's mean position, mm
+    zone_strip_centre: np.ndarray  #: (zones,) zone centres in strip coordinates; NaN with ZONE_OFF_STRIP
+    zone_sensor_centre: np.ndarray  #: (zones,) zone centres in sensor x, mm
+    zone_width: np.ndarray  #: (zones,) zone widths, mm (0 off the strip)
+    zone_fiber_count: np.ndarray  #: (zones,) int64 result fibers in each zone
+
+
+@dataclass(frozen=True)
 class FlatnessResult:
     """Everything about one evaluated window (copies: later windows do not
     change it)."""
@@ -151,6 +187,8 @@ class FlatnessResult:
     fibers: FiberResults
     zones: ZoneResults
     shape: ShapeResult
+    #: where the results lie on the strip (always filled by :class:`Flatness`)
+    strip: Optional[StripWindow] = None
 
 
 def flatness_options() -> Dict[str, float]:
@@ -159,6 +197,23 @@ def flatness_options() -> Dict[str, float]:
 
 
 _NO_FLAGS = np.zeros((1, 1), dtype=np.uint8)  # numpy.i has no optional arrays
+
+
+def _edges(function: str, rows: int, left_mm: Any,
+           right_mm: Any) -> Optional[Tuple[np.ndarray, np.ndarray]]:
+    """The strip's edges per row as two (rows,) float64 arrays (NaN:
+    unknown), or None when neither is given."""
+    if left_mm is None and right_mm is None:
+        return None
+    out = []
+    for name, value in (("left_mm", left_mm), ("right_mm", right_mm)):
+        if value is None:
+            out.append(np.full(rows, np.nan))
+            continue
+        array = as_float64(function, name, value, 1)
+        check_shape(function, name, array, (rows,), "z.shape[0]")
+        out.append(array)
+    return out[0], out[1]
 
 
 def _rows(function: str, fibers: int, s: Any, z: Any,
@@ -310,41 +365,66 @@ class Flatness:
 
     # -- evaluation ----------------------------------------------------------------
 
-    def evaluate(self, s: Any, z: Any, flags: Any = None) -> FlatnessResult:
+    def evaluate(self, s: Any, z: Any, flags: Any = None, left_mm: Any = None,
+                 right_mm: Any = None) -> FlatnessResult:
         """Evaluates one window from s (N,) mm, z (N, K) mm and flags (N, K)
         uint8 FLAG_* bits or None; returns its :class:`FlatnessResult`.
-        Independent of the streaming state."""
+        Independent of the streaming state.
+
+        left_mm, right_mm: the strip's edges per row (N,) in sensor x, mm
+        (NaN where unknown; :meth:`Extractor.strip` with laser 2 gives
+        them), or None. Where the edges are known (given, or taken from the
+        flags' FLAG_OFF_STRIP bits), the window is measured on the strip:
+        see :class:`StripWindow`."""
         fn = "evaluate"
         s, z, mask, flagged = _rows(fn, self._fibers, s, z, flags)
+        edges = _edges(fn, len(s), left_mm, right_mm)
         with self._lock:
             handle = self._live()
-            handle.evaluate_rows(s, z, mask, flagged)
+            if edges is None:
+                handle.evaluate_rows(s, z, mask, flagged)
+            else:
+                handle.evaluate_strip_rows(s, z, mask, flagged, edges[0], edges[1])
             return self._result(handle)
 
-    def push(self, s: Any, z: Any, flags: Any = None) -> Tuple[int, bool]:
+    def push(self, s: Any, z: Any, flags: Any = None, left_mm: Any = None,
+             right_mm: Any = None) -> Tuple[int, bool]:
         """Streams rows (s continues to increase across calls) until a window
         completes. Returns ``(consumed, evaluated)``: the rows taken (all
         unless a window completed first) and whether a window was evaluated
         (read it with :meth:`result`, then push ``s[consumed:]`` etc. again).
-        BufferFullError when a window would exceed flat_row_capacity rows."""
+        BufferFullError when a window would exceed flat_row_capacity rows.
+        left_mm, right_mm: the strip's edges per row, as in :meth:`evaluate`."""
         fn = "push"
         s, z, mask, flagged = _rows(fn, self._fibers, s, z, flags)
+        edges = _edges(fn, len(s), left_mm, right_mm)
         with self._lock:
-            consumed, evaluated = self._live().push_rows(s, z, mask, flagged)
+            if edges is None:
+                consumed, evaluated = self._live().push_rows(s, z, mask, flagged)
+            else:
+                consumed, evaluated = self._live().push_strip_rows(s, z, mask, flagged, edges[0],
+                                                                   edges[1])
         return int(consumed), bool(evaluated)
 
-    def windows(self, s: Any, z: Any, flags: Any = None) -> Iterator[FlatnessResult]:
+    def windows(self, s: Any, z: Any, flags: Any = None, left_mm: Any = None,
+                right_mm: Any = None) -> Iterator[FlatnessResult]:
         """Pushes all the rows, yielding the :class:`FlatnessResult` of every
-        window they complete (in order). Does not :meth:`finish`."""
+        window they complete (in order). Does not :meth:`finish`.
+        left_mm, right_mm: the strip's edges per row, as in :meth:`evaluate`."""
         fn = "windows"
         s, z, mask, flagged = _rows(fn, self._fibers, s, z, flags)
+        edges = _edges(fn, len(s), left_mm, right_mm)
         start = 0
         rows = len(s)
         while start < rows:
             part = (s[start:], z[start:], mask[start:] if flagged else mask)
             with self._lock:
                 handle = self._live()
-                consumed, evaluated = handle.push_rows(*part, flagged)
+                if edges is None:
+                    consumed, evaluated = handle.push_rows(*part, flagged)
+                else:
+                    consumed, evaluated = handle.push_strip_rows(
+                        *part, flagged, edges[0][start:], edges[1][start:])
                 result = self._result(handle) if evaluated else None
             start += int(consumed)
             if result is not None:
@@ -387,6 +467,17 @@ class Flatness:
         shape = np.empty(5)
         handle.shape_into(shape)
         kind = Shape(int(shape[0]))
+        strip = np.empty(6)
+        handle.strip_into(strip)
+        fiber_strip, fiber_sensor = np.empty(k), np.empty(k)
+        handle.fiber_positions_into(fiber_strip, fiber_sensor)
+        zone_strip, zone_sensor, zone_width, zone_fibers = (np.empty(zones) for _ in range(4))
+        handle.zone_positions_into(zone_strip, zone_sensor, zone_width, zone_fibers)
+        on_strip = StripWindow(bool(int(window[3]) & WINDOW_ON_STRIP),
+                               (float(strip[0]), float(strip[1]), float(strip[2])),
+                               (float(strip[3]), float(strip[4]), float(strip[5])),
+                               fiber_strip, fiber_sensor, zone_strip, zone_sensor, zone_width,
+                               zone_fibers.astype(np.int64))
         return FlatnessResult(
             WindowInfo(float(window[0]), float(window[1]), int(window[2]), int(window[3]),
                        int(window[4])),
@@ -395,6 +486,7 @@ class Flatness:
                         zone_flags),
             ShapeResult(kind, kind.label, float(shape[1]), ShapeComponent(int(shape[2])),
                         float(shape[3]), float(shape[4])),
+            on_strip,
         )
 
 

@@ -18,8 +18,10 @@ __all__ = [
     "FLAG_INVALID_INPUT",
     "FLAG_GAP",
     "FLAG_NO_DATA",
+    "FLAG_OFF_STRIP",
     "Reconstructor",
     "reconstruct",
+    "reconstruct_flagged",
     "reconstructor_options",
 ]
 
@@ -30,6 +32,27 @@ FLAG_INVALID_INPUT: int = _capi.FLT_FLAG_INVALID_INPUT
 FLAG_GAP: int = _capi.FLT_FLAG_GAP
 #: The fiber has had no valid height since the strip began: z is NaN.
 FLAG_NO_DATA: int = _capi.FLT_FLAG_NO_DATA
+#: The fiber lies off the strip in this row (beyond its edges, or no strip
+#: under a laser): not invalid data, nothing to measure. As input (the
+#: extractor's :meth:`Extractor.fiber_flags`) the sample is not used; as
+#: output the value is NaN with this bit alone: never reconstructed as strip.
+FLAG_OFF_STRIP: int = _capi.FLT_FLAG_OFF_STRIP
+
+
+def _flags(function: str, value: Any, shape: Tuple[int, ...]) -> np.ndarray:
+    """The extractor's per-sample FLAG_* bits as a C-contiguous uint8 array
+    of `shape`: an integer array with values 0..255."""
+    array = np.asarray(value)
+    if array.dtype.kind not in "iu":
+        raise TypeError(f"{function}() argument 'flags' must be an integer array of FLAG_* "
+                        f"bits (the extractor's uint8 flags), got dtype {array.dtype}")
+    if array.shape != shape:
+        raise ValueError(f"{function}() argument 'flags' has shape {array.shape}, but "
+                         f"height.shape requires {shape}")
+    if array.size and (array.min() < 0 or array.max() > 255):
+        raise ValueError(f"{function}() argument 'flags' holds values outside 0..255 "
+                         f"(FLAG_* bits)")
+    return np.ascontiguousarray(array, dtype=np.uint8)
 
 
 def reconstructor_options() -> Dict[str, float]:
@@ -83,6 +106,23 @@ def reconstruct(s: Any, height: Any, slope: Any, valid: Any = None,
     """
     z, _flags = reconstruct_with_flags(s, height, slope, valid, **options)
     return z
+
+
+def reconstruct_flagged(s: Any, height: Any, slope: Any, flags: Any,
+                        **options: OptionValue) -> Tuple[np.ndarray, np.ndarray]:
+    """As :func:`reconstruct_with_flags`, with the extractor's per-sample
+    FLAG_* bits (N, K) in place of a validity mask: 0 valid,
+    FLAG_INVALID_INPUT invalid (bridged), FLAG_OFF_STRIP off the strip (not
+    used; its output is NaN flagged FLAG_OFF_STRIP alone). Returns (z,
+    flags), both (N, K)."""
+    fn = "reconstruct_flagged"
+    s, height, slope, _mask, _masked = block(fn, s, height, slope, None)
+    bits = _flags(fn, flags, height.shape)
+    bag = make_options(fn, options, names=_NAMES)
+    z = np.empty(height.shape, dtype=np.float64)
+    out = np.empty(height.shape, dtype=np.uint8)
+    _capi.flt_py_reconstruct(bag, s, height, slope, bits, 2, z, out)
+    return z, out
 
 
 def reconstruct_with_flags(s: Any, height: Any, slope: Any, valid: Any = None,
@@ -234,6 +274,32 @@ class Reconstructor:
                     f"a Reconstructor of {self._fibers} fibers")
         with self._lock:
             self._live().push_block(s, height, slope, mask, masked)
+
+    def push_flagged(self, s: Any, height: Any, slope: Any, flags: Any) -> None:
+        """Pushes one row or a block of rows with the extractor's per-fiber
+        FLAG_* bits (:meth:`Extractor.fiber_flags`) in place of a validity
+        mask: 0 valid, FLAG_INVALID_INPUT invalid (bridged), FLAG_OFF_STRIP
+        off the strip (not used; its rows come out NaN flagged
+        FLAG_OFF_STRIP, so a strip that wanders, narrows or ends is never
+        extended beyond its edges). Shapes as :meth:`push` (flags like
+        height). On any error nothing is pushed."""
+        fn = "push_flagged"
+        if np.ndim(height) == 1:  # one row
+            if np.ndim(s) != 0:
+                raise ValueError(
+                    f"{fn}() argument 's' must be a scalar when 'height' is one "
+                    f"row of shape (K,); got shape {np.shape(s)}"
+                )
+            s = np.reshape(as_float64(fn, "s", s, 0), (1,))
+            height = np.reshape(as_float64(fn, "height", height, 1), (1, -1))
+            slope = np.reshape(as_float64(fn, "slope", slope, 1), (1, -1))
+            flags = np.reshape(np.asarray(flags), (1, -1))
+        s, height, slope, _mask, _masked = block(fn, s, height, slope, None)
+        check_shape(fn, "height", height, (height.shape[0], self._fibers),
+                    f"a Reconstructor of {self._fibers} fibers")
+        bits = _flags(fn, flags, height.shape)
+        with self._lock:
+            self._live().push_block(s, height, slope, bits, 2)
 
     def pull(self, max_rows: Optional[int] = None
              ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:

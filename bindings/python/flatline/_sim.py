@@ -306,6 +306,41 @@ class SimulatedLine:
         encoder = float(encoder)
         return SimFrame(image, encoder, encoder - self._row_offset, truth, peak_rows)
 
+    def strip_edges(self, encoder_mm: Any, laser: int = 2
+                    ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Ground truth of the strip's edges at the encoder positions (n,)
+        (or a scalar), under laser 0 or 1, or 2 (the default) for a profile
+        row (the mean of both lasers' edges, present only where both see
+        the strip). Returns (left_mm, right_mm, present): sensor x of the
+        edges (NaN where the laser sees no strip) and a bool array."""
+        fn = "strip_edges"
+        laser = as_index(fn, "laser", laser, 0, 2)
+        scalar = np.ndim(encoder_mm) == 0
+        encoder = np.atleast_1d(np.asarray(encoder_mm, dtype=np.float64))
+        if encoder.ndim != 1:
+            raise ValueError(f"{fn}() argument 'encoder_mm' must be a scalar or have 1 "
+                             f"dimension, got shape {encoder.shape}")
+        encoder = np.ascontiguousarray(encoder)
+        left, right = np.empty(len(encoder)), np.empty(len(encoder))
+        present = np.empty(len(encoder), dtype=np.uint8)
+        if len(encoder):
+            with self._lock:
+                self._live().strip_edges_into(laser, encoder, left, right, present)
+        if scalar:
+            return left[0], right[0], present.view(np.bool_)[0]
+        return left, right, present.view(np.bool_)
+
+    def fiber_flags(self, encoder_mm: float) -> np.ndarray:
+        """Ground truth of a frame's fiber flags at encoder_mm: what a
+        perfect extractor reports (:meth:`Extractor.fiber_flags`), (K,)
+        uint8: 0 on the strip for both lasers, FLAG_OFF_STRIP otherwise."""
+        fn = "fiber_flags"
+        encoder_mm = as_real(fn, "encoder_mm", encoder_mm)
+        flags = np.empty(self._fibers, dtype=np.uint8)
+        with self._lock:
+            self._live().fiber_flags_into(encoder_mm, flags)
+        return flags
+
     def rewind(self) -> None:
         """Back to frame 0: the following output repeats the first exactly."""
         with self._lock:

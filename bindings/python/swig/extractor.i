@@ -16,6 +16,9 @@
 %ignore flt_extractor_process;
 %ignore flt_extractor_peaks;
 %ignore flt_extractor_laser_profiles;
+%ignore flt_extractor_fiber_flags;
+%ignore flt_extractor_strip;
+%ignore flt_extractor_saturation;
 
 %typemap(in, numinputs=0) flt_extractor **out (flt_extractor *temp = NULL) { $1 = &temp; }
 %typemap(argout) flt_extractor **out {
@@ -27,7 +30,12 @@
   (double *row_slope_out, size_t row_slope_out_fibers)
 };
 %apply (unsigned char *INPLACE_ARRAY1, size_t DIM1) {
-  (unsigned char *row_valid_out, size_t row_valid_out_fibers)
+  (unsigned char *row_valid_out, size_t row_valid_out_fibers),
+  (unsigned char *fiber_flags_out, size_t fiber_flags_out_fibers)
+};
+%apply (double *INPLACE_ARRAY1, size_t DIM1) {
+  (double *strip_out, size_t strip_out_n),
+  (double *saturation_out, size_t saturation_out_n)
 };
 %apply (double *INPLACE_ARRAY2, size_t DIM1, size_t DIM2) {
   (double *peak_rows_out, size_t peak_rows_out_lasers, size_t peak_rows_out_width),
@@ -138,6 +146,37 @@ struct flt_extractor {};
         return flt_py_shape_error("flt_extractor_laser_profiles", "z_out.shape[0]",
                                   laser_z_out_lasers, 2);
     return flt_extractor_laser_profiles($self, laser_z_out_fibers, laser_z_out);
+  }
+
+  /* The last frame's flags per fiber (K,): what push_flagged takes. */
+  flt_status fiber_flags_into(unsigned char *fiber_flags_out, size_t fiber_flags_out_fibers) {
+    return flt_extractor_fiber_flags($self, fiber_flags_out_fibers, fiber_flags_out);
+  }
+
+  /* The strip under laser 0, 1 or 2 (the row): (left, right, width,
+   * centre, flags) as 5 doubles, mm. */
+  flt_status strip_into(unsigned laser, double *strip_out, size_t strip_out_n) {
+    unsigned flags = 0;
+    flt_status status;
+    if (strip_out_n != 5)
+      return flt_py_shape_error("flt_extractor_strip", "out.shape[0]", strip_out_n, 5);
+    status = flt_extractor_strip($self, laser, &strip_out[0], &strip_out[1], &strip_out[2],
+                                 &strip_out[3], &flags);
+    strip_out[4] = (double)flags;
+    return status;
+  }
+
+  /* (peaks, saturated, fraction) as 3 doubles (the counts exact below
+   * 2^53). */
+  flt_status saturation_into(unsigned laser, double *saturation_out, size_t saturation_out_n) {
+    size_t peaks = 0, saturated = 0;
+    flt_status status;
+    if (saturation_out_n != 3)
+      return flt_py_shape_error("flt_extractor_saturation", "out.shape[0]", saturation_out_n, 3);
+    status = flt_extractor_saturation($self, laser, &peaks, &saturated, &saturation_out[2]);
+    saturation_out[0] = (double)peaks;
+    saturation_out[1] = (double)saturated;
+    return status;
   }
 }
 

@@ -18,6 +18,11 @@
 %ignore flt_flatness_fiber_results;
 %ignore flt_flatness_zone_results;
 %ignore flt_flatness_shape;
+%ignore flt_flatness_evaluate_strip;
+%ignore flt_flatness_push_strip;
+%ignore flt_flatness_strip;
+%ignore flt_flatness_zone_positions;
+%ignore flt_flatness_fiber_positions;
 
 %typemap(in, numinputs=0) flt_flatness **out (flt_flatness *temp = NULL) { $1 = &temp; }
 %typemap(argout) flt_flatness **out {
@@ -30,7 +35,9 @@
 
 %apply (double *IN_ARRAY1, size_t DIM1) {
   (const double *fiber_x, size_t fiber_x_count),
-  (const double *flat_s, size_t flat_s_rows)
+  (const double *flat_s, size_t flat_s_rows),
+  (const double *edge_left, size_t edge_left_rows),
+  (const double *edge_right, size_t edge_right_rows)
 };
 %apply (double *IN_ARRAY2, size_t DIM1, size_t DIM2) {
   (const double *flat_z, size_t flat_z_rows, size_t flat_z_fibers)
@@ -48,7 +55,14 @@
   (double *centre_x_out, size_t centre_x_out_n),
   (double *fiber_count_out, size_t fiber_count_out_n),
   (double *window_out, size_t window_out_n),
-  (double *shape_out, size_t shape_out_n)
+  (double *shape_out, size_t shape_out_n),
+  (double *strip_out, size_t strip_out_n),
+  (double *zone_strip_out, size_t zone_strip_out_n),
+  (double *zone_sensor_out, size_t zone_sensor_out_n),
+  (double *zone_width_out, size_t zone_width_out_n),
+  (double *zone_fibers_out, size_t zone_fibers_out_n),
+  (double *fiber_strip_out, size_t fiber_strip_out_n),
+  (double *fiber_sensor_out, size_t fiber_sensor_out_n)
 };
 %apply (unsigned char *INPLACE_ARRAY1, size_t DIM1) {
   (unsigned char *fiber_flags_out, size_t fiber_flags_out_n),
@@ -197,6 +211,91 @@ struct flt_flatness {};
     shape_out[0] = (double)shape;
     shape_out[2] = (double)components;
     return status;
+  }
+
+  /* One window with the strip's edges per row, left and right (n,) mm
+   * (NaN: unknown). */
+  flt_status evaluate_strip_rows(const double *flat_s, size_t flat_s_rows,
+                                 const double *flat_z, size_t flat_z_rows, size_t flat_z_fibers,
+                                 const unsigned char *flat_flags, size_t flat_flags_rows,
+                                 size_t flat_flags_fibers, int flagged,
+                                 const double *edge_left, size_t edge_left_rows,
+                                 const double *edge_right, size_t edge_right_rows) {
+    const char *fn = "flt_flatness_evaluate_strip";
+    flt_status status = flt_py_flat_rows(fn, $self, flat_s_rows, flat_z_rows, flat_z_fibers,
+                                         flat_flags_rows, flat_flags_fibers, flagged);
+    if (status != FLT_OK) return status;
+    if (edge_left_rows != flat_z_rows)
+      return flt_py_shape_error(fn, "left_mm.shape[0]", edge_left_rows, flat_z_rows);
+    if (edge_right_rows != flat_z_rows)
+      return flt_py_shape_error(fn, "right_mm.shape[0]", edge_right_rows, flat_z_rows);
+    Py_BEGIN_ALLOW_THREADS
+    status = flt_flatness_evaluate_strip($self, flat_z_rows, flat_z_fibers, flat_s, flat_z,
+                                         flagged ? flat_flags : NULL, edge_left, edge_right);
+    Py_END_ALLOW_THREADS
+    return status;
+  }
+
+  /* Streaming push with the strip's edges; returns (consumed, evaluated). */
+  flt_status push_strip_rows(const double *flat_s, size_t flat_s_rows,
+                             const double *flat_z, size_t flat_z_rows, size_t flat_z_fibers,
+                             const unsigned char *flat_flags, size_t flat_flags_rows,
+                             size_t flat_flags_fibers, int flagged,
+                             const double *edge_left, size_t edge_left_rows,
+                             const double *edge_right, size_t edge_right_rows,
+                             size_t *consumed_out, int *evaluated_out) {
+    const char *fn = "flt_flatness_push_strip";
+    flt_status status = flt_py_flat_rows(fn, $self, flat_s_rows, flat_z_rows, flat_z_fibers,
+                                         flat_flags_rows, flat_flags_fibers, flagged);
+    if (status != FLT_OK) return status;
+    if (edge_left_rows != flat_z_rows)
+      return flt_py_shape_error(fn, "left_mm.shape[0]", edge_left_rows, flat_z_rows);
+    if (edge_right_rows != flat_z_rows)
+      return flt_py_shape_error(fn, "right_mm.shape[0]", edge_right_rows, flat_z_rows);
+    Py_BEGIN_ALLOW_THREADS
+    status = flt_flatness_push_strip($self, flat_z_rows, flat_z_fibers, flat_s, flat_z,
+                                     flagged ? flat_flags : NULL, edge_left, edge_right,
+                                     consumed_out, evaluated_out);
+    Py_END_ALLOW_THREADS
+    return status;
+  }
+
+  /* The strip over the last window: width {mean, min, max} then centre
+   * {mean, min, max}, mm (6 doubles). */
+  flt_status strip_into(double *strip_out, size_t strip_out_n) {
+    if (strip_out_n != 6)
+      return flt_py_shape_error("flt_flatness_strip", "out.shape[0]", strip_out_n, 6);
+    return flt_flatness_strip($self, strip_out, strip_out + 3);
+  }
+
+  /* Zone positions into (zones,) arrays; the fiber counts as doubles. */
+  flt_status zone_positions_into(double *zone_strip_out, size_t zone_strip_out_n,
+                                 double *zone_sensor_out, size_t zone_sensor_out_n,
+                                 double *zone_width_out, size_t zone_width_out_n,
+                                 double *zone_fibers_out, size_t zone_fibers_out_n) {
+    const char *fn = "flt_flatness_zone_positions";
+    size_t zones = zone_strip_out_n, j, *counts;
+    flt_status status;
+    if (zone_sensor_out_n != zones || zone_width_out_n != zones || zone_fibers_out_n != zones)
+      return flt_py_shape_error(fn, "an output's length", zone_sensor_out_n, zones);
+    counts = (size_t *)PyMem_Malloc((zones ? zones : 1) * sizeof(size_t));
+    if (counts == NULL) { PyErr_NoMemory(); return FLT_ERR_OUT_OF_MEMORY; }
+    status = flt_flatness_zone_positions($self, zones, zone_strip_out, zone_sensor_out,
+                                         zone_width_out, counts);
+    if (status == FLT_OK)
+      for (j = 0; j < zones; ++j) zone_fibers_out[j] = (double)counts[j];
+    PyMem_Free(counts);
+    return status;
+  }
+
+  /* Result fiber positions into (K,) arrays. */
+  flt_status fiber_positions_into(double *fiber_strip_out, size_t fiber_strip_out_n,
+                                  double *fiber_sensor_out, size_t fiber_sensor_out_n) {
+    if (fiber_sensor_out_n != fiber_strip_out_n)
+      return flt_py_shape_error("flt_flatness_fiber_positions", "sensor_x.shape[0]",
+                                fiber_sensor_out_n, fiber_strip_out_n);
+    return flt_flatness_fiber_positions($self, fiber_strip_out_n, fiber_strip_out,
+                                        fiber_sensor_out);
   }
 }
 

@@ -20,6 +20,8 @@
 %ignore flt_recon_end_sheet;
 %ignore flt_recon_boundary;
 %ignore flt_reconstruct;
+%ignore flt_recon_push_flagged;
+%ignore flt_reconstruct_flagged;
 
 %typemap(in, numinputs=0) flt_recon **out (flt_recon *temp = NULL) { $1 = &temp; }
 %typemap(argout) flt_recon **out {
@@ -76,7 +78,9 @@ struct flt_recon {};
   ~flt_recon() { flt_recon_destroy($self); }
 
   /* Pushes a block; `masked` selects whether `valid` is used (numpy.i has
-   * no optional arrays, so the unmasked call passes a 1x1 dummy). */
+   * no optional arrays, so the unmasked call passes a 1x1 dummy): 0 no
+   * mask, 1 a validity mask, 2 the extractor's FLT_FLAG_* bits
+   * (flt_recon_push_flagged). */
   flt_status push_block(const double *s, size_t s_rows,
                   const double *height, size_t height_rows, size_t height_fibers,
                   const double *slope, size_t slope_rows, size_t slope_fibers,
@@ -84,12 +88,15 @@ struct flt_recon {};
                   int masked) {
     flt_status status;
     if (!masked) valid = NULL;
-    status = flt_py_check_block("flt_recon_push", s_rows, height_rows,
-                                height_fibers, slope_rows, slope_fibers, valid,
-                                valid_rows, valid_fibers);
+    status = flt_py_check_block(masked == 2 ? "flt_recon_push_flagged" : "flt_recon_push",
+                                s_rows, height_rows, height_fibers, slope_rows, slope_fibers,
+                                valid, valid_rows, valid_fibers);
     if (status != FLT_OK) return status;
     Py_BEGIN_ALLOW_THREADS
-    status = flt_recon_push($self, s_rows, height_fibers, s, height, slope, valid);
+    if (masked == 2)
+      status = flt_recon_push_flagged($self, s_rows, height_fibers, s, height, slope, valid);
+    else
+      status = flt_recon_push($self, s_rows, height_fibers, s, height, slope, valid);
     Py_END_ALLOW_THREADS
     return status;
   }
@@ -137,7 +144,9 @@ struct flt_recon {};
 }
 
 %inline %{
-/* flt_reconstruct over numpy arrays; z_out and flags_out are (N, K). */
+/* flt_reconstruct over numpy arrays; z_out and flags_out are (N, K).
+ * masked: 0 no mask, 1 `valid` is a mask, 2 it holds the extractor's
+ * FLT_FLAG_* bits (flt_reconstruct_flagged). */
 flt_status flt_py_reconstruct(const flt_options *options,
                               const double *s, size_t s_rows,
                               const double *height, size_t height_rows,
@@ -165,8 +174,12 @@ flt_status flt_py_reconstruct(const flt_options *options,
                                   flags_out_rows * flags_out_fibers,
                                   s_rows * height_fibers);
     Py_BEGIN_ALLOW_THREADS
-    status = flt_reconstruct(options, s_rows, height_fibers, s, height, slope,
-                             valid, z_out, flags_out);
+    if (masked == 2)
+      status = flt_reconstruct_flagged(options, s_rows, height_fibers, s, height, slope,
+                                       valid, z_out, flags_out);
+    else
+      status = flt_reconstruct(options, s_rows, height_fibers, s, height, slope,
+                               valid, z_out, flags_out);
     Py_END_ALLOW_THREADS
     return status;
 }

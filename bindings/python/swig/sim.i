@@ -17,6 +17,8 @@
 %ignore flt_sim_surface;
 %ignore flt_sim_next_rows;
 %ignore flt_sim_next_frame;
+%ignore flt_sim_strip_edges;
+%ignore flt_sim_fiber_flags;
 
 %typemap(in, numinputs=0) flt_sim **out (flt_sim *temp = NULL) { $1 = &temp; }
 %typemap(argout) flt_sim **out {
@@ -36,7 +38,16 @@
   (double *z_out, size_t z_out_count),
   (double *encoder_out, size_t encoder_out_rows),
   (double *s_out, size_t s_out_rows),
-  (double *truth_row_out, size_t truth_row_out_fibers)
+  (double *truth_row_out, size_t truth_row_out_fibers),
+  (double *edge_left_out, size_t edge_left_out_count),
+  (double *edge_right_out, size_t edge_right_out_count)
+};
+%apply (double *IN_ARRAY1, size_t DIM1) {
+  (const double *edge_encoder, size_t edge_encoder_count)
+};
+%apply (unsigned char *INPLACE_ARRAY1, size_t DIM1) {
+  (unsigned char *edge_present_out, size_t edge_present_out_count),
+  (unsigned char *sim_flags_out, size_t sim_flags_out_fibers)
 };
 %apply (double *INPLACE_ARRAY2, size_t DIM1, size_t DIM2) {
   (double *height_out, size_t height_out_rows, size_t height_out_fibers),
@@ -181,6 +192,33 @@ struct flt_sim {};
     return flt_py_sim_frame($self, frame16_out, frame16_out_rows, frame16_out_cols, 2,
                             truth_row_out, truth_row_out_fibers, peak_rows_out,
                             peak_rows_out_lasers, peak_rows_out_width, encoder_mm_out);
+  }
+
+  /* The true edges under laser 0, 1 or 2 (the row) at the encoder
+   * positions (n,): left, right (n,) mm and present (n,). */
+  flt_status strip_edges_into(unsigned laser, const double *edge_encoder,
+                              size_t edge_encoder_count, double *edge_left_out,
+                              size_t edge_left_out_count, double *edge_right_out,
+                              size_t edge_right_out_count, unsigned char *edge_present_out,
+                              size_t edge_present_out_count) {
+    const char *fn = "flt_sim_strip_edges";
+    if (edge_left_out_count != edge_encoder_count)
+      return flt_py_shape_error(fn, "left_mm_out.shape[0]", edge_left_out_count,
+                                edge_encoder_count);
+    if (edge_right_out_count != edge_encoder_count)
+      return flt_py_shape_error(fn, "right_mm_out.shape[0]", edge_right_out_count,
+                                edge_encoder_count);
+    if (edge_present_out_count != edge_encoder_count)
+      return flt_py_shape_error(fn, "present_out.shape[0]", edge_present_out_count,
+                                edge_encoder_count);
+    return flt_sim_strip_edges($self, laser, edge_encoder_count, edge_encoder, edge_left_out,
+                               edge_right_out, edge_present_out);
+  }
+
+  /* The true fiber flags (K,) of a frame at encoder_mm. */
+  flt_status fiber_flags_into(double encoder_mm, unsigned char *sim_flags_out,
+                              size_t sim_flags_out_fibers) {
+    return flt_sim_fiber_flags($self, encoder_mm, sim_flags_out_fibers, sim_flags_out);
   }
 }
 
