@@ -16,6 +16,67 @@ namespace Flatline
     }
 
 
+    /// <summary>What <see cref="Extractor.Strip"/> could not see
+    /// (FLT_STRIP_*); bits combine.</summary>
+    [Flags]
+    public enum StripFlags : uint
+    {
+        None = 0,
+        /// <summary>No strip under the laser (a head or tail between coils,
+        /// or no line): every value is NaN; both open bits are set too.</summary>
+        NoStrip = FlatlineNative.FLT_STRIP_NONE,
+        /// <summary>The strip reaches the frame's border at low sensor x:
+        /// <see cref="StripEdges.LeftMm"/> is NaN.</summary>
+        LeftOpen = FlatlineNative.FLT_STRIP_LEFT_OPEN,
+        /// <summary>The same at high sensor x: <see cref="StripEdges.RightMm"/> is NaN.</summary>
+        RightOpen = FlatlineNative.FLT_STRIP_RIGHT_OPEN,
+    }
+
+    /// <summary>Where the last frame shows the strip, sensor x in mm; a value
+    /// is NaN exactly where <see cref="Flags"/> says why.</summary>
+    public readonly struct StripEdges
+    {
+        internal StripEdges(double left, double right, double width, double centre, StripFlags flags)
+        {
+            LeftMm = left;
+            RightMm = right;
+            WidthMm = width;
+            CentreMm = centre;
+            Flags = flags;
+        }
+
+        /// <summary>The edge at low sensor x, mm.</summary>
+        public double LeftMm { get; }
+        /// <summary>The edge at high sensor x, mm.</summary>
+        public double RightMm { get; }
+        /// <summary>Right minus left, mm; NaN unless both edges are seen.</summary>
+        public double WidthMm { get; }
+        /// <summary>The centre line's sensor x, mm; NaN unless both edges are seen.</summary>
+        public double CentreMm { get; }
+        /// <summary>Which values are NaN and why.</summary>
+        public StripFlags Flags { get; }
+        public override string ToString() => $"strip {LeftMm:F2} .. {RightMm:F2} mm ({Flags})";
+    }
+
+    /// <summary>The last frame's saturated peaks on the strip, for an
+    /// exposure controller.</summary>
+    public readonly struct SaturationCount
+    {
+        internal SaturationCount(ulong peaks, ulong saturated, double fraction)
+        {
+            Peaks = peaks;
+            Saturated = saturated;
+            Fraction = fraction;
+        }
+
+        /// <summary>The strip's columns with a valid peak.</summary>
+        public ulong Peaks { get; }
+        /// <summary>Of those, the saturated ones (measured as a plateau).</summary>
+        public ulong Saturated { get; }
+        /// <summary>Saturated / peaks; 0 without a peak.</summary>
+        public double Fraction { get; }
+    }
+
     /// <summary>A laser's band of frame rows: the rows the extractor searches
     /// for that laser's line, px.</summary>
     public readonly struct RowBand : IEquatable<RowBand>
@@ -209,6 +270,57 @@ namespace Flatline
                 FlatlineNative.flt_extractor_laser_profiles(live, (ulong)Fibers, pz);
             }
             return z;
+        }
+
+        /// <summary>The last processed frame's flags per fiber: 0 valid,
+        /// <see cref="ReconFlags.OffStrip"/> off the strip,
+        /// <see cref="ReconFlags.InvalidInput"/> on the strip without a valid
+        /// height from both lasers. Exactly what
+        /// <see cref="Reconstructor.PushFlagged(double[], double[,], double[,], ReconFlags[,])"/> takes.
+        /// <see cref="FlatlineStateException"/> before the first frame.</summary>
+        public unsafe ReconFlags[] FiberFlags()
+        {
+            var live = LiveHandle;
+            var flags = new ReconFlags[Fibers];
+            fixed (ReconFlags* pf = flags)
+            {
+                FlatlineNative.flt_extractor_fiber_flags(live, (ulong)Fibers, (byte*)pf);
+            }
+            return flags;
+        }
+
+        /// <summary>Where the last processed frame shows the strip under laser
+        /// 0 or 1, or 2 (the default) for the profile row (the mean of both
+        /// lasers' edges). <see cref="FlatlineStateException"/> before the
+        /// first frame.</summary>
+        public unsafe StripEdges Strip(int laser = 2)
+        {
+            var live = LiveHandle;
+            double left, right, width, centre;
+            uint flags;
+            FlatlineNative.flt_extractor_strip(live, LaserOrRow(laser), &left, &right, &width, &centre,
+                                               &flags);
+            return new StripEdges(left, right, width, centre, (StripFlags)flags);
+        }
+
+        /// <summary>The last processed frame's saturated peaks on the strip,
+        /// under laser 0 or 1, or 2 (the default) for both.</summary>
+        public unsafe SaturationCount Saturation(int laser = 2)
+        {
+            var live = LiveHandle;
+            ulong peaks, saturated;
+            double fraction;
+            FlatlineNative.flt_extractor_saturation(live, LaserOrRow(laser), &peaks, &saturated,
+                                                    &fraction);
+            return new SaturationCount(peaks, saturated, fraction);
+        }
+
+        private static uint LaserOrRow(int laser)
+        {
+            if (laser < 0 || laser > 2)
+                throw new ArgumentOutOfRangeException(nameof(laser), laser,
+                                                      "laser must be 0, 1 or 2 (the profile row)");
+            return (uint)laser;
         }
 
         /// <summary>Frees the native extractor now. Further calls throw

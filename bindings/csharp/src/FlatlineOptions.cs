@@ -206,6 +206,26 @@ namespace Flatline
         public double SimFullWell { get => Get("sim_full_well"); set => Set("sim_full_well", value); }
         /// <summary>Spurious reflections per frame.</summary>
         public double SimReflections { get => Get("sim_reflections"); set => Set("sim_reflections", value); }
+        /// <summary>What the lasers fall on beyond the strip's edges.</summary>
+        public SimSurround SimSurround { get => (SimSurround)(int)Get("sim_surround"); set => Set("sim_surround", (int)value); }
+        /// <summary>Mean lateral position of the strip's centre line, sensor x, mm.</summary>
+        public double SimStripOffset { get => Get("sim_strip_offset"); set => Set("sim_strip_offset", value); }
+        /// <summary>Amplitude of the sine in the strip's lateral wander, mm.</summary>
+        public double SimWanderAmplitude { get => Get("sim_wander_amplitude"); set => Set("sim_wander_amplitude", value); }
+        /// <summary>Its period in encoder travel, mm.</summary>
+        public double SimWanderPeriod { get => Get("sim_wander_period"); set => Set("sim_wander_period", value); }
+        /// <summary>Standard deviation of the wander's slow random walk, mm.</summary>
+        public double SimWanderSigma { get => Get("sim_wander_sigma"); set => Set("sim_wander_sigma", value); }
+        /// <summary>Length of each coil along travel, mm; 0 for one endless strip.</summary>
+        public double SimCoilLength { get => Get("sim_coil_length"); set => Set("sim_coil_length", value); }
+        /// <summary>Travel between one coil's tail and the next one's head, mm.</summary>
+        public double SimCoilGap { get => Get("sim_coil_gap"); set => Set("sim_coil_gap", value); }
+        /// <summary>Width of every second coil, mm; 0 for SimStripWidth.</summary>
+        public double SimSecondWidth { get => Get("sim_second_width"); set => Set("sim_second_width", value); }
+        /// <summary>Share of the charge above full scale that blooms into the neighbouring rows.</summary>
+        public double SimBlooming { get => Get("sim_blooming"); set => Set("sim_blooming", value); }
+        /// <summary>Probability of a glint at each strip edge, per laser and frame.</summary>
+        public double SimEdgeGlints { get => Get("sim_edge_glints"); set => Set("sim_edge_glints", value); }
 
         // ---- frame-to-profile extractor (Extractor); flatline/extractor.h
         /// <summary>First frame row of laser 0's band, px.</summary>
@@ -225,6 +245,12 @@ namespace Flatline
         public double ExtractMinPeak { get => Get("extract_min_peak"); set => Set("extract_min_peak", value); }
         /// <summary>Widest accepted line: rows at or above half its maximum.</summary>
         public double ExtractMaxWidth { get => Get("extract_max_width"); set => Set("extract_max_width", value); }
+        /// <summary>A line lower than this is not on the strip (the roller table), mm.</summary>
+        public double ExtractStripMinZ { get => Get("extract_strip_min_z"); set => Set("extract_strip_min_z", value); }
+        /// <summary>Widest dark stretch across the strip not taken for its end, mm.</summary>
+        public double ExtractEdgeGap { get => Get("extract_edge_gap"); set => Set("extract_edge_gap", value); }
+        /// <summary>Narrowest run of line taken for the strip, mm.</summary>
+        public double ExtractMinStripWidth { get => Get("extract_min_strip_width"); set => Set("extract_min_strip_width", value); }
 
         // ---- flatness metrics (Flatness); flatline/flatness.h
         /// <summary>Streamed evaluation window: the last N mm of strip; 0 for
@@ -253,6 +279,12 @@ namespace Flatline
         public double FlatCrossbowLimit { get => Get("flat_crossbow_limit"); set => Set("flat_crossbow_limit", value); }
         /// <summary>Rows one streamed window (or sheet) may hold (9 bytes per row and fiber).</summary>
         public int FlatRowCapacity { get => (int)Get("flat_row_capacity"); set => Set("flat_row_capacity", value); }
+        /// <summary>Zones across the strip, each an equal share of its width; 0 for zones of FlatZoneWidth.</summary>
+        public int FlatZoneCount { get => (int)Get("flat_zone_count"); set => Set("flat_zone_count", value); }
+        /// <summary>The sensor side of the leveler's drive side.</summary>
+        public DriveSide FlatDriveSide { get => (DriveSide)(int)Get("flat_drive_side"); set => Set("flat_drive_side", (int)value); }
+        /// <summary>Where zones are laid: on the strip (the default) or on the fiber grid.</summary>
+        public ZonesOn FlatZonesOn { get => (ZonesOn)(int)Get("flat_zones_on"); set => Set("flat_zones_on", (int)value); }
 
         // ---- frame sources (FrameSource); flatline/source.h
         /// <summary>Where a frame's encoder position comes from.</summary>

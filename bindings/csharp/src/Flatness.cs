@@ -13,6 +13,26 @@ namespace Flatline
         Mean = NativeFlatReference.FLT_FLAT_REFERENCE_MEAN,
     }
 
+    /// <summary>Where zones are laid (the option "flat_zones_on",
+    /// flt_zones_on in flatline/flatness.h).</summary>
+    public enum ZonesOn
+    {
+        /// <summary>On the strip, from its edges, where they are known (the default).</summary>
+        Strip = NativeZonesOn.FLT_ZONES_ON_STRIP,
+        /// <summary>On the sensor's fiber grid, whatever the strip does.</summary>
+        Grid = NativeZonesOn.FLT_ZONES_ON_GRID,
+    }
+
+    /// <summary>The sensor side of the leveler's drive side (the option
+    /// "flat_drive_side", flt_side in flatline/flatness.h).</summary>
+    public enum DriveSide
+    {
+        /// <summary>At the sensor's low x (the default).</summary>
+        LowX = NativeSide.FLT_SIDE_LOW_X,
+        /// <summary>At the sensor's high x.</summary>
+        HighX = NativeSide.FLT_SIDE_HIGH_X,
+    }
+
     /// <summary>The shape class of a window (flt_shape), from its zone
     /// I-Unit profile; see include/flatline/flatness.h for the rule.</summary>
     public enum ShapeClass
@@ -22,6 +42,11 @@ namespace Flatline
         /// <summary>Long material at x &lt; centre.</summary>
         WavyEdgeLeft = NativeShape.FLT_SHAPE_WAVY_EDGE_LEFT,
         WavyEdgeRight = NativeShape.FLT_SHAPE_WAVY_EDGE_RIGHT,
+        /// <summary><see cref="WavyEdgeLeft"/> by the operator's name
+        /// (FlatDriveSide says which sensor side it is).</summary>
+        WavyEdgeDriveSide = NativeShape.FLT_SHAPE_WAVY_EDGE_DRIVE_SIDE,
+        /// <summary><see cref="WavyEdgeRight"/> by the operator's name.</summary>
+        WavyEdgeOperatorSide = NativeShape.FLT_SHAPE_WAVY_EDGE_OPERATOR_SIDE,
         WavyEdgeBoth = NativeShape.FLT_SHAPE_WAVY_EDGE_BOTH,
         QuarterBuckle = NativeShape.FLT_SHAPE_QUARTER_BUCKLE,
         /// <summary>Two or more component groups; see <see cref="ShapeComponents"/>.</summary>
@@ -56,6 +81,9 @@ namespace Flatline
         NoWave = FlatlineNative.FLT_FIBER_NO_WAVE,
         /// <summary>Some rows unusable; the arc length is scaled from the covered part.</summary>
         Partial = FlatlineNative.FLT_FIBER_PARTIAL,
+        /// <summary>The result slot lies beyond the strip's edges (zones on
+        /// the strip); NoData is set too.</summary>
+        OffStrip = FlatlineNative.FLT_FIBER_OFF_STRIP,
     }
 
     /// <summary>Per-zone result flags (FLT_ZONE_*).</summary>
@@ -65,6 +93,9 @@ namespace Flatline
         None = 0,
         /// <summary>No valid fiber in the zone: its I-Units are NaN.</summary>
         NoData = FlatlineNative.FLT_ZONE_NO_DATA,
+        /// <summary>The zone lies beyond the strip's zones (a strip narrower
+        /// than the grid); NoData is set too.</summary>
+        OffStrip = FlatlineNative.FLT_ZONE_OFF_STRIP,
     }
 
     /// <summary>Per-window flags (FLT_WINDOW_*).</summary>
@@ -80,6 +111,51 @@ namespace Flatline
         NoBow = FlatlineNative.FLT_WINDOW_NO_BOW,
         /// <summary>CrossbowMm is NaN.</summary>
         NoCrossbow = FlatlineNative.FLT_WINDOW_NO_CROSSBOW,
+        /// <summary>The strip's edges were known: fibers and zones lie on
+        /// the strip (see <see cref="StripWindow"/>).</summary>
+        OnStrip = FlatlineNative.FLT_WINDOW_ON_STRIP,
+    }
+
+    /// <summary>Where one window's results lie on the strip. With
+    /// <see cref="WindowFlags.OnStrip"/> result fiber k is the strip
+    /// coordinate <see cref="FiberStripX"/>[k] (mm from the strip's centre
+    /// line towards the operator side), not sensor fiber k, and zones are
+    /// laid on the strip; without it, on the fiber grid.</summary>
+    public sealed class StripWindow
+    {
+        internal StripWindow(bool onStrip, double[] widthMm, double[] centreMm, double[] fiberStripX,
+                             double[] fiberSensorX, double[] zoneStripCentre, double[] zoneSensorCentre,
+                             double[] zoneWidth, int[] zoneFiberCount)
+        {
+            OnStrip = onStrip;
+            WidthMm = widthMm;
+            CentreMm = centreMm;
+            FiberStripX = fiberStripX;
+            FiberSensorX = fiberSensorX;
+            ZoneStripCentre = zoneStripCentre;
+            ZoneSensorCentre = zoneSensorCentre;
+            ZoneWidth = zoneWidth;
+            ZoneFiberCount = zoneFiberCount;
+        }
+
+        /// <summary>The window was measured on the strip.</summary>
+        public bool OnStrip { get; }
+        /// <summary>[3] the strip's width over the window: mean, min, max, mm.</summary>
+        public double[] WidthMm { get; }
+        /// <summary>[3] its centre line's sensor x: mean, min, max, mm.</summary>
+        public double[] CentreMm { get; }
+        /// <summary>[fibers] each result fiber's strip coordinate, mm.</summary>
+        public double[] FiberStripX { get; }
+        /// <summary>[fibers] its sensor x at the window's mean position, mm.</summary>
+        public double[] FiberSensorX { get; }
+        /// <summary>[zones] zone centres in strip coordinates, mm; NaN off the strip.</summary>
+        public double[] ZoneStripCentre { get; }
+        /// <summary>[zones] zone centres in sensor x, mm; NaN off the strip.</summary>
+        public double[] ZoneSensorCentre { get; }
+        /// <summary>[zones] zone widths, mm (0 off the strip).</summary>
+        public double[] ZoneWidth { get; }
+        /// <summary>[zones] result fibers in each zone.</summary>
+        public int[] ZoneFiberCount { get; }
     }
 
     /// <summary>What <see cref="Flatness.Push"/> did: the rows it took (all
@@ -201,18 +277,22 @@ namespace Flatline
     /// <summary>Everything about the last evaluated window.</summary>
     public sealed class FlatnessResult
     {
-        internal FlatnessResult(FlatnessWindow window, FiberResults fibers, ZoneResults zones, ShapeResult shape)
+        internal FlatnessResult(FlatnessWindow window, FiberResults fibers, ZoneResults zones, ShapeResult shape,
+                                StripWindow strip)
         {
             Window = window;
             Fibers = fibers;
             Zones = zones;
             Shape = shape;
+            Strip = strip;
         }
 
         public FlatnessWindow Window { get; }
         public FiberResults Fibers { get; }
         public ZoneResults Zones { get; }
         public ShapeResult Shape { get; }
+        /// <summary>Where the results lie on the strip.</summary>
+        public StripWindow Strip { get; }
     }
 
     /// <summary>
@@ -310,6 +390,55 @@ namespace Flatline
             return Result();
         }
 
+        /// <summary>As <see cref="Evaluate"/>, with the strip's edges per row
+        /// (flt_flatness_evaluate_strip): <paramref name="leftMm"/> and
+        /// <paramref name="rightMm"/> [rows] in sensor x, mm, NaN where
+        /// unknown (<see cref="Extractor.Strip"/> with laser 2 gives them),
+        /// or null: unknown. Where the edges are known the window is measured
+        /// on the strip (<see cref="FlatnessResult.Strip"/>).</summary>
+        public unsafe FlatnessResult EvaluateStrip(double[] s, double[,] z, byte[,] flags, double[] leftMm,
+                                                   double[] rightMm)
+        {
+            var live = LiveHandle;
+            int rows = CheckRows(s, z, flags);
+            CheckEdges(leftMm, rightMm, rows);
+            fixed (double* ps = s, pz = z, pl = leftMm, pr = rightMm)
+            fixed (byte* pf = flags)
+            {
+                FlatlineNative.flt_flatness_evaluate_strip(live, (ulong)rows, (ulong)Fibers, ps, pz, pf, pl, pr);
+            }
+            return Result();
+        }
+
+        /// <summary>As <see cref="Push"/>, with the strip's edges per row (as
+        /// in <see cref="EvaluateStrip"/>; indexed like s).</summary>
+        public unsafe FlatnessPush PushStrip(double[] s, double[,] z, byte[,] flags, double[] leftMm,
+                                             double[] rightMm, int firstRow = 0, int rows = -1)
+        {
+            var live = LiveHandle;
+            int total = CheckRows(s, z, flags);
+            CheckEdges(leftMm, rightMm, total);
+            if (firstRow < 0 || firstRow > total)
+                throw new ArgumentOutOfRangeException(nameof(firstRow), firstRow, $"firstRow must be in 0 .. {total}");
+            if (rows == -1)
+                rows = total - firstRow;
+            if (rows < 0 || rows > total - firstRow)
+                throw new ArgumentOutOfRangeException(nameof(rows), rows,
+                                                      $"rows must be in 0 .. {total - firstRow} (from row {firstRow})");
+            ulong consumed = 0;
+            int evaluated = 0;
+            long offset = (long)firstRow * Fibers;
+            fixed (double* ps = s, pz = z, pl = leftMm, pr = rightMm)
+            fixed (byte* pf = flags)
+            {
+                FlatlineNative.flt_flatness_push_strip(live, (ulong)rows, (ulong)Fibers, ps + firstRow, pz + offset,
+                                                       pf == null ? null : pf + offset,
+                                                       pl == null ? null : pl + firstRow,
+                                                       pr == null ? null : pr + firstRow, &consumed, &evaluated);
+            }
+            return new FlatnessPush((int)consumed, evaluated != 0);
+        }
+
         /// <summary>Streams rows <paramref name="firstRow"/> ..
         /// <paramref name="firstRow"/> + <paramref name="rows"/> - 1 (all the
         /// rest when rows is -1) of s, z and flags; s continues to increase
@@ -380,11 +509,33 @@ namespace Flatline
                 FlatlineNative.flt_flatness_zone_results(live, (ulong)Zones, pz, (byte*)pf);
             }
             FlatlineNative.flt_flatness_shape(live, &shape, &confidence, &components, &bow, &crossbow);
+            var width = new double[3];
+            var centre = new double[3];
+            var fiberStrip = new double[Fibers];
+            var fiberSensor = new double[Fibers];
+            var zoneStrip = new double[Zones];
+            var zoneSensor = new double[Zones];
+            var zoneWidth = new double[Zones];
+            var zoneCount = new ulong[Zones];
+            fixed (double* pw = width, pc = centre, pfs = fiberStrip, pfx = fiberSensor, pzs = zoneStrip,
+                   pzx = zoneSensor, pzw = zoneWidth)
+            fixed (ulong* pzc = zoneCount)
+            {
+                FlatlineNative.flt_flatness_strip(live, pw, pc);
+                FlatlineNative.flt_flatness_fiber_positions(live, (ulong)Fibers, pfs, pfx);
+                FlatlineNative.flt_flatness_zone_positions(live, (ulong)Zones, pzs, pzx, pzw, pzc);
+            }
+            var counts = new int[Zones];
+            for (int j = 0; j < Zones; ++j)
+                counts[j] = (int)zoneCount[j];
+            var strip = new StripWindow(((WindowFlags)windowFlags & WindowFlags.OnStrip) != 0, width, centre,
+                                        fiberStrip, fiberSensor, zoneStrip, zoneSensor, zoneWidth, counts);
             return new FlatnessResult(
                 new FlatnessWindow(sFirst, sLast, (int)rows.ToUInt64(), (WindowFlags)windowFlags, (long)index),
                 fibers,
                 new ZoneResults(zoneIUnits, zoneFlags, ZoneLeftX, ZoneCentreX, ZoneFiberCount),
-                new ShapeResult((ShapeClass)shape, confidence, (ShapeComponents)components, bow, crossbow));
+                new ShapeResult((ShapeClass)shape, confidence, (ShapeComponents)components, bow, crossbow),
+                strip);
         }
 
         /// <summary>Frees the native metrics now. Further calls throw
@@ -422,6 +573,14 @@ namespace Flatline
             }
             fiberCount = Array.ConvertAll(counts, n => (int)n);
             handle.Track(NativeBytes(options != null ? options.FlatRowCapacity : DefaultRowCapacity));
+        }
+
+        private static void CheckEdges(double[] leftMm, double[] rightMm, int rows)
+        {
+            if (leftMm != null)
+                Shapes.Check(leftMm, rows, nameof(leftMm));
+            if (rightMm != null)
+                Shapes.Check(rightMm, rows, nameof(rightMm));
         }
 
         private int CheckRows(double[] s, double[,] z, byte[,] flags)

@@ -78,5 +78,36 @@ namespace Flatline
             }
             return new ReconResult((double[])s.Clone(), z, flags);
         }
+
+        /// <summary>As <see cref="Reconstruct"/>, with the extractor's
+        /// per-sample flags [rows, fibers] in place of a validity mask
+        /// (flt_reconstruct_flagged): off-strip samples come out NaN flagged
+        /// <see cref="ReconFlags.OffStrip"/>.</summary>
+        public static unsafe ReconResult ReconstructFlagged(double[] s, double[,] height, double[,] slope,
+                                                            ReconFlags[,] flags, FlatlineOptions options = null)
+        {
+            int rows = Shapes.Rows(s, nameof(s));
+            int fibers = Shapes.Columns(height, nameof(height));
+            if (fibers < 1)
+                throw new ArgumentException("height has no fibers (second dimension is 0)", nameof(height));
+            Shapes.Check(height, rows, fibers, nameof(height));
+            Shapes.Check(slope, rows, fibers, nameof(slope));
+            if (flags == null)
+                throw new ArgumentNullException(nameof(flags));
+            Shapes.Check(flags, rows, fibers, nameof(flags));
+            var z = new double[rows, fibers];
+            var outFlags = new byte[rows, fibers];
+            using (var scope = FlatlineOptions.Borrow(options))
+            {
+                fixed (double* ps = s, ph = height, pg = slope, pz = z)
+                fixed (ReconFlags* pin = flags)
+                fixed (byte* pf = outFlags)
+                {
+                    FlatlineNative.flt_reconstruct_flagged(scope.Handle, (ulong)rows, (ulong)fibers, ps, ph,
+                                                           pg, (byte*)pin, pz, pf);
+                }
+            }
+            return new ReconResult((double[])s.Clone(), z, outFlags);
+        }
     }
 }

@@ -18,6 +18,11 @@ namespace Flatline
         /// <summary>The fiber has had no valid height since the strip began;
         /// the value is NaN.</summary>
         NoData = FlatlineNative.FLT_FLAG_NO_DATA,
+        /// <summary>The fiber lies off the strip in this row (beyond its
+        /// edges, or no strip under a laser): not invalid data. As input
+        /// (<see cref="Extractor.FiberFlags"/>) the sample is not used; as
+        /// output the value is NaN with this flag alone.</summary>
+        OffStrip = FlatlineNative.FLT_FLAG_OFF_STRIP,
     }
 
     /// <summary>The robust modes of the reconstructor (the option "robust",
@@ -197,6 +202,46 @@ namespace Flatline
             fixed (bool* pv = valid)
             {
                 FlatlineNative.flt_recon_push(live, 1, (ulong)Fibers, &s, ph, pg, (byte*)pv);
+            }
+        }
+
+        /// <summary>Pushes a block of rows with the extractor's per-fiber flags
+        /// (<see cref="Extractor.FiberFlags"/>) in place of a validity mask:
+        /// <see cref="ReconFlags.None"/> valid, <see cref="ReconFlags.InvalidInput"/>
+        /// invalid (bridged), <see cref="ReconFlags.OffStrip"/> off the strip
+        /// (not used; its rows come out NaN flagged OffStrip). Arrays
+        /// [rows, fibers] as <see cref="Push(double[], double[,], double[,], bool[,])"/>;
+        /// flags must not be null.</summary>
+        public unsafe void PushFlagged(double[] s, double[,] height, double[,] slope, ReconFlags[,] flags)
+        {
+            var live = LiveHandle;
+            int rows = Shapes.Rows(s, nameof(s));
+            Shapes.Check(height, rows, Fibers, nameof(height));
+            Shapes.Check(slope, rows, Fibers, nameof(slope));
+            if (flags == null)
+                throw new ArgumentNullException(nameof(flags));
+            Shapes.Check(flags, rows, Fibers, nameof(flags));
+            fixed (double* ps = s, ph = height, pg = slope)
+            fixed (ReconFlags* pf = flags)
+            {
+                FlatlineNative.flt_recon_push_flagged(live, (ulong)rows, (ulong)Fibers, ps, ph, pg, (byte*)pf);
+            }
+        }
+
+        /// <summary>Pushes one row at position <paramref name="s"/> (mm) with
+        /// its per-fiber flags; arrays [fibers].</summary>
+        public unsafe void PushFlagged(double s, double[] height, double[] slope, ReconFlags[] flags)
+        {
+            var live = LiveHandle;
+            Shapes.Check(height, Fibers, nameof(height));
+            Shapes.Check(slope, Fibers, nameof(slope));
+            if (flags == null)
+                throw new ArgumentNullException(nameof(flags));
+            Shapes.Check(flags, Fibers, nameof(flags));
+            fixed (double* ph = height, pg = slope)
+            fixed (ReconFlags* pf = flags)
+            {
+                FlatlineNative.flt_recon_push_flagged(live, 1, (ulong)Fibers, &s, ph, pg, (byte*)pf);
             }
         }
 

@@ -29,6 +29,37 @@ namespace Flatline
         Crossbow = NativeDefect.FLT_SIM_CROSSBOW,
     }
 
+    /// <summary>What the lasers fall on beyond the strip's edges (the option
+    /// "sim_surround", flt_sim_surround in flatline/sim.h).</summary>
+    public enum SimSurround
+    {
+        /// <summary>The strip fills the field of view (the default).</summary>
+        Strip = NativeSimSurround.FLT_SIM_SURROUND_STRIP,
+        /// <summary>Nothing: no line beyond the edges or between coils.</summary>
+        Nothing = NativeSimSurround.FLT_SIM_SURROUND_NOTHING,
+        /// <summary>The roller table, SimTableDepth below the pass line.</summary>
+        RollerTable = NativeSimSurround.FLT_SIM_SURROUND_ROLLER_TABLE,
+    }
+
+    /// <summary>The simulated strip's edges (<see cref="SimulatedLine.StripEdges"/>):
+    /// sensor x, mm, [positions]; NaN where <see cref="Present"/> is false.</summary>
+    public sealed class SimulatedEdges
+    {
+        internal SimulatedEdges(double[] leftMm, double[] rightMm, bool[] present)
+        {
+            LeftMm = leftMm;
+            RightMm = rightMm;
+            Present = present;
+        }
+
+        /// <summary>The edge at low sensor x, mm.</summary>
+        public double[] LeftMm { get; }
+        /// <summary>The edge at high sensor x, mm.</summary>
+        public double[] RightMm { get; }
+        /// <summary>True where the laser (or both, for the row) sees the strip.</summary>
+        public bool[] Present { get; }
+    }
+
     /// <summary>
     /// Profile rows from <see cref="SimulatedLine.NextRows"/>: what the
     /// extractor would produce, with the ground truth. Arrays per row are
@@ -298,6 +329,46 @@ namespace Flatline
             CheckFrame(pixels, truth, peakRows);
             fixed (ushort* pp = pixels)
                 return Render(live, pp, sizeof(ushort), truth, peakRows);
+        }
+
+        /// <summary>Ground truth of the strip's edges at the encoder
+        /// positions (mm, finite) under laser 0 or 1, or 2 (the default) for
+        /// a profile row (the mean of both lasers' edges, present only where
+        /// both see the strip): sensor x of each edge, NaN where the laser
+        /// sees no strip (Present false).</summary>
+        public unsafe SimulatedEdges StripEdges(double[] encoderMm, int laser = 2)
+        {
+            var live = LiveHandle;
+            if (encoderMm == null)
+                throw new ArgumentNullException(nameof(encoderMm));
+            if (laser < 0 || laser > 2)
+                throw new ArgumentOutOfRangeException(nameof(laser), laser, "laser must be 0, 1 or 2 (the profile row)");
+            int n = encoderMm.Length;
+            var left = new double[n];
+            var right = new double[n];
+            var present = new bool[n];
+            if (n > 0)
+                fixed (double* pe = encoderMm, pl = left, pr = right)
+                fixed (bool* pp = present)
+                {
+                    FlatlineNative.flt_sim_strip_edges(live, (uint)laser, (ulong)n, pe, pl, pr, (byte*)pp);
+                }
+            return new SimulatedEdges(left, right, present);
+        }
+
+        /// <summary>Ground truth of a frame's fiber flags at
+        /// <paramref name="encoderMm"/>: what a perfect extractor reports
+        /// (<see cref="Extractor.FiberFlags"/>): None on the strip for both
+        /// lasers, <see cref="ReconFlags.OffStrip"/> otherwise.</summary>
+        public unsafe ReconFlags[] FiberFlags(double encoderMm)
+        {
+            var live = LiveHandle;
+            var flags = new ReconFlags[Fibers];
+            fixed (ReconFlags* pf = flags)
+            {
+                FlatlineNative.flt_sim_fiber_flags(live, encoderMm, (ulong)Fibers, (byte*)pf);
+            }
+            return flags;
         }
 
         /// <summary>Back to frame 0: the following output repeats the first exactly.</summary>

@@ -13,6 +13,10 @@ FLT_CS_HANDLE(flt_flatness, FlatnessHandle)
 /* The I-Unit references stay internal; the public FlatReference mirrors them. */
 %rename(NativeFlatReference) flt_flat_reference;
 %ignore FLT_FLAT_REFERENCE_MAX_ENUM_;
+%rename(NativeSide) flt_side;
+%ignore FLT_SIDE_MAX_ENUM_;
+%rename(NativeZonesOn) flt_zones_on;
+%ignore FLT_ZONES_ON_MAX_ENUM_;
 %typemap(ctype) flt_shape "int"
 %typemap(imtype) flt_shape "int"
 %typemap(cstype) flt_shape "int"

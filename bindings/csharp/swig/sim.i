@@ -7,6 +7,8 @@
 FLT_CS_HANDLE(flt_sim, SimHandle)
 
 %rename(NativeDefect) flt_sim_defect;
+%rename(NativeSimSurround) flt_sim_surround;
+%ignore FLT_SIM_SURROUND_MAX_ENUM_;
 %ignore FLT_SIM_DEFECT_MAX_ENUM_;
 
 /* Frames are written into a caller buffer pinned with `fixed` (byte[,] or

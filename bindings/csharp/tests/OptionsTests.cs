@@ -137,6 +137,9 @@ namespace Flatline.Tests
             Agree<RobustMode>("robust");
             Agree<FlatReference>("flat_reference");
             Agree<EncoderMode>("source_encoder_mode");
+            Agree<SimSurround>("sim_surround");
+            Agree<DriveSide>("flat_drive_side");
+            Agree<ZonesOn>("flat_zones_on");
             Assert.Empty(FlatlineOptions.Describe("max_gap").Choices);
             using var options = new FlatlineOptions
             {
