@@ -1785,7 +1785,7 @@ static void row_sim_create(void) {
     GOOD(flt_options_set(o, FLT_OPT_SIM_EDGE_GLINTS, 1));
     GOOD(flt_sim_create(g_calib, o, &s));
     uint8_t *frame = malloc((size_t)WIDTH * ROI_ROWS);
-    GOOD(flt_sim_next_frame(s, frame, (size_t)WIDTH * ROI_ROWS, WIDTH, NULL, 0, NULL, NULL));
+    GOOD(flt_sim_next_frame(s, frame, (size_t)WIDTH * ROI_ROWS, WIDTH, NULL, 0, NULL, NULL, 0));
     free(frame);
     flt_sim_destroy(s);
     flt_options_destroy(o);

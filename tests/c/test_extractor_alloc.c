@@ -172,7 +172,7 @@ static void the_line_in_the_field_allocates_nothing_per_frame(void **state) {
         double e, width, centre, fraction;
         unsigned strip_flags;
         size_t peaks, saturated;
-        st = flt_sim_next_frame(sim, frame, (size_t)W * ROWS, W, &e, 0, NULL, NULL);
+        st = flt_sim_next_frame(sim, frame, (size_t)W * ROWS, W, &e, 0, NULL, NULL, 0);
         if (st == FLT_OK)
             st = flt_extractor_process(ex, frame, FLT_PIXEL_MONO8, W, ROWS, W, e, FIBERS, &s[f],
                                        h + (size_t)f * FIBERS, g + (size_t)f * FIBERS, NULL);
