@@ -236,8 +236,8 @@ static edge_run edges_of(double width, double glints, unsigned seed) {
     for (int f = 0; f < 40; ++f) {
         double e, s, h[FIBERS], g[FIBERS];
         uint8_t flags[FIBERS], truth_flags[FIBERS];
-        assert_int_equal(flt_sim_next_frame(sim, frame, (size_t)W * ROI_ROWS, W, &e, 0, NULL, NULL, 0),
-                         FLT_OK);
+        assert_int_equal(
+            flt_sim_next_frame(sim, frame, (size_t)W * ROI_ROWS, W, &e, 0, NULL, NULL, 0), FLT_OK);
         assert_int_equal(flt_extractor_process(ex, frame, FLT_PIXEL_MONO8, W, ROI_ROWS, W, e,
                                                FIBERS, &s, h, g, NULL),
                          FLT_OK);
@@ -347,8 +347,8 @@ static void saturated_lines_are_measured(void **state) {
         double e, s, h[FIBERS], g[FIBERS], z[2 * FIBERS], fraction;
         uint8_t flags[FIBERS], truth_flags[FIBERS];
         size_t peaks, saturated;
-        assert_int_equal(flt_sim_next_frame(sim, frame, (size_t)W * ROI_ROWS, W, &e, 0, NULL, NULL, 0),
-                         FLT_OK);
+        assert_int_equal(
+            flt_sim_next_frame(sim, frame, (size_t)W * ROI_ROWS, W, &e, 0, NULL, NULL, 0), FLT_OK);
         assert_int_equal(flt_extractor_process(ex, frame, FLT_PIXEL_MONO8, W, ROI_ROWS, W, e,
                                                FIBERS, &s, h, g, NULL),
                          FLT_OK);
@@ -427,8 +427,8 @@ static void heads_and_tails_never_report_strip_where_there_is_none(void **state)
         double e;
         double *hf = h + (size_t)f * FIBERS, *gf = g + (size_t)f * FIBERS;
         uint8_t *ff = flags + (size_t)f * FIBERS, *tf = truth + (size_t)f * FIBERS;
-        assert_int_equal(flt_sim_next_frame(sim, frame, (size_t)W * ROI_ROWS, W, &e, 0, NULL, NULL, 0),
-                         FLT_OK);
+        assert_int_equal(
+            flt_sim_next_frame(sim, frame, (size_t)W * ROI_ROWS, W, &e, 0, NULL, NULL, 0), FLT_OK);
         assert_int_equal(flt_extractor_process(ex, frame, FLT_PIXEL_MONO8, W, ROI_ROWS, W, e,
                                                FIBERS, &s[f], hf, gf, NULL),
                          FLT_OK);
