@@ -78,13 +78,20 @@
  *
  * GenICam features (USB3 Vision)
  *   Opening a camera reads its bootstrap registers, its manifest and its
- *   GenICam XML (zipped or not). Features are resolved by name when used, for
- *   the simple node kinds: IntReg, MaskedIntReg, Integer (Value or pValue),
- *   Float (Value or pValue), FloatReg, Enumeration/EnumEntry, Command,
- *   Boolean, with constant addresses. A feature behind a formula (SwissKnife,
- *   Converter) or a computed address fails with FLT_ERR_NOT_FOUND naming the
- *   feature and the node kind that stopped it; flt_source_map_feature() then
- *   gives its register by address instead. Streaming needs Width, Height,
+ *   GenICam XML (zipped or not). Features are evaluated by name when used,
+ *   reading the camera each time, by the library's GenICam engine (every
+ *   node kind: registers, bit fields, StructReg entries, formulas -
+ *   SwissKnife, Converter and their integer forms -, computed addresses,
+ *   selectors; see flatline/genicam.h, which shows the same evaluation
+ *   without a camera). The access mode is honoured: a feature that is not
+ *   implemented, not available, locked or read-only is refused with
+ *   FLT_ERR_STATE; a value outside its bounds with FLT_ERR_INVALID_ARGUMENT.
+ *   A feature the camera lacks fails with FLT_ERR_NOT_FOUND, one whose
+ *   description the engine refuses (wrong or ambiguous there) with
+ *   FLT_ERR_FORMAT, a formula failing for the camera's values with
+ *   FLT_ERR_NUMERIC; each names the node chain, and
+ *   flt_source_map_feature() gives such a feature a register by address
+ *   instead. Streaming needs Width, Height,
  *   PixelFormat, AcquisitionMode, AcquisitionStart and AcquisitionStop; a
  *   laser-line sensor typically also sets OffsetY, Height, ExposureTime and
  *   TriggerSelector/TriggerMode/TriggerSource before flt_source_start().
@@ -463,12 +470,14 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_camera_value(const flt_sour
 
 /** @{ */
 /** GenICam features by name (e.g. "Width", "ExposureTime", "TriggerMode").
- * Integers: IntReg, MaskedIntReg, Integer, Boolean, and Enumeration (its
- * value); floats: Float, FloatReg (and integers, converted); enumerations by
- * entry name ("Continuous"); commands write their command value. A value is
- * written as is: the camera checks its range and answers a GenCP status,
- * which the error message names. FLT_ERR_STATE for a source that is not a
- * camera. */
+ * Integers: integer features, Boolean, and Enumeration (its value); floats:
+ * float features (Float, FloatReg, Converter, SwissKnife; integers
+ * converted); enumerations by entry name ("Continuous"); commands write
+ * their command value. A value is checked against the feature's bounds
+ * (pMin/pMax/pInc, its register's width), then the camera checks it and
+ * answers a GenCP status, which the error message names. FLT_ERR_STATE for
+ * a source that is not a camera, or a feature its access mode forbids (see
+ * "GenICam features" above). */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_get_int(flt_source *source,
                                                              const char *feature, int64_t *out);
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_set_int(flt_source *source,
@@ -484,8 +493,9 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_execute(flt_source *source,
                                                              const char *feature);
 /** @} */
 
-/** Gives feature `feature` a register instead of its XML node (for features
- * the client cannot resolve, or to override one): `length` bytes (1, 2, 4 or
+/** Gives feature `feature` a register instead of its XML node (for a
+ * feature the camera's description lacks or the engine refuses, or to
+ * override one): `length` bytes (1, 2, 4 or
  * 8) at `address`, little-endian; an unsigned integer, or an IEEE float
  * (length 4 or 8) when is_float is non-zero. Commands write 1 to it.
  * Enumerations mapped this way take their integer values (set_int).

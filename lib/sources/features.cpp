@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 // Feature access over a register port: register reads and writes with bit
-// fields, byte order and range checks; the engine of this release (the
-// simple node kinds with constant addresses, u3v/genicam.hpp); and the
-// layer that puts the user's mapped registers in front of the engine.
+// fields, byte order and range checks (the registers a user maps by
+// address); the GenICam engine (lib/sources/genicam/) behind the
+// feature_engine interface; and the layer that puts the user's mapped
+// registers in front of the engine.
 #include "sources/features.hpp"
 
 #include <algorithm>
@@ -12,7 +13,8 @@
 
 #include "core/error.hpp"
 #include "sources/source.hpp"
-#include "sources/u3v/genicam.hpp"
+#include "sources/genicam/node_map.hpp"
+#include "sources/genicam/text.hpp"
 #include "sources/u3v/protocol.hpp"
 
 namespace flt::sources {
@@ -141,117 +143,99 @@ void write_float(register_port &port, const register_view &r, const std::string 
     port.write(r.address, b, r.length);
 }
 
-// --- the engine of this release -----------------------------------------------
+// --- the engine ------------------------------------------------------------------
 
 namespace {
 
-// The simple node kinds with constant addresses, as u3v::genicam_map
-// resolves them (IntReg, MaskedIntReg, Integer, Float, FloatReg,
-// Enumeration, Command, Boolean); formulas and computed addresses fail
-// with the node that stopped the resolution.
-class simple_engine final : public feature_engine {
+// lib/sources/genicam/'s node map behind the feature_engine interface. A
+// feature the engine refuses (the description is wrong or ambiguous there,
+// or a formula fails) gets the way out named: a register by address.
+class genicam_engine final : public feature_engine {
   public:
-    simple_engine(const std::string &xml, register_port &port) : port_(port) { map_.parse(xml); }
+    genicam_engine(const std::string &xml, register_port &port) {
+        map_.load(genicam::xml_document(xml));
+        map_.bind(&port);
+    }
+
+    bool has(const std::string &feature) override { return map_.has(feature); }
 
     feature_kind kind_of(const std::string &feature) override {
-        const u3v::feature_access a = map_.resolve(feature);
-        const std::string &k = a.node ? a.node->kind : std::string();
-        if (k == "Enumeration")
-            return feature_kind::enumeration;
-        if (k == "Command")
-            return feature_kind::command;
-        if (k == "Boolean")
-            return feature_kind::boolean;
-        if (k == "Float" || k == "FloatReg")
-            return feature_kind::floating;
-        if (k == "Integer" || k == "IntReg" || k == "MaskedIntReg")
-            return feature_kind::integer;
-        return feature_kind::other;
+        return hinted([&] {
+            switch (map_.interface_of(feature)) {
+                case genicam::interface_kind::integer:
+                    return feature_kind::integer;
+                case genicam::interface_kind::floating:
+                    return feature_kind::floating;
+                case genicam::interface_kind::enumeration:
+                    return feature_kind::enumeration;
+                case genicam::interface_kind::command:
+                    return feature_kind::command;
+                case genicam::interface_kind::boolean:
+                    return feature_kind::boolean;
+                default:
+                    return feature_kind::other;
+            }
+        });
     }
-
     std::int64_t get_int(const std::string &feature) override {
-        const u3v::feature_access a = map_.resolve(feature);
-        if (a.kind == u3v::feature_access::constant)
-            return a.constant_value;
-        return read_int(port_, view_of(a), feature);
+        return hinted([&] { return map_.get_int(feature); });
     }
-
     void set_int(const std::string &feature, std::int64_t value) override {
-        const u3v::feature_access a = map_.resolve(feature);
-        if (a.kind == u3v::feature_access::constant)
-            raise(FLT_ERR_INVALID_ARGUMENT, "feature '%s' is a constant (%lld) and cannot be set",
-                  feature.c_str(), (long long)a.constant_value);
-        write_int(port_, view_of(a), feature, value);
+        hinted([&] {
+            map_.set_int(feature, value);
+            return 0;
+        });
     }
-
     double get_float(const std::string &feature) override {
-        const u3v::feature_access a = map_.resolve(feature);
-        if (a.kind == u3v::feature_access::constant)
-            return a.constant_float;
-        return read_float(port_, view_of(a), feature);
+        return hinted([&] { return map_.get_float(feature); });
     }
-
     void set_float(const std::string &feature, double value) override {
-        if (!std::isfinite(value))
-            raise(FLT_ERR_INVALID_ARGUMENT, "feature '%s': value %g is not finite", feature.c_str(),
-                  value);
-        const u3v::feature_access a = map_.resolve(feature);
-        if (a.kind == u3v::feature_access::constant)
-            raise(FLT_ERR_INVALID_ARGUMENT, "feature '%s' is a constant and cannot be set",
-                  feature.c_str());
-        write_float(port_, view_of(a), feature, value);
+        hinted([&] {
+            map_.set_float(feature, value);
+            return 0;
+        });
     }
-
     void set_enum(const std::string &feature, const std::string &entry) override {
-        const u3v::feature_access a = map_.resolve(feature);
-        const u3v::genicam_node *n = a.node;
-        if (!n || n->kind != "Enumeration")
-            raise(FLT_ERR_INVALID_ARGUMENT,
-                  "feature '%s' is not an XML Enumeration; set its integer value with "
-                  "flt_source_set_int()",
-                  feature.c_str());
-        for (const auto &e : n->entries)
-            if (e.first == entry)
-                return set_int(feature, e.second);
-        std::string names;
-        for (const auto &e : n->entries)
-            names += (names.empty() ? "" : ", ") + e.first;
-        raise(FLT_ERR_NOT_FOUND, "feature '%s' has no entry '%.64s' (entries: %.200s)",
-              feature.c_str(), entry.c_str(), names.c_str());
+        hinted([&] {
+            map_.set_enum(feature, entry);
+            return 0;
+        });
     }
-
     void execute(const std::string &feature) override {
-        const u3v::feature_access a = map_.resolve(feature);
-        if (!a.node || a.node->kind != "Command")
-            raise(FLT_ERR_INVALID_ARGUMENT, "feature '%s' is a %s, not a Command", feature.c_str(),
-                  a.node ? a.node->kind.c_str() : "constant");
-        const std::int64_t value = a.node->p_command_value.empty()
-                                       ? a.node->command_value
-                                       : get_int(a.node->p_command_value);
-        set_int(feature, value);
+        hinted([&] {
+            map_.execute(feature);
+            return 0;
+        });
     }
 
   private:
-    static register_view view_of(const u3v::feature_access &a) {
-        register_view r;
-        r.address = a.address;
-        r.length = a.length;
-        r.little_endian = a.little_endian;
-        r.is_signed = a.is_signed;
-        r.is_float = a.kind == u3v::feature_access::float_register;
-        r.lsb = a.lsb;
-        r.msb = a.msb;
-        return r;
+    // Every call reads the camera afresh: a camera changes registers on its
+    // own (status, automatic exposure, what a selector shows), and a feature
+    // call costs its GenCP transactions only when the user makes it. Within
+    // one call the cache holds, so a formula reading a register twice, a
+    // bound check and a read-modify-write read it once.
+    template <class F> auto hinted(F &&call) -> decltype(call()) {
+        map_.invalidate();
+        try {
+            return call();
+        } catch (const error &e) {
+            if (e.status != FLT_ERR_FORMAT && e.status != FLT_ERR_NUMERIC &&
+                e.status != FLT_ERR_NOT_FOUND)
+                throw;
+            std::string message = e.what();
+            if (message.find("memory image") == std::string::npos)
+                message += "; flt_source_map_feature() gives a feature a register instead";
+            throw error(e.status, message.c_str());
+        }
     }
 
-    register_port &port_;
-    u3v::genicam_map map_;
+    genicam::node_map map_;
 };
 
 }  // namespace
 
 std::unique_ptr<feature_engine> make_feature_engine(const std::string &xml, register_port &port) {
-    return std::make_unique<simple_engine>(xml, port);
+    return std::make_unique<genicam_engine>(xml, port);
 }
 
 // --- the layer -----------------------------------------------------------------
@@ -259,6 +243,10 @@ std::unique_ptr<feature_engine> make_feature_engine(const std::string &xml, regi
 const register_view *feature_layer::mapped(const std::string &feature) const {
     auto it = mapped_.find(feature);
     return it == mapped_.end() ? nullptr : &it->second;
+}
+
+bool feature_layer::has(const std::string &feature) {
+    return mapped(feature) || engine_->has(feature);
 }
 
 feature_kind feature_layer::kind_of(const std::string &feature) {
@@ -274,8 +262,10 @@ std::int64_t feature_layer::get_int(const std::string &feature) {
 }
 
 void feature_layer::set_int(const std::string &feature, std::int64_t value) {
-    if (const register_view *r = mapped(feature))
-        return write_int(port_, *r, feature, value);
+    if (const register_view *r = mapped(feature)) {
+        write_int(port_, *r, feature, value);
+        return;
+    }
     engine_->set_int(feature, value);
 }
 
@@ -286,8 +276,10 @@ double feature_layer::get_float(const std::string &feature) {
 }
 
 void feature_layer::set_float(const std::string &feature, double value) {
-    if (const register_view *r = mapped(feature))
-        return write_float(port_, *r, feature, value);
+    if (const register_view *r = mapped(feature)) {
+        write_float(port_, *r, feature, value);
+        return;
+    }
     engine_->set_float(feature, value);
 }
 
@@ -301,8 +293,10 @@ void feature_layer::set_enum(const std::string &feature, const std::string &entr
 }
 
 void feature_layer::execute(const std::string &feature) {
-    if (const register_view *r = mapped(feature))
-        return write_int(port_, *r, feature, 1);
+    if (const register_view *r = mapped(feature)) {
+        write_int(port_, *r, feature, 1);
+        return;
+    }
     engine_->execute(feature);
 }
 

@@ -3,13 +3,14 @@
 // every transport. Three pieces:
 //
 //   register_port    the device's registers as GenICam's Port node sees
-//                    them; each transport's control channel implements it
-//                    (u3v/control.hpp: GenCP READMEM/WRITEMEM; GigE Vision:
-//                    GVCP READMEM/WRITEMEM).
+//                    them (flt::genicam::register_port); each transport's
+//                    control channel implements it (u3v/control.hpp: GenCP
+//                    READMEM/WRITEMEM; GigE Vision: GVCP READMEM/WRITEMEM).
 //   feature_engine   the GenICam engine: parses the camera's description
-//                    and evaluates features through a register_port. THIS
-//                    IS THE SEAM where a GenICam engine plugs in:
-//                    make_feature_engine() picks the implementation.
+//                    and evaluates features through a register_port.
+//                    make_feature_engine() returns the engine of
+//                    lib/sources/genicam/ (every node kind, formulas,
+//                    selectors, access modes, the register cache).
 //   feature_layer    what a camera's feature calls go through: registers
 //                    the user mapped by address (flt_source_map_feature)
 //                    first, then the engine.
@@ -21,27 +22,28 @@
 #include <memory>
 #include <string>
 
+#include "sources/genicam/port.hpp"
+
 namespace flt::sources {
 
 // A device's register space. Both calls throw flt::error with the status
 // and the reason (timeout, a device status, an unplug...).
-class register_port {
-  public:
-    virtual ~register_port() = default;
-    virtual void read(std::uint64_t address, std::uint8_t *out, std::size_t bytes) = 0;
-    virtual void write(std::uint64_t address, const std::uint8_t *in, std::size_t bytes) = 0;
-};
+using register_port = genicam::register_port;
 
 enum class feature_kind { integer, floating, enumeration, command, boolean, other };
 
 // A GenICam engine bound to one device's description and port. Every call
-// throws flt::error: FLT_ERR_NOT_FOUND naming the feature (and the node
-// chain that stopped it) when it cannot be evaluated, FLT_ERR_INVALID_
-// ARGUMENT for a value or entry the feature cannot take, and whatever the
-// port throws.
+// throws flt::error naming the feature and the node chain: FLT_ERR_NOT_FOUND
+// (no such feature or entry), FLT_ERR_FORMAT (the description is wrong or
+// ambiguous there), FLT_ERR_NUMERIC (a formula fails for the registers'
+// values), FLT_ERR_STATE (the access mode forbids it: not implemented, not
+// available, locked, read-only), FLT_ERR_INVALID_ARGUMENT (a value outside
+// the feature's bounds or a type it does not have), and whatever the port
+// throws.
 class feature_engine {
   public:
     virtual ~feature_engine() = default;
+    virtual bool has(const std::string &feature) = 0;
     virtual feature_kind kind_of(const std::string &feature) = 0;
     virtual std::int64_t get_int(const std::string &feature) = 0;
     virtual void set_int(const std::string &feature, std::int64_t value) = 0;
@@ -93,6 +95,8 @@ class feature_layer {
     bool is_mapped(const std::string &feature) const { return mapped_.count(feature) != 0; }
     // The kind of an XML feature (a mapped one is an integer or a float).
     feature_kind kind_of(const std::string &feature);
+    // Whether the camera's description defines `feature` (or it is mapped).
+    bool has(const std::string &feature);
 
   private:
     const register_view *mapped(const std::string &feature) const;

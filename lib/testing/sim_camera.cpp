@@ -28,7 +28,7 @@ constexpr std::uint8_t k_ep_control_in = 0x81, k_ep_control_out = 0x01, k_ep_eve
 constexpr std::uint32_t k_image_chunk_id = 0x00000001u;
 
 // The camera's GenICam XML. ExposureTime goes through a Converter (a
-// formula), which the client does not evaluate.
+// formula) of its raw register, PayloadSize through an IntSwissKnife.
 std::string make_xml(const std::string &vendor, const std::string &model) {
     auto int_reg = [](const char *name, std::uint64_t address) {
         char text[512];

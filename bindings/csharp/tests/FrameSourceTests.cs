@@ -276,16 +276,17 @@ namespace Flatline.Tests
             Assert.Equal(40, camera.GetInt("Height"));
             camera.SetFloat("Gain", 2.5);            // a float32 register: 2.5 is exact
             Assert.Equal(2.5, camera.GetFloat("Gain"));
-            // ExposureTime is a Converter the client does not evaluate: it
-            // names the feature; mapped to its register it works.
-            var missing = Assert.Throws<NotFoundException>(() => camera.GetInt("ExposureTime"));
-            Assert.Contains("ExposureTime", missing.Message);
-            camera.MapFeature("ExposureTime", 0x1001C, 4);
-            camera.SetInt("ExposureTime", 1234);
+            // ExposureTime is a Converter of its raw register (us, FROM - 0).
+            camera.SetFloat("ExposureTime", 1234.0);
             Assert.Equal(1234u, bus.Peek(1, 0x1001C));
             Assert.Equal(new byte[] { 0xD2, 0x04, 0, 0 }, camera.ReadMemory(0x1001C, 4));
             camera.WriteMemory(0x1001C, new byte[] { 0x10, 0x27, 0, 0 });
             Assert.Equal(10000, camera.GetInt("ExposureTime"));
+            // A feature the camera lacks is named; mapped to a register it works.
+            var missing = Assert.Throws<NotFoundException>(() => camera.GetInt("ExposureAbs"));
+            Assert.Contains("ExposureAbs", missing.Message);
+            camera.MapFeature("ExposureAbs", 0x1001C, 4);
+            Assert.Equal(10000, camera.GetInt("ExposureAbs"));
 
             camera.Start();
             Assert.Equal(1UL, bus.Get(1, U3VSimParam.Acquiring));

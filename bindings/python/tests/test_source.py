@@ -104,13 +104,15 @@ def test_features_by_name_registers_and_mapping(bus):
         cam.set_enum("TriggerMode", "On")
         assert cam.get_int("TriggerMode") == bus.peek(1, 0x10024)
         cam.execute("AcquisitionStop")
-        # ExposureTime is a Converter the client does not evaluate...
-        with pytest.raises(flatline.NotFoundError, match="ExposureTime"):
-            cam.get_float("ExposureTime")
-        # ...until it is mapped onto its raw register (us, integer).
-        cam.map_feature("ExposureTime", 0x1001C, 4)
-        cam.set_int("ExposureTime", 1234)
-        assert cam.get_int("ExposureTime") == 1234 == bus.peek(1, 0x1001C)
+        # ExposureTime is a Converter of its raw register (us, FROM - 0)...
+        cam.set_float("ExposureTime", 1234.0)
+        assert cam.get_float("ExposureTime") == 1234.0
+        assert bus.peek(1, 0x1001C) == 1234
+        # ...and a feature the camera lacks can be mapped onto a register.
+        with pytest.raises(flatline.NotFoundError, match="ExposureAbs"):
+            cam.get_int("ExposureAbs")
+        cam.map_feature("ExposureAbs", 0x1001C, 4)
+        assert cam.get_int("ExposureAbs") == 1234
         # Raw GenCP memory access.
         cam.write_memory(0x1001C, struct.pack("<I", 777))
         assert cam.read_memory(0x1001C, 4) == struct.pack("<I", 777)

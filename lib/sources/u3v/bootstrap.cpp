@@ -6,7 +6,7 @@
 
 #include "core/error.hpp"
 #include "sources/source.hpp"
-#include "sources/u3v/genicam.hpp"
+#include "sources/genicam/text.hpp"
 #include "sources/u3v/protocol.hpp"
 
 namespace flt::u3v {
@@ -76,7 +76,7 @@ device_description read_description(sources::register_port &port, std::uint64_t 
         device_description d;
         d.file_bytes = size;
         d.zipped = type == 1;
-        d.xml = d.zipped ? unzip_single(file.data(), file.size())
+        d.xml = d.zipped ? genicam::unzip_single(file.data(), file.size())
                          : std::string(reinterpret_cast<const char *>(file.data()), file.size());
         return d;
     }
