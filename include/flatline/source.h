@@ -91,7 +91,9 @@
  *   FLT_ERR_FORMAT, a formula failing for the camera's values with
  *   FLT_ERR_NUMERIC; each names the node chain, and
  *   flt_source_map_feature() gives such a feature a register by address
- *   instead. Streaming needs Width, Height,
+ *   instead. While streaming the client holds TLParamsLocked = 1 (when the
+ *   camera has it), so features that change the payload are locked, as
+ *   cameras expect. Streaming needs Width, Height,
  *   PixelFormat, AcquisitionMode, AcquisitionStart and AcquisitionStop; a
  *   laser-line sensor typically also sets OffsetY, Height, ExposureTime and
  *   TriggerSelector/TriggerMode/TriggerSource before flt_source_start().

@@ -79,8 +79,12 @@ std::string make_xml(const std::string &vendor, const std::string &model) {
          "  </Category>\n";
     x += "  <Group Comment=\"Image format\">\n";
     x += "    <Integer Name=\"Width\" NameSpace=\"Standard\">\n"
+         "      <pIsLocked>TLParamsLocked</pIsLocked>\n"
          "      <pValue>WidthReg</pValue>\n      <Min>16</Min>\n"
          "      <Inc>4</Inc>\n    </Integer>\n";
+    // The host's lock while it acquires (SFNC): a host-side value.
+    x += "    <Integer Name=\"TLParamsLocked\" NameSpace=\"Standard\">\n"
+         "      <Value>0</Value>\n    </Integer>\n";
     x += int_reg("WidthReg", sim_map::width);
     x += int_reg("Height", sim_map::height);
     char masked[512];

@@ -301,6 +301,12 @@ static void test_streams_1000_frames_byte_exact(void **state) {
     ok(flt_options_set(o, FLT_OPT_SOURCE_ENCODER_START, 100.0));
     flt_source *src = open_camera(bus, "SN0001", o);
     ok(flt_source_start(src));
+    /* While streaming the host holds TLParamsLocked = 1, and Width (its
+     * pIsLocked) refuses a change that would break the stream. */
+    int64_t locked = 0;
+    ok(flt_source_get_int(src, "TLParamsLocked", &locked));
+    assert_int_equal(locked, 1);
+    assert_error(flt_source_set_int(src, "Width", 64), FLT_ERR_STATE, "locked");
     uint64_t v = 0;
     ok(flt_source_camera_value(src, FLT_CAMERA_PAYLOAD_BYTES, &v));
     assert_int_equal(v, 3000);
@@ -351,7 +357,10 @@ static void test_streams_1000_frames_byte_exact(void **state) {
     ok(flt_source_stop(src));
     assert_int_equal(peek(bus, 0, 0x2000 + 0x04), 0);
     assert_int_equal(sim_value(bus, 0, FLT_U3V_SIM_ACQUIRING), 0);
-    ok(flt_source_stop(src)); /* a no-op */
+    ok(flt_source_stop(src));                               /* a no-op */
+    ok(flt_source_get_int(src, "TLParamsLocked", &locked)); /* released */
+    assert_int_equal(locked, 0);
+    ok(flt_source_set_int(src, "Width", 100));
     const flt_frame *f = NULL;
     assert_error(flt_source_next(src, 10, &f), FLT_ERR_STATE, "not started");
     flt_source_destroy(src);

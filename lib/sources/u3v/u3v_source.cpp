@@ -198,6 +198,7 @@ void u3v_camera::start_sequence() {
         // From here on the camera may stream whatever the answers say.
         may_stream_ = true;
         write_si_control(sirm::control_enable);
+        lock_transport_params(true);
         execute("AcquisitionStart");
     } catch (const error &e) {
         stream_.release();
@@ -211,12 +212,38 @@ void u3v_camera::start_sequence() {
         } catch (const error &u) {
             undo = std::string("; stopping it again failed too: ") + u.what();
         }
+        try {
+            lock_transport_params(false);
+        } catch (...) {
+        }
         raise(e.status, "%s%s", e.what(), undo.c_str());
     } catch (...) {
+        try {
+            lock_transport_params(false);
+        } catch (...) {
+        }
         stream_.release();
         throw;
     }
     streaming_ = true;
+}
+
+// SFNC: the host locks the transport-layer parameters (TLParamsLocked = 1)
+// while it acquires, and cameras tie the features that change the payload
+// (Width, Height, PixelFormat, ...) to it through pIsLocked: changing them
+// mid-stream is refused with "locked" instead of breaking the stream. A
+// camera whose TLParamsLocked the host cannot write (read-only, as some
+// describe it, or not available) manages it itself: that is no error. What
+// the camera answers on the wire is.
+void u3v_camera::lock_transport_params(bool locked) {
+    if (!features_->has("TLParamsLocked"))
+        return;
+    try {
+        features_->set_int("TLParamsLocked", locked ? 1 : 0);
+    } catch (const error &e) {
+        if (e.status != FLT_ERR_STATE && e.status != FLT_ERR_INVALID_ARGUMENT)
+            throw;
+    }
 }
 
 void u3v_camera::stop() {
@@ -240,7 +267,15 @@ void u3v_camera::stop() {
             may_stream_ = false;
             return;
         }
+        try {
+            lock_transport_params(false);
+        } catch (...) {
+        }
         throw;
+    }
+    try {
+        lock_transport_params(false);
+    } catch (...) {
     }
     stream_.release();
 }

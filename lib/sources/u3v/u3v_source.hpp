@@ -78,6 +78,7 @@ class u3v_camera final : public sources::source_impl, public sources::camera_dev
     // while worth it. Throws (the camera may still stream) unless SI control
     // is off and, with need_acquisition_stop, AcquisitionStop was taken.
     void halt_camera(bool need_acquisition_stop);
+    void lock_transport_params(bool locked);
 
     std::unique_ptr<usb_backend> owned_bus_;  // declared first: destroyed last
     camera_config config_;
