@@ -551,6 +551,41 @@ typedef enum flt_option {
     /** "u3v_command_attempts": times a command is sent when no acknowledge
      * comes (integer). Default 3. */
     FLT_OPT_U3V_COMMAND_ATTEMPTS = 610,
+    /* --- GigE Vision cameras (flt_source_open_gige) --- */
+    /** "gige_packet_size": stream packet size, bytes of IP packet (IP, UDP
+     * and GVSP headers + data), 576..16384 (integer); 0 (the default)
+     * negotiates it with test packets up to 9000 (jumbo frames), keeping the
+     * camera's own when it sends none. */
+    FLT_OPT_GIGE_PACKET_SIZE = 640,
+    /** "gige_control_timeout": wait for a GVCP acknowledge, ms (integer).
+     * Default 200. */
+    FLT_OPT_GIGE_CONTROL_TIMEOUT = 641,
+    /** "gige_command_attempts": times a GVCP command is sent when no
+     * acknowledge comes (integer). Default 3. */
+    FLT_OPT_GIGE_COMMAND_ATTEMPTS = 642,
+    /** "gige_heartbeat_timeout": the camera drops our control privilege after
+     * this long without a heartbeat, ms (integer 500..600000); the host sends
+     * one every third of it. Default 3000. */
+    FLT_OPT_GIGE_HEARTBEAT_TIMEOUT = 643,
+    /** "gige_resend_attempts": times a lost packet is asked again before its
+     * frame is dropped (integer 0..32; 0 never asks). Default 3. */
+    FLT_OPT_GIGE_RESEND_ATTEMPTS = 644,
+    /** "gige_resend_timeout": wait for a packet asked again before asking
+     * once more, and silence after which a frame's remaining packets count
+     * as lost, ms (integer). Default 20. */
+    FLT_OPT_GIGE_RESEND_TIMEOUT = 645,
+    /** "gige_socket_buffer": receive buffer asked for the stream socket,
+     * bytes (integer; Linux grants at most net.core.rmem_max). Default
+     * 4194304 (4 MiB: 16 frames of 512 x 512 Mono8). */
+    FLT_OPT_GIGE_SOCKET_BUFFER = 646,
+    /** "gige_discovery_timeout": how long flt_source_open_gige() waits for
+     * cameras answering a discovery broadcast, ms (integer). Default 1000. */
+    FLT_OPT_GIGE_DISCOVERY_TIMEOUT = 647,
+    /** "gige_assembly_frames": frames assembled at once while packets of the
+     * older ones are asked again (integer 2..64); a frame still incomplete
+     * when this many later frames arrive is dropped. Costs one frame buffer
+     * each. Default 8 (80 ms at 100 frames/s for resends to come). */
+    FLT_OPT_GIGE_ASSEMBLY_FRAMES = 648,
     /* --- the gauge (flatline/gauge.h) --- */
     /** "gauge_workers": threads that process the frames (integer 0..64); 0
      * processes each frame on the thread that delivers it. Default 2. */

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 /** @file
- * libflatline - frame sources: a USB3 Vision camera (over libusb-1.0, no
- * camera SDK), recorded image sequences and the simulator, behind one handle.
+ * libflatline - frame sources: a USB3 Vision camera (over libusb-1.0) or a
+ * GigE Vision camera (over UDP), no camera SDK, recorded image sequences
+ * and the simulator, behind one handle.
  *
  * A sensor is a camera plus an encoder. Every frame a source delivers carries
  * its pixels, pixel format, size, stride, block id, timestamp and the encoder
@@ -75,6 +76,19 @@
  *                                       every later call; destroy still works
  *     garbage transfers                 BAD_PACKETS
  *   The control channel counts PENDING_ACKS, STALE_ACKS and COMMAND_RETRIES.
+ *
+ * Frame accounting (GigE Vision)
+ *   Each packet found missing counts PACKETS_MISSING and is asked again
+ *   (RESEND_REQUESTS per request); one that then arrives counts
+ *   PACKETS_RESENT; a copy of a packet already here, DUPLICATE. A frame
+ *   still missing packets after gige_resend_attempts requests (or at once,
+ *   when the camera does not resend), or pushed out by gige_assembly_frames
+ *   later frames in assembly, is DROPPED and INCOMPLETE; a leader announcing another size
+ *   or format than the stream's, BAD_LEADERS; a payload packet of the wrong
+ *   size, OVERFLOW; block ids never seen, LOST; datagrams that are no GVSP
+ *   packet of the stream, BAD_PACKETS; TIMEOUTS as for USB3 Vision. So
+ *   PACKETS_MISSING = PACKETS_RESENT + the packets of the frames dropped
+ *   for them.
  *
  * GenICam features (USB3 Vision)
  *   Opening a camera reads its bootstrap registers, its manifest and its
@@ -154,6 +168,7 @@ typedef enum flt_source_kind {
     FLT_SOURCE_SIMULATOR = 1, /**< a simulated sensor (flt_sim) */
     FLT_SOURCE_IMAGES = 2,    /**< recorded images */
     FLT_SOURCE_U3V = 3,       /**< a USB3 Vision camera */
+    FLT_SOURCE_GIGE = 4,      /**< a GigE Vision camera */
     FLT_SOURCE_KIND_MAX_ENUM_ = 0x7FFFFFFF
 } flt_source_kind;
 
@@ -276,6 +291,69 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_open_u3v(flt_usb_transport 
                                                               const flt_options *options,
                                                               flt_source **out);
 
+/* ---------------------------------------------------------------------- */
+/* GigE Vision cameras                                                     */
+/* ---------------------------------------------------------------------- */
+/*
+ * A GigE Vision camera is reached over UDP (no camera SDK): GVCP on the
+ * camera's port 3956 for registers, GVSP from the camera to a host port for
+ * frames (lib/sources/gige/README.md). Opening takes the
+ * camera's control privilege and keeps it with a heartbeat thread (every
+ * third of option gige_heartbeat_timeout); another application cannot
+ * control the camera meanwhile. Registers are big-endian; features go
+ * through the same GenICam engine as USB3 Vision. The stream packet size is
+ * negotiated with test packets (option gige_packet_size); lost packets are
+ * asked again (gige_resend_attempts, gige_resend_timeout) when the camera
+ * resends (FLT_CAMERA_RESEND_CAPABLE). Frames leave in block order; a frame
+ * still missing packets after the resends is dropped, never delivered
+ * damaged (see "Frame accounting"). The host's firewall must let the
+ * camera's UDP packets in.
+ */
+
+/** Lists the GigE Vision cameras that answer a discovery command.
+ * Each entry has the strings of flt_camera_list_get (speed 0) and an
+ * address (flt_camera_list_address).
+ * @param address     "a.b.c.d" (a camera, or a subnet's broadcast address;
+ *                    ":port" for a GVCP port other than 3956), or NULL for
+ *                    255.255.255.255 and every IPv4 interface's broadcast
+ *                    address.
+ * @param timeout_ms  how long answers are gathered, ms (1..60000).
+ * @param out         the new list (flt_camera_list_destroy).
+ * @return FLT_OK (an empty list when nobody answers);
+ *         FLT_ERR_INVALID_ARGUMENT for an address that is no IPv4 address;
+ *         FLT_ERR_DEVICE when no discovery could be sent. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_camera_list_create_gige(const char *address,
+                                                                      uint32_t timeout_ms,
+                                                                      flt_camera_list **out);
+
+/** The address to open camera `index` of a list by.
+ * @param list   a camera list.
+ * @param index  the camera, 0 .. count - 1.
+ * @param out    "a.b.c.d" (":port" when it answered from another port than
+ *               3956) for a GigE Vision camera, "" for a USB3 Vision one;
+ *               owned by the list.
+ * @return FLT_OK, or FLT_ERR_INVALID_ARGUMENT. */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_camera_list_address(const flt_camera_list *list,
+                                                                  size_t index, const char **out);
+
+/** Opens a GigE Vision camera: takes the control privilege, reads the
+ * bootstrap registers and the GenICam file, and negotiates the stream
+ * packet size. The frame buffers are allocated by flt_source_start().
+ * @param camera   its address ("a.b.c.d" or "a.b.c.d:port"), or its serial
+ *                 number or user-defined name (found by a discovery
+ *                 broadcast, option gige_discovery_timeout), or NULL for the
+ *                 first camera that answers.
+ * @param options  source_* and gige_* options, or NULL.
+ * @param out      the new source (flt_source_destroy).
+ * @return FLT_OK; FLT_ERR_NOT_FOUND when no such camera answers;
+ *         FLT_ERR_TIMEOUT when the address does not answer; FLT_ERR_DEVICE
+ *         when another application controls the camera or it refuses us;
+ *         FLT_ERR_INVALID_ARGUMENT for an empty name or an option outside
+ *         its range (encoder mode 3 is not available yet). */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_open_gige(const char *camera,
+                                                               const flt_options *options,
+                                                               flt_source **out);
+
 /** Stops a streaming camera, releases it and frees everything. NULL is a
  * no-op.
  * @param source the source, or NULL.
@@ -388,6 +466,12 @@ typedef enum flt_source_counter {
     FLT_COUNT_STALE_ACKS = 14, /**< acks with another request id (stale), discarded */
     FLT_COUNT_COMMAND_RETRIES = 15,   /**< GenCP commands sent again after no answer */
     FLT_COUNT_STREAM_RECOVERIES = 16, /**< cameras found streaming on open or start */
+    FLT_COUNT_PACKETS_MISSING = 17,   /**< GigE: packets found missing (each once) */
+    FLT_COUNT_RESEND_REQUESTS = 18,   /**< GigE: packets asked again (each time) */
+    FLT_COUNT_PACKETS_RESENT = 19,    /**< GigE: missing packets that came after a
+                                         request */
+    FLT_COUNT_PACKETS_DUPLICATE = 20, /**< GigE: packets that came twice, or for a
+                                         frame already gone */
     FLT_COUNT_MAX_ENUM_ = 0x7FFFFFFF
 } flt_source_counter;
 
@@ -409,10 +493,11 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_count(const flt_source *sou
 FLT_API const char *FLT_CALL flt_source_stream_error(const flt_source *source);
 
 /* ---------------------------------------------------------------------- */
-/* USB3 Vision cameras                                                     */
+/* Cameras (USB3 Vision and GigE Vision)                                  */
 /* ---------------------------------------------------------------------- */
 
-/** Camera strings from the bootstrap registers (ABRM). */
+/** Camera strings from the bootstrap registers (USB3 Vision: ABRM; GigE
+ * Vision: 0x0048.., no family: ""). */
 typedef enum flt_camera_string {
     FLT_CAMERA_VENDOR = 0,            /**< vendor name */
     FLT_CAMERA_MODEL = 1,             /**< model name */
@@ -456,6 +541,19 @@ typedef enum flt_camera_value {
     FLT_CAMERA_FINAL_TRANSFER_BYTES = 15, /**< final transfer size written */
     FLT_CAMERA_MAX_LEADER_BYTES = 16,     /**< SIRM maximum leader size */
     FLT_CAMERA_MAX_TRAILER_BYTES = 17,    /**< SIRM maximum trailer size */
+    /* GigE Vision (also CONTROL_TIMEOUT_MS, XML_BYTES, XML_ZIPPED and,
+     * after start, PAYLOAD_BYTES) */
+    FLT_CAMERA_GEV_VERSION = 18,          /**< bootstrap 0x0000 (major << 16 | minor) */
+    FLT_CAMERA_IP_ADDRESS = 19,           /**< IPv4 address, a << 24 | b << 16 | ... */
+    FLT_CAMERA_HEARTBEAT_TIMEOUT_MS = 20, /**< the heartbeat timeout written */
+    FLT_CAMERA_HEARTBEATS = 21,           /**< heartbeats answered since open */
+    FLT_CAMERA_PACKET_SIZE = 22,          /**< negotiated stream packet size, bytes
+                                             (IP + UDP + GVSP headers + data) */
+    FLT_CAMERA_STREAM_PORT = 23,          /**< host UDP port of the stream */
+    FLT_CAMERA_TIMESTAMP_HZ = 24,         /**< camera timestamp ticks per second */
+    FLT_CAMERA_RESEND_CAPABLE = 25,       /**< 1 when the camera resends packets */
+    FLT_CAMERA_RECEIVE_BUFFER_BYTES = 26, /**< the stream socket's buffer, as
+                                             the system granted it */
     FLT_CAMERA_VALUE_MAX_ENUM_ = 0x7FFFFFFF
 } flt_camera_value;
 

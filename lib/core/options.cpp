@@ -131,6 +131,16 @@ const option_spec k_options[] = {
     {FLT_OPT_FLAT_ZONE_COUNT, "flat_zone_count", 0.0, 100000.0, 0.0, true},
     {FLT_OPT_FLAT_DRIVE_SIDE, "flat_drive_side", 0.0, 1.0, 0.0, true},
     {FLT_OPT_FLAT_ZONES_ON, "flat_zones_on", 0.0, 1.0, 0.0, true},
+    // GigE Vision cameras
+    {FLT_OPT_GIGE_PACKET_SIZE, "gige_packet_size", 0.0, 16384.0, 0.0, true},
+    {FLT_OPT_GIGE_CONTROL_TIMEOUT, "gige_control_timeout", 1.0, 60000.0, 200.0, true},
+    {FLT_OPT_GIGE_COMMAND_ATTEMPTS, "gige_command_attempts", 1.0, 10.0, 3.0, true},
+    {FLT_OPT_GIGE_HEARTBEAT_TIMEOUT, "gige_heartbeat_timeout", 500.0, 600000.0, 3000.0, true},
+    {FLT_OPT_GIGE_RESEND_ATTEMPTS, "gige_resend_attempts", 0.0, 32.0, 3.0, true},
+    {FLT_OPT_GIGE_RESEND_TIMEOUT, "gige_resend_timeout", 1.0, 10000.0, 20.0, true},
+    {FLT_OPT_GIGE_SOCKET_BUFFER, "gige_socket_buffer", 65536.0, 1073741824.0, 4194304.0, true},
+    {FLT_OPT_GIGE_DISCOVERY_TIMEOUT, "gige_discovery_timeout", 1.0, 60000.0, 1000.0, true},
+    {FLT_OPT_GIGE_ASSEMBLY_FRAMES, "gige_assembly_frames", 2.0, 64.0, 8.0, true},
 };
 constexpr std::size_t k_option_count = sizeof k_options / sizeof k_options[0];
 

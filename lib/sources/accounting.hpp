@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // Internal: the frame accounting of a camera source, whatever its transport
-// (USB3 Vision now, GigE Vision next): one counter per flt_source_counter,
+// (USB3 Vision, GigE Vision): one counter per flt_source_counter,
 // and why the last frame was dropped or lost. The protocol layers (control
 // channel, stream) count into the one object their camera owns.
 #pragma once
@@ -15,7 +15,7 @@ namespace flt::sources {
 
 // Counters known to this build (a transport that adds counters appends
 // them to flt_source_counter and this size follows).
-constexpr std::size_t k_counters = std::size_t(FLT_COUNT_STREAM_RECOVERIES) + 1;
+constexpr std::size_t k_counters = std::size_t(FLT_COUNT_PACKETS_DUPLICATE) + 1;
 
 struct frame_accounting {
     std::array<std::uint64_t, k_counters> counts{};

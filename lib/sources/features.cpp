@@ -306,6 +306,7 @@ void feature_layer::map_feature(const std::string &feature, std::uint64_t addres
     r.address = address;
     r.length = length;
     r.is_float = is_float;
+    r.little_endian = !big_endian_;
     r.lsb = 0;
     r.msb = int(8 * length) - 1;
     mapped_[feature] = r;

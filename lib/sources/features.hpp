@@ -78,8 +78,11 @@ void write_float(register_port &port, const register_view &r, const std::string 
 
 class feature_layer {
   public:
-    feature_layer(register_port &port, std::unique_ptr<feature_engine> engine)
-        : port_(port), engine_(std::move(engine)) {}
+    // `big_endian`: registers mapped by address hold big-endian values (GigE
+    // Vision) instead of little-endian ones (USB3 Vision).
+    feature_layer(register_port &port, std::unique_ptr<feature_engine> engine,
+                  bool big_endian = false)
+        : port_(port), engine_(std::move(engine)), big_endian_(big_endian) {}
 
     std::int64_t get_int(const std::string &feature);
     void set_int(const std::string &feature, std::int64_t value);
@@ -87,9 +90,9 @@ class feature_layer {
     void set_float(const std::string &feature, double value);
     void set_enum(const std::string &feature, const std::string &entry);
     void execute(const std::string &feature);
-    // `length` bytes (1, 2, 4, 8; 4 or 8 for a float) at `address`,
-    // little-endian. A mapped command writes 1; a mapped enumeration takes
-    // its integer value.
+    // `length` bytes (1, 2, 4, 8; 4 or 8 for a float) at `address`, in the
+    // transport's byte order (see the constructor). A mapped command writes 1; a mapped enumeration
+    // takes its integer value.
     void map_feature(const std::string &feature, std::uint64_t address, std::uint32_t length,
                      bool is_float);
     bool is_mapped(const std::string &feature) const { return mapped_.count(feature) != 0; }
@@ -103,6 +106,7 @@ class feature_layer {
     register_port &port_;
     std::unique_ptr<feature_engine> engine_;
     std::map<std::string, register_view> mapped_;
+    bool big_endian_ = false;
 };
 
 }  // namespace flt::sources

@@ -2,7 +2,7 @@
 // The frame-source handle (flatline/source.h), the one public face of every
 // kind of source: argument checks, the started state, the borrowed frame and
 // its encoder position live here; each kind implements source_impl
-// (source.hpp) in its folder: sim/, images/, u3v/. Also the camera list.
+// (source.hpp) in its folder: sim/, images/, u3v/, gige/. Also the camera list.
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -14,6 +14,9 @@
 #include "core/options.hpp"
 #include "flatline/source.h"
 #include "sources/encoder.hpp"
+#include "sources/gige/discovery.hpp"
+#include "sources/gige/gige_source.hpp"
+#include "sources/gige/protocol.hpp"
 #include "sources/images/image_source.hpp"
 #include "sources/sim/sim_source.hpp"
 #include "sources/source.hpp"
@@ -41,8 +44,12 @@ struct flt_frame {
 };
 
 struct flt_camera_list {
+    struct entry {
+        std::string vendor, model, serial, address;
+        std::uint32_t speed_mbps = 0;
+    };
     std::uint32_t magic = k_list_magic;
-    std::vector<u3v::camera_entry> cameras;
+    std::vector<entry> cameras;
 };
 
 struct flt_source {
@@ -88,7 +95,7 @@ flt_status need_camera(const char *fn, const flt_source *source, sources::camera
         return st;
     out = source->impl->camera();
     if (out == nullptr)
-        return fail(FLT_ERR_STATE, "%s: the source is not a USB3 Vision camera", fn);
+        return fail(FLT_ERR_STATE, "%s: the source is not a camera (USB3 or GigE Vision)", fn);
     return FLT_OK;
 }
 
@@ -187,12 +194,15 @@ FLT_API flt_status FLT_CALL flt_camera_list_create(flt_usb_transport *usb, flt_c
         if (flt_status st = check_transport(fn, usb, backend))
             return st;
         auto list = std::make_unique<flt_camera_list>();
+        std::vector<u3v::camera_entry> found;
         if (backend) {
-            list->cameras = u3v::list_cameras(*backend);
+            found = u3v::list_cameras(*backend);
         } else {
             auto libusb = u3v::make_libusb_backend();
-            list->cameras = u3v::list_cameras(*libusb);
+            found = u3v::list_cameras(*libusb);
         }
+        for (const u3v::camera_entry &c : found)
+            list->cameras.push_back({c.vendor, c.model, c.serial, "", c.desc.speed_mbps});
         *out = list.release();
         return FLT_OK;
     });
@@ -232,7 +242,7 @@ FLT_API flt_status FLT_CALL flt_camera_list_get(const flt_camera_list *list, siz
                         "%s: argument 'index' = %zu but the list has "
                         "%zu camera(s)",
                         fn, index, list->cameras.size());
-        const u3v::camera_entry &e = list->cameras[index];
+        const flt_camera_list::entry &e = list->cameras[index];
         if (vendor)
             *vendor = e.vendor.c_str();
         if (model)
@@ -240,7 +250,95 @@ FLT_API flt_status FLT_CALL flt_camera_list_get(const flt_camera_list *list, siz
         if (serial)
             *serial = e.serial.c_str();
         if (speed_mbps)
-            *speed_mbps = e.desc.speed_mbps;
+            *speed_mbps = e.speed_mbps;
+        return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_camera_list_create_gige(const char *address, uint32_t timeout_ms,
+                                                        flt_camera_list **out) {
+    const char *fn = "flt_camera_list_create_gige";
+    return guard(fn, [&] {
+        FLT_CHECK_NOT_NULL(fn, out);
+        *out = nullptr;
+        if (timeout_ms < 1 || timeout_ms > 60000)
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'timeout_ms' = %u is outside [1, 60000]", fn, timeout_ms);
+        gige::endpoint e;
+        if (address && !gige::parse_endpoint(address, gige::k_gvcp_port, e))
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'address' = '%.80s' is no IPv4 address (a.b.c.d or "
+                        "a.b.c.d:port)",
+                        fn, address);
+        auto list = std::make_unique<flt_camera_list>();
+        for (const gige::camera_info &c : gige::discover(address, timeout_ms))
+            list->cameras.push_back({c.strings[FLT_CAMERA_VENDOR], c.strings[FLT_CAMERA_MODEL],
+                                     c.strings[FLT_CAMERA_SERIAL],
+                                     gige::to_string(c.address, gige::k_gvcp_port), 0});
+        *out = list.release();
+        return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_camera_list_address(const flt_camera_list *list, size_t index,
+                                                    const char **out) {
+    const char *fn = "flt_camera_list_address";
+    return guard(fn, [&] {
+        FLT_CHECK_NOT_NULL(fn, list);
+        FLT_CHECK_NOT_NULL(fn, out);
+        if (list->magic != k_list_magic)
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'list' is not a live list", fn);
+        if (index >= list->cameras.size())
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'index' = %zu but the list has %zu camera(s)", fn, index,
+                        list->cameras.size());
+        *out = list->cameras[index].address.c_str();
+        return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_source_open_gige(const char *camera, const flt_options *options,
+                                                 flt_source **out) {
+    const char *fn = "flt_source_open_gige";
+    return guard(fn, [&] {
+        FLT_CHECK_NOT_NULL(fn, out);
+        *out = nullptr;
+        if (camera && camera[0] == '\0')
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'camera' is empty (NULL takes the first camera)", fn);
+        if (flt_status st = check_option_component(fn, options, {FLT_OPT_SOURCE_ENCODER_MODE}))
+            return st;
+        const unsigned packet = unsigned(option_value(options, FLT_OPT_GIGE_PACKET_SIZE));
+        if (packet != 0 && packet < 576)
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: option 'gige_packet_size' = %u must be 0 (negotiate) or at least "
+                        "576",
+                        fn, packet);
+        auto s = std::make_unique<flt_source>();
+        s->encoder.configure(options, true);
+        if (s->encoder.mode() == sources::encoder_chunk)
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: option 'source_encoder_mode' = 3 (chunk counter) is not available "
+                        "for GigE Vision cameras yet; use 1 (fixed step) or 2 (host)",
+                        fn);
+        gige::camera_config config;
+        config.control.timeout_ms = unsigned(option_value(options, FLT_OPT_GIGE_CONTROL_TIMEOUT));
+        config.control.command_attempts =
+            unsigned(option_value(options, FLT_OPT_GIGE_COMMAND_ATTEMPTS));
+        config.control.heartbeat_ms =
+            unsigned(option_value(options, FLT_OPT_GIGE_HEARTBEAT_TIMEOUT));
+        config.stream.packet_size = packet;
+        config.stream.resend_attempts =
+            unsigned(option_value(options, FLT_OPT_GIGE_RESEND_ATTEMPTS));
+        config.stream.resend_timeout_ms =
+            unsigned(option_value(options, FLT_OPT_GIGE_RESEND_TIMEOUT));
+        config.stream.socket_buffer = int(option_value(options, FLT_OPT_GIGE_SOCKET_BUFFER));
+        config.discovery_ms = unsigned(option_value(options, FLT_OPT_GIGE_DISCOVERY_TIMEOUT));
+        config.stream.assembly_frames =
+            unsigned(option_value(options, FLT_OPT_GIGE_ASSEMBLY_FRAMES));
+        const gige::endpoint address = gige::find_camera(camera, config.discovery_ms);
+        s->impl = std::make_unique<gige::gige_camera>(address, config);
+        *out = s.release();
         return FLT_OK;
     });
 }
@@ -412,7 +510,7 @@ FLT_API flt_status FLT_CALL flt_source_count(const flt_source *source, flt_sourc
         if (flt_status st = check_source(fn, source))
             return st;
         FLT_CHECK_NOT_NULL(fn, out);
-        if (enum_arg(counter) < 0 || enum_arg(counter) > int(FLT_COUNT_STREAM_RECOVERIES))
+        if (enum_arg(counter) < 0 || enum_arg(counter) > int(FLT_COUNT_PACKETS_DUPLICATE))
             return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'counter' = %d is no counter", fn,
                         enum_arg(counter));
         *out = source->impl->count(counter);

@@ -2704,7 +2704,7 @@ static void row_source_count(void) {
     uint64_t v;
     BAD(FLT_ERR_INVALID_ARGUMENT, "'source'", flt_source_count(NULL, FLT_COUNT_FRAMES, &v));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_source_count(s, FLT_COUNT_FRAMES, NULL));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'counter'", flt_source_count(s, (flt_source_counter)17, &v));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'counter'", flt_source_count(s, (flt_source_counter)21, &v));
     ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "'counter'",
                 flt_source_count(s, (flt_source_counter)-1, &v));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'counter'", flt_source_count(s, FLT_COUNT_MAX_ENUM_, &v));
@@ -2960,6 +2960,64 @@ static void row_camera_list_get(void) {
     GOOD(flt_camera_list_get(l, 0, NULL, NULL, NULL, NULL));
     flt_camera_list_destroy(l);
     flt_u3v_sim_destroy(bus);
+}
+
+static void row_camera_list_create_gige(void) {
+    flt_camera_list *l = NULL;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_camera_list_create_gige("127.0.0.1", 10, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'address'", flt_camera_list_create_gige("camera", 10, &l));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'address'", flt_camera_list_create_gige("1.2.3.4:0", 10, &l));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'address'", flt_camera_list_create_gige("256.1.1.1", 10, &l));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'timeout_ms'", flt_camera_list_create_gige(NULL, 0, &l));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'timeout_ms'", flt_camera_list_create_gige(NULL, 60001, &l));
+    /* The discard port of loopback: nobody answers, an empty list. */
+    GOOD(flt_camera_list_create_gige("127.0.0.1:9", 1, &l));
+    size_t n = 1;
+    GOOD(flt_camera_list_count(l, &n));
+    if (n != 0)
+        ERR("a list of %zu cameras from a port nobody answers on\n", n);
+    flt_camera_list_destroy(l);
+}
+
+static void row_camera_list_address(void) {
+    flt_u3v_sim *bus = new_bus();
+    flt_camera_list *l = NULL;
+    const char *a = NULL;
+    GOOD(flt_camera_list_create(usb(bus), &l));
+    g_fn = "flt_camera_list_address";
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'list'", flt_camera_list_address(NULL, 0, &a));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_camera_list_address(l, 0, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'index'", flt_camera_list_address(l, 1, &a));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'index'", flt_camera_list_address(l, NEG, &a));
+    GOOD(flt_camera_list_address(l, 0, &a));
+    if (!a || a[0] != '\0')
+        ERR("a USB3 Vision camera has address '%s', expected ''\n", a ? a : "(null)");
+    flt_camera_list_destroy(l);
+    flt_u3v_sim_destroy(bus);
+}
+
+/* Without a camera on the network: every refusal (the good path is
+ * test_gige's, against aravis's fake camera). */
+static void row_source_open_gige(void) {
+    flt_source *s = NULL;
+    flt_options *o = NULL;
+    GOOD(flt_options_create(&o));
+    GOOD(flt_options_set(o, FLT_OPT_GIGE_CONTROL_TIMEOUT, 10));
+    GOOD(flt_options_set(o, FLT_OPT_GIGE_COMMAND_ATTEMPTS, 1));
+    GOOD(flt_options_set(o, FLT_OPT_GIGE_DISCOVERY_TIMEOUT, 1));
+    g_fn = "flt_source_open_gige";
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_source_open_gige("127.0.0.1", o, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'camera'", flt_source_open_gige("", o, &s));
+    BAD(FLT_ERR_TIMEOUT, "127.0.0.1:9", flt_source_open_gige("127.0.0.1:9", o, &s));
+    BAD(FLT_ERR_NOT_FOUND, "NO-SUCH-SERIAL", flt_source_open_gige("NO-SUCH-SERIAL", o, &s));
+    GOOD(flt_options_set(o, FLT_OPT_GIGE_PACKET_SIZE, 575));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "gige_packet_size", flt_source_open_gige("127.0.0.1", o, &s));
+    GOOD(flt_options_set(o, FLT_OPT_GIGE_PACKET_SIZE, 0));
+    GOOD(flt_options_set(o, FLT_OPT_SOURCE_ENCODER_MODE, 3));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "source_encoder_mode", flt_source_open_gige("127.0.0.1", o, &s));
+    if (s)
+        ERR("a refused open returned a source\n");
+    flt_options_destroy(o);
 }
 
 static void row_u3v_sim_create(void) {
@@ -4187,6 +4245,9 @@ static const row k_rows[] = {
     ROW(camera_list_count),
     ROW(camera_list_get),
     ROW(source_open_u3v),
+    ROW(camera_list_create_gige),
+    ROW(camera_list_address),
+    ROW(source_open_gige),
     ROW(source_destroy),
     ROW(source_kind_of),
     ROW(source_start),
