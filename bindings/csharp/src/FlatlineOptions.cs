@@ -310,6 +310,24 @@ namespace Flatline
         public int U3vPendingAckLimit { get => (int)Get("u3v_pending_ack_limit"); set => Set("u3v_pending_ack_limit", value); }
         /// <summary>Times a command is sent when no acknowledge comes.</summary>
         public int U3vCommandAttempts { get => (int)Get("u3v_command_attempts"); set => Set("u3v_command_attempts", value); }
+        /// <summary>GigE Vision stream packet size, bytes (IP + UDP + GVSP headers + data); 0 negotiates it.</summary>
+        public int GigePacketSize { get => (int)Get("gige_packet_size"); set => Set("gige_packet_size", value); }
+        /// <summary>Wait for a GVCP acknowledge, ms.</summary>
+        public int GigeControlTimeout { get => (int)Get("gige_control_timeout"); set => Set("gige_control_timeout", value); }
+        /// <summary>Times a GVCP command is sent when no acknowledge comes.</summary>
+        public int GigeCommandAttempts { get => (int)Get("gige_command_attempts"); set => Set("gige_command_attempts", value); }
+        /// <summary>The camera drops our control after this long without a heartbeat, ms.</summary>
+        public int GigeHeartbeatTimeout { get => (int)Get("gige_heartbeat_timeout"); set => Set("gige_heartbeat_timeout", value); }
+        /// <summary>Times a lost packet is asked again before its frame is dropped (0: never).</summary>
+        public int GigeResendAttempts { get => (int)Get("gige_resend_attempts"); set => Set("gige_resend_attempts", value); }
+        /// <summary>Wait for a packet asked again before asking once more, ms.</summary>
+        public int GigeResendTimeout { get => (int)Get("gige_resend_timeout"); set => Set("gige_resend_timeout", value); }
+        /// <summary>Receive buffer asked for the stream socket, bytes.</summary>
+        public int GigeSocketBuffer { get => (int)Get("gige_socket_buffer"); set => Set("gige_socket_buffer", value); }
+        /// <summary>How long opening by serial or name waits for discovery answers, ms.</summary>
+        public int GigeDiscoveryTimeout { get => (int)Get("gige_discovery_timeout"); set => Set("gige_discovery_timeout", value); }
+        /// <summary>Frames assembled at once while lost packets are asked again.</summary>
+        public int GigeAssemblyFrames { get => (int)Get("gige_assembly_frames"); set => Set("gige_assembly_frames", value); }
 
         // ---- the gauge (Gauge); flatline/gauge.h
         /// <summary>Threads that process the frames; 0 processes each frame on

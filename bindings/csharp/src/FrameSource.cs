@@ -12,6 +12,7 @@ namespace Flatline
         Simulator = NativeSourceKind.FLT_SOURCE_SIMULATOR,
         Images = NativeSourceKind.FLT_SOURCE_IMAGES,
         U3V = NativeSourceKind.FLT_SOURCE_U3V,
+        GigE = NativeSourceKind.FLT_SOURCE_GIGE,
     }
 
     /// <summary>Where a frame's encoder position comes from (the option
@@ -48,6 +49,14 @@ namespace Flatline
         StaleAcks = NativeCounter.FLT_COUNT_STALE_ACKS,
         CommandRetries = NativeCounter.FLT_COUNT_COMMAND_RETRIES,
         StreamRecoveries = NativeCounter.FLT_COUNT_STREAM_RECOVERIES,
+        /// <summary>GigE Vision: packets found missing (each once).</summary>
+        PacketsMissing = NativeCounter.FLT_COUNT_PACKETS_MISSING,
+        /// <summary>GigE Vision: packets asked again (each request).</summary>
+        ResendRequests = NativeCounter.FLT_COUNT_RESEND_REQUESTS,
+        /// <summary>GigE Vision: missing packets that came after a request.</summary>
+        PacketsResent = NativeCounter.FLT_COUNT_PACKETS_RESENT,
+        /// <summary>GigE Vision: packets that came twice or too late.</summary>
+        PacketsDuplicate = NativeCounter.FLT_COUNT_PACKETS_DUPLICATE,
     }
 
     /// <summary>Camera strings from the bootstrap registers (flt_camera_string).</summary>
@@ -84,26 +93,43 @@ namespace Flatline
         FinalTransferBytes = NativeCameraValue.FLT_CAMERA_FINAL_TRANSFER_BYTES,
         MaxLeaderBytes = NativeCameraValue.FLT_CAMERA_MAX_LEADER_BYTES,
         MaxTrailerBytes = NativeCameraValue.FLT_CAMERA_MAX_TRAILER_BYTES,
+        GevVersion = NativeCameraValue.FLT_CAMERA_GEV_VERSION,
+        /// <summary>IPv4 address, a &lt;&lt; 24 | b &lt;&lt; 16 | c &lt;&lt; 8 | d.</summary>
+        IpAddress = NativeCameraValue.FLT_CAMERA_IP_ADDRESS,
+        HeartbeatTimeoutMs = NativeCameraValue.FLT_CAMERA_HEARTBEAT_TIMEOUT_MS,
+        Heartbeats = NativeCameraValue.FLT_CAMERA_HEARTBEATS,
+        /// <summary>Negotiated stream packet size, bytes (IP + UDP + GVSP headers + data).</summary>
+        PacketSize = NativeCameraValue.FLT_CAMERA_PACKET_SIZE,
+        StreamPort = NativeCameraValue.FLT_CAMERA_STREAM_PORT,
+        TimestampHz = NativeCameraValue.FLT_CAMERA_TIMESTAMP_HZ,
+        ResendCapable = NativeCameraValue.FLT_CAMERA_RESEND_CAPABLE,
+        ReceiveBufferBytes = NativeCameraValue.FLT_CAMERA_RECEIVE_BUFFER_BYTES,
     }
 
-    /// <summary>A USB3 Vision camera found by <see cref="FrameSource.Cameras"/>:
-    /// its strings and link speed (Mbit/s; 0 unknown). A camera that cannot
-    /// be opened to read its strings is listed with vendor "?" and the
-    /// reason as its model.</summary>
+    /// <summary>A camera found by <see cref="FrameSource.Cameras"/> (USB3
+    /// Vision) or <see cref="FrameSource.GigECameras"/> (GigE Vision): its
+    /// strings, link speed (Mbit/s; 0 unknown) and address. A USB3 Vision
+    /// camera that cannot be opened to read its strings is listed with
+    /// vendor "?" and the reason as its model.</summary>
     public sealed class CameraInfo
     {
-        internal CameraInfo(string vendor, string model, string serial, int speedMbps)
+        internal CameraInfo(string vendor, string model, string serial, int speedMbps,
+                            string address = "")
         {
             Vendor = vendor;
             Model = model;
             Serial = serial;
             SpeedMbps = speedMbps;
+            Address = address;
         }
 
         public string Vendor { get; }
         public string Model { get; }
         public string Serial { get; }
         public int SpeedMbps { get; }
+        /// <summary>GigE Vision: "a.b.c.d" (":port" when not 3956), what
+        /// <see cref="FrameSource.GigE"/> opens; USB3 Vision: "".</summary>
+        public string Address { get; }
         public override string ToString() => $"{Vendor} {Model} ({Serial}), {SpeedMbps} Mbit/s";
     }
 
@@ -311,6 +337,55 @@ namespace Flatline
                 }
             }
             GC.KeepAlive(bus);
+            return cameras;
+        }
+
+        /// <summary>Opens a GigE Vision camera: <paramref name="camera"/> is
+        /// its address ("a.b.c.d" or "a.b.c.d:port"), its serial number or
+        /// user-defined name (found by a discovery broadcast), or null for the
+        /// first camera that answers. Takes the control privilege (kept by a
+        /// heartbeat), reads the bootstrap registers and the GenICam file and
+        /// negotiates the stream packet size (options GigE*).
+        /// <see cref="NotFoundException"/> when no such camera answers,
+        /// <see cref="DeviceTimeoutException"/> when the address does not
+        /// answer, <see cref="DeviceException"/> when another application
+        /// controls the camera.</summary>
+        public static FrameSource GigE(string camera = null, FlatlineOptions options = null)
+        {
+            NativeLoader.EnsureLoaded();
+            SourceHandle handle;
+            using (var scope = FlatlineOptions.Borrow(options))
+            {
+                FlatlineNative.flt_source_open_gige(camera, scope.Handle, out handle);
+            }
+            return new FrameSource(handle, null);
+        }
+
+        /// <summary>The GigE Vision cameras that answer a discovery sent to
+        /// <paramref name="address"/> (a camera or a subnet's broadcast
+        /// address, "a.b.c.d[:port]"), or to every interface's broadcast
+        /// address when null, within <paramref name="timeoutMs"/>
+        /// (1..60000).</summary>
+        public static unsafe IReadOnlyList<CameraInfo> GigECameras(string address = null, int timeoutMs = 1000)
+        {
+            if (timeoutMs < 1 || timeoutMs > 60000)
+                throw new ArgumentOutOfRangeException(nameof(timeoutMs), timeoutMs, "1..60000 ms");
+            NativeLoader.EnsureLoaded();
+            var cameras = new List<CameraInfo>();
+            FlatlineNative.flt_camera_list_create_gige(address, (uint)timeoutMs, out CameraListHandle list);
+            using (list)
+            {
+                FlatlineNative.flt_camera_list_count(list, out UIntPtr count);
+                for (ulong i = 0; i < count.ToUInt64(); ++i)
+                {
+                    IntPtr vendor, model, serial, where;
+                    uint speed;
+                    FlatlineNative.flt_camera_list_get(list, i, &vendor, &model, &serial, &speed);
+                    FlatlineNative.flt_camera_list_address(list, i, &where);
+                    cameras.Add(new CameraInfo(Utf8.Decode(vendor), Utf8.Decode(model), Utf8.Decode(serial),
+                                               (int)speed, Utf8.Decode(where)));
+                }
+            }
             return cameras;
         }
 

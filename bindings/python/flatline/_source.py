@@ -40,6 +40,7 @@ class SourceKind(enum.IntEnum):
     SIMULATOR = _capi.FLT_SOURCE_SIMULATOR
     IMAGES = _capi.FLT_SOURCE_IMAGES
     U3V = _capi.FLT_SOURCE_U3V
+    GIGE = _capi.FLT_SOURCE_GIGE
 
 
 class Frame(NamedTuple):
@@ -54,12 +55,14 @@ class Frame(NamedTuple):
 
 
 class CameraInfo(NamedTuple):
-    """A USB3 Vision camera found by :func:`list_cameras`."""
+    """A camera found by :func:`list_cameras` (USB3 Vision) or
+    :meth:`Source.list_gige_cameras` (GigE Vision)."""
 
     vendor: str  #: "?" when the camera could not be opened to read its strings
     model: str  #: the model, or why the camera could not be opened
-    serial: str  #: the serial number (pass it to :meth:`Source.u3v`)
+    serial: str  #: the serial number (pass it to :meth:`Source.u3v` / :meth:`Source.gige`)
     speed_mbps: int  #: link speed, Mbit/s (480, 5000, 10000; 0 unknown)
+    address: str = ""  #: GigE Vision: "a.b.c.d" (":port" if not 3956); USB3 Vision: ""
 
 
 #: flt_source_counter by its Python name (counters() keys), in C order.
@@ -81,6 +84,10 @@ _COUNTERS = {
     "stale_acks": _capi.FLT_COUNT_STALE_ACKS,
     "command_retries": _capi.FLT_COUNT_COMMAND_RETRIES,
     "stream_recoveries": _capi.FLT_COUNT_STREAM_RECOVERIES,
+    "packets_missing": _capi.FLT_COUNT_PACKETS_MISSING,
+    "resend_requests": _capi.FLT_COUNT_RESEND_REQUESTS,
+    "packets_resent": _capi.FLT_COUNT_PACKETS_RESENT,
+    "packets_duplicate": _capi.FLT_COUNT_PACKETS_DUPLICATE,
 }
 
 _CAMERA_STRINGS = {
@@ -112,13 +119,22 @@ _CAMERA_VALUES = {
     "final_transfer_bytes": _capi.FLT_CAMERA_FINAL_TRANSFER_BYTES,
     "max_leader_bytes": _capi.FLT_CAMERA_MAX_LEADER_BYTES,
     "max_trailer_bytes": _capi.FLT_CAMERA_MAX_TRAILER_BYTES,
+    "gev_version": _capi.FLT_CAMERA_GEV_VERSION,
+    "ip_address": _capi.FLT_CAMERA_IP_ADDRESS,
+    "heartbeat_timeout_ms": _capi.FLT_CAMERA_HEARTBEAT_TIMEOUT_MS,
+    "heartbeats": _capi.FLT_CAMERA_HEARTBEATS,
+    "packet_size": _capi.FLT_CAMERA_PACKET_SIZE,
+    "stream_port": _capi.FLT_CAMERA_STREAM_PORT,
+    "timestamp_hz": _capi.FLT_CAMERA_TIMESTAMP_HZ,
+    "resend_capable": _capi.FLT_CAMERA_RESEND_CAPABLE,
+    "receive_buffer_bytes": _capi.FLT_CAMERA_RECEIVE_BUFFER_BYTES,
 }
 
 
 def source_options() -> Dict[str, float]:
-    """The source options (source_*, u3v_*) with their C defaults."""
+    """The source options (source_*, u3v_*, gige_*) with their C defaults."""
     return {name: info.default
-            for name, info in prefixed_options("source_", "u3v_").items()}
+            for name, info in prefixed_options("source_", "u3v_", "gige_").items()}
 
 
 def _name(function: str, argument: str, value: Any, table: Dict[str, int]) -> int:
@@ -302,6 +318,41 @@ class Source:
         return cls._wrap(handle, (bus, bus_handle), (bus._lock,), bus)
 
     list_cameras = staticmethod(list_cameras)
+
+    @classmethod
+    def gige(cls, camera: Optional[str] = None, **options: float) -> "Source":
+        """Opens a GigE Vision camera: `camera` is its address ("a.b.c.d" or
+        "a.b.c.d:port"), its serial number or user-defined name (found by a
+        discovery broadcast, gige_discovery_timeout), or None for the first
+        camera that answers. Takes the control privilege (kept by a
+        heartbeat), reads the bootstrap registers and the GenICam file and
+        negotiates the stream packet size. NotFoundError when no such camera
+        answers, TimeoutError when the address does not answer, DeviceError
+        when another application controls the camera."""
+        fn = "Source.gige"
+        if camera is not None:
+            camera = _str(fn, "camera", camera)
+        bag = make_options(fn, options, prefixes=("source_", "gige_"))
+        return cls._wrap(_capi.flt_source_open_gige(camera, bag), (), ())
+
+    @staticmethod
+    def list_gige_cameras(address: Optional[str] = None,
+                          timeout_ms: int = 1000) -> List[CameraInfo]:
+        """The GigE Vision cameras that answer a discovery sent to `address`
+        (a camera or a subnet's broadcast address, "a.b.c.d[:port]"), or to
+        every interface's broadcast address when None, within `timeout_ms`
+        (1..60000). Each has its address (pass it to :meth:`gige`)."""
+        fn = "Source.list_gige_cameras"
+        if address is not None:
+            address = _str(fn, "address", address)
+        timeout_ms = as_index(fn, "timeout_ms", timeout_ms, 1, 60000)
+        handle = _capi.flt_camera_list_create_gige(address, timeout_ms)
+        found = []
+        for index in range(int(_capi.flt_camera_list_count(handle))):
+            vendor, model, serial, speed = _capi.flt_camera_list_get(handle, index)
+            found.append(CameraInfo(vendor, model, serial, int(speed),
+                                    _capi.flt_camera_list_address(handle, index)))
+        return found
 
     # -- lifetime ------------------------------------------------------------------
 
