@@ -145,7 +145,9 @@ def test_component_option_tables_are_the_c_defaults():
     assert all(name.startswith("extract_") for name in extract) and len(extract) == 11
     source = flatline.source_options()
     assert source["source_encoder_step"] == 3.0 and source["u3v_transfers"] == 8.0
-    assert all(name.startswith(("source_", "u3v_")) for name in source) and len(source) == 11
+    assert source["gige_resend_attempts"] == 3.0 and source["gige_packet_size"] == 0.0
+    assert all(name.startswith(("source_", "u3v_", "gige_")) for name in source)
+    assert len(source) == 11 + 9
     assert "u3v_transfers (int): default 8" in flatline.Source.__doc__
     for doc in (flatline.SimulatedLine.__doc__, flatline.Extractor.__doc__,
                 flatline.Source.__doc__, flatline.Flatness.__doc__):
@@ -165,7 +167,7 @@ def test_enums_are_the_c_values():
     assert flatline.LASERS == 2
     assert [int(s) for s in flatline.Shape] == list(range(8))
     assert int(flatline.ShapeComponent.CROSSBOW) == 32
-    assert [int(k) for k in flatline.SourceKind] == [1, 2, 3]
+    assert [int(k) for k in flatline.SourceKind] == [1, 2, 3, 4]
     from flatline.testing import U3VFault, U3VSimParam
     assert U3VFault.LATE_ACK == 13 and U3VSimParam.OPEN == 25
     assert (flatline.FIBER_NO_DATA, flatline.FIBER_NO_WAVE, flatline.FIBER_PARTIAL) == (1, 2, 4)
