@@ -53,8 +53,20 @@
  *   the last ones, after the tail, are dropped. A new strip starts afresh:
  *   nothing carries over from one coil to the next. Every strip has a coil
  *   number; sheets are numbered along the gauge's life and within their
- *   coil. (The strip's presence is judged from the fraction of valid
- *   fibers until the extractor reports the strip's edges itself.)
+ *   coil. A frame shows the strip when the extractor finds it
+ *   (flt_extractor_strip: not FLT_STRIP_NONE) and its valid fibers span
+ *   gauge_strip_min_width; a profile row pushed by the caller, when its
+ *   valid fibers do.
+ *
+ * The strip's edges
+ *   A strip narrower than the sensor leaves fibers beside it: the
+ *   extractor flags them FLT_FLAG_OFF_STRIP, the reconstructor never
+ *   reconstructs them (NaN with that bit alone in the height map), and the
+ *   flatness metrics lay their fibers and zones on the strip from its
+ *   edges (flatline/flatness.h), so a strip that wanders sideways keeps its
+ *   zones. The sheet reports the strip's width and position (mean, min,
+ *   max) and where its fibers and zones lie in sensor and strip
+ *   coordinates.
  *
  * Cuts
  *   flt_gauge_cut(encoder_mm) tells the gauge where the shear cut: the
@@ -158,9 +170,13 @@ typedef enum flt_sheet_value {
     FLT_SHEET_ROWS = 5,
     FLT_SHEET_S_FIRST = 6, /**< s of the first row, mm */
     FLT_SHEET_S_LAST = 7,  /**< s of the last row, mm */
-    /** The strip's edges, width and centre across the sensor, mm (x of the
-     * fiber grid): the outer fibers with enough valid data, plus half a
-     * pitch. NaN with FLT_SHEET_FLAG_NO_EDGES. */
+    /** The strip's edges, width and centre across the sensor, mm (sensor
+     * x, as the fiber grid's): where the extractor saw the strip's edges
+     * (flt_extractor_strip; FLT_WINDOW_ON_STRIP in the window flags), the
+     * mean over the sheet of the flatness metrics' smoothed per-row strip
+     * (flt_flatness_strip), left and right = centre -+ width / 2; else the
+     * outer fibers with enough valid data, plus half a pitch. NaN with
+     * FLT_SHEET_FLAG_NO_EDGES. */
     FLT_SHEET_STRIP_LEFT = 8,
     FLT_SHEET_STRIP_RIGHT = 9,   /**< right edge, mm */
     FLT_SHEET_STRIP_WIDTH = 10,  /**< width, mm */
@@ -188,9 +204,10 @@ typedef enum flt_sheet_value {
     FLT_SHEET_WINDOW_FLAGS = 23, /**< FLT_WINDOW_* bits */
     /** Counters over the sheet's stretch of strip: frames measured (its
      * rows), frames skipped (line stops, short reversals), frames dropped
-     * (the queue was full), saturated peaks (reported by the extractor;
-     * 0 until it counts them) and invalid samples (row and fiber without a
-     * measurement, fibers outside a narrower strip included). */
+     * (the queue was full), saturated peaks on the strip (both lasers,
+     * flt_extractor_saturation; 0 for pushed rows) and invalid samples
+     * (row and fiber without a measurement, fibers beside a narrower strip
+     * included). */
     FLT_SHEET_FRAMES = 24,
     FLT_SHEET_SKIPPED = 25,   /**< frames skipped */
     FLT_SHEET_DROPPED = 26,   /**< frames dropped */
@@ -202,15 +219,26 @@ typedef enum flt_sheet_value {
     /** The sizes of the per-fiber and per-zone arrays. */
     FLT_SHEET_FIBERS = 30,
     FLT_SHEET_ZONES = 31, /**< zone count */
+    /** The strip's width over the sheet's rows: smallest (mm; equal to the
+     * mean without edges). A strip that narrows shows here. */
+    FLT_SHEET_STRIP_WIDTH_MIN = 32,
+    FLT_SHEET_STRIP_WIDTH_MAX = 33, /**< largest width over the rows, mm */
+    /** The strip's centre over the sheet's rows: smallest (mm, sensor x).
+     * A strip that wanders sideways shows here. */
+    FLT_SHEET_STRIP_CENTRE_MIN = 34,
+    FLT_SHEET_STRIP_CENTRE_MAX = 35, /**< largest centre over the rows, mm */
     /** Not a key: keeps the type int-sized whatever is added. */
     FLT_SHEET_VALUE_MAX_ENUM_ = 0x7FFFFFFF
 } flt_sheet_value;
 
 /** Per-fiber and per-zone results, read with flt_sheet_get_array(). */
 typedef enum flt_sheet_array {
-    /** Per fiber (FLT_SHEET_FIBERS values): x (mm), I-Units, arc length
-     * (mm), largest wave height (mm), period (mm), steepness (%), and the
-     * FLT_FIBER_* flag bits as whole numbers (flatline/flatness.h). */
+    /** Per fiber (FLT_SHEET_FIBERS values): x (mm, sensor x: the result
+     * fiber's mean position over the sheet; on the strip a result fiber
+     * keeps its place on the strip, flatline/flatness.h "Zones on the
+     * strip"), I-Units, arc length (mm), largest wave height (mm), period
+     * (mm), steepness (%), and the FLT_FIBER_* flag bits as whole numbers
+     * (flatline/flatness.h). */
     FLT_SHEET_FIBER_X = 0,
     FLT_SHEET_FIBER_I_UNITS = 1,     /**< I-Units per fiber */
     FLT_SHEET_FIBER_ARC_LENGTH = 2,  /**< arc length per fiber, mm */
@@ -218,11 +246,21 @@ typedef enum flt_sheet_array {
     FLT_SHEET_FIBER_WAVE_PERIOD = 4, /**< its period, mm */
     FLT_SHEET_FIBER_STEEPNESS = 5,   /**< its steepness, % */
     FLT_SHEET_FIBER_FLAGS = 6,       /**< FLT_FIBER_* bits */
-    /** Per zone (FLT_SHEET_ZONES values): centre x (mm), I-Units, and the
-     * FLT_ZONE_* flag bits as whole numbers. */
+    /** Per zone (FLT_SHEET_ZONES values): centre x (mm, sensor x, the mean
+     * over the sheet), I-Units, and the FLT_ZONE_* flag bits as whole
+     * numbers. */
     FLT_SHEET_ZONE_CENTRE_X = 7,
     FLT_SHEET_ZONE_I_UNITS = 8, /**< I-Units per zone */
     FLT_SHEET_ZONE_FLAGS = 9,   /**< FLT_ZONE_* bits */
+    /** Strip coordinates (mm from the strip's centre line towards the
+     * operator side, flatline/flatness.h) per result fiber
+     * (FLT_SHEET_FIBERS values): beyond the strip's half width for a fiber
+     * flagged FLT_FIBER_OFF_STRIP; NaN when the sheet has no flatness
+     * window (every fiber FLT_FIBER_NO_DATA). */
+    FLT_SHEET_FIBER_STRIP_X = 10,
+    /** The same per zone centre (FLT_SHEET_ZONES values); NaN for a zone
+     * beyond what the strip holds (FLT_ZONE_NO_DATA | FLT_ZONE_OFF_STRIP). */
+    FLT_SHEET_ZONE_STRIP_X = 11,
     FLT_SHEET_ARRAY_MAX_ENUM_ = 0x7FFFFFFF
 } flt_sheet_array;
 

@@ -305,6 +305,7 @@ void gauge::init(const flt_calib *calib, const flt_options *options) {
         slot.height.assign(K_, 0.0);
         slot.slope.assign(K_, 0.0);
         slot.valid.assign(K_, 0);
+        slot.flags.assign(K_, 0);
     }
 
     // Sequencer state.
@@ -314,7 +315,7 @@ void gauge::init(const flt_calib *calib, const flt_options *options) {
     held_s_.assign(hold_capacity_, 0.0);
     held_height_.assign(hold_capacity_ * K_, 0.0);
     held_slope_.assign(hold_capacity_ * K_, 0.0);
-    held_valid_.assign(hold_capacity_ * K_, 0);
+    held_flags_.assign(hold_capacity_ * K_, 0);
     held_meta_.resize(hold_capacity_);
     pull_s_.assign(k_pull_rows, 0.0);
     pull_z_.assign(k_pull_rows * K_, 0.0);
@@ -324,6 +325,8 @@ void gauge::init(const flt_calib *calib, const flt_options *options) {
         b.z.assign(sheet_capacity_ * K_, 0.0);
         b.flags.assign(sheet_capacity_ * K_, 0);
         b.meta.resize(sheet_capacity_);
+        b.left.assign(sheet_capacity_, 0.0);
+        b.right.assign(sheet_capacity_, 0.0);
         if (cfg_.keep_maps >= 2)
             b.measured.assign(sheet_capacity_ * K_, 0.0);
     }
@@ -341,7 +344,7 @@ void gauge::init(const flt_calib *calib, const flt_options *options) {
         sh->fibers = K_;
         sh->maps = cfg_.keep_maps;
         for (int a = 0; a < k_sheet_arrays; ++a)
-            sh->array[a].assign(a < FLT_SHEET_ZONE_CENTRE_X ? K_ : zones_, 0.0);
+            sh->array[a].assign(is_fiber_array(a) ? K_ : zones_, 0.0);
         if (cfg_.keep_maps >= 1) {
             sh->map_s.assign(sheet_capacity_, 0.0);
             sh->map_z.assign(sheet_capacity_ * K_, 0.0);
@@ -481,6 +484,16 @@ void gauge::extract(frame_slot &slot, const void *pixels, flt_pixel_format forma
                                                 slot.slope.data(), slot.valid.data());
     if (st == FLT_OK) {
         *error_out = false;
+        // The strip in the frame: per fiber on or off it, its edges (the
+        // profile row's: both lasers' mean) and its saturated peaks. These
+        // calls fail only before a successful process, which this was.
+        std::size_t peaks = 0, saturated = 0;
+        if (flt_extractor_fiber_flags(extractor, K_, slot.flags.data()) != FLT_OK ||
+            flt_extractor_strip(extractor, 2, &slot.left, &slot.right, nullptr, nullptr,
+                                &slot.strip_flags) != FLT_OK ||
+            flt_extractor_saturation(extractor, 2, &peaks, &saturated, nullptr) != FLT_OK)
+            throw error(FLT_ERR_INTERNAL, flt_last_error_message());
+        slot.saturated = std::uint32_t(saturated);
         return;
     }
     // A frame without the two lines while the band is automatic is a frame
@@ -491,6 +504,10 @@ void gauge::extract(frame_slot &slot, const void *pixels, flt_pixel_format forma
     std::fill(slot.height.begin(), slot.height.end(), k_nan);
     std::fill(slot.slope.begin(), slot.slope.end(), k_nan);
     std::fill(slot.valid.begin(), slot.valid.end(), std::uint8_t(0));
+    std::fill(slot.flags.begin(), slot.flags.end(), std::uint8_t(FLT_FLAG_INVALID_INPUT));
+    slot.left = slot.right = k_nan;
+    slot.strip_flags = FLT_STRIP_NONE | FLT_STRIP_LEFT_OPEN | FLT_STRIP_RIGHT_OPEN;
+    slot.saturated = 0;
     clear_error();
 }
 
@@ -531,7 +548,12 @@ void gauge::fill_slot(frame_slot &slot, const gauge_input &in) const {
             slot.height[k] = in.height[k];
             slot.slope[k] = in.slope[k];
             slot.valid[k] = ok ? 1 : 0;
+            slot.flags[k] = ok ? 0 : std::uint8_t(FLT_FLAG_INVALID_INPUT);
         }
+        // A row from the caller says nothing of the strip's edges.
+        slot.left = slot.right = k_nan;
+        slot.strip_flags = 0;
+        slot.saturated = 0;
         return;
     }
     if (cfg_.workers == 0)
@@ -784,7 +806,10 @@ void gauge::sequence(frame_slot &slot) {
     std::uint32_t valid = 0;
     for (std::size_t k = 0; k < K_; ++k)
         valid += slot.valid[k] != 0;
-    const bool present = valid > 0 && double(valid) * pitch_ >= cfg_.strip_min_width;
+    // The strip is there when enough fibers measured it and the extractor
+    // found it (a frame with no run of line wide enough is no strip).
+    const bool present = valid > 0 && double(valid) * pitch_ >= cfg_.strip_min_width &&
+                         !(slot.strip_flags & FLT_STRIP_NONE);
     const double s = slot.s;
 
     if (in_strip_ && pushed_ && s - last_pushed_s_ > max_jump_) {
@@ -814,10 +839,13 @@ void gauge::sequence(frame_slot &slot) {
     meta.skipped = pending_row_skipped_;
     meta.dropped = pending_row_dropped_;
     meta.invalid = std::uint32_t(K_ - valid);
+    meta.left = slot.left;
+    meta.right = slot.right;
+    meta.saturated = slot.saturated;
     pending_row_skipped_ = pending_row_dropped_ = 0;
     if (present) {
         release_held();
-        push_row(s, slot.height.data(), slot.slope.data(), slot.valid.data(), meta);
+        push_row(s, slot.height.data(), slot.slope.data(), slot.flags.data(), meta);
         return;
     }
     // Perhaps the tail: hold the row until the strip shows again (a gap
@@ -825,7 +853,7 @@ void gauge::sequence(frame_slot &slot) {
     held_s_[held_] = s;
     std::memcpy(&held_height_[held_ * K_], slot.height.data(), K_ * sizeof(double));
     std::memcpy(&held_slope_[held_ * K_], slot.slope.data(), K_ * sizeof(double));
-    std::memcpy(&held_valid_[held_ * K_], slot.valid.data(), K_);
+    std::memcpy(&held_flags_[held_ * K_], slot.flags.data(), K_);
     held_meta_[held_] = meta;
     ++held_;
     if (s - held_s_[0] >= cfg_.tail_length || held_ == hold_capacity_)
@@ -851,21 +879,21 @@ void gauge::begin_strip(double s) {
 
 void gauge::release_held() {
     for (std::size_t i = 0; i < held_; ++i)
-        push_row(held_s_[i], &held_height_[i * K_], &held_slope_[i * K_], &held_valid_[i * K_],
+        push_row(held_s_[i], &held_height_[i * K_], &held_slope_[i * K_], &held_flags_[i * K_],
                  held_meta_[i]);
     held_ = 0;
 }
 
-void gauge::push_row(double s, const double *height, const double *slope, const std::uint8_t *valid,
+void gauge::push_row(double s, const double *height, const double *slope, const std::uint8_t *flags,
                      const row_meta &meta) {
     if (meta_count_ == row_capacity_)
         throw error(FLT_ERR_INTERNAL, "the gauge's row ring is full");
-    check(flt_recon_push(recon_, 1, K_, &s, height, slope, valid));
+    check(flt_recon_push_flagged(recon_, 1, K_, &s, height, slope, flags));
     const std::size_t at = (meta_head_ + meta_count_) % row_capacity_;
     meta_ring_[at] = meta;
     if (cfg_.keep_maps >= 2)
         for (std::size_t k = 0; k < K_; ++k)
-            measured_ring_[at * K_ + k] = valid[k] ? height[k] : k_nan;
+            measured_ring_[at * K_ + k] = flags[k] == 0 ? height[k] : k_nan;
     ++meta_count_;
     pushed_ = true;
     last_pushed_s_ = s;
@@ -906,6 +934,8 @@ void gauge::output_row(double s, const double *z, const std::uint8_t *flags, con
     std::memcpy(&b.z[r * K_], z, K_ * sizeof(double));
     std::memcpy(&b.flags[r * K_], flags, K_);
     b.meta[r] = meta;
+    b.left[r] = meta.left;
+    b.right[r] = meta.right;
     if (measured)
         std::memcpy(&b.measured[r * K_], measured, K_ * sizeof(double));
     ++b.rows;
@@ -956,6 +986,8 @@ void gauge::split(double s_at, unsigned end_flags, bool all_rows) {
     std::memcpy(nb.z.data(), old.z.data() + i * K_, rest * K_ * sizeof(double));
     std::memcpy(nb.flags.data(), old.flags.data() + i * K_, rest * K_);
     std::copy(old.meta.begin() + long(i), old.meta.begin() + long(old.rows), nb.meta.begin());
+    std::memcpy(nb.left.data(), old.left.data() + i, rest * sizeof(double));
+    std::memcpy(nb.right.data(), old.right.data() + i, rest * sizeof(double));
     if (cfg_.keep_maps >= 2)
         std::memcpy(nb.measured.data(), old.measured.data() + i * K_, rest * K_ * sizeof(double));
     nb.rows = rest;
@@ -1095,8 +1127,8 @@ void gauge::evaluate(const sheet_job &job) {
     // ones through the streamed finish (which reports them flagged).
     flt_flatness *f = nullptr;
     if (n >= 2 && b.s[n - 1] - b.s[0] >= min_length_) {
-        const flt_status st =
-            flt_flatness_evaluate(flat_, n, K_, b.s.data(), b.z.data(), b.flags.data());
+        const flt_status st = flt_flatness_evaluate_strip(
+            flat_, n, K_, b.s.data(), b.z.data(), b.flags.data(), b.left.data(), b.right.data());
         if (st == FLT_OK)
             f = flat_;
         else if (st != FLT_ERR_INVALID_ARGUMENT)
@@ -1106,8 +1138,8 @@ void gauge::evaluate(const sheet_job &job) {
         check(flt_flatness_reset(flat_short_));
         std::size_t used = 0;
         int evaluated = 0;
-        check(flt_flatness_push(flat_short_, n, K_, b.s.data(), b.z.data(), b.flags.data(), &used,
-                                &evaluated));
+        check(flt_flatness_push_strip(flat_short_, n, K_, b.s.data(), b.z.data(), b.flags.data(),
+                                      b.left.data(), b.right.data(), &used, &evaluated));
         check(flt_flatness_finish(flat_short_, &evaluated));
         if (used != n || !evaluated)
             throw error(FLT_ERR_INTERNAL, "a short sheet was not evaluated whole");
@@ -1123,6 +1155,8 @@ void gauge::evaluate(const sheet_job &job) {
     double *zx = sh->array[FLT_SHEET_ZONE_CENTRE_X].data();
     double *ziu = sh->array[FLT_SHEET_ZONE_I_UNITS].data();
     double *zfl = sh->array[FLT_SHEET_ZONE_FLAGS].data();
+    double *fsx = sh->array[FLT_SHEET_FIBER_STRIP_X].data();
+    double *zsx = sh->array[FLT_SHEET_ZONE_STRIP_X].data();
     std::copy(fiber_x_.begin(), fiber_x_.end(), fx);
     std::copy(zone_x_.begin(), zone_x_.end(), zx);
     unsigned window_flags = 0;
@@ -1134,6 +1168,10 @@ void gauge::evaluate(const sheet_job &job) {
         check(flt_flatness_zone_results(f, zones_, ziu, flag_scratch_.data()));
         for (std::size_t j = 0; j < zones_; ++j)
             zfl[j] = flag_scratch_[j];
+        // Where the results lie: on the strip (from its edges) or, without
+        // edges, on the fiber grid; in strip and in sensor coordinates.
+        check(flt_flatness_fiber_positions(f, K_, fsx, fx));
+        check(flt_flatness_zone_positions(f, zones_, zsx, zx, nullptr, nullptr));
         flt_shape shape = FLT_SHAPE_UNDETERMINED;
         double confidence = 0, bow = 0, crossbow = 0;
         unsigned components = 0;
@@ -1149,11 +1187,11 @@ void gauge::evaluate(const sheet_job &job) {
         if (n < 2 || b.s[n - 1] - b.s[0] < min_length_)
             window_flags |= FLT_WINDOW_SHORT;
         for (std::size_t k = 0; k < K_; ++k) {
-            fiu[k] = farc[k] = fwh[k] = fwp[k] = fst[k] = k_nan;
+            fiu[k] = farc[k] = fwh[k] = fwp[k] = fst[k] = fsx[k] = k_nan;
             ffl[k] = double(FLT_FIBER_NO_DATA | FLT_FIBER_NO_WAVE);
         }
         for (std::size_t j = 0; j < zones_; ++j) {
-            ziu[j] = k_nan;
+            ziu[j] = zsx[j] = k_nan;
             zfl[j] = double(FLT_ZONE_NO_DATA);
         }
         v[FLT_SHEET_SHAPE] = double(FLT_SHAPE_UNDETERMINED);
@@ -1164,23 +1202,39 @@ void gauge::evaluate(const sheet_job &job) {
     }
     v[FLT_SHEET_WINDOW_FLAGS] = double(window_flags);
 
-    // The strip's edges: the outer fibers with enough valid data.
-    long first = -1, last = -1;
-    for (std::size_t k = 0; k < K_; ++k)
-        if (!(unsigned(ffl[k]) & FLT_FIBER_NO_DATA)) {
-            if (first < 0)
-                first = long(k);
-            last = long(k);
-        }
-    if (first >= 0) {
-        v[FLT_SHEET_STRIP_LEFT] = fx[first] - 0.5 * pitch_;
-        v[FLT_SHEET_STRIP_RIGHT] = fx[last] + 0.5 * pitch_;
-        v[FLT_SHEET_STRIP_WIDTH] = v[FLT_SHEET_STRIP_RIGHT] - v[FLT_SHEET_STRIP_LEFT];
-        v[FLT_SHEET_STRIP_CENTRE] = 0.5 * (v[FLT_SHEET_STRIP_LEFT] + v[FLT_SHEET_STRIP_RIGHT]);
+    // The strip's width and lateral position: from the extractor's edges
+    // where the flatness window had them (smoothed along the sheet: mean,
+    // min and max over its rows); else the outer fibers with data.
+    if (f && (window_flags & FLT_WINDOW_ON_STRIP)) {
+        double width[3], centre[3];
+        check(flt_flatness_strip(f, width, centre));
+        v[FLT_SHEET_STRIP_WIDTH] = width[0];
+        v[FLT_SHEET_STRIP_WIDTH_MIN] = width[1];
+        v[FLT_SHEET_STRIP_WIDTH_MAX] = width[2];
+        v[FLT_SHEET_STRIP_CENTRE] = centre[0];
+        v[FLT_SHEET_STRIP_CENTRE_MIN] = centre[1];
+        v[FLT_SHEET_STRIP_CENTRE_MAX] = centre[2];
+        v[FLT_SHEET_STRIP_LEFT] = centre[0] - 0.5 * width[0];
+        v[FLT_SHEET_STRIP_RIGHT] = centre[0] + 0.5 * width[0];
     } else {
-        flags |= FLT_SHEET_FLAG_NO_EDGES;
-        v[FLT_SHEET_STRIP_LEFT] = v[FLT_SHEET_STRIP_RIGHT] = k_nan;
-        v[FLT_SHEET_STRIP_WIDTH] = v[FLT_SHEET_STRIP_CENTRE] = k_nan;
+        long first = -1, last = -1;
+        for (std::size_t k = 0; k < K_; ++k)
+            if (!(unsigned(ffl[k]) & FLT_FIBER_NO_DATA)) {
+                if (first < 0)
+                    first = long(k);
+                last = long(k);
+            }
+        if (first >= 0) {
+            v[FLT_SHEET_STRIP_LEFT] = fx[first] - 0.5 * pitch_;
+            v[FLT_SHEET_STRIP_RIGHT] = fx[last] + 0.5 * pitch_;
+        } else {
+            flags |= FLT_SHEET_FLAG_NO_EDGES;
+            v[FLT_SHEET_STRIP_LEFT] = v[FLT_SHEET_STRIP_RIGHT] = k_nan;
+        }
+        v[FLT_SHEET_STRIP_WIDTH] = v[FLT_SHEET_STRIP_WIDTH_MIN] = v[FLT_SHEET_STRIP_WIDTH_MAX] =
+            v[FLT_SHEET_STRIP_RIGHT] - v[FLT_SHEET_STRIP_LEFT];
+        v[FLT_SHEET_STRIP_CENTRE] = v[FLT_SHEET_STRIP_CENTRE_MIN] = v[FLT_SHEET_STRIP_CENTRE_MAX] =
+            0.5 * (v[FLT_SHEET_STRIP_LEFT] + v[FLT_SHEET_STRIP_RIGHT]);
     }
     // The largest wave over the fibers.
     long wave = -1;

@@ -19,10 +19,15 @@
 namespace flt {
 
 constexpr std::uint32_t k_sheet_magic = 0x464c5453u;  // "FLTS"
-constexpr int k_sheet_values = 32;                    // flt_sheet_value keys 0..31
-constexpr int k_sheet_arrays = 10;                    // flt_sheet_array keys 0..9
+constexpr int k_sheet_values = 36;                    // flt_sheet_value keys 0..35
+constexpr int k_sheet_arrays = 12;                    // flt_sheet_array keys 0..11
 
 struct sheet_pool;
+
+// Whether a flt_sheet_array has a value per fiber (else per zone).
+inline bool is_fiber_array(int key) {
+    return key < FLT_SHEET_ZONE_CENTRE_X || key == FLT_SHEET_FIBER_STRIP_X;
+}
 
 }  // namespace flt
 
@@ -73,6 +78,9 @@ struct gauge_input {
 // Per row on its way through the reconstructor: what its sheet counts.
 struct row_meta {
     double s = 0.0;
+    // The strip's edges in the row, sensor x mm (the extractor's, both
+    // lasers' mean; NaN where not seen).
+    double left = 0.0, right = 0.0;
     std::uint32_t skipped = 0, dropped = 0, saturated = 0, invalid = 0;
 };
 
@@ -126,10 +134,16 @@ class gauge {
         double s = 0.0;  // the profile row
         std::vector<double> height, slope;
         std::vector<std::uint8_t> valid;
+        // Per fiber what flt_recon_push_flagged takes: 0, FLT_FLAG_INVALID_INPUT
+        // or FLT_FLAG_OFF_STRIP.
+        std::vector<std::uint8_t> flags;
+        double left = 0.0, right = 0.0;  // the strip's edges (NaN: not seen)
+        unsigned strip_flags = 0;        // FLT_STRIP_* of the frame
+        std::uint32_t saturated = 0;     // saturated peaks on the strip
     };
     // ---- the sheets being built and evaluated
     struct sheet_buffer {
-        std::vector<double> s, z, measured;
+        std::vector<double> s, z, measured, left, right;
         std::vector<std::uint8_t> flags;
         std::vector<row_meta> meta;
         std::size_t rows = 0;
@@ -162,7 +176,7 @@ class gauge {
     void drop_active_cuts(double up_to, bool all);
     void begin_strip(double s);
     void end_strip(unsigned flag);
-    void push_row(double s, const double *height, const double *slope, const std::uint8_t *valid,
+    void push_row(double s, const double *height, const double *slope, const std::uint8_t *flags,
                   const row_meta &meta);
     void release_held();
     void pull_all();
@@ -251,7 +265,7 @@ class gauge {
     std::size_t meta_head_ = 0, meta_count_ = 0;
     // Held rows: the strip may have left (always emptied whole).
     std::vector<double> held_s_, held_height_, held_slope_;
-    std::vector<std::uint8_t> held_valid_;
+    std::vector<std::uint8_t> held_flags_;
     std::vector<row_meta> held_meta_;
     std::size_t held_ = 0;
     std::uint32_t pending_row_skipped_ = 0, pending_row_dropped_ = 0;

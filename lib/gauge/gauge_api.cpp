@@ -305,8 +305,7 @@ FLT_API flt_status FLT_CALL flt_sheet_get_array(const flt_sheet *sheet, flt_shee
         if (count != a.size())
             return fail(FLT_ERR_INVALID_ARGUMENT,
                         "%s: argument 'count' = %zu but the array has %zu values (%s)", fn, count,
-                        a.size(),
-                        raw < FLT_SHEET_ZONE_CENTRE_X ? "FLT_SHEET_FIBERS" : "FLT_SHEET_ZONES");
+                        a.size(), is_fiber_array(raw) ? "FLT_SHEET_FIBERS" : "FLT_SHEET_ZONES");
         std::memcpy(out, a.data(), count * sizeof(double));
         return FLT_OK;
     });

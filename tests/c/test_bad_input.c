@@ -3469,7 +3469,7 @@ static void row_sheet_get(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'sheet'", flt_sheet_get(NULL, FLT_SHEET_ID, &v));
     BAD(FLT_ERR_INVALID_ARGUMENT, "not a live", flt_sheet_get((flt_sheet *)junk, FLT_SHEET_ID, &v));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_sheet_get(sh, FLT_SHEET_ID, NULL));
-    BAD(FLT_ERR_NOT_FOUND, "'key' = 32", flt_sheet_get(sh, (flt_sheet_value)32, &v));
+    BAD(FLT_ERR_NOT_FOUND, "'key' = 36", flt_sheet_get(sh, (flt_sheet_value)36, &v));
     ENUM_UB_BAD(FLT_ERR_NOT_FOUND, "'key' = -1", flt_sheet_get(sh, (flt_sheet_value)-1, &v));
     GOOD(flt_sheet_get(sh, FLT_SHEET_ROWS, &v));
     ++g_checks;
@@ -3487,7 +3487,7 @@ static void row_sheet_get_array(void) {
     double a[FIBERS];
     BAD(FLT_ERR_INVALID_ARGUMENT, "'sheet'",
         flt_sheet_get_array(NULL, FLT_SHEET_FIBER_I_UNITS, FIBERS, a));
-    BAD(FLT_ERR_NOT_FOUND, "'key' = 10", flt_sheet_get_array(sh, (flt_sheet_array)10, FIBERS, a));
+    BAD(FLT_ERR_NOT_FOUND, "'key' = 12", flt_sheet_get_array(sh, (flt_sheet_array)12, FIBERS, a));
     ENUM_UB_BAD(FLT_ERR_NOT_FOUND, "'key' = -2",
                 flt_sheet_get_array(sh, (flt_sheet_array)-2, FIBERS, a));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'out'",

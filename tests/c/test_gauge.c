@@ -56,7 +56,12 @@ static void sleep_ms(int ms) {
 /* A sheet copied out of its handle, to compare runs                       */
 /* ---------------------------------------------------------------------- */
 
-enum { N_VALUES = 32, N_ARRAYS = 10 };
+enum { N_VALUES = 36, N_ARRAYS = 12 };
+
+/* Whether a sheet array has a value per fiber (else per zone). */
+static int fiber_array(int a) {
+    return a < FLT_SHEET_ZONE_CENTRE_X || a == FLT_SHEET_FIBER_STRIP_X;
+}
 
 typedef struct copied_sheet {
     double value[N_VALUES];
@@ -79,7 +84,7 @@ static void copy_sheet(const flt_sheet *sh, copied_sheet *c, int maps) {
     c->fibers = (size_t)c->value[FLT_SHEET_FIBERS];
     const size_t zones = (size_t)c->value[FLT_SHEET_ZONES];
     for (int a = 0; a < N_ARRAYS; ++a) {
-        c->n_array[a] = a < FLT_SHEET_ZONE_CENTRE_X ? c->fibers : zones;
+        c->n_array[a] = fiber_array(a) ? c->fibers : zones;
         c->array[a] = malloc(c->n_array[a] * sizeof(double));
         OK(flt_sheet_get_array(sh, (flt_sheet_array)a, c->n_array[a], c->array[a]));
     }
@@ -169,11 +174,15 @@ typedef struct hand_chain {
     size_t n_cuts, next_cut;
     double sheet_start;
     int sheet_flags, started;
-    size_t rows; /* of the open sheet */
-    double *s, *z;
+    size_t rows;                  /* of the open sheet */
+    double *s, *z, *left, *right; /* the open sheet's rows and edges */
     uint8_t *flags;
     double *out_s, *out_z;
     uint8_t *out_flags;
+    /* The edges of the rows pushed and not yet out of the reconstructor
+     * (in order: pushed row i comes out as row i). */
+    double *in_left, *in_right;
+    size_t pushed, taken;
     sheet_list result;
 } hand_chain;
 
@@ -196,10 +205,10 @@ static void hand_finish(hand_chain *h, double s_end, int end_flags, size_t rows)
     size_t zones = 0;
     OK(flt_flatness_zones(h->flat, &zones));
     for (int a = 0; a < N_ARRAYS; ++a) {
-        c->n_array[a] = a < FLT_SHEET_ZONE_CENTRE_X ? FK : zones;
+        c->n_array[a] = fiber_array(a) ? FK : zones;
         c->array[a] = calloc(c->n_array[a], sizeof(double));
     }
-    OK(flt_flatness_evaluate(h->flat, rows, FK, h->s, h->z, h->flags));
+    OK(flt_flatness_evaluate_strip(h->flat, rows, FK, h->s, h->z, h->flags, h->left, h->right));
     OK(flt_flatness_zone_results(h->flat, zones, c->array[FLT_SHEET_ZONE_I_UNITS], NULL));
     uint8_t fflags[FK];
     OK(flt_flatness_fiber_results(
@@ -212,11 +221,27 @@ static void hand_finish(hand_chain *h, double s_end, int end_flags, size_t rows)
                           &c->value[FLT_SHEET_BOW], &c->value[FLT_SHEET_CROSSBOW]));
     c->value[FLT_SHEET_SHAPE] = shape;
     c->value[FLT_SHEET_COMPONENTS] = comps;
+    /* Where fibers and zones lie, and the strip (from its edges). */
+    OK(flt_flatness_fiber_positions(h->flat, FK, c->array[FLT_SHEET_FIBER_STRIP_X],
+                                    c->array[FLT_SHEET_FIBER_X]));
+    OK(flt_flatness_zone_positions(h->flat, zones, c->array[FLT_SHEET_ZONE_STRIP_X],
+                                   c->array[FLT_SHEET_ZONE_CENTRE_X], NULL, NULL));
+    unsigned window_flags = 0;
+    OK(flt_flatness_window(h->flat, NULL, NULL, NULL, &window_flags, NULL));
+    c->value[FLT_SHEET_WINDOW_FLAGS] = window_flags;
+    if (window_flags & FLT_WINDOW_ON_STRIP) {
+        double width[3], centre[3];
+        OK(flt_flatness_strip(h->flat, width, centre));
+        c->value[FLT_SHEET_STRIP_WIDTH] = width[0];
+        c->value[FLT_SHEET_STRIP_CENTRE] = centre[0];
+    }
     /* The rows beyond the cut begin the next sheet. */
     const size_t rest = h->rows - rows;
     memmove(h->s, h->s + rows, rest * sizeof(double));
     memmove(h->z, h->z + rows * FK, rest * FK * sizeof(double));
     memmove(h->flags, h->flags + rows * FK, rest * FK);
+    memmove(h->left, h->left + rows, rest * sizeof(double));
+    memmove(h->right, h->right + rows, rest * sizeof(double));
     h->rows = rest;
     h->sheet_start = s_end;
     h->sheet_flags = 0;
@@ -232,6 +257,9 @@ static void hand_take_rows(hand_chain *h, size_t got) {
         h->s[h->rows] = s;
         memcpy(&h->z[h->rows * FK], &h->out_z[r * FK], FK * sizeof(double));
         memcpy(&h->flags[h->rows * FK], &h->out_flags[r * FK], FK);
+        h->left[h->rows] = h->in_left[h->taken];
+        h->right[h->rows] = h->in_right[h->taken];
+        ++h->taken;
         ++h->rows;
     }
 }
@@ -261,7 +289,14 @@ static void hand_frame(hand_chain *h, const uint8_t *frame, double encoder, int 
         h->sheet_start = s;
         h->sheet_flags = FLT_SHEET_FLAG_HEAD;
     }
-    OK(flt_recon_push(h->recon, 1, FK, &s, height, slope, valid));
+    /* The strip: fibers off it, and its edges (both lasers' mean) for the
+     * flatness of the row's sheet. */
+    uint8_t flags[FK];
+    OK(flt_extractor_fiber_flags(h->ex, FK, flags));
+    OK(flt_extractor_strip(h->ex, 2, &h->in_left[h->pushed], &h->in_right[h->pushed], NULL, NULL,
+                           NULL));
+    ++h->pushed;
+    OK(flt_recon_push_flagged(h->recon, 1, FK, &s, height, slope, flags));
     hand_pull(h);
 }
 
@@ -332,6 +367,10 @@ static void frames_against_hand_chain(void **state) {
     h.s = malloc(CAP * sizeof(double));
     h.z = malloc(CAP * FK * sizeof(double));
     h.flags = malloc(CAP * FK);
+    h.left = malloc(CAP * sizeof(double));
+    h.right = malloc(CAP * sizeof(double));
+    h.in_left = malloc(CAP * sizeof(double));
+    h.in_right = malloc(CAP * sizeof(double));
     h.out_s = malloc(4096 * sizeof(double));
     h.out_z = malloc(4096 * FK * sizeof(double));
     h.out_flags = malloc(4096 * FK);
@@ -377,17 +416,25 @@ static void frames_against_hand_chain(void **state) {
         assert_memory_equal(a->flags, b->flags, a->rows * FK);
         const int compare[] = {FLT_SHEET_FIBER_I_UNITS,     FLT_SHEET_FIBER_ARC_LENGTH,
                                FLT_SHEET_FIBER_WAVE_HEIGHT, FLT_SHEET_FIBER_WAVE_PERIOD,
-                               FLT_SHEET_FIBER_STEEPNESS,   FLT_SHEET_ZONE_I_UNITS};
+                               FLT_SHEET_FIBER_STEEPNESS,   FLT_SHEET_ZONE_I_UNITS,
+                               FLT_SHEET_FIBER_X,           FLT_SHEET_FIBER_STRIP_X,
+                               FLT_SHEET_ZONE_CENTRE_X,     FLT_SHEET_ZONE_STRIP_X};
         for (size_t k = 0; k < sizeof compare / sizeof compare[0]; ++k)
             assert_same_doubles(a->array[compare[k]], b->array[compare[k]], a->n_array[compare[k]],
                                 "metrics");
         const int scalars[] = {FLT_SHEET_SHAPE, FLT_SHEET_CONFIDENCE, FLT_SHEET_COMPONENTS,
-                               FLT_SHEET_BOW, FLT_SHEET_CROSSBOW};
+                               FLT_SHEET_BOW,   FLT_SHEET_CROSSBOW,   FLT_SHEET_WINDOW_FLAGS};
         for (size_t k = 0; k < sizeof scalars / sizeof scalars[0]; ++k)
             assert_same_doubles(&a->value[scalars[k]], &b->value[scalars[k]], 1, "shape");
         /* 1000 mm at 10 mm, give or take a row. */
         assert_true(a->rows >= 99 && a->rows <= 101);
         assert_int_equal(a->value[FLT_SHEET_FRAMES], (double)a->rows);
+        if ((int)a->value[FLT_SHEET_WINDOW_FLAGS] & FLT_WINDOW_ON_STRIP) {
+            assert_same_doubles(&a->value[FLT_SHEET_STRIP_WIDTH], &b->value[FLT_SHEET_STRIP_WIDTH],
+                                1, "strip width");
+            assert_same_doubles(&a->value[FLT_SHEET_STRIP_CENTRE],
+                                &b->value[FLT_SHEET_STRIP_CENTRE], 1, "strip centre");
+        }
         assert_int_equal(a->value[FLT_SHEET_DROPPED], 0.0);
     }
     /* 0, 1 and 2 workers: the same sheets, every value, array and map. */
@@ -418,6 +465,7 @@ static void frames_against_hand_chain(void **state) {
     }
     free_list(&h.result);
     free(h.s), free(h.z), free(h.flags), free(h.out_s), free(h.out_z), free(h.out_flags);
+    free(h.left), free(h.right), free(h.in_left), free(h.in_right);
     free(frame), free(blank);
     flt_extractor_destroy(h.ex);
     flt_recon_destroy(h.recon);
@@ -1139,6 +1187,108 @@ static void acquisition_from_a_source(void **state) {
     flt_calib_destroy(calib);
 }
 
+/* A strip 1000 mm wide, 100 mm off the sensor's centre, on a 1500 mm
+ * fiber grid, the roller table beside it: the extractor's edges give the sheet's width and
+ * position, the fibers beside the strip are FLT_FLAG_OFF_STRIP (NaN) in the height map, and fibers
+ * and zones lie on the strip. */
+static void narrow_strip_has_edges(void **state) {
+    (void)state;
+    flt_calib *calib = NULL;
+    OK(flt_calib_create_reference(ROI_FIRST, ROI_ROWS, F_FIRST_X, F_PITCH, FK, &calib));
+    flt_options *so = bag();
+    set(so, FLT_OPT_SIM_FRAME_SPACING, F_STEP);
+    set(so, FLT_OPT_SIM_STRIP_WIDTH, 1000.0);
+    set(so, FLT_OPT_SIM_STRIP_OFFSET, 100.0);
+    set(so, FLT_OPT_SIM_SURROUND, FLT_SIM_SURROUND_ROLLER_TABLE);
+    flt_sim *sim = NULL;
+    OK(flt_sim_create(calib, so, &sim));
+    flt_options_destroy(so);
+    OK(flt_sim_add_defect(sim, FLT_SIM_CENTRE_BUCKLE, 4.0, 800.0));
+    flt_options *o = bag();
+    set(o, FLT_OPT_GAUGE_FRAME_SPACING, 8.0);
+    set(o, FLT_OPT_GAUGE_OVERFLOW, 1);
+    set(o, FLT_OPT_GAUGE_KEEP_MAPS, 1);
+    set(o, FLT_OPT_LAG_KNOTS, 4);
+    flt_gauge *g = NULL;
+    OK(flt_gauge_create(calib, o, &g));
+    OK(flt_gauge_cut(g, 1500.0));
+    uint8_t *frame = malloc((size_t)WIDTH * ROI_ROWS);
+    for (int f = 0; f < 300; ++f) {
+        double e = 0;
+        OK(flt_sim_next_frame(sim, frame, (size_t)WIDTH * ROI_ROWS, WIDTH, &e, 0, NULL, NULL));
+        OK(flt_gauge_push_frame(g, frame, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, e));
+    }
+    OK(flt_gauge_flush(g));
+    sheet_list l = {0};
+    drain(g, &l, 1);
+    assert_int_equal(l.n, 2);
+    for (size_t i = 0; i < l.n; ++i) {
+        const copied_sheet *c = &l.sheet[i];
+        const double *v = c->value;
+        assert_true((int)v[FLT_SHEET_WINDOW_FLAGS] & FLT_WINDOW_ON_STRIP);
+        assert_false((int)v[FLT_SHEET_FLAGS] & FLT_SHEET_FLAG_NO_EDGES);
+        print_message("sheet %zu: strip width %.2f mm (%.2f .. %.2f), centre %.2f mm "
+                      "(%.2f .. %.2f)\n",
+                      i + 1, v[FLT_SHEET_STRIP_WIDTH], v[FLT_SHEET_STRIP_WIDTH_MIN],
+                      v[FLT_SHEET_STRIP_WIDTH_MAX], v[FLT_SHEET_STRIP_CENTRE],
+                      v[FLT_SHEET_STRIP_CENTRE_MIN], v[FLT_SHEET_STRIP_CENTRE_MAX]);
+        /* The edges are refined to a fraction of a camera column (about
+         * 1 mm here) and smoothed along the sheet: within 2 mm. */
+        assert_true(fabs(v[FLT_SHEET_STRIP_WIDTH] - 1000.0) < 2.0);
+        assert_true(fabs(v[FLT_SHEET_STRIP_CENTRE] - 100.0) < 2.0);
+        assert_true(v[FLT_SHEET_STRIP_WIDTH_MIN] <= v[FLT_SHEET_STRIP_WIDTH]);
+        assert_true(v[FLT_SHEET_STRIP_WIDTH_MAX] >= v[FLT_SHEET_STRIP_WIDTH]);
+        assert_true(v[FLT_SHEET_STRIP_WIDTH_MAX] - v[FLT_SHEET_STRIP_WIDTH_MIN] < 4.0);
+        assert_true(fabs(v[FLT_SHEET_STRIP_LEFT] - (-400.0)) < 2.0);
+        assert_true(fabs(v[FLT_SHEET_STRIP_RIGHT] - 600.0) < 2.0);
+        /* Fibers 15 mm or more beside the strip (a pitch and a half) are
+         * off it in every row; those 15 mm or more inside never are. */
+        for (size_t k = 0; k < FK; ++k) {
+            const double x = F_FIRST_X + F_PITCH * (double)k;
+            for (size_t r = 0; r < c->rows; ++r) {
+                const uint8_t fl = c->flags[r * FK + k];
+                if (x < -415.0 || x > 615.0) {
+                    assert_int_equal(fl, FLT_FLAG_OFF_STRIP);
+                    assert_true(isnan(c->z[r * FK + k]));
+                } else if (x > -385.0 && x < 585.0) {
+                    assert_false(fl & FLT_FLAG_OFF_STRIP);
+                }
+            }
+        }
+        /* Result fibers on the strip: one pitch apart in strip coordinates,
+         * centred on its centre line, at sensor x = centre + strip x (no
+         * wander) within the edges' 2 mm. */
+        const double *sx = c->array[FLT_SHEET_FIBER_STRIP_X], *fx = c->array[FLT_SHEET_FIBER_X];
+        const double *ff = c->array[FLT_SHEET_FIBER_FLAGS];
+        for (size_t k = 0; k < FK; ++k) {
+            if ((int)ff[k] & FLT_FIBER_NO_DATA)
+                continue;
+            assert_true(fabs(sx[k]) <= 500.0);
+            assert_true(fabs(fx[k] - (v[FLT_SHEET_STRIP_CENTRE] + sx[k])) < 2.0 ||
+                        fabs(fx[k] - (v[FLT_SHEET_STRIP_CENTRE] - sx[k])) < 2.0);
+        }
+        /* Zones on the strip lie within its half width; the grid's zones
+         * beyond what the strip holds are off it (NaN, flagged). */
+        const double *zs = c->array[FLT_SHEET_ZONE_STRIP_X], *zf = c->array[FLT_SHEET_ZONE_FLAGS];
+        size_t on_strip = 0;
+        for (size_t j = 0; j < c->n_array[FLT_SHEET_ZONE_STRIP_X]; ++j) {
+            if ((int)zf[j] & FLT_ZONE_OFF_STRIP) {
+                assert_true(isnan(zs[j]));
+                continue;
+            }
+            assert_true(fabs(zs[j]) < 500.0);
+            ++on_strip;
+        }
+        assert_true(on_strip > 0);
+    }
+    free_list(&l);
+    free(frame);
+    flt_gauge_destroy(g);
+    flt_options_destroy(o);
+    flt_sim_destroy(sim);
+    flt_calib_destroy(calib);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(frames_against_hand_chain),
@@ -1150,6 +1300,7 @@ int main(void) {
         cmocka_unit_test(callback_polling_and_slots),
         cmocka_unit_test(splits_and_empty_sheets),
         cmocka_unit_test(acquisition_from_a_source),
+        cmocka_unit_test(narrow_strip_has_edges),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -71,6 +71,10 @@ namespace Flatline
         Lookahead = NativeSheetValue.FLT_SHEET_LOOKAHEAD,
         Fibers = NativeSheetValue.FLT_SHEET_FIBERS,
         Zones = NativeSheetValue.FLT_SHEET_ZONES,
+        StripWidthMin = NativeSheetValue.FLT_SHEET_STRIP_WIDTH_MIN,
+        StripWidthMax = NativeSheetValue.FLT_SHEET_STRIP_WIDTH_MAX,
+        StripCentreMin = NativeSheetValue.FLT_SHEET_STRIP_CENTRE_MIN,
+        StripCentreMax = NativeSheetValue.FLT_SHEET_STRIP_CENTRE_MAX,
     }
 
     /// <summary>The gauge's counters (flt_gauge_counter).</summary>
@@ -128,11 +132,18 @@ namespace Flatline
         /// <summary>s of its first and last row, mm (NaN with <see cref="SheetFlags.Empty"/>).</summary>
         public double SFirstMm => Value(SheetValue.SFirst);
         public double SLastMm => Value(SheetValue.SLast);
-        /// <summary>The strip's edges, width and centre across the sensor, mm.</summary>
+        /// <summary>The strip's edges, width and centre across the sensor, mm
+        /// (from the extractor's edges where it saw them: WindowFlags.OnStrip).</summary>
         public double StripLeftMm => Value(SheetValue.StripLeft);
         public double StripRightMm => Value(SheetValue.StripRight);
         public double StripWidthMm => Value(SheetValue.StripWidth);
         public double StripCentreMm => Value(SheetValue.StripCentre);
+        /// <summary>The strip's width and centre over the sheet's rows:
+        /// smallest and largest, mm (a strip that narrows or wanders).</summary>
+        public double StripWidthMinMm => Value(SheetValue.StripWidthMin);
+        public double StripWidthMaxMm => Value(SheetValue.StripWidthMax);
+        public double StripCentreMinMm => Value(SheetValue.StripCentreMin);
+        public double StripCentreMaxMm => Value(SheetValue.StripCentreMax);
         /// <summary>The shape class, its confidence in [0, 1] and its components.</summary>
         public ShapeClass Shape => (ShapeClass)(int)Value(SheetValue.Shape);
         /// <summary>The C library's name of the class, e.g. "centre buckle".</summary>
@@ -174,6 +185,11 @@ namespace Flatline
         public FiberFlags[] FiberFlags { get; private set; } = Array.Empty<FiberFlags>();
         /// <summary>Per zone [zones]: centre x (mm), I-Units, flags.</summary>
         public double[] ZoneCentreX { get; private set; } = Array.Empty<double>();
+        /// <summary>Strip coordinates (mm from the strip's centre line towards
+        /// the operator side) of each fiber [fibers] and zone centre [zones];
+        /// NaN where its flags say it has no data.</summary>
+        public double[] FiberStripX { get; private set; } = Array.Empty<double>();
+        public double[] ZoneStripX { get; private set; } = Array.Empty<double>();
         public double[] ZoneIUnits { get; private set; } = Array.Empty<double>();
         public ZoneFlags[] ZoneFlags { get; private set; } = Array.Empty<ZoneFlags>();
 
@@ -189,7 +205,7 @@ namespace Flatline
 
         internal static unsafe Sheet Read(IntPtr sheet, int maps)
         {
-            int count = (int)NativeSheetValue.FLT_SHEET_ZONES + 1;
+            int count = (int)NativeSheetValue.FLT_SHEET_STRIP_CENTRE_MAX + 1;
             var values = new double[count];
             for (int key = 0; key < count; ++key)
             {
@@ -217,6 +233,8 @@ namespace Flatline
                 result.FiberFlags[k] = (FiberFlags)(byte)fiberFlags[k];
             result.ZoneCentreX = Values(NativeSheetArray.FLT_SHEET_ZONE_CENTRE_X, zones);
             result.ZoneIUnits = Values(NativeSheetArray.FLT_SHEET_ZONE_I_UNITS, zones);
+            result.FiberStripX = Values(NativeSheetArray.FLT_SHEET_FIBER_STRIP_X, fibers);
+            result.ZoneStripX = Values(NativeSheetArray.FLT_SHEET_ZONE_STRIP_X, zones);
             var zoneFlags = Values(NativeSheetArray.FLT_SHEET_ZONE_FLAGS, zones);
             result.ZoneFlags = new ZoneFlags[zones];
             for (int j = 0; j < zones; ++j)

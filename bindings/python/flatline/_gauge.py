@@ -7,7 +7,7 @@ from __future__ import annotations
 import enum
 import threading
 from dataclasses import dataclass, field
-from typing import Any, Dict, Iterator, Optional
+from typing import Any, Dict, Iterator, Optional, Tuple
 
 import numpy as np
 
@@ -51,6 +51,7 @@ _VALUES = (
     "confidence", "components", "bow", "crossbow", "wave_height", "wave_period",
     "wave_steepness", "wave_x", "max_i_units", "flags", "window_flags", "frames",
     "skipped", "dropped", "saturated", "invalid", "lookahead", "fibers", "zones",
+    "strip_width_min", "strip_width_max", "strip_centre_min", "strip_centre_max",
 )
 
 _COUNTERS = {
@@ -77,9 +78,10 @@ _COUNTERS = {
 class SheetZones:
     """A sheet's zone profile, (zones,) arrays."""
 
-    centre_x: np.ndarray  #: (zones,) zone centre across the width, mm
+    centre_x: np.ndarray  #: (zones,) zone centre across the sensor, mm (mean over the sheet)
     i_units: np.ndarray  #: (zones,) I-Units; NaN with ZONE_NO_DATA
     flags: np.ndarray  #: (zones,) uint8 ZONE_* bits
+    strip_x: np.ndarray  #: (zones,) zone centre from the strip's centre line, mm
 
 
 @dataclass(frozen=True)
@@ -97,10 +99,10 @@ class Sheet:
     rows: int  #: rows (frames) in it
     s_first: float  #: s of its first row, mm (NaN with EMPTY)
     s_last: float  #: s of its last row, mm (NaN with EMPTY)
-    strip_left: float  #: the strip's left edge, mm across the sensor
+    strip_left: float  #: the strip's left edge, mm across the sensor (the extractor's edges)
     strip_right: float  #: its right edge, mm
-    strip_width: float  #: its width, mm
-    strip_centre: float  #: its centre, mm
+    strip_width: float  #: its width, mm (mean over the sheet)
+    strip_centre: float  #: its centre, mm (mean over the sheet)
     shape: Shape  #: the shape class
     confidence: float  #: in [0, 1]
     components: ShapeComponent  #: FLT_SHAPE_HAS_* bits
@@ -116,11 +118,14 @@ class Sheet:
     frames: int  #: frames measured (its rows)
     skipped: int  #: frames skipped (line stops, short reversals)
     dropped: int  #: frames dropped at a full queue
-    saturated: int  #: saturated peaks (0 until the extractor counts them)
+    saturated: int  #: saturated peaks on the strip (frames; 0 for pushed rows)
     invalid: int  #: samples (row, fiber) without a measurement
     lookahead_mm: float  #: strip the reconstructor had taken beyond s_end when finished
     fibers: FiberResults  #: per fiber: x, arc length, I-Units, wave, flags
-    zones: SheetZones  #: per zone: centre, I-Units, flags
+    zones: SheetZones  #: per zone: centre, I-Units, flags, strip x
+    fiber_strip_x: np.ndarray  #: (K,) result fibers from the strip's centre line, mm
+    strip_width_range: Tuple[float, float]  #: smallest and largest width over the rows, mm
+    strip_centre_range: Tuple[float, float]  #: smallest and largest centre over the rows, mm
     s: Optional[np.ndarray] = None  #: (rows,) row positions, mm (gauge_keep_maps >= 1)
     z: Optional[np.ndarray] = None  #: (rows, K) reconstructed heights, mm
     z_flags: Optional[np.ndarray] = None  #: (rows, K) uint8 FLAG_* bits
@@ -154,6 +159,7 @@ def _read_sheet(handle: Any, maps: int) -> Sheet:
         array(_capi.FLT_SHEET_ZONE_CENTRE_X, zones),
         array(_capi.FLT_SHEET_ZONE_I_UNITS, zones),
         array(_capi.FLT_SHEET_ZONE_FLAGS, zones).astype(np.uint8),
+        array(_capi.FLT_SHEET_ZONE_STRIP_X, zones),
     )
     s = z = z_flags = measured = None
     if maps >= 1:
@@ -172,7 +178,10 @@ def _read_sheet(handle: Any, maps: int) -> Sheet:
         v["wave_period"], v["wave_steepness"], v["wave_x"], v["max_i_units"],
         SheetFlag(int(v["flags"])), int(v["window_flags"]), int(v["frames"]),
         int(v["skipped"]), int(v["dropped"]), int(v["saturated"]), int(v["invalid"]),
-        v["lookahead"], fiber_results, zone_results, s, z, z_flags, measured, v)
+        v["lookahead"], fiber_results, zone_results,
+        array(_capi.FLT_SHEET_FIBER_STRIP_X, fibers),
+        (v["strip_width_min"], v["strip_width_max"]),
+        (v["strip_centre_min"], v["strip_centre_max"]), s, z, z_flags, measured, v)
 
 
 def gauge_options() -> Dict[str, float]:
