@@ -252,6 +252,51 @@ namespace Flatline.Tests
         }
 
         [Fact]
+        public void ANarrowStripHasEdgesAndFibersOffIt()
+        {
+            // A strip 1000 mm wide, 100 mm off centre, on the 1500 mm fiber grid.
+            using var calibration = Sensor();
+            using var lineOptions = new FlatlineOptions { SimFrameSpacing = 10, SimStripWidth = 1000 };
+            lineOptions.Set("sim_strip_offset", 100);
+            lineOptions.Set("sim_surround", 2); // the roller table beside the strip
+            using var line = new SimulatedLine(calibration, lineOptions);
+            line.AddDefect(DefectKind.CentreBuckle, 4, 800);
+            using var options = new FlatlineOptions { GaugeFrameSpacing = 8, GaugeOverflowWait = true, LagKnots = 4 };
+            options.Set("gauge_keep_maps", 1);
+            using var gauge = new Gauge(calibration, options);
+            for (int f = 0; f < 200; ++f)
+                gauge.Push(line.NextFrame());
+            gauge.Flush();
+            var sheets = Drain(gauge);
+            Assert.Single(sheets);
+            var sheet = sheets[0];
+            // The extractor's edges, to a fraction of a camera column (about
+            // 1 mm), smoothed along the sheet: within 2 mm.
+            Assert.True(Math.Abs(sheet.StripWidthMm - 1000) < 2, $"width {sheet.StripWidthMm}");
+            Assert.True(Math.Abs(sheet.StripCentreMm - 100) < 2, $"centre {sheet.StripCentreMm}");
+            Assert.True(sheet.StripWidthMinMm <= sheet.StripWidthMm && sheet.StripWidthMm <= sheet.StripWidthMaxMm);
+            // Fibers a pitch and a half (45 mm) beside the strip are off it in every row.
+            for (int k = 0; k < Fibers; ++k)
+            {
+                double x = -750 + Pitch * k;
+                if (x > -445 && x < 645)
+                    continue;
+                for (int r = 0; r < sheet.Rows; ++r)
+                {
+                    Assert.Equal(ReconFlags.OffStrip, sheet.ZFlags![r, k]);
+                    Assert.True(double.IsNaN(sheet.Z![r, k]));
+                }
+            }
+            for (int j = 0; j < sheet.ZoneStripX.Length; ++j)
+            {
+                if ((sheet.ZoneFlags[j] & ZoneFlags.OffStrip) != 0)
+                    Assert.True(double.IsNaN(sheet.ZoneStripX[j]));
+                else
+                    Assert.True(Math.Abs(sheet.ZoneStripX[j]) < 500);
+            }
+        }
+
+        [Fact]
         public void AGaugeNobodyDisposesIsFreedByItsFinalizer()
         {
             using var calibration = Sensor();

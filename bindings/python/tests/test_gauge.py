@@ -220,3 +220,41 @@ def test_gauge_options_table():
     assert table["gauge_workers"] == 2.0 and table["gauge_frame_spacing"] == 1.0
     assert all(name.startswith("gauge_") for name in table) and len(table) == 10
     assert "gauge_workers (int): default 2" in flatline.Gauge.__doc__
+
+
+def test_narrow_strip_edges_and_off_strip_fibers(calib):
+    # A strip 1000 mm wide, 100 mm off centre, on the 1500 mm fiber grid.
+    with flatline.SimulatedLine(calib, sim_frame_spacing=10.0, sim_strip_width=1000.0,
+                                sim_strip_offset=100.0, sim_surround=2) as sim:
+        sim.add_defect("centre_buckle", 4.0, 800.0)
+        with flatline.Gauge(calib, gauge_frame_spacing=8.0, gauge_overflow=1,
+                            gauge_keep_maps=1, lag_knots=4) as gauge:
+            for _ in range(200):  # 2 m
+                frame = sim.next_frame()
+                gauge.push_frame(frame.image, frame.encoder_mm)
+            gauge.flush()
+            (sheet,) = list(gauge)
+    assert sheet.window_flags & flatline.WINDOW_ON_STRIP
+    # The extractor's edges, to a fraction of a camera column (about 1 mm),
+    # smoothed along the sheet: within 2 mm.
+    assert abs(sheet.strip_width - 1000.0) < 2.0
+    assert abs(sheet.strip_centre - 100.0) < 2.0
+    assert sheet.strip_width_range[0] <= sheet.strip_width <= sheet.strip_width_range[1]
+    assert sheet.strip_centre_range[0] <= sheet.strip_centre <= sheet.strip_centre_range[1]
+    x = -750.0 + PITCH * np.arange(K)
+    beside = (x < -445.0) | (x > 645.0)  # a pitch and a half (45 mm) beside the edges
+    assert np.all(sheet.z_flags[:, beside] == flatline.FLAG_OFF_STRIP)
+    assert np.all(np.isnan(sheet.z[:, beside]))
+    inside = (x > -355.0) & (x < 555.0)
+    assert not np.any(sheet.z_flags[:, inside] & flatline.FLAG_OFF_STRIP)
+    # Result fibers on the strip lie within its half width; those beyond
+    # its edges are flagged off it.
+    on = (sheet.fibers.flags & flatline.FIBER_NO_DATA) == 0
+    assert np.any(on)
+    assert np.all(np.abs(sheet.fiber_strip_x[on]) <= 500.0)
+    beyond = np.abs(sheet.fiber_strip_x) > 500.0
+    assert np.all(sheet.fibers.flags[beyond] & flatline.FIBER_OFF_STRIP)
+    on_strip = (sheet.zones.flags & flatline.ZONE_OFF_STRIP) == 0
+    assert np.any(on_strip)
+    assert np.all(np.abs(sheet.zones.strip_x[on_strip]) < 500.0)
+    assert np.all(np.isnan(sheet.zones.strip_x[~on_strip]))
