@@ -1215,7 +1215,7 @@ static void narrow_strip_has_edges(void **state) {
     uint8_t *frame = malloc((size_t)WIDTH * ROI_ROWS);
     for (int f = 0; f < 300; ++f) {
         double e = 0;
-        OK(flt_sim_next_frame(sim, frame, (size_t)WIDTH * ROI_ROWS, WIDTH, &e, 0, NULL, NULL));
+        OK(flt_sim_next_frame(sim, frame, (size_t)WIDTH * ROI_ROWS, WIDTH, &e, 0, NULL, NULL, 0));
         OK(flt_gauge_push_frame(g, frame, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, e));
     }
     OK(flt_gauge_flush(g));
