@@ -1994,8 +1994,8 @@ static void row_sim_strip_edges(void) {
     flt_options *o = options_with(FLT_OPT_SIM_WANDER_SIGMA, 10);
     GOOD(flt_options_set(o, FLT_OPT_SIM_WANDER_LENGTH, 100));
     GOOD(flt_sim_create(g_calib, o, &s));
-    double far = 1e6;
-    GOOD(flt_sim_strip_edges(s, 1, 1, &far, l, r, p));
+    double far_mm = 1e6; /* (not "far": a macro of windows.h) */
+    GOOD(flt_sim_strip_edges(s, 1, 1, &far_mm, l, r, p));
     ++g_checks;
     if (!(isfinite(l[0]) && isfinite(r[0]) && p[0] == 1))
         ERR("edges at 1 km: %g, %g, present %d", l[0], r[0], p[0]);
