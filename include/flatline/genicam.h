@@ -192,16 +192,16 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_feature_name(const flt_gen
  * What a feature is, without evaluating anything.
  * @param description the description.
  * @param feature the feature's name.
- * @param type  its interface (may be NULL).
- * @param kind  the XML element: "IntReg", "SwissKnife", "StructEntry", ... (may be NULL).
- * @param unit  its Unit, "" if none (may be NULL).
+ * @param type_out  its interface (may be NULL).
+ * @param kind_out  the XML element: "IntReg", "SwissKnife", "StructEntry", ... (may be NULL).
+ * @param unit_out  its Unit, "" if none (may be NULL).
  * @return FLT_ERR_NOT_FOUND for a name the description does not define.
  */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_feature_info(const flt_genicam *description,
                                                                    const char *feature,
-                                                                   flt_genicam_type *type,
-                                                                   const char **kind,
-                                                                   const char **unit);
+                                                                   flt_genicam_type *type_out,
+                                                                   const char **kind_out,
+                                                                   const char **unit_out);
 
 /* ---------------------------------------------------------------------- */
 /* Register contents                                                       */
@@ -278,33 +278,32 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_get_access(flt_genicam *de
  * the access modes of the nodes the feature reads. Any output may be NULL.
  * @param description the description.
  * @param feature the feature's name.
- * @param implemented 1 when implemented.
- * @param available   1 when available.
- * @param locked      1 when locked.
+ * @param implemented_out 1 when implemented.
+ * @param available_out   1 when available.
+ * @param locked_out      1 when locked.
  * @return FLT_OK, or a status as for flt_genicam_get_int().
  */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_get_flags(flt_genicam *description,
                                                                 const char *feature,
-                                                                int *implemented, int *available,
-                                                                int *locked);
+                                                                int *implemented_out,
+                                                                int *available_out,
+                                                                int *locked_out);
 
 /**
  * The register holding the feature's value: the register node at the end of
  * its pValue chain (through Converters), its address evaluated now.
  * @param description the description.
  * @param feature    the feature's name.
- * @param address    bytes; @param length bytes;
- * @param lsb, msb   the bits of the register's value holding the feature;
- * @param big_endian 1 for a big-endian register. Any output may be NULL.
+ * @param address_out    bytes; @param length_out bytes;
+ * @param lsb_out, msb_out the bits of the register's value holding the feature;
+ * @param big_endian_out 1 for a big-endian register. Any output may be NULL.
  * @return FLT_ERR_NOT_FOUND when the value is no single register's (a
  *         SwissKnife formula of several, a constant, a pIndex table); the
  *         message says which.
  */
-FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_register(flt_genicam *description,
-                                                               const char *feature,
-                                                               uint64_t *address, uint32_t *length,
-                                                               uint32_t *lsb, uint32_t *msb,
-                                                               int *big_endian);
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_register(
+    flt_genicam *description, const char *feature, uint64_t *address_out, uint32_t *length_out,
+    uint32_t *lsb_out, uint32_t *msb_out, int *big_endian_out);
 
 /**
  * The value of an integer, enumeration (its integer), boolean (0/1) or
@@ -347,25 +346,27 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_get_string(flt_genicam *de
  * Without a bound: INT64_MIN / INT64_MAX, inc 1. Any output may be NULL.
  * @param description the description.
  * @param feature the feature's name.
- * @param min receives the minimum.
- * @param max receives the maximum.
- * @param inc receives the increment.
+ * @param min_out receives the minimum.
+ * @param max_out receives the maximum.
+ * @param inc_out receives the increment.
  * @return FLT_OK, or a status as for flt_genicam_get_int().
  */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_int_bounds(flt_genicam *description,
-                                                                 const char *feature, int64_t *min,
-                                                                 int64_t *max, int64_t *inc);
+                                                                 const char *feature,
+                                                                 int64_t *min_out, int64_t *max_out,
+                                                                 int64_t *inc_out);
 
 /** A float feature's bounds; without a bound -DBL_MAX / DBL_MAX.
  * @param description the description.
  * @param feature the feature's name.
- * @param min receives the minimum.
- * @param max receives the maximum.
+ * @param min_out receives the minimum.
+ * @param max_out receives the maximum.
  * @return FLT_OK, or a status as for flt_genicam_get_int().
  */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_float_bounds(flt_genicam *description,
-                                                                   const char *feature, double *min,
-                                                                   double *max);
+                                                                   const char *feature,
+                                                                   double *min_out,
+                                                                   double *max_out);
 
 /** The number of entries of an enumeration.
  * @param description the description.
@@ -381,16 +382,17 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_enum_count(flt_genicam *de
  * @param description the description.
  * @param feature   the enumeration's name.
  * @param index     0 .. count-1 (flt_genicam_enum_count()).
- * @param name      owned by the handle, valid until it is destroyed;
- * @param value     the entry's integer;
- * @param available 1 when the entry is implemented and available now.
+ * @param name_out      owned by the handle, valid until it is destroyed;
+ * @param value_out     the entry's integer;
+ * @param available_out 1 when the entry is implemented and available now.
  * Any output may be NULL. FLT_ERR_NOT_FOUND past the last entry.
  * @return FLT_OK, or a status as for flt_genicam_get_int().
  */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_enum_entry(flt_genicam *description,
                                                                  const char *feature, size_t index,
-                                                                 const char **name, int64_t *value,
-                                                                 int *available);
+                                                                 const char **name_out,
+                                                                 int64_t *value_out,
+                                                                 int *available_out);
 
 /* ---------------------------------------------------------------------- */
 /* Writes (into the memory image or through the write callback)            */

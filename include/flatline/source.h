@@ -262,13 +262,22 @@ FLT_API void FLT_CALL flt_camera_list_destroy(flt_camera_list *list);
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_camera_list_count(const flt_camera_list *list,
                                                                 size_t *out);
 /** Camera `index`: its strings (owned by the list, valid until it is
- * destroyed) and its link speed, Mbit/s (480 high speed, 5000 super speed,
- * 10000 super speed plus; 0 unknown). Any output may be NULL. */
+ * destroyed) and its link speed. Any output may be NULL.
+ * @param list           the list.
+ * @param index          0 .. count - 1.
+ * @param vendor_out     the vendor's name.
+ * @param model_out      the model's name.
+ * @param serial_out     the serial number.
+ * @param speed_mbps_out the link speed, Mbit/s (480 high speed, 5000 super
+ *                       speed, 10000 super speed plus; 0 unknown).
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL list or an index out
+ *         of range.
+ */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_camera_list_get(const flt_camera_list *list,
-                                                              size_t index, const char **vendor,
-                                                              const char **model,
-                                                              const char **serial,
-                                                              uint32_t *speed_mbps);
+                                                              size_t index, const char **vendor_out,
+                                                              const char **model_out,
+                                                              const char **serial_out,
+                                                              uint32_t *speed_mbps_out);
 
 /**
  * Opens a USB3 Vision camera. Reads the bootstrap registers and the GenICam
@@ -418,20 +427,26 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_next(flt_source *source, ui
                                                           const flt_frame **out);
 
 /** Everything about a frame; any output may be NULL.
- *   pixels        height rows of stride_bytes, `format` pixels (16-bit
- *                 formats: host-order words, data in the low bits).
- *   width, height px; stride_bytes >= width * bytes per pixel.
- *   block_id      the camera's frame counter (simulator and images: the
- *                 frame index).
- *   timestamp_ns  camera: the leader's timestamp (device clock, ns);
- *                 otherwise the host's monotonic clock at delivery, ns.
- *   encoder_mm    the strip position, mm (see "Encoder positions"). */
-FLT_API FLT_NODISCARD flt_status FLT_CALL flt_frame_info(const flt_frame *frame,
-                                                         const void **pixels, uint32_t *width,
-                                                         uint32_t *height, size_t *stride_bytes,
-                                                         flt_pixel_format *format,
-                                                         uint64_t *block_id, uint64_t *timestamp_ns,
-                                                         double *encoder_mm);
+ * @param frame            the frame (borrowed from flt_source_next).
+ * @param pixels_out       height rows of stride_bytes, `format` pixels
+ *                         (16-bit formats: host-order words, data in the
+ *                         low bits); valid until the next flt_source_next.
+ * @param width_out        width, px.
+ * @param height_out       height, px.
+ * @param stride_bytes_out bytes from row to row, >= width * bytes per pixel.
+ * @param format_out       the pixel format.
+ * @param block_id_out     the camera's frame counter (simulator and images:
+ *                         the frame index).
+ * @param timestamp_ns_out camera: the leader's timestamp (device clock, ns);
+ *                         otherwise the host's monotonic clock at delivery,
+ *                         ns.
+ * @param encoder_mm_out   the strip position, mm (see "Encoder positions").
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL frame.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL
+flt_frame_info(const flt_frame *frame, const void **pixels_out, uint32_t *width_out,
+               uint32_t *height_out, size_t *stride_bytes_out, flt_pixel_format *format_out,
+               uint64_t *block_id_out, uint64_t *timestamp_ns_out, double *encoder_mm_out);
 
 /** Encoder mode 2: the position the next frames carry, mm (finite).
  * FLT_ERR_STATE in any other mode.

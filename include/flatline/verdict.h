@@ -153,14 +153,15 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_rules_count(const flt_rules *rules
  * Rule `index`.
  * @param rules     the rule set;
  * @param index     0 .. flt_rules_count() - 1;
- * @param name      the rule's name, owned by the rule set;
- * @param measure   its flt_measure;
- * @param length_mm its straightedge length (0 for other measures).
+ * @param name_out      the rule's name, owned by the rule set;
+ * @param measure_out   its flt_measure;
+ * @param length_mm_out its straightedge length (0 for other measures).
  * Any output may be NULL. FLT_ERR_NOT_FOUND past the last rule.
  */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_rules_rule(const flt_rules *rules, size_t index,
-                                                         const char **name, flt_measure *measure,
-                                                         double *length_mm);
+                                                         const char **name_out,
+                                                         flt_measure *measure_out,
+                                                         double *length_mm_out);
 
 /* ---------------------------------------------------------------------- */
 /* Straightedge                                                            */
@@ -173,16 +174,16 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_rules_rule(const flt_rules *rules,
  *                    measured), an infinite one is an error;
  * @param count       samples;
  * @param length_mm   the straightedge (mm, > 0);
- * @param deviation_mm the deviation (mm, >= 0; 0 when no gap);
- * @param at_mm       the position of its deepest point (may be NULL).
+ * @param deviation_mm_out the deviation (mm, >= 0; 0 when no gap);
+ * @param at_mm_out       the position of its deepest point (may be NULL).
  * @return FLT_OK, or FLT_ERR_NOT_FOUND when fewer than 2 samples are
  *         measured (nothing can rest on them).
  */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_straightedge_profile(const double *position_mm,
                                                                    const double *height_mm,
                                                                    size_t count, double length_mm,
-                                                                   double *deviation_mm,
-                                                                   double *at_mm);
+                                                                   double *deviation_mm_out,
+                                                                   double *at_mm_out);
 
 /* ---------------------------------------------------------------------- */
 /* Verdicts                                                                */

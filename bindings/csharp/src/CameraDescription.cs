@@ -278,7 +278,7 @@ namespace Flatline
         public unsafe (double Min, double Max) GetFloatBounds(string feature)
         {
             double min, max;
-            FlatlineNative.flt_genicam_float_bounds(LiveHandle, Feature(feature), &min, &max);
+            FlatlineNative.flt_genicam_float_bounds(LiveHandle, Feature(feature), out min, out max);
             return (min, max);
         }
 

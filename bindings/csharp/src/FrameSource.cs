@@ -422,7 +422,7 @@ namespace Flatline
             ulong stride, blockId, timestamp;
             int format;
             double encoder;
-            FlatlineNative.flt_frame_info(native, &pixels, &width, &height, &stride, &format, &blockId, &timestamp,
+            FlatlineNative.flt_frame_info(native, &pixels, out width, out height, &stride, &format, &blockId, &timestamp,
                                           &encoder);
             var pixelFormat = (PixelFormat)format;
             var frame = reuse != null && reuse.Fits(pixelFormat, (int)width, (int)height)

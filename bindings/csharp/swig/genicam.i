@@ -18,13 +18,13 @@ FLT_CS_INT_ENUM(flt_genicam_text, NativeGenICamText)
 %ignore flt_genicam_write_fn;
 
 /* Outputs are raw pointers (&local in CameraDescription.cs). */
-FLT_CS_OUT_POINTER(int, int, flt_genicam_type *type, flt_genicam_access *out, int *implemented,
-                   int *available, int *locked, int *big_endian)
-FLT_CS_OUT_POINTER(uint64_t, ulong, uint64_t *address)
-FLT_CS_OUT_POINTER(uint32_t, uint, uint32_t *length, uint32_t *lsb, uint32_t *msb)
-FLT_CS_OUT_POINTER(int64_t, long, int64_t *min, int64_t *max, int64_t *inc, int64_t *value)
-FLT_CS_OUT_POINTER(double, double, double *min, double *max)
-FLT_CS_OUT_POINTER(void, global::System.IntPtr, const char **kind, const char **unit)
+FLT_CS_OUT_POINTER(int, int, flt_genicam_type *type_out, flt_genicam_access *out, int *implemented_out,
+                   int *available_out, int *locked_out, int *big_endian_out)
+FLT_CS_OUT_POINTER(uint64_t, ulong, uint64_t *address_out)
+FLT_CS_OUT_POINTER(uint32_t, uint, uint32_t *length_out, uint32_t *lsb_out, uint32_t *msb_out)
+FLT_CS_OUT_POINTER(int64_t, long, int64_t *min_out, int64_t *max_out, int64_t *inc_out, int64_t *value_out)
+/* (double *min_out, *max_out: common.i's `out double`.) */
+FLT_CS_OUT_POINTER(void, global::System.IntPtr, const char **kind_out, const char **unit_out)
 
 /* Byte buffers (the description, register contents): pinned byte*. */
 %typemap(ctype) const void *data, const void *bytes "void *"

@@ -39,15 +39,16 @@ FLT_CS_INT_ENUM(flt_encoder_mode, NativeEncoderMode)
 
 /* Outputs are raw pointers (&local in the public classes). */
 FLT_CS_OUT_POINTER(int, int, flt_source_kind *out)
-FLT_CS_OUT_POINTER(uint64_t, ulong, uint64_t *out, uint64_t *block_id, uint64_t *timestamp_ns)
+FLT_CS_OUT_POINTER(uint64_t, ulong, uint64_t *out, uint64_t *block_id_out, uint64_t *timestamp_ns_out)
 FLT_CS_OUT_POINTER(int64_t, long, int64_t *out)
-FLT_CS_OUT_POINTER(uint32_t, uint, uint32_t *speed_mbps, uint32_t *width, uint32_t *height)
-FLT_CS_OUT_POINTER(size_t, ulong, size_t *stride_bytes)
-FLT_CS_OUT_POINTER(int, int, flt_pixel_format *format)
+FLT_CS_OUT_POINTER(uint32_t, uint, uint32_t *speed_mbps_out)
+/* (uint32_t *width_out, *height_out: common.i's `out uint`.) */
+FLT_CS_OUT_POINTER(size_t, ulong, size_t *stride_bytes_out)
+FLT_CS_OUT_POINTER(int, int, flt_pixel_format *format_out)
 /* Library-owned strings and the borrowed frame and its pixels: IntPtrs. */
 FLT_CS_OUT_POINTER(void, global::System.IntPtr,
-                   const char **vendor, const char **model, const char **serial,
-                   const char **out, const void **pixels, const flt_frame **out)
+                   const char **vendor_out, const char **model_out, const char **serial_out,
+                   const char **out, const void **pixels_out, const flt_frame **out)
 %typemap(ctype) const flt_frame *frame "const flt_frame *"
 %typemap(imtype) const flt_frame *frame "global::System.IntPtr"
 %typemap(cstype) const flt_frame *frame "global::System.IntPtr"

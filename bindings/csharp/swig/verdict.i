@@ -15,7 +15,7 @@ FLT_CS_INT_ENUM(flt_verdict_value, NativeVerdictValue)
 %ignore FLT_VERDICT_STATE_MAX_ENUM_;
 %ignore FLT_VERDICT_VALUE_MAX_ENUM_;
 
-FLT_CS_OUT_POINTER(int, int, flt_measure *measure)
-FLT_CS_OUT_POINTER(double, double, double *length_mm, double *deviation_mm, double *at_mm)
+FLT_CS_OUT_POINTER(int, int, flt_measure *measure_out)
+FLT_CS_OUT_POINTER(double, double, double *length_mm_out, double *deviation_mm_out, double *at_mm_out)
 
 %include "flatline/verdict.h"

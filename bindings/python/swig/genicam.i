@@ -21,47 +21,47 @@
 %typemap(argout) flt_genicam **out {
   %append_output(SWIG_NewPointerObj(*$1, $descriptor(flt_genicam *), SWIG_POINTER_OWN));
 }
-%typemap(in, numinputs=0) flt_genicam_type *type (flt_genicam_type temp = FLT_GENICAM_INTEGER) {
+%typemap(in, numinputs=0) flt_genicam_type *type_out (flt_genicam_type temp = FLT_GENICAM_INTEGER) {
   $1 = &temp;
 }
-%typemap(argout) flt_genicam_type *type { %append_output(PyLong_FromLong((long)*$1)); }
+%typemap(argout) flt_genicam_type *type_out { %append_output(PyLong_FromLong((long)*$1)); }
 %typemap(in, numinputs=0) flt_genicam_access *out (flt_genicam_access temp) { $1 = &temp; }
 %typemap(argout) flt_genicam_access *out { %append_output(PyLong_FromLong((long)*$1)); }
-%typemap(in, numinputs=0) const char **kind (const char *temp = NULL),
-                          const char **unit (const char *temp = NULL) {
+%typemap(in, numinputs=0) const char **kind_out (const char *temp = NULL),
+                          const char **unit_out (const char *temp = NULL) {
   $1 = ($1_ltype)&temp;
 }
-%typemap(argout) const char **kind, const char **unit {
+%typemap(argout) const char **kind_out, const char **unit_out {
   %append_output(PyUnicode_DecodeUTF8(*$1 ? *$1 : "", (Py_ssize_t)strlen(*$1 ? *$1 : ""),
                                       "replace"));
 }
-%typemap(in, numinputs=0) int *implemented (int temp = 0), int *available (int temp = 0),
-                          int *locked (int temp = 0), int *big_endian (int temp = 0) {
+%typemap(in, numinputs=0) int *implemented_out (int temp = 0), int *available_out (int temp = 0),
+                          int *locked_out (int temp = 0), int *big_endian_out (int temp = 0) {
   $1 = &temp;
 }
-%typemap(argout) int *implemented, int *available, int *locked, int *big_endian {
+%typemap(argout) int *implemented_out, int *available_out, int *locked_out, int *big_endian_out {
   %append_output(PyBool_FromLong(*$1));
 }
-%typemap(in, numinputs=0) uint64_t *address (uint64_t temp = 0) { $1 = &temp; }
-%typemap(argout) uint64_t *address {
+%typemap(in, numinputs=0) uint64_t *address_out (uint64_t temp = 0) { $1 = &temp; }
+%typemap(argout) uint64_t *address_out {
   %append_output(PyLong_FromUnsignedLongLong((unsigned long long)*$1));
 }
-%typemap(in, numinputs=0) uint32_t *length (uint32_t temp = 0), uint32_t *lsb (uint32_t temp = 0),
-                          uint32_t *msb (uint32_t temp = 0) { $1 = &temp; }
-%typemap(argout) uint32_t *length, uint32_t *lsb, uint32_t *msb {
+%typemap(in, numinputs=0) uint32_t *length_out (uint32_t temp = 0), uint32_t *lsb_out (uint32_t temp = 0),
+                          uint32_t *msb_out (uint32_t temp = 0) { $1 = &temp; }
+%typemap(argout) uint32_t *length_out, uint32_t *lsb_out, uint32_t *msb_out {
   %append_output(PyLong_FromUnsignedLong((unsigned long)*$1));
 }
-%typemap(in, numinputs=0) int64_t *min (int64_t temp = 0), int64_t *max (int64_t temp = 0),
-                          int64_t *inc (int64_t temp = 0), int64_t *value (int64_t temp = 0) {
+%typemap(in, numinputs=0) int64_t *min_out (int64_t temp = 0), int64_t *max_out (int64_t temp = 0),
+                          int64_t *inc_out (int64_t temp = 0), int64_t *value_out (int64_t temp = 0) {
   $1 = &temp;
 }
-%typemap(argout) int64_t *min, int64_t *max, int64_t *inc, int64_t *value {
+%typemap(argout) int64_t *min_out, int64_t *max_out, int64_t *inc_out, int64_t *value_out {
   %append_output(PyLong_FromLongLong((long long)*$1));
 }
-%typemap(in, numinputs=0) double *min (double temp = 0.0), double *max (double temp = 0.0) {
+%typemap(in, numinputs=0) double *min_out (double temp = 0.0), double *max_out (double temp = 0.0) {
   $1 = &temp;
 }
-%typemap(argout) double *min, double *max { %append_output(PyFloat_FromDouble(*$1)); }
+%typemap(argout) double *min_out, double *max_out { %append_output(PyFloat_FromDouble(*$1)); }
 
 %{
 /* A read-only view of any buffer-protocol object (bytes, bytearray,

@@ -39,18 +39,18 @@
 %typemap(in, numinputs=0) int64_t *out (int64_t temp = 0) { $1 = &temp; }
 %typemap(argout) int64_t *out { %append_output(PyLong_FromLongLong((long long)*$1)); }
 %typemap(in, numinputs=0) uint32_t *out (uint32_t temp = 0),
-                          uint32_t *speed_mbps (uint32_t temp = 0) { $1 = &temp; }
-%typemap(argout) uint32_t *out, uint32_t *speed_mbps {
+                          uint32_t *speed_mbps_out (uint32_t temp = 0) { $1 = &temp; }
+%typemap(argout) uint32_t *out, uint32_t *speed_mbps_out {
   %append_output(PyLong_FromUnsignedLong((unsigned long)*$1));
 }
 %typemap(in, numinputs=0) const char **out (const char *temp = NULL),
-                          const char **vendor (const char *temp = NULL),
-                          const char **model (const char *temp = NULL),
-                          const char **serial (const char *temp = NULL) {
+                          const char **vendor_out (const char *temp = NULL),
+                          const char **model_out (const char *temp = NULL),
+                          const char **serial_out (const char *temp = NULL) {
   $1 = ($1_ltype)&temp;
 }
-%typemap(argout) const char **out, const char **vendor, const char **model,
-                 const char **serial {
+%typemap(argout) const char **out, const char **vendor_out, const char **model_out,
+                 const char **serial_out {
   %append_output(PyUnicode_DecodeUTF8(*$1 ? *$1 : "", (Py_ssize_t)strlen(*$1 ? *$1 : ""),
                                       "replace"));
 }

@@ -22,11 +22,11 @@
 %typemap(argout) flt_verdict **out {
   %append_output(SWIG_NewPointerObj(*$1, $descriptor(flt_verdict *), SWIG_POINTER_OWN));
 }
-%typemap(in, numinputs=0) flt_measure *measure (flt_measure temp = FLT_MEASURE_BOW) { $1 = &temp; }
-%typemap(argout) flt_measure *measure { %append_output(PyLong_FromLong((long)*$1)); }
-%typemap(in, numinputs=0) double *length_mm (double temp = 0.0),
+%typemap(in, numinputs=0) flt_measure *measure_out (flt_measure temp = FLT_MEASURE_BOW) { $1 = &temp; }
+%typemap(argout) flt_measure *measure_out { %append_output(PyLong_FromLong((long)*$1)); }
+%typemap(in, numinputs=0) double *length_mm_out (double temp = 0.0),
                           double *at_out (double temp = 0.0) { $1 = &temp; }
-%typemap(argout) double *length_mm, double *at_out { %append_output(PyFloat_FromDouble(*$1)); }
+%typemap(argout) double *length_mm_out, double *at_out { %append_output(PyFloat_FromDouble(*$1)); }
 
 %apply (char *STRING, size_t LENGTH) { (const char *text, size_t length) };
 %apply (double *IN_ARRAY1, size_t DIM1) {
