@@ -627,6 +627,20 @@ typedef enum flt_option {
     /** "gauge_sheet_slots": sheets that can exist at once, waiting for the
      * caller or held by it (integer 1..1024). Default 4. */
     FLT_OPT_GAUGE_SHEET_SLOTS = 709,
+
+    /* ---- leveler advisor (flatline/advisor.h) ---- */
+    /** "advisor_damping": lambda of the advice, |P G d + gain r|^2 +
+     * lambda |d|^2, relative to the mean squared effect of a unit step
+     * (trace((P G)^T P G) / actuators), so that it does not depend on the
+     * actuators' units; 0..1e6. Default 0.01: it only holds back actuators
+     * with little effect. */
+    FLT_OPT_ADVISOR_DAMPING = 900,
+    /** "advisor_gain": the share of the expected deviation one advice sets
+     * out to remove, 0.01..1. Default 0.5: with the leveler a sheet ahead
+     * of the gauge, the loop stays stable while G understates the leveler's
+     * effect by up to a factor 1 + 1/gain = 3, and does not overshoot when
+     * G overstates it (docs/advisor.md). */
+    FLT_OPT_ADVISOR_GAIN = 901,
     /** Not an option: keeps the type int-sized whatever is added. Any int
      * can be passed as a key (the library reads an enum argument as the int
      * it is) and an unknown one is refused with a message. New keys go

@@ -17,5 +17,6 @@
 #include "flatline/gauge.h"
 #include "flatline/genicam.h"
 #include "flatline/verdict.h"
+#include "flatline/advisor.h"
 
 #endif /* FLATLINE_FLATLINE_H */

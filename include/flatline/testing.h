@@ -2,7 +2,8 @@
 /** @file
  * libflatline testing tier - test doubles for acquisition without hardware:
  * a simulated USB bus with simulated USB3 Vision cameras, fault injection,
- * and a look at the camera's registers from outside.
+ * and a look at the camera's registers from outside; and a hidden leveler
+ * for the advisor's closed loop (flt_leveler_sim, at the end).
  *
  * What       A simulated USB bus behind the same transport seam as libusb:
  *            the real client code of libflatline (discovery, GenCP,
@@ -243,6 +244,93 @@ FLT_TESTING_API FLT_NODISCARD flt_status FLT_CALL flt_u3v_sim_inject(flt_u3v_sim
 FLT_TESTING_API FLT_NODISCARD flt_status FLT_CALL flt_u3v_sim_peek(const flt_u3v_sim *bus,
                                                                    size_t camera, uint64_t address,
                                                                    uint32_t *out);
+
+/* ---------------------------------------------------------------------- */
+/* A simulated leveler (for the advisor, flatline/advisor.h)               */
+/* ---------------------------------------------------------------------- */
+
+/** A hidden leveler: what flatline/advisor.h models, as a test double.
+ *
+ * Its true influence matrix G_true (zones x actuators, I-Units per unit)
+ * maps the actuator settings u to the strip's zone elongation profile:
+ *     e = incoming + G_true u + noise
+ * (noise: N(0, noise_iu^2) per zone and sheet, drawn from (seed, sheet)).
+ * Zone k spans x in [x0 + (k - 1/2) w, x0 + (k + 1/2) w] (x0 the centre of
+ * zone 0, w the zone width, as flt_flatness_zone_layout() gives them).
+ * Each sheet it produces is a height map for a flt_sim
+ * (flt_sim_set_height_map()): fiber x of zone k carries a sine along
+ * travel, z = A_k sin(2 pi (s - s0) / P), whose amplitude
+ * A_k = (P / pi) sqrt(1e-5 (e_k - min e)) gives it e_k - min e I-Units,
+ * so a gauge reading the sheet sees the elongation profile relative to its
+ * shortest zone. The map has 8 columns per zone (the amplitude steps
+ * between zones over one eighth of a zone) and 32 rows per period.
+ *
+ * Delay: settings given with flt_leveler_sim_set_settings() act on the
+ * sheet after the next one produced (the next one is already in the
+ * leveler while the gauge measures the last one): the leveler is one
+ * sheet ahead of the gauge. The settings start at 0. */
+typedef struct flt_leveler_sim flt_leveler_sim;
+
+/** A hidden leveler.
+ * @param zones          1 .. 1024.
+ * @param actuators      1 .. 64.
+ * @param zone_x0_mm     the centre of zone 0, mm (finite).
+ * @param zone_width_mm  the zone width, mm (> 0).
+ * @param g_true         [zones * actuators] row-major, I-Units per unit; copied.
+ * @param g_count        zones * actuators.
+ * @param incoming       [zones] the strip's elongation with every setting at
+ *                       0, I-Units; copied.
+ * @param incoming_count zones.
+ * @param noise_iu       sheet-to-sheet noise per zone, I-Units (>= 0).
+ * @param seed           the noise's seed.
+ * @param out            the new leveler (flt_leveler_sim_destroy()).
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT naming the argument. */
+FLT_TESTING_API FLT_NODISCARD flt_status FLT_CALL flt_leveler_sim_create(
+    size_t zones, size_t actuators, double zone_x0_mm, double zone_width_mm, const double *g_true,
+    size_t g_count, const double *incoming, size_t incoming_count, double noise_iu, uint64_t seed,
+    flt_leveler_sim **out);
+
+/** Frees the leveler.
+ * @param leveler the leveler; NULL is a no-op. */
+FLT_TESTING_API void FLT_CALL flt_leveler_sim_destroy(flt_leveler_sim *leveler);
+
+/** New settings; they act from the sheet after the next one on.
+ * @param leveler        the leveler.
+ * @param settings       [actuators] finite.
+ * @param settings_count actuators.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT. */
+FLT_TESTING_API FLT_NODISCARD flt_status FLT_CALL flt_leveler_sim_set_settings(
+    flt_leveler_sim *leveler, const double *settings, size_t settings_count);
+
+/** A new coil: the strip's elongation with every setting at 0 from the
+ * next sheet on (the settings and the delay are kept).
+ * @param leveler        the leveler.
+ * @param incoming       [zones] I-Units, finite; copied.
+ * @param incoming_count zones.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT. */
+FLT_TESTING_API FLT_NODISCARD flt_status FLT_CALL flt_leveler_sim_set_incoming(
+    flt_leveler_sim *leveler, const double *incoming, size_t incoming_count);
+
+/** Levels the next sheet and puts it on the simulator: the sheet covers
+ * s in [s0_mm, s0_mm + length_mm] (the simulator's defects are kept; its
+ * height map is replaced).
+ * @param leveler          the leveler.
+ * @param sim              the simulator whose sheet it sets.
+ * @param s0_mm            where the sheet starts along travel, mm.
+ * @param length_mm        its length, mm (> 0, at most 1e6).
+ * @param period_mm        the period of its waves, mm (length / 1000 ..
+ *                         length).
+ * @param elongation_out   [zones] receives e - min e, I-Units (what a
+ *                         perfect gauge reads), or NULL.
+ * @param elongation_count zones (0 with NULL).
+ * @param settings_out     [actuators] receives the settings this sheet
+ *                         went through, or NULL.
+ * @param settings_count   actuators (0 with NULL).
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT; what flt_sim_set_height_map()
+ *         returns. */
+FLT_TESTING_API FLT_NODISCARD flt_status FLT_CALL flt_leveler_sim_next_sheet(
+    flt_leveler_sim *leveler, flt_sim *sim, double s0_mm, double length_mm, double period_mm,
+    double *elongation_out, size_t elongation_count, double *settings_out, size_t settings_count);
 
 #ifdef __cplusplus
 }

@@ -141,6 +141,9 @@ const option_spec k_options[] = {
     {FLT_OPT_GIGE_SOCKET_BUFFER, "gige_socket_buffer", 65536.0, 1073741824.0, 4194304.0, true},
     {FLT_OPT_GIGE_DISCOVERY_TIMEOUT, "gige_discovery_timeout", 1.0, 60000.0, 1000.0, true},
     {FLT_OPT_GIGE_ASSEMBLY_FRAMES, "gige_assembly_frames", 2.0, 64.0, 8.0, true},
+    // the leveler advisor
+    {FLT_OPT_ADVISOR_DAMPING, "advisor_damping", 0.0, 1.0e6, 0.01, false},
+    {FLT_OPT_ADVISOR_GAIN, "advisor_gain", 0.01, 1.0, 0.5, false},
 };
 constexpr std::size_t k_option_count = sizeof k_options / sizeof k_options[0];
 

@@ -24,7 +24,8 @@
  * Linux, the PE export directory found through GetModuleHandleEx on
  * Windows) and fails when an exported function has no row, or a row names
  * a function that neither exports, or libflatline exports a test double
- * (flt_u3v_sim_*). A new public function cannot land without its row.
+ * (flt_u3v_sim_*, flt_leveler_sim_*). A new public function cannot land
+ * without its row.
  *
  * Known bugs: a case that returns the wrong status is written with
  * KNOWN_BUG(...) and reported, not silently dropped; it must keep failing
@@ -3784,6 +3785,402 @@ static void row_verdict_failed(void) {
 }
 
 /* ---------------------------------------------------------------------- */
+/* advisor.h                                                               */
+/* ---------------------------------------------------------------------- */
+
+static const char g_leveler_text[] =
+    "{ \"format\": \"flatline-leveler\", \"version\": 1, \"zones\": 3,\n"
+    "  \"actuators\": [ { \"name\": \"tilt\", \"unit\": \"mm\", \"min\": -2, \"max\": 2,\n"
+    "                   \"step\": 0.5 } ],\n"
+    "  \"influence\": [ [ -5 ], [ 0 ], [ 5 ] ] }\n";
+
+/* A ready advisor: 3 zones, 1 actuator (tilt, [-2, 2] mm, step 0.5). */
+static flt_advisor *new_advisor(void) {
+    flt_advisor *a = NULL;
+    if (flt_advisor_load_text(g_leveler_text, sizeof g_leveler_text - 1, NULL, &a)) {
+        ERR("fixture advisor: %s", flt_last_error_message());
+        exit(2);
+    }
+    return a;
+}
+
+static void row_advisor_create(void) {
+    flt_advisor *a = (flt_advisor *)1;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_advisor_create(3, 2, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'zones' = 0", flt_advisor_create(0, 2, NULL, &a));
+    ++g_checks;
+    if (a != NULL)
+        ERR("*out not NULL after a failure");
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'zones'", flt_advisor_create(NEG, 2, NULL, &a));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'zones' = 1025", flt_advisor_create(1025, 2, NULL, &a));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'actuators' = 0", flt_advisor_create(3, 0, NULL, &a));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'actuators' = 65", flt_advisor_create(3, 65, NULL, &a));
+    /* another component's key; the advisor's own out of range is refused
+     * by flt_options_set already */
+    flt_options *other = options_with(FLT_OPT_FLAT_ZONE_WIDTH, 100);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "flat_zone_width", flt_advisor_create(3, 2, other, &a));
+    flt_options_destroy(other);
+    flt_options *o = NULL;
+    GOOD(flt_options_create(&o));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "advisor_gain", flt_options_set(o, FLT_OPT_ADVISOR_GAIN, 0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "advisor_damping",
+        flt_options_set(o, FLT_OPT_ADVISOR_DAMPING, NaN_));
+    GOOD(flt_options_set(o, FLT_OPT_ADVISOR_GAIN, 1));
+    GOOD(flt_advisor_create(1024, 64, o, &a));
+    flt_options_destroy(o);
+    flt_advisor_destroy(a);
+}
+
+static void row_advisor_load(void) {
+    char path[300], bad_path[300];
+    flt_advisor *a = NULL;
+    path_in_dir(path, sizeof path, "leveler.json");
+    write_file(path, g_leveler_text, sizeof g_leveler_text - 1);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_advisor_load(path, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'path'", flt_advisor_load(NULL, NULL, &a));
+    BAD(FLT_ERR_IO, "no_such_file", flt_advisor_load("/nonexistent/no_such_file.json", NULL, &a));
+    BAD(FLT_ERR_IO, "directory", flt_advisor_load(g_dir, NULL, &a));
+    path_in_dir(bad_path, sizeof bad_path, "leveler_truncated.json");
+    write_file(bad_path, g_leveler_text, (sizeof g_leveler_text - 1) / 2);
+    BAD(FLT_ERR_FORMAT, "leveler file", flt_advisor_load(bad_path, NULL, &a));
+    write_file(bad_path, "", 0);
+    BAD(FLT_ERR_FORMAT, NULL, flt_advisor_load(bad_path, NULL, &a));
+    flt_options *other = options_with(FLT_OPT_GAUGE_WORKERS, 1);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "gauge_workers", flt_advisor_load(path, other, &a));
+    flt_options_destroy(other);
+    GOOD(flt_advisor_load(path, NULL, &a));
+    flt_advisor_destroy(a);
+}
+
+static void row_advisor_load_text(void) {
+    flt_advisor *a = NULL;
+    const size_t n = sizeof g_leveler_text - 1;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_advisor_load_text(g_leveler_text, n, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'text'", flt_advisor_load_text(NULL, n, NULL, &a));
+    BAD(FLT_ERR_FORMAT, NULL, flt_advisor_load_text(g_leveler_text, 0, NULL, &a));
+    BAD(FLT_ERR_FORMAT, "'length'", flt_advisor_load_text(g_leveler_text, NEG, NULL, &a));
+    BAD(FLT_ERR_FORMAT, NULL, flt_advisor_load_text(g_leveler_text, 40, NULL, &a));
+    static const char nan_g[] =
+        "{ \"format\": \"flatline-leveler\", \"version\": 1, \"zones\": 1,\n"
+        "  \"actuators\": [ { \"name\": \"t\", \"unit\": \"\", \"min\": 0, \"max\": 1, "
+        "\"step\": 1 } ],\n"
+        "  \"influence\": [ [ NaN ] ] }";
+    BAD(FLT_ERR_FORMAT, "'influence[0][0]' is NaN (line 3)",
+        flt_advisor_load_text(nan_g, sizeof nan_g - 1, NULL, &a));
+    flt_options *other = options_with(FLT_OPT_SIM_SEED, 3);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "sim_seed", flt_advisor_load_text(g_leveler_text, n, other, &a));
+    flt_options_destroy(other);
+    GOOD(flt_advisor_load_text(g_leveler_text, n, NULL, &a));
+    flt_advisor_destroy(a);
+}
+
+static void row_advisor_destroy(void) {
+    flt_advisor_destroy(NULL);
+    uint64_t junk[32] = {0};
+    flt_advisor_destroy((flt_advisor *)junk); /* not an advisor: left alone */
+    g_checks += 2;
+}
+
+static void row_advisor_size(void) {
+    flt_advisor *a = new_advisor();
+    uint64_t junk[32] = {0};
+    size_t z = 0, n = 0;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'advisor'", flt_advisor_size(NULL, &z, &n));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "not a live", flt_advisor_size((flt_advisor *)junk, &z, &n));
+    GOOD(flt_advisor_size(a, NULL, NULL));
+    GOOD(flt_advisor_size(a, &z, &n));
+    ++g_checks;
+    if (z != 3 || n != 1)
+        ERR("size %zu x %zu, not 3 x 1", z, n);
+    flt_advisor_destroy(a);
+}
+
+static void row_advisor_set_actuator(void) {
+    flt_advisor *a = new_advisor();
+    char long_name[80];
+    memset(long_name, 'n', sizeof long_name - 1);
+    long_name[sizeof long_name - 1] = 0;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'advisor'",
+        flt_advisor_set_actuator(NULL, 0, "tilt", "mm", -1, 1, 0.5));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'index' = 1",
+        flt_advisor_set_actuator(a, 1, "tilt", "mm", -1, 1, 0.5));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'index'",
+        flt_advisor_set_actuator(a, NEG, "tilt", "mm", -1, 1, 0.5));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'name'", flt_advisor_set_actuator(a, 0, NULL, "mm", -1, 1, 0.5));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'name'", flt_advisor_set_actuator(a, 0, "", "mm", -1, 1, 0.5));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'name'",
+        flt_advisor_set_actuator(a, 0, long_name, "mm", -1, 1, 0.5));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'unit'",
+        flt_advisor_set_actuator(a, 0, "tilt", NULL, -1, 1, 0.5));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'unit'",
+        flt_advisor_set_actuator(a, 0, "tilt", long_name, -1, 1, 0.5));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'min'",
+        flt_advisor_set_actuator(a, 0, "tilt", "mm", NaN_, 1, 0.5));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'min'",
+        flt_advisor_set_actuator(a, 0, "tilt", "mm", -1e300, 1, 0.5));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'max'",
+        flt_advisor_set_actuator(a, 0, "tilt", "mm", -1, Inf_, 0.5));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "greater than min",
+        flt_advisor_set_actuator(a, 0, "tilt", "mm", 1, 1, 0.5));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'step'", flt_advisor_set_actuator(a, 0, "tilt", "mm", -1, 1, 0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'step'",
+        flt_advisor_set_actuator(a, 0, "tilt", "mm", -1, 1, NaN_));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'step'",
+        flt_advisor_set_actuator(a, 0, "tilt", "mm", -1, 1, 1e12));
+    GOOD(flt_advisor_set_actuator(a, 0, "tilt", "", -1, 1, 0.5));
+    flt_advisor_destroy(a);
+}
+
+static void row_advisor_actuator(void) {
+    flt_advisor *a = new_advisor();
+    const char *name = NULL, *unit = NULL;
+    double mn = 0, mx = 0, st = 0;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'advisor'",
+        flt_advisor_actuator(NULL, 0, &name, &unit, &mn, &mx, &st));
+    BAD(FLT_ERR_NOT_FOUND, "'index' = 1", flt_advisor_actuator(a, 1, &name, &unit, &mn, &mx, &st));
+    BAD(FLT_ERR_NOT_FOUND, "'index'", flt_advisor_actuator(a, NEG, &name, &unit, &mn, &mx, &st));
+    GOOD(flt_advisor_actuator(a, 0, NULL, NULL, NULL, NULL, NULL));
+    GOOD(flt_advisor_actuator(a, 0, &name, &unit, &mn, &mx, &st));
+    ++g_checks;
+    if (strcmp(name, "tilt") != 0 || mn != -2 || mx != 2 || st != 0.5)
+        ERR("actuator 0 is %s [%g, %g] %g", name, mn, mx, st);
+    flt_advisor_destroy(a);
+}
+
+static void row_advisor_set_influence(void) {
+    flt_advisor *a = new_advisor();
+    const double g[3] = {-4, 0, 4}, nan_g[3] = {0, NaN_, 0}, big_g[3] = {0, 1e10, 0};
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'advisor'", flt_advisor_set_influence(NULL, g, 3));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'g'", flt_advisor_set_influence(a, NULL, 3));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'g_count' = 2", flt_advisor_set_influence(a, g, 2));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'g_count'", flt_advisor_set_influence(a, g, NEG));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'g'[1]", flt_advisor_set_influence(a, nan_g, 3));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'g'[1]", flt_advisor_set_influence(a, big_g, 3));
+    GOOD(flt_advisor_set_influence(a, g, 3));
+    flt_advisor_destroy(a);
+}
+
+static void row_advisor_influence(void) {
+    flt_advisor *a = new_advisor();
+    double g[3] = {0};
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'advisor'", flt_advisor_influence(NULL, g, 3));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'g_out'", flt_advisor_influence(a, NULL, 3));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'g_count' = 4", flt_advisor_influence(a, g, 4));
+    GOOD(flt_advisor_influence(a, g, 3));
+    ++g_checks;
+    if (g[0] != -5 || g[2] != 5)
+        ERR("G = [%g %g %g]", g[0], g[1], g[2]);
+    flt_advisor_destroy(a);
+}
+
+static void row_advisor_set_target(void) {
+    flt_advisor *a = new_advisor();
+    const double t[3] = {0, 1, 0}, inf_t[3] = {0, Inf_, 0};
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'advisor'", flt_advisor_set_target(NULL, t, 3));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'target_count' = 3", flt_advisor_set_target(a, NULL, 3));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'target_count' = 2", flt_advisor_set_target(a, t, 2));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'target'[1]", flt_advisor_set_target(a, inf_t, 3));
+    GOOD(flt_advisor_set_target(a, t, 3));
+    GOOD(flt_advisor_set_target(a, NULL, 0));
+    flt_advisor_destroy(a);
+}
+
+static void row_advisor_identify(void) {
+    flt_advisor *a = new_advisor();
+    /* 3 steps of the one actuator, the profile following G = (-5, 0, 5) */
+    const double du[3] = {0.5, -0.5, 0.25};
+    const double dp[9] = {-2.5, 0, 2.5, 2.5, 0, -2.5, -1.25, 0, 1.25};
+    const double nan_du[3] = {0.5, NaN_, 0.25};
+    const double flat_dp[9] = {1, 1, 1, 2, 2, 2, 3, 3, 3};
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'advisor'", flt_advisor_identify(NULL, 3, du, 3, dp, 9, 0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'delta_u'", flt_advisor_identify(a, 3, NULL, 3, dp, 9, 0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'delta_p'", flt_advisor_identify(a, 3, du, 3, NULL, 9, 0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'steps' = 0", flt_advisor_identify(a, 0, du, 0, dp, 0, 0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'steps'", flt_advisor_identify(a, NEG, du, 3, dp, 9, 0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'delta_u_count' = 2",
+        flt_advisor_identify(a, 3, du, 2, dp, 9, 0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'delta_p_count' = 8",
+        flt_advisor_identify(a, 3, du, 3, dp, 8, 0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'ridge'", flt_advisor_identify(a, 3, du, 3, dp, 9, -1));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'ridge'", flt_advisor_identify(a, 3, du, 3, dp, 9, NaN_));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'delta_u'[1]", flt_advisor_identify(a, 3, nan_du, 3, dp, 9, 0));
+    BAD(FLT_ERR_NUMERIC, "at least 2", flt_advisor_identify(a, 1, du, 1, dp, 3, 0));
+    BAD(FLT_ERR_NUMERIC, "all zero", flt_advisor_identify(a, 3, du, 3, flat_dp, 9, 0));
+    GOOD(flt_advisor_identify(a, 3, du, 3, dp, 9, 0));
+    flt_advisor_destroy(a);
+}
+
+static void row_advisor_fit(void) {
+    flt_advisor *a = new_advisor();
+    double r2 = 0, rms = 0;
+    size_t steps = 9;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'advisor'", flt_advisor_fit(NULL, &r2, &rms, &steps));
+    GOOD(flt_advisor_fit(a, NULL, NULL, NULL));
+    GOOD(flt_advisor_fit(a, &r2, &rms, &steps));
+    ++g_checks;
+    if (r2 != 1 || rms != 0 || steps != 0)
+        ERR("a file's G: fit %g %g %zu, not 1 0 0", r2, rms, steps);
+    flt_advisor_destroy(a);
+}
+
+static void row_advisor_advise(void) {
+    flt_advisor *a = new_advisor();
+    const double p[3] = {10, 5, 0}, u[1] = {0}, out_of_range[1] = {3};
+    const double inf_p[3] = {0, Inf_, 0}, one_p[3] = {NaN_, 5, NaN_}, gap_p[3] = {10, NaN_, 0};
+    double d[1], pred[3], c;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'advisor'",
+        flt_advisor_advise(NULL, p, 3, u, 1, u, 1, d, 1, pred, 3, &c));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'profile'",
+        flt_advisor_advise(a, NULL, 3, u, 1, u, 1, d, 1, pred, 3, &c));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'settings_sheet'",
+        flt_advisor_advise(a, p, 3, NULL, 1, u, 1, d, 1, pred, 3, &c));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'settings_now'",
+        flt_advisor_advise(a, p, 3, u, 1, NULL, 1, d, 1, pred, 3, &c));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'delta_out'",
+        flt_advisor_advise(a, p, 3, u, 1, u, 1, NULL, 1, pred, 3, &c));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'profile_count' = 2",
+        flt_advisor_advise(a, p, 2, u, 1, u, 1, d, 1, pred, 3, &c));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'settings_sheet_count'",
+        flt_advisor_advise(a, p, 3, u, NEG, u, 1, d, 1, pred, 3, &c));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'settings_now_count'",
+        flt_advisor_advise(a, p, 3, u, 1, u, 0, d, 1, pred, 3, &c));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'delta_count'",
+        flt_advisor_advise(a, p, 3, u, 1, u, 1, d, 2, pred, 3, &c));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'predicted_count'",
+        flt_advisor_advise(a, p, 3, u, 1, u, 1, d, 1, pred, 2, &c));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'predicted_count'",
+        flt_advisor_advise(a, p, 3, u, 1, u, 1, d, 1, NULL, 3, &c));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'profile'[1]",
+        flt_advisor_advise(a, inf_p, 3, u, 1, u, 1, d, 1, pred, 3, &c));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "1 measured zone",
+        flt_advisor_advise(a, one_p, 3, u, 1, u, 1, d, 1, pred, 3, &c));
+    /* a zone without data (NaN) takes no part; its prediction is NaN */
+    GOOD(flt_advisor_advise(a, gap_p, 3, u, 1, u, 1, d, 1, pred, 3, &c));
+    ++g_checks;
+    if (!isnan(pred[1]) || isnan(pred[0]) || isnan(pred[2]))
+        ERR("predicted %g %g %g: NaN only where the profile is", pred[0], pred[1], pred[2]);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "outside the range",
+        flt_advisor_advise(a, p, 3, u, 1, out_of_range, 1, d, 1, pred, 3, &c));
+    /* wrong order: no G yet, an actuator not described */
+    flt_advisor *empty = NULL;
+    GOOD(flt_advisor_create(3, 1, NULL, &empty));
+    BAD(FLT_ERR_STATE, "not described",
+        flt_advisor_advise(empty, p, 3, u, 1, u, 1, d, 1, NULL, 0, NULL));
+    GOOD(flt_advisor_set_actuator(empty, 0, "tilt", "mm", -1, 1, 0.5));
+    BAD(FLT_ERR_STATE, "no influence matrix",
+        flt_advisor_advise(empty, p, 3, u, 1, u, 1, d, 1, NULL, 0, NULL));
+    flt_advisor_destroy(empty);
+    GOOD(flt_advisor_advise(a, p, 3, u, 1, u, 1, d, 1, pred, 3, &c));
+    GOOD(flt_advisor_advise(a, p, 3, u, 1, u, 1, d, 1, NULL, 0, NULL));
+    ++g_checks;
+    /* p leans to zone 0 (+5 against the mean): G's -5 on zone 0 says move
+     * tilt up, by at most the step. */
+    if (!(d[0] > 0 && d[0] <= 0.5))
+        ERR("advice %g, not in (0, 0.5]", d[0]);
+    flt_advisor_destroy(a);
+}
+
+/* testing.h: the hidden leveler */
+
+static flt_leveler_sim *new_leveler(void) {
+    const double g[3] = {-5, 0, 5}, e0[3] = {10, 0, 0};
+    flt_leveler_sim *l = NULL;
+    if (flt_leveler_sim_create(3, 1, -100, 100, g, 3, e0, 3, 0.1, 1, &l)) {
+        ERR("fixture leveler: %s", flt_last_error_message());
+        exit(2);
+    }
+    return l;
+}
+
+static void row_leveler_sim_create(void) {
+    const double g[3] = {-5, 0, 5}, e0[3] = {10, 0, 0}, nan_e[3] = {0, NaN_, 0};
+    flt_leveler_sim *l = (flt_leveler_sim *)1;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'",
+        flt_leveler_sim_create(3, 1, -100, 100, g, 3, e0, 3, 0.1, 1, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'zones'",
+        flt_leveler_sim_create(0, 1, -100, 100, g, 3, e0, 3, 0.1, 1, &l));
+    ++g_checks;
+    if (l != NULL)
+        ERR("*out not NULL after a failure");
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'actuators'",
+        flt_leveler_sim_create(3, 65, -100, 100, g, 3, e0, 3, 0.1, 1, &l));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'zone_x0_mm'",
+        flt_leveler_sim_create(3, 1, NaN_, 100, g, 3, e0, 3, 0.1, 1, &l));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'zone_width_mm'",
+        flt_leveler_sim_create(3, 1, -100, 0, g, 3, e0, 3, 0.1, 1, &l));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'g_true'",
+        flt_leveler_sim_create(3, 1, -100, 100, NULL, 3, e0, 3, 0.1, 1, &l));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'g_count'",
+        flt_leveler_sim_create(3, 1, -100, 100, g, 2, e0, 3, 0.1, 1, &l));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'incoming'",
+        flt_leveler_sim_create(3, 1, -100, 100, g, 3, NULL, 3, 0.1, 1, &l));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'incoming_count'",
+        flt_leveler_sim_create(3, 1, -100, 100, g, 3, e0, NEG, 0.1, 1, &l));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'incoming'[1]",
+        flt_leveler_sim_create(3, 1, -100, 100, g, 3, nan_e, 3, 0.1, 1, &l));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'noise_iu'",
+        flt_leveler_sim_create(3, 1, -100, 100, g, 3, e0, 3, -1, 1, &l));
+    GOOD(flt_leveler_sim_create(3, 1, -100, 100, g, 3, e0, 3, 0.1, 1, &l));
+    flt_leveler_sim_destroy(l);
+}
+
+static void row_leveler_sim_destroy(void) {
+    flt_leveler_sim_destroy(NULL);
+    uint64_t junk[32] = {0};
+    flt_leveler_sim_destroy((flt_leveler_sim *)junk); /* not a leveler: left alone */
+    g_checks += 2;
+}
+
+static void row_leveler_sim_set_settings(void) {
+    flt_leveler_sim *l = new_leveler();
+    const double u[1] = {0.5}, inf_u[1] = {Inf_};
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'leveler'", flt_leveler_sim_set_settings(NULL, u, 1));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'settings'", flt_leveler_sim_set_settings(l, NULL, 1));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'settings_count'", flt_leveler_sim_set_settings(l, u, 2));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'settings'[0]", flt_leveler_sim_set_settings(l, inf_u, 1));
+    GOOD(flt_leveler_sim_set_settings(l, u, 1));
+    flt_leveler_sim_destroy(l);
+}
+
+static void row_leveler_sim_set_incoming(void) {
+    flt_leveler_sim *l = new_leveler();
+    const double e[3] = {0, 5, 0}, nan_e[3] = {NaN_, 0, 0};
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'leveler'", flt_leveler_sim_set_incoming(NULL, e, 3));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'incoming'", flt_leveler_sim_set_incoming(l, NULL, 3));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'incoming_count'", flt_leveler_sim_set_incoming(l, e, 4));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'incoming'[0]", flt_leveler_sim_set_incoming(l, nan_e, 3));
+    GOOD(flt_leveler_sim_set_incoming(l, e, 3));
+    flt_leveler_sim_destroy(l);
+}
+
+static void row_leveler_sim_next_sheet(void) {
+    flt_leveler_sim *l = new_leveler();
+    double e[3], u[1];
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'leveler'",
+        flt_leveler_sim_next_sheet(NULL, g_sim, 0, 3000, 500, e, 3, u, 1));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'sim'",
+        flt_leveler_sim_next_sheet(l, NULL, 0, 3000, 500, e, 3, u, 1));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'s0_mm'",
+        flt_leveler_sim_next_sheet(l, g_sim, NaN_, 3000, 500, e, 3, u, 1));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'length_mm'",
+        flt_leveler_sim_next_sheet(l, g_sim, 0, 0, 500, e, 3, u, 1));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'length_mm'",
+        flt_leveler_sim_next_sheet(l, g_sim, 0, 1e300, 500, e, 3, u, 1));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'period_mm'",
+        flt_leveler_sim_next_sheet(l, g_sim, 0, 3000, 1e-3, e, 3, u, 1));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'period_mm'",
+        flt_leveler_sim_next_sheet(l, g_sim, 0, 3000, 4000, e, 3, u, 1));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'elongation_count'",
+        flt_leveler_sim_next_sheet(l, g_sim, 0, 3000, 500, e, 2, u, 1));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'settings_count'",
+        flt_leveler_sim_next_sheet(l, g_sim, 0, 3000, 500, e, 3, u, 0));
+    GOOD(flt_leveler_sim_next_sheet(l, g_sim, 0, 3000, 500, e, 3, u, 1));
+    GOOD(flt_leveler_sim_next_sheet(l, g_sim, 3000, 3000, 500, NULL, 0, NULL, 0));
+    GOOD(flt_sim_clear_sheet(g_sim)); /* leave the shared simulator flat */
+    flt_leveler_sim_destroy(l);
+}
+
+/* ---------------------------------------------------------------------- */
 /* genicam.h                                                               */
 /* ---------------------------------------------------------------------- */
 
@@ -4336,6 +4733,26 @@ static const row k_rows[] = {
     ROW(verdict_evaluate),
     ROW(verdict_get),
     ROW(verdict_failed),
+    /* advisor.h */
+    ROW(advisor_create),
+    ROW(advisor_load),
+    ROW(advisor_load_text),
+    ROW(advisor_destroy),
+    ROW(advisor_size),
+    ROW(advisor_set_actuator),
+    ROW(advisor_actuator),
+    ROW(advisor_set_influence),
+    ROW(advisor_influence),
+    ROW(advisor_set_target),
+    ROW(advisor_identify),
+    ROW(advisor_fit),
+    ROW(advisor_advise),
+    /* testing.h (libflatline_testing): the hidden leveler */
+    ROW(leveler_sim_create),
+    ROW(leveler_sim_destroy),
+    ROW(leveler_sim_set_settings),
+    ROW(leveler_sim_set_incoming),
+    ROW(leveler_sim_next_sheet),
 };
 #define N_ROWS (sizeof k_rows / sizeof k_rows[0])
 
@@ -4454,7 +4871,8 @@ int main(void) {
     /* The test doubles stay out of the production library. */
     for (size_t i = 0; i < n_production; ++i) {
         ++g_checks;
-        if (strncmp(exported[i], "flt_u3v_sim_", 12) == 0)
+        if (strncmp(exported[i], "flt_u3v_sim_", 12) == 0 ||
+            strncmp(exported[i], "flt_leveler_sim_", 16) == 0)
             ERR("libflatline exports the test double %s (it belongs to libflatline_testing)",
                 exported[i]);
     }
