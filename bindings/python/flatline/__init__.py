@@ -109,6 +109,7 @@ from ._extractor import (
 from ._flatness import FIBER_OFF_STRIP, WINDOW_ON_STRIP, ZONE_OFF_STRIP, StripWindow
 
 from ._gauge import Gauge, Sheet, SheetFlag, SheetZones, gauge_options
+from ._advisor import Actuator, Advice, Advisor, AdvisorFit, advisor_options
 from ._verdict import (
     Measure,
     RuleResult,
@@ -231,4 +232,9 @@ __all__ = [
     "WINDOW_ON_STRIP",
     "ZONE_OFF_STRIP",
     "StripWindow",
+    "Actuator",
+    "Advice",
+    "Advisor",
+    "AdvisorFit",
+    "advisor_options",
 ]

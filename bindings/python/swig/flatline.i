@@ -50,3 +50,4 @@
 %include "gauge.i"
 %include "genicam.i"
 %include "verdict.i"
+%include "advisor.i"

@@ -78,4 +78,13 @@ struct flt_u3v_sim {};
   ~flt_u3v_sim() { flt_u3v_sim_destroy($self); }
 }
 
+/* The hidden leveler (flt_leveler_sim) closes the advisor's loop in the C
+ * tests and examples/advisor_loop; it is not bound. */
+%ignore flt_leveler_sim;
+%ignore flt_leveler_sim_create;
+%ignore flt_leveler_sim_destroy;
+%ignore flt_leveler_sim_set_settings;
+%ignore flt_leveler_sim_set_incoming;
+%ignore flt_leveler_sim_next_sheet;
+
 %include "flatline/testing.h"
