@@ -357,6 +357,14 @@ namespace Flatline
         /// <summary>Sheets that can exist at once, waiting or held.</summary>
         public int GaugeSheetSlots { get => (int)Get("gauge_sheet_slots"); set => Set("gauge_sheet_slots", value); }
 
+        // ---- the leveler advisor (Advisor); flatline/advisor.h
+        /// <summary>Lambda of the advice relative to the mean squared effect of
+        /// a unit step (advisor_damping).</summary>
+        public double AdvisorDamping { get => Get("advisor_damping"); set => Set("advisor_damping", value); }
+        /// <summary>The share of the expected deviation one advice sets out to
+        /// remove, 0.01..1 (advisor_gain).</summary>
+        public double AdvisorGain { get => Get("advisor_gain"); set => Set("advisor_gain", value); }
+
         public void Dispose()
         {
             handle.Dispose();

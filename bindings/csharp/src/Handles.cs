@@ -213,4 +213,13 @@ namespace Flatline
         protected override void Destroy(IntPtr native) => FlatlineNative.flt_verdict_destroy_handle(native);
         protected override void OnLive(int delta) => Interlocked.Add(ref live, delta);
     }
+
+    internal sealed class AdvisorHandle : FlatlineHandle
+    {
+        private static long live;
+        internal static long Live => Interlocked.Read(ref live);
+        public AdvisorHandle() { }
+        protected override void Destroy(IntPtr native) => FlatlineNative.flt_advisor_destroy_handle(native);
+        protected override void OnLive(int delta) => Interlocked.Add(ref live, delta);
+    }
 }

@@ -36,3 +36,4 @@
 %include "gauge.i"
 %include "genicam.i"
 %include "verdict.i"
+%include "advisor.i"

@@ -40,4 +40,13 @@ FLT_CS_OUT_POINTER(uint32_t, uint, uint32_t *out)
 %typemap(in) flt_usb_transport **out %{ $1 = ($1_ltype)$input; %}
 %typemap(csin) flt_usb_transport **out "out $csinput"
 
+/* The hidden leveler (flt_leveler_sim) closes the advisor's loop in the C
+ * tests and examples/advisor_loop; it is not bound. */
+%ignore flt_leveler_sim;
+%ignore flt_leveler_sim_create;
+%ignore flt_leveler_sim_destroy;
+%ignore flt_leveler_sim_set_settings;
+%ignore flt_leveler_sim_set_incoming;
+%ignore flt_leveler_sim_next_sheet;
+
 %include "flatline/testing.h"
