@@ -28,7 +28,10 @@ namespace Flatline.Tests
         public void NativeFilesDoNotCollideWithManagedAssemblies()
         {
             string folder = AppContext.BaseDirectory;
-            string core = OperatingSystem.IsWindows() ? "libflatline.dll" : "libflatline.so.0";
+            // The SONAME: libflatline.so.0.MINOR while MAJOR is 0, else libflatline.so.MAJOR.
+            int version = Library.Version, major = version / 10000, minor = version / 100 % 100;
+            string soname = major == 0 ? $"libflatline.so.0.{minor}" : $"libflatline.so.{major}";
+            string core = OperatingSystem.IsWindows() ? "libflatline.dll" : soname;
             string glue = NativeLoader.PlatformFileName(NativeLoader.GlueName);
             Assert.True(File.Exists(Path.Combine(folder, core)), $"{core} is beside the program");
             Assert.True(File.Exists(Path.Combine(folder, glue)), $"{glue} is beside the program");
@@ -100,7 +103,7 @@ namespace Flatline.Tests
             e = Assert.Throws<ArgumentException>(() =>
                 Library.Reconstruct(sheet.S, sheet.Height, sheet.Slope, new bool[20, 4]));
             Assert.Equal("valid", e.ParamName);
-            Assert.Throws<ArgumentNullException>(() => Library.Reconstruct(null, sheet.Height, sheet.Slope));
+            Assert.Throws<ArgumentNullException>(() => Library.Reconstruct(null!, sheet.Height, sheet.Slope));  // null on purpose: the check under test
             // Positions are the C library's business: a typed FlatlineException.
             var s = (double[])sheet.S.Clone();
             s[5] = s[4];
