@@ -62,13 +62,13 @@ namespace Flatline
         /// k1 k2 p1 p2 k3 k4 k5 k6 (what cv::calibrateCamera returns).</summary>
         public double[] Distortion => new[] { K1, K2, P1, P2, K3, K4, K5, K6 };
 
-        public bool Equals(CameraIntrinsics other) =>
+        public bool Equals(CameraIntrinsics? other) =>
             other != null && Fx.Equals(other.Fx) && Fy.Equals(other.Fy) && Cx.Equals(other.Cx) &&
             Cy.Equals(other.Cy) && K1.Equals(other.K1) && K2.Equals(other.K2) && P1.Equals(other.P1) &&
             P2.Equals(other.P2) && K3.Equals(other.K3) && K4.Equals(other.K4) && K5.Equals(other.K5) &&
             K6.Equals(other.K6);
 
-        public override bool Equals(object obj) => Equals(obj as CameraIntrinsics);
+        public override bool Equals(object? obj) => Equals(obj as CameraIntrinsics);
 
         public override int GetHashCode()
         {
@@ -102,10 +102,10 @@ namespace Flatline
         /// <summary>The x of fiber <paramref name="fiber"/>, mm.</summary>
         public double X(int fiber) => FirstXMm + fiber * PitchMm;
 
-        public bool Equals(FiberGrid other) =>
+        public bool Equals(FiberGrid? other) =>
             other != null && FirstXMm.Equals(other.FirstXMm) && PitchMm.Equals(other.PitchMm) && Count == other.Count;
 
-        public override bool Equals(object obj) => Equals(obj as FiberGrid);
+        public override bool Equals(object? obj) => Equals(obj as FiberGrid);
         public override int GetHashCode() => (FirstXMm.GetHashCode() * 31 + PitchMm.GetHashCode()) * 31 + Count;
         public override string ToString() =>
             FormattableString.Invariant($"{Count} fibers from x = {FirstXMm:R} mm every {PitchMm:R} mm");
@@ -386,7 +386,7 @@ namespace Flatline
         /// </summary>
         public unsafe IntrinsicsEstimate EstimateIntrinsics(IReadOnlyList<byte[,]> images, CalibrationTarget target,
                                                             int columns, int rows, double pitchMm,
-                                                            FlatlineOptions options = null)
+                                                            FlatlineOptions? options = null)
         {
             var live = LiveHandle;
             if (images == null)
@@ -491,7 +491,7 @@ namespace Flatline
         /// is a <see cref="NumericException"/> and leaves the model unchanged.
         /// </summary>
         public unsafe HomographyEstimate EstimateHomography(int laser, double[,] imagePx, double[,] planeMm,
-                                                            FlatlineOptions options = null)
+                                                            FlatlineOptions? options = null)
         {
             var live = LiveHandle;
             uint l = Shapes.Laser(laser);

@@ -32,7 +32,7 @@ namespace Flatline
     /// </summary>
     public class FlatlineException : Exception
     {
-        public FlatlineException(Status status, string message)
+        public FlatlineException(Status status, string? message)
             : base(string.IsNullOrEmpty(message) ? NameOf(status) : message)
         {
             Status = status;
@@ -53,74 +53,74 @@ namespace Flatline
     /// array sizes are caught earlier, in C#, as <see cref="ArgumentException"/>.</summary>
     public class InvalidArgumentException : FlatlineException
     {
-        public InvalidArgumentException(Status status, string message) : base(status, message) { }
+        public InvalidArgumentException(Status status, string? message) : base(status, message) { }
     }
 
     /// <summary>FLT_ERR_OUT_OF_MEMORY: native memory could not be allocated.</summary>
     public class FlatlineOutOfMemoryException : FlatlineException
     {
-        public FlatlineOutOfMemoryException(Status status, string message) : base(status, message) { }
+        public FlatlineOutOfMemoryException(Status status, string? message) : base(status, message) { }
     }
 
     /// <summary>FLT_ERR_STATE: the call is not allowed in the object's current
     /// state (for example Pull before any Push, or EndSheet twice).</summary>
     public class FlatlineStateException : FlatlineException
     {
-        public FlatlineStateException(Status status, string message) : base(status, message) { }
+        public FlatlineStateException(Status status, string? message) : base(status, message) { }
     }
 
     /// <summary>FLT_ERR_BUFFER_FULL: a fixed-capacity buffer is full; pull
     /// finished rows, push smaller blocks, or raise RowCapacity.</summary>
     public class BufferFullException : FlatlineException
     {
-        public BufferFullException(Status status, string message) : base(status, message) { }
+        public BufferFullException(Status status, string? message) : base(status, message) { }
     }
 
     /// <summary>FLT_ERR_IO: a file could not be opened, read or written.
     /// Also the base of <see cref="FlatlineFormatException"/>.</summary>
     public class FlatlineIOException : FlatlineException
     {
-        public FlatlineIOException(Status status, string message) : base(status, message) { }
+        public FlatlineIOException(Status status, string? message) : base(status, message) { }
     }
 
     /// <summary>FLT_ERR_FORMAT: a file or packet is malformed; the message
     /// names the field.</summary>
     public class FlatlineFormatException : FlatlineIOException
     {
-        public FlatlineFormatException(Status status, string message) : base(status, message) { }
+        public FlatlineFormatException(Status status, string? message) : base(status, message) { }
     }
 
     /// <summary>FLT_ERR_DEVICE: a camera or transport failed. Also the base of
     /// <see cref="DeviceTimeoutException"/>.</summary>
     public class DeviceException : FlatlineException
     {
-        public DeviceException(Status status, string message) : base(status, message) { }
+        public DeviceException(Status status, string? message) : base(status, message) { }
     }
 
     /// <summary>FLT_ERR_TIMEOUT: a device did not answer in time.</summary>
     public class DeviceTimeoutException : DeviceException
     {
-        public DeviceTimeoutException(Status status, string message) : base(status, message) { }
+        public DeviceTimeoutException(Status status, string? message) : base(status, message) { }
     }
 
     /// <summary>FLT_ERR_NOT_FOUND: something named (a device, a feature, an
     /// option) does not exist.</summary>
     public class NotFoundException : FlatlineException
     {
-        public NotFoundException(Status status, string message) : base(status, message) { }
+        public NotFoundException(Status status, string? message) : base(status, message) { }
     }
 
     /// <summary>FLT_ERR_NUMERIC: a singular system or a failed estimate.</summary>
     public class NumericException : FlatlineException
     {
-        public NumericException(Status status, string message) : base(status, message) { }
+        public NumericException(Status status, string? message) : base(status, message) { }
     }
 
     /// <summary>FLT_ERR_INTERNAL: a bug in libflatline; please report it with
     /// the message.</summary>
     public class FlatlineInternalException : FlatlineException
     {
-        public FlatlineInternalException(Status status, string message) : base(status, message) { }
+        public FlatlineInternalException(Status status, string? message) : base(status, message) { }
     }
 
     /// <summary>The one place where a C status becomes an exception. The
@@ -137,7 +137,7 @@ namespace Flatline
             throw Create((Status)status, FlatlineNative.flt_last_error_message());
         }
 
-        internal static FlatlineException Create(Status status, string message)
+        internal static FlatlineException Create(Status status, string? message)
         {
             switch (status)
             {

@@ -90,7 +90,7 @@ namespace Flatline
         public int FirstRow { get; }
         public int Rows { get; }
         public bool Equals(RowBand other) => FirstRow == other.FirstRow && Rows == other.Rows;
-        public override bool Equals(object obj) => obj is RowBand other && Equals(other);
+        public override bool Equals(object? obj) => obj is RowBand other && Equals(other);
         public override int GetHashCode() => FirstRow * 65537 + Rows;
         public override string ToString() => $"rows {FirstRow} .. {FirstRow + Rows - 1}";
     }
@@ -152,7 +152,7 @@ namespace Flatline
         /// <paramref name="options"/> (null for the defaults) is read for the
         /// extract_* keys and not kept; <see cref="InvalidArgumentException"/>
         /// for a band outside the frame or an unusable Savitzky-Golay window.</summary>
-        public Extractor(Calibration calibration, FlatlineOptions options = null)
+        public Extractor(Calibration calibration, FlatlineOptions? options = null)
         {
             if (calibration == null)
                 throw new ArgumentNullException(nameof(calibration));
@@ -213,16 +213,16 @@ namespace Flatline
         {
             if (frame == null)
                 throw new ArgumentNullException(nameof(frame));
-            return frame.Pixels8 != null
-                ? Process(frame.Pixels8, frame.EncoderMm)
-                : Process(frame.Pixels16, frame.Format, frame.EncoderMm);
+            return frame.Pixels is byte[,] pixels8
+                ? Process(pixels8, frame.EncoderMm)
+                : Process((ushort[,])frame.Pixels, frame.Format, frame.EncoderMm);
         }
 
         /// <summary>Processes a Mono8 frame into the caller's arrays
         /// <paramref name="height"/>, <paramref name="slope"/> and (optional)
         /// <paramref name="valid"/>, each [fibers] (a SCADA loop reuses them;
         /// nothing is allocated), and returns the row's material position, mm.</summary>
-        public unsafe double Process(byte[,] frame, double encoderMm, double[] height, double[] slope, bool[] valid = null)
+        public unsafe double Process(byte[,] frame, double encoderMm, double[] height, double[] slope, bool[]? valid = null)
         {
             var live = LiveHandle;
             CheckFrame(frame, height, slope, valid);
@@ -232,7 +232,7 @@ namespace Flatline
 
         /// <summary>The same for a 16-bit frame of <paramref name="format"/>.</summary>
         public unsafe double Process(ushort[,] frame, PixelFormat format, double encoderMm, double[] height,
-                                     double[] slope, bool[] valid = null)
+                                     double[] slope, bool[]? valid = null)
         {
             var live = LiveHandle;
             if (format == PixelFormat.Mono8)
@@ -349,7 +349,7 @@ namespace Flatline
             valid = new bool[Fibers];
         }
 
-        private void CheckFrame<T>(T[,] frame, double[] height, double[] slope, bool[] valid)
+        private void CheckFrame<T>(T[,] frame, double[] height, double[] slope, bool[]? valid)
         {
             if (frame == null)
                 throw new ArgumentNullException(nameof(frame));
@@ -364,7 +364,7 @@ namespace Flatline
         }
 
         private unsafe double Run(ExtractorHandle live, void* frame, PixelFormat format, int bytesPerPixel,
-                                  double encoderMm, double[] height, double[] slope, bool[] valid)
+                                  double encoderMm, double[] height, double[] slope, bool[]? valid)
         {
             double s;
             fixed (double* ph = height, pg = slope)

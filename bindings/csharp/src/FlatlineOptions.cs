@@ -413,19 +413,23 @@ namespace Flatline
 
         /// <summary>The caller's bag, or a bag of defaults for null (the
         /// marshaller cannot pass a null SafeHandle), disposed with the scope.</summary>
-        internal static Scope Borrow(FlatlineOptions options) =>
-            options != null ? new Scope(options.LiveHandle, null) : new Scope(null, new FlatlineOptions());
+        internal static Scope Borrow(FlatlineOptions? options) =>
+            options != null ? new Scope(options.LiveHandle, null) : Defaults(new FlatlineOptions());
+
+        private static Scope Defaults(FlatlineOptions defaults) => new Scope(defaults.handle, defaults);
 
         internal readonly struct Scope : IDisposable
         {
-            private readonly OptionsHandle borrowed;
-            private readonly FlatlineOptions owned;
-            internal Scope(OptionsHandle borrowed, FlatlineOptions owned)
+            private readonly FlatlineOptions? owned;
+            /// <summary>The handle to pass; <paramref name="owned"/>: the
+            /// bag of defaults it belongs to, disposed with the scope (null
+            /// for the caller's bag).</summary>
+            internal Scope(OptionsHandle handle, FlatlineOptions? owned)
             {
-                this.borrowed = borrowed;
+                Handle = handle;
                 this.owned = owned;
             }
-            internal OptionsHandle Handle => borrowed ?? owned.handle;
+            internal OptionsHandle Handle { get; }
             public void Dispose() => owned?.Dispose();
         }
     }

@@ -327,7 +327,7 @@ namespace Flatline
         /// (null for the defaults) is read for the flat_* keys and not kept.
         /// <see cref="InvalidArgumentException"/> for bad positions or
         /// FlatUpdateInterval &gt; FlatWindowLength.</summary>
-        public unsafe Flatness(double[] fiberX, FlatlineOptions options = null)
+        public unsafe Flatness(double[] fiberX, FlatlineOptions? options = null)
         {
             if (fiberX == null)
                 throw new ArgumentNullException(nameof(fiberX));
@@ -343,7 +343,7 @@ namespace Flatline
 
         /// <summary>Metrics on the fiber grid of <paramref name="calibration"/>,
         /// which the object holds.</summary>
-        public Flatness(Calibration calibration, FlatlineOptions options = null)
+        public Flatness(Calibration calibration, FlatlineOptions? options = null)
         {
             if (calibration == null)
                 throw new ArgumentNullException(nameof(calibration));
@@ -356,7 +356,7 @@ namespace Flatline
         }
 
         /// <summary>The calibration the metrics were created from, else null.</summary>
-        public Calibration Calibration { get; }
+        public Calibration? Calibration { get; }
         public int Fibers { get; private set; }
         public int Zones { get; private set; }
         /// <summary>Left edge of each zone, mm (a copy).</summary>
@@ -378,7 +378,7 @@ namespace Flatline
         /// <see cref="InvalidArgumentException"/> (keeping the previous
         /// results) for fewer than 2 rows, non-increasing s, a window shorter
         /// than FlatMinLength or no fiber with enough usable data.</summary>
-        public unsafe FlatnessResult Evaluate(double[] s, double[,] z, byte[,] flags = null)
+        public unsafe FlatnessResult Evaluate(double[] s, double[,] z, byte[,]? flags = null)
         {
             var live = LiveHandle;
             int rows = CheckRows(s, z, flags);
@@ -396,8 +396,8 @@ namespace Flatline
         /// unknown (<see cref="Extractor.Strip"/> with laser 2 gives them),
         /// or null: unknown. Where the edges are known the window is measured
         /// on the strip (<see cref="FlatnessResult.Strip"/>).</summary>
-        public unsafe FlatnessResult EvaluateStrip(double[] s, double[,] z, byte[,] flags, double[] leftMm,
-                                                   double[] rightMm)
+        public unsafe FlatnessResult EvaluateStrip(double[] s, double[,] z, byte[,]? flags, double[]? leftMm,
+                                                   double[]? rightMm)
         {
             var live = LiveHandle;
             int rows = CheckRows(s, z, flags);
@@ -412,8 +412,8 @@ namespace Flatline
 
         /// <summary>As <see cref="Push"/>, with the strip's edges per row (as
         /// in <see cref="EvaluateStrip"/>; indexed like s).</summary>
-        public unsafe FlatnessPush PushStrip(double[] s, double[,] z, byte[,] flags, double[] leftMm,
-                                             double[] rightMm, int firstRow = 0, int rows = -1)
+        public unsafe FlatnessPush PushStrip(double[] s, double[,] z, byte[,]? flags, double[]? leftMm,
+                                             double[]? rightMm, int firstRow = 0, int rows = -1)
         {
             var live = LiveHandle;
             int total = CheckRows(s, z, flags);
@@ -446,7 +446,7 @@ namespace Flatline
         /// <see cref="FlatnessPush.Evaluated"/>, read <see cref="Result"/> and
         /// call again from firstRow + Consumed. <see cref="BufferFullException"/>
         /// when a window would hold more than FlatRowCapacity rows.</summary>
-        public unsafe FlatnessPush Push(double[] s, double[,] z, byte[,] flags = null, int firstRow = 0, int rows = -1)
+        public unsafe FlatnessPush Push(double[] s, double[,] z, byte[,]? flags = null, int firstRow = 0, int rows = -1)
         {
             var live = LiveHandle;
             int total = CheckRows(s, z, flags);
@@ -557,7 +557,7 @@ namespace Flatline
             }
         }
 
-        private unsafe void Init(FlatlineOptions options, out double[] leftX, out double[] centreX, out int[] fiberCount)
+        private unsafe void Init(FlatlineOptions? options, out double[] leftX, out double[] centreX, out int[] fiberCount)
         {
             FlatlineNative.flt_flatness_fibers(handle, out UIntPtr fibers);
             FlatlineNative.flt_flatness_zones(handle, out UIntPtr zones);
@@ -575,7 +575,7 @@ namespace Flatline
             handle.Track(NativeBytes(options != null ? options.FlatRowCapacity : DefaultRowCapacity));
         }
 
-        private static void CheckEdges(double[] leftMm, double[] rightMm, int rows)
+        private static void CheckEdges(double[]? leftMm, double[]? rightMm, int rows)
         {
             if (leftMm != null)
                 Shapes.Check(leftMm, rows, nameof(leftMm));
@@ -583,7 +583,7 @@ namespace Flatline
                 Shapes.Check(rightMm, rows, nameof(rightMm));
         }
 
-        private int CheckRows(double[] s, double[,] z, byte[,] flags)
+        private int CheckRows(double[] s, double[,] z, byte[,]? flags)
         {
             if (s == null)
                 throw new ArgumentNullException(nameof(s));

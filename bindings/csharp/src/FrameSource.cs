@@ -145,17 +145,16 @@ namespace Flatline
         internal Frame(PixelFormat format, int width, int height)
         {
             Format = format;
-            if (format == PixelFormat.Mono8)
-                Pixels8 = new byte[height, width];
-            else
-                Pixels16 = new ushort[height, width];
+            Pixels = format == PixelFormat.Mono8 ? new byte[height, width] : (Array)new ushort[height, width];
         }
 
         public PixelFormat Format { get; }
-        public byte[,] Pixels8 { get; }
-        public ushort[,] Pixels16 { get; }
+        /// <summary>Mono8: the pixels [height, width]; null for a 16-bit format.</summary>
+        public byte[,]? Pixels8 => Pixels as byte[,];
+        /// <summary>Mono10/12/16: the pixels [height, width]; null for Mono8.</summary>
+        public ushort[,]? Pixels16 => Pixels as ushort[,];
         /// <summary>The pixels whatever the format: a byte[,] or a ushort[,].</summary>
-        public Array Pixels => (Array)Pixels8 ?? Pixels16;
+        public Array Pixels { get; }
         public int Width => Pixels.GetLength(1);
         public int Height => Pixels.GetLength(0);
         /// <summary>The row pitch of the source's buffer, bytes (&gt;= width *
@@ -200,7 +199,7 @@ namespace Flatline
 
         static FrameSource() => NativeLoader.EnsureLoaded();
 
-        private FrameSource(SourceHandle handle, object parent, long nativeBytes = 0)
+        private FrameSource(SourceHandle handle, object? parent, long nativeBytes = 0)
         {
             this.handle = handle;
             Parent = parent;
@@ -216,7 +215,7 @@ namespace Flatline
         /// <summary>Frames rendered by <paramref name="line"/> (which may still
         /// change its sheet between frames), each with the line's encoder
         /// position (or fixed step / host mode; Chunk is refused).</summary>
-        public static FrameSource Simulator(SimulatedLine line, FlatlineOptions options = null)
+        public static FrameSource Simulator(SimulatedLine line, FlatlineOptions? options = null)
         {
             if (line == null)
                 throw new ArgumentNullException(nameof(line));
@@ -240,8 +239,8 @@ namespace Flatline
         /// "file name,encoder_mm"). <see cref="FlatlineFormatException"/>
         /// names a bad CSV line; <see cref="FlatlineIOException"/> an
         /// unreadable image.</summary>
-        public static unsafe FrameSource Images(IReadOnlyList<string> paths, string encoderCsv = null,
-                                                FlatlineOptions options = null)
+        public static unsafe FrameSource Images(IReadOnlyList<string> paths, string? encoderCsv = null,
+                                                FlatlineOptions? options = null)
         {
             if (paths == null)
                 throw new ArgumentNullException(nameof(paths));
@@ -279,8 +278,8 @@ namespace Flatline
         /// <summary>Every *.png, *.tif and *.tiff file of
         /// <paramref name="directory"/> (not its sub-folders), sorted by name.
         /// <see cref="NotFoundException"/> if there is none.</summary>
-        public static FrameSource ImageDirectory(string directory, string encoderCsv = null,
-                                                 FlatlineOptions options = null)
+        public static FrameSource ImageDirectory(string directory, string? encoderCsv = null,
+                                                 FlatlineOptions? options = null)
         {
             if (directory == null)
                 throw new ArgumentNullException(nameof(directory));
@@ -298,7 +297,7 @@ namespace Flatline
         /// or on <paramref name="bus"/> when given (which the source holds).
         /// <see cref="NotFoundException"/> names a serial that is not present;
         /// <see cref="DeviceException"/> says why a camera cannot be opened.</summary>
-        public static FrameSource U3V(string serial = null, FlatlineOptions options = null, U3VSimBus bus = null)
+        public static FrameSource U3V(string? serial = null, FlatlineOptions? options = null, U3VSimBus? bus = null)
         {
             NativeLoader.EnsureLoaded();
             SourceHandle handle;
@@ -318,7 +317,7 @@ namespace Flatline
         /// <summary>The USB3 Vision cameras present on the USB bus, or on
         /// <paramref name="bus"/>. <see cref="DeviceException"/> if libusb
         /// cannot start.</summary>
-        public static unsafe IReadOnlyList<CameraInfo> Cameras(U3VSimBus bus = null)
+        public static unsafe IReadOnlyList<CameraInfo> Cameras(U3VSimBus? bus = null)
         {
             NativeLoader.EnsureLoaded();
             var cameras = new List<CameraInfo>();
@@ -350,7 +349,7 @@ namespace Flatline
         /// <see cref="DeviceTimeoutException"/> when the address does not
         /// answer, <see cref="DeviceException"/> when another application
         /// controls the camera.</summary>
-        public static FrameSource GigE(string camera = null, FlatlineOptions options = null)
+        public static FrameSource GigE(string? camera = null, FlatlineOptions? options = null)
         {
             NativeLoader.EnsureLoaded();
             SourceHandle handle;
@@ -366,7 +365,7 @@ namespace Flatline
         /// address, "a.b.c.d[:port]"), or to every interface's broadcast
         /// address when null, within <paramref name="timeoutMs"/>
         /// (1..60000).</summary>
-        public static unsafe IReadOnlyList<CameraInfo> GigECameras(string address = null, int timeoutMs = 1000)
+        public static unsafe IReadOnlyList<CameraInfo> GigECameras(string? address = null, int timeoutMs = 1000)
         {
             if (timeoutMs < 1 || timeoutMs > 60000)
                 throw new ArgumentOutOfRangeException(nameof(timeoutMs), timeoutMs, "1..60000 ms");
@@ -391,7 +390,7 @@ namespace Flatline
 
         public SourceKind Kind { get; }
         /// <summary>What the source borrows: its SimulatedLine or U3VSimBus, else null.</summary>
-        public object Parent { get; }
+        public object? Parent { get; }
 
         /// <summary>Starts acquisition (a camera: stream set-up, buffers,
         /// AcquisitionStart; images start again from the first).
@@ -408,7 +407,7 @@ namespace Flatline
         /// sequence. <see cref="DeviceTimeoutException"/>,
         /// <see cref="DeviceException"/>, <see cref="FlatlineStateException"/>
         /// before <see cref="Start"/>.</summary>
-        public unsafe Frame Next(int timeoutMs = 1000, Frame reuse = null)
+        public unsafe Frame? Next(int timeoutMs = 1000, Frame? reuse = null)
         {
             var live = LiveHandle;
             if (timeoutMs < 0)
@@ -430,14 +429,14 @@ namespace Flatline
                 : new Frame(pixelFormat, (int)width, (int)height);
             int rowBytes = (int)width * (pixelFormat == PixelFormat.Mono8 ? 1 : 2);
             byte* source = (byte*)pixels;
-            if (frame.Pixels8 != null)
+            if (frame.Pixels is byte[,] pixels8)
             {
-                fixed (byte* target = frame.Pixels8)
+                fixed (byte* target = pixels8)
                     CopyRows(source, (long)stride, target, rowBytes, (int)height);
             }
             else
             {
-                fixed (ushort* target = frame.Pixels16)
+                fixed (ushort* target = (ushort[,])frame.Pixels)
                     CopyRows(source, (long)stride, (byte*)target, rowBytes, (int)height);
             }
             frame.StrideBytes = (long)stride;
@@ -583,7 +582,7 @@ namespace Flatline
             }
         }
 
-        private static string Feature(string feature) =>
+        private static string Feature(string? feature) =>
             feature ?? throw new ArgumentNullException(nameof(feature));
 
         private static unsafe void CopyRows(byte* source, long stride, byte* target, int rowBytes, int rows)

@@ -1,5 +1,4 @@
 // SPDX-License-Identifier: Apache-2.0
-#nullable enable
 using System;
 using System.Collections.Concurrent;
 using System.Collections.Generic;
@@ -396,10 +395,10 @@ namespace Flatline
         {
             if (frame == null)
                 throw new ArgumentNullException(nameof(frame));
-            if (frame.Pixels8 != null)
-                Push(frame.Pixels8, frame.EncoderMm);
+            if (frame.Pixels is byte[,] pixels8)
+                Push(pixels8, frame.EncoderMm);
             else
-                Push(frame.Pixels16, frame.Format, frame.EncoderMm);
+                Push((ushort[,])frame.Pixels, frame.Format, frame.EncoderMm);
         }
 
         /// <summary>A frame from a <see cref="FrameSource"/>.</summary>
@@ -407,10 +406,10 @@ namespace Flatline
         {
             if (frame == null)
                 throw new ArgumentNullException(nameof(frame));
-            if (frame.Pixels8 != null)
-                Push(frame.Pixels8, frame.EncoderMm);
+            if (frame.Pixels is byte[,] pixels8)
+                Push(pixels8, frame.EncoderMm);
             else
-                Push(frame.Pixels16, frame.Format, frame.EncoderMm);
+                Push((ushort[,])frame.Pixels, frame.Format, frame.EncoderMm);
         }
 
         /// <summary>One profile row instead of a frame (a sensor that extracts

@@ -37,7 +37,7 @@ namespace Flatline
         /// is null. Setting it after the library is loaded throws
         /// <see cref="InvalidOperationException"/>.
         /// </summary>
-        public static string NativeLibraryPath
+        public static string? NativeLibraryPath
         {
             get => NativeLoader.ConfiguredPath;
             set => NativeLoader.ConfiguredPath = value;
@@ -54,7 +54,7 @@ namespace Flatline
         /// rows along travel, fibers across the width).
         /// </summary>
         public static unsafe ReconResult Reconstruct(double[] s, double[,] height, double[,] slope,
-                                                     bool[,] valid = null, FlatlineOptions options = null)
+                                                     bool[,]? valid = null, FlatlineOptions? options = null)
         {
             int rows = Shapes.Rows(s, nameof(s));
             int fibers = Shapes.Columns(height, nameof(height));
@@ -84,7 +84,7 @@ namespace Flatline
         /// (flt_reconstruct_flagged): off-strip samples come out NaN flagged
         /// <see cref="ReconFlags.OffStrip"/>.</summary>
         public static unsafe ReconResult ReconstructFlagged(double[] s, double[,] height, double[,] slope,
-                                                            ReconFlags[,] flags, FlatlineOptions options = null)
+                                                            ReconFlags[,] flags, FlatlineOptions? options = null)
         {
             int rows = Shapes.Rows(s, nameof(s));
             int fibers = Shapes.Columns(height, nameof(height));

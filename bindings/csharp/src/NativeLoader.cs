@@ -23,10 +23,10 @@ namespace Flatline
         internal const string EnvironmentVariable = "FLATLINE_NATIVE_PATH";
 
         private static readonly object Gate = new object();
-        private static string configuredPath;
+        private static string? configuredPath;
         private static bool bound;
 
-        internal static string ConfiguredPath
+        internal static string? ConfiguredPath
         {
             get { lock (Gate) return configuredPath; }
             set
@@ -55,7 +55,7 @@ namespace Flatline
         /// <summary>The glue file an override names: a folder (the glue is
         /// looked up inside it by its platform name) or the file itself.
         /// null when no override is set.</summary>
-        internal static string ResolveOverride(string configured)
+        internal static string? ResolveOverride(string? configured)
         {
             if (string.IsNullOrEmpty(configured))
                 return null;
@@ -63,9 +63,9 @@ namespace Flatline
             return Directory.Exists(full) ? Path.Combine(full, PlatformFileName(GlueName)) : full;
         }
 
-        private static string EffectiveOverride()
+        private static string? EffectiveOverride()
         {
-            string path = ConfiguredPath;
+            string? path = ConfiguredPath;
             if (string.IsNullOrEmpty(path))
                 path = Environment.GetEnvironmentVariable(EnvironmentVariable);
             return ResolveOverride(path);
@@ -103,7 +103,7 @@ namespace Flatline
                 return IntPtr.Zero;
             lock (Gate)
                 bound = true;
-            string file = EffectiveOverride();
+            string? file = EffectiveOverride();
             if (file == null)
                 return IntPtr.Zero;  // the default probing
             if (libraryName == TestingGlueName)
@@ -141,7 +141,7 @@ namespace Flatline
                 preloaded = true;
                 bound = true;
             }
-            string file = EffectiveOverride();
+            string? file = EffectiveOverride();
             if (file == null || !RuntimeInformation.IsOSPlatform(OSPlatform.Windows))
                 return;
             if (!File.Exists(file))
@@ -166,7 +166,7 @@ namespace Flatline
                     return;
                 testingPreloaded = true;
             }
-            string file = EffectiveOverride();
+            string? file = EffectiveOverride();
             if (file == null || !RuntimeInformation.IsOSPlatform(OSPlatform.Windows))
                 return;
             string dir = Path.GetDirectoryName(file) ?? ".";

@@ -103,7 +103,7 @@ namespace Flatline
         /// fibers. <paramref name="options"/> (null for the defaults) is
         /// copied, not kept. <see cref="InvalidArgumentException"/> for
         /// fibers = 0 or inconsistent options.</summary>
-        public Reconstructor(int fibers, FlatlineOptions options = null)
+        public Reconstructor(int fibers, FlatlineOptions? options = null)
         {
             if (fibers < 0)
                 throw new ArgumentOutOfRangeException(nameof(fibers), fibers, "fibers must be at least 1");
@@ -126,7 +126,7 @@ namespace Flatline
         /// <see cref="InvalidArgumentException"/> naming both values.
         /// <see cref="FlatlineStateException"/> if the calibration is not
         /// finished. The calibration is only read during the call.</summary>
-        public Reconstructor(Calibration calibration, FlatlineOptions options = null)
+        public Reconstructor(Calibration calibration, FlatlineOptions? options = null)
         {
             if (calibration == null)
                 throw new ArgumentNullException(nameof(calibration));
@@ -173,7 +173,7 @@ namespace Flatline
         /// before the native call; on any failure nothing was pushed.
         /// <see cref="BufferFullException"/> when the rows do not fit in RowCapacity.
         /// </summary>
-        public unsafe void Push(double[] s, double[,] height, double[,] slope, bool[,] valid = null)
+        public unsafe void Push(double[] s, double[,] height, double[,] slope, bool[,]? valid = null)
         {
             var live = LiveHandle;
             int rows = Shapes.Rows(s, nameof(s));
@@ -191,7 +191,7 @@ namespace Flatline
 
         /// <summary>Pushes one row at position <paramref name="s"/> (mm);
         /// arrays [fibers].</summary>
-        public unsafe void Push(double s, double[] height, double[] slope, bool[] valid = null)
+        public unsafe void Push(double s, double[] height, double[] slope, bool[]? valid = null)
         {
             var live = LiveHandle;
             Shapes.Check(height, Fibers, nameof(height));

@@ -104,12 +104,11 @@ namespace Flatline
     /// </summary>
     public sealed class SimulatedFrame
     {
-        internal SimulatedFrame(PixelFormat format, byte[,] pixels8, ushort[,] pixels16, double encoderMm,
+        internal SimulatedFrame(PixelFormat format, Array pixels, double encoderMm,
                                 double[] truth, double[,] peakRows)
         {
             Format = format;
-            Pixels8 = pixels8;
-            Pixels16 = pixels16;
+            Pixels = pixels;
             EncoderMm = encoderMm;
             Truth = truth;
             PeakRows = peakRows;
@@ -117,11 +116,11 @@ namespace Flatline
 
         public PixelFormat Format { get; }
         /// <summary>The pixels of a Mono8 frame, else null.</summary>
-        public byte[,] Pixels8 { get; }
+        public byte[,]? Pixels8 => Pixels as byte[,];
         /// <summary>The pixels of a Mono10, Mono12 or Mono16 frame, else null.</summary>
-        public ushort[,] Pixels16 { get; }
+        public ushort[,]? Pixels16 => Pixels as ushort[,];
         /// <summary>The pixels whatever the format: a byte[,] or a ushort[,].</summary>
-        public Array Pixels => (Array)Pixels8 ?? Pixels16;
+        public Array Pixels { get; }
         public int Width => Pixels.GetLength(1);
         public int Height => Pixels.GetLength(0);
         /// <summary>The frame's encoder position, mm.</summary>
@@ -165,7 +164,7 @@ namespace Flatline
         /// <paramref name="options"/> (null for the defaults) is read for the
         /// sim_* keys and not kept. The sheet starts flat.
         /// </summary>
-        public SimulatedLine(Calibration calibration = null, FlatlineOptions options = null)
+        public SimulatedLine(Calibration? calibration = null, FlatlineOptions? options = null)
         {
             if (calibration == null)
             {
@@ -294,13 +293,13 @@ namespace Flatline
             {
                 var pixels = new byte[FrameHeight, FrameWidth];
                 double encoder = NextFrame(pixels, truth, peakRows);
-                return new SimulatedFrame(PixelFormat, pixels, null, encoder, truth, peakRows);
+                return new SimulatedFrame(PixelFormat, pixels, encoder, truth, peakRows);
             }
             else
             {
                 var pixels = new ushort[FrameHeight, FrameWidth];
                 double encoder = NextFrame(pixels, truth, peakRows);
-                return new SimulatedFrame(PixelFormat, null, pixels, encoder, truth, peakRows);
+                return new SimulatedFrame(PixelFormat, pixels, encoder, truth, peakRows);
             }
         }
 
@@ -310,7 +309,7 @@ namespace Flatline
         /// and <paramref name="peakRows"/> [2, FrameWidth] are filled when
         /// given. <see cref="ArgumentException"/> for a wrong size or a 16-bit
         /// <see cref="PixelFormat"/>, before the native call.</summary>
-        public unsafe double NextFrame(byte[,] pixels, double[] truth = null, double[,] peakRows = null)
+        public unsafe double NextFrame(byte[,] pixels, double[]? truth = null, double[,]? peakRows = null)
         {
             var live = LiveHandle;
             if (PixelFormat != PixelFormat.Mono8)
@@ -321,7 +320,7 @@ namespace Flatline
         }
 
         /// <summary>The same for Mono10, Mono12 and Mono16 frames.</summary>
-        public unsafe double NextFrame(ushort[,] pixels, double[] truth = null, double[,] peakRows = null)
+        public unsafe double NextFrame(ushort[,] pixels, double[]? truth = null, double[,]? peakRows = null)
         {
             var live = LiveHandle;
             if (PixelFormat == PixelFormat.Mono8)
@@ -396,7 +395,7 @@ namespace Flatline
             }
         }
 
-        private void CheckFrame<T>(T[,] pixels, double[] truth, double[,] peakRows)
+        private void CheckFrame<T>(T[,] pixels, double[]? truth, double[,]? peakRows)
         {
             if (pixels == null)
                 throw new ArgumentNullException(nameof(pixels));
@@ -412,7 +411,7 @@ namespace Flatline
                     $"[2, {FrameWidth}] (laser, column)", nameof(peakRows));
         }
 
-        private unsafe double Render(SimHandle live, void* pixels, int bytesPerPixel, double[] truth, double[,] peakRows)
+        private unsafe double Render(SimHandle live, void* pixels, int bytesPerPixel, double[]? truth, double[,]? peakRows)
         {
             ulong stride = (ulong)(FrameWidth * bytesPerPixel);
             double encoder;

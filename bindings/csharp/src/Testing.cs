@@ -114,7 +114,7 @@ namespace Flatline.Testing
         /// <summary>Renders camera <paramref name="camera"/>'s frames with
         /// <paramref name="line"/> (held by the bus), or the test pattern for
         /// null. The camera takes the line's frame size and format.</summary>
-        public void SetFrames(int camera, SimulatedLine line)
+        public void SetFrames(int camera, SimulatedLine? line)
         {
             var live = LiveHandle;
             var sim = line != null ? line.LiveHandle : new SimHandle();

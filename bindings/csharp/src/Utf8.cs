@@ -11,7 +11,7 @@ namespace Flatline
     {
         /// <summary>A NUL-terminated UTF-8 copy of <paramref name="text"/>, or
         /// null for null (the C side sees NULL).</summary>
-        internal static byte[] Encode(string text)
+        internal static byte[]? Encode(string? text)
         {
             if (text == null)
                 return null;
@@ -23,11 +23,14 @@ namespace Flatline
             return bytes;
         }
 
-        /// <summary>Reads a NUL-terminated UTF-8 string the library owns.</summary>
+        /// <summary>Reads a NUL-terminated UTF-8 string the library owns.
+        /// The C functions hand out a string whenever they return FLT_OK
+        /// (a failure has thrown before this is called); a NULL all the
+        /// same reads as "", so the managed string is never null.</summary>
         internal static unsafe string Decode(IntPtr text)
         {
             if (text == IntPtr.Zero)
-                return null;
+                return "";
             byte* p = (byte*)text;
             int length = 0;
             while (p[length] != 0)
