@@ -207,7 +207,7 @@ namespace Flatline.Tests
                 calib.SetHomography(0, new double[3, 2])).ParamName);
             Assert.Equal("laser", Assert.Throws<ArgumentOutOfRangeException>(() => calib.ImageToPlane(2, new double[1, 2])).ParamName);
             Assert.Equal("laser", Assert.Throws<ArgumentOutOfRangeException>(() => calib.GetLaserOffset(-1)).ParamName);
-            Assert.Throws<ArgumentNullException>(() => calib.ImageToPlane(0, null));
+            Assert.Throws<ArgumentNullException>(() => calib.ImageToPlane(0, null!));  // null on purpose: the check under test
             calib.SetFrameSize(64, 48);
             var images = new List<byte[,]> { new byte[48, 64], new byte[48, 63] };
             var e = Assert.Throws<ArgumentException>(() =>

@@ -1,5 +1,4 @@
 // SPDX-License-Identifier: Apache-2.0
-#nullable enable
 using System;
 using System.IO;
 using System.IO.Compression;
@@ -116,7 +115,7 @@ namespace Flatline.Tests
             Assert.Contains("'Nope'", Assert.Throws<NotFoundException>(() => c.GetInt("Nope")).Message);
             Assert.Contains("no single register", Assert.Throws<NotFoundException>(() => c.GetRegister("PayloadSize")).Message);
             Assert.Contains("no entry 'Maybe'", Assert.Throws<NotFoundException>(() => c.SetString("TriggerMode", "Maybe")).Message);
-            Assert.Throws<ArgumentNullException>(() => c.GetInt(null!));
+            Assert.Throws<ArgumentNullException>(() => c.GetInt(null!));  // null on purpose: the check under test
             Assert.Throws<ArgumentException>(() => c.SetMemory(0, Array.Empty<byte>()));
             Assert.Contains("malformed", Assert.Throws<FlatlineFormatException>(
                 () => CameraDescription.FromBytes(Encoding.UTF8.GetBytes(Xml.Substring(0, 200)))).Message);

@@ -21,7 +21,7 @@ namespace Flatline.Tests
         /// <summary>A sheet smooth across the width (a centre buckle and a
         /// bow), with the simulator's default camera noise (speckle, shot
         /// noise, 8 bits).</summary>
-        private static SimulatedLine Line(Calibration calib, FlatlineOptions options = null)
+        private static SimulatedLine Line(Calibration calib, FlatlineOptions? options = null)
         {
             var line = new SimulatedLine(calib, options);
             line.AddDefect(DefectKind.CentreBuckle, 12, 1800);
@@ -95,7 +95,7 @@ namespace Flatline.Tests
             var e = Assert.Throws<FlatlineStateException>(() => extractor.Peaks());
             Assert.Contains("no frame has been processed yet", e.Message);
             SimulatedFrame frame = line.NextFrame();
-            extractor.Process(frame.Pixels8, frame.EncoderMm);
+            extractor.Process(frame);
             double[,] peaks = extractor.Peaks();
             Assert.Equal(2, peaks.GetLength(0));
             Assert.Equal(2048, peaks.GetLength(1));
@@ -134,7 +134,7 @@ namespace Flatline.Tests
             {
                 SimulatedFrame frame = line.NextFrame();
                 Assert.Equal(PixelFormat.Mono12, frame.Format);
-                ProfileRow row = extractor.Process(frame.Pixels16, PixelFormat.Mono12, frame.EncoderMm);
+                ProfileRow row = extractor.Process(Assert.IsType<ushort[,]>(frame.Pixels), PixelFormat.Mono12, frame.EncoderMm);
                 for (int k = 0; k < row.Fibers; ++k)
                 {
                     Assert.True(row.Valid[k]);
@@ -229,7 +229,7 @@ namespace Flatline.Tests
                 extractor.Process(new byte[128, 2048], 0, new double[100], new double[101])).ParamName);
             Assert.Equal("valid", Assert.Throws<ArgumentException>(() =>
                 extractor.Process(new byte[128, 2048], 0, new double[101], new double[101], new bool[102])).ParamName);
-            Assert.Throws<ArgumentNullException>(() => extractor.Process((byte[,])null, 0));
+            Assert.Throws<ArgumentNullException>(() => extractor.Process((byte[,])null!, 0));  // null on purpose: the check under test
             Assert.Equal("laser", Assert.Throws<ArgumentOutOfRangeException>(() => extractor.Band(2)).ParamName);
             // None reached the C library: no frame was processed.
             Assert.Throws<FlatlineStateException>(() => extractor.Peaks());
@@ -241,7 +241,7 @@ namespace Flatline.Tests
             using var unfinished = new Calibration();
             var state = Assert.Throws<FlatlineStateException>(() => new Extractor(unfinished));
             Assert.Contains("'calib' is not finished", state.Message);
-            Assert.Throws<ArgumentNullException>(() => new Extractor(null));
+            Assert.Throws<ArgumentNullException>(() => new Extractor(null!));  // null on purpose: the check under test
             using var calib = Sensor();
             using var even = new FlatlineOptions { ExtractSgWindow = 10 };
             var invalid = Assert.Throws<InvalidArgumentException>(() => new Extractor(calib, even));

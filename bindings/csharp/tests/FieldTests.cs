@@ -140,7 +140,7 @@ namespace Flatline.Tests
                     for (int k = 0; k < 3; ++k)
                         Assert.False(double.IsNaN(result.Z[r, k]));
                 }
-            Assert.Throws<ArgumentNullException>(() => recon.PushFlagged(s, height, slope, null));
+            Assert.Throws<ArgumentNullException>(() => recon.PushFlagged(s, height, slope, null!));  // null on purpose: the check under test
             Assert.Throws<ArgumentException>(() => recon.PushFlagged(s, height, slope, new ReconFlags[rows, 3]));
         }
 

@@ -29,10 +29,10 @@ namespace Flatline.Tests
         /// flags, [zones] I-Units and flags, and the shape's 5 values.</summary>
         public sealed class FlatnessWindow
         {
-            public double[] Fiber;   // [5 * fibers]: arc, I, height, period, steepness
-            public byte[] FiberFlags;
-            public double[] Zone;
-            public byte[] ZoneFlags;
+            public required double[] Fiber;   // [5 * fibers]: arc, I, height, period, steepness
+            public required byte[] FiberFlags;
+            public required double[] Zone;
+            public required byte[] ZoneFlags;
             public int Shape;
             public double Confidence, Bow, Crossbow;
             public uint Components;
@@ -339,7 +339,7 @@ namespace Flatline.Tests
             var (s, z) = Rows(x, 3000, (xx, ss) => Math.Sin(ss / 200.0));
             Assert.Throws<ArgumentException>(() => flatness.Evaluate(s, new double[s.Length, 4]));
             Assert.Throws<ArgumentException>(() => flatness.Evaluate(s, z, new byte[s.Length - 1, 5]));
-            Assert.Throws<ArgumentNullException>(() => flatness.Evaluate(null, z));
+            Assert.Throws<ArgumentNullException>(() => flatness.Evaluate(null!, z));  // null on purpose: the check under test
             Assert.Throws<ArgumentOutOfRangeException>(() => flatness.Push(s, z, null, s.Length + 1));
             // Values the C library rejects: its message names the argument.
             var e = Assert.Throws<InvalidArgumentException>(() => flatness.Evaluate(new[] { 0.0 }, new double[1, 5]));
@@ -441,8 +441,8 @@ namespace Flatline.Tests
                 return zones.ToArray();
             }
             double[] serial = Run();
-            double[] a = null, b = null;
-            Exception failure = null;
+            double[]? a = null, b = null;
+            Exception? failure = null;
             // A failed assertion on a thread is caught and rethrown here (an
             // exception escaping a thread would end the test process).
             ThreadStart Guarded(Action run) => () =>
@@ -458,6 +458,8 @@ namespace Flatline.Tests
             threadB.Join();
             if (failure != null)
                 throw failure;
+            Assert.NotNull(a);
+            Assert.NotNull(b);
             Assert.Equal(serial.Length, a.Length);
             Assert.Equal(serial.Length, b.Length);
             for (int i = 0; i < serial.Length; ++i)

@@ -87,11 +87,11 @@ namespace Flatline.Tests
             Assert.Equal(SourceKind.Simulator, source.Kind);
             Assert.Throws<FlatlineStateException>(() => source.Next());   // before Start
             source.Start();
-            Frame reused = null;
+            Frame? reused = null;
             for (int f = 0; f < 5; ++f)
             {
                 var expected = direct.NextFrame();
-                var frame = source.Next(1000, reused);
+                var frame = source.Take(1000, reused);
                 if (reused != null)
                     Assert.Same(reused, frame);  // same size and format: copied into it
                 reused = frame;
@@ -99,7 +99,7 @@ namespace Flatline.Tests
                 Assert.Equal((ulong)f, frame.BlockId);
                 Assert.Equal(expected.EncoderMm, frame.EncoderMm);
                 Assert.Equal(5.0 * f, frame.EncoderMm);
-                Assert.True(SameBytes(expected.Pixels8, frame.Pixels8), $"frame {f} differs");
+                Assert.True(SameBytes(expected.Mono8(), frame.Mono8()), $"frame {f} differs");
                 Assert.Equal(2048, frame.StrideBytes);
             }
             Assert.Equal(5UL, source.Count(SourceCounter.Frames));
@@ -133,7 +133,7 @@ namespace Flatline.Tests
                 double[] encoder = { 10.5, 13.25, 16.0 };
                 for (int i = 0; i < 3; ++i)
                 {
-                    var frame = source.Next();
+                    var frame = source.Take();
                     Assert.Equal(images[i], frame.Pixels8);
                     Assert.Equal(encoder[i], frame.EncoderMm);
                     Assert.Equal((ulong)i, frame.BlockId);
@@ -147,7 +147,7 @@ namespace Flatline.Tests
                 source.Start();
                 for (int i = 0; i < 3; ++i)
                 {
-                    var frame = source.Next();
+                    var frame = source.Take();
                     Assert.Equal(images[i], frame.Pixels8);
                     Assert.Equal(100 + 2.5 * i, frame.EncoderMm);
                 }
@@ -164,7 +164,7 @@ namespace Flatline.Tests
             using (var source = FrameSource.Images(new[] { deepPath }, null, options))
             {
                 source.Start();
-                var frame = source.Next();
+                var frame = source.Take();
                 Assert.Equal(PixelFormat.Mono12, frame.Format);
                 Assert.Null(frame.Pixels8);
                 Assert.Equal(deep, frame.Pixels16);
@@ -183,14 +183,14 @@ namespace Flatline.Tests
             using var options = new FlatlineOptions { SourceEncoderMode = EncoderMode.Host };
             using var source = FrameSource.Simulator(line, options);
             source.Start();
-            Assert.True(double.IsNaN(source.Next().EncoderMm));   // before the first SetEncoder
+            Assert.True(double.IsNaN(source.Take().EncoderMm));   // before the first SetEncoder
             source.SetEncoder(12.5);
-            Assert.Equal(12.5, source.Next().EncoderMm);
-            Assert.Equal(12.5, source.Next().EncoderMm);           // the value set last
+            Assert.Equal(12.5, source.Take().EncoderMm);
+            Assert.Equal(12.5, source.Take().EncoderMm);           // the value set last
             source.SetEncoder(20.0);
-            Assert.Equal(20.0, source.Next().EncoderMm);
+            Assert.Equal(20.0, source.Take().EncoderMm);
             Assert.Throws<InvalidArgumentException>(() => source.SetEncoder(double.NaN));
-            Assert.Equal(20.0, source.Next().EncoderMm);           // unchanged by the refused call
+            Assert.Equal(20.0, source.Take().EncoderMm);           // unchanged by the refused call
         }
 
         [Fact]
@@ -205,7 +205,7 @@ namespace Flatline.Tests
             Assert.Equal(0UL, bus.Get(0, U3VSimParam.SiControl));
             Assert.Equal(1UL, camera.Count(SourceCounter.StreamRecoveries));
             camera.Start();
-            Assert.Equal(64, camera.Next(1000).Width);
+            Assert.Equal(64, camera.Take(1000).Width);
             Assert.Equal(0UL, camera.Count(SourceCounter.Dropped));  // the half-sent frame is not delivered
         }
 
@@ -216,7 +216,7 @@ namespace Flatline.Tests
             bus.AddCamera("Flatline", "Faulty", "F", 64, 16);
             using var camera = FrameSource.U3V("F", null, bus);
             camera.Start();
-            Assert.Equal(64, camera.Next(1000).Width);
+            Assert.Equal(64, camera.Take(1000).Width);
             // Every command of the stop is lost: 3 rounds x 3 attempts x 2 steps.
             bus.Inject(0, U3VFault.ControlTimeout, 0, 18);
             var e = Assert.Throws<DeviceTimeoutException>(() => camera.Stop());
@@ -225,7 +225,7 @@ namespace Flatline.Tests
             Assert.Equal(0UL, bus.Get(0, U3VSimParam.FaultsPending));
             camera.Start();                                          // stops it first
             Assert.Equal(1UL, camera.Count(SourceCounter.StreamRecoveries));
-            Assert.Equal(64, camera.Next(1000).Width);
+            Assert.Equal(64, camera.Take(1000).Width);
             camera.Stop();
             Assert.Equal(0UL, bus.Get(0, U3VSimParam.SiControl));
             Assert.Equal(0UL, bus.Get(0, U3VSimParam.Acquiring));
@@ -250,7 +250,7 @@ namespace Flatline.Tests
             Assert.Equal(Status.NotFound,
                          Assert.Throws<NotFoundException>(() => FrameSource.ImageDirectory(empty)).Status);
             Assert.Throws<ArgumentException>(() => FrameSource.Images(Array.Empty<string>()));
-            Assert.Throws<ArgumentNullException>(() => FrameSource.Images(new string[] { null }));
+            Assert.Throws<ArgumentNullException>(() => FrameSource.Images(new string[] { null! }));  // a null path on purpose: the check under test
         }
 
         [Fact]
@@ -293,7 +293,7 @@ namespace Flatline.Tests
             ulong first = 0;
             for (int f = 0; f < 3; ++f)
             {
-                var frame = camera.Next(1000);
+                var frame = camera.Take(1000);
                 Assert.Equal(96, frame.Width);
                 Assert.Equal(40, frame.Height);
                 if (f == 0)
@@ -302,7 +302,7 @@ namespace Flatline.Tests
                 Assert.Equal(first + (ulong)f, b);
                 // The test pattern of source.h, byte i of block b.
                 for (int i = 0; i < 96 * 40; i += 37)
-                    Assert.Equal((byte)(b * 131 + (ulong)i * 7 + (ulong)(i >> 9)), frame.Pixels8[i / 96, i % 96]);
+                    Assert.Equal((byte)(b * 131 + (ulong)i * 7 + (ulong)(i >> 9)), frame.Mono8()[i / 96, i % 96]);
                 Assert.Equal(3.0 * f, frame.EncoderMm);  // fixed step, 3 mm default
             }
             camera.Stop();
@@ -324,7 +324,7 @@ namespace Flatline.Tests
             using (var stalled = FrameSource.U3V("T", null, bus))
             {
                 stalled.Start();
-                Assert.Equal(1UL, stalled.Next(100).BlockId);   // block ids count from 1
+                Assert.Equal(1UL, stalled.Take(100).BlockId);   // block ids count from 1
                 var timeout = Assert.Throws<DeviceTimeoutException>(() => stalled.Next(100));
                 Assert.Equal(Status.Timeout, timeout.Status);
                 Assert.IsAssignableFrom<DeviceException>(timeout);   // callers may catch both as device faults
@@ -333,7 +333,7 @@ namespace Flatline.Tests
             }
             var unplugged = FrameSource.U3V("U", null, bus);
             unplugged.Start();
-            Assert.Equal(1UL, unplugged.Next(100).BlockId);
+            Assert.Equal(1UL, unplugged.Take(100).BlockId);
             var gone = Assert.Throws<DeviceException>(() => unplugged.Next(100));
             Assert.IsType<DeviceException>(gone);
             Assert.Equal(Status.Device, gone.Status);
@@ -345,8 +345,8 @@ namespace Flatline.Tests
             using (var shortFrames = FrameSource.U3V("S", null, bus))
             {
                 shortFrames.Start();
-                Assert.Equal(1UL, shortFrames.Next(100).BlockId);
-                Assert.Equal(3UL, shortFrames.Next(100).BlockId);   // block 2 dropped, the next delivered
+                Assert.Equal(1UL, shortFrames.Take(100).BlockId);
+                Assert.Equal(3UL, shortFrames.Take(100).BlockId);   // block 2 dropped, the next delivered
                 Assert.Equal(1UL, shortFrames.Count(SourceCounter.Dropped));
                 Assert.Equal(1UL, shortFrames.Count(SourceCounter.Short));
                 Assert.NotEqual("", shortFrames.StreamError);
@@ -388,16 +388,16 @@ namespace Flatline.Tests
             using var exCamera = new Extractor(calib);
             using var rcDirect = new Reconstructor(Fibers);
             using var rcCamera = new Reconstructor(Fibers);
-            Frame frame = null;
+            Frame? frame = null;
             int valid = 0;
             for (int f = 0; f < Frames; ++f)
             {
                 var expected = directLine.NextFrame();
-                frame = source.Next(1000, frame);
+                frame = source.Take(1000, frame);
                 Assert.Equal(expected.EncoderMm, frame.EncoderMm);
-                Assert.True(SameBytes(expected.Pixels8, frame.Pixels8), $"frame {f} differs");
+                Assert.True(SameBytes(expected.Mono8(), frame.Mono8()), $"frame {f} differs");
                 var a = exDirect.Process(expected);
-                var b = exCamera.Process(frame.Pixels8, frame.EncoderMm);
+                var b = exCamera.Process(frame.Mono8(), frame.EncoderMm);
                 Assert.Equal(a.S, b.S);
                 Assert.Equal(a.Valid, b.Valid);
                 Assert.Equal(a.Height, b.Height);
@@ -449,8 +449,8 @@ namespace Flatline.Tests
                 source.Start();
                 Assert.Equal(5.0, Skip(source, 1).EncoderMm);
                 // Disposing the line first only defers its native destroy.
-                ((SimulatedLine)line.Target).Dispose();
-                Assert.Equal(10.0, source.Next().EncoderMm);
+                Assert.IsType<SimulatedLine>(line.Target).Dispose();
+                Assert.Equal(10.0, source.Take().EncoderMm);
             }
 
             Finalizers.Settle();
@@ -467,7 +467,7 @@ namespace Flatline.Tests
             Assert.Equal(busesBefore + 1, U3VSimHandle.Live);
             Assert.Equal(linesBefore + 1, SimHandle.Live);
             camera.Start();
-            var frame = camera.Next(1000);
+            var frame = camera.Take(1000);
             Assert.Equal(width, frame.Width);    // the line's frame size
             Assert.Equal(height, frame.Height);
             Assert.Equal(128, height);
@@ -480,7 +480,7 @@ namespace Flatline.Tests
         {
             for (int i = 0; i < frames; ++i)
                 source.Next();
-            return source.Next();
+            return source.Take();
         }
 
         [Fact]

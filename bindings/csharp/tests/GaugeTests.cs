@@ -1,5 +1,4 @@
 // SPDX-License-Identifier: Apache-2.0
-#nullable enable
 using System;
 using System.Collections.Generic;
 using System.Linq;
@@ -332,7 +331,7 @@ namespace Flatline.Tests
             }
             using var gauge = new Gauge(calibration);
             Assert.Throws<ArgumentException>(() => gauge.Push(new byte[10, 10], 0.0));
-            Assert.Throws<ArgumentNullException>(() => gauge.PushRow(0.0, null!, new double[Fibers]));
+            Assert.Throws<ArgumentNullException>(() => gauge.PushRow(0.0, null!, new double[Fibers]));  // null on purpose: the check under test
             Assert.Throws<InvalidArgumentException>(() => gauge.PushRow(0.0, new double[Fibers + 1], new double[Fibers + 1]));
             Assert.Throws<InvalidArgumentException>(() => gauge.Push(new byte[240, 2048], double.NaN));
             gauge.Cut(100);

@@ -20,7 +20,7 @@ namespace Flatline.Tests
 
         // Not inlined, so no reference survives in this frame's registers.
         [MethodImpl(MethodImplOptions.NoInlining)]
-        private static void Abandon(int count, FlatlineOptions options, List<Reconstructor> keep)
+        private static void Abandon(int count, FlatlineOptions options, List<Reconstructor>? keep)
         {
             var row = new double[4];
             for (int i = 0; i < count; ++i)

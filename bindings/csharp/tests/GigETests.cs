@@ -1,5 +1,4 @@
 // SPDX-License-Identifier: Apache-2.0
-#nullable enable
 using System;
 using System.Diagnostics;
 using System.IO;
@@ -81,7 +80,7 @@ namespace Flatline.Tests
                 ulong first = 0, previous = 0;
                 for (int n = 0; n < 20; ++n)
                 {
-                    var frame = source.Next(2000)!;
+                    var frame = source.Take(2000);
                     if (n == 0)
                         first = frame.BlockId;
                     else

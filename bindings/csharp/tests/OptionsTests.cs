@@ -87,7 +87,7 @@ namespace Flatline.Tests
             Assert.True(properties.Length >= 44, $"{properties.Length} typed properties");
             foreach (var property in properties)
             {
-                object value = property.GetValue(options);
+                object? value = property.GetValue(options);
                 property.SetValue(options, value);  // the default round-trips through the setter
                 Assert.Equal(value, property.GetValue(options));
             }

@@ -61,7 +61,7 @@ namespace Flatline.Tests
         public void ErrorMessagesAreThreadLocal()
         {
             // One thread fails while the other succeeds; each sees its own outcome.
-            Exception failure = null;
+            Exception? failure = null;
             var failing = new Thread(() =>
             {
                 try

@@ -152,7 +152,7 @@ namespace Flatline.Tests
                 recon.Push(s, new double[3, 4], new double[3, 4], new bool[3, 5])).ParamName);
             Assert.Equal("s", Assert.Throws<ArgumentException>(() =>
                 recon.Push(new double[0], new double[0, 4], new double[0, 4])).ParamName);
-            Assert.Throws<ArgumentNullException>(() => recon.Push(s, null, new double[3, 4]));
+            Assert.Throws<ArgumentNullException>(() => recon.Push(s, null!, new double[3, 4]));  // null on purpose: the check under test
             Assert.Equal("height", Assert.Throws<ArgumentException>(() =>
                 recon.Push(0.0, new double[3], new double[4])).ParamName);
             Assert.Equal("valid", Assert.Throws<ArgumentException>(() =>
@@ -206,7 +206,7 @@ namespace Flatline.Tests
             }
             using var unfinished = new Calibration();
             Assert.Throws<FlatlineStateException>(() => new Reconstructor(unfinished));
-            Assert.Throws<ArgumentNullException>(() => new Reconstructor((Calibration)null));
+            Assert.Throws<ArgumentNullException>(() => new Reconstructor((Calibration)null!));  // null on purpose: the check under test
         }
 
         // Noise-free simulated rows of the 80 mm sensor (5 mm waves at 400 mm

@@ -23,10 +23,11 @@ namespace Flatline.Tests
     /// <summary>Synthetic dual-laser measurements of known surfaces.</summary>
     internal sealed class Sheet
     {
-        public double[] S;
-        public double[,] Height;
-        public double[,] Slope;
-        public double[,] TrueZ;
+        public required double[] S;
+        public required double[,] Height;
+        public required double[,] Slope;
+        /// <summary>The surface measured; empty for rows of another origin.</summary>
+        public double[,] TrueZ = new double[0, 0];
         public int Rows => S.Length;
         public int Fibers => Height.GetLength(1);
 
@@ -99,7 +100,7 @@ namespace Flatline.Tests
 
         /// <summary>Streams a sheet through a reconstructor in chunks, pulling
         /// after every push, then ends the sheet and pulls the rest.</summary>
-        public static ReconResult Stream(Reconstructor recon, Sheet sheet, int chunk, bool[,] valid = null)
+        public static ReconResult Stream(Reconstructor recon, Sheet sheet, int chunk, bool[,]? valid = null)
         {
             var s = new System.Collections.Generic.List<double>();
             var z = new System.Collections.Generic.List<double[]>();

@@ -155,7 +155,7 @@ namespace Flatline.Tests
                     int row = (int)Math.Round(v);
                     double d = row - v;
                     double expected = 0.03 * 255 + 0.6 * 255 * Math.Exp(-d * d / 8);
-                    Assert.True(Math.Abs(frame.Pixels8[row, u] - expected) <= 0.5 + 1e-9);
+                    Assert.True(Math.Abs(frame.Mono8()[row, u] - expected) <= 0.5 + 1e-9);
                     ++checkedPixels;
                 }
             Assert.Equal(2 * 66, checkedPixels);
@@ -172,7 +172,7 @@ namespace Flatline.Tests
             Assert.Equal(PixelFormat.Mono12, frame.Format);
             Assert.Null(frame.Pixels8);
             ushort max = 0;
-            foreach (ushort p in frame.Pixels16)
+            foreach (ushort p in frame.Mono16())
                 max = Math.Max(max, p);
             Assert.Equal(4095, max);  // full scale of 12 bits, never more
             // Row 0 (sensor row 960) is 36 px from the nearest line: background,
@@ -180,7 +180,7 @@ namespace Flatline.Tests
             // 10000) = 7.1 counts per pixel, 0.16 on the mean of 2048.
             double mean = 0;
             for (int u = 0; u < 2048; ++u)
-                mean += frame.Pixels16[0, u] / 2048.0;
+                mean += frame.Mono16()[0, u] / 2048.0;
             output.WriteLine($"Mono12 background mean {mean:F2} counts (expected 122.85)");
             Assert.InRange(mean, 121.85, 123.85);
             var pixels = new ushort[128, 2048];
@@ -212,7 +212,7 @@ namespace Flatline.Tests
             Assert.Equal(ra.S, rb.S);
             Assert.NotEqual(ra.Height[5, 3], rc.Height[5, 3]);  // another seed, other noise
             Assert.Equal(ra.Truth[5, 3], rc.Truth[5, 3]);       // on the same sheet
-            byte[,] fa = a.NextFrame().Pixels8, fb = b.NextFrame().Pixels8;
+            byte[,] fa = a.NextFrame().Mono8(), fb = b.NextFrame().Mono8();
             Assert.Equal(fa, fb);
             a.Rewind();
             SimulatedRows again = a.NextRows(300);
@@ -250,7 +250,7 @@ namespace Flatline.Tests
                         }
                     }
                 }
-                byte[,] frame = line.NextFrame().Pixels8;
+                byte[,] frame = line.NextFrame().Mono8();
                 int pixelDifferences = 0;
                 for (int v = 0; v < line.FrameHeight; ++v)
                     for (int u = 0; u < line.FrameWidth; ++u)
@@ -274,10 +274,10 @@ namespace Flatline.Tests
                 using var options = Noisy(seed);
                 using var line = new SimulatedLine(calib, options);  // one finished calibration, shared
                 line.AddDefect(DefectKind.CentreBuckle, 12, 1800);
-                SimulatedRows rows = null;
-                for (int block = 0; block < 20; ++block)
+                SimulatedRows rows = line.NextRows(100);
+                for (int block = 1; block < 20; ++block)
                     rows = line.NextRows(100);
-                return (rows, line.NextFrame().Pixels8);
+                return (rows, line.NextFrame().Mono8());
             }
             var serial = new[] { Run(21), Run(22) };
             var parallel = new (SimulatedRows, byte[,])[2];
@@ -349,7 +349,7 @@ namespace Flatline.Tests
             SimulatedLine line = LineOwningTheOnlyReference(out WeakReference calibration);
             CollectEverything();
             Assert.True(calibration.IsAlive, "the calibration was collected while its line lives");
-            var held = (Calibration)calibration.Target;
+            var held = Assert.IsType<Calibration>(calibration.Target);
             Assert.Same(held, line.Calibration);
             Assert.True(line.Calibration.IsFinished);  // not finalized
             line.AddDefect(DefectKind.Bow, 1, 1000);

@@ -1,5 +1,4 @@
 // SPDX-License-Identifier: Apache-2.0
-#nullable enable
 using System;
 using System.IO;
 using Xunit;
