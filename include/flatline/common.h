@@ -438,8 +438,9 @@ typedef enum flt_option {
     /** "extract_sg_order": Savitzky-Golay polynomial order (integer).
      * Default 2. */
     FLT_OPT_EXTRACT_SG_ORDER = 405,
-    /** "extract_min_peak": weakest accepted peak, fraction of full scale.
-     * Default 0.1. */
+    /** "extract_min_peak": weakest accepted peak, fraction of full scale:
+     * the least maximum, and the least rise of an unsaturated peak above
+     * its local background (flatline/extractor.h). Default 0.1. */
     FLT_OPT_EXTRACT_MIN_PEAK = 406,
     /** "extract_max_width": widest accepted line, rows at or above half the
      * peak, px. Default 12. */

@@ -8,11 +8,18 @@
  *   (its region of interest):
  *     1. finds the strongest valid peak: the brightest pixel of the column,
  *        rejected when it is too weak (below extract_min_peak of full
- *        scale) or too wide (more than extract_max_width rows at or above
- *        half its maximum; "half" is half way between the local background,
- *        the higher of the lowest pixels either side of it, and the
- *        maximum); after a rejection the next brightest peak outside the
- *        rejected one is tried (at most 3 candidates per column and laser).
+ *        scale, or, unsaturated, rising less than that above its local
+ *        background: a ripple on a bright background is no line) or too
+ *        wide (more than extract_max_width rows at or above half its
+ *        maximum; "half" is half way between the local background, the
+ *        higher of the lowest pixels either side of it, and the maximum);
+ *        after a rejection the next brightest peak outside the rejected
+ *        one is tried (at most 3 candidates per column and laser). An
+ *        unsaturated peak rejected as too wide or too weak above its
+ *        background is a bright patch of background and is passed over
+ *        whole (its rows at or above its half level, or within
+ *        extract_min_peak of its maximum), so that a line beside a
+ *        brighter patch (a target's white field) is still found.
  *        A saturated peak (at the format's full scale) is measured, not
  *        dropped: see "Saturation" below. Once the row of
  *        columns is known, a peak is also rejected when its shape departs

@@ -223,6 +223,11 @@ column_peak(const unsigned char *frame, std::size_t stride, std::uint32_t u, std
         const bool saturated = value >= p.full_scale;
         *suspect = *suspect || saturated;
         const bool too_wide = hi - lo + 1 > p.max_width;
+        // An unsaturated peak must rise extract_min_peak above its local
+        // background, not only above zero: on a bright background (a white
+        // patch of a target, a lit strip) a ripple of a few counts is no
+        // line.
+        const bool faint = !saturated && value - background < p.min_value;
         if (saturated && accept_saturated) {
             // The plateau: the rows at full scale around the maximum (within
             // 1/32 of it, across dips of up to 2 rows: a compressed or
@@ -291,7 +296,7 @@ column_peak(const unsigned char *frame, std::size_t stride, std::uint32_t u, std
                 *saturated_out = true;
                 return 0.5 * (cross_l + cross_r);
             }
-        } else if (!saturated && !too_wide) {
+        } else if (!saturated && !too_wide && !faint) {
             // Zero crossing (+ above, - below) of the derivative next to the
             // maximum: at most 2 rows away, linearly interpolated.
             long i = row;
@@ -345,6 +350,24 @@ column_peak(const unsigned char *frame, std::size_t stride, std::uint32_t u, std
             break;
         // Rejected: the next brightest local maximum outside the rejected
         // peaks (a strided scan, only for the few rejected columns).
+        // A peak too wide or too faint and unsaturated is a bright
+        // background, not a line (a white patch of a target beside a line
+        // over a dark one): all of it is passed over - the rows at or above
+        // its half level (too wide), or within extract_min_peak of its
+        // maximum (faint) - not only the extract_max_width rows the width
+        // walk reached; else its next rows are the next candidates and the
+        // line beside it is never reached. (A saturated peak keeps the
+        // short range: the line under a glint lies within the glint's glow.)
+        if (!saturated && (too_wide || faint)) {
+            auto same_patch = [&](long v) {
+                const std::uint32_t count = px(v);
+                return faint ? count + p.min_value > value : 2 * count >= level2;
+            };
+            while (lo > band_lo && same_patch(lo - 1))
+                --lo;
+            while (hi < band_hi && same_patch(hi + 1))
+                ++hi;
+        }
         excluded_lo[excluded] = lo, excluded_hi[excluded] = hi, ++excluded;
         std::uint32_t best = 0;
         long best_row = -1;

@@ -363,6 +363,72 @@ static void end_to_end_reference_sheet_within_half_a_millimetre(void **state) {
     flt_calib_destroy(calib);
 }
 
+/* A line beside a bright, wide patch of background (a calibration target's
+ * white field next to a line over one of its black marks; a lit strip):
+ * the patch is brighter than the line, but it is no peak. Its brightest
+ * pixel rises only a few counts of noise above the patch around it (too
+ * faint above its background: extract_min_peak, 0.1 of full scale) and
+ * the patch is wider than extract_max_width; either way all of it is
+ * passed over and the line beside it is measured. Before, a ripple on the
+ * patch was taken for the peak (or the candidates ran out inside the
+ * patch): no column found the line. Bound: every column finds the line
+ * within 0.1 px of its true row (noise-free line, sigma 2 px, on a flat
+ * dark background: the Savitzky-Golay centre of a Gaussian is exact to
+ * well under 0.05 px) and none reports a peak on the patch. */
+static void line_beside_a_bright_patch_is_found(void **state) {
+    (void)state;
+    enum { N = 101 };
+    flt_calib *calib = reference(N, 20.0);
+    /* Laser 0 reads rows 0..127 of the frame, laser 1 rows 128..255. */
+    const flt_option keys[] = {FLT_OPT_EXTRACT_LASER0_FIRST_ROW, FLT_OPT_EXTRACT_LASER0_ROWS,
+                               FLT_OPT_EXTRACT_LASER1_FIRST_ROW, FLT_OPT_EXTRACT_LASER1_ROWS};
+    const double values[] = {0, 128, 128, 128};
+    flt_extractor *ex = make_extractor(calib, 4, keys, values);
+    uint8_t *frame = malloc((size_t)W * ROI_ROWS);
+    assert_non_null(frame);
+    const double line_row = 40.3, line_sigma = 2.0;
+    unsigned seed = 12345;
+    for (uint32_t v = 0; v < ROI_ROWS; ++v)
+        for (uint32_t u = 0; u < W; ++u) {
+            double g = 25.0; /* the dark background, counts */
+            /* Laser 0: the patch (rows 56..103: 48 rows, 180 +- 4 counts
+             * of noise) 16 rows below a line of 110 counts above the
+             * background; laser 1: the same line alone. */
+            if (v >= 56 && v < 104) {
+                seed = seed * 1103515245u + 12345u;
+                g = 176.0 + (double)((seed >> 16) % 9);
+            }
+            const double d0 = ((double)v - line_row) / line_sigma;
+            const double d1 = ((double)v - (line_row + 128)) / line_sigma;
+            g += 110.0 * (exp(-0.5 * d0 * d0) + exp(-0.5 * d1 * d1));
+            frame[(size_t)v * W + u] = (uint8_t)lround(g);
+        }
+    double e = 0, s, h[N], g[N], rows[2 * W];
+    assert_int_equal(
+        flt_extractor_process(ex, frame, FLT_PIXEL_MONO8, W, ROI_ROWS, W, e, N, &s, h, g, NULL),
+        FLT_OK);
+    assert_int_equal(flt_extractor_peaks(ex, W, rows), FLT_OK);
+    size_t on_line = 0, on_patch = 0;
+    double worst = 0;
+    for (uint32_t u = 0; u < W; ++u) {
+        if (rows[u] >= 50)
+            ++on_patch;
+        else if (rows[u] == rows[u]) {
+            ++on_line;
+            worst = fmax(worst, fabs(rows[u] - line_row));
+        }
+    }
+    printf("line beside a bright patch: %zu of %d columns on the line (worst %.3f px), "
+           "%zu on the patch\n",
+           on_line, W, worst, on_patch);
+    assert_int_equal(on_patch, 0);
+    assert_int_equal(on_line, W);
+    assert_true(worst <= 0.1);
+    free(frame);
+    flt_extractor_destroy(ex);
+    flt_calib_destroy(calib);
+}
+
 /* The same frame gives the same bytes, in one extractor and in another. */
 static void same_frame_same_bytes(void **state) {
     (void)state;
@@ -498,6 +564,7 @@ int main(void) {
         cmocka_unit_test(mono12_frames_give_the_same_accuracy),
         cmocka_unit_test(spurious_reflections_are_rejected_not_measured),
         cmocka_unit_test(end_to_end_reference_sheet_within_half_a_millimetre),
+        cmocka_unit_test(line_beside_a_bright_patch_is_found),
         cmocka_unit_test(same_frame_same_bytes),
         cmocka_unit_test(bad_input_is_rejected_by_name),
     };
