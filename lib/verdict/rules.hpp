@@ -45,5 +45,7 @@ bool is_straightedge(flt_measure m);
 struct flt_rules {
     static constexpr unsigned k_magic = 0x464c5452u;  // "FLTR"
     unsigned magic = k_magic;
+    // A sheet's rules (flt_sheet_verdict): owned by the gauge, not destroyed.
+    bool borrowed = false;
     flt::verdict::rule_set set;
 };

@@ -39,7 +39,24 @@ namespace {
 
 constexpr std::size_t k_none = std::numeric_limits<std::size_t>::max();
 
+// The levels of the segment tree over n samples: ceil(log2 n) + 1.
+std::size_t levels_of(std::size_t n) {
+    std::size_t levels = 1;
+    while ((std::size_t(1) << (levels - 1)) < n)
+        ++levels;
+    return levels;
+}
+
 }  // namespace
+
+void straightedge::reserve(std::size_t count) {
+    p_.reserve(count);
+    h_.reserve(count);
+    high_.reserve(count);
+    low_.reserve(count);
+    nodes_.reserve(4 * count);
+    pool_.reserve(2 * count * levels_of(count));
+}
 
 straightedge_gap straightedge::measure(const double *pos, const double *z,
                                        const unsigned char *flags, std::size_t count,
@@ -98,10 +115,7 @@ straightedge_gap straightedge::measure(const double *pos, const double *z,
             // ceil(log2 n) + 1 levels.
             nodes_.assign(4 * n_, hull_ref{0, 0, 0, 0});
             pool_.clear();
-            std::size_t levels = 1;
-            while ((std::size_t(1) << (levels - 1)) < n_)
-                ++levels;
-            pool_.reserve(2 * n_ * levels);
+            pool_.reserve(2 * n_ * levels_of(n_));
             build(1, 0, n_);
             built = true;
         }

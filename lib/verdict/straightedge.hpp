@@ -33,6 +33,9 @@ class straightedge {
     straightedge_gap measure(const double *pos, const double *z, const unsigned char *flags,
                              std::size_t count, std::size_t z_stride, unsigned skip_bits,
                              double length, double floor);
+    // Makes room for profiles of up to `count` samples now, so that
+    // measuring them later allocates nothing.
+    void reserve(std::size_t count);
 
   private:
     // The used samples.

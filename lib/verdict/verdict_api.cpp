@@ -16,16 +16,19 @@
 #include "flatline/verdict.h"
 #include "verdict/rules.hpp"
 #include "verdict/straightedge.hpp"
+#include "verdict/verdict.hpp"
 
 using namespace flt;
+using flt::verdict::given_measure;
+using flt::verdict::k_measures;
+using flt::verdict::k_values;
 using flt::verdict::rule;
+using flt::verdict::rule_result;
 using flt::verdict::straightedge;
 using flt::verdict::straightedge_gap;
 
 namespace {
 
-constexpr int k_measures = 7;  // flt_measure values
-constexpr int k_values = 9;    // flt_verdict_value keys
 // The largest sheet thickness and width a verdict takes (mm): anything
 // beyond is a unit mistake, not a sheet.
 constexpr double k_max_thickness = 1000.0;
@@ -33,28 +36,6 @@ constexpr double k_max_width = 100000.0;
 // A straightedge longer than 10 km is a unit mistake.
 constexpr double k_max_length = 1.0e7;
 constexpr double k_nan = std::numeric_limits<double>::quiet_NaN();
-
-struct rule_result {
-    double value[k_values];
-};
-
-struct given_measure {
-    double value = k_nan, x = k_nan, s = k_nan;
-};
-
-}  // namespace
-
-struct flt_verdict {
-    static constexpr unsigned k_magic = 0x464c5456u;  // "FLTV"
-    unsigned magic = k_magic;
-    flt::verdict::rule_set set;
-    given_measure given[k_measures];
-    std::vector<rule_result> results;
-    bool evaluated = false;
-    straightedge scratch;
-};
-
-namespace {
 
 flt_status check_rules(const char *fn, const flt_rules *r) {
     if (r == nullptr)
@@ -71,6 +52,15 @@ flt_status check_verdict(const char *fn, const flt_verdict *v) {
     if (v->magic != flt_verdict::k_magic)
         return fail(FLT_ERR_INVALID_ARGUMENT,
                     "%s: argument 'verdict' is not a live flt_verdict handle", fn);
+    return FLT_OK;
+}
+
+// A sheet's verdict is the gauge's: read it, do not change it.
+flt_status check_writable(const char *fn, const flt_verdict *v) {
+    if (v->borrowed)
+        return fail(FLT_ERR_STATE,
+                    "%s: argument 'verdict' is a sheet's verdict (flt_sheet_verdict): read-only",
+                    fn);
     return FLT_OK;
 }
 
@@ -140,44 +130,6 @@ flt_status load(const char *fn, const char *text, std::size_t length, flt_rules 
     return FLT_OK;
 }
 
-// The worst straightedge gap of a map for one measure and length.
-struct map_gap {
-    double deviation = 0, x = k_nan, s = k_nan;
-    bool measured = false;
-};
-
-map_gap straightedge_of_map(straightedge &se, flt_measure measure, double length, std::size_t rows,
-                            std::size_t fibers, const double *s, const double *x, const double *z,
-                            const std::uint8_t *flags) {
-    map_gap out;
-    if (measure == FLT_MEASURE_STRAIGHTEDGE_ALONG) {
-        for (std::size_t k = 0; k < fibers; ++k) {
-            const straightedge_gap g =
-                se.measure(s, z + k, flags ? flags + k : nullptr, rows, fibers, FLT_FLAG_NO_DATA,
-                           length, out.measured ? out.deviation : -1.0);
-            if (g.measured && (!out.measured || g.deviation > out.deviation)) {
-                out.measured = true;
-                out.deviation = g.deviation;
-                out.x = x[k];
-                out.s = g.at;
-            }
-        }
-    } else {
-        for (std::size_t r = 0; r < rows; ++r) {
-            const straightedge_gap g =
-                se.measure(x, z + r * fibers, flags ? flags + r * fibers : nullptr, fibers, 1,
-                           FLT_FLAG_NO_DATA, length, out.measured ? out.deviation : -1.0);
-            if (g.measured && (!out.measured || g.deviation > out.deviation)) {
-                out.measured = true;
-                out.deviation = g.deviation;
-                out.x = g.at;
-                out.s = s[r];
-            }
-        }
-    }
-    return out;
-}
-
 }  // namespace
 
 // ------------------------------------------------------------------ rules
@@ -212,7 +164,7 @@ FLT_API flt_status FLT_CALL flt_rules_load_text(const char *text, size_t length,
 
 FLT_API void FLT_CALL flt_rules_destroy(flt_rules *rules) {
     guard_void([&] {
-        if (rules != nullptr && rules->magic == flt_rules::k_magic) {
+        if (rules != nullptr && rules->magic == flt_rules::k_magic && !rules->borrowed) {
             rules->magic = 0;
             delete rules;
         }
@@ -299,7 +251,10 @@ FLT_API flt_status FLT_CALL flt_verdict_create(const flt_rules *rules, flt_verdi
             return st;
         auto v = std::make_unique<flt_verdict>();
         v->set = rules->set;
-        v->results.resize(v->set.rules.size());
+        const std::size_t n = v->set.rules.size();
+        v->results.resize(n);
+        v->pending.resize(n);
+        v->gaps.resize(n);
         *out = v.release();
         return FLT_OK;
     });
@@ -307,7 +262,7 @@ FLT_API flt_status FLT_CALL flt_verdict_create(const flt_rules *rules, flt_verdi
 
 FLT_API void FLT_CALL flt_verdict_destroy(flt_verdict *verdict) {
     guard_void([&] {
-        if (verdict != nullptr && verdict->magic == flt_verdict::k_magic) {
+        if (verdict != nullptr && verdict->magic == flt_verdict::k_magic && !verdict->borrowed) {
             verdict->magic = 0;
             delete verdict;
         }
@@ -319,6 +274,8 @@ FLT_API flt_status FLT_CALL flt_verdict_set_measure(flt_verdict *verdict, flt_me
     const char *fn = "flt_verdict_set_measure";
     return guard(fn, [&] {
         if (flt_status st = check_verdict(fn, verdict))
+            return st;
+        if (flt_status st = check_writable(fn, verdict))
             return st;
         const int m = enum_arg(measure);
         if (m < 0 || m >= k_measures)
@@ -361,6 +318,8 @@ FLT_API flt_status FLT_CALL flt_verdict_evaluate(flt_verdict *verdict, double th
     return guard(fn, [&] {
         if (flt_status st = check_verdict(fn, verdict))
             return st;
+        if (flt_status st = check_writable(fn, verdict))
+            return st;
         if (!(thickness_mm > 0) || !(thickness_mm <= k_max_thickness))
             return fail(FLT_ERR_INVALID_ARGUMENT,
                         "%s: argument 'thickness_mm' = %g must be > 0 and <= %g", fn, thickness_mm,
@@ -389,63 +348,16 @@ FLT_API flt_status FLT_CALL flt_verdict_evaluate(flt_verdict *verdict, double th
             if (flt_status st = check_heights(fn, "z_mm", z_mm, rows * fibers))
                 return st;
         }
-        const std::vector<rule> &rules = verdict->set.rules;
-        std::vector<rule_result> results(rules.size());
-        // Rules sharing a straightedge measure and length share its result.
-        std::vector<std::size_t> computed_from(rules.size(), std::size_t(-1));
-        std::vector<map_gap> gaps(rules.size());
-        for (std::size_t i = 0; i < rules.size(); ++i) {
-            const rule &r = rules[i];
-            double *out = results[i].value;
-            for (int k = 0; k < k_values; ++k)
-                out[k] = k_nan;
-            out[FLT_VERDICT_MEASURE] = double(r.measure);
-            out[FLT_VERDICT_LENGTH] = r.length;
-            const int band = r.band_of(thickness_mm, width_mm);
-            out[FLT_VERDICT_BAND] = band;
-            if (band < 0) {
-                out[FLT_VERDICT_STATE] = FLT_VERDICT_NO_BAND;
-                continue;
-            }
-            const double limit = r.bands[std::size_t(band)].limit;
-            out[FLT_VERDICT_LIMIT] = limit;
-            bool measured = false;
-            double worst = 0, x = 0, s = 0;
-            if (flt::verdict::is_straightedge(r.measure)) {
-                if (has_map) {
-                    std::size_t from = i;
-                    for (std::size_t j = 0; j < i; ++j)
-                        if (computed_from[j] == j && rules[j].measure == r.measure &&
-                            rules[j].length == r.length)
-                            from = j;
-                    if (from == i)
-                        gaps[i] = straightedge_of_map(verdict->scratch, r.measure, r.length, rows,
-                                                      fibers, s_mm, x_mm, z_mm, flags);
-                    computed_from[i] = from;
-                    const map_gap &g = gaps[from];
-                    measured = g.measured;
-                    worst = g.deviation;
-                    x = g.x;
-                    s = g.s;
-                }
-            } else {
-                const given_measure &g = verdict->given[r.measure];
-                measured = !std::isnan(g.value);
-                worst = std::fabs(g.value);
-                x = g.x;
-                s = g.s;
-            }
-            if (!measured) {
-                out[FLT_VERDICT_STATE] = FLT_VERDICT_NOT_MEASURED;
-                continue;
-            }
-            out[FLT_VERDICT_WORST] = worst;
-            out[FLT_VERDICT_MARGIN] = limit - worst;
-            out[FLT_VERDICT_X] = x;
-            out[FLT_VERDICT_S] = s;
-            out[FLT_VERDICT_STATE] = worst <= limit ? FLT_VERDICT_PASS : FLT_VERDICT_FAIL;
-        }
-        verdict->results.swap(results);
+        flt::verdict::map_view map;
+        map.rows = rows;
+        map.fibers = fibers;
+        map.s = s_mm;
+        map.x = x_mm;
+        map.z = z_mm;
+        map.flags = flags;
+        flt::verdict::judge(verdict->set, verdict->given, verdict->scratch, thickness_mm, width_mm,
+                            map, verdict->pending.data(), verdict->gaps.data());
+        verdict->results.swap(verdict->pending);
         verdict->evaluated = true;
         return FLT_OK;
     });
