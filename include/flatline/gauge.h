@@ -99,6 +99,25 @@
  *   polling (flt_gauge_next_sheet) or through a callback
  *   (flt_gauge_set_callback). A NaN value always comes with its flag.
  *
+ * Verdicts and coil statistics
+ *   With a rule set (flt_gauge_set_rules, flatline/verdict.h) every
+ *   finished sheet is judged against the tolerances as part of its
+ *   evaluation: the straightedge rules on its reconstructed height map
+ *   (kept for the verdict whatever gauge_keep_maps says), the others from
+ *   its flatness results (the largest zone I-Units at its zone's centre,
+ *   the largest wave's steepness and height at its fiber, bow and crossbow
+ *   at the strip's centre; s the sheet's middle). The sheet's thickness is
+ *   the caller's; its width, the caller's nominal width or the sheet's
+ *   measured strip width (FLT_SHEET_STRIP_WIDTH); they choose each rule's
+ *   band. flt_sheet_verdict() gives the sheet's rules and verdict as
+ *   read-only handles for flt_rules_rule() and flt_verdict_get().
+ *   Per coil the gauge counts the sheets judged, passed and failed, and
+ *   per rule the outcomes and the distribution of the worst values: min,
+ *   max, mean, where the largest was, and a histogram of worst / limit in
+ *   FLT_COIL_HISTOGRAM_BINS bins of a tenth of the limit (no percentiles:
+ *   they would need every value kept). flt_gauge_coil_stats() reads them
+ *   for the coil being measured and for the last finished one.
+ *
  * Threads
  *   gauge_workers threads process the frames (0: the thread that pushes a
  *   frame, or the acquisition thread, processes it before the call
@@ -121,7 +140,8 @@
  *   flt_gauge_destroy (ignored there).
  *
  * Memory
- *   Everything is allocated by flt_gauge_create(), except, once, the
+ *   Everything is allocated by flt_gauge_create() (and flt_gauge_set_rules()
+ *   for the verdicts), except, once, the
  *   workers' extractors when the bands are automatic (when the first frame
  *   has shown the two lines) and the flatness metrics' column scratch (at
  *   the first sheet longer than any before). Frames, cuts and sheets
@@ -141,6 +161,7 @@
 #include "flatline/flatness.h" /* FLT_WINDOW_*, FLT_FIBER_*, FLT_ZONE_*, flt_shape */
 #include "flatline/recon.h"    /* FLT_FLAG_* of the height maps */
 #include "flatline/source.h"
+#include "flatline/verdict.h" /* flt_rules, flt_verdict */
 
 #ifdef __cplusplus
 extern "C" {
@@ -227,6 +248,11 @@ typedef enum flt_sheet_value {
      * A strip that wanders sideways shows here. */
     FLT_SHEET_STRIP_CENTRE_MIN = 34,
     FLT_SHEET_STRIP_CENTRE_MAX = 35, /**< largest centre over the rows, mm */
+    /** The number of rules the sheet was judged by (0: the gauge had no
+     * rules, flt_gauge_set_rules) and how many of them it failed
+     * (flt_sheet_verdict has each rule's result). */
+    FLT_SHEET_RULES = 36,
+    FLT_SHEET_RULES_FAILED = 37, /**< rules failed (FLT_VERDICT_FAIL) */
     /** Not a key: keeps the type int-sized whatever is added. */
     FLT_SHEET_VALUE_MAX_ENUM_ = 0x7FFFFFFF
 } flt_sheet_value;
@@ -284,6 +310,61 @@ enum {
      * between them). */
     FLT_SHEET_FLAG_EMPTY = 128
 };
+
+/** Which coil's statistics flt_gauge_coil_stats() reads. */
+typedef enum flt_coil {
+    /** The coil being measured: the sheets judged since its first (none
+     * yet after a coil's last sheet: FLT_COIL_NUMBER is then 0). */
+    FLT_COIL_CURRENT = 0,
+    /** The last finished coil: its last sheet (FLT_SHEET_FLAG_TAIL,
+     * _NEW_STRIP or _FLUSHED) was judged, or the next coil's first was. */
+    FLT_COIL_LAST = 1,
+    FLT_COIL_MAX_ENUM_ = 0x7FFFFFFF
+} flt_coil;
+
+/** The histogram of a rule's worst values over a coil: bin i counts the
+ * sheets whose worst / limit lies in (i / 10, (i + 1) / 10] (bin 0 from
+ * 0, the last bin everything above 1.9): bins 0-9 passed, 10-19 failed. */
+#define FLT_COIL_HISTOGRAM_BINS 20
+
+/** A coil's statistics for one rule, read with flt_gauge_coil_stats() as an
+ * array indexed by these keys. Counts are whole numbers as doubles. */
+typedef enum flt_coil_value {
+    /** The coil's number (FLT_SHEET_COIL; 0: no sheet judged yet). */
+    FLT_COIL_NUMBER = 0,
+    /** Sheets judged in the coil. */
+    FLT_COIL_SHEETS = 1,
+    /** Sheets that failed no rule ... */
+    FLT_COIL_SHEETS_PASSED = 2,
+    /** ... and sheets that failed at least one. */
+    FLT_COIL_SHEETS_FAILED = 3,
+    /** 1 once the coil's last sheet was judged, else 0. */
+    FLT_COIL_FINISHED = 4,
+    /** The number of rules the statistics are over (the rule set in force
+     * when the coil's statistics began). */
+    FLT_COIL_RULES = 5,
+    /** This rule's outcomes over the coil's sheets (FLT_VERDICT_PASS,
+     * _FAIL, _NO_BAND, _NOT_MEASURED): they add up to FLT_COIL_SHEETS. */
+    FLT_COIL_RULE_PASSED = 6,
+    FLT_COIL_RULE_FAILED = 7,       /**< sheets that failed the rule */
+    FLT_COIL_RULE_NO_BAND = 8,      /**< sheets no band of the rule covers */
+    FLT_COIL_RULE_NOT_MEASURED = 9, /**< sheets the measure was missing on */
+    /** The worst values (FLT_VERDICT_WORST) of the sheets that passed or
+     * failed: smallest, largest, mean (the measure's unit; NaN when no
+     * sheet was measured). */
+    FLT_COIL_WORST_MIN = 10,
+    FLT_COIL_WORST_MAX = 11,  /**< largest worst value */
+    FLT_COIL_WORST_MEAN = 12, /**< mean worst value */
+    /** Where the largest is: the sheet's FLT_SHEET_ID, x and s (mm). */
+    FLT_COIL_WORST_SHEET = 13,
+    FLT_COIL_WORST_X = 14, /**< x of the largest, mm */
+    FLT_COIL_WORST_S = 15, /**< s of the largest, mm */
+    /** The first of FLT_COIL_HISTOGRAM_BINS counts (worst / limit). */
+    FLT_COIL_HISTOGRAM = 16,
+    /** The number of values (the array's size). */
+    FLT_COIL_VALUES = 16 + FLT_COIL_HISTOGRAM_BINS,
+    FLT_COIL_VALUE_MAX_ENUM_ = 0x7FFFFFFF
+} flt_coil_value;
 
 /** Gauge counters, since it was created (flt_gauge_count()). */
 typedef enum flt_gauge_counter {
@@ -513,6 +594,47 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_set_callback(flt_gauge *gaug
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_count(const flt_gauge *gauge,
                                                           flt_gauge_counter counter, uint64_t *out);
 
+/** Sets the rule set every sheet is judged by from now on (see "Verdicts
+ * and coil statistics"), or with NULL judges no more. The gauge copies what
+ * it needs: the caller may destroy the rules after the call. Allowed at any
+ * time and from any thread (the callback too): a sheet is judged by the
+ * rules in force when its evaluation begins, which with workers may come
+ * after later frames were pushed, so set them before a coil's first frame.
+ * The current coil's statistics restart; the last coil's stay.
+ * Allocates: a verdict per sheet slot, and room for the straightedge over
+ * the longest sheet and the widest row; judging allocates nothing.
+ * @param gauge the gauge.
+ * @param rules the rule set (flatline/verdict.h), or NULL.
+ * @param thickness_mm the sheets' thickness, mm (> 0, <= 1000): chooses
+ *        each rule's band, with the width.
+ * @param width_mm the sheets' nominal width, mm (> 0, <= 100000), or 0 for
+ *        each sheet's measured strip width (FLT_SHEET_STRIP_WIDTH; a sheet
+ *        without it is NOT_MEASURED by every rule).
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL gauge, rules that are
+ *         not a live handle, or a thickness or width out of range (the
+ *         rules in force stay).
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_set_rules(flt_gauge *gauge,
+                                                              const flt_rules *rules,
+                                                              double thickness_mm, double width_mm);
+
+/** A coil's statistics for one rule (see "Verdicts and coil statistics"),
+ * copied out at once (consistent with each other): out[k] for the keys
+ * k < count of flt_coil_value.
+ * @param gauge the gauge.
+ * @param which FLT_COIL_CURRENT or FLT_COIL_LAST.
+ * @param rule the rule, 0 .. FLT_COIL_RULES - 1.
+ * @param count how many values to copy, 1 .. FLT_COIL_VALUES.
+ * @param out receives `count` values.
+ * @return FLT_OK; FLT_ERR_STATE when that coil has no statistics (no rules
+ *         were set, or no coil finished yet); FLT_ERR_NOT_FOUND for a rule
+ *         past the last; FLT_ERR_INVALID_ARGUMENT for a NULL argument, an
+ *         unknown `which` or a count out of range.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_coil_stats(const flt_gauge *gauge,
+                                                               flt_coil which, size_t rule,
+                                                               size_t count, double *out);
+
 /* ---------------------------------------------------------------------- */
 /* Sheets                                                                  */
 /* ---------------------------------------------------------------------- */
@@ -578,6 +700,22 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sheet_height_map(const flt_sheet *
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sheet_measured_map(const flt_sheet *sheet,
                                                                  size_t rows, size_t fibers,
                                                                  double *height_out);
+
+/** The sheet's verdict: the rules it was judged by and its results, as
+ * read-only handles owned by the sheet (valid while it lives; do not
+ * destroy them). Read them with flt_rules_count(), flt_rules_rule(),
+ * flt_verdict_get() and flt_verdict_failed(); flt_verdict_set_measure()
+ * and flt_verdict_evaluate() refuse them (FLT_ERR_STATE).
+ * @param sheet the sheet.
+ * @param rules_out receives its rules, or NULL.
+ * @param verdict_out receives its verdict, or NULL.
+ * @return FLT_OK; FLT_ERR_STATE when the gauge had no rules when it
+ *         judged the sheet (FLT_SHEET_RULES = 0); FLT_ERR_INVALID_ARGUMENT
+ *         for a NULL or dead sheet.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sheet_verdict(const flt_sheet *sheet,
+                                                            const flt_rules **rules_out,
+                                                            const flt_verdict **verdict_out);
 
 #ifdef __cplusplus
 }

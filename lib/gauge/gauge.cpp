@@ -341,6 +341,7 @@ void gauge::init(const flt_calib *calib, const flt_options *options) {
         auto *sh = new flt_sheet;
         pool_->free.push_back(sh);
         sh->pool = pool_;
+        sh->slot = i;
         sh->fibers = K_;
         sh->maps = cfg_.keep_maps;
         for (int a = 0; a < k_sheet_arrays; ++a)
@@ -373,6 +374,8 @@ void gauge::first_use_of_sync_objects() {
     touch_thread_locals();
     { std::lock_guard<std::mutex> lock(pool_->m); }
     { std::lock_guard<std::mutex> lock(deliver_m_); }
+    { std::lock_guard<std::mutex> lock(rules_m_); }
+    { std::lock_guard<std::mutex> lock(stats_m_); }
     std::unique_lock<std::mutex> lock(m_);
     // A wait that times out at once (a wait, not a notify, makes the
     // runtime's object).
@@ -1259,6 +1262,10 @@ void gauge::evaluate(const sheet_job &job) {
     v[FLT_SHEET_MAX_I_UNITS] = max_iu;
     v[FLT_SHEET_FLAGS] = double(flags);
 
+    // The verdict, from the sheet buffer's map (kept whatever
+    // gauge_keep_maps says) and the values above.
+    judge(sh, b, n);
+
     sh->rows = n;
     if (cfg_.keep_maps >= 1) {
         std::memcpy(sh->map_s.data(), b.s.data(), n * sizeof(double));
@@ -1269,6 +1276,209 @@ void gauge::evaluate(const sheet_job &job) {
         std::memcpy(sh->map_measured.data(), b.measured.data(), n * K_ * sizeof(double));
     sh->magic = k_sheet_magic;
     deliver(sh);
+}
+
+void gauge::judge(flt_sheet *sh, const sheet_buffer &b, std::size_t n) {
+    std::shared_ptr<verdict_config> vc;
+    {
+        std::lock_guard<std::mutex> lock(rules_m_);
+        vc = verdict_;  // a reference more: no allocation
+    }
+    double *v = sh->value;
+    sh->verdict = vc;  // may free a replaced rule set (never allocates)
+    v[FLT_SHEET_RULES] = 0;
+    v[FLT_SHEET_RULES_FAILED] = 0;
+    if (!vc)
+        return;
+    flt_verdict &vd = *vc->slot[sh->slot];
+    // The flatness measures and where they are: s the sheet's middle; x
+    // the largest zone's centre, the largest wave's fiber, the strip's
+    // centre for bow and crossbow (the sensor's centre without edges).
+    const double s_mid = n ? 0.5 * (b.s[0] + b.s[n - 1]) : k_nan;
+    const double x_centre = std::isnan(v[FLT_SHEET_STRIP_CENTRE])
+                                ? 0.5 * (fiber_x_.front() + fiber_x_.back())
+                                : v[FLT_SHEET_STRIP_CENTRE];
+    const auto give = [&](flt_measure m, double value, double x) {
+        verdict::given_measure &g = vd.given[m];
+        g = verdict::given_measure{};
+        if (!std::isnan(value) && !std::isnan(x) && !std::isnan(s_mid)) {
+            g.value = value;
+            g.x = x;
+            g.s = s_mid;
+        }
+    };
+    const double *ziu = sh->array[FLT_SHEET_ZONE_I_UNITS].data();
+    const double *zfl = sh->array[FLT_SHEET_ZONE_FLAGS].data();
+    const double *zx = sh->array[FLT_SHEET_ZONE_CENTRE_X].data();
+    long zone = -1;
+    for (std::size_t j = 0; j < zones_; ++j)
+        if (!(unsigned(zfl[j]) & FLT_ZONE_NO_DATA) && (zone < 0 || ziu[j] > ziu[zone]))
+            zone = long(j);
+    give(FLT_MEASURE_ZONE_I_UNITS, zone >= 0 ? ziu[zone] : k_nan, zone >= 0 ? zx[zone] : k_nan);
+    give(FLT_MEASURE_WAVE_STEEPNESS, v[FLT_SHEET_WAVE_STEEPNESS], v[FLT_SHEET_WAVE_X]);
+    give(FLT_MEASURE_WAVE_HEIGHT, v[FLT_SHEET_WAVE_HEIGHT], v[FLT_SHEET_WAVE_X]);
+    give(FLT_MEASURE_BOW, v[FLT_SHEET_BOW], x_centre);
+    give(FLT_MEASURE_CROSSBOW, v[FLT_SHEET_CROSSBOW], x_centre);
+    const double width = vc->width > 0 ? vc->width : v[FLT_SHEET_STRIP_WIDTH];
+    verdict::map_view map;
+    if (n > 0 && vc->needs_map) {
+        map.rows = n;
+        map.fibers = K_;
+        map.s = b.s.data();
+        map.x = fiber_x_.data();
+        map.z = b.z.data();
+        map.flags = b.flags.data();
+    }
+    verdict::judge(vd.set, vd.given, vc->scratch, vc->thickness, width, map, vd.results.data(),
+                   vd.gaps.data());
+    vd.evaluated = true;
+    double failed = 0;
+    for (const verdict::rule_result &r : vd.results)
+        failed += r.value[FLT_VERDICT_STATE] == FLT_VERDICT_FAIL ? 1 : 0;
+    v[FLT_SHEET_RULES] = double(vd.results.size());
+    v[FLT_SHEET_RULES_FAILED] = failed;
+    count_in_coil(*vc, *sh);
+}
+
+void coil_stats::reset(std::uint64_t gen, std::size_t n_rules) {
+    generation = gen;
+    coil = sheets = passed = failed = 0;
+    finished = false;
+    per_rule zero{};
+    zero.min = zero.max = zero.worst_sheet = zero.worst_x = zero.worst_s = k_nan;
+    rules.assign(n_rules, zero);  // within the capacity set_rules reserved
+}
+
+void gauge::count_in_coil(const verdict_config &vc, const flt_sheet &sh) {
+    const flt_verdict &vd = *vc.slot[sh.slot];
+    const double *v = sh.value;
+    std::lock_guard<std::mutex> lock(stats_m_);
+    coil_stats &c = coil_current_;
+    if (c.generation != vc.generation)
+        return;  // judged by rules replaced since (their statistics restarted)
+    const double coil = v[FLT_SHEET_COIL];
+    const auto finish = [&] {
+        c.finished = true;
+        std::swap(coil_last_, coil_current_);  // moves: no allocation
+        coil_current_.reset(coil_last_.generation, coil_last_.rules.size());
+    };
+    if (c.sheets > 0 && c.coil != coil)
+        finish();  // the previous coil's last sheet was not judged (lost)
+    c.coil = coil;
+    c.sheets += 1;
+    const double failed = v[FLT_SHEET_RULES_FAILED];
+    (failed > 0 ? c.failed : c.passed) += 1;
+    for (std::size_t i = 0; i < c.rules.size() && i < vd.results.size(); ++i) {
+        const double *r = vd.results[i].value;
+        coil_stats::per_rule &p = c.rules[i];
+        const int state = int(r[FLT_VERDICT_STATE]);
+        if (state >= 0 && state < 4)
+            p.count[state] += 1;
+        if (state != FLT_VERDICT_PASS && state != FLT_VERDICT_FAIL)
+            continue;
+        const double worst = r[FLT_VERDICT_WORST];
+        p.measured += 1;
+        p.sum += worst;
+        if (!(worst >= p.min))
+            p.min = worst;
+        if (!(worst <= p.max)) {
+            p.max = worst;
+            p.worst_sheet = v[FLT_SHEET_ID];
+            p.worst_x = r[FLT_VERDICT_X];
+            p.worst_s = r[FLT_VERDICT_S];
+        }
+        // Bin i holds worst / limit in (i / 10, (i + 1) / 10]: passes in
+        // 0-9, failures in 10-19 whatever the rounding of the ratio.
+        const double ratio = worst / r[FLT_VERDICT_LIMIT];
+        long bin = long(std::ceil(std::min(ratio, 100.0) * 10.0)) - 1;
+        bin = std::max(0L, std::min(long(FLT_COIL_HISTOGRAM_BINS) - 1, bin));
+        if (state == FLT_VERDICT_PASS)
+            bin = std::min(bin, 9L);
+        else
+            bin = std::max(bin, 10L);
+        p.histogram[bin] += 1;
+    }
+    const unsigned flags = unsigned(v[FLT_SHEET_FLAGS]);
+    if (flags & (FLT_SHEET_FLAG_TAIL | FLT_SHEET_FLAG_NEW_STRIP | FLT_SHEET_FLAG_FLUSHED))
+        finish();
+}
+
+flt_status gauge::set_rules(const char *fn, const flt_rules *rules, double thickness,
+                            double width) {
+    std::shared_ptr<verdict_config> vc;
+    std::size_t n = 0;
+    if (rules) {
+        vc = std::make_shared<verdict_config>();
+        vc->rules.set = rules->set;
+        vc->rules.borrowed = true;
+        vc->thickness = thickness;
+        vc->width = width;
+        vc->needs_map = verdict::needs_map(rules->set);
+        n = rules->set.rules.size();
+        vc->slot.resize(cfg_.sheet_slots);
+        for (std::unique_ptr<flt_verdict> &vd : vc->slot) {
+            vd = std::make_unique<flt_verdict>();
+            vd->borrowed = true;
+            vd->set = rules->set;
+            vd->results.resize(n);
+            vd->pending.resize(n);
+            vd->gaps.resize(n);
+        }
+        // The straightedge over the longest line it will meet: a fiber of
+        // the longest sheet, or a row of every fiber.
+        if (vc->needs_map)
+            vc->scratch.reserve(std::max(sheet_capacity_, K_));
+    }
+    {
+        std::lock_guard<std::mutex> stats_lock(stats_m_);
+        coil_current_.rules.reserve(n);
+        coil_last_.rules.reserve(n);
+        std::lock_guard<std::mutex> lock(rules_m_);
+        const std::uint64_t gen = vc ? ++rules_generation_ : 0;
+        if (vc)
+            vc->generation = gen;
+        verdict_.swap(vc);
+        coil_current_.reset(gen, n);
+    }
+    (void)fn;
+    return FLT_OK;  // the replaced rules (vc) are freed here, unless a sheet holds them
+}
+
+flt_status gauge::coil_stats_of(const char *fn, flt_coil which, std::size_t rule, std::size_t count,
+                                double *out) const {
+    std::lock_guard<std::mutex> lock(stats_m_);
+    const coil_stats &c = which == FLT_COIL_LAST ? coil_last_ : coil_current_;
+    if (c.generation == 0)
+        return fail(FLT_ERR_STATE,
+                    which == FLT_COIL_LAST
+                        ? "%s: no coil has finished under rules yet (flt_gauge_set_rules)"
+                        : "%s: the gauge has no rules (flt_gauge_set_rules)",
+                    fn);
+    if (rule >= c.rules.size())
+        return fail(FLT_ERR_NOT_FOUND, "%s: argument 'rule' = %zu is past the last of %zu rules",
+                    fn, rule, c.rules.size());
+    const coil_stats::per_rule &p = c.rules[rule];
+    double all[FLT_COIL_VALUES];
+    all[FLT_COIL_NUMBER] = c.coil;
+    all[FLT_COIL_SHEETS] = c.sheets;
+    all[FLT_COIL_SHEETS_PASSED] = c.passed;
+    all[FLT_COIL_SHEETS_FAILED] = c.failed;
+    all[FLT_COIL_FINISHED] = c.finished ? 1.0 : 0.0;
+    all[FLT_COIL_RULES] = double(c.rules.size());
+    all[FLT_COIL_RULE_PASSED] = p.count[FLT_VERDICT_PASS];
+    all[FLT_COIL_RULE_FAILED] = p.count[FLT_VERDICT_FAIL];
+    all[FLT_COIL_RULE_NO_BAND] = p.count[FLT_VERDICT_NO_BAND];
+    all[FLT_COIL_RULE_NOT_MEASURED] = p.count[FLT_VERDICT_NOT_MEASURED];
+    all[FLT_COIL_WORST_MIN] = p.min;
+    all[FLT_COIL_WORST_MAX] = p.max;
+    all[FLT_COIL_WORST_MEAN] = p.measured > 0 ? p.sum / p.measured : k_nan;
+    all[FLT_COIL_WORST_SHEET] = p.worst_sheet;
+    all[FLT_COIL_WORST_X] = p.worst_x;
+    all[FLT_COIL_WORST_S] = p.worst_s;
+    for (int i = 0; i < FLT_COIL_HISTOGRAM_BINS; ++i)
+        all[FLT_COIL_HISTOGRAM + i] = p.histogram[i];
+    std::copy(all, all + count, out);
+    return FLT_OK;
 }
 
 void gauge::deliver(flt_sheet *sheet) {

@@ -15,14 +15,16 @@
 #include "flatline/flatness.h"
 #include "flatline/gauge.h"
 #include "flatline/recon.h"
+#include "verdict/verdict.hpp"
 
 namespace flt {
 
 constexpr std::uint32_t k_sheet_magic = 0x464c5453u;  // "FLTS"
-constexpr int k_sheet_values = 36;                    // flt_sheet_value keys 0..35
+constexpr int k_sheet_values = 38;                    // flt_sheet_value keys 0..37
 constexpr int k_sheet_arrays = 12;                    // flt_sheet_array keys 0..11
 
 struct sheet_pool;
+struct verdict_config;
 
 // Whether a flt_sheet_array has a value per fiber (else per zone).
 inline bool is_fiber_array(int key) {
@@ -43,6 +45,10 @@ struct flt_sheet {
     int maps = 0;  // gauge_keep_maps
     std::vector<double> map_s, map_z, map_measured;
     std::vector<std::uint8_t> map_flags;
+    std::size_t slot = 0;  // its number among the slots (its verdict's)
+    // The rules it was judged by (null: none); kept alive while the sheet
+    // is (flt_sheet_verdict).
+    std::shared_ptr<flt::verdict_config> verdict;
 };
 
 namespace flt {
@@ -52,6 +58,35 @@ struct sheet_pool {
     std::vector<flt_sheet *> free;  // capacity reserved for every slot
     bool alive = true;
     ~sheet_pool();
+};
+
+// A rule set in force (flt_gauge_set_rules): immutable after it is made,
+// except the verdicts of the sheet slots and the straightedge's scratch,
+// which only the evaluation (one thread at a time) writes.
+struct verdict_config {
+    std::uint64_t generation = 0;     // which set_rules made it
+    flt_rules rules;                  // borrowed: flt_sheet_verdict's view
+    double thickness = 0, width = 0;  // mm; width 0: the sheet's strip width
+    bool needs_map = false;
+    // One verdict per sheet slot (flt_sheet::slot), borrowed.
+    std::vector<std::unique_ptr<flt_verdict>> slot;
+    verdict::straightedge scratch;
+};
+
+// One coil's statistics (flt_gauge_coil_stats).
+struct coil_stats {
+    struct per_rule {
+        double count[4];  // by flt_verdict_state
+        double min, max, sum, measured;
+        double worst_sheet, worst_x, worst_s;
+        double histogram[FLT_COIL_HISTOGRAM_BINS];
+    };
+    std::uint64_t generation = 0;  // the verdict_config's (0: no rules)
+    double coil = 0, sheets = 0, passed = 0, failed = 0;
+    bool finished = false;
+    std::vector<per_rule> rules;  // capacity reserved at set_rules
+
+    void reset(std::uint64_t gen, std::size_t n_rules);
 };
 
 struct gauge_config {
@@ -111,6 +146,9 @@ class gauge {
     flt_status next_sheet(const char *fn, std::uint32_t timeout_ms, flt_sheet **out);
     flt_status set_callback(const char *fn, flt_sheet_callback callback, void *user);
     std::uint64_t count(flt_gauge_counter counter) const;
+    flt_status set_rules(const char *fn, const flt_rules *rules, double thickness, double width);
+    flt_status coil_stats_of(const char *fn, flt_coil which, std::size_t rule, std::size_t count,
+                             double *out) const;
     // FLT_OK, or the failure that stopped processing (message set).
     flt_status failure(const char *fn) const;
     bool acquiring() const;
@@ -189,6 +227,10 @@ class gauge {
     int free_buffer_or_wait();
     // Evaluation (one thread at a time, sheets in order).
     void evaluate(const sheet_job &job);
+    // The verdict of a sheet being evaluated (its values set), and the
+    // coil's statistics.
+    void judge(flt_sheet *sh, const sheet_buffer &b, std::size_t n);
+    void count_in_coil(const verdict_config &vc, const flt_sheet &sh);
     void deliver(flt_sheet *sheet);
     flt_sheet *take_slot();
     void acquisition_main();
@@ -276,6 +318,14 @@ class gauge {
     // ---- evaluation state (the thread holding the evaluating role)
     std::shared_ptr<sheet_pool> pool_;
     std::vector<std::uint8_t> flag_scratch_;  // max(fibers, zones)
+
+    // ---- verdicts: the rules in force (replaced whole by set_rules) and
+    // the coils' statistics, each under its own mutex (never both held by
+    // the evaluation; set_rules takes stats_m_ then rules_m_).
+    mutable std::mutex rules_m_, stats_m_;
+    std::shared_ptr<verdict_config> verdict_;
+    std::uint64_t rules_generation_ = 0;
+    coil_stats coil_current_, coil_last_;
 
     // ---- output
     std::mutex deliver_m_;

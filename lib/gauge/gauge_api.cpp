@@ -256,6 +256,49 @@ FLT_API flt_status FLT_CALL flt_gauge_count(const flt_gauge *gauge, flt_gauge_co
     });
 }
 
+FLT_API flt_status FLT_CALL flt_gauge_set_rules(flt_gauge *gauge, const flt_rules *rules,
+                                                double thickness_mm, double width_mm) {
+    const char *fn = "flt_gauge_set_rules";
+    return guard(fn, [&] {
+        if (flt_status st = check_handle(fn, gauge))
+            return st;
+        if (rules != nullptr && rules->magic != flt_rules::k_magic)
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'rules' is not a live flt_rules handle", fn);
+        // The same bounds as flt_verdict_evaluate: beyond them, a unit
+        // mistake.
+        if (!(thickness_mm > 0) || !(thickness_mm <= 1000.0))
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'thickness_mm' = %g must be > 0 and <= 1000 (mm)", fn,
+                        thickness_mm);
+        if (!(width_mm == 0) && !(width_mm > 0 && width_mm <= 100000.0))
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'width_mm' = %g must be 0 (the measured strip width) or "
+                        "> 0 and <= 100000 (mm)",
+                        fn, width_mm);
+        return gauge->impl->set_rules(fn, rules, thickness_mm, width_mm);
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_gauge_coil_stats(const flt_gauge *gauge, flt_coil which,
+                                                 size_t rule, size_t count, double *out) {
+    const char *fn = "flt_gauge_coil_stats";
+    return guard(fn, [&] {
+        if (flt_status st = check_handle(fn, gauge))
+            return st;
+        FLT_CHECK_NOT_NULL(fn, out);
+        const int raw = enum_arg(which);
+        if (raw != FLT_COIL_CURRENT && raw != FLT_COIL_LAST)
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'which' = %d is not a flt_coil (0 or 1)", fn, raw);
+        if (count < 1 || count > FLT_COIL_VALUES)
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: argument 'count' = %zu must be 1 .. FLT_COIL_VALUES (%d)", fn, count,
+                        int(FLT_COIL_VALUES));
+        return gauge->impl->coil_stats_of(fn, flt_coil(raw), rule, count, out);
+    });
+}
+
 FLT_API void FLT_CALL flt_sheet_destroy(flt_sheet *sheet) {
     guard_void([&] {
         if (!sheet || sheet->magic != k_sheet_magic || sheet->borrowed)
@@ -349,6 +392,29 @@ FLT_API flt_status FLT_CALL flt_sheet_measured_map(const flt_sheet *sheet, size_
                         "%s: arguments 'rows' x 'fibers' = %zu x %zu but the sheet has %zu x %zu",
                         fn, rows, fibers, sheet->rows, sheet->fibers);
         std::memcpy(height_out, sheet->map_measured.data(), rows * fibers * sizeof(double));
+        return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_sheet_verdict(const flt_sheet *sheet, const flt_rules **rules_out,
+                                              const flt_verdict **verdict_out) {
+    const char *fn = "flt_sheet_verdict";
+    return guard(fn, [&] {
+        if (rules_out)
+            *rules_out = nullptr;
+        if (verdict_out)
+            *verdict_out = nullptr;
+        if (flt_status st = check_sheet(fn, sheet))
+            return st;
+        if (!sheet->verdict)
+            return fail(FLT_ERR_STATE,
+                        "%s: the gauge had no rules when it judged this sheet "
+                        "(flt_gauge_set_rules)",
+                        fn);
+        if (rules_out)
+            *rules_out = &sheet->verdict->rules;
+        if (verdict_out)
+            *verdict_out = sheet->verdict->slot[sheet->slot].get();
         return FLT_OK;
     });
 }

@@ -3470,7 +3470,7 @@ static void row_sheet_get(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'sheet'", flt_sheet_get(NULL, FLT_SHEET_ID, &v));
     BAD(FLT_ERR_INVALID_ARGUMENT, "not a live", flt_sheet_get((flt_sheet *)junk, FLT_SHEET_ID, &v));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_sheet_get(sh, FLT_SHEET_ID, NULL));
-    BAD(FLT_ERR_NOT_FOUND, "'key' = 36", flt_sheet_get(sh, (flt_sheet_value)36, &v));
+    BAD(FLT_ERR_NOT_FOUND, "'key' = 38", flt_sheet_get(sh, (flt_sheet_value)38, &v));
     ENUM_UB_BAD(FLT_ERR_NOT_FOUND, "'key' = -1", flt_sheet_get(sh, (flt_sheet_value)-1, &v));
     GOOD(flt_sheet_get(sh, FLT_SHEET_ROWS, &v));
     ++g_checks;
@@ -3782,6 +3782,102 @@ static void row_verdict_failed(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_verdict_failed(v, NULL));
     GOOD(flt_verdict_failed(v, &n));
     flt_verdict_destroy(v);
+}
+
+/* The gauge's verdicts (gauge.h, "Verdicts and coil statistics"). */
+
+static void row_gauge_set_rules(void) {
+    flt_gauge *g = new_gauge(0);
+    flt_rules *r = new_rules();
+    uint64_t junk[32] = {0};
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'gauge'", flt_gauge_set_rules(NULL, r, 4.0, 0.0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "not a live",
+        flt_gauge_set_rules(g, (const flt_rules *)junk, 4.0, 0.0));
+    const double thickness[] = {0.0, -1.0, NAN, INFINITY, 1e300, 1000.5};
+    for (size_t i = 0; i < sizeof thickness / sizeof *thickness; ++i)
+        BAD(FLT_ERR_INVALID_ARGUMENT, "'thickness_mm'",
+            flt_gauge_set_rules(g, r, thickness[i], 0.0));
+    const double width[] = {-1.0, NAN, INFINITY, -INFINITY, 1e300, -0.0 - 1e-300};
+    for (size_t i = 0; i < sizeof width / sizeof *width; ++i)
+        BAD(FLT_ERR_INVALID_ARGUMENT, "'width_mm'", flt_gauge_set_rules(g, r, 4.0, width[i]));
+    GOOD(flt_gauge_set_rules(g, r, 4.0, 1500.0));
+    GOOD(flt_gauge_set_rules(g, NULL, 4.0, 0.0));
+    GOOD(flt_gauge_set_rules(g, r, 4.0, 0.0));
+    flt_rules_destroy(r); /* the gauge keeps its own copy */
+    flt_sheet *sh = new_sheet(g);
+    double n = 0;
+    GOOD(flt_sheet_get(sh, FLT_SHEET_RULES, &n));
+    ++g_checks;
+    if (n != 2.0)
+        ERR("the sheet was judged by %g rules, not 2", n);
+    flt_sheet_destroy(sh);
+    flt_gauge_destroy(g);
+}
+
+static void row_gauge_coil_stats(void) {
+    flt_gauge *g = new_gauge(0);
+    double v[FLT_COIL_VALUES + 1];
+    BAD(FLT_ERR_STATE, "flt_gauge_set_rules", flt_gauge_coil_stats(g, FLT_COIL_CURRENT, 0, 1, v));
+    flt_rules *r = new_rules();
+    GOOD(flt_gauge_set_rules(g, r, 4.0, 0.0));
+    flt_rules_destroy(r);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'gauge'", flt_gauge_coil_stats(NULL, FLT_COIL_CURRENT, 0, 1, v));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_gauge_coil_stats(g, FLT_COIL_CURRENT, 0, 1, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'which' = 2", flt_gauge_coil_stats(g, (flt_coil)2, 0, 1, v));
+    ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "'which' = -1",
+                flt_gauge_coil_stats(g, (flt_coil)-1, 0, 1, v));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'count' = 0",
+        flt_gauge_coil_stats(g, FLT_COIL_CURRENT, 0, 0, v));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'count'", flt_gauge_coil_stats(g, FLT_COIL_CURRENT, 0, NEG, v));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'count'",
+        flt_gauge_coil_stats(g, FLT_COIL_CURRENT, 0, FLT_COIL_VALUES + 1, v));
+    BAD(FLT_ERR_NOT_FOUND, "'rule' = 2", flt_gauge_coil_stats(g, FLT_COIL_CURRENT, 2, 1, v));
+    BAD(FLT_ERR_NOT_FOUND, "'rule'", flt_gauge_coil_stats(g, FLT_COIL_CURRENT, NEG, 1, v));
+    BAD(FLT_ERR_STATE, "no coil", flt_gauge_coil_stats(g, FLT_COIL_LAST, 0, 1, v));
+    GOOD(flt_gauge_coil_stats(g, FLT_COIL_CURRENT, 1, FLT_COIL_VALUES, v));
+    /* One flushed strip: a finished coil of one sheet. */
+    make_waiting_sheet(g, 0.0);
+    GOOD(flt_gauge_coil_stats(g, FLT_COIL_LAST, 0, FLT_COIL_VALUES, v));
+    ++g_checks;
+    if (v[FLT_COIL_SHEETS] != 1.0 || v[FLT_COIL_FINISHED] != 1.0)
+        ERR("the finished coil has %g sheets (finished %g), not 1 (1)", v[FLT_COIL_SHEETS],
+            v[FLT_COIL_FINISHED]);
+    flt_gauge_destroy(g);
+}
+
+static void row_sheet_verdict(void) {
+    flt_gauge *g = new_gauge(0);
+    flt_sheet *sh = new_sheet(g);
+    const flt_rules *rules = NULL;
+    const flt_verdict *v = NULL;
+    uint64_t junk[64] = {0};
+    BAD(FLT_ERR_STATE, "flt_gauge_set_rules", flt_sheet_verdict(sh, &rules, &v));
+    flt_sheet_destroy(sh);
+    flt_rules *r = new_rules();
+    GOOD(flt_gauge_set_rules(g, r, 4.0, 0.0));
+    flt_rules_destroy(r);
+    sh = new_sheet(g);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'sheet'", flt_sheet_verdict(NULL, &rules, &v));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "not a live",
+        flt_sheet_verdict((const flt_sheet *)junk, &rules, &v));
+    GOOD(flt_sheet_verdict(sh, NULL, NULL));
+    GOOD(flt_sheet_verdict(sh, &rules, &v));
+    /* The sheet's handles are read-only and not the caller's to free. */
+    BAD(FLT_ERR_STATE, "read-only",
+        flt_verdict_evaluate((flt_verdict *)v, 4.0, 1000.0, 0, 0, NULL, NULL, NULL, NULL));
+    BAD(FLT_ERR_STATE, "read-only",
+        flt_verdict_set_measure((flt_verdict *)v, FLT_MEASURE_BOW, 1.0, 0.0, 0.0));
+    flt_verdict_destroy((flt_verdict *)v);
+    flt_rules_destroy((flt_rules *)rules);
+    double st = -1;
+    size_t n = 0;
+    GOOD(flt_verdict_get(v, 0, FLT_VERDICT_STATE, &st));
+    GOOD(flt_rules_count(rules, &n));
+    ++g_checks;
+    if (n != 2 || !(st == FLT_VERDICT_PASS))
+        ERR("the flat sheet's verdict: %zu rules, state %g (want 2, PASS)", n, st);
+    flt_sheet_destroy(sh);
+    flt_gauge_destroy(g);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -4694,6 +4790,9 @@ static const row k_rows[] = {
     ROW(sheet_get_array),
     ROW(sheet_height_map),
     ROW(sheet_measured_map),
+    ROW(gauge_set_rules),
+    ROW(gauge_coil_stats),
+    ROW(sheet_verdict),
     /* genicam.h */
     ROW(genicam_load),
     ROW(genicam_load_memory),

@@ -5,6 +5,7 @@
  * hands them over. The counting allocator (alloc_count.h) sees the shared
  * library's calls on every thread, as in test_recon_alloc.c. Not built
  * under sanitizers, which own malloc. */
+#include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stdatomic.h>
@@ -21,14 +22,33 @@
 
 #define OK(call) assert_int_equal((call), FLT_OK)
 
-static size_t take_sheets(flt_gauge *g) {
+/* Sheets are judged too: a straightedge along (the height map) and
+ * across, and a flatness measure. */
+static const char k_rules[] =
+    "{ \"format\": \"flatline-tolerances\", \"version\": 1, \"name\": \"alloc\",\n"
+    "  \"rules\": [\n"
+    "    { \"name\": \"1 m\", \"measure\": \"straightedge_along\", \"length_mm\": 1000,\n"
+    "      \"bands\": [ { \"thickness_mm\": [0, 50], \"width_mm\": [0, 5000], \"limit\": 3 } ] },\n"
+    "    { \"name\": \"across\", \"measure\": \"straightedge_across\", \"length_mm\": 1000,\n"
+    "      \"bands\": [ { \"thickness_mm\": [0, 50], \"width_mm\": [0, 5000], \"limit\": 3 } ] },\n"
+    "    { \"name\": \"IU\", \"measure\": \"zone_i_units\",\n"
+    "      \"bands\": [ { \"thickness_mm\": [0, 50], \"width_mm\": [0, 5000], \"limit\": 10 } ] }\n"
+    "  ] }\n";
+
+/* Sheets taken (with rules, each judged by the 3 rules, its verdict read). */
+static size_t take_sheets(flt_gauge *g, double judged) {
     size_t n = 0;
     for (;;) {
         flt_sheet *sh = NULL;
         if (flt_gauge_next_sheet(g, 0, &sh) != FLT_OK || !sh)
             return n;
-        double v;
-        if (flt_sheet_get(sh, FLT_SHEET_MAX_I_UNITS, &v) == FLT_OK)
+        double v, rules = 0, worst = NAN;
+        const flt_verdict *verdict = NULL;
+        if (flt_sheet_get(sh, FLT_SHEET_MAX_I_UNITS, &v) == FLT_OK &&
+            flt_sheet_get(sh, FLT_SHEET_RULES, &rules) == FLT_OK && rules == judged &&
+            (!judged ||
+             (flt_sheet_verdict(sh, NULL, &verdict) == FLT_OK &&
+              flt_verdict_get(verdict, 0, FLT_VERDICT_WORST, &worst) == FLT_OK && worst >= 0)))
             ++n;
         flt_sheet_destroy(sh);
     }
@@ -56,6 +76,10 @@ static void rows_and_sheets_allocate_nothing(void **state) {
     OK(flt_gauge_create(calib, o, &g));
     atomic_store(&g_counting, 0);
     assert_true(atomic_load(&g_allocations) >= 10); /* the counter sees the library */
+    flt_rules *rules = NULL;
+    OK(flt_rules_load_text(k_rules, sizeof k_rules - 1, &rules));
+    OK(flt_gauge_set_rules(g, rules, 4.0, 0.0)); /* allocates here, not per sheet */
+    flt_rules_destroy(rules);
 
     /* Warm-up: a first strip of 1 m sheets (the flatness metrics grow their
      * column scratch once, at the first sheet). */
@@ -64,7 +88,7 @@ static void rows_and_sheets_allocate_nothing(void **state) {
     for (size_t r = 0; r < 2000; ++r)
         OK(flt_gauge_push_row(g, t->s[r], K, &t->height[r * K], &t->slope[r * K], NULL));
     OK(flt_gauge_flush(g));
-    size_t warm = take_sheets(g);
+    size_t warm = take_sheets(g, 3);
 
     /* Counted: a second strip (a long reversal starts it) of 1 m sheets,
      * a line stop, a short reversal, cuts, polling, the tail. */
@@ -81,17 +105,21 @@ static void rows_and_sheets_allocate_nothing(void **state) {
         if (r == 3000 && st == FLT_OK) /* a line stop and a short reversal */
             st = flt_gauge_push_row(g, t->s[r] - 9.0, K, &t->height[r * K], &t->slope[r * K], NULL);
         if (r % 500 == 0)
-            sheets += take_sheets(g);
+            sheets += take_sheets(g, 3);
     }
     if (st == FLT_OK)
         st = flt_gauge_flush(g);
-    sheets += take_sheets(g);
+    sheets += take_sheets(g, 3);
     atomic_store(&g_counting, 0);
     OK(st);
     print_message("%zu + %zu sheets, %zu allocations while streaming\n", warm, sheets,
                   atomic_load(&g_allocations));
     assert_true(sheets >= 17);
     assert_int_equal(atomic_load(&g_allocations), 0);
+    /* ... and the coil's statistics counted them. */
+    double stats[FLT_COIL_VALUES];
+    OK(flt_gauge_coil_stats(g, FLT_COIL_LAST, 0, FLT_COIL_VALUES, stats));
+    assert_true(stats[FLT_COIL_SHEETS] == (double)sheets);
     flt_gauge_destroy(g);
     flt_options_destroy(o);
     flt_calib_destroy(calib);
@@ -139,7 +167,7 @@ static void frames_allocate_nothing(void **state) {
     print_message("%llu frames extracted by 2 workers, %zu allocations\n",
                   (unsigned long long)extracted, atomic_load(&g_allocations));
     assert_int_equal(extracted, FRAMES);
-    assert_int_equal(take_sheets(g), 2);
+    assert_int_equal(take_sheets(g, 0), 2);
     assert_int_equal(atomic_load(&g_allocations), 0);
     flt_gauge_destroy(g);
     free(frames);

@@ -13,6 +13,10 @@ FLT_CS_INT_ENUM(flt_gauge_counter, NativeGaugeCounter)
 %ignore FLT_SHEET_VALUE_MAX_ENUM_;
 %ignore FLT_SHEET_ARRAY_MAX_ENUM_;
 %ignore FLT_GAUGE_COUNT_MAX_ENUM_;
+/* The sheets' verdicts and the coils' statistics: not wrapped yet. */
+%ignore flt_gauge_set_rules;
+%ignore flt_gauge_coil_stats;
+%ignore flt_sheet_verdict;
 
 /* The callback: a function pointer the public Gauge makes from a delegate
  * it keeps alive (Marshal.GetFunctionPointerForDelegate), and its user

@@ -22,6 +22,10 @@
 %ignore flt_sheet_get_array;
 %ignore flt_sheet_height_map;
 %ignore flt_sheet_measured_map;
+/* The sheets' verdicts and the coils' statistics: not wrapped yet. */
+%ignore flt_gauge_set_rules;
+%ignore flt_gauge_coil_stats;
+%ignore flt_sheet_verdict;
 
 %typemap(in, numinputs=0) flt_gauge **out (flt_gauge *temp = NULL) { $1 = &temp; }
 %typemap(argout) flt_gauge **out {
