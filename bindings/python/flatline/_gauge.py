@@ -19,11 +19,14 @@ from ._flatness import FiberResults, Shape, ShapeComponent
 from ._options import OptionValue, make_options, options_doc, prefixed_options
 from ._pixels import PixelFormat
 from ._source import Source
+from ._verdict import RuleResult, ToleranceRules, _results, _rule_list
 
 __all__ = [
     "SheetFlag",
     "SheetZones",
     "Sheet",
+    "RuleStats",
+    "CoilStats",
     "Gauge",
     "gauge_options",
 ]
@@ -52,6 +55,7 @@ _VALUES = (
     "wave_steepness", "wave_x", "max_i_units", "flags", "window_flags", "frames",
     "skipped", "dropped", "saturated", "invalid", "lookahead", "fibers", "zones",
     "strip_width_min", "strip_width_max", "strip_centre_min", "strip_centre_max",
+    "rules", "rules_failed",
 )
 
 _COUNTERS = {
@@ -132,6 +136,46 @@ class Sheet:
     measured: Optional[np.ndarray] = None  #: (rows, K) measured heights, mm (gauge_keep_maps 2)
     #: Every scalar result by its C name (flt_sheet_value), later ones too.
     values: Dict[str, float] = field(default_factory=dict)
+    #: Its verdict, one result per rule of the rules it was judged by
+    #: (Gauge.set_rules); None when the gauge had none.
+    verdict: Optional[Tuple[RuleResult, ...]] = None
+
+    @property
+    def failed_rules(self) -> int:
+        """The number of rules the sheet failed (0 without rules)."""
+        return int(self.values.get("rules_failed", 0))
+
+
+@dataclass(frozen=True)
+class RuleStats:
+    """One rule's statistics over a coil (flt_gauge_coil_stats)."""
+
+    rule: int  #: the rule's index in the rule set
+    passed: int  #: sheets that passed it
+    failed: int  #: sheets that failed it
+    no_band: int  #: sheets none of its bands covers
+    not_measured: int  #: sheets its measure was missing on
+    worst_min: float  #: the smallest worst value of the sheets measured (NaN: none)
+    worst_max: float  #: the largest
+    worst_mean: float  #: their mean
+    worst_sheet: float  #: the id of the sheet with the largest (NaN: none)
+    worst_x_mm: float  #: where the largest is, across the strip, mm
+    worst_s_mm: float  #: ... and along it, mm
+    #: (20,) sheets by worst / limit: bin i counts (i/10, (i+1)/10] (bin 0
+    #: from 0, bin 19 everything above 1.9): bins 0-9 passed, 10-19 failed.
+    histogram: np.ndarray
+
+
+@dataclass(frozen=True)
+class CoilStats:
+    """A coil's verdict statistics (flt_gauge_coil_stats)."""
+
+    coil: int  #: the coil's number (0: no sheet judged yet)
+    sheets: int  #: sheets judged
+    passed: int  #: sheets that failed no rule
+    failed: int  #: sheets that failed at least one
+    finished: bool  #: its last sheet was judged
+    rules: Tuple[RuleStats, ...]  #: per rule, in rule order
 
 
 def _read_sheet(handle: Any, maps: int) -> Sheet:
@@ -161,6 +205,10 @@ def _read_sheet(handle: Any, maps: int) -> Sheet:
         array(_capi.FLT_SHEET_ZONE_FLAGS, zones).astype(np.uint8),
         array(_capi.FLT_SHEET_ZONE_STRIP_X, zones),
     )
+    verdict = None
+    if int(v["rules"]) > 0:
+        rules_h, verdict_h = _capi.flt_sheet_verdict(handle)
+        verdict = tuple(_results(verdict_h, _rule_list(rules_h)))
     s = z = z_flags = measured = None
     if maps >= 1:
         s = np.empty(rows)
@@ -181,7 +229,7 @@ def _read_sheet(handle: Any, maps: int) -> Sheet:
         v["lookahead"], fiber_results, zone_results,
         array(_capi.FLT_SHEET_FIBER_STRIP_X, fibers),
         (v["strip_width_min"], v["strip_width_max"]),
-        (v["strip_centre_min"], v["strip_centre_max"]), s, z, z_flags, measured, v)
+        (v["strip_centre_min"], v["strip_centre_max"]), s, z, z_flags, measured, v, verdict)
 
 
 def gauge_options() -> Dict[str, float]:
@@ -242,6 +290,7 @@ class Gauge:
         self._push = threading.Lock()
         self._source: Optional[Source] = None
         self._maps = int(_capi.flt_gauge_get_option(handle, _capi.FLT_OPT_GAUGE_KEEP_MAPS))
+        self._rules: Optional[ToleranceRules] = None
         self._fibers = int(calib.fiber_grid.count)
         width, height = calib.frame_size
         self._frame_shape = (height, width)
@@ -407,6 +456,59 @@ class Gauge:
             if sheet is None:
                 return
             yield sheet
+
+    # -- verdicts --------------------------------------------------------------------
+
+    @property
+    def rules(self) -> Optional[ToleranceRules]:
+        """The rule set sheets are judged by (set_rules), or None."""
+        return self._rules
+
+    def set_rules(self, rules: Optional[ToleranceRules], thickness_mm: float = 1.0,
+                  width_mm: float = 0.0) -> None:
+        """Judges every sheet from now on against `rules` (None: no more):
+        the sheets' thickness (mm) and nominal width (mm; 0: each sheet's
+        measured strip width) choose each rule's band. The gauge keeps its
+        own copy. The current coil's statistics restart; set the rules
+        before a coil's first frame."""
+        if rules is not None and not isinstance(rules, ToleranceRules):
+            raise TypeError(f"set_rules() argument 'rules' must be ToleranceRules or None, not "
+                            f"{type(rules).__name__}")
+        _capi.flt_gauge_set_rules(self._live(), None if rules is None else rules._handle,
+                                  float(thickness_mm), float(width_mm))
+        self._rules = rules
+
+    def coil_stats(self, last: bool = False) -> Optional[CoilStats]:
+        """The verdict statistics of the coil being measured, or with
+        last=True of the last finished coil; None when there are none (no
+        rules, no coil finished yet)."""
+        handle = self._live()
+        which = _capi.FLT_COIL_LAST if last else _capi.FLT_COIL_CURRENT
+        first = np.empty(_capi.FLT_COIL_VALUES)
+        try:
+            handle.coil_stats_into(which, 0, first)
+        except StateError:
+            return None
+        rows = [first]
+        for i in range(1, int(first[_capi.FLT_COIL_RULES])):
+            row = np.empty(_capi.FLT_COIL_VALUES)
+            handle.coil_stats_into(which, i, row)
+            rows.append(row)
+        h0 = _capi.FLT_COIL_HISTOGRAM
+        stats = []
+        for i, row in enumerate(rows):
+            hist = row[h0:h0 + _capi.FLT_COIL_HISTOGRAM_BINS].astype(np.int64)
+            hist.flags.writeable = False
+            stats.append(RuleStats(
+                i, int(row[_capi.FLT_COIL_RULE_PASSED]), int(row[_capi.FLT_COIL_RULE_FAILED]),
+                int(row[_capi.FLT_COIL_RULE_NO_BAND]), int(row[_capi.FLT_COIL_RULE_NOT_MEASURED]),
+                float(row[_capi.FLT_COIL_WORST_MIN]), float(row[_capi.FLT_COIL_WORST_MAX]),
+                float(row[_capi.FLT_COIL_WORST_MEAN]), float(row[_capi.FLT_COIL_WORST_SHEET]),
+                float(row[_capi.FLT_COIL_WORST_X]), float(row[_capi.FLT_COIL_WORST_S]), hist))
+        return CoilStats(int(first[_capi.FLT_COIL_NUMBER]), int(first[_capi.FLT_COIL_SHEETS]),
+                         int(first[_capi.FLT_COIL_SHEETS_PASSED]),
+                         int(first[_capi.FLT_COIL_SHEETS_FAILED]),
+                         bool(first[_capi.FLT_COIL_FINISHED]), tuple(stats))
 
     def counters(self) -> Dict[str, int]:
         """The gauge's counters by name: frames, extracted, skipped_stop,

@@ -77,6 +77,35 @@ class RuleResult:
         return self.state == VerdictState.PASS
 
 
+def _rule_list(handle: Any) -> List[ToleranceRule]:
+    """The rules of a flt_rules handle (owned or a sheet's)."""
+    out = []
+    for i in range(int(_capi.flt_rules_count(handle))):
+        name, measure, length = _capi.flt_rules_rule(handle, i)
+        out.append(ToleranceRule(name, Measure(measure), length))
+    return out
+
+
+def _results(handle: Any, rules: List[ToleranceRule]) -> List[RuleResult]:
+    """The results of a flt_verdict handle (owned or a sheet's), in rule
+    order."""
+    out = []
+    for i, rule in enumerate(rules):
+        def get(key: int) -> float:
+            return float(_capi.flt_verdict_get(handle, i, key))
+        out.append(RuleResult(
+            rule=rule,
+            state=VerdictState(int(get(_capi.FLT_VERDICT_STATE))),
+            worst=get(_capi.FLT_VERDICT_WORST),
+            limit=get(_capi.FLT_VERDICT_LIMIT),
+            margin=get(_capi.FLT_VERDICT_MARGIN),
+            x_mm=get(_capi.FLT_VERDICT_X),
+            s_mm=get(_capi.FLT_VERDICT_S),
+            band=int(get(_capi.FLT_VERDICT_BAND)),
+        ))
+    return out
+
+
 def straightedge_deviation(positions: Any, heights: Any, length_mm: float) -> Tuple[float, float]:
     """The straightedge deviation of one profile: the largest gap between
     the profile and a straightedge of `length_mm` resting on it on two
@@ -149,7 +178,7 @@ class Verdict:
     def __init__(self, rules: ToleranceRules) -> None:
         if not isinstance(rules, ToleranceRules):
             raise TypeError(f"Verdict() argument 'rules' must be ToleranceRules, not {type(rules).__name__}")
-        self._rules = [rules[i] for i in range(len(rules))]
+        self._rules = _rule_list(rules._handle)
         self._handle = _capi.flt_verdict_create(rules._handle)
 
     def set_measure(self, measure: Measure, value: float, x_mm: float = 0.0,
@@ -190,22 +219,7 @@ class Verdict:
 
     def results(self) -> List[RuleResult]:
         """The results of the last evaluation, in rule order."""
-        out = []
-        h = self._handle
-        for i, rule in enumerate(self._rules):
-            def get(key: int) -> float:
-                return float(_capi.flt_verdict_get(h, i, key))
-            out.append(RuleResult(
-                rule=rule,
-                state=VerdictState(int(get(_capi.FLT_VERDICT_STATE))),
-                worst=get(_capi.FLT_VERDICT_WORST),
-                limit=get(_capi.FLT_VERDICT_LIMIT),
-                margin=get(_capi.FLT_VERDICT_MARGIN),
-                x_mm=get(_capi.FLT_VERDICT_X),
-                s_mm=get(_capi.FLT_VERDICT_S),
-                band=int(get(_capi.FLT_VERDICT_BAND)),
-            ))
-        return out
+        return _results(self._handle, self._rules)
 
     @property
     def failed(self) -> int:

@@ -4,7 +4,9 @@
  * sheets.
  *
  * Wrapped as they are: create, get_option, cut, attach_source, start,
- * count and flt_sheet_get. Replaced: push_frame and push_row (numpy
+ * count, set_rules, flt_sheet_get and flt_sheet_verdict (its rules and
+ * verdict come back as borrowed handles, read at once by flatline.Sheet).
+ * Replaced: coil_stats (into a numpy array). Replaced: push_frame and push_row (numpy
  * arrays), flush, stop and next_sheet (they wait: the GIL is released),
  * the sheet's arrays and maps (into numpy arrays). set_callback is not
  * wrapped: a C callback on a gauge thread cannot call Python safely, and
@@ -22,10 +24,22 @@
 %ignore flt_sheet_get_array;
 %ignore flt_sheet_height_map;
 %ignore flt_sheet_measured_map;
-/* The sheets' verdicts and the coils' statistics: not wrapped yet. */
-%ignore flt_gauge_set_rules;
 %ignore flt_gauge_coil_stats;
-%ignore flt_sheet_verdict;
+
+/* The sheet's own rules and verdict: borrowed (not freed by Python; valid
+ * while the sheet lives). */
+%typemap(in, numinputs=0) const flt_rules **rules_out (const flt_rules *temp = NULL) {
+  $1 = ($1_ltype)&temp;
+}
+%typemap(argout) const flt_rules **rules_out {
+  %append_output(SWIG_NewPointerObj((void *)*$1, $descriptor(flt_rules *), 0));
+}
+%typemap(in, numinputs=0) const flt_verdict **verdict_out (const flt_verdict *temp = NULL) {
+  $1 = ($1_ltype)&temp;
+}
+%typemap(argout) const flt_verdict **verdict_out {
+  %append_output(SWIG_NewPointerObj((void *)*$1, $descriptor(flt_verdict *), 0));
+}
 
 %typemap(in, numinputs=0) flt_gauge **out (flt_gauge *temp = NULL) { $1 = &temp; }
 %typemap(argout) flt_gauge **out {
@@ -41,7 +55,8 @@
 };
 %apply (double *INPLACE_ARRAY1, size_t DIM1) {
   (double *sheet_array_out, size_t sheet_array_out_n),
-  (double *sheet_s_out, size_t sheet_s_out_n)
+  (double *sheet_s_out, size_t sheet_s_out_n),
+  (double *coil_out, size_t coil_out_n)
 };
 %apply (double *INPLACE_ARRAY2, size_t DIM1, size_t DIM2) {
   (double *sheet_z_out, size_t sheet_z_out_rows, size_t sheet_z_out_fibers),
@@ -113,6 +128,11 @@ struct flt_gauge {};
     status = flt_gauge_stop($self);
     Py_END_ALLOW_THREADS
     return status;
+  }
+
+  /* One rule's coil statistics into out (FLT_COIL_VALUES,). */
+  flt_status coil_stats_into(int which, size_t rule, double *coil_out, size_t coil_out_n) {
+    return flt_gauge_coil_stats($self, (flt_coil)which, rule, coil_out_n, coil_out);
   }
 
   /* The next sheet, or None after timeout_ms. */

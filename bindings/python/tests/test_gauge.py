@@ -258,3 +258,75 @@ def test_narrow_strip_edges_and_off_strip_fibers(calib):
     assert np.any(on_strip)
     assert np.all(np.abs(sheet.zones.strip_x[on_strip]) < 500.0)
     assert np.all(np.isnan(sheet.zones.strip_x[~on_strip]))
+
+
+VERDICT_RULES = """{
+  "format": "flatline-tolerances", "version": 1, "name": "python gauge test",
+  "rules": [
+    { "name": "1/2 m tight", "measure": "straightedge_along", "length_mm": 500,
+      "bands": [ { "thickness_mm": [1, 10], "width_mm": [0, 3000], "limit": 1.9 } ] },
+    { "name": "1/2 m loose", "measure": "straightedge_along", "length_mm": 500,
+      "bands": [ { "thickness_mm": [1, 10], "width_mm": [0, 3000], "limit": 2.1 } ] }
+  ]
+}"""
+
+
+def test_sheets_carry_their_verdict_and_the_coil_its_statistics(calib):
+    # The strip waves along travel as 2 sin(2 pi s / 1000) mm over its whole
+    # width: under a 500 mm straightedge the deviation is A (1 - cos(pi L /
+    # P)) = 2 mm (flatline/verdict.h), so the 1.9 mm rule fails and the
+    # 2.1 mm one passes.
+    s = np.arange(3000) * 3.0
+    x = np.zeros(K)
+
+    def z(ss):
+        return 2.0 * np.sin(2 * np.pi * ss[:, None] / 1000.0) + x
+
+    behind, ahead = z(s - 50.0), z(s + 50.0)
+    h, g = 0.5 * (behind + ahead), (ahead - behind) / 100.0
+    rules = flatline.ToleranceRules.loads(VERDICT_RULES)
+    gauge = flatline.Gauge(calib, gauge_workers=2, gauge_overflow=1, gauge_frame_spacing=2.0)
+    assert gauge.rules is None and gauge.coil_stats() is None
+    gauge.set_rules(rules, thickness_mm=4.0)
+    assert gauge.rules is rules
+    for c in (3000.0, 6000.0):
+        gauge.cut(c)
+    for r in range(len(s)):
+        gauge.push_row(s[r], h[r], g[r])
+    gauge.flush()
+    sheets = list(gauge)
+    assert len(sheets) == 3
+    for sheet in sheets:
+        tight, loose = sheet.verdict
+        assert tight.rule.name == "1/2 m tight" and loose.rule.name == "1/2 m loose"
+        assert tight.state == flatline.VerdictState.FAIL
+        assert loose.state == flatline.VerdictState.PASS
+        assert sheet.failed_rules == 1
+        # Rows every 3 mm: the contacts lie up to 3 mm closer than 500 mm
+        # and the trough up to 1.5 mm from a row, at most A pi h / P = 0.019
+        # mm less; the noise-free gauge is within micrometres of the sheet.
+        assert 2.0 - 0.02 <= tight.worst <= 2.0 + 0.001
+        assert tight.worst == loose.worst
+        assert tight.margin == pytest.approx(1.9 - tight.worst, abs=1e-12)
+        assert sheet.s_first <= tight.s_mm <= sheet.s_last
+    stats = gauge.coil_stats(last=True)
+    assert stats is not None and stats.finished
+    assert (stats.coil, stats.sheets, stats.passed, stats.failed) == (1, 3, 0, 3)
+    tight_stats = stats.rules[0]
+    assert (tight_stats.passed, tight_stats.failed) == (0, 3)
+    assert tight_stats.worst_max == max(sh.verdict[0].worst for sh in sheets)
+    # worst / limit = 2 / 1.9 lies in (1.0, 1.1]: bin 10.
+    assert tight_stats.histogram[10] == 3 and tight_stats.histogram.sum() == 3
+    assert stats.rules[1].histogram[9] == 3  # 2 / 2.1 in (0.9, 1.0]
+    assert stats.rules[1].passed == 3
+    now = gauge.coil_stats()
+    assert now is not None and (now.coil, now.sheets) == (0, 0)
+    # Without rules a sheet has no verdict.
+    gauge.set_rules(None)
+    for r in range(len(s)):
+        gauge.push_row(s[r] + 20000.0, h[r], g[r])
+    gauge.flush()
+    assert all(sheet.verdict is None for sheet in gauge)
+    with pytest.raises(flatline.InvalidArgumentError, match="thickness_mm"):
+        gauge.set_rules(rules, thickness_mm=-1.0)
+    gauge.close()
