@@ -74,6 +74,78 @@ namespace Flatline
         StripWidthMax = NativeSheetValue.FLT_SHEET_STRIP_WIDTH_MAX,
         StripCentreMin = NativeSheetValue.FLT_SHEET_STRIP_CENTRE_MIN,
         StripCentreMax = NativeSheetValue.FLT_SHEET_STRIP_CENTRE_MAX,
+        Rules = NativeSheetValue.FLT_SHEET_RULES,
+        RulesFailed = NativeSheetValue.FLT_SHEET_RULES_FAILED,
+    }
+
+    /// <summary>One rule's statistics over a coil (flt_gauge_coil_stats).</summary>
+    public sealed class RuleStats
+    {
+        internal RuleStats(int rule, double[] v)
+        {
+            Rule = rule;
+            Passed = (long)v[(int)NativeCoilValue.FLT_COIL_RULE_PASSED];
+            Failed = (long)v[(int)NativeCoilValue.FLT_COIL_RULE_FAILED];
+            NoBand = (long)v[(int)NativeCoilValue.FLT_COIL_RULE_NO_BAND];
+            NotMeasured = (long)v[(int)NativeCoilValue.FLT_COIL_RULE_NOT_MEASURED];
+            WorstMin = v[(int)NativeCoilValue.FLT_COIL_WORST_MIN];
+            WorstMax = v[(int)NativeCoilValue.FLT_COIL_WORST_MAX];
+            WorstMean = v[(int)NativeCoilValue.FLT_COIL_WORST_MEAN];
+            WorstSheet = v[(int)NativeCoilValue.FLT_COIL_WORST_SHEET];
+            WorstXMm = v[(int)NativeCoilValue.FLT_COIL_WORST_X];
+            WorstSMm = v[(int)NativeCoilValue.FLT_COIL_WORST_S];
+            var histogram = new long[FlatlineNative.FLT_COIL_HISTOGRAM_BINS];
+            for (int i = 0; i < histogram.Length; ++i)
+                histogram[i] = (long)v[(int)NativeCoilValue.FLT_COIL_HISTOGRAM + i];
+            Histogram = Array.AsReadOnly(histogram);
+        }
+
+        /// <summary>The rule's index in its rule set.</summary>
+        public int Rule { get; }
+        /// <summary>Sheets that passed it, failed it, that none of its bands
+        /// covers, and that its measure was missing on.</summary>
+        public long Passed { get; }
+        public long Failed { get; }
+        public long NoBand { get; }
+        public long NotMeasured { get; }
+        /// <summary>The worst values of the sheets measured: smallest,
+        /// largest, mean (NaN when none was).</summary>
+        public double WorstMin { get; }
+        public double WorstMax { get; }
+        public double WorstMean { get; }
+        /// <summary>Where the largest is: the sheet's id (NaN: none), x and s, mm.</summary>
+        public double WorstSheet { get; }
+        public double WorstXMm { get; }
+        public double WorstSMm { get; }
+        /// <summary>Sheets by worst / limit: bin i counts (i/10, (i+1)/10]
+        /// (bin 0 from 0, the last everything above 1.9): bins 0-9 passed,
+        /// 10-19 failed.</summary>
+        public IReadOnlyList<long> Histogram { get; }
+    }
+
+    /// <summary>A coil's verdict statistics (flt_gauge_coil_stats).</summary>
+    public sealed class CoilStats
+    {
+        internal CoilStats(double[] first, IReadOnlyList<RuleStats> rules)
+        {
+            Coil = (long)first[(int)NativeCoilValue.FLT_COIL_NUMBER];
+            Sheets = (long)first[(int)NativeCoilValue.FLT_COIL_SHEETS];
+            Passed = (long)first[(int)NativeCoilValue.FLT_COIL_SHEETS_PASSED];
+            Failed = (long)first[(int)NativeCoilValue.FLT_COIL_SHEETS_FAILED];
+            Finished = first[(int)NativeCoilValue.FLT_COIL_FINISHED] != 0;
+            Rules = rules;
+        }
+
+        /// <summary>The coil's number (0: no sheet judged yet).</summary>
+        public long Coil { get; }
+        /// <summary>Sheets judged; those that failed no rule; those that failed one or more.</summary>
+        public long Sheets { get; }
+        public long Passed { get; }
+        public long Failed { get; }
+        /// <summary>True once the coil's last sheet was judged.</summary>
+        public bool Finished { get; }
+        /// <summary>Per rule, in rule order.</summary>
+        public IReadOnlyList<RuleStats> Rules { get; }
     }
 
     /// <summary>The gauge's counters (flt_gauge_counter).</summary>
@@ -202,9 +274,15 @@ namespace Flatline
         /// fibers] (mm, NaN where invalid); null otherwise.</summary>
         public double[,]? Measured { get; private set; }
 
+        /// <summary>Its verdict, one result per rule of the rules it was
+        /// judged by (<see cref="Gauge.SetRules"/>); null when the gauge had none.</summary>
+        public IReadOnlyList<RuleResult>? Verdict { get; private set; }
+        /// <summary>The number of rules it failed (0 without rules).</summary>
+        public int FailedRules => (int)Value(SheetValue.RulesFailed);
+
         internal static unsafe Sheet Read(IntPtr sheet, int maps)
         {
-            int count = (int)NativeSheetValue.FLT_SHEET_STRIP_CENTRE_MAX + 1;
+            int count = (int)NativeSheetValue.FLT_SHEET_RULES_FAILED + 1;
             var values = new double[count];
             for (int key = 0; key < count; ++key)
             {
@@ -257,6 +335,31 @@ namespace Flatline
                 fixed (double* pm = measured)
                     FlatlineNative.flt_cs_sheet_measured_map(sheet, (ulong)rows, (ulong)fibers, pm);
                 result.Measured = measured;
+            }
+            int rules = (int)values[(int)SheetValue.Rules];
+            if (rules > 0)
+            {
+                var verdict = new List<RuleResult>(rules);
+                for (int i = 0; i < rules; ++i)
+                {
+                    int measure;
+                    double length;
+                    FlatlineNative.flt_cs_sheet_rule(sheet, (ulong)i, out IntPtr name, &measure, &length);
+                    var rule = new ToleranceRule(Utf8.Decode(name), (Measure)measure, length);
+                    double Get(NativeVerdictValue key)
+                    {
+                        FlatlineNative.flt_cs_sheet_verdict_get(sheet, (ulong)i, (int)key, out double v);
+                        return v;
+                    }
+                    verdict.Add(new RuleResult(rule, (VerdictState)(int)Get(NativeVerdictValue.FLT_VERDICT_STATE),
+                                               Get(NativeVerdictValue.FLT_VERDICT_WORST),
+                                               Get(NativeVerdictValue.FLT_VERDICT_LIMIT),
+                                               Get(NativeVerdictValue.FLT_VERDICT_MARGIN),
+                                               Get(NativeVerdictValue.FLT_VERDICT_X),
+                                               Get(NativeVerdictValue.FLT_VERDICT_S),
+                                               (int)Get(NativeVerdictValue.FLT_VERDICT_BAND)));
+                }
+                result.Verdict = verdict.AsReadOnly();
             }
             return result;
         }
@@ -581,6 +684,52 @@ namespace Flatline
                 if (!handle.IsClosed)
                     UpdateCallback();
             }
+        }
+
+        /// <summary>The rule set sheets are judged by (<see cref="SetRules"/>), or null.</summary>
+        public ToleranceRules? Rules { get; private set; }
+
+        /// <summary>Judges every sheet from now on against <paramref name="rules"/>
+        /// (null: no more): the sheets' thickness (mm) and nominal width (mm;
+        /// 0: each sheet's measured strip width) choose each rule's band. The
+        /// gauge keeps its own copy. The current coil's statistics restart;
+        /// set the rules before a coil's first frame.</summary>
+        public void SetRules(ToleranceRules? rules, double thicknessMm = 1.0, double widthMm = 0.0)
+        {
+            if (rules == null)
+                FlatlineNative.flt_cs_gauge_clear_rules(LiveHandle);
+            else
+                FlatlineNative.flt_gauge_set_rules(LiveHandle, rules.LiveHandle, thicknessMm, widthMm);
+            Rules = rules;
+        }
+
+        /// <summary>The verdict statistics of the coil being measured, or with
+        /// <paramref name="last"/> of the last finished coil; null when there
+        /// are none (no rules, no coil finished yet).</summary>
+        public unsafe CoilStats? CoilStatistics(bool last = false)
+        {
+            int which = (int)(last ? NativeCoil.FLT_COIL_LAST : NativeCoil.FLT_COIL_CURRENT);
+            int n = (int)NativeCoilValue.FLT_COIL_VALUES;
+            double[] Read(int rule)
+            {
+                var v = new double[n];
+                fixed (double* pv = v)
+                    FlatlineNative.flt_cs_gauge_coil_stats(LiveHandle, which, (ulong)rule, (ulong)n, pv);
+                return v;
+            }
+            double[] first;
+            try
+            {
+                first = Read(0);
+            }
+            catch (FlatlineStateException)
+            {
+                return null;
+            }
+            var rules = new List<RuleStats> { new RuleStats(0, first) };
+            for (int i = 1; i < (int)first[(int)NativeCoilValue.FLT_COIL_RULES]; ++i)
+                rules.Add(new RuleStats(i, Read(i)));
+            return new CoilStats(first, rules.AsReadOnly());
         }
 
         /// <summary>One of the gauge's counters.</summary>

@@ -33,7 +33,7 @@
 %include "sim.i"
 %include "flatness.i"
 %include "source.i"
+%include "verdict.i"  /* before the gauge: its sheets have verdicts */
 %include "gauge.i"
 %include "genicam.i"
-%include "verdict.i"
 %include "advisor.i"

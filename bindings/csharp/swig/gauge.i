@@ -10,13 +10,16 @@ FLT_CS_HANDLE(flt_sheet, SheetHandle)
 FLT_CS_INT_ENUM(flt_sheet_value, NativeSheetValue)
 FLT_CS_INT_ENUM(flt_sheet_array, NativeSheetArray)
 FLT_CS_INT_ENUM(flt_gauge_counter, NativeGaugeCounter)
+FLT_CS_INT_ENUM(flt_coil, NativeCoil)
+FLT_CS_INT_ENUM(flt_coil_value, NativeCoilValue)
+%ignore FLT_COIL_MAX_ENUM_;
+%ignore FLT_COIL_VALUE_MAX_ENUM_;
+/* A sheet's verdict and a coil's statistics through the helpers below. */
+%ignore flt_sheet_verdict;
+%ignore flt_gauge_coil_stats;
 %ignore FLT_SHEET_VALUE_MAX_ENUM_;
 %ignore FLT_SHEET_ARRAY_MAX_ENUM_;
 %ignore FLT_GAUGE_COUNT_MAX_ENUM_;
-/* The sheets' verdicts and the coils' statistics: not wrapped yet. */
-%ignore flt_gauge_set_rules;
-%ignore flt_gauge_coil_stats;
-%ignore flt_sheet_verdict;
 
 /* The callback: a function pointer the public Gauge makes from a delegate
  * it keeps alive (Marshal.GetFunctionPointerForDelegate), and its user
@@ -55,6 +58,28 @@ flt_status flt_cs_sheet_height_map(void *sheet, size_t rows, size_t fibers, doub
 flt_status flt_cs_sheet_measured_map(void *sheet, size_t rows, size_t fibers,
                                      double *height_values) {
     return flt_sheet_measured_map((const flt_sheet *)sheet, rows, fibers, height_values);
+}
+/* The sheet's verdict: rule `rule` of the rules it was judged by (name
+ * owned by the sheet) and one of its results (flt_verdict_value). */
+flt_status flt_cs_sheet_rule(void *sheet, size_t rule, const char **name, flt_measure *measure,
+                             double *length_mm) {
+    const flt_rules *rules = NULL;
+    flt_status st = flt_sheet_verdict((const flt_sheet *)sheet, &rules, NULL);
+    return st != FLT_OK ? st : flt_rules_rule(rules, rule, name, measure, length_mm);
+}
+flt_status flt_cs_sheet_verdict_get(void *sheet, size_t rule, int key, double *out) {
+    const flt_verdict *verdict = NULL;
+    flt_status st = flt_sheet_verdict((const flt_sheet *)sheet, NULL, &verdict);
+    return st != FLT_OK ? st : flt_verdict_get(verdict, rule, (flt_verdict_value)key, out);
+}
+/* A coil's statistics for one rule into values[count]. */
+flt_status flt_cs_gauge_coil_stats(const flt_gauge *gauge, int which, size_t rule, size_t count,
+                                   double *values) {
+    return flt_gauge_coil_stats(gauge, (flt_coil)which, rule, count, values);
+}
+/* No more rules (a null SafeHandle cannot be passed). */
+flt_status flt_cs_gauge_clear_rules(flt_gauge *gauge) {
+    return flt_gauge_set_rules(gauge, NULL, 1.0, 0.0);
 }
 /* Destroys a gauge after removing its callback, so that no sheet reaches a
  * delegate while the gauge shuts down (its finalizer may run after the

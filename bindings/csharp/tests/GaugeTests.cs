@@ -342,5 +342,78 @@ namespace Flatline.Tests
             Assert.Throws<ObjectDisposedException>(() => gauge.Cut(200));
             gauge.Dispose();  // idempotent
         }
+
+        private const string VerdictRules = @"{
+  ""format"": ""flatline-tolerances"", ""version"": 1, ""name"": ""c# gauge test"",
+  ""rules"": [
+    { ""name"": ""1/2 m tight"", ""measure"": ""straightedge_along"", ""length_mm"": 500,
+      ""bands"": [ { ""thickness_mm"": [1, 10], ""width_mm"": [0, 3000], ""limit"": 1.9 } ] },
+    { ""name"": ""1/2 m loose"", ""measure"": ""straightedge_along"", ""length_mm"": 500,
+      ""bands"": [ { ""thickness_mm"": [1, 10], ""width_mm"": [0, 3000], ""limit"": 2.1 } ] }
+  ]
+}";
+
+        [Fact]
+        public void SheetsCarryTheirVerdictAndTheCoilItsStatistics()
+        {
+            // The strip waves along travel as 2 sin(2 pi s / 1000) mm across its
+            // whole width: under a 500 mm straightedge the deviation is
+            // A (1 - cos(pi L / P)) = 2 mm, so the 1.9 mm rule fails and the 2.1
+            // mm one passes.
+            using var calibration = Sensor();
+            using var options = Options();
+            using var gauge = new Gauge(calibration, options);
+            Assert.Null(gauge.CoilStatistics());
+            using (var rules = ToleranceRules.Parse(VerdictRules))
+            {
+                gauge.SetRules(rules, thicknessMm: 4.0);
+                Assert.Same(rules, gauge.Rules);
+            }  // the gauge keeps its own copy
+            gauge.Cut(3000);
+            gauge.Cut(6000);
+            var height = new double[Fibers];
+            var slope = new double[Fibers];
+            double Bow(double s) => 2.0 * Math.Sin(2 * Math.PI * s / 1000.0);
+            for (int r = 0; r < 3000; ++r)
+            {
+                double s = Step * r;
+                for (int k = 0; k < Fibers; ++k)
+                {
+                    height[k] = 0.5 * (Bow(s - 50) + Bow(s + 50));
+                    slope[k] = (Bow(s + 50) - Bow(s - 50)) / 100.0;
+                }
+                gauge.PushRow(s, height, slope);
+            }
+            gauge.Flush();
+            var sheets = Drain(gauge);
+            Assert.Equal(3, sheets.Count);
+            foreach (var sheet in sheets)
+            {
+                var verdict = sheet.Verdict;
+                Assert.NotNull(verdict);
+                Assert.Equal("1/2 m tight", verdict![0].Rule.Name);
+                Assert.Equal(VerdictState.Fail, verdict[0].State);
+                Assert.Equal(VerdictState.Pass, verdict[1].State);
+                Assert.Equal(1, sheet.FailedRules);
+                // Rows every 3 mm: at most A pi h / P = 0.019 mm below 2 mm; the
+                // noise-free gauge is within micrometres of the sheet.
+                Assert.InRange(verdict[0].Worst, 2.0 - 0.02, 2.0 + 0.001);
+                Assert.Equal(1.9 - verdict[0].Worst, verdict[0].Margin, 12);
+            }
+            var coil = gauge.CoilStatistics(last: true);
+            Assert.NotNull(coil);
+            Assert.True(coil!.Finished);
+            Assert.Equal((1L, 3L, 0L, 3L), (coil.Coil, coil.Sheets, coil.Passed, coil.Failed));
+            Assert.Equal(3, coil.Rules[0].Failed);
+            Assert.Equal(sheets.Max(s => s.Verdict![0].Worst), coil.Rules[0].WorstMax);
+            Assert.Equal(3, coil.Rules[0].Histogram[10]);  // 2 / 1.9 in (1.0, 1.1]
+            Assert.Equal(3, coil.Rules[1].Histogram[9]);   // 2 / 2.1 in (0.9, 1.0]
+            var now = gauge.CoilStatistics();
+            Assert.Equal((0L, 0L), (now!.Coil, now.Sheets));
+            gauge.SetRules(null);
+            Assert.Null(gauge.Rules);
+            Assert.Null(gauge.CoilStatistics());
+            Assert.Throws<InvalidArgumentException>(() => gauge.SetRules(ToleranceRules.Parse(VerdictRules), -1.0));
+        }
     }
 }
