@@ -32,6 +32,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <utility>
 
 namespace flt {
 namespace verdict {
@@ -56,6 +57,55 @@ void straightedge::reserve(std::size_t count) {
     low_.reserve(count);
     nodes_.reserve(4 * count);
     pool_.reserve(2 * count * levels_of(count));
+    order_.reserve(count);
+    range_.reserve(count);
+}
+
+const std::vector<std::size_t> &
+straightedge::order_lines(const double *z, const unsigned char *flags, std::size_t count,
+                          std::size_t line_stride, std::size_t length, std::size_t z_stride,
+                          unsigned skip_bits) {
+    order_.resize(count);
+    range_.resize(count);
+    for (std::size_t i = 0; i < count; ++i) {
+        double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+        for (std::size_t j = 0; j < length; ++j) {
+            const std::size_t at = i * line_stride + j * z_stride;
+            const double v = z[at];
+            if (!std::isfinite(v) || (flags != nullptr && (flags[at] & skip_bits) != 0))
+                continue;
+            lo = v < lo ? v : lo;
+            hi = v > hi ? v : hi;
+        }
+        order_[i] = i;
+        range_[i] = hi >= lo ? hi - lo : 0.0;
+    }
+    // Insertion into a sorted prefix would be quadratic; std::stable_sort
+    // may allocate. A heap sort on (range desc, index asc) is in place.
+    const auto before = [&](std::size_t a, std::size_t b) {  // a goes first
+        return range_[a] > range_[b] || (range_[a] == range_[b] && a < b);
+    };
+    // Max-heap of "goes last" at the root, then pop to the back.
+    const auto sift = [&](std::size_t root, std::size_t end) {
+        for (;;) {
+            std::size_t child = 2 * root + 1;
+            if (child >= end)
+                return;
+            if (child + 1 < end && before(order_[child], order_[child + 1]))
+                ++child;
+            if (!before(order_[root], order_[child]))
+                return;
+            std::swap(order_[root], order_[child]);
+            root = child;
+        }
+    };
+    for (std::size_t i = count / 2; i-- > 0;)
+        sift(i, count);
+    for (std::size_t end = count; end > 1; --end) {
+        std::swap(order_[0], order_[end - 1]);
+        sift(0, end - 1);
+    }
+    return order_;
 }
 
 straightedge_gap straightedge::measure(const double *pos, const double *z,

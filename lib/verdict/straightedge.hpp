@@ -33,9 +33,21 @@ class straightedge {
     straightedge_gap measure(const double *pos, const double *z, const unsigned char *flags,
                              std::size_t count, std::size_t z_stride, unsigned skip_bits,
                              double length, double floor);
-    // Makes room for profiles of up to `count` samples now, so that
-    // measuring them later allocates nothing.
+    // Makes room for profiles of up to `count` samples (and maps of up to
+    // `count` lines) now, so that measuring them later allocates nothing.
     void reserve(std::size_t count);
+
+    // The order in which to measure the lines of a map: by decreasing
+    // height range (max - min of the heights measure() uses), ties in line
+    // order. A line's gap never exceeds its range, so the tallest lines
+    // first raise the floor early and the rest are mostly skipped: the
+    // result is the same, found sooner. lines: `count` lines, line i's
+    // samples z[i * line_stride + j * z_stride] (j < length) with their
+    // flags likewise. Returns the order (valid until the next call).
+    const std::vector<std::size_t> &order_lines(const double *z, const unsigned char *flags,
+                                                std::size_t count, std::size_t line_stride,
+                                                std::size_t length, std::size_t z_stride,
+                                                unsigned skip_bits);
 
   private:
     // The used samples.
@@ -50,6 +62,8 @@ class straightedge {
     std::vector<std::size_t> pool_;
     std::vector<std::size_t> high_, low_;  // sliding-window extremes (deques)
     std::size_t n_ = 0;
+    std::vector<std::size_t> order_;  // order_lines
+    std::vector<double> range_;
 
     void build(std::size_t node, std::size_t lo, std::size_t hi);
     // The sample in [lo, hi) of largest slope from sample i (< lo); the

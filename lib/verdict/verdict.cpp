@@ -20,8 +20,13 @@ map_gap straightedge_of_map(straightedge &se, flt_measure measure, double length
                             const map_view &m) {
     map_gap out;
     out.computed = true;
+    // The tallest lines first (straightedge::order_lines): same result,
+    // most lines skipped. Ties keep the line order, so the position
+    // reported is the first line (in that order) with the largest gap.
     if (measure == FLT_MEASURE_STRAIGHTEDGE_ALONG) {
-        for (std::size_t k = 0; k < m.fibers; ++k) {
+        const std::vector<std::size_t> &order =
+            se.order_lines(m.z, m.flags, m.fibers, 1, m.rows, m.fibers, FLT_FLAG_NO_DATA);
+        for (std::size_t k : order) {
             const straightedge_gap g =
                 se.measure(m.s, m.z + k, m.flags ? m.flags + k : nullptr, m.rows, m.fibers,
                            FLT_FLAG_NO_DATA, length, out.measured ? out.deviation : -1.0);
@@ -33,7 +38,9 @@ map_gap straightedge_of_map(straightedge &se, flt_measure measure, double length
             }
         }
     } else {
-        for (std::size_t r = 0; r < m.rows; ++r) {
+        const std::vector<std::size_t> &order =
+            se.order_lines(m.z, m.flags, m.rows, m.fibers, m.fibers, 1, FLT_FLAG_NO_DATA);
+        for (std::size_t r : order) {
             const straightedge_gap g = se.measure(
                 m.x, m.z + r * m.fibers, m.flags ? m.flags + r * m.fibers : nullptr, m.fibers, 1,
                 FLT_FLAG_NO_DATA, length, out.measured ? out.deviation : -1.0);
