@@ -61,11 +61,11 @@ flt_status flt_cs_sheet_measured_map(void *sheet, size_t rows, size_t fibers,
 }
 /* The sheet's verdict: rule `rule` of the rules it was judged by (name
  * owned by the sheet) and one of its results (flt_verdict_value). */
-flt_status flt_cs_sheet_rule(void *sheet, size_t rule, const char **name, flt_measure *measure,
-                             double *length_mm) {
+flt_status flt_cs_sheet_rule(void *sheet, size_t rule, const char **name_out,
+                             flt_measure *measure_out, double *length_mm_out) {
     const flt_rules *rules = NULL;
     flt_status st = flt_sheet_verdict((const flt_sheet *)sheet, &rules, NULL);
-    return st != FLT_OK ? st : flt_rules_rule(rules, rule, name, measure, length_mm);
+    return st != FLT_OK ? st : flt_rules_rule(rules, rule, name_out, measure_out, length_mm_out);
 }
 flt_status flt_cs_sheet_verdict_get(void *sheet, size_t rule, int key, double *out) {
     const flt_verdict *verdict = NULL;
