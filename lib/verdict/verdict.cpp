@@ -3,6 +3,7 @@
 // the height map, the others from the values given.
 #include "verdict/verdict.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -58,10 +59,8 @@ map_gap straightedge_of_map(straightedge &se, flt_measure measure, double length
 }  // namespace
 
 bool needs_map(const rule_set &set) {
-    for (const rule &r : set.rules)
-        if (is_straightedge(r.measure))
-            return true;
-    return false;
+    return std::any_of(set.rules.begin(), set.rules.end(),
+                       [](const rule &r) { return is_straightedge(r.measure); });
 }
 
 void judge(const rule_set &set, const given_measure *given, straightedge &se, double thickness,

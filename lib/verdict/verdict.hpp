@@ -45,13 +45,13 @@ struct map_view {
     const std::uint8_t *flags = nullptr;
 };
 
-// Judges one sheet against every rule of `set` into out[set.rules.size()],
+// Judges one sheet against every rule of `set` into results[set.rules.size()],
 // with gaps[set.rules.size()] as scratch. thickness > 0; a width that is
 // not > 0 (NaN: the sheet's strip was not seen) leaves every rule
 // NOT_MEASURED. Allocates nothing but the straightedge's growth (none once
 // it was reserved for the longest line).
 void judge(const rule_set &set, const given_measure *given, straightedge &se, double thickness,
-           double width, const map_view &map, rule_result *out, map_gap *gaps);
+           double width, const map_view &map, rule_result *results, map_gap *gaps);
 
 // Whether any rule of the set needs the height map.
 bool needs_map(const rule_set &set);
