@@ -133,9 +133,12 @@ class Extractor:
     # -- lifetime ---------------------------------------------------------------
 
     def close(self) -> None:
-        """Frees the C extractor now. Idempotent; later calls raise StateError."""
+        """Frees the C extractor now, even while a traceback or another
+        object still refers to this Extractor. Idempotent; later calls raise
+        StateError."""
         with self._lock:
-            self._handle = None
+            handle, self._handle = self._handle, None
+            _capi.flt_py_release(handle)
 
     @property
     def closed(self) -> bool:

@@ -304,9 +304,12 @@ class Flatness:
     # -- lifetime -------------------------------------------------------------------
 
     def close(self) -> None:
-        """Frees the C buffers now. Idempotent; later calls raise StateError."""
+        """Frees the C buffers now, even while a traceback or another object
+        still refers to this Flatness. Idempotent; later calls raise
+        StateError."""
         with self._lock:
-            self._handle = None
+            handle, self._handle = self._handle, None
+            _capi.flt_py_release(handle)
 
     @property
     def closed(self) -> bool:

@@ -190,12 +190,12 @@ class Reconstructor:
     # -- lifetime ----------------------------------------------------------
 
     def close(self) -> None:
-        """Frees the C reconstructor now. Idempotent; any later call other
-        than close raises StateError."""
+        """Frees the C reconstructor now, even while a traceback or another
+        object still refers to this Reconstructor. Idempotent; any later
+        call other than close raises StateError."""
         with self._lock:
-            # The SWIG object owns the handle: dropping the only reference
-            # calls flt_recon_destroy immediately.
-            self._handle = None
+            handle, self._handle = self._handle, None
+            _capi.flt_py_release(handle)
 
     @property
     def closed(self) -> bool:

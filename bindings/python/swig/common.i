@@ -254,6 +254,44 @@ struct flt_options {};
   %append_output(SWIG_NewPointerObj(*$1, $descriptor(flt_options *), SWIG_POINTER_OWN));
 }
 
+/* flt_py_release(proxy): frees the C object behind a SWIG proxy now, however
+ * many references to the proxy are still alive (a traceback's frame keeps
+ * the locals of the call that raised, and a test framework may keep the
+ * traceback for a long time): the flatline classes' close() promises the C
+ * memory back at once, not when the last reference happens to go. Calls the
+ * proxy's __swig_destroy__ when the proxy owns the object, then clears the
+ * pointer, so a call through a stale proxy passes NULL, which every
+ * function of the library refuses (FLT_ERR_INVALID_ARGUMENT), and the
+ * proxy's own destructor later does nothing. None and a released proxy are
+ * ignored. */
+%{
+static PyObject *flt_py_release(PyObject *self, PyObject *args) {
+    SwigPyObject *sobj;
+    PyObject *proxy = NULL;
+    (void)self;
+    if (!PyArg_UnpackTuple(args, "flt_py_release", 1, 1, &proxy)) return NULL;
+    if (proxy == Py_None) Py_RETURN_NONE;
+    sobj = SWIG_Python_GetSwigThis(proxy);
+    if (sobj == NULL) {
+        PyErr_SetString(PyExc_TypeError, "flt_py_release: not a SWIG proxy");
+        return NULL;
+    }
+    if (sobj->ptr != NULL && sobj->own) {
+        PyObject *destroy = PyObject_GetAttrString((PyObject *)Py_TYPE(proxy), "__swig_destroy__");
+        PyObject *done;
+        if (destroy == NULL) return NULL;
+        done = PyObject_CallFunctionObjArgs(destroy, proxy, NULL);
+        Py_DECREF(destroy);
+        if (done == NULL) return NULL;
+        Py_DECREF(done);
+    }
+    sobj->ptr = NULL;
+    sobj->own = 0;
+    Py_RETURN_NONE;
+}
+%}
+%native(flt_py_release) flt_py_release;
+
 /* The version the extension was compiled against (the library's own is
  * flt_version_string()). */
 %constant const char *FLT_HEADER_VERSION = FLT_VERSION_STRING;

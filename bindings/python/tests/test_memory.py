@@ -3,9 +3,11 @@
 leaves the resident set flat."""
 
 import gc
+import math
 import tracemalloc
 
 import numpy as np
+import pytest
 
 import flatline
 
@@ -164,3 +166,74 @@ def test_repeated_large_simulator_calls_leave_rss_flat():
     growth = rss_bytes() - before
     print(f"RSS growth over 5 large simulator calls: {growth / 1024:.0f} KiB")
     assert growth < 12 * MB
+
+
+def _peak_rss_bytes():
+    """The process's peak resident set (VmHWM) so far, or None where the
+    kernel does not report it."""
+    try:
+        with open("/proc/self/status") as status:
+            for line in status:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return None
+
+
+def test_close_frees_now_while_tracebacks_hold_the_call():
+    # A test framework keeps the exceptions of failing calls, and with them
+    # the frames of the binding's methods that raised, whose locals hold the
+    # C handle. close() must free the C buffers anyway: otherwise every kept
+    # failure pins its object (a contract suite drawing large capacities
+    # once held gigabytes this way). Each round creates a Flatness of
+    # 200,000 rows (about 22 MB of buffers: flatness.h), a Reconstructor of
+    # 64 fibers x 32,768 rows (about 19 MB: recon.h) and an Extractor, keeps
+    # a refusal of each (its traceback), and closes them. Twelve rounds that
+    # each pinned their objects would add > 480 MB (measured: 590 MB when
+    # close() only dropped its reference); the bound of 16 MB allows the
+    # kept exceptions (~0.1 MB a round) and the allocator's noise, not one
+    # round's buffers (> 40 MB).
+    kept = []
+    calib = roi_reference(fibers=64, pitch=20.0)
+
+    def round_trip():
+        flat = flatline.Flatness(np.arange(3) * 100.0, flat_row_capacity=200_000)
+        recon = flatline.Reconstructor(64, row_capacity=32_768)
+        ex = flatline.Extractor(calib)
+        for fn, args in [(flat.evaluate, (np.zeros(1), np.zeros((1, 3)))),
+                         (recon.push, (np.array([np.nan]), np.zeros((1, 64)), np.zeros((1, 64)))),
+                         (ex.process, (np.zeros(ex.frame_size[::-1], dtype=np.uint8), math.nan))]:
+            try:
+                fn(*args)
+            except flatline.FlatlineError as error:
+                kept.append(error)  # with its traceback: the frames hold the handles
+            else:
+                raise AssertionError(f"{fn.__name__} took a bad call")
+        flat.close()
+        recon.close()
+        ex.close()
+
+    for _ in range(2):  # warm-up: glibc's mmap threshold rises after the first free
+        round_trip()
+    gc.collect()
+    before = rss_bytes()
+    peak_before = _peak_rss_bytes()
+    for _ in range(12):
+        round_trip()
+    gc.collect()
+    growth = rss_bytes() - before
+    assert len(kept) == 42 and all(e.__traceback__ is not None for e in kept)
+    print(f"RSS growth over 12 rounds with their refusals kept: {growth / MB:.1f} MB")
+    assert growth < 16 * MB
+    # A closed object is closed for good, and a stale handle in a kept frame
+    # reaches the library as NULL, which it refuses.
+    frame_locals = kept[0].__traceback__.tb_next.tb_frame.f_locals
+    handle = frame_locals.get("handle")
+    if handle is not None:
+        with pytest.raises(flatline.InvalidArgumentError, match="NULL"):
+            flatline.capi.flt_flatness_finish(handle)
+    if peak_before is not None:
+        peak_growth = _peak_rss_bytes() - peak_before
+        print(f"peak RSS growth: {peak_growth / MB:.1f} MB")
+        assert peak_growth < 16 * MB
