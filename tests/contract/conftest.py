@@ -10,6 +10,13 @@ Two Hypothesis profiles, chosen with FLT_CONTRACT_PROFILE:
            `--hypothesis-seed=N` pins one.
 FLT_CONTRACT_SCALE multiplies the examples of either profile (e.g. 0.2 for a
 quick look, 5 for a long run).
+
+The suite runs under an address-space limit of its own
+(FLT_CONTRACT_MEMORY_GB, 4 GiB; 0 for none; Linux and other POSIX systems):
+an example that makes memory grow fails inside the suite with MemoryError or
+flatline.OutOfMemoryError, and Hypothesis prints it, where without a limit
+the kernel's out-of-memory killer would end the process without a word. The
+suite needs about 0.4 GB (README.md).
 """
 
 import os
@@ -29,6 +36,25 @@ settings.register_profile("ci", derandomize=True, max_examples=max(1, int(100 * 
 settings.register_profile("explore", derandomize=False,
                           max_examples=max(1, int(1000 * _SCALE)), **_COMMON)
 settings.load_profile(os.environ.get("FLT_CONTRACT_PROFILE", "ci"))
+
+
+def _limit_address_space() -> None:
+    gigabytes = float(os.environ.get("FLT_CONTRACT_MEMORY_GB", "4"))
+    if gigabytes <= 0:
+        return
+    try:
+        import resource
+    except ImportError:  # Windows: no rlimits
+        return
+    limit = int(gigabytes * (1 << 30))
+    soft, hard = resource.getrlimit(resource.RLIMIT_AS)
+    if hard != resource.RLIM_INFINITY:
+        limit = min(limit, hard)
+    if soft == resource.RLIM_INFINITY or soft > limit:
+        resource.setrlimit(resource.RLIMIT_AS, (limit, hard))
+
+
+_limit_address_space()
 
 
 def examples(count: int) -> int:
