@@ -146,7 +146,9 @@ typedef struct flt_sim flt_sim;
  * so it may be destroyed right after), or of the reference sensor when calib
  * is NULL (flt_calib_create_reference(0, 2048, -1000, 2, 1001)).
  * options: NULL for the defaults, else read for the sim_* keys. The sheet
- * starts flat. Allocates the frame scratch (4 bytes per pixel) here.
+ * starts flat. Allocates everything here: 4 W H + 170 W + 25 K bytes for
+ * W x H frames and K fibers (the frame scratch, 4 bytes per pixel, and per
+ * column and fiber tables; tests/c/test_memory.c checks it).
  * @param calib   a finished calibration, or NULL for the reference sensor.
  * @param options NULL, or the sim_* keys.
  * @param out     receives the handle; NULL on failure.

@@ -154,11 +154,12 @@ flt_status create_handle(const char *fn, std::size_t fibers, const double *x,
                     "%s: option 'flat_zone_width' = %g mm divides the fibers' %g mm into %.4g "
                     "zones, more than %d; use wider zones",
                     fn, p.zone_width, x[fibers - 1] - x[0], zones, FLT_FLATNESS_MAX_ZONES);
-    // The rows of a window (position, heights, flags, edges) twice over
-    // with the evaluation's column scratch and the strip's resampled copy,
-    // and per fiber and zone a few results.
+    // flatness.h, "Memory": per row the window (position 8, heights and
+    // flags 9 K, edges 16), the strip's resampled copy (9 K and seven
+    // doubles of per-row edge statistics) and the evaluation's column
+    // scratch (17); per fiber and zone the two result sets.
     const double K = double(fibers), rows = double(p.row_capacity);
-    const double bytes = rows * (8 + 18 * K + 17 + 64) + K * 120 + zones * 60;
+    const double bytes = rows * (97 + 18 * K) + 250 * K + 100 * zones;
     if (!(bytes <= FLT_FLATNESS_MAX_BYTES))
         return fail(FLT_ERR_INVALID_ARGUMENT,
                     "%s: flat_row_capacity = %zu rows of %zu fibers would take about %.3g GB, "

@@ -111,32 +111,99 @@ int alloc_count_install(void) {
     }
     return hooked;
 }
+size_t alloc_live_bytes(void) {
+    return 0;
+}
+size_t alloc_peak_bytes(void) {
+    return 0;
+}
+void alloc_reset_peak(void) {}
 #else
+#  include <errno.h>
+#  include <malloc.h>
+
 extern void *__libc_malloc(size_t);
 extern void *__libc_calloc(size_t, size_t);
 extern void *__libc_realloc(void *, size_t);
+extern void *__libc_memalign(size_t, size_t);
 extern void __libc_free(void *);
 
-void *malloc(size_t n) {
+/* Bytes held, as malloc_usable_size reports them (what the allocator set
+ * aside for each block, a few bytes above what was asked), and their peak. */
+static atomic_size_t live_bytes;
+static atomic_size_t peak_bytes;
+
+static void *held(void *p) {
+    if (p != NULL) {
+        size_t now = atomic_fetch_add(&live_bytes, malloc_usable_size(p)) + malloc_usable_size(p);
+        size_t peak = atomic_load(&peak_bytes);
+        while (now > peak && !atomic_compare_exchange_weak(&peak_bytes, &peak, now)) {
+        }
+    }
+    return p;
+}
+static void released(void *p) {
+    if (p != NULL)
+        atomic_fetch_sub(&live_bytes, malloc_usable_size(p));
+}
+static void count(void) {
     if (atomic_load(&g_counting))
         atomic_fetch_add(&g_allocations, 1);
-    return __libc_malloc(n);
+}
+
+void *malloc(size_t n) {
+    count();
+    return held(__libc_malloc(n));
 }
 void *calloc(size_t n, size_t size) {
-    if (atomic_load(&g_counting))
-        atomic_fetch_add(&g_allocations, 1);
-    return __libc_calloc(n, size);
+    count();
+    return held(__libc_calloc(n, size));
 }
 void *realloc(void *p, size_t n) {
-    if (atomic_load(&g_counting))
-        atomic_fetch_add(&g_allocations, 1);
-    return __libc_realloc(p, n);
+    count();
+    released(p);
+    void *moved = __libc_realloc(p, n);
+    if (moved == NULL && n != 0) {  // p is still held
+        held(p);
+        return NULL;
+    }
+    return held(moved);
+}
+/* The aligned forms (operator new of over-aligned types, Eigen, OpenCV)
+ * come back to free(): they must be counted on the way in too. */
+void *memalign(size_t alignment, size_t n) {
+    count();
+    return held(__libc_memalign(alignment, n));
+}
+void *aligned_alloc(size_t alignment, size_t n) {
+    count();
+    return held(__libc_memalign(alignment, n));
+}
+int posix_memalign(void **out, size_t alignment, size_t n) {
+    if (alignment < sizeof(void *) || (alignment & (alignment - 1)) != 0)
+        return EINVAL;
+    count();
+    void *p = held(__libc_memalign(alignment, n));
+    if (p == NULL && n != 0)
+        return ENOMEM;
+    *out = p;
+    return 0;
 }
 void free(void *p) {
+    released(p);
     __libc_free(p);
 }
 
 int alloc_count_install(void) {
     return 1;
+}
+size_t alloc_live_bytes(void) {
+    return atomic_load(&live_bytes);
+}
+size_t alloc_peak_bytes(void) {
+    return atomic_load(&peak_bytes);
+}
+void alloc_reset_peak(void) {
+    atomic_store(&peak_bytes, atomic_load(&live_bytes));
 }
 #endif

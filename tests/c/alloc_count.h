@@ -31,4 +31,13 @@ extern atomic_size_t g_allocations;
 
 int alloc_count_install(void);
 
+/* Linux only (0 on Windows, where the hooks see one DLL's calls): the bytes
+ * the process holds in the heap now, their peak since alloc_reset_peak(),
+ * counted from malloc_usable_size for every block, with or without
+ * g_counting. The memory tests compare a create call's peak with the
+ * formula its header documents. */
+size_t alloc_live_bytes(void);
+size_t alloc_peak_bytes(void);
+void alloc_reset_peak(void);
+
 #endif
