@@ -26,6 +26,10 @@ from flatline import capi
 #: with room for a machine loaded twenty-fold.
 FIXED_SECONDS = 3.0
 SECONDS_PER_ROW = 0.05
+#: Seconds per MB a create call writes: the components write every buffer
+#: at create (docs/memory.md), about 400 MB/s on the development machine,
+#: so 20 MB/s leaves room for a machine loaded twenty-fold.
+SECONDS_PER_MB = 0.05
 
 #: A NaN in a reconstructed height is allowed only with one of these flags.
 NAN_FLAGS = flatline.FLAG_NO_DATA | getattr(flatline, "FLAG_OFF_STRIP", 0)
@@ -85,12 +89,13 @@ def closing(test: Callable[..., Any]) -> Callable[..., Any]:
 
 
 def call(what: str, fn: Callable[..., Any], *args: Any, rows: int = 1,
-         **kwargs: Any) -> Tuple[bool, Any]:
+         megabytes: float = 0.0, **kwargs: Any) -> Tuple[bool, Any]:
     """Calls fn: (True, result), or (False, the exception) when the library
     or the binding refused with a FlatlineError, ValueError or TypeError
     (each checked by check_refusal). Anything else (OverflowError,
     SystemError, IndexError, ...) breaks the contract and propagates; so
-    does a call slower than FIXED_SECONDS + SECONDS_PER_ROW * rows."""
+    does a call slower than FIXED_SECONDS + SECONDS_PER_ROW * rows +
+    SECONDS_PER_MB * megabytes (what a create call allocates)."""
     start = time.perf_counter()
     try:
         result = fn(*args, **kwargs)
@@ -104,7 +109,7 @@ def call(what: str, fn: Callable[..., Any], *args: Any, rows: int = 1,
         result, ok = error, False
     elapsed = time.perf_counter() - start
     Tally.calls += 1
-    limit = FIXED_SECONDS + SECONDS_PER_ROW * max(1, rows)
+    limit = FIXED_SECONDS + SECONDS_PER_ROW * max(1, rows) + SECONDS_PER_MB * megabytes
     assert elapsed <= limit, f"{what}: {elapsed:.2f} s for {rows} rows (limit {limit:.2f} s)"
     return ok, result
 

@@ -322,7 +322,8 @@ class ReconMachine(RuleBasedStateMachine):
     @precondition(lambda self: self.recon is None)
     def create(self, fibers, options):
         assume(recon_bytes(fibers, options) < RECON_BUDGET)
-        ok, recon = call("Reconstructor", flatline.Reconstructor, fibers, **options)
+        ok, recon = call("Reconstructor", flatline.Reconstructor, fibers,
+                         megabytes=recon_bytes(fibers, options) / 1e6, **options)
         if not ok:  # inconsistent options (knots too fine for the lasers)
             return
         self.recon, self.fibers = recon, fibers
@@ -515,7 +516,7 @@ def test_flatness_whole_sheets_and_streams(x, options, rows, seed, kinds, scale,
     bytes_ = flatness_bytes(fibers, options)
     refused = bytes_ > capi.FLT_FLATNESS_MAX_BYTES * 1.01
     assume(bytes_ < BUDGET or refused)
-    ok, flat = call("Flatness", flatline.Flatness, x, **options)
+    ok, flat = call("Flatness", flatline.Flatness, x, megabytes=bytes_ / 1e6, **options)
     if not ok:  # too many zones for the grid, or inconsistent windows
         assert isinstance(flat, flatline.InvalidArgumentError), flat
         return
