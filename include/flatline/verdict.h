@@ -19,11 +19,12 @@
  *   nowhere above it; its deviation is the largest gap between the
  *   straightedge and the sheet between the contacts, and the sheet's
  *   deviation is the largest over every such resting position on every
- *   line. It is computed exactly over the samples with convex hulls
- *   (lib/verdict/README.md). A straightedge longer than a wave's period
- *   bridges it (the gap is the wave's full height); a shorter one dips
- *   into it: under a sine of amplitude A and period P the deviation is
- *   A (1 - cos(pi L / P)) for L <= P and 2 A for L >= P.
+ *   line (its position: the deepest sample; on a tie between lines, on
+ *   the smaller fiber or row). It is computed exactly over the samples
+ *   with convex hulls (lib/verdict/README.md). A straightedge longer than
+ *   a wave's period bridges it (the gap is the wave's full height); a
+ *   shorter one dips into it: under a sine of amplitude A and period P
+ *   the deviation is A (1 - cos(pi L / P)) for L <= P and 2 A for L >= P.
  *   The other measures are the flatness results (flatline/flatness.h) the
  *   caller gives with flt_verdict_set_measure(): FLT_MEASURE_ZONE_I_UNITS
  *   (the largest zone I-Units), _WAVE_STEEPNESS (%), _WAVE_HEIGHT (mm,
@@ -57,7 +58,8 @@
  * Memory
  *   flt_rules_load*() and flt_verdict_create() allocate; a verdict keeps
  *   its own copy of the rules. flt_verdict_evaluate() allocates scratch
- *   when it meets a longer line than before (once per size).
+ *   when it meets a longer line, or more lines, than before (once per
+ *   size).
  *
  * Threads
  *   A flt_rules is read-only after loading: any threads may share it. A

@@ -1,13 +1,11 @@
 // SPDX-License-Identifier: Apache-2.0
 // One sheet against every rule (verdict.hpp): the straightedge measures on
-// the height map, the others from the values given.
+// the height map (straightedge.cpp), the others from the values given.
 #include "verdict/verdict.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
-
-#include "flatline/recon.h"  // FLT_FLAG_NO_DATA
 
 namespace flt {
 namespace verdict {
@@ -15,48 +13,25 @@ namespace {
 
 constexpr double k_nan = std::numeric_limits<double>::quiet_NaN();
 
-// The worst straightedge gap of a map for one measure and length: over
-// every fiber (along) or every row (across).
-map_gap straightedge_of_map(straightedge &se, flt_measure measure, double length,
-                            const map_view &m) {
-    map_gap out;
-    out.computed = true;
-    // The tallest lines first (straightedge::order_lines): same result,
-    // most lines skipped. Ties keep the line order, so the position
-    // reported is the first line (in that order) with the largest gap.
-    if (measure == FLT_MEASURE_STRAIGHTEDGE_ALONG) {
-        const std::vector<std::size_t> &order =
-            se.order_lines(m.z, m.flags, m.fibers, 1, m.rows, m.fibers, FLT_FLAG_NO_DATA);
-        for (std::size_t k : order) {
-            const straightedge_gap g =
-                se.measure(m.s, m.z + k, m.flags ? m.flags + k : nullptr, m.rows, m.fibers,
-                           FLT_FLAG_NO_DATA, length, out.measured ? out.deviation : -1.0);
-            if (g.measured && (!out.measured || g.deviation > out.deviation)) {
-                out.measured = true;
-                out.deviation = g.deviation;
-                out.x = m.x[k];
-                out.s = g.at;
-            }
-        }
-    } else {
-        const std::vector<std::size_t> &order =
-            se.order_lines(m.z, m.flags, m.rows, m.fibers, m.fibers, 1, FLT_FLAG_NO_DATA);
-        for (std::size_t r : order) {
-            const straightedge_gap g = se.measure(
-                m.x, m.z + r * m.fibers, m.flags ? m.flags + r * m.fibers : nullptr, m.fibers, 1,
-                FLT_FLAG_NO_DATA, length, out.measured ? out.deviation : -1.0);
-            if (g.measured && (!out.measured || g.deviation > out.deviation)) {
-                out.measured = true;
-                out.deviation = g.deviation;
-                out.x = g.at;
-                out.s = m.s[r];
-            }
-        }
-    }
-    return out;
+// Whether rule r needs a map gap for this sheet: a straightedge whose band
+// applies.
+bool needs_gap(const rule &r, double thickness, double width, bool has_map) {
+    return has_map && is_straightedge(r.measure) && width > 0 && r.band_of(thickness, width) >= 0;
 }
 
 }  // namespace
+
+std::size_t gap_source(const rule_set &set, std::size_t i, double thickness, double width,
+                       bool has_map) {
+    const std::vector<rule> &rules = set.rules;
+    if (!needs_gap(rules[i], thickness, width, has_map))
+        return k_no_line;
+    for (std::size_t j = 0; j < i; ++j)
+        if (rules[j].measure == rules[i].measure && rules[j].length == rules[i].length &&
+            needs_gap(rules[j], thickness, width, has_map))
+            return j;
+    return i;
+}
 
 bool needs_map(const rule_set &set) {
     return std::any_of(set.rules.begin(), set.rules.end(),
@@ -65,10 +40,20 @@ bool needs_map(const rule_set &set) {
 
 void judge(const rule_set &set, const given_measure *given, straightedge &se, double thickness,
            double width, const map_view &map, rule_result *results, map_gap *gaps) {
-    const std::vector<rule> &rules = set.rules;
     const bool has_map = map.rows > 0 && map.fibers > 0;
-    for (std::size_t i = 0; i < rules.size(); ++i)
+    for (std::size_t i = 0; i < set.rules.size(); ++i) {
         gaps[i] = map_gap{};
+        if (gap_source(set, i, thickness, width, has_map) != i)
+            continue;
+        const rule &r = set.rules[i];
+        se.measure_lines(map, is_along(r), r.length, 0, line_count(map, is_along(r)), gaps[i]);
+    }
+    finish(set, given, thickness, width, has_map, gaps, results);
+}
+
+void finish(const rule_set &set, const given_measure *given, double thickness, double width,
+            bool has_map, const map_gap *gaps, rule_result *results) {
+    const std::vector<rule> &rules = set.rules;
     for (std::size_t i = 0; i < rules.size(); ++i) {
         const rule &r = rules[i];
         double *out = results[i].value;
@@ -94,18 +79,10 @@ void judge(const rule_set &set, const given_measure *given, straightedge &se, do
         bool measured = false;
         double worst = 0, x = 0, s = 0;
         if (is_straightedge(r.measure)) {
-            if (has_map) {
-                // Rules sharing a straightedge measure and length share its
-                // result.
-                std::size_t from = i;
-                for (std::size_t j = 0; j < i; ++j)
-                    if (gaps[j].computed && rules[j].measure == r.measure &&
-                        rules[j].length == r.length)
-                        from = j;
-                if (from == i)
-                    gaps[i] = straightedge_of_map(se, r.measure, r.length, map);
+            const std::size_t from = gap_source(set, i, thickness, width, has_map);
+            if (from != k_no_line) {
                 const map_gap &g = gaps[from];
-                measured = g.measured;
+                measured = g.measured();
                 worst = g.deviation;
                 x = g.x;
                 s = g.s;

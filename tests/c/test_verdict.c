@@ -2,9 +2,11 @@
 /*
  * Verdicts (flatline/verdict.h): the straightedge deviation against closed
  * forms (a sine under a straightedge shorter and longer than its period)
- * and against its definition evaluated by brute force; rule files and
- * their errors; a sheet judged against rules by thickness and width band.
+ * and against its definition evaluated by brute force, on profiles and on
+ * every line of maps; rule files and their errors; a sheet judged against
+ * rules by thickness and width band.
  */
+#include <float.h>
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -23,6 +25,9 @@
 #define OK(call) assert_int_equal((call), FLT_OK)
 
 static const double PI = 3.14159265358979323846;
+
+static flt_rules *load(const char *text);
+static double get(const flt_verdict *v, size_t rule, flt_verdict_value key);
 
 /* The sine's straightedge deviation: a straightedge of length L <= P rests
  * on the two samples L/2 either side of a trough (the highest pair it can
@@ -168,6 +173,246 @@ static void small_profiles(void **state) {
     /* Two samples: measured, no gap. */
     OK(flt_straightedge_profile(p, v, 2, 100, &d, &at));
     assert_true(d == 0.0);
+}
+
+/* The definition once more, directly and for long profiles: a left
+ * contact i rests with every sample j within reach whose slope from i is
+ * at least that of each sample between; the steepest such j lies highest
+ * over every sample between, so the gaps from i are those under the
+ * segment to the sample of largest slope from i within reach (the
+ * farthest on a tie). Its O(n x samples in reach) scans use the library's
+ * comparison of slopes (products, no division). depth[k] (may be NULL)
+ * receives each sample's largest gap. */
+static double definition(const double *p, const double *z, size_t n, double length, double *depth) {
+    const double reach = length * (1 + 1e-9); /* as the library: a span of L counts */
+    double best = 0;
+    for (size_t k = 0; depth && k < n; ++k)
+        depth[k] = 0;
+    for (size_t i = 0; i + 1 < n; ++i) {
+        size_t j = i + 1;
+        for (size_t q = i + 2; q < n && p[q] - p[i] <= reach; ++q)
+            if ((z[q] - z[i]) * (p[j] - p[i]) >= (z[j] - z[i]) * (p[q] - p[i]))
+                j = q;
+        const double m = (z[j] - z[i]) / (p[j] - p[i]);
+        for (size_t k = i + 1; k < j; ++k) {
+            const double g = m * (p[k] - p[i]) - (z[k] - z[i]);
+            best = g > best ? g : best;
+            if (depth && g > depth[k])
+                depth[k] = g;
+        }
+    }
+    return best;
+}
+
+static uint64_t g_seed = 20240611;
+
+static double uniform(void) {
+    g_seed = g_seed * 6364136223846793005ull + 1442695040888963407ull;
+    return (double)(g_seed >> 11) / 9007199254740992.0;
+}
+
+/* A random profile of n samples, of one of six kinds: a wave with noise
+ * on a 1 mm grid; with uneven spacing; tilted bumps; heights on a 0.25 mm
+ * grid (plateaus, and gaps equal to the last bit at many places); NaN
+ * holes, single and a long one; spikes and pits. */
+static void random_profile(int kind, size_t n, double *p, double *z) {
+    const double amplitude = 0.1 + 4 * uniform(), period = 20 + 1500 * uniform();
+    const double noise = 0.2 * uniform(), tilt = 0.02 * (uniform() - 0.5);
+    double pos = 1000 * (uniform() - 0.5);
+    for (size_t i = 0; i < n; ++i) {
+        pos += kind == 0 ? 1.0 : 0.2 + 3 * uniform();
+        p[i] = pos;
+        z[i] = amplitude * sin(2 * PI * pos / period) + tilt * pos + noise * (uniform() - 0.5);
+        if (kind == 2)
+            z[i] = amplitude * cos(2 * PI * pos / period) * cos(PI * pos / (3.1 * period)) +
+                   tilt * pos + noise * (uniform() - 0.5);
+        if (kind == 3)
+            z[i] = floor(z[i] * 4) / 4;
+        if (kind == 4 && uniform() < 0.08)
+            z[i] = NAN;
+        if (kind == 5 && uniform() < 0.1)
+            z[i] += (uniform() < 0.5 ? -1 : 1) * amplitude * uniform();
+    }
+    if (kind == 4 && n > 20)
+        for (size_t i = n / 3; i < n / 2; ++i)
+            z[i] = NAN;
+}
+
+/* Random profiles of every kind and many lengths, from 2 samples to 2500
+ * (around the library's chunks of 16 samples), under straightedges from
+ * shorter than a sample step (nothing rests with a sample between) to
+ * three times the profile: the deviation equals the definition's, and it
+ * is found at a sample that deep. */
+static void random_profiles_equal_the_definition(void **state) {
+    (void)state;
+    const size_t sizes[] = {2, 3, 15, 16, 17, 33, 100, 257, 1000, 2500};
+    double *p = malloc(2500 * sizeof *p), *z = malloc(2500 * sizeof *z);
+    double *pv = malloc(2500 * sizeof *pv), *zv = malloc(2500 * sizeof *zv);
+    double *depth = malloc(2500 * sizeof *depth);
+    size_t profiles = 0, positive = 0;
+    for (size_t t = 0; t < sizeof sizes / sizeof *sizes; ++t)
+        for (int kind = 0; kind < 6; ++kind)
+            for (int rep = 0; rep < (sizes[t] >= 1000 ? 2 : 6); ++rep) {
+                const size_t n = sizes[t];
+                random_profile(kind, n, p, z);
+                size_t nv = 0;
+                double extent = 0;
+                for (size_t i = 0; i < n; ++i)
+                    if (!isnan(z[i])) {
+                        pv[nv] = p[i];
+                        zv[nv++] = z[i];
+                        extent = fabs(z[i]) > extent ? fabs(z[i]) : extent;
+                    }
+                const double span = p[n - 1] - p[0];
+                const double lengths[] = {0.1, 5, 37, 10.0, 0.3 * span, span, 3 * span};
+                for (size_t l = 0; l < sizeof lengths / sizeof *lengths; ++l) {
+                    double d = -1, at = NAN;
+                    const flt_status st = flt_straightedge_profile(p, z, n, lengths[l], &d, &at);
+                    if (nv < 2) {
+                        assert_int_equal(st, FLT_ERR_NOT_FOUND);
+                        continue;
+                    }
+                    OK(st);
+                    ++profiles;
+                    const double want = definition(pv, zv, nv, lengths[l], depth);
+                    /* Both evaluate the gap m (p_k - p_i) - (z_k - z_i) on the
+                     * same samples; only where resting positions tie exactly
+                     * may they take different contacts for the same gap, which
+                     * changes its rounding: a few operations on magnitudes up
+                     * to twice the largest |z|, 32 ulps of it. */
+                    const double tolerance = 32 * DBL_EPSILON * extent;
+                    if (fabs(d - want) > tolerance)
+                        fail_msg("kind %d, n %zu, L = %g: %.17g against the definition's %.17g",
+                                 kind, n, lengths[l], d, want);
+                    if (want > 0) {
+                        ++positive;
+                        size_t k = 0;
+                        while (k < nv && pv[k] != at)
+                            ++k;
+                        assert_true(k < nv);                             /* a measured sample ... */
+                        assert_true(fabs(depth[k] - want) <= tolerance); /* ... that deep */
+                    } else {
+                        assert_true(d == 0.0);
+                    }
+                }
+            }
+    print_message("%zu profiles, %zu with a gap\n", profiles, positive);
+    assert_true(positive > profiles / 2);
+    free(p);
+    free(z);
+    free(pv);
+    free(zv);
+    free(depth);
+}
+
+/* Maps: every fiber along and every row across, against the definition
+ * line by line. Uneven positions both ways, NaN holes with
+ * FLT_FLAG_NO_DATA and flagged samples that still hold a height (left out
+ * all the same), a dry fiber and a dry row; a wave along, a buckle
+ * across, noise. The worst value is the largest line's; its position is
+ * on the smallest line that deep, at a sample that deep. */
+static void maps_equal_the_definition_line_by_line(void **state) {
+    (void)state;
+    enum { R = 211, K = 97 };
+    double s[R], x[K], line_p[R], line_z[R], depth[R];
+    double *z = malloc((size_t)R * K * sizeof *z);
+    uint8_t *flags = calloc((size_t)R * K, 1);
+    double pos = 0;
+    for (size_t r = 0; r < R; ++r)
+        s[r] = pos += 3 + 4 * uniform();
+    pos = -500;
+    for (size_t k = 0; k < K; ++k)
+        x[k] = pos += 5 + 10 * uniform();
+    for (size_t r = 0; r < R; ++r)
+        for (size_t k = 0; k < K; ++k) {
+            const size_t at = r * K + k;
+            z[at] = 1.5 * sin(2 * PI * s[r] / 300) * cos(PI * x[k] / 1200) +
+                    0.8 * cos(2 * PI * x[k] / 700) + 0.05 * (uniform() - 0.5);
+            const double u = uniform();
+            if (u < 0.03 || k == 40 || (r == 100 && k > 3)) {
+                z[at] = NAN;
+                flags[at] = FLT_FLAG_NO_DATA;
+            } else if (u < 0.05) {
+                flags[at] = FLT_FLAG_NO_DATA | FLT_FLAG_GAP; /* a height, unused */
+            } else if (u < 0.07) {
+                flags[at] = FLT_FLAG_GAP; /* another flag: used */
+            }
+        }
+    static const char rules[] =
+        "{ \"format\": \"flatline-tolerances\", \"version\": 1, \"name\": \"maps\",\n"
+        "  \"rules\": [\n"
+        "    { \"name\": \"a\", \"measure\": \"straightedge_along\", \"length_mm\": 40,\n"
+        "      \"bands\": [ { \"thickness_mm\": [0, 10], \"width_mm\": [0, 5000], \"limit\": 1 } ] "
+        "},\n"
+        "    { \"name\": \"b\", \"measure\": \"straightedge_along\", \"length_mm\": 250,\n"
+        "      \"bands\": [ { \"thickness_mm\": [0, 10], \"width_mm\": [0, 5000], \"limit\": 1 } ] "
+        "},\n"
+        "    { \"name\": \"c\", \"measure\": \"straightedge_across\", \"length_mm\": 60,\n"
+        "      \"bands\": [ { \"thickness_mm\": [0, 10], \"width_mm\": [0, 5000], \"limit\": 1 } ] "
+        "},\n"
+        "    { \"name\": \"d\", \"measure\": \"straightedge_across\", \"length_mm\": 500,\n"
+        "      \"bands\": [ { \"thickness_mm\": [0, 10], \"width_mm\": [0, 5000], \"limit\": 1 } ] "
+        "}\n"
+        "  ] }\n";
+    flt_rules *set = load(rules);
+    flt_verdict *v = NULL;
+    OK(flt_verdict_create(set, &v));
+    for (int round = 0; round < 2; ++round) { /* with the flags, then heights alone */
+        const uint8_t *f = round == 0 ? flags : NULL;
+        OK(flt_verdict_evaluate(v, 2.0, 1000.0, R, K, s, x, z, f));
+        for (size_t rule = 0; rule < 4; ++rule) {
+            double length = 0;
+            flt_measure measure;
+            OK(flt_rules_rule(set, rule, NULL, &measure, &length));
+            const int along = measure == FLT_MEASURE_STRAIGHTEDGE_ALONG;
+            const size_t lines = along ? K : R, samples = along ? R : K;
+            const double worst = get(v, rule, FLT_VERDICT_WORST);
+            const double wx = get(v, rule, FLT_VERDICT_X), ws = get(v, rule, FLT_VERDICT_S);
+            double best = -1, extent = 0;
+            size_t best_line = 0;
+            int found = 0;
+            for (size_t l = 0; l < lines; ++l) {
+                size_t n = 0;
+                for (size_t j = 0; j < samples; ++j) {
+                    const size_t at = along ? j * K + l : l * K + j;
+                    if (isnan(z[at]) || (f && (f[at] & FLT_FLAG_NO_DATA)))
+                        continue;
+                    line_p[n] = along ? s[j] : x[j];
+                    line_z[n++] = z[at];
+                    extent = fabs(z[at]) > extent ? fabs(z[at]) : extent;
+                }
+                if (n < 2)
+                    continue;
+                const double d = definition(line_p, line_z, n, length, depth);
+                if (d > best) {
+                    best = d;
+                    best_line = l;
+                }
+                /* the reported position's line: its sample is that deep */
+                if ((along ? x[l] : s[l]) == (along ? wx : ws)) {
+                    found = 1;
+                    assert_true(fabs(d - worst) <= 32 * DBL_EPSILON * extent);
+                    size_t k = 0;
+                    while (k < n && line_p[k] != (along ? ws : wx))
+                        ++k;
+                    assert_true(k < n);
+                    assert_true(fabs(depth[k] - worst) <= 32 * DBL_EPSILON * extent);
+                }
+            }
+            print_message("rule %zu (%s %3.0f mm): worst %.6f mm on line %zu\n", rule,
+                          along ? "along " : "across", length, worst, best_line);
+            assert_true(found);
+            /* as the tolerance in random_profiles_equal_the_definition */
+            assert_true(fabs(worst - best) <= 32 * DBL_EPSILON * extent);
+            assert_true((along ? x[best_line] : s[best_line]) == (along ? wx : ws));
+            assert_int_equal(get(v, rule, FLT_VERDICT_STATE),
+                             worst <= 1.0 ? FLT_VERDICT_PASS : FLT_VERDICT_FAIL);
+        }
+    }
+    flt_verdict_destroy(v);
+    flt_rules_destroy(set);
+    free(z);
+    free(flags);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -441,6 +686,8 @@ int main(void) {
         cmocka_unit_test(sine_under_short_and_long_straightedges),
         cmocka_unit_test(equals_the_definition),
         cmocka_unit_test(small_profiles),
+        cmocka_unit_test(random_profiles_equal_the_definition),
+        cmocka_unit_test(maps_equal_the_definition_line_by_line),
         cmocka_unit_test(rule_file_is_read),
         cmocka_unit_test(rule_file_errors_name_the_field),
         cmocka_unit_test(sheet_against_rules),
