@@ -12,7 +12,8 @@
  *   feature for register contents the caller gives (a memory image or a
  *   callback), the way the library's camera clients do on a real camera.
  *   Commissioning engineers use it to see what a feature will read or
- *   write before the camera is connected:
+ *   write before the camera is connected (flatline-camera, tools/camera,
+ *   shows a camera's tree this way, offline or live):
  *
  *       flt_genicam *g;
  *       flt_genicam_load("camera.xml", &g);        (or _load_memory)
@@ -89,6 +90,9 @@ typedef enum flt_genicam_type {
     FLT_GENICAM_COMMAND = 5,     /**< Command */
     FLT_GENICAM_STRING = 6,      /**< String, StringReg */
     FLT_GENICAM_REGISTER = 7,    /**< Register: raw bytes */
+    /** Category: a node of the feature tree holding features and other
+     * categories (flt_genicam_category_entry()); it has no value. */
+    FLT_GENICAM_CATEGORY = 8,
     FLT_GENICAM_TYPE_MAX_ENUM_ = 0x7FFFFFFF
 } flt_genicam_type;
 
@@ -202,6 +206,29 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_feature_info(const flt_gen
                                                                    flt_genicam_type *type_out,
                                                                    const char **kind_out,
                                                                    const char **unit_out);
+
+/**
+ * Entry `index` of a category of the feature tree: a feature or a
+ * sub-category, in the description's order. The tree starts at the
+ * category "Root" (GenICam's name for the top); flt_genicam_feature_info()
+ * tells a sub-category (FLT_GENICAM_CATEGORY) from a feature. An entry
+ * names what the file wrote, which may be a node the file lacks
+ * (flt_genicam_feature_info() then fails with FLT_ERR_NOT_FOUND).
+ * Nothing is evaluated: a category lists its entries whatever their access
+ * mode.
+ * @param description the description.
+ * @param category    the category's name ("Root" for the top).
+ * @param index       0 .. its entries - 1.
+ * @param out receives the entry's name, owned by the handle (valid until
+ *            it is destroyed).
+ * @return FLT_OK; FLT_ERR_NOT_FOUND past the last entry, or for a name that
+ *         is no category of the description (the message says which);
+ *         FLT_ERR_INVALID_ARGUMENT for a NULL argument.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_genicam_category_entry(const flt_genicam *description,
+                                                                     const char *category,
+                                                                     size_t index,
+                                                                     const char **out);
 
 /* ---------------------------------------------------------------------- */
 /* Register contents                                                       */

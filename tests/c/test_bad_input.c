@@ -4282,6 +4282,7 @@ static void row_leveler_sim_next_sheet(void) {
 
 static const char k_genicam_xml[] =
     "<RegisterDescription VendorName=\"V\" ModelName=\"M\">"
+    "<Category Name=\"Root\"><pFeature>Width</pFeature><pFeature>Gain</pFeature></Category>"
     "<Integer Name=\"Width\"><pValue>WidthReg</pValue><Min>16</Min><Max>4096</Max></Integer>"
     "<IntReg Name=\"WidthReg\"><Address>0x100</Address><Length>4</Length>"
     "<AccessMode>RW</AccessMode><pPort>Device</pPort><Endianess>LittleEndian</Endianess>"
@@ -4386,6 +4387,23 @@ static void row_genicam_feature_info(void) {
     BAD(FLT_ERR_NOT_FOUND, "'Nope'", flt_genicam_feature_info(g, "Nope", &type, NULL, NULL));
     BAD(FLT_ERR_NOT_FOUND, NULL, flt_genicam_feature_info(g, "", &type, NULL, NULL));
     GOOD(flt_genicam_feature_info(g, "Width", NULL, NULL, NULL));
+    flt_genicam_destroy(g);
+}
+
+static void row_genicam_category_entry(void) {
+    flt_genicam *g = new_genicam();
+    const char *name;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'description'",
+        flt_genicam_category_entry(NULL, "Root", 0, &name));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'category'", flt_genicam_category_entry(g, NULL, 0, &name));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_genicam_category_entry(g, "Root", 0, NULL));
+    BAD(FLT_ERR_NOT_FOUND, "'index' = 2", flt_genicam_category_entry(g, "Root", 2, &name));
+    BAD(FLT_ERR_NOT_FOUND, "'index'", flt_genicam_category_entry(g, "Root", NEG, &name));
+    BAD(FLT_ERR_NOT_FOUND, "'Width' is no category",
+        flt_genicam_category_entry(g, "Width", 0, &name));
+    BAD(FLT_ERR_NOT_FOUND, "no category", flt_genicam_category_entry(g, "Nope", 0, &name));
+    BAD(FLT_ERR_NOT_FOUND, NULL, flt_genicam_category_entry(g, "", 0, &name));
+    GOOD(flt_genicam_category_entry(g, "Root", 1, &name));
     flt_genicam_destroy(g);
 }
 
@@ -4801,6 +4819,7 @@ static const row k_rows[] = {
     ROW(genicam_feature_count),
     ROW(genicam_feature_name),
     ROW(genicam_feature_info),
+    ROW(genicam_category_entry),
     ROW(genicam_set_memory),
     ROW(genicam_get_memory),
     ROW(genicam_clear_memory),

@@ -560,6 +560,60 @@ static void test_lists_features_with_type_kind_and_unit(void **state) {
     flt_genicam_destroy(g);
 }
 
+/* The feature tree: categories hold features and categories, in the file's
+ * order; an entry may name a node the file lacks, and nothing is evaluated
+ * (an entry whose register the memory image lacks is still listed). */
+static void test_category_tree(void **state) {
+    (void)state;
+    static const char xml[] =
+        "<RegisterDescription VendorName=\"V\" ModelName=\"M\">"
+        "<Category Name=\"Root\"><pFeature>ImageFormatControl</pFeature>"
+        "<pFeature>Gain</pFeature><pFeature>Ghost</pFeature></Category>"
+        "<Category Name=\"ImageFormatControl\"><pFeature>Width</pFeature>"
+        "<pFeature>PixelFormat</pFeature></Category>"
+        "<IntReg Name=\"Width\"><Address>0x100</Address><Length>4</Length>"
+        "<AccessMode>RW</AccessMode><pPort>Device</pPort></IntReg>"
+        "<Enumeration Name=\"PixelFormat\"><EnumEntry Name=\"Mono8\"><Value>1</Value>"
+        "</EnumEntry><Value>1</Value></Enumeration>"
+        "<Float Name=\"Gain\"><Value>1.5</Value></Float>"
+        "<Port Name=\"Device\"/>"
+        "</RegisterDescription>";
+    flt_genicam *g = NULL;
+    ok(flt_genicam_load_memory(xml, sizeof xml - 1, &g));
+    const char *want_root[] = {"ImageFormatControl", "Gain", "Ghost"};
+    const char *want_format[] = {"Width", "PixelFormat"};
+    const char *name = NULL;
+    for (size_t i = 0; i < 3; ++i) {
+        ok(flt_genicam_category_entry(g, "Root", i, &name));
+        assert_string_equal(name, want_root[i]);
+    }
+    assert_error(flt_genicam_category_entry(g, "Root", 3, &name), FLT_ERR_NOT_FOUND,
+                 "past the 3 entries");
+    for (size_t i = 0; i < 2; ++i) {
+        ok(flt_genicam_category_entry(g, "ImageFormatControl", i, &name));
+        assert_string_equal(name, want_format[i]);
+    }
+    flt_genicam_type type;
+    ok(flt_genicam_feature_info(g, "ImageFormatControl", &type, NULL, NULL));
+    assert_int_equal(type, FLT_GENICAM_CATEGORY);
+    ok(flt_genicam_feature_info(g, "Root", &type, NULL, NULL));
+    assert_int_equal(type, FLT_GENICAM_CATEGORY);
+    ok(flt_genicam_feature_info(g, "Width", &type, NULL, NULL));
+    assert_int_equal(type, FLT_GENICAM_INTEGER);
+    /* "Ghost" is listed but is no node */
+    assert_error(flt_genicam_feature_info(g, "Ghost", &type, NULL, NULL), FLT_ERR_NOT_FOUND,
+                 "'Ghost'");
+    /* a feature or an unknown name is no category */
+    assert_error(flt_genicam_category_entry(g, "Width", 0, &name), FLT_ERR_NOT_FOUND,
+                 "no category");
+    assert_error(flt_genicam_category_entry(g, "Nope", 0, &name), FLT_ERR_NOT_FOUND, "no category");
+    /* categories are not features */
+    size_t n = 0;
+    ok(flt_genicam_feature_count(g, &n));
+    assert_int_equal(n, 3);
+    flt_genicam_destroy(g);
+}
+
 static void test_integer_registers_in_both_byte_orders(void **state) {
     (void)state;
     flt_genicam *g = load_test_camera();
@@ -1177,6 +1231,7 @@ static void test_memory_image_limits(void **state) {
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_lists_features_with_type_kind_and_unit),
+        cmocka_unit_test(test_category_tree),
         cmocka_unit_test(test_integer_registers_in_both_byte_orders),
         cmocka_unit_test(test_struct_entries_inherit_the_struct_reg),
         cmocka_unit_test(test_floats_and_converters),

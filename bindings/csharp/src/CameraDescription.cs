@@ -19,6 +19,8 @@ namespace Flatline
         String = NativeGenICamType.FLT_GENICAM_STRING,
         /// <summary>Raw bytes.</summary>
         Register = NativeGenICamType.FLT_GENICAM_REGISTER,
+        /// <summary>A node of the feature tree (no value): <see cref="CameraDescription.GetCategory"/>.</summary>
+        Category = NativeGenICamType.FLT_GENICAM_CATEGORY,
     }
 
     /// <summary>A feature's access mode for the current register contents (flt_genicam_access).</summary>
@@ -179,6 +181,51 @@ namespace Flatline
             IntPtr kind, unit;
             FlatlineNative.flt_genicam_feature_info(LiveHandle, Feature(feature), &type, &kind, &unit);
             return new FeatureInfo(feature, (FeatureType)type, Utf8.Decode(kind), Utf8.Decode(unit));
+        }
+
+        /// <summary>The entries of a category of the feature tree, in the
+        /// file's order: features and sub-categories (<see cref="GetFeature"/>
+        /// tells them apart: <see cref="FeatureType.Category"/>). The tree
+        /// starts at "Root". An entry may name a node the file lacks.
+        /// <see cref="NotFoundException"/> for a name that is no category.</summary>
+        public unsafe IReadOnlyList<string> GetCategory(string category = "Root")
+        {
+            var live = LiveHandle;
+            if (category == null)
+                throw new ArgumentNullException(nameof(category));
+            var entries = new List<string>();
+            while (true)
+            {
+                IntPtr name;
+                try
+                {
+                    FlatlineNative.flt_genicam_category_entry(live, category, (ulong)entries.Count, &name);
+                }
+                catch (NotFoundException)
+                {
+                    // past the last entry, or no such category (an empty one
+                    // is still a category)
+                    if (entries.Count == 0 && !IsCategory(category))
+                        throw;
+                    return entries;
+                }
+                entries.Add(Utf8.Decode(name));
+            }
+        }
+
+        private unsafe bool IsCategory(string name)
+        {
+            int type;
+            IntPtr kind, unit;
+            try
+            {
+                FlatlineNative.flt_genicam_feature_info(LiveHandle, name, &type, &kind, &unit);
+            }
+            catch (NotFoundException)
+            {
+                return false;
+            }
+            return type == (int)FeatureType.Category;
         }
 
         /// <summary>Puts <paramref name="data"/> (bytes in the device's memory

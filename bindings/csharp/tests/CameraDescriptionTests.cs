@@ -16,6 +16,10 @@ namespace Flatline.Tests
         private const string Xml = @"<?xml version=""1.0"" encoding=""utf-8""?>
 <RegisterDescription VendorName=""Flatline"" ModelName=""NetCam"" SchemaMajorVersion=""1""
     SchemaMinorVersion=""1"" SchemaSubMinorVersion=""0"">
+  <Category Name=""Root""><pFeature>ImageFormat</pFeature><pFeature>TriggerMode</pFeature>
+    <pFeature>Ghost</pFeature></Category>
+  <Category Name=""ImageFormat""><pFeature>Width</pFeature><pFeature>PayloadSize</pFeature></Category>
+  <Category Name=""Empty""></Category>
   <Integer Name=""Width""><pValue>WidthReg</pValue><Min>16</Min><Max>4096</Max><Inc>16</Inc></Integer>
   <IntReg Name=""WidthReg""><Address>0x100</Address><Length>4</Length><AccessMode>RW</AccessMode>
     <pPort>Device</pPort><Sign>Unsigned</Sign><Endianess>LittleEndian</Endianess></IntReg>
@@ -58,6 +62,23 @@ namespace Flatline.Tests
             Assert.Equal("us", exposure.Unit);
             Assert.Equal(FeatureType.Enumeration, c.GetFeature("TriggerMode").Type);
             Assert.Equal(FeatureType.Command, c.GetFeature("AcquisitionStart").Type);
+        }
+
+        [Fact]
+        public void WalksTheFeatureTree()
+        {
+            using var c = Loaded();
+            // the file's order; "Ghost" names no node
+            Assert.Equal(new[] { "ImageFormat", "TriggerMode", "Ghost" }, c.GetCategory());
+            Assert.Equal(new[] { "Width", "PayloadSize" }, c.GetCategory("ImageFormat"));
+            Assert.Empty(c.GetCategory("Empty"));
+            Assert.Equal(FeatureType.Category, c.GetFeature("ImageFormat").Type);
+            Assert.Contains("no category", Assert.Throws<NotFoundException>(() => c.GetCategory("Width")).Message);
+            Assert.Contains("no category", Assert.Throws<NotFoundException>(() => c.GetCategory("Nope")).Message);
+            Assert.Throws<ArgumentNullException>(() => c.GetCategory(null!));
+            // categories are not features
+            Assert.False(c.Contains("ImageFormat"));
+            Assert.Equal(9, c.FeatureNames.Count);
         }
 
         [Fact]

@@ -30,6 +30,7 @@ from typing import Any, Iterator, List, NamedTuple, Tuple, Union
 
 from . import capi as _capi
 from ._arrays import as_index
+from ._errors import NotFoundError
 
 __all__ = [
     "FeatureType",
@@ -52,6 +53,7 @@ class FeatureType(enum.IntEnum):
     COMMAND = _capi.FLT_GENICAM_COMMAND
     STRING = _capi.FLT_GENICAM_STRING  #: String, StringReg
     REGISTER = _capi.FLT_GENICAM_REGISTER  #: raw bytes
+    CATEGORY = _capi.FLT_GENICAM_CATEGORY  #: a node of the feature tree (no value)
 
 
 class Access(enum.IntEnum):
@@ -170,6 +172,54 @@ class CameraDescription:
         with self._lock:
             type_, kind, unit = _capi.flt_genicam_feature_info(self._g, name)
         return Feature(name, FeatureType(type_), kind, unit)
+
+    def category(self, name: str = "Root") -> List[str]:
+        """The entries of a category of the feature tree, in the file's
+        order: features and sub-categories (:meth:`feature` tells them apart:
+        ``FeatureType.CATEGORY``). The tree starts at "Root". An entry may
+        name a node the file lacks. NotFoundError for a name that is no
+        category."""
+        _feature("category", name)
+        out: List[str] = []
+        with self._lock:
+            while True:
+                try:
+                    out.append(_capi.flt_genicam_category_entry(self._g, name, len(out)))
+                except NotFoundError:
+                    # past the last entry, or no such category (an empty
+                    # one is still a category)
+                    if not out and not self._is_category(name):
+                        raise
+                    return out
+
+    def _is_category(self, name: str) -> bool:
+        try:
+            type_, _, _ = _capi.flt_genicam_feature_info(self._g, name)
+        except NotFoundError:
+            return False
+        return bool(type_ == FeatureType.CATEGORY)
+
+    def tree(self, name: str = "Root") -> Iterator[Tuple[int, str]]:
+        """Walks the feature tree from category ``name`` depth first:
+        (depth, entry) for every entry below it (depth 0 for its own
+        entries); a category is entered once (a file that lists a category
+        inside itself does not loop)."""
+        seen = {name}
+
+        def walk(category: str, depth: int) -> Iterator[Tuple[int, str]]:
+            for entry in self.category(category):
+                yield depth, entry
+                if entry in seen:
+                    continue
+                try:
+                    is_category = self.feature(entry).type == FeatureType.CATEGORY
+                except NotFoundError:
+                    is_category = False
+                if is_category:
+                    seen.add(entry)
+                    yield from walk(entry, depth + 1)
+
+        return walk(name, 0)
 
     # ---- register contents -------------------------------------------------
 

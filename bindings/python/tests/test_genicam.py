@@ -17,6 +17,12 @@ from flatline.genicam import Access, CameraDescription, EnumEntry, FeatureType, 
 XML = b"""<?xml version="1.0" encoding="utf-8"?>
 <RegisterDescription VendorName="Flatline" ModelName="PyCam" SchemaMajorVersion="1"
     SchemaMinorVersion="1" SchemaSubMinorVersion="0">
+  <Category Name="Root"><pFeature>ImageFormat</pFeature><pFeature>Label</pFeature>
+    <pFeature>Ghost</pFeature><pFeature>Loop</pFeature></Category>
+  <Category Name="ImageFormat"><pFeature>Width</pFeature><pFeature>ExposureTime</pFeature>
+  </Category>
+  <Category Name="Loop"><pFeature>Loop</pFeature></Category>
+  <Category Name="Empty"></Category>
   <Integer Name="Width"><pValue>WidthReg</pValue><Min>16</Min><Max>4096</Max><Inc>16</Inc></Integer>
   <IntReg Name="WidthReg"><Address>0x100</Address><Length>4</Length><AccessMode>RW</AccessMode>
     <pPort>Device</pPort><Sign>Unsigned</Sign><Endianess>BigEndian</Endianess></IntReg>
@@ -61,6 +67,23 @@ def test_lists_the_features(camera):
     assert features["AcquisitionStart"].type == FeatureType.COMMAND
     assert features["Label"].type == FeatureType.STRING
     assert list(camera)[0] == "Width"
+
+
+def test_feature_tree(camera):
+    # the file's order; "Ghost" names no node; "Loop" lists itself (the
+    # walk enters it once)
+    assert camera.category() == ["ImageFormat", "Label", "Ghost", "Loop"]
+    assert camera.category("ImageFormat") == ["Width", "ExposureTime"]
+    assert camera.category("Empty") == []
+    assert camera.feature("ImageFormat").type == FeatureType.CATEGORY
+    assert list(camera.tree()) == [(0, "ImageFormat"), (1, "Width"), (1, "ExposureTime"),
+                                   (0, "Label"), (0, "Ghost"), (0, "Loop"), (1, "Loop")]
+    with pytest.raises(flatline.NotFoundError, match="no category"):
+        camera.category("Width")
+    with pytest.raises(flatline.NotFoundError, match="no category"):
+        camera.category("Nope")
+    # categories are not features
+    assert "ImageFormat" not in camera and len(camera) == 12
 
 
 def test_values_registers_and_bounds(camera):

@@ -1444,6 +1444,28 @@ const std::string &node_map::description(const std::string &feature) const {
     return named(*d_, feature).description;
 }
 
+namespace {
+const node &category_named(const node_map::impl &m, const std::string &name) {
+    const node &n = named(m, name);
+    if (interface_of_kind(n.k) != interface_kind::category)
+        throw error(FLT_ERR_NOT_FOUND, ("'" + name + "' is no category").c_str());
+    return n;
+}
+}  // namespace
+
+std::size_t node_map::category_size(const std::string &category) const {
+    return category_named(*d_, category).features.size();
+}
+const std::string &node_map::category_feature(const std::string &category,
+                                              std::size_t index) const {
+    const node &n = category_named(*d_, category);
+    if (index >= n.features.size())
+        throw error(FLT_ERR_NOT_FOUND, ("category '" + category + "' has " +
+                                        std::to_string(n.features.size()) + " entries")
+                                           .c_str());
+    return n.features[index].name;
+}
+
 access_mode node_map::declared_access(const std::string &feature) const {
     // Follows pValue without evaluating anything; a loop ends the walk.
     const node *n = &named(*d_, feature);

@@ -196,6 +196,8 @@ flt_genicam_type type_of(flt::genicam::interface_kind k) {
             return FLT_GENICAM_STRING;
         case interface_kind::reg:
             return FLT_GENICAM_REGISTER;
+        case interface_kind::category:
+            return FLT_GENICAM_CATEGORY;
         default:
             break;
     }
@@ -334,6 +336,30 @@ FLT_API flt_status FLT_CALL flt_genicam_feature_info(const flt_genicam *descript
             *kind = description->map.kind_of(feature).c_str();
         if (unit)
             *unit = description->map.unit(feature).c_str();
+        return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_genicam_category_entry(const flt_genicam *description,
+                                                       const char *category, size_t index,
+                                                       const char **out) {
+    const char *fn = "flt_genicam_category_entry";
+    return guard(fn, [&] {
+        FLT_CHECK_NOT_NULL(fn, description);
+        FLT_CHECK_NOT_NULL(fn, category);
+        FLT_CHECK_NOT_NULL(fn, out);
+        *out = nullptr;
+        if (!description->map.has(category) ||
+            description->map.interface_of(category) != flt::genicam::interface_kind::category)
+            return fail(FLT_ERR_NOT_FOUND, "%s: '%.200s' is no category of the description", fn,
+                        category);
+        const std::size_t n = description->map.category_size(category);
+        if (index >= n)
+            return fail(FLT_ERR_NOT_FOUND,
+                        "%s: argument 'index' = %zu is past the %zu entries of category "
+                        "'%.200s'",
+                        fn, index, n, category);
+        *out = description->map.category_feature(category, index).c_str();
         return FLT_OK;
     });
 }

@@ -108,6 +108,12 @@ class node_map {
     const std::string &display_name(const std::string &feature) const;
     const std::string &unit(const std::string &feature) const;
     const std::string &description(const std::string &feature) const;
+    // The pFeature entries of a Category node, in document order, as
+    // written (an entry may name a node the file lacks): how many, and
+    // entry `index` (a string that lives as long as the map). Both throw
+    // FLT_ERR_NOT_FOUND for a name that is no Category node.
+    std::size_t category_size(const std::string &category) const;
+    const std::string &category_feature(const std::string &category, std::size_t index) const;
     // The access mode as declared, without evaluating anything (ImposedAccessMode
     // and AccessMode along the pValue chain): what the file says.
     access_mode declared_access(const std::string &feature) const;
