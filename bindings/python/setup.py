@@ -8,7 +8,17 @@ libflatline.so.N beside them (the extension's rpath is $ORIGIN), and the
 testing tier's extension flatline/_testing_capi*.so with
 libflatline_testing.so.X.Y.Z (loaded only by `import flatline.testing`).
 
+The coil report (tools/coil_report/coil_report.py and its example rules)
+goes in as flatline.coil_report; pyproject.toml makes it and the live view
+(flatline.live) the commands flatline-coil-report and flatline-live.
+
 Environment:
+    FLATLINE_PREBUILT_PACKAGE  a package folder a CMake build made already
+                          (<build>/bindings/python/package/flatline): its
+                          files are copied, the libraries stripped of their
+                          debug information, and nothing is compiled. The
+                          release wheel is made so (packaging/build), from
+                          the build the tests ran on.
     FLATLINE_SOURCE_DIR   the libflatline source tree (default: ../.. of this
                           file, i.e. the repository this folder lives in)
     FLATLINE_BUILD_DIR    CMake build directory (default: under setuptools'
@@ -57,6 +67,15 @@ class CMakeExtension(Extension):
 
 class CMakeBuild(build_ext):
     def build_extension(self, ext: Extension) -> None:
+        prebuilt = os.environ.get("FLATLINE_PREBUILT_PACKAGE")
+        if prebuilt:
+            built = Path(prebuilt).resolve()
+            if not (built / "_capi.so").is_file():
+                sys.exit(f"setup.py: FLATLINE_PREBUILT_PACKAGE={prebuilt} holds no _capi.so: "
+                         f"build the flt_python_capi target first")
+            print(f"setup.py: the package as built in {built}", flush=True)
+            self._copy_package(built, strip=True)
+            return
         build_dir = Path(
             os.environ.get("FLATLINE_BUILD_DIR", Path(self.build_temp).resolve() / "cmake")
         )
@@ -69,6 +88,7 @@ class CMakeBuild(build_ext):
             "-DFLT_BUILD_CSHARP=OFF",
             "-DFLT_BUILD_TESTS=OFF",
             "-DFLT_BUILD_EXAMPLES=OFF",
+            "-DFLT_BUILD_TOOLS=OFF",
             f"-DPython3_EXECUTABLE={sys.executable}",
         ] + shlex.split(os.environ.get("FLATLINE_CMAKE_ARGS", ""))
         jobs = os.environ.get("CMAKE_BUILD_PARALLEL_LEVEL", "2")
@@ -78,8 +98,11 @@ class CMakeBuild(build_ext):
             print("setup.py:", " ".join(shlex.quote(c) for c in command), flush=True)
             subprocess.run(command, check=True)
 
-        built = build_dir / "bindings" / "python" / "package" / "flatline"
-        target = Path(self.get_ext_fullpath(ext.name))  # .../flatline/_capi.<abi>.so
+        self._copy_package(build_dir / "bindings" / "python" / "package" / "flatline",
+                           strip=False)
+
+    def _copy_package(self, built: Path, strip: bool) -> None:
+        target = Path(self.get_ext_fullpath("flatline._capi"))  # .../flatline/_capi.<abi>.so
         target.parent.mkdir(parents=True, exist_ok=True)
         shutil.copyfile(built / "_capi.so", target)
         shutil.copyfile(built / "capi.py", target.parent / "capi.py")
@@ -93,10 +116,20 @@ class CMakeBuild(build_ext):
         for library in list(built.glob("libflatline.so*")) + list(
                 built.glob("libflatline_testing.so*")):
             shutil.copyfile(library, target.parent / library.name)
+        # The coil report and its example rules (the live view's default
+        # rules too), as the CMake build puts them beside the package.
+        for name in ("coil_report.py", "example_rules.json"):
+            shutil.copyfile(built / name, target.parent / name)
         # The licence and the third-party notices travel with the binaries
         # (the package holds libflatline.so, which NOTICE describes).
         for notice in ("LICENSE", "NOTICE"):
             shutil.copyfile(SOURCE_DIR / notice, target.parent / notice)
+        strip_tool = shutil.which("strip") if strip else None
+        if strip_tool:
+            # A RelWithDebInfo build's libflatline is 20+ MB with its debug
+            # information, under 2 MB without: the wheel installs in seconds.
+            for library in target.parent.glob("*.so*"):
+                subprocess.run([strip_tool, "--strip-debug", str(library)], check=True)
 
 
 setup(
