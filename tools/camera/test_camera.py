@@ -112,22 +112,26 @@ def test_simulated_camera(sim, work, full):
     check(rc == 0 and re.search(r"Flatline Simulated sensor\s+serial SIM-1\s+5000 Mbit/s", out),
           "list shows the simulated USB3 Vision camera, its serial and link speed")
 
-    rc, out, _ = sim.run("-c", "sim", "features", expect=0)
-    check(rc == 0, "features of the simulated camera")
-    # the tree: Root -> ImageFormatControl -> Width ... indented two spaces
-    check(re.search(r"^ImageFormatControl$", out, re.M) is not None,
-          "features: the category ImageFormatControl under Root")
-    check(re.search(r"^  Width\s+RW\s+2048\s+\[16 \.\. ", out, re.M) is not None,
-          "features: Width = 2048, read-write, with its bounds")
-    check(re.search(r"^  PixelFormat\s+RW\s+Mono8\s+\{Mono8, Mono10, Mono12, Mono16\}", out,
-                    re.M) is not None, "features: PixelFormat Mono8 and its entries")
-    check("ExposureTime" not in out and "--all shows them" in out,
-          "features: features in no category wait for --all")
+    if full:  # (under wine: the tree is checked in --all's output below)
+        rc, out, _ = sim.run("-c", "sim", "features", expect=0)
+        check(rc == 0, "features of the simulated camera")
+        # the tree: Root -> ImageFormatControl -> Width ... indented two spaces
+        check(re.search(r"^ImageFormatControl$", out, re.M) is not None,
+              "features: the category ImageFormatControl under Root")
+        check(re.search(r"^  Width\s+RW\s+2048\s+\[16 \.\. ", out, re.M) is not None,
+              "features: Width = 2048, read-write, with its bounds")
+        check(re.search(r"^  PixelFormat\s+RW\s+Mono8\s+\{Mono8, Mono10, Mono12, Mono16\}", out,
+                        re.M) is not None, "features: PixelFormat Mono8 and its entries")
+        check("ExposureTime" not in out and "--all shows them" in out,
+              "features: features in no category wait for --all")
+
     rc, out_all, _ = sim.run("-c", "sim", "features", "--all", expect=0)
     check(re.search(r"^  ExposureTime\s+RW\s+\d+ us", out_all, re.M) is not None,
           "features --all: ExposureTime with its unit")
     check(re.search(r"^  AcquisitionStart\s+RW\s+\(command\)", out_all, re.M) is not None,
           "features --all: AcquisitionStart is a command")
+    check(re.search(r"^ImageFormatControl\n  Width\s+RW\s+2048\s+\[16 \.\. ", out_all, re.M)
+          is not None, "features --all: Width = 2048 under ImageFormatControl, with its bounds")
 
     rc, out, _ = sim.run("-c", "sim", "get", "Width", "Height", "PixelFormat", expect=0)
     check(out.splitlines() == ["Width = 2048", "Height = 256", "PixelFormat = Mono8"],
@@ -152,19 +156,20 @@ def test_simulated_camera(sim, work, full):
         rc, out, _ = sim.run("-c", "sim", "set", "AcquisitionStop", expect=0)
         check(out.strip() == "AcquisitionStop executed", "set of a command executes it")
 
-    # snap: the raw frame
-    png = os.path.join(work, "sim_frame.png")
-    rc, out, _ = sim.run("-c", "sim", "snap", "-o", png, expect=0)
-    check(rc == 0 and "2048x256 Mono8" in out, "snap writes the frame")
-    w, h, channels, depth, rows = read_png(png)
-    check((w, h, channels, depth) == (2048, 256, 1, 8), "snap: a 2048x256 8-bit grey PNG")
-    # two lines: the brightest row of the middle column lies in each half
-    # band (the reference sensor's lines are ~100 rows apart in this window)
-    column = [rows[y][1024] for y in range(h)]
-    top = max(range(h // 2), key=lambda y: column[y])
-    bottom = max(range(h // 2, h), key=lambda y: column[y])
-    check(column[top] > 100 and column[bottom] > 100,
-          f"snap: two bright lines in column 1024 (rows {top} and {bottom})")
+    if full:  # (under wine the fake GigE camera's raw frame is checked)
+        # snap: the raw frame
+        png = os.path.join(work, "sim_frame.png")
+        rc, out, _ = sim.run("-c", "sim", "snap", "-o", png, expect=0)
+        check(rc == 0 and "2048x256 Mono8" in out, "snap writes the frame")
+        w, h, channels, depth, rows = read_png(png)
+        check((w, h, channels, depth) == (2048, 256, 1, 8), "snap: a 2048x256 8-bit grey PNG")
+        # two lines: the brightest row of the middle column lies in each half
+        # band (the reference sensor's lines are ~100 rows apart in this window)
+        column = [rows[y][1024] for y in range(h)]
+        top = max(range(h // 2), key=lambda y: column[y])
+        bottom = max(range(h // 2, h), key=lambda y: column[y])
+        check(column[top] > 100 and column[bottom] > 100,
+              f"snap: two bright lines in column 1024 (rows {top} and {bottom})")
 
     # snap --overlay: lines, bands, saturation, edges
     png = os.path.join(work, "sim_overlay.png")
