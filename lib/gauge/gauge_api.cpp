@@ -16,6 +16,12 @@ namespace {
 constexpr std::uint32_t k_gauge_magic = 0x464c5447u;  // "FLTG"
 }  // namespace
 
+const flt_verdict *flt_sheet::verdict_handle() const {
+    if (!verdict)
+        return nullptr;
+    return own_verdict ? own_verdict.get() : verdict->slot[slot].get();
+}
+
 struct flt_gauge {
     std::uint32_t magic = k_gauge_magic;
     std::unique_ptr<gauge> impl;
@@ -248,7 +254,7 @@ FLT_API flt_status FLT_CALL flt_gauge_count(const flt_gauge *gauge, flt_gauge_co
             return st;
         FLT_CHECK_NOT_NULL(fn, out);
         const int raw = enum_arg(counter);
-        if (raw < 0 || raw > FLT_GAUGE_COUNT_SHEETS_WAITING)
+        if (raw < 0 || raw > FLT_GAUGE_COUNT_REFUSED)
             return fail(FLT_ERR_INVALID_ARGUMENT,
                         "%s: argument 'counter' = %d is not a flt_gauge_counter", fn, raw);
         *out = gauge->impl->count(counter);
@@ -303,17 +309,9 @@ FLT_API void FLT_CALL flt_sheet_destroy(flt_sheet *sheet) {
     guard_void([&] {
         if (!sheet || sheet->magic != k_sheet_magic || sheet->borrowed)
             return;
-        sheet->magic = 0;
         // A local reference keeps the pool alive while it is locked.
         const std::shared_ptr<sheet_pool> pool = sheet->pool;
-        {
-            std::lock_guard<std::mutex> lock(pool->m);
-            if (pool->alive) {
-                pool->free.push_back(sheet);  // capacity reserved: no allocation
-                return;
-            }
-        }
-        delete sheet;  // the gauge is gone
+        pool->give_back(sheet);
     });
 }
 
@@ -414,7 +412,7 @@ FLT_API flt_status FLT_CALL flt_sheet_verdict(const flt_sheet *sheet, const flt_
         if (rules_out)
             *rules_out = &sheet->verdict->rules;
         if (verdict_out)
-            *verdict_out = sheet->verdict->slot[sheet->slot].get();
+            *verdict_out = sheet->verdict_handle();
         return FLT_OK;
     });
 }

@@ -56,7 +56,7 @@ static void sleep_ms(int ms) {
 /* A sheet copied out of its handle, to compare runs                       */
 /* ---------------------------------------------------------------------- */
 
-enum { N_VALUES = 36, N_ARRAYS = 12 };
+enum { N_VALUES = 45, N_ARRAYS = 12 };
 
 /* Whether a sheet array has a value per fiber (else per zone). */
 static int fiber_array(int a) {
@@ -825,8 +825,19 @@ static void head_and_tail(void **state) {
     assert_int_equal(c1->value[FLT_SHEET_COIL], 1.0);
     assert_int_equal(c2->value[FLT_SHEET_COIL], 2.0);
     assert_int_equal(c2->value[FLT_SHEET_INDEX], 1.0);
-    assert_int_equal((int)c1->value[FLT_SHEET_FLAGS], FLT_SHEET_FLAG_HEAD | FLT_SHEET_FLAG_TAIL);
+    /* Coil 1 lost 30 lines of 1000 rows: flagged, counted, covered 97 %
+     * (above the default 95 %: complete, and judged). */
+    assert_int_equal((int)c1->value[FLT_SHEET_FLAGS],
+                     FLT_SHEET_FLAG_HEAD | FLT_SHEET_FLAG_TAIL | FLT_SHEET_FLAG_LOST_ROWS);
+    assert_int_equal(c1->value[FLT_SHEET_LOST_LINES], 30.0);
+    assert_int_equal(c1->value[FLT_SHEET_ROWS_MEASURED], 970.0);
+    assert_int_equal(c1->value[FLT_SHEET_ROWS_EXPECTED], 1000.0);
+    assert_true(c1->value[FLT_SHEET_COVERAGE] == 0.97);
+    assert_int_equal(c1->value[FLT_SHEET_MISSING], 0.0);
+    assert_true(c1->value[FLT_SHEET_SHAPE] != (double)FLT_SHAPE_NOT_JUDGED);
     assert_int_equal((int)c2->value[FLT_SHEET_FLAGS], FLT_SHEET_FLAG_HEAD | FLT_SHEET_FLAG_FLUSHED);
+    assert_true(c2->value[FLT_SHEET_COVERAGE] == 1.0);
+    assert_int_equal(count(g, FLT_GAUGE_COUNT_LOST_LINES), 30);
     /* Coil 1: its first row is the head, its last the last row with the
      * strip; the gap's rows are in it, bridged and flagged. */
     assert_true(c1->value[FLT_SHEET_S_START] == t->s[50]);
@@ -917,7 +928,35 @@ static void queue_overflow_is_counted(void **state) {
     assert_int_equal(count(g, FLT_GAUGE_COUNT_FRAMES), R);
     assert_true(sheet_dropped == (double)dropped);
     assert_true(sheet_frames + (double)dropped == (double)R);
+    /* Every sheet that lost frames says so, and its coverage counts them. */
+    for (size_t i = 0; i < l.n; ++i) {
+        const double *v = l.sheet[i].value;
+        if (v[FLT_SHEET_DROPPED] > 0)
+            assert_true((unsigned)v[FLT_SHEET_FLAGS] & FLT_SHEET_FLAG_LOST_ROWS);
+        assert_true(v[FLT_SHEET_ROWS_EXPECTED] == v[FLT_SHEET_ROWS] + v[FLT_SHEET_DROPPED]);
+    }
     free_list(&l);
+    flt_gauge_destroy(g);
+
+    /* The default (gauge_overflow "auto") waits for room when the caller
+     * pushes: the same callback, nothing dropped, every row in a sheet. */
+    flt_options *d = bag();
+    set(d, FLT_OPT_GAUGE_QUEUE_FRAMES, 4);
+    set(d, FLT_OPT_LAG_KNOTS, 4);
+    set(d, FLT_OPT_GAUGE_WORKERS, 1);
+    set(d, FLT_OPT_GAUGE_FRAME_SPACING, 2.0);
+    OK(flt_gauge_create(calib, d, &g));
+    flt_options_destroy(d);
+    g_first_sheet_seen = 0;
+    g_callback_frames = g_callback_dropped = 0;
+    OK(flt_gauge_set_callback(g, slow_callback, NULL));
+    for (double c = 600.0; c < 9000.0; c += 600.0)
+        OK(flt_gauge_cut(g, c));
+    push_rows(g, t, 0, R);
+    OK(flt_gauge_flush(g));
+    assert_int_equal(count(g, FLT_GAUGE_COUNT_DROPPED), 0);
+    assert_true(g_callback_dropped == 0.0);
+    assert_true(g_callback_frames == (double)R);
     flt_gauge_destroy(g);
     flt_options_destroy(o);
     flt_calib_destroy(calib);
@@ -952,15 +991,23 @@ static void callback_polling_and_slots(void **state) {
     set(o, FLT_OPT_GAUGE_OVERFLOW, 1);
     flt_gauge *g = NULL;
     OK(flt_gauge_create(calib, o, &g));
-    /* Six sheets of 1 m, nobody polls: two slots, so the four oldest are
-     * dropped, counted, and the newest two wait. */
+    /* Six sheets of 1 m, nobody polls: two slots, so four more sheets are
+     * made for the others; every one waits, in order. */
     for (double c = 1000.0; c < 6000.0; c += 1000.0)
         OK(flt_gauge_cut(g, c));
     push_rows(g, t, 0, R);
     OK(flt_gauge_flush(g));
     assert_int_equal(count(g, FLT_GAUGE_COUNT_SHEETS), 6);
-    assert_int_equal(count(g, FLT_GAUGE_COUNT_SHEETS_DROPPED), 4);
-    assert_int_equal(count(g, FLT_GAUGE_COUNT_SHEETS_WAITING), 2);
+    assert_int_equal(count(g, FLT_GAUGE_COUNT_SHEETS_DROPPED), 0);
+    assert_int_equal(count(g, FLT_GAUGE_COUNT_SHEETS_GROWN), 4);
+    assert_int_equal(count(g, FLT_GAUGE_COUNT_SHEETS_WAITING), 6);
+    for (int i = 1; i <= 4; ++i) {
+        flt_sheet *sh = NULL;
+        OK(flt_gauge_next_sheet(g, 0, &sh));
+        assert_non_null(sh);
+        assert_int_equal(get(sh, FLT_SHEET_ID), (double)i);
+        flt_sheet_destroy(sh);
+    }
     flt_sheet *s5 = NULL, *s6 = NULL, *none = NULL;
     OK(flt_gauge_next_sheet(g, 0, &s5));
     OK(flt_gauge_next_sheet(g, 0, &s6));
@@ -977,6 +1024,61 @@ static void callback_polling_and_slots(void **state) {
     assert_int_equal(get(s5, FLT_SHEET_ROWS), 333.0); /* 4002..4998 at 3 mm */
     flt_sheet_destroy(s5);
     flt_sheet_destroy(s6);
+
+    /* With gauge_sheet_backlog = 0 the caller chose to keep only the
+     * newest: the four oldest are dropped, counted, the newest two wait. */
+    set(o, FLT_OPT_GAUGE_SHEET_BACKLOG, 0);
+    OK(flt_gauge_create(calib, o, &g));
+    for (double c = 1000.0; c < 6000.0; c += 1000.0)
+        OK(flt_gauge_cut(g, c));
+    push_rows(g, t, 0, R);
+    OK(flt_gauge_flush(g));
+    assert_int_equal(count(g, FLT_GAUGE_COUNT_SHEETS_DROPPED), 4);
+    assert_int_equal(count(g, FLT_GAUGE_COUNT_SHEETS_GROWN), 0);
+    assert_int_equal(count(g, FLT_GAUGE_COUNT_SHEETS_WAITING), 2);
+    OK(flt_gauge_next_sheet(g, 0, &s5));
+    assert_int_equal(get(s5, FLT_SHEET_ID), 5.0);
+    flt_sheet_destroy(s5);
+    flt_gauge_destroy(g);
+
+    /* A caller who reads late: with 2 slots and a backlog of 2, a push is
+     * refused once 4 sheets exist (the row not taken, not counted), and
+     * taken again after the caller read them. */
+    set(o, FLT_OPT_GAUGE_SHEET_BACKLOG, 2);
+    set(o, FLT_OPT_LAG_KNOTS, 4); /* sheets finish 400 mm after their cut */
+    OK(flt_gauge_create(calib, o, &g));
+    for (double c = 300.0; c < 6000.0; c += 300.0)
+        OK(flt_gauge_cut(g, c));
+    sheet_list read = {0};
+    uint64_t refused = 0;
+    for (size_t r = 0; r < R;) {
+        const flt_status st = flt_gauge_push_row(g, t->s[r], t->fibers, &t->height[r * t->fibers],
+                                                 &t->slope[r * t->fibers], NULL);
+        if (st == FLT_OK) {
+            ++r;
+            continue;
+        }
+        assert_int_equal(st, FLT_ERR_BUFFER_FULL);
+        assert_non_null(strstr(flt_last_error_message(), "gauge_sheet_backlog"));
+        ++refused;
+        assert_int_equal(count(g, FLT_GAUGE_COUNT_FRAMES), r);
+        drain(g, &read, 0); /* (each read frees its sheet) */
+        sleep_ms(1);
+    }
+    OK(flt_gauge_flush(g));
+    drain(g, &read, 0);
+    /* Refused at least once (20 sheets, never read between pushes but
+     * when refused), counted; every sheet out, in order, none lost. */
+    assert_true(refused >= 1);
+    assert_int_equal(count(g, FLT_GAUGE_COUNT_REFUSED), refused);
+    assert_int_equal(count(g, FLT_GAUGE_COUNT_FRAMES), R);
+    assert_int_equal(count(g, FLT_GAUGE_COUNT_SHEETS_DROPPED), 0);
+    assert_int_equal(read.n, 20);
+    for (size_t i = 0; i < read.n; ++i)
+        assert_int_equal(read.sheet[i].value[FLT_SHEET_ID], (double)(i + 1));
+    free_list(&read);
+    flt_gauge_destroy(g);
+    set(o, FLT_OPT_GAUGE_SHEET_BACKLOG, 16);
 
     /* A callback receives every sheet, in order; polling is refused
      * meanwhile; without it polling works again. */
@@ -1001,6 +1103,98 @@ static void callback_polling_and_slots(void **state) {
     assert_null(sh);
     flt_gauge_destroy(g);
     flt_options_destroy(o);
+    flt_calib_destroy(calib);
+    test_sheet_free(t);
+}
+
+/* Rows every 3 mm with stretches missing, as a camera that lost frames
+ * before the gauge gives them; cuts at 3000 and 6000 mm. */
+static const char k_iu_rules[] =
+    "{ \"format\": \"flatline-tolerances\", \"version\": 1, \"name\": \"t\",\n"
+    "  \"rules\": [ { \"name\": \"IU\", \"measure\": \"zone_i_units\",\n"
+    "    \"bands\": [ { \"thickness_mm\": [0, 50], \"width_mm\": [0, 5000], \"limit\": 1000 } ] } "
+    "] "
+    "}\n";
+
+static void lost_rows_and_coverage(void **state) {
+    (void)state;
+    enum { R = 3000, K = 51 }; /* 9 m */
+    test_sheet *t = row_sheet(R, K, 3.0);
+    flt_calib *calib = row_calib(K);
+    flt_rules *rules = NULL;
+    OK(flt_rules_load_text(k_iu_rules, sizeof k_iu_rules - 1, &rules));
+    for (int workers = 0; workers <= 2; workers += 2) {
+        flt_gauge *g = row_gauge(calib, workers, NULL);
+        OK(flt_gauge_set_rules(g, rules, 2.0, FLT_GAUGE_WIDTH_MEASURED));
+        OK(flt_gauge_cut(g, 3000.0));
+        OK(flt_gauge_cut(g, 6000.0));
+        /* Missing: rows 500..599 (sheet 1: 100 of 1000), 1400..1419 (sheet
+         * 2: 20) and 1990..2009 (5970..6027 mm: 10 before the cut at 6000,
+         * 10 after it). */
+        for (size_t r = 0; r < R; ++r) {
+            const int missing =
+                (r >= 500 && r < 600) || (r >= 1400 && r < 1420) || (r >= 1990 && r < 2010);
+            if (!missing)
+                push_rows(g, t, r, r + 1);
+        }
+        OK(flt_gauge_flush(g));
+        sheet_list l = {0};
+        drain(g, &l, 0);
+        assert_int_equal(l.n, 3);
+        const double *v1 = l.sheet[0].value, *v2 = l.sheet[1].value, *v3 = l.sheet[2].value;
+        /* Sheet 1: 900 of 1000 rows, below 95 %: incomplete, no class and
+         * no verdict as if it were whole. */
+        assert_int_equal(v1[FLT_SHEET_ROWS], 900.0);
+        assert_int_equal(v1[FLT_SHEET_MISSING], 100.0);
+        assert_int_equal(v1[FLT_SHEET_ROWS_EXPECTED], 1000.0);
+        assert_true(v1[FLT_SHEET_COVERAGE] == 0.9);
+        assert_int_equal((unsigned)v1[FLT_SHEET_FLAGS] &
+                             (FLT_SHEET_FLAG_INCOMPLETE | FLT_SHEET_FLAG_LOST_ROWS),
+                         FLT_SHEET_FLAG_INCOMPLETE | FLT_SHEET_FLAG_LOST_ROWS);
+        assert_int_equal(v1[FLT_SHEET_SHAPE], (double)FLT_SHAPE_NOT_JUDGED);
+        assert_string_equal(flt_shape_string(FLT_SHAPE_NOT_JUDGED), "not judged: incomplete");
+        assert_int_equal(v1[FLT_SHEET_VERDICT], (double)FLT_VERDICT_NOT_JUDGED);
+        /* Sheet 2: 20 inside, 10 of the 20 across its end: 970 of 1000,
+         * complete but flagged; judged. Sheet 3: the other 10: 990 of
+         * 1000. The burst across the cut counts once, split by position. */
+        assert_int_equal(v2[FLT_SHEET_ROWS], 970.0);
+        assert_int_equal(v2[FLT_SHEET_MISSING], 30.0);
+        assert_true(v2[FLT_SHEET_COVERAGE] == 0.97);
+        assert_int_equal((unsigned)v2[FLT_SHEET_FLAGS] & FLT_SHEET_FLAG_INCOMPLETE, 0);
+        assert_true((unsigned)v2[FLT_SHEET_FLAGS] & FLT_SHEET_FLAG_LOST_ROWS);
+        assert_true(v2[FLT_SHEET_SHAPE] != (double)FLT_SHAPE_NOT_JUDGED);
+        assert_int_equal(v2[FLT_SHEET_VERDICT], (double)FLT_VERDICT_PASS);
+        assert_int_equal(v3[FLT_SHEET_ROWS], 990.0);
+        assert_int_equal(v3[FLT_SHEET_MISSING], 10.0);
+        assert_true(v3[FLT_SHEET_COVERAGE] == 0.99);
+        assert_int_equal(count(g, FLT_GAUGE_COUNT_MISSING), 140);
+        assert_int_equal(count(g, FLT_GAUGE_COUNT_SHEETS_INCOMPLETE), 1);
+        free_list(&l);
+        flt_gauge_destroy(g);
+    }
+    /* The rule's own state on an incomplete sheet: NOT_JUDGED, with the
+     * band that would apply and no worst value. */
+    flt_gauge *g = row_gauge(calib, 1, NULL);
+    OK(flt_gauge_set_rules(g, rules, 2.0, FLT_GAUGE_WIDTH_MEASURED));
+    for (size_t r = 0; r < 1000; ++r)
+        if (r < 500 || r >= 600)
+            push_rows(g, t, r, r + 1);
+    OK(flt_gauge_flush(g));
+    flt_sheet *sh = NULL;
+    OK(flt_gauge_next_sheet(g, 0, &sh));
+    assert_non_null(sh);
+    const flt_verdict *verdict = NULL;
+    OK(flt_sheet_verdict(sh, NULL, &verdict));
+    double rule_state = 0, band = 0, worst = 0;
+    OK(flt_verdict_get(verdict, 0, FLT_VERDICT_STATE, &rule_state));
+    OK(flt_verdict_get(verdict, 0, FLT_VERDICT_BAND, &band));
+    OK(flt_verdict_get(verdict, 0, FLT_VERDICT_WORST, &worst));
+    assert_int_equal(rule_state, (double)FLT_VERDICT_NOT_JUDGED);
+    assert_int_equal(band, 0.0);
+    assert_true(isnan(worst));
+    flt_sheet_destroy(sh);
+    flt_gauge_destroy(g);
+    flt_rules_destroy(rules);
     flt_calib_destroy(calib);
     test_sheet_free(t);
 }
@@ -1038,12 +1232,15 @@ static void splits_and_empty_sheets(void **state) {
     assert_true(l.sheet[1].value[FLT_SHEET_S_END] == 3601.0);
     const copied_sheet *e = &l.sheet[2];
     assert_int_equal(e->rows, 0);
+    /* A sheet with no row measured nothing: incomplete, not judged. */
     assert_int_equal((int)e->value[FLT_SHEET_FLAGS],
-                     FLT_SHEET_FLAG_EMPTY | FLT_SHEET_FLAG_NO_EDGES | FLT_SHEET_FLAG_NO_WAVE);
+                     FLT_SHEET_FLAG_EMPTY | FLT_SHEET_FLAG_NO_EDGES | FLT_SHEET_FLAG_NO_WAVE |
+                         FLT_SHEET_FLAG_INCOMPLETE);
+    assert_int_equal(e->value[FLT_SHEET_COVERAGE], 0.0);
     assert_true(isnan(e->value[FLT_SHEET_S_FIRST]) && isnan(e->value[FLT_SHEET_BOW]));
     assert_int_equal((int)e->value[FLT_SHEET_WINDOW_FLAGS] & FLT_WINDOW_NO_VALID_FIBER,
                      FLT_WINDOW_NO_VALID_FIBER);
-    assert_int_equal(e->value[FLT_SHEET_SHAPE], (double)FLT_SHAPE_UNDETERMINED);
+    assert_int_equal(e->value[FLT_SHEET_SHAPE], (double)FLT_SHAPE_NOT_JUDGED);
     /* Every value NaN is flagged: here every zone. */
     for (size_t j = 0; j < e->n_array[FLT_SHEET_ZONE_I_UNITS]; ++j)
         assert_true(isnan(e->array[FLT_SHEET_ZONE_I_UNITS][j]) &&
@@ -1298,6 +1495,7 @@ int main(void) {
         cmocka_unit_test(head_and_tail),
         cmocka_unit_test(queue_overflow_is_counted),
         cmocka_unit_test(callback_polling_and_slots),
+        cmocka_unit_test(lost_rows_and_coverage),
         cmocka_unit_test(splits_and_empty_sheets),
         cmocka_unit_test(acquisition_from_a_source),
         cmocka_unit_test(narrow_strip_has_edges),

@@ -31,6 +31,24 @@ namespace Flatline
         NoWave = FlatlineNative.FLT_SHEET_FLAG_NO_WAVE,
         /// <summary>No row: every result is NaN and flagged.</summary>
         Empty = FlatlineNative.FLT_SHEET_FLAG_EMPTY,
+        /// <summary>Its coverage is below GaugeMinCoverage: its shape and
+        /// verdict are "not judged".</summary>
+        Incomplete = FlatlineNative.FLT_SHEET_FLAG_INCOMPLETE,
+        /// <summary>It lost rows: frames dropped, missing by the encoder, or
+        /// lost lines.</summary>
+        LostRows = FlatlineNative.FLT_SHEET_FLAG_LOST_ROWS,
+    }
+
+    /// <summary>What a full frame queue does (the option gauge_overflow).</summary>
+    public enum GaugeOverflow
+    {
+        /// <summary>Drop the frame, count it and flag its sheet.</summary>
+        Drop = NativeGaugeOverflow.FLT_GAUGE_OVERFLOW_DROP,
+        /// <summary>The thread that delivers the frame waits for room.</summary>
+        Wait = NativeGaugeOverflow.FLT_GAUGE_OVERFLOW_WAIT,
+        /// <summary>Wait for pushed frames and an attached image sequence or
+        /// simulator; drop for an attached camera (the default).</summary>
+        Auto = NativeGaugeOverflow.FLT_GAUGE_OVERFLOW_AUTO,
     }
 
     /// <summary>A sheet's scalar results by key (flt_sheet_value), for
@@ -76,6 +94,13 @@ namespace Flatline
         StripCentreMax = NativeSheetValue.FLT_SHEET_STRIP_CENTRE_MAX,
         Rules = NativeSheetValue.FLT_SHEET_RULES,
         RulesFailed = NativeSheetValue.FLT_SHEET_RULES_FAILED,
+        Coverage = NativeSheetValue.FLT_SHEET_COVERAGE,
+        RowsExpected = NativeSheetValue.FLT_SHEET_ROWS_EXPECTED,
+        RowsMeasured = NativeSheetValue.FLT_SHEET_ROWS_MEASURED,
+        LostLines = NativeSheetValue.FLT_SHEET_LOST_LINES,
+        Missing = NativeSheetValue.FLT_SHEET_MISSING,
+        Verdict = NativeSheetValue.FLT_SHEET_VERDICT,
+        Peaks = NativeSheetValue.FLT_SHEET_PEAKS,
     }
 
     /// <summary>One rule's statistics over a coil (flt_gauge_coil_stats).</summary>
@@ -167,6 +192,11 @@ namespace Flatline
         Queued = NativeGaugeCounter.FLT_GAUGE_COUNT_QUEUED,
         Acquiring = NativeGaugeCounter.FLT_GAUGE_COUNT_ACQUIRING,
         SheetsWaiting = NativeGaugeCounter.FLT_GAUGE_COUNT_SHEETS_WAITING,
+        SheetsGrown = NativeGaugeCounter.FLT_GAUGE_COUNT_SHEETS_GROWN,
+        SheetsIncomplete = NativeGaugeCounter.FLT_GAUGE_COUNT_SHEETS_INCOMPLETE,
+        Missing = NativeGaugeCounter.FLT_GAUGE_COUNT_MISSING,
+        LostLines = NativeGaugeCounter.FLT_GAUGE_COUNT_LOST_LINES,
+        Refused = NativeGaugeCounter.FLT_GAUGE_COUNT_REFUSED,
     }
 
     /// <summary>
@@ -244,6 +274,26 @@ namespace Flatline
         /// <summary>Strip the reconstructor had taken beyond <see cref="SEndMm"/>
         /// when the sheet was finished, mm.</summary>
         public double LookaheadMm => Value(SheetValue.Lookahead);
+        /// <summary>Rows measured over the rows its length should hold, 0..1;
+        /// below GaugeMinCoverage the sheet is <see cref="Incomplete"/>.</summary>
+        public double Coverage => Value(SheetValue.Coverage);
+        /// <summary>Too many rows are missing for a class or a verdict: its
+        /// <see cref="Shape"/> is <see cref="ShapeClass.NotJudged"/> and its
+        /// <see cref="VerdictState"/> <see cref="Flatline.VerdictState.NotJudged"/>.</summary>
+        public bool Incomplete => (Flags & SheetFlags.Incomplete) != 0;
+        /// <summary>The rows its length should hold (rows + dropped + missing),
+        /// those that measured the strip, lost lines (rows inside the strip
+        /// whose frame did not show it), and frames missing by the encoder.</summary>
+        public long RowsExpected => (long)Value(SheetValue.RowsExpected);
+        public long RowsMeasured => (long)Value(SheetValue.RowsMeasured);
+        public long LostLines => (long)Value(SheetValue.LostLines);
+        public long Missing => (long)Value(SheetValue.Missing);
+        /// <summary>Laser peaks on the strip (the denominator of <see cref="Saturated"/>).</summary>
+        public long Peaks => (long)Value(SheetValue.Peaks);
+        /// <summary>The whole sheet's verdict: Fail when a rule failed, Pass
+        /// when every rule was judged and passed, else NotJudged (no rules, a
+        /// rule that could not judge it, an incomplete sheet): never a pass.</summary>
+        public VerdictState VerdictState => (VerdictState)(int)Value(SheetValue.Verdict);
 
         /// <summary>Per fiber [fibers]: x (mm), I-Units, arc length (mm), the
         /// largest wave's height (mm), period (mm) and steepness (%), flags.</summary>

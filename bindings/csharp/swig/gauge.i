@@ -12,6 +12,8 @@ FLT_CS_INT_ENUM(flt_sheet_array, NativeSheetArray)
 FLT_CS_INT_ENUM(flt_gauge_counter, NativeGaugeCounter)
 FLT_CS_INT_ENUM(flt_coil, NativeCoil)
 FLT_CS_INT_ENUM(flt_coil_value, NativeCoilValue)
+FLT_CS_INT_ENUM(flt_gauge_overflow, NativeGaugeOverflow)
+%ignore FLT_GAUGE_OVERFLOW_MAX_ENUM_;
 %ignore FLT_COIL_MAX_ENUM_;
 %ignore FLT_COIL_VALUE_MAX_ENUM_;
 /* A sheet's verdict and a coil's statistics through the helpers below. */

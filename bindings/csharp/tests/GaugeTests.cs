@@ -49,7 +49,7 @@ namespace Flatline.Tests
 
         private static FlatlineOptions Options(int workers = 2) => new FlatlineOptions
         {
-            GaugeWorkers = workers, GaugeOverflowWait = true, GaugeKeepMaps = 1, GaugeSheetSlots = 16,
+            GaugeWorkers = workers, GaugeOverflow = GaugeOverflow.Wait, GaugeKeepMaps = 1, GaugeSheetSlots = 16,
             GaugeFrameSpacing = 2.0,
         };
 
@@ -209,7 +209,7 @@ namespace Flatline.Tests
             using var line = new SimulatedLine(calibration, lineOptions);
             line.AddDefect(DefectKind.CentreBuckle, 4, 800);
             using var source = FrameSource.Simulator(line);
-            using var options = new FlatlineOptions { GaugeFrameSpacing = 8, GaugeOverflowWait = true, LagKnots = 4 };
+            using var options = new FlatlineOptions { GaugeFrameSpacing = 8, GaugeOverflow = GaugeOverflow.Wait, LagKnots = 4 };
             using var gauge = new Gauge(calibration, options);
             Assert.Throws<FlatlineStateException>(() => gauge.Start());  // no source yet
             gauge.Attach(source);
@@ -238,7 +238,7 @@ namespace Flatline.Tests
             using var lineOptions = new FlatlineOptions { SimFrameSpacing = 10 };
             using var line = new SimulatedLine(calibration, lineOptions);
             line.AddDefect(DefectKind.CentreBuckle, 4, 800);
-            using var options = new FlatlineOptions { GaugeFrameSpacing = 8, GaugeOverflowWait = true, LagKnots = 4 };
+            using var options = new FlatlineOptions { GaugeFrameSpacing = 8, GaugeOverflow = GaugeOverflow.Wait, LagKnots = 4 };
             using var gauge = new Gauge(calibration, options);
             gauge.Cut(1000);
             for (int f = 0; f < 200; ++f)
@@ -260,7 +260,7 @@ namespace Flatline.Tests
             lineOptions.Set("sim_surround", 2); // the roller table beside the strip
             using var line = new SimulatedLine(calibration, lineOptions);
             line.AddDefect(DefectKind.CentreBuckle, 4, 800);
-            using var options = new FlatlineOptions { GaugeFrameSpacing = 8, GaugeOverflowWait = true, LagKnots = 4 };
+            using var options = new FlatlineOptions { GaugeFrameSpacing = 8, GaugeOverflow = GaugeOverflow.Wait, LagKnots = 4 };
             options.Set("gauge_keep_maps", 1);
             using var gauge = new Gauge(calibration, options);
             for (int f = 0; f < 200; ++f)

@@ -19,7 +19,7 @@ from ._flatness import FiberResults, Shape, ShapeComponent
 from ._options import OptionValue, make_options, options_doc, prefixed_options
 from ._pixels import PixelFormat
 from ._source import Source
-from ._verdict import RuleResult, ToleranceRules, _results, _rule_list
+from ._verdict import RuleResult, ToleranceRules, VerdictState, _results, _rule_list
 
 __all__ = [
     "SheetFlag",
@@ -45,6 +45,10 @@ class SheetFlag(enum.IntFlag):
     NO_EDGES = _capi.FLT_SHEET_FLAG_NO_EDGES  #: strip edges unknown (NaN)
     NO_WAVE = _capi.FLT_SHEET_FLAG_NO_WAVE  #: no fiber has a wave (wave values NaN)
     EMPTY = _capi.FLT_SHEET_FLAG_EMPTY  #: no row: every result NaN and flagged
+    #: coverage below gauge_min_coverage: shape and verdict "not judged"
+    INCOMPLETE = _capi.FLT_SHEET_FLAG_INCOMPLETE
+    #: rows lost: frames dropped, missing by the encoder, or lost lines
+    LOST_ROWS = _capi.FLT_SHEET_FLAG_LOST_ROWS
 
 
 # flt_sheet_value keys by the names Sheet.values uses (in key order).
@@ -55,7 +59,8 @@ _VALUES = (
     "wave_steepness", "wave_x", "max_i_units", "flags", "window_flags", "frames",
     "skipped", "dropped", "saturated", "invalid", "lookahead", "fibers", "zones",
     "strip_width_min", "strip_width_max", "strip_centre_min", "strip_centre_max",
-    "rules", "rules_failed",
+    "rules", "rules_failed", "coverage", "rows_expected", "rows_measured", "lost_lines",
+    "missing", "verdict", "peaks",
 )
 
 _COUNTERS = {
@@ -75,6 +80,11 @@ _COUNTERS = {
     "queued": _capi.FLT_GAUGE_COUNT_QUEUED,
     "acquiring": _capi.FLT_GAUGE_COUNT_ACQUIRING,
     "sheets_waiting": _capi.FLT_GAUGE_COUNT_SHEETS_WAITING,
+    "sheets_grown": _capi.FLT_GAUGE_COUNT_SHEETS_GROWN,
+    "sheets_incomplete": _capi.FLT_GAUGE_COUNT_SHEETS_INCOMPLETE,
+    "missing": _capi.FLT_GAUGE_COUNT_MISSING,
+    "lost_lines": _capi.FLT_GAUGE_COUNT_LOST_LINES,
+    "refused": _capi.FLT_GAUGE_COUNT_REFUSED,
 }
 
 
@@ -144,6 +154,45 @@ class Sheet:
     def failed_rules(self) -> int:
         """The number of rules the sheet failed (0 without rules)."""
         return int(self.values.get("rules_failed", 0))
+
+    @property
+    def coverage(self) -> float:
+        """Rows measured over the rows its length should hold, 0..1 (below
+        gauge_min_coverage the sheet is INCOMPLETE)."""
+        return self.values["coverage"]
+
+    @property
+    def incomplete(self) -> bool:
+        """True when too many rows are missing for a class or a verdict:
+        ``shape`` is Shape.NOT_JUDGED and ``verdict_state`` NOT_JUDGED."""
+        return bool(self.flags & SheetFlag.INCOMPLETE)
+
+    @property
+    def rows_expected(self) -> int:
+        """The rows its length should hold (rows + dropped + missing)."""
+        return int(self.values["rows_expected"])
+
+    @property
+    def rows_measured(self) -> int:
+        """Its rows that measured the strip (rows - lost_lines)."""
+        return int(self.values["rows_measured"])
+
+    @property
+    def lost_lines(self) -> int:
+        """Rows inside the strip whose frame did not show it."""
+        return int(self.values["lost_lines"])
+
+    @property
+    def missing(self) -> int:
+        """Frames missing by the encoder (lost before the gauge saw them)."""
+        return int(self.values["missing"])
+
+    @property
+    def verdict_state(self) -> VerdictState:
+        """The whole sheet's verdict: FAIL when a rule failed, PASS when every
+        rule was judged and passed, else NOT_JUDGED (no rules, a rule that
+        could not judge it, or an incomplete sheet): never a pass."""
+        return VerdictState(int(self.values["verdict"]))
 
 
 @dataclass(frozen=True)
@@ -268,9 +317,15 @@ class Gauge:
             for sheet in gauge:
                 ...
 
+    Nothing is lost by default: a push waits for room in a full queue
+    (gauge_overflow="auto"; an attached camera drops instead, counted and
+    flagged on its sheet), and every finished sheet waits to be read. A
+    sheet missing more than 5 % of its rows (gauge_min_coverage) is
+    ``incomplete``: its shape and verdict say "not judged".
+
     Pushing is serialised (frames must arrive in order); iterating sheets
     may run on another thread. The GIL is released while the gauge waits
-    (a full queue with gauge_overflow = 1, flush, stop, a sheet). While an
+    (a full queue, flush, stop, a sheet). While an
     attached source is acquiring, leave it (and the simulator or bus it
     reads) alone: the gauge's thread uses it.
 

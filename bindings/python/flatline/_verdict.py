@@ -46,6 +46,9 @@ class VerdictState(enum.IntEnum):
     FAIL = _capi.FLT_VERDICT_FAIL  #: the worst value exceeds the limit
     NO_BAND = _capi.FLT_VERDICT_NO_BAND  #: no band covers the sheet's thickness and width
     NOT_MEASURED = _capi.FLT_VERDICT_NOT_MEASURED  #: no map, or the value was not given
+    #: the gauge's sheet is incomplete; also a whole sheet's verdict
+    #: (Sheet.verdict_state) when a rule could not judge it
+    NOT_JUDGED = _capi.FLT_VERDICT_NOT_JUDGED
 
 
 @dataclass(frozen=True)

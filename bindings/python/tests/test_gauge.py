@@ -218,7 +218,7 @@ def test_bad_input_raises_with_the_library_message(calib):
 def test_gauge_options_table():
     table = flatline.gauge_options()
     assert table["gauge_workers"] == 2.0 and table["gauge_frame_spacing"] == 1.0
-    assert all(name.startswith("gauge_") for name in table) and len(table) == 10
+    assert all(name.startswith("gauge_") for name in table) and len(table) == 13
     assert "gauge_workers (int): default 2" in flatline.Gauge.__doc__
 
 
@@ -330,3 +330,105 @@ def test_sheets_carry_their_verdict_and_the_coil_its_statistics(calib):
     with pytest.raises(flatline.InvalidArgumentError, match="thickness_mm"):
         gauge.set_rules(rules, thickness_mm=-1.0)
     gauge.close()
+
+
+# ---- nothing lost unless the caller chose it ------------------------------------
+
+
+def _frame_pool(calib, n=60):
+    """n rendered frames of the simulated line (a buckle), to push cyclically."""
+    with flatline.SimulatedLine(calib, sim_frame_spacing=3.0) as sim:
+        sim.add_defect("centre_buckle", 6.0, 1800.0)
+        return [sim.next_frame().image for _ in range(n)]
+
+
+def _push_frames_fast(gauge, pool, count, step=3.0, cut_every=1000.0):
+    for c in np.arange(cut_every, count * step, cut_every):
+        gauge.cut(float(c))
+    for i in range(count):
+        gauge.push_frame(pool[i % len(pool)], i * step)
+    gauge.flush()
+    return list(gauge)
+
+
+def _same_sheets(a, b):
+    assert len(a) == len(b)
+    for x, y in zip(a, b):
+        assert x.values.keys() == y.values.keys()
+        for key in x.values:
+            vx, vy = x.values[key], y.values[key]
+            assert (vx == vy) or (math.isnan(vx) and math.isnan(vy)), key
+        assert np.array_equal(x.zones.i_units, y.zones.i_units, equal_nan=True)
+
+
+def test_frames_pushed_as_fast_as_possible_are_never_dropped_by_default(calib):
+    # 2100 frames pushed by a plain loop into 2 workers: the loop outruns
+    # the extraction (gauge_overflow="drop" loses most of them, which shows
+    # it does), and by default it waits: 0 dropped, every frame in a sheet,
+    # the same sheets as with the queue set to wait explicitly.
+    pool = _frame_pool(calib)
+    with flatline.Gauge(calib, gauge_workers=2, gauge_overflow="drop",
+                        gauge_frame_spacing=2.0, gauge_queue_frames=8) as gauge:
+        lossy = _push_frames_fast(gauge, pool, 2100)
+        assert gauge.counters()["dropped"] > 0
+        assert any(flatline.SheetFlag.LOST_ROWS in sh.flags for sh in lossy)
+        assert all(sh.dropped == 0 or flatline.SheetFlag.LOST_ROWS in sh.flags for sh in lossy)
+    runs = {}
+    for overflow in ("auto", "wait"):
+        with flatline.Gauge(calib, gauge_workers=2, gauge_overflow=overflow,
+                            gauge_frame_spacing=2.0, gauge_queue_frames=8) as gauge:
+            runs[overflow] = _push_frames_fast(gauge, pool, 2100)
+            counters = gauge.counters()
+            assert counters["dropped"] == 0 and counters["frames"] == 2100
+            assert sum(sh.rows for sh in runs[overflow]) == 2100 - counters["no_strip"]
+    assert all(sh.coverage == 1.0 and not sh.incomplete for sh in runs["auto"])
+    _same_sheets(runs["auto"], runs["wait"])
+    with flatline.Gauge(calib) as gauge:
+        assert gauge.option("gauge_overflow") == flatline.capi.FLT_GAUGE_OVERFLOW_AUTO
+
+
+def test_readme_streaming_pattern_returns_every_sheet(calib):
+    # The README's pattern: read the sheets while pushing, then flush and
+    # read the rest. With rigid_motion and robust the reconstructor holds
+    # about 17 m of strip, so the 10 sheets of 1 m all finish at the flush:
+    # more than the 4 sheet slots, and every one comes out, in order.
+    s, h, g, _ = reference_sheet(3400)  # 10.2 m
+    got = []
+    with flatline.Gauge(calib, rigid_motion=True, robust="huber",
+                        gauge_frame_spacing=2.0) as gauge:
+        for c in range(1000, 10000, 1000):
+            gauge.cut(float(c))
+        for r in range(len(s)):
+            gauge.push_row(s[r], h[r], g[r])
+            for sheet in gauge:
+                got.append(sheet)
+        gauge.flush()
+        got.extend(gauge)
+        counters = gauge.counters()
+    assert [sh.id for sh in got] == list(range(1, 11))
+    assert counters["sheets_dropped"] == 0 and counters["sheets_grown"] > 0
+    assert all(not sh.incomplete for sh in got)
+
+
+def test_a_sheet_missing_rows_is_not_judged(calib):
+    # Rows every 3 mm with 100 of the first sheet's 1000 missing (a camera
+    # that lost them): coverage 0.9 < 0.95, incomplete, shape and verdict
+    # "not judged"; the second sheet is whole.
+    s, h, g, _ = reference_sheet(2000)
+    keep = np.ones(len(s), bool)
+    keep[400:500] = False
+    rules = flatline.ToleranceRules.loads(VERDICT_RULES)
+    with flatline.Gauge(calib, gauge_frame_spacing=2.0) as gauge:
+        gauge.set_rules(rules, thickness_mm=4.0, width_mm=0.0)
+        gauge.cut(3000.0)
+        for r in np.flatnonzero(keep):
+            gauge.push_row(s[r], h[r], g[r])
+        gauge.flush()
+        first, second = list(gauge)
+    assert first.incomplete and first.coverage == 0.9
+    assert (first.rows, first.missing, first.rows_expected) == (900, 100, 1000)
+    assert first.shape == flatline.Shape.NOT_JUDGED and str(first.shape) == "not judged: incomplete"
+    assert first.verdict_state == flatline.VerdictState.NOT_JUDGED
+    assert all(r.state == flatline.VerdictState.NOT_JUDGED for r in first.verdict)
+    assert not second.incomplete and second.coverage == 1.0
+    assert second.verdict_state != flatline.VerdictState.NOT_JUDGED
