@@ -136,7 +136,13 @@
  *   measured strip width (FLT_SHEET_STRIP_WIDTH); they choose each rule's
  *   band. flt_sheet_verdict() gives the sheet's rules and verdict as
  *   read-only handles for flt_rules_rule() and flt_verdict_get().
- *   Per coil the gauge counts the sheets judged, passed and failed, and
+ *   A sheet's verdict (FLT_SHEET_VERDICT) is FAIL when a rule failed,
+ *   PASS only when every rule judged it and it passed each, and
+ *   FLT_VERDICT_NOT_JUDGED otherwise: a rule whose band does not cover its
+ *   thickness and width (NO_BAND), a measure that is missing
+ *   (NOT_MEASURED), or an incomplete sheet. A sheet no rule could judge is
+ *   never counted as passed.
+ *   Per coil the gauge counts the sheets passed, failed and not judged, and
  *   per rule the outcomes and the distribution of the worst values: min,
  *   max, mean, where the largest was, and a histogram of worst / limit in
  *   FLT_COIL_HISTOGRAM_BINS bins of a tenth of the limit (no percentiles:
@@ -417,11 +423,13 @@ typedef enum flt_coil {
 typedef enum flt_coil_value {
     /** The coil's number (FLT_SHEET_COIL; 0: no sheet judged yet). */
     FLT_COIL_NUMBER = 0,
-    /** Sheets judged in the coil. */
+    /** Sheets of the coil evaluated under the rules: judged or not. */
     FLT_COIL_SHEETS = 1,
-    /** Sheets that failed no rule ... */
+    /** Sheets whose verdict (FLT_SHEET_VERDICT) is PASS: every rule judged
+     * them and they passed every one ... */
     FLT_COIL_SHEETS_PASSED = 2,
-    /** ... and sheets that failed at least one. */
+    /** ... FAIL: they failed at least one rule (FLT_COIL_SHEETS_NOT_JUDGED
+     * are the rest). */
     FLT_COIL_SHEETS_FAILED = 3,
     /** 1 once the coil's last sheet was judged, else 0. */
     FLT_COIL_FINISHED = 4,
@@ -429,7 +437,8 @@ typedef enum flt_coil_value {
      * when the coil's statistics began). */
     FLT_COIL_RULES = 5,
     /** This rule's outcomes over the coil's sheets (FLT_VERDICT_PASS,
-     * _FAIL, _NO_BAND, _NOT_MEASURED): they add up to FLT_COIL_SHEETS. */
+     * _FAIL, _NO_BAND, _NOT_MEASURED, and FLT_COIL_RULE_NOT_JUDGED for
+     * incomplete sheets): they add up to FLT_COIL_SHEETS. */
     FLT_COIL_RULE_PASSED = 6,
     FLT_COIL_RULE_FAILED = 7,       /**< sheets that failed the rule */
     FLT_COIL_RULE_NO_BAND = 8,      /**< sheets no band of the rule covers */
@@ -446,8 +455,16 @@ typedef enum flt_coil_value {
     FLT_COIL_WORST_S = 15, /**< s of the largest, mm */
     /** The first of FLT_COIL_HISTOGRAM_BINS counts (worst / limit). */
     FLT_COIL_HISTOGRAM = 16,
+    /** Sheets not judged: their verdict is FLT_VERDICT_NOT_JUDGED (a rule
+     * whose band does not cover them or whose measure is missing, and no
+     * rule failed; or incomplete). Never counted as passed. */
+    FLT_COIL_SHEETS_NOT_JUDGED = 16 + FLT_COIL_HISTOGRAM_BINS,
+    /** Sheets judged: passed + failed. */
+    FLT_COIL_SHEETS_JUDGED = 17 + FLT_COIL_HISTOGRAM_BINS,
+    /** This rule's FLT_VERDICT_NOT_JUDGED outcomes (incomplete sheets). */
+    FLT_COIL_RULE_NOT_JUDGED = 18 + FLT_COIL_HISTOGRAM_BINS,
     /** The number of values (the array's size). */
-    FLT_COIL_VALUES = 16 + FLT_COIL_HISTOGRAM_BINS,
+    FLT_COIL_VALUES = 19 + FLT_COIL_HISTOGRAM_BINS,
     FLT_COIL_VALUE_MAX_ENUM_ = 0x7FFFFFFF
 } flt_coil_value;
 
@@ -705,10 +722,13 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_count(const flt_gauge *gauge
  * @param gauge the gauge.
  * @param rules the rule set (flatline/verdict.h), or NULL.
  * @param thickness_mm the sheets' thickness, mm (> 0, <= 1000): chooses
- *        each rule's band, with the width.
- * @param width_mm the sheets' nominal width, mm (> 0, <= 100000), or 0 for
- *        each sheet's measured strip width (FLT_SHEET_STRIP_WIDTH; a sheet
- *        without it is NOT_MEASURED by every rule).
+ *        each rule's band, with the width. Required: there is no default
+ *        thickness (a wrong one puts every sheet outside the bands, where
+ *        it is not judged).
+ * @param width_mm the sheets' nominal width, mm (> 0, <= 100000), or
+ *        FLT_GAUGE_WIDTH_MEASURED (0) for each sheet's measured strip width
+ *        (FLT_SHEET_STRIP_WIDTH; a sheet without it is NOT_MEASURED by every
+ *        rule).
  * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL gauge, rules that are
  *         not a live handle, or a thickness or width out of range (the
  *         rules in force stay).

@@ -1541,7 +1541,7 @@ void gauge::judge(flt_sheet *sh, const sheet_buffer &b, std::size_t n) {
 
 void coil_stats::reset(std::uint64_t gen, std::size_t n_rules) {
     generation = gen;
-    coil = sheets = passed = failed = 0;
+    coil = sheets = passed = failed = not_judged = 0;
     finished = false;
     per_rule zero{};
     zero.min = zero.max = zero.worst_sheet = zero.worst_x = zero.worst_s = k_nan;
@@ -1565,13 +1565,16 @@ void gauge::count_in_coil(const verdict_config &vc, const flt_sheet &sh) {
         finish();  // the previous coil's last sheet was not judged (lost)
     c.coil = coil;
     c.sheets += 1;
-    const double failed = v[FLT_SHEET_RULES_FAILED];
-    (failed > 0 ? c.failed : c.passed) += 1;
+    // By the sheet's verdict: a sheet no rule could judge is not passed.
+    const double verdict = v[FLT_SHEET_VERDICT];
+    (verdict == FLT_VERDICT_FAIL   ? c.failed
+     : verdict == FLT_VERDICT_PASS ? c.passed
+                                   : c.not_judged) += 1;
     for (std::size_t i = 0; i < c.rules.size() && i < vd.results.size(); ++i) {
         const double *r = vd.results[i].value;
         coil_stats::per_rule &p = c.rules[i];
         const int state = int(r[FLT_VERDICT_STATE]);
-        if (state >= 0 && state < 4)
+        if (state >= 0 && state < 5)
             p.count[state] += 1;
         if (state != FLT_VERDICT_PASS && state != FLT_VERDICT_FAIL)
             continue;
@@ -1668,6 +1671,9 @@ flt_status gauge::coil_stats_of(const char *fn, flt_coil which, std::size_t rule
     all[FLT_COIL_RULE_FAILED] = p.count[FLT_VERDICT_FAIL];
     all[FLT_COIL_RULE_NO_BAND] = p.count[FLT_VERDICT_NO_BAND];
     all[FLT_COIL_RULE_NOT_MEASURED] = p.count[FLT_VERDICT_NOT_MEASURED];
+    all[FLT_COIL_RULE_NOT_JUDGED] = p.count[FLT_VERDICT_NOT_JUDGED];
+    all[FLT_COIL_SHEETS_NOT_JUDGED] = c.not_judged;
+    all[FLT_COIL_SHEETS_JUDGED] = c.passed + c.failed;
     all[FLT_COIL_WORST_MIN] = p.min;
     all[FLT_COIL_WORST_MAX] = p.max;
     all[FLT_COIL_WORST_MEAN] = p.measured > 0 ? p.sum / p.measured : k_nan;

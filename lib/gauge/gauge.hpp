@@ -90,13 +90,13 @@ struct verdict_config {
 // One coil's statistics (flt_gauge_coil_stats).
 struct coil_stats {
     struct per_rule {
-        double count[4];  // by flt_verdict_state
+        double count[5];  // by flt_verdict_state
         double min, max, sum, measured;
         double worst_sheet, worst_x, worst_s;
         double histogram[FLT_COIL_HISTOGRAM_BINS];
     };
     std::uint64_t generation = 0;  // the verdict_config's (0: no rules)
-    double coil = 0, sheets = 0, passed = 0, failed = 0;
+    double coil = 0, sheets = 0, passed = 0, failed = 0, not_judged = 0;
     bool finished = false;
     std::vector<per_rule> rules;  // capacity reserved at set_rules
 

@@ -103,6 +103,38 @@ namespace Flatline
         Peaks = NativeSheetValue.FLT_SHEET_PEAKS,
     }
 
+    /// <summary>The width that chooses a rule's band (<see cref="Gauge.SetRules"/>):
+    /// a nominal width, or each sheet's measured strip width.</summary>
+    public readonly struct SheetWidth : IEquatable<SheetWidth>
+    {
+        private SheetWidth(double mm)
+        {
+            Mm = mm;
+        }
+
+        /// <summary>Each sheet's measured strip width (<see cref="Sheet.StripWidthMm"/>).</summary>
+        public static SheetWidth Measured => new SheetWidth(FlatlineNative.FLT_GAUGE_WIDTH_MEASURED);
+
+        /// <summary>A nominal width, mm (&gt; 0).</summary>
+        public static SheetWidth Nominal(double mm)
+        {
+            if (!(mm > 0))
+                throw new ArgumentOutOfRangeException(nameof(mm), mm, "a nominal width is > 0 mm; SheetWidth.Measured for the measured one");
+            return new SheetWidth(mm);
+        }
+
+        /// <summary>The width in mm, or 0 for <see cref="Measured"/>.</summary>
+        public double Mm { get; }
+
+        /// <summary>True for <see cref="Measured"/>.</summary>
+        public bool IsMeasured => Mm == FlatlineNative.FLT_GAUGE_WIDTH_MEASURED;
+
+        public bool Equals(SheetWidth other) => Mm.Equals(other.Mm);
+        public override bool Equals(object? obj) => obj is SheetWidth other && Equals(other);
+        public override int GetHashCode() => Mm.GetHashCode();
+        public override string ToString() => IsMeasured ? "measured" : $"{Mm} mm";
+    }
+
     /// <summary>One rule's statistics over a coil (flt_gauge_coil_stats).</summary>
     public sealed class RuleStats
     {
@@ -113,6 +145,7 @@ namespace Flatline
             Failed = (long)v[(int)NativeCoilValue.FLT_COIL_RULE_FAILED];
             NoBand = (long)v[(int)NativeCoilValue.FLT_COIL_RULE_NO_BAND];
             NotMeasured = (long)v[(int)NativeCoilValue.FLT_COIL_RULE_NOT_MEASURED];
+            NotJudged = (long)v[(int)NativeCoilValue.FLT_COIL_RULE_NOT_JUDGED];
             WorstMin = v[(int)NativeCoilValue.FLT_COIL_WORST_MIN];
             WorstMax = v[(int)NativeCoilValue.FLT_COIL_WORST_MAX];
             WorstMean = v[(int)NativeCoilValue.FLT_COIL_WORST_MEAN];
@@ -133,6 +166,8 @@ namespace Flatline
         public long Failed { get; }
         public long NoBand { get; }
         public long NotMeasured { get; }
+        /// <summary>Incomplete sheets, which no rule judged.</summary>
+        public long NotJudged { get; }
         /// <summary>The worst values of the sheets measured: smallest,
         /// largest, mean (NaN when none was).</summary>
         public double WorstMin { get; }
@@ -157,16 +192,23 @@ namespace Flatline
             Sheets = (long)first[(int)NativeCoilValue.FLT_COIL_SHEETS];
             Passed = (long)first[(int)NativeCoilValue.FLT_COIL_SHEETS_PASSED];
             Failed = (long)first[(int)NativeCoilValue.FLT_COIL_SHEETS_FAILED];
+            NotJudged = (long)first[(int)NativeCoilValue.FLT_COIL_SHEETS_NOT_JUDGED];
             Finished = first[(int)NativeCoilValue.FLT_COIL_FINISHED] != 0;
             Rules = rules;
         }
 
         /// <summary>The coil's number (0: no sheet judged yet).</summary>
         public long Coil { get; }
-        /// <summary>Sheets judged; those that failed no rule; those that failed one or more.</summary>
+        /// <summary>Sheets evaluated under the rules (Passed + Failed +
+        /// NotJudged); those every rule judged and passed; those that failed
+        /// one or more; those no rule failed that some rule could not judge
+        /// (no band, a missing measure, incomplete): never counted as passed.</summary>
         public long Sheets { get; }
         public long Passed { get; }
         public long Failed { get; }
+        public long NotJudged { get; }
+        /// <summary>Sheets judged: <see cref="Passed"/> + <see cref="Failed"/>.</summary>
+        public long Judged => Passed + Failed;
         /// <summary>True once the coil's last sheet was judged.</summary>
         public bool Finished { get; }
         /// <summary>Per rule, in rule order.</summary>
@@ -332,7 +374,7 @@ namespace Flatline
 
         internal static unsafe Sheet Read(IntPtr sheet, int maps)
         {
-            int count = (int)NativeSheetValue.FLT_SHEET_RULES_FAILED + 1;
+            int count = (int)NativeSheetValue.FLT_SHEET_PEAKS + 1;
             var values = new double[count];
             for (int key = 0; key < count; ++key)
             {
@@ -739,26 +781,38 @@ namespace Flatline
         /// <summary>The rule set sheets are judged by (<see cref="SetRules"/>), or null.</summary>
         public ToleranceRules? Rules { get; private set; }
 
-        /// <summary>Judges every sheet from now on against <paramref name="rules"/>
-        /// (null: no more): the sheets' thickness (mm) and nominal width (mm;
-        /// 0: each sheet's measured strip width) choose each rule's band. The
-        /// gauge keeps its own copy. The current coil's statistics restart;
+        /// <summary>Judges every sheet from now on against <paramref name="rules"/>:
+        /// the sheets' thickness (mm) and width (<see cref="SheetWidth.Nominal"/>
+        /// or <see cref="SheetWidth.Measured"/>) choose each rule's band; both
+        /// are required (a sheet no band covers is not judged, never passed).
+        /// The gauge keeps its own copy. The current coil's statistics restart;
         /// set the rules before a coil's first frame.</summary>
-        public void SetRules(ToleranceRules? rules, double thicknessMm = 1.0, double widthMm = 0.0)
+        public void SetRules(ToleranceRules rules, double thicknessMm, SheetWidth width)
         {
             if (rules == null)
-                FlatlineNative.flt_cs_gauge_clear_rules(LiveHandle);
-            else
-                FlatlineNative.flt_gauge_set_rules(LiveHandle, rules.LiveHandle, thicknessMm, widthMm);
+                throw new ArgumentNullException(nameof(rules), "ClearRules() judges no more");
+            FlatlineNative.flt_gauge_set_rules(LiveHandle, rules.LiveHandle, thicknessMm, width.Mm);
             Rules = rules;
         }
 
-        /// <summary>The verdict statistics of the coil being measured, or with
-        /// <paramref name="last"/> of the last finished coil; null when there
-        /// are none (no rules, no coil finished yet).</summary>
-        public unsafe CoilStats? CoilStatistics(bool last = false)
+        /// <summary>Judges no more sheets (the current coil's statistics end).</summary>
+        public void ClearRules()
         {
-            int which = (int)(last ? NativeCoil.FLT_COIL_LAST : NativeCoil.FLT_COIL_CURRENT);
+            FlatlineNative.flt_cs_gauge_clear_rules(LiveHandle);
+            Rules = null;
+        }
+
+        /// <summary>The verdict statistics of the coil being measured; null
+        /// without rules.</summary>
+        public CoilStats? CurrentCoilStatistics() => CoilStatistics((int)NativeCoil.FLT_COIL_CURRENT);
+
+        /// <summary>The verdict statistics of the last finished coil; null
+        /// when none finished under rules yet.</summary>
+        public CoilStats? LastCoilStatistics() => CoilStatistics((int)NativeCoil.FLT_COIL_LAST);
+
+        private unsafe CoilStats? CoilStatistics(int coil)
+        {
+            int which = coil;
             int n = (int)NativeCoilValue.FLT_COIL_VALUES;
             double[] Read(int rule)
             {

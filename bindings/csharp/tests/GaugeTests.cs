@@ -363,10 +363,10 @@ namespace Flatline.Tests
             using var calibration = Sensor();
             using var options = Options();
             using var gauge = new Gauge(calibration, options);
-            Assert.Null(gauge.CoilStatistics());
+            Assert.Null(gauge.CurrentCoilStatistics());
             using (var rules = ToleranceRules.Parse(VerdictRules))
             {
-                gauge.SetRules(rules, thicknessMm: 4.0);
+                gauge.SetRules(rules, thicknessMm: 4.0, SheetWidth.Measured);
                 Assert.Same(rules, gauge.Rules);
             }  // the gauge keeps its own copy
             gauge.Cut(3000);
@@ -400,7 +400,7 @@ namespace Flatline.Tests
                 Assert.InRange(verdict[0].Worst, 2.0 - 0.02, 2.0 + 0.001);
                 Assert.Equal(1.9 - verdict[0].Worst, verdict[0].Margin, 12);
             }
-            var coil = gauge.CoilStatistics(last: true);
+            var coil = gauge.LastCoilStatistics();
             Assert.NotNull(coil);
             Assert.True(coil!.Finished);
             Assert.Equal((1L, 3L, 0L, 3L), (coil.Coil, coil.Sheets, coil.Passed, coil.Failed));
@@ -408,12 +408,38 @@ namespace Flatline.Tests
             Assert.Equal(sheets.Max(s => s.Verdict![0].Worst), coil.Rules[0].WorstMax);
             Assert.Equal(3, coil.Rules[0].Histogram[10]);  // 2 / 1.9 in (1.0, 1.1]
             Assert.Equal(3, coil.Rules[1].Histogram[9]);   // 2 / 2.1 in (0.9, 1.0]
-            var now = gauge.CoilStatistics();
+            var now = gauge.CurrentCoilStatistics();
             Assert.Equal((0L, 0L), (now!.Coil, now.Sheets));
-            gauge.SetRules(null);
+            gauge.ClearRules();
             Assert.Null(gauge.Rules);
-            Assert.Null(gauge.CoilStatistics());
-            Assert.Throws<InvalidArgumentException>(() => gauge.SetRules(ToleranceRules.Parse(VerdictRules), -1.0));
+            Assert.Null(gauge.CurrentCoilStatistics());
+            Assert.Throws<InvalidArgumentException>(() => gauge.SetRules(ToleranceRules.Parse(VerdictRules), -1.0, SheetWidth.Measured));
+            Assert.Throws<ArgumentOutOfRangeException>(() => SheetWidth.Nominal(0));
+        }
+
+        [Fact]
+        public void ASheetNoBandCoversIsNotJudgedNeverPassed()
+        {
+            // The rules' bands are 1..10 mm thick: a 0.5 mm sheet is in none.
+            // Each sheet is not judged, and the coil counts 0 passed, 0 failed,
+            // 2 not judged.
+            using var calibration = Sensor();
+            using var options = Options();
+            using var gauge = new Gauge(calibration, options);
+            using (var rules = ToleranceRules.Parse(VerdictRules))
+                gauge.SetRules(rules, 0.5, SheetWidth.Nominal(1500));
+            gauge.Cut(3000);
+            var zero = new double[Fibers];
+            for (int r = 0; r < 2000; ++r)
+                gauge.PushRow(Step * r, zero, zero);
+            gauge.Flush();
+            var sheets = Drain(gauge);
+            Assert.Equal(2, sheets.Count);
+            Assert.All(sheets, s => Assert.Equal(VerdictState.NotJudged, s.VerdictState));
+            Assert.All(sheets, s => Assert.Equal(1.0, s.Coverage));
+            var coil = gauge.LastCoilStatistics();
+            Assert.NotNull(coil);
+            Assert.Equal((2L, 0L, 0L, 2L, 0L), (coil!.Sheets, coil.Passed, coil.Failed, coil.NotJudged, coil.Judged));
         }
     }
 }

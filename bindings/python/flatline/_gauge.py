@@ -7,7 +7,7 @@ from __future__ import annotations
 import enum
 import threading
 from dataclasses import dataclass, field
-from typing import Any, Dict, Iterator, Optional, Tuple
+from typing import Any, Dict, Iterator, Optional, Tuple, Union
 
 import numpy as np
 
@@ -213,18 +213,27 @@ class RuleStats:
     #: (20,) sheets by worst / limit: bin i counts (i/10, (i+1)/10] (bin 0
     #: from 0, bin 19 everything above 1.9): bins 0-9 passed, 10-19 failed.
     histogram: np.ndarray
+    not_judged: int = 0  #: incomplete sheets (not judged by any rule)
 
 
 @dataclass(frozen=True)
 class CoilStats:
-    """A coil's verdict statistics (flt_gauge_coil_stats)."""
+    """A coil's verdict statistics (flt_gauge_coil_stats). Every sheet is
+    passed, failed or not judged: a sheet that no rule's band covers, whose
+    measure is missing, or that is incomplete is never counted as passed."""
 
     coil: int  #: the coil's number (0: no sheet judged yet)
-    sheets: int  #: sheets judged
-    passed: int  #: sheets that failed no rule
-    failed: int  #: sheets that failed at least one
+    sheets: int  #: sheets evaluated under the rules: passed + failed + not_judged
+    passed: int  #: sheets every rule judged and passed
+    failed: int  #: sheets that failed at least one rule
     finished: bool  #: its last sheet was judged
     rules: Tuple[RuleStats, ...]  #: per rule, in rule order
+    not_judged: int = 0  #: sheets no rule failed that some rule could not judge
+
+    @property
+    def judged(self) -> int:
+        """Sheets judged: passed + failed."""
+        return self.passed + self.failed
 
 
 def _read_sheet(handle: Any, maps: int) -> Sheet:
@@ -519,18 +528,45 @@ class Gauge:
         """The rule set sheets are judged by (set_rules), or None."""
         return self._rules
 
-    def set_rules(self, rules: Optional[ToleranceRules], thickness_mm: float = 1.0,
-                  width_mm: float = 0.0) -> None:
-        """Judges every sheet from now on against `rules` (None: no more):
-        the sheets' thickness (mm) and nominal width (mm; 0: each sheet's
-        measured strip width) choose each rule's band. The gauge keeps its
-        own copy. The current coil's statistics restart; set the rules
-        before a coil's first frame."""
+    def set_rules(self, rules: Optional[ToleranceRules],
+                  thickness_mm: Optional[float] = None,
+                  width_mm: Union[float, str, None] = None) -> None:
+        """Judges every sheet from now on against `rules` (None: no more).
+        The sheets' thickness (mm) and width choose each rule's band, and
+        both are required with rules: ``width_mm`` is the nominal width
+        (mm) or ``"measured"`` for each sheet's measured strip width. A
+        sheet that no band covers is not judged (never passed). The gauge
+        keeps its own copy. The current coil's statistics restart; set the
+        rules before a coil's first frame.
+
+            gauge.set_rules(rules, thickness_mm=4.0, width_mm="measured")
+        """
+        fn = "set_rules"
         if rules is not None and not isinstance(rules, ToleranceRules):
-            raise TypeError(f"set_rules() argument 'rules' must be ToleranceRules or None, not "
+            raise TypeError(f"{fn}() argument 'rules' must be ToleranceRules or None, not "
                             f"{type(rules).__name__}")
-        _capi.flt_gauge_set_rules(self._live(), None if rules is None else rules._handle,
-                                  float(thickness_mm), float(width_mm))
+        if rules is None:
+            _capi.flt_gauge_set_rules(self._live(), None, 1.0, 0.0)
+            self._rules = None
+            return
+        if thickness_mm is None:
+            raise TypeError(f"{fn}() missing required argument 'thickness_mm': the sheets' "
+                            f"thickness, mm, chooses each rule's band (there is no default)")
+        if width_mm is None:
+            raise TypeError(f"{fn}() missing required argument 'width_mm': the sheets' "
+                            f"nominal width, mm, or \"measured\" for each sheet's strip width")
+        if isinstance(width_mm, str):
+            if width_mm != "measured":
+                raise ValueError(f"{fn}() argument 'width_mm' = {width_mm!r} must be a width "
+                                 f"in mm or \"measured\"")
+            width = _capi.FLT_GAUGE_WIDTH_MEASURED
+        else:
+            width = as_real(fn, "width_mm", width_mm)
+            if width == 0.0:
+                raise ValueError(f"{fn}() argument 'width_mm' = 0: give the nominal width in "
+                                 f"mm, or \"measured\" for each sheet's strip width")
+        _capi.flt_gauge_set_rules(self._live(), rules._handle,
+                                  as_real(fn, "thickness_mm", thickness_mm), width)
         self._rules = rules
 
     def coil_stats(self, last: bool = False) -> Optional[CoilStats]:
@@ -559,11 +595,13 @@ class Gauge:
                 int(row[_capi.FLT_COIL_RULE_NO_BAND]), int(row[_capi.FLT_COIL_RULE_NOT_MEASURED]),
                 float(row[_capi.FLT_COIL_WORST_MIN]), float(row[_capi.FLT_COIL_WORST_MAX]),
                 float(row[_capi.FLT_COIL_WORST_MEAN]), float(row[_capi.FLT_COIL_WORST_SHEET]),
-                float(row[_capi.FLT_COIL_WORST_X]), float(row[_capi.FLT_COIL_WORST_S]), hist))
+                float(row[_capi.FLT_COIL_WORST_X]), float(row[_capi.FLT_COIL_WORST_S]), hist,
+                int(row[_capi.FLT_COIL_RULE_NOT_JUDGED])))
         return CoilStats(int(first[_capi.FLT_COIL_NUMBER]), int(first[_capi.FLT_COIL_SHEETS]),
                          int(first[_capi.FLT_COIL_SHEETS_PASSED]),
                          int(first[_capi.FLT_COIL_SHEETS_FAILED]),
-                         bool(first[_capi.FLT_COIL_FINISHED]), tuple(stats))
+                         bool(first[_capi.FLT_COIL_FINISHED]), tuple(stats),
+                         int(first[_capi.FLT_COIL_SHEETS_NOT_JUDGED]))
 
     def counters(self) -> Dict[str, int]:
         """The gauge's counters by name: frames, extracted, skipped_stop,

@@ -225,6 +225,11 @@ class Verdict:
         return _results(self._handle, self._rules)
 
     @property
+    def rules(self) -> Tuple[ToleranceRule, ...]:
+        """The rules this verdict judges by, in order."""
+        return tuple(self._rules)
+
+    @property
     def failed(self) -> int:
         """The number of rules that failed in the last evaluation."""
         return int(_capi.flt_verdict_failed(self._handle))

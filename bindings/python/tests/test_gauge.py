@@ -287,7 +287,7 @@ def test_sheets_carry_their_verdict_and_the_coil_its_statistics(calib):
     rules = flatline.ToleranceRules.loads(VERDICT_RULES)
     gauge = flatline.Gauge(calib, gauge_workers=2, gauge_overflow=1, gauge_frame_spacing=2.0)
     assert gauge.rules is None and gauge.coil_stats() is None
-    gauge.set_rules(rules, thickness_mm=4.0)
+    gauge.set_rules(rules, thickness_mm=4.0, width_mm="measured")
     assert gauge.rules is rules
     for c in (3000.0, 6000.0):
         gauge.cut(c)
@@ -328,7 +328,7 @@ def test_sheets_carry_their_verdict_and_the_coil_its_statistics(calib):
     gauge.flush()
     assert all(sheet.verdict is None for sheet in gauge)
     with pytest.raises(flatline.InvalidArgumentError, match="thickness_mm"):
-        gauge.set_rules(rules, thickness_mm=-1.0)
+        gauge.set_rules(rules, thickness_mm=-1.0, width_mm="measured")
     gauge.close()
 
 
@@ -419,7 +419,7 @@ def test_a_sheet_missing_rows_is_not_judged(calib):
     keep[400:500] = False
     rules = flatline.ToleranceRules.loads(VERDICT_RULES)
     with flatline.Gauge(calib, gauge_frame_spacing=2.0) as gauge:
-        gauge.set_rules(rules, thickness_mm=4.0, width_mm=0.0)
+        gauge.set_rules(rules, thickness_mm=4.0, width_mm="measured")
         gauge.cut(3000.0)
         for r in np.flatnonzero(keep):
             gauge.push_row(s[r], h[r], g[r])
@@ -432,3 +432,32 @@ def test_a_sheet_missing_rows_is_not_judged(calib):
     assert all(r.state == flatline.VerdictState.NOT_JUDGED for r in first.verdict)
     assert not second.incomplete and second.coverage == 1.0
     assert second.verdict_state != flatline.VerdictState.NOT_JUDGED
+
+
+def test_thickness_and_width_are_required_and_no_band_is_not_judged(calib):
+    rules = flatline.ToleranceRules.loads(VERDICT_RULES)  # bands: 1..10 mm thick
+    s, h, g, _ = reference_sheet(2000)
+    with flatline.Gauge(calib, gauge_frame_spacing=2.0) as gauge:
+        with pytest.raises(TypeError, match="thickness_mm"):
+            gauge.set_rules(rules)
+        with pytest.raises(TypeError, match="width_mm"):
+            gauge.set_rules(rules, thickness_mm=4.0)
+        with pytest.raises(ValueError, match="measured"):
+            gauge.set_rules(rules, thickness_mm=4.0, width_mm="nominal")
+        assert gauge.rules is None
+        # 0.5 mm is in no band: every rule NO_BAND, each sheet not judged,
+        # and the coil counts 0 passed, 0 failed, 2 not judged.
+        gauge.set_rules(rules, thickness_mm=0.5, width_mm=1500.0)
+        gauge.cut(3000.0)
+        for r in range(len(s)):
+            gauge.push_row(s[r], h[r], g[r])
+        gauge.flush()
+        sheets = list(gauge)
+        stats = gauge.coil_stats(last=True)
+    assert len(sheets) == 2
+    assert all(sh.verdict_state == flatline.VerdictState.NOT_JUDGED for sh in sheets)
+    assert all(r.state == flatline.VerdictState.NO_BAND for sh in sheets for r in sh.verdict)
+    assert stats is not None
+    assert (stats.sheets, stats.passed, stats.failed, stats.not_judged, stats.judged) == \
+        (2, 0, 0, 2, 0)
+    assert stats.rules[0].no_band == 2
