@@ -164,13 +164,26 @@
  *   "wait" for every source). Results do not depend on the number of
  *   workers: with no frame dropped, every sheet is identical bit for bit
  *   (tests/c/test_gauge.c checks 0, 1 and 2 workers).
- *   The calls of one gauge may come from any threads, except that frames
- *   (push_frame, push_row, or the attached source) must come from one
- *   thread at a time, in order; cut() may come from another thread.
- *   The callback runs on a gauge thread; it must not call
- *   flt_gauge_flush, flt_gauge_stop, flt_gauge_next_sheet or
- *   flt_gauge_set_callback of its gauge (FLT_ERR_STATE) nor
- *   flt_gauge_destroy (ignored there).
+ *   The calls of one gauge may come from any threads. Frames come from one
+ *   producer at a time, in order: push_frame and push_row from a thread
+ *   while another thread pushes or flushes return FLT_ERR_STATE at once
+ *   (nothing taken; the gauge stays usable), and so do they while an
+ *   attached source acquires. flt_gauge_flush and flt_gauge_start wait
+ *   for a push in progress to end. cut() may come from any thread.
+ *
+ * Inside the callback
+ *   The callback runs on a gauge thread (or the thread whose push, cut or
+ *   flush finished the sheet, with 0 workers), and no call of its own
+ *   gauge made there waits for itself or hangs. There flt_gauge_cut (the
+ *   cut is queued: it takes effect with the next frame),
+ *   flt_gauge_count, flt_gauge_get_option, flt_gauge_set_rules and
+ *   flt_gauge_coil_stats work; flt_gauge_push_frame, flt_gauge_push_row,
+ *   flt_gauge_flush, flt_gauge_attach_source,
+ *   flt_gauge_start, flt_gauge_stop, flt_gauge_next_sheet and
+ *   flt_gauge_set_callback return FLT_ERR_STATE (the message says why);
+ *   flt_gauge_destroy is ignored (it would wait for itself).
+ *   tests/c/test_gauge.c calls each of them from the callback with 0, 1
+ *   and 2 workers.
  *
  * Memory
  *   Everything is allocated by flt_gauge_create() (and flt_gauge_set_rules()
@@ -585,9 +598,10 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_get_option(const flt_gauge *
  *         (nothing is counted); FLT_ERR_BUFFER_FULL when
  *         gauge_sheet_slots + gauge_sheet_backlog sheets exist (read or
  *         free sheets; the frame was not taken: push it again);
- *         FLT_ERR_STATE while an attached source is acquiring; a failure
- *         of processing (which stops the gauge) is returned by every later
- *         call. */
+ *         FLT_ERR_STATE while an attached source is acquiring, while
+ *         another thread pushes or flushes, or from inside the callback
+ *         (nothing taken); a failure of processing (which stops the gauge)
+ *         is returned by every later call. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_push_frame(flt_gauge *gauge, const void *frame,
                                                                flt_pixel_format format,
                                                                uint32_t width, uint32_t height,
@@ -614,7 +628,7 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_push_row(flt_gauge *gauge, d
 /** The shear cut the strip at encoder_mm (see "Cuts"): finite, at most
  * 1e12 in magnitude, beyond the previous cut unless the encoder went back
  * since. FLT_ERR_BUFFER_FULL when 256 cuts wait for strip (the strip has
- * not reached them).
+ * not reached them). Any thread, the callback too (queued there).
  * @param gauge the gauge.
  * @param encoder_mm where the shear cut, mm of encoder position.
  * @return FLT_OK; FLT_ERR_BUFFER_FULL as above; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong
@@ -634,7 +648,8 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_cut(flt_gauge *gauge, double
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_flush(flt_gauge *gauge);
 
 /** Attaches a frame source (borrowed: it must outlive the gauge or be
- * detached with NULL first). FLT_ERR_STATE while acquiring.
+ * detached with NULL first). FLT_ERR_STATE while acquiring or from inside
+ * the callback.
  * @param gauge the gauge.
  * @param source the source, or NULL to detach it.
  * @return FLT_OK; FLT_ERR_STATE while acquiring; FLT_ERR_INVALID_ARGUMENT
@@ -647,8 +662,9 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_attach_source(flt_gauge *gau
  * thread, which takes every frame the source delivers as push_frame would
  * (frames the source dropped on the way are counted by the source,
  * flt_source_count). The thread ends by itself at the end of an image
- * sequence or when the source fails. FLT_ERR_STATE without a source or
- * while acquiring; the source's own error if it does not start.
+ * sequence or when the source fails. FLT_ERR_STATE without a source,
+ * while acquiring or from inside the callback; the source's own error if
+ * it does not start.
  * @param gauge the gauge.
  * @return FLT_OK; FLT_ERR_STATE as above; the source's status if it
  *         does not start.

@@ -588,6 +588,31 @@ void gauge::fill_slot(frame_slot &slot, const gauge_input &in) const {
     slot.stride = row_bytes;
 }
 
+flt_status gauge::push(const char *fn, const gauge_input &in) {
+    // A frame from inside the callback would wait for the thread that runs
+    // the callback (its own queue, its own sequencer): refused, not hung.
+    if (in_gauge_callback(this))
+        return fail(FLT_ERR_STATE,
+                    "%s: called from inside the gauge's callback (push frames from another "
+                    "thread; flt_gauge_cut works there)",
+                    fn);
+    std::unique_lock<std::mutex> producer(produce_m_, std::try_to_lock);
+    if (!producer.owns_lock())
+        return fail(FLT_ERR_STATE,
+                    "%s: another thread is pushing frames or flushing this gauge: frames come "
+                    "from one thread at a time, in order (nothing was taken)",
+                    fn);
+    if (acquiring())
+        return fail(FLT_ERR_STATE,
+                    "%s: the attached source is acquiring: frames come from it "
+                    "(flt_gauge_stop first)",
+                    fn);
+    if (flt_status st = failure(fn))
+        return st;
+    take(in, false);
+    return FLT_OK;
+}
+
 bool gauge::backlog_full() const {
     return cfg_.sheet_backlog > 0 && pool_->out.load() >= cfg_.sheet_slots + cfg_.sheet_backlog;
 }
@@ -1770,6 +1795,8 @@ flt_status gauge::cut(const char *fn, double encoder_mm) {
 flt_status gauge::flush(const char *fn) {
     if (in_gauge_callback(this))
         return fail(FLT_ERR_STATE, "%s: called from inside the gauge's callback", fn);
+    // The end of the input: after the frame another thread is pushing.
+    const std::lock_guard<std::mutex> producer(produce_m_);
     if (flt_status st = failure(fn))
         return st;
     std::unique_lock<std::mutex> lock(m_);
@@ -1807,6 +1834,8 @@ flt_status gauge::flush(const char *fn) {
 }
 
 flt_status gauge::attach(const char *fn, flt_source *source) {
+    if (in_gauge_callback(this))
+        return fail(FLT_ERR_STATE, "%s: called from inside the gauge's callback", fn);
     std::lock_guard<std::mutex> lock(m_);
     if (acquiring_)
         return fail(FLT_ERR_STATE, "%s: the gauge is acquiring; call flt_gauge_stop first", fn);
@@ -1819,6 +1848,11 @@ flt_status gauge::attach(const char *fn, flt_source *source) {
 }
 
 flt_status gauge::start(const char *fn) {
+    if (in_gauge_callback(this))
+        return fail(FLT_ERR_STATE, "%s: called from inside the gauge's callback", fn);
+    // Not while a frame is being pushed: from here frames come from the
+    // source alone.
+    const std::lock_guard<std::mutex> producer(produce_m_);
     if (flt_status st = failure(fn))
         return st;
     std::unique_lock<std::mutex> lock(m_);

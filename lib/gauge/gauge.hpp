@@ -155,8 +155,12 @@ class gauge {
     flt_status check_frame(const char *fn, const void *pixels, int format, std::uint32_t width,
                            std::uint32_t height, std::size_t stride, double encoder_mm) const;
     static flt_status check_encoder(const char *fn, double encoder_mm);
-    // The producer's entry (push_frame, push_row, the acquisition thread),
-    // input already checked. Throws flt::error for a failure.
+    // push_frame and push_row, input already checked: refused inside the
+    // callback, while another thread pushes or flushes, or while a source
+    // acquires (FLT_ERR_STATE, message set); else take().
+    flt_status push(const char *fn, const gauge_input &in);
+    // The producer's entry (push, the acquisition thread), input already
+    // checked. Throws flt::error for a failure.
     void take(const gauge_input &in, bool from_acquisition);
     flt_status cut(const char *fn, double encoder_mm);
     flt_status flush(const char *fn);
@@ -287,6 +291,10 @@ class gauge {
     bool band_known_ = false;                  // producer-side
     flt_recon *recon_ = nullptr;
     flt_flatness *flat_ = nullptr, *flat_short_ = nullptr;
+
+    // ---- the producer role: held by push (tried: a second pusher is
+    // refused), flush and start (waited for)
+    std::mutex produce_m_;
 
     // ---- shared state, under m_
     mutable std::mutex m_;

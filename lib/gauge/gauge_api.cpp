@@ -47,15 +47,6 @@ flt_status check_sheet(const char *fn, const flt_sheet *s) {
     return FLT_OK;
 }
 
-flt_status not_while_acquiring(const char *fn, const gauge &g) {
-    if (g.acquiring())
-        return fail(FLT_ERR_STATE,
-                    "%s: the attached source is acquiring: frames come from it "
-                    "(flt_gauge_stop first)",
-                    fn);
-    return FLT_OK;
-}
-
 // A success leaves no message (inner calls the gauge handled may have).
 flt_status ok() {
     clear_error();
@@ -121,16 +112,13 @@ FLT_API flt_status FLT_CALL flt_gauge_push_frame(flt_gauge *gauge, const void *f
         if (flt_status st =
                 g.check_frame(fn, frame, enum_arg(format), width, height, stride_bytes, encoder_mm))
             return st;
-        if (flt_status st = not_while_acquiring(fn, g))
-            return st;
-        if (flt_status st = g.failure(fn))
-            return st;
         gauge_input in;
         in.pixels = frame;
         in.format = format;
         in.stride = stride_bytes;
         in.encoder_mm = encoder_mm;
-        g.take(in, false);
+        if (flt_status st = g.push(fn, in))
+            return st;
         return ok();
     });
 }
@@ -151,16 +139,13 @@ FLT_API flt_status FLT_CALL flt_gauge_push_row(flt_gauge *gauge, double encoder_
                         g.fibers());
         if (flt_status st = flt::gauge::check_encoder(fn, encoder_mm))
             return st;
-        if (flt_status st = not_while_acquiring(fn, g))
-            return st;
-        if (flt_status st = g.failure(fn))
-            return st;
         gauge_input in;
         in.height = height;
         in.slope = slope;
         in.valid = valid;
         in.encoder_mm = encoder_mm;
-        g.take(in, false);
+        if (flt_status st = g.push(fn, in))
+            return st;
         return ok();
     });
 }

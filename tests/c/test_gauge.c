@@ -7,8 +7,10 @@
  * from a source.
  */
 #include <math.h>
+#include <pthread.h>
 #include <setjmp.h>
 #include <stdarg.h>
+#include <stdatomic.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -1254,6 +1256,243 @@ static void splits_and_empty_sheets(void **state) {
 }
 
 /* ---------------------------------------------------------------------- */
+/* Misuse: every call from inside the callback, two pushing threads        */
+/* ---------------------------------------------------------------------- */
+
+static double now_s(void) {
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+enum { CALLS = 14 };
+typedef struct inside_log {
+    flt_gauge *gauge;
+    const flt_rules *rules;
+    atomic_int done;
+    flt_status status[CALLS];
+    double slowest_s;
+} inside_log;
+
+static uint8_t g_frame[WIDTH * ROI_ROWS];
+
+/* Calls every gauge entry point from inside the callback, once, timing
+ * each: each returns at once with its documented status. */
+static void calling_callback(const flt_sheet *sheet, void *user) {
+    (void)sheet;
+    inside_log *log = user;
+    if (atomic_fetch_add(&log->done, 1) > 0)
+        return;
+    flt_gauge *g = log->gauge;
+    double row[64] = {0};
+    double v = 0;
+    uint64_t n = 0;
+    flt_sheet *other = NULL;
+    for (int i = 0; i < CALLS; ++i) {
+        const double t0 = now_s();
+        flt_status st = FLT_OK;
+        switch (i) {
+            case 0:
+                st = flt_gauge_get_option(g, FLT_OPT_GAUGE_WORKERS, &v);
+                break;
+            case 1:
+                st = flt_gauge_push_frame(g, g_frame, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH,
+                                          1.0e6);
+                break;
+            case 2:
+                st = flt_gauge_push_row(g, 1.0e6, 51, row, row, NULL);
+                break;
+            case 3:
+                st = flt_gauge_cut(g, 4000.0);
+                break; /* queued */
+            case 4:
+                st = flt_gauge_flush(g);
+                break;
+            case 5:
+                st = flt_gauge_attach_source(g, NULL);
+                break;
+            case 6:
+                st = flt_gauge_start(g);
+                break;
+            case 7:
+                st = flt_gauge_stop(g);
+                break;
+            case 8:
+                st = flt_gauge_next_sheet(g, 100, &other);
+                break;
+            case 9:
+                st = flt_gauge_set_callback(g, NULL, NULL);
+                break;
+            case 10:
+                st = flt_gauge_count(g, FLT_GAUGE_COUNT_SHEETS, &n);
+                break;
+            case 11:
+                st = flt_gauge_set_rules(g, log->rules, 2.0, FLT_GAUGE_WIDTH_MEASURED);
+                break;
+            case 12:
+                st = flt_gauge_coil_stats(g, FLT_COIL_CURRENT, 0, 1, &v);
+                break;
+            case 13:
+                flt_gauge_destroy(g);
+                break; /* ignored: it would wait for itself */
+            default:
+                break;
+        }
+        log->status[i] = st;
+        const double dt = now_s() - t0;
+        if (dt > log->slowest_s)
+            log->slowest_s = dt;
+    }
+}
+
+static void every_call_from_inside_the_callback(void **state) {
+    (void)state;
+    enum { R = 2000, K = 51 };
+    test_sheet *t = row_sheet(R, K, 3.0);
+    flt_calib *calib = row_calib(K);
+    flt_rules *rules = NULL;
+    OK(flt_rules_load_text(k_iu_rules, sizeof k_iu_rules - 1, &rules));
+    /* What each call returns inside the callback (flatline/gauge.h,
+     * "Inside the callback"). */
+    const flt_status expect[CALLS] = {FLT_OK,        FLT_ERR_STATE, FLT_ERR_STATE, FLT_OK,
+                                      FLT_ERR_STATE, FLT_ERR_STATE, FLT_ERR_STATE, FLT_ERR_STATE,
+                                      FLT_ERR_STATE, FLT_ERR_STATE, FLT_OK,        FLT_OK,
+                                      FLT_OK,        FLT_OK};
+    for (int workers = 0; workers <= 2; ++workers) {
+        flt_options *o = bag();
+        set(o, FLT_OPT_LAG_KNOTS, 4); /* the first sheet finishes 400 mm after its cut */
+        flt_gauge *g = row_gauge(calib, workers, o);
+        flt_options_destroy(o);
+        inside_log log = {g, rules, 0, {FLT_OK}, 0.0};
+        atomic_init(&log.done, 0);
+        OK(flt_gauge_set_callback(g, calling_callback, &log));
+        OK(flt_gauge_cut(g, 1000.0));
+        /* 3.6 m, then the rest once the first sheet came: the cut the
+         * callback gives lies ahead of the frames pushed, so it takes
+         * effect (given after the last frame, it would wait for the next
+         * strip's). */
+        push_rows(g, t, 0, 1200);
+        for (int i = 0; i < 10000 && atomic_load(&log.done) == 0; ++i)
+            sleep_ms(1);
+        push_rows(g, t, 1200, R);
+        OK(flt_gauge_flush(g));
+        /* Every call returned at once, with its status; the gauge went on:
+         * the cut given inside took effect (sheets end at 1000 and 4000
+         * mm, then the flush), and the rules set there judged the rest. */
+        print_message("%d workers: the slowest call inside the callback took %.3f ms\n", workers,
+                      1e3 * log.slowest_s);
+        assert_true(log.slowest_s < 1.0);
+        for (int i = 0; i < CALLS; ++i)
+            if (log.status[i] != expect[i]) {
+                print_error("call %d returned %s, expected %s\n", i,
+                            flt_status_string(log.status[i]), flt_status_string(expect[i]));
+                fail();
+            }
+        assert_int_equal(atomic_load(&log.done), 3);
+        assert_int_equal(count(g, FLT_GAUGE_COUNT_SHEETS), 3);
+        assert_int_equal(count(g, FLT_GAUGE_COUNT_CUTS_IGNORED), 0);
+        OK(flt_gauge_set_callback(g, NULL, NULL));
+        double stats[FLT_COIL_VALUES];
+        OK(flt_gauge_coil_stats(g, FLT_COIL_LAST, 0, FLT_COIL_VALUES, stats));
+        assert_true(stats[FLT_COIL_SHEETS] >= 2); /* judged after the callback set rules */
+        flt_gauge_destroy(g);
+    }
+    flt_rules_destroy(rules);
+    flt_calib_destroy(calib);
+    test_sheet_free(t);
+}
+
+/* Two threads pushing at once: while one waits in a push (its worker is
+ * held by a slow callback), the other is refused at once, and the gauge
+ * goes on. The second thread's rows lie behind the strip (a short
+ * reversal), so those that are taken between the first's pushes are
+ * skipped. */
+typedef struct second_pusher {
+    flt_gauge *gauge;
+    const double *height;
+    atomic_int stop;
+    int refused, taken, other;
+    double slowest_s;
+} second_pusher;
+
+static void *second_pusher_main(void *arg) {
+    second_pusher *p = arg;
+    while (!atomic_load(&p->stop)) {
+        const double t0 = now_s();
+        const flt_status st = flt_gauge_push_row(p->gauge, 0.0, 51, p->height, p->height, NULL);
+        const double dt = now_s() - t0;
+        if (dt > p->slowest_s)
+            p->slowest_s = dt;
+        if (st == FLT_ERR_STATE)
+            ++p->refused;
+        else if (st == FLT_OK)
+            ++p->taken;
+        else
+            ++p->other;
+        sleep_ms(1);
+    }
+    return NULL;
+}
+
+static void a_second_pusher_is_refused(void **state) {
+    (void)state;
+    enum { R = 3000, K = 51 };
+    test_sheet *t = row_sheet(R, K, 3.0);
+    flt_calib *calib = row_calib(K);
+    flt_options *o = bag();
+    set(o, FLT_OPT_GAUGE_QUEUE_FRAMES, 1);
+    set(o, FLT_OPT_LAG_KNOTS, 4);
+    set(o, FLT_OPT_GAUGE_REVERSAL_LENGTH, 1.0e8); /* going back to 0 is a short reversal */
+    flt_gauge *g = row_gauge(calib, 1, o);
+    flt_options_destroy(o);
+    g_first_sheet_seen = 0;
+    g_callback_frames = g_callback_dropped = 0;
+    OK(flt_gauge_set_callback(g, slow_callback, NULL));
+    for (double c = 600.0; c < 9000.0; c += 600.0)
+        OK(flt_gauge_cut(g, c));
+    second_pusher p = {g, &t->height[0], 0, 0, 0, 0, 0.0};
+    atomic_init(&p.stop, 0);
+    pthread_t other;
+    push_rows(g, t, 0, 10);
+    assert_int_equal(pthread_create(&other, NULL, second_pusher_main, &p), 0);
+    /* Waits 300 ms for room once: the other is refused meanwhile. (This
+     * thread is refused too when it comes while the other pushes: again.) */
+    int main_refused = 0;
+    for (size_t r = 10; r < R;) {
+        const flt_status st = flt_gauge_push_row(g, t->s[r], t->fibers, &t->height[r * t->fibers],
+                                                 &t->slope[r * t->fibers], NULL);
+        if (st == FLT_ERR_STATE)
+            ++main_refused;
+        else {
+            OK(st);
+            ++r;
+        }
+    }
+    atomic_store(&p.stop, 1);
+    pthread_join(other, NULL);
+    OK(flt_gauge_flush(g));
+    OK(flt_gauge_set_callback(g, NULL, NULL));
+    print_message("second pusher: %d refused, %d taken (skipped), slowest call %.3f ms; the "
+                  "first refused %d times\n",
+                  p.refused, p.taken, 1e3 * p.slowest_s, main_refused);
+    assert_true(p.refused >= 1);
+    assert_int_equal(p.other, 0);
+    assert_true(p.slowest_s < 1.0);
+    /* Usable: every row of the first thread is in a sheet, the second's
+     * taken rows were skipped, nothing failed. */
+    assert_true(g_callback_frames == (double)R);
+    assert_int_equal(count(g, FLT_GAUGE_COUNT_FRAMES), R + p.taken);
+    assert_int_equal(count(g, FLT_GAUGE_COUNT_SKIPPED_REVERSAL) +
+                         count(g, FLT_GAUGE_COUNT_SKIPPED_STOP),
+                     p.taken);
+    flt_sheet *sh = NULL;
+    OK(flt_gauge_next_sheet(g, 0, &sh));
+    flt_gauge_destroy(g);
+    flt_calib_destroy(calib);
+    test_sheet_free(t);
+}
+
+/* ---------------------------------------------------------------------- */
 /* Acquisition from a source                                               */
 /* ---------------------------------------------------------------------- */
 
@@ -1497,6 +1736,8 @@ int main(void) {
         cmocka_unit_test(callback_polling_and_slots),
         cmocka_unit_test(lost_rows_and_coverage),
         cmocka_unit_test(splits_and_empty_sheets),
+        cmocka_unit_test(every_call_from_inside_the_callback),
+        cmocka_unit_test(a_second_pusher_is_refused),
         cmocka_unit_test(acquisition_from_a_source),
         cmocka_unit_test(narrow_strip_has_edges),
     };

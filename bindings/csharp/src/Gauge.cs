@@ -501,7 +501,7 @@ namespace Flatline
         private readonly IntPtr callbackPointer;
         private readonly object sync = new object();            // handlers, channels, errors
         private readonly object registration = new object();    // the native callback's state
-        private readonly object push = new object();            // frames in order
+        private readonly object push = new object();            // the attached source
         private EventHandler<SheetEventArgs>? sheetFinished;
         private readonly List<SheetChannel> channels = new List<SheetChannel>();
         private bool callbackSet;
@@ -560,13 +560,13 @@ namespace Flatline
         public unsafe void Push(byte[,] frame, double encoderMm)
         {
             CheckFrame(frame);
-            lock (push)
-            {
-                ThrowHandlerError();
-                fixed (byte* pf = frame)
-                    FlatlineNative.flt_gauge_push_frame(LiveHandle, pf, (int)PixelFormat.Mono8, (uint)FrameWidth,
-                                                        (uint)FrameHeight, (ulong)FrameWidth, encoderMm);
-            }
+            // One producer at a time: the library refuses a second thread
+            // that pushes meanwhile, or a handler of this gauge's sheets
+            // (FlatlineStateException), instead of waiting for it.
+            ThrowHandlerError();
+            fixed (byte* pf = frame)
+                FlatlineNative.flt_gauge_push_frame(LiveHandle, pf, (int)PixelFormat.Mono8, (uint)FrameWidth,
+                                                    (uint)FrameHeight, (ulong)FrameWidth, encoderMm);
         }
 
         /// <summary>One 16-bit frame of <paramref name="format"/> (Mono10, 12 or 16).</summary>
@@ -576,13 +576,10 @@ namespace Flatline
                 throw new ArgumentException("a ushort[,] frame is Mono10, Mono12 or Mono16; pass Mono8 frames as byte[,]",
                                             nameof(format));
             CheckFrame(frame);
-            lock (push)
-            {
-                ThrowHandlerError();
-                fixed (ushort* pf = frame)
-                    FlatlineNative.flt_gauge_push_frame(LiveHandle, pf, (int)format, (uint)FrameWidth,
-                                                        (uint)FrameHeight, (ulong)FrameWidth * 2, encoderMm);
-            }
+            ThrowHandlerError();
+            fixed (ushort* pf = frame)
+                FlatlineNative.flt_gauge_push_frame(LiveHandle, pf, (int)format, (uint)FrameWidth,
+                                                    (uint)FrameHeight, (ulong)FrameWidth * 2, encoderMm);
         }
 
         /// <summary>A simulated frame, with its own format and encoder position.</summary>
@@ -619,13 +616,10 @@ namespace Flatline
             Shapes.Check(slope, height.Length, nameof(slope));
             if (valid != null)
                 Shapes.Check(valid, height.Length, nameof(valid));
-            lock (push)
-            {
-                ThrowHandlerError();
-                fixed (double* ph = height, pg = slope)
-                fixed (bool* pv = valid)
-                    FlatlineNative.flt_gauge_push_row(LiveHandle, encoderMm, (ulong)height.Length, ph, pg, (byte*)pv);
-            }
+            ThrowHandlerError();
+            fixed (double* ph = height, pg = slope)
+            fixed (bool* pv = valid)
+                FlatlineNative.flt_gauge_push_row(LiveHandle, encoderMm, (ulong)height.Length, ph, pg, (byte*)pv);
         }
 
         /// <summary>The shear cut the strip at <paramref name="encoderMm"/>
@@ -641,11 +635,8 @@ namespace Flatline
         /// the strip (its last sheet) and waits until that sheet is out.</summary>
         public void Flush()
         {
-            lock (push)
-            {
-                ThrowHandlerError();
-                FlatlineNative.flt_gauge_flush(LiveHandle);
-            }
+            ThrowHandlerError();
+            FlatlineNative.flt_gauge_flush(LiveHandle);
             ThrowHandlerError();
         }
 

@@ -441,5 +441,130 @@ namespace Flatline.Tests
             Assert.NotNull(coil);
             Assert.Equal((2L, 0L, 0L, 2L, 0L), (coil!.Sheets, coil.Passed, coil.Failed, coil.NotJudged, coil.Judged));
         }
+
+        [Theory]
+        [InlineData(0)]
+        [InlineData(1)]
+        [InlineData(2)]
+        public void EveryCallFromASheetHandlerReturnsAtOnce(int workers)
+        {
+            // Each call of the gauge from inside its own SheetFinished handler
+            // either works (Cut is queued, Count, SetRules, statistics) or
+            // throws FlatlineStateException at once: none waits for itself.
+            using var calibration = Sensor();
+            using var options = Options(workers);
+            options.LagKnots = 4;
+            using var gauge = new Gauge(calibration, options);
+            using var rules = ToleranceRules.Parse(VerdictRules);
+            var outcome = new Dictionary<string, string>();
+            double slowest = 0;
+            int seen = 0;
+            var zero = new double[Fibers];
+            gauge.SheetFinished += (sender, e) =>
+            {
+                if (seen++ > 0)
+                    return;
+                void Try(string name, Action call)
+                {
+                    var watch = System.Diagnostics.Stopwatch.StartNew();
+                    try
+                    {
+                        call();
+                        outcome[name] = "ok";
+                    }
+                    catch (Exception x)
+                    {
+                        outcome[name] = x.GetType().Name;
+                    }
+                    slowest = Math.Max(slowest, watch.Elapsed.TotalSeconds);
+                }
+                Try("PushRow", () => gauge.PushRow(1e6, zero, zero));
+                Try("Push", () => gauge.Push(new byte[gauge.FrameHeight, gauge.FrameWidth], 1e6));
+                Try("Cut", () => gauge.Cut(4000));
+                Try("Flush", () => gauge.Flush());
+                Try("Start", () => gauge.Start());
+                Try("Stop", () => gauge.Stop());
+                Try("NextSheet", () => gauge.NextSheet(100));
+                Try("Count", () => gauge.Count(GaugeCounter.Sheets));
+                Try("SetRules", () => gauge.SetRules(rules, 2.0, SheetWidth.Measured));
+                Try("Statistics", () => gauge.CurrentCoilStatistics());
+                Try("GetOption", () => gauge.GetOption("gauge_workers"));
+            };
+            gauge.Cut(1000);
+            PushRows(gauge, 0, 2000);
+            gauge.Flush();
+            Assert.InRange(slowest, 0.0, 1.0);
+            foreach (var ok in new[] { "Cut", "Count", "SetRules", "Statistics", "GetOption" })
+                Assert.Equal("ok", outcome[ok]);
+            foreach (var refused in new[] { "PushRow", "Push", "Flush", "Start", "Stop", "NextSheet" })
+                Assert.Equal(nameof(FlatlineStateException), outcome[refused]);
+            // The cut given inside took effect: sheets end at 1000, 4000, the flush.
+            Assert.Equal(3, seen);
+            Assert.Equal(3UL, gauge.Count(GaugeCounter.Sheets));
+            Assert.Equal(0UL, gauge.Count(GaugeCounter.CutsIgnored));
+        }
+
+        [Fact]
+        public void ASecondThreadPushingIsRefusedAndTheGaugeGoesOn()
+        {
+            using var calibration = Sensor();
+            using var options = Options(1);
+            options.LagKnots = 4;
+            options.GaugeQueueFrames = 1;
+            options.GaugeReversalLength = 1e8;  // back to 0 is a short reversal: skipped
+            using var gauge = new Gauge(calibration, options);
+            for (int c = 600; c < 9000; c += 600)
+                gauge.Cut(c);
+            PushRows(gauge, 0, 10);
+            int refused = 0, taken = 0;
+            using var stop = new ManualResetEventSlim();
+            var zero = new double[Fibers];
+            var other = new Thread(() =>
+            {
+                while (!stop.IsSet)
+                {
+                    try
+                    {
+                        gauge.PushRow(0.0, zero, zero);
+                        ++taken;
+                    }
+                    catch (FlatlineStateException e)
+                    {
+                        Assert.Contains("another thread is pushing", e.Message);
+                        ++refused;
+                    }
+                    stop.Wait(1);
+                }
+            });
+            other.Start();
+            try
+            {
+                var height = new double[Fibers];
+                var slope = new double[Fibers];
+                for (int r = 10; r < 3000;)
+                {
+                    Row(r, height, slope);
+                    try
+                    {
+                        gauge.PushRow(Step * r, height, slope);
+                        ++r;
+                    }
+                    catch (FlatlineStateException)
+                    {
+                        // refused too when it comes while the other pushes
+                    }
+                }
+            }
+            finally
+            {
+                stop.Set();
+                other.Join();
+            }
+            gauge.Flush();
+            var sheets = Drain(gauge);
+            Assert.True(refused > 0, "the second thread never met the first one's push");
+            Assert.Equal(3000, sheets.Sum(s => s.Rows));
+            Assert.Equal((ulong)(3000 + taken), gauge.Count(GaugeCounter.Frames));
+        }
     }
 }

@@ -5,7 +5,6 @@
 from __future__ import annotations
 
 import enum
-import threading
 from dataclasses import dataclass, field
 from typing import Any, Dict, Iterator, Optional, Tuple, Union
 
@@ -332,8 +331,9 @@ class Gauge:
     sheet missing more than 5 % of its rows (gauge_min_coverage) is
     ``incomplete``: its shape and verdict say "not judged".
 
-    Pushing is serialised (frames must arrive in order); iterating sheets
-    may run on another thread. The GIL is released while the gauge waits
+    Frames come from one thread at a time, in order: a push from a second
+    thread while one is in progress raises StateError (nothing taken, the
+    gauge goes on); iterating sheets may run on another thread. The GIL is released while the gauge waits
     (a full queue, flush, stop, a sheet). While an
     attached source is acquiring, leave it (and the simulator or bus it
     reads) alone: the gauge's thread uses it.
@@ -351,7 +351,6 @@ class Gauge:
         with calib._reading():
             handle = _capi.flt_gauge_create(calib._live(), bag)
         self._handle: Optional[_capi.flt_gauge] = handle
-        self._push = threading.Lock()
         self._source: Optional[Source] = None
         self._maps = int(_capi.flt_gauge_get_option(handle, _capi.FLT_OPT_GAUGE_KEEP_MAPS))
         self._rules: Optional[ToleranceRules] = None
@@ -433,8 +432,9 @@ class Gauge:
                 and frame.strides[0] >= frame.shape[1] * item):
             frame = np.ascontiguousarray(frame, dtype=frame.dtype.newbyteorder("="))
         encoder_mm = as_real(fn, "encoder_mm", encoder_mm)
-        with self._push:
-            self._live().push_frame_array(frame, int(fmt), encoder_mm)
+        # One producer at a time: the library refuses a second thread that
+        # pushes meanwhile (StateError) rather than interleave its frames.
+        self._live().push_frame_array(frame, int(fmt), encoder_mm)
 
     def push_row(self, encoder_mm: float, height: Any, slope: Any,
                  valid: Any = None) -> None:
@@ -449,8 +449,7 @@ class Gauge:
             mask, flagged = np.zeros(1, dtype=np.uint8), 0
         else:
             mask, flagged = as_mask(fn, "valid", valid, 1), 1
-        with self._push:
-            self._live().push_row_arrays(encoder_mm, h, g, mask, flagged)
+        self._live().push_row_arrays(encoder_mm, h, g, mask, flagged)
 
     def cut(self, encoder_mm: float) -> None:
         """The shear cut the strip at encoder_mm (the reading at which the cut
@@ -460,9 +459,9 @@ class Gauge:
 
     def flush(self) -> None:
         """The end of the input: processes every frame pushed, ends the strip
-        (its last sheet) and waits until that sheet is out."""
-        with self._push:
-            self._live().flush_waiting()
+        (its last sheet) and waits until that sheet is out (after a push
+        another thread has in progress)."""
+        self._live().flush_waiting()
 
     # -- acquisition ----------------------------------------------------------------
 

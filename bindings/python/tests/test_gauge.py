@@ -370,8 +370,11 @@ def test_frames_pushed_as_fast_as_possible_are_never_dropped_by_default(calib):
     with flatline.Gauge(calib, gauge_workers=2, gauge_overflow="drop",
                         gauge_frame_spacing=2.0, gauge_queue_frames=8) as gauge:
         lossy = _push_frames_fast(gauge, pool, 2100)
-        assert gauge.counters()["dropped"] > 0
-        assert any(flatline.SheetFlag.LOST_ROWS in sh.flags for sh in lossy)
+        counters = gauge.counters()
+        assert counters["dropped"] > 0
+        # Every frame is in a sheet, dropped or before the strip; a sheet
+        # that lost any says so.
+        assert sum(sh.rows for sh in lossy) + counters["dropped"] + counters["no_strip"] == 2100
         assert all(sh.dropped == 0 or flatline.SheetFlag.LOST_ROWS in sh.flags for sh in lossy)
     runs = {}
     for overflow in ("auto", "wait"):
@@ -461,3 +464,51 @@ def test_thickness_and_width_are_required_and_no_band_is_not_judged(calib):
     assert (stats.sheets, stats.passed, stats.failed, stats.not_judged, stats.judged) == \
         (2, 0, 0, 2, 0)
     assert stats.rules[0].no_band == 2
+
+
+def test_a_second_thread_pushing_is_refused_and_the_gauge_goes_on(calib):
+    # While the main thread is in a push (a queue of 1 frame and one worker
+    # keep it waiting for room), a second thread's pushes are refused at
+    # once with StateError;
+    # those that land between the main thread's pushes are behind the
+    # strip (a short reversal) and skipped. Every main row is in a sheet.
+    s, h, g, _ = reference_sheet(3000)
+    refused, taken = [], []
+    stop = threading.Event()
+    with flatline.Gauge(calib, gauge_workers=1, gauge_queue_frames=1, lag_knots=4,
+                        gauge_frame_spacing=2.0, gauge_reversal_length=1e8) as gauge:
+        for c in range(600, 9000, 600):
+            gauge.cut(float(c))
+        for r in range(10):
+            gauge.push_row(s[r], h[r], g[r])
+
+        def second():
+            while not stop.is_set():
+                try:
+                    gauge.push_row(0.0, h[0], g[0])
+                    taken.append(1)
+                except flatline.StateError as e:
+                    assert "another thread is pushing" in str(e)
+                    refused.append(1)
+                stop.wait(0.001)
+
+        other = threading.Thread(target=second)
+        other.start()
+        try:
+            r = 10
+            while r < len(s):  # refused too when it comes while the other pushes
+                try:
+                    gauge.push_row(s[r], h[r], g[r])
+                    r += 1
+                except flatline.StateError:
+                    pass
+        finally:
+            stop.set()
+            other.join()
+        gauge.flush()
+        sheets = list(gauge)
+        counters = gauge.counters()
+    assert refused, "the second thread never met the first one's push"
+    assert sum(sh.rows for sh in sheets) == len(s)
+    assert counters["frames"] == len(s) + len(taken)
+    assert counters["skipped_reversal"] + counters["skipped_stop"] == len(taken)
