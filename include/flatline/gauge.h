@@ -178,7 +178,7 @@
  *   cut is queued: it takes effect with the next frame),
  *   flt_gauge_count, flt_gauge_get_option, flt_gauge_set_rules and
  *   flt_gauge_coil_stats work; flt_gauge_push_frame, flt_gauge_push_row,
- *   flt_gauge_flush, flt_gauge_attach_source,
+ *   flt_gauge_flush, flt_gauge_wait, flt_gauge_attach_source,
  *   flt_gauge_start, flt_gauge_stop, flt_gauge_next_sheet and
  *   flt_gauge_set_callback return FLT_ERR_STATE (the message says why);
  *   flt_gauge_destroy is ignored (it would wait for itself).
@@ -682,6 +682,39 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_start(flt_gauge *gauge);
  *         FLT_ERR_STATE from inside the callback.
  */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_stop(flt_gauge *gauge);
+
+/** flt_gauge_wait()'s timeout for "as long as it takes". */
+#define FLT_GAUGE_WAIT_FOREVER UINT32_MAX
+
+/** Runs an attached, started finite source to its end: waits until the
+ * acquisition ends by itself (the end of an image sequence, or a failure
+ * of the source), then ends the input as flt_gauge_stop() and
+ * flt_gauge_flush() do, and returns when every sheet is out (delivered to
+ * the callback or waiting for flt_gauge_next_sheet). With a camera, which
+ * never ends, it returns FLT_ERR_TIMEOUT after timeout_ms and changes
+ * nothing: the acquisition goes on (call again, or flt_gauge_stop).
+ * Without a callback, read the sheets between calls with a short
+ * timeout (the sheets waiting count towards gauge_sheet_backlog, and the
+ * source waits while the backlog is full):
+ *
+ *     flt_gauge_attach_source(gauge, images);
+ *     flt_gauge_start(gauge);
+ *     flt_status st;
+ *     while ((st = flt_gauge_wait(gauge, 100)) == FLT_ERR_TIMEOUT)
+ *         take_sheets(gauge);                  // flt_gauge_next_sheet(gauge, 0, ...)
+ *     take_sheets(gauge);                      // the rest, after the flush
+ *
+ * @param gauge the gauge.
+ * @param timeout_ms how long to wait for the source's end, ms
+ *        (FLT_GAUGE_WAIT_FOREVER: as long as it takes); the flush after it
+ *        is waited for whatever the timeout.
+ * @return FLT_OK; FLT_ERR_TIMEOUT when the source still delivers;
+ *         FLT_ERR_STATE when no acquisition was started (flt_gauge_start)
+ *         or from inside the callback; the error that ended the
+ *         acquisition (e.g. FLT_ERR_DEVICE for an unplugged camera) after
+ *         its sheets were finished all the same; a failure of processing.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_wait(flt_gauge *gauge, uint32_t timeout_ms);
 
 /* ---------------------------------------------------------------------- */
 /* Output                                                                  */

@@ -1966,6 +1966,39 @@ flt_status gauge::stop(const char *fn) {
     return FLT_OK;
 }
 
+flt_status gauge::wait(const char *fn, std::uint32_t timeout_ms) {
+    if (in_gauge_callback(this))
+        return fail(FLT_ERR_STATE, "%s: called from inside the gauge's callback", fn);
+    {
+        std::unique_lock<std::mutex> lock(m_);
+        if (!acquiring_ && !acquisition_.joinable())
+            return fail(FLT_ERR_STATE,
+                        "%s: no acquisition to wait for: attach a source "
+                        "(flt_gauge_attach_source) and start it (flt_gauge_start)",
+                        fn);
+        const auto ended = [&] {
+            return !acquiring_ || failed_;
+        };
+        if (timeout_ms == FLT_GAUGE_WAIT_FOREVER)
+            idle_cv_.wait(lock, ended);
+        else if (!idle_cv_.wait_for(lock, std::chrono::milliseconds(timeout_ms), ended))
+            return fail(FLT_ERR_TIMEOUT,
+                        "%s: the source still delivers frames after %u ms (a camera never "
+                        "ends: flt_gauge_stop ends its acquisition)",
+                        fn, unsigned(timeout_ms));
+    }
+    // The source is exhausted: its frames through, the strip ended, every
+    // sheet out; an error that ended the acquisition is said after that.
+    const flt_status stopped = stop(fn);
+    std::string why;
+    if (stopped != FLT_OK)
+        why = flt_last_error_message();
+    const flt_status flushed = flush(fn);
+    if (stopped != FLT_OK)
+        return fail(stopped, "%s", why.c_str());
+    return flushed;
+}
+
 flt_status gauge::next_sheet(const char *fn, std::uint32_t timeout_ms, flt_sheet **out) {
     if (in_gauge_callback(this))
         return fail(FLT_ERR_STATE, "%s: called from inside the gauge's callback", fn);

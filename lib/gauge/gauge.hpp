@@ -167,6 +167,7 @@ class gauge {
     flt_status attach(const char *fn, flt_source *source);
     flt_status start(const char *fn);
     flt_status stop(const char *fn);
+    flt_status wait(const char *fn, std::uint32_t timeout_ms);
     flt_status next_sheet(const char *fn, std::uint32_t timeout_ms, flt_sheet **out);
     flt_status set_callback(const char *fn, flt_sheet_callback callback, void *user);
     std::uint64_t count(flt_gauge_counter counter) const;

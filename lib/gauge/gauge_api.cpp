@@ -209,6 +209,17 @@ FLT_API flt_status FLT_CALL flt_gauge_stop(flt_gauge *gauge) {
     });
 }
 
+FLT_API flt_status FLT_CALL flt_gauge_wait(flt_gauge *gauge, uint32_t timeout_ms) {
+    const char *fn = "flt_gauge_wait";
+    return guard(fn, [&] {
+        if (flt_status st = check_handle(fn, gauge))
+            return st;
+        if (flt_status st = gauge->impl->wait(fn, timeout_ms))
+            return st;
+        return ok();
+    });
+}
+
 FLT_API flt_status FLT_CALL flt_gauge_next_sheet(flt_gauge *gauge, uint32_t timeout_ms,
                                                  flt_sheet **out) {
     const char *fn = "flt_gauge_next_sheet";

@@ -3405,6 +3405,24 @@ static void row_gauge_stop(void) {
     flt_gauge_destroy(g);
 }
 
+static void row_gauge_wait(void) {
+    flt_gauge *g = new_gauge(0);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'gauge'", flt_gauge_wait(NULL, 0));
+    /* Wrong order: nothing started. */
+    BAD(FLT_ERR_STATE, "flt_gauge_start", flt_gauge_wait(g, 0));
+    BAD(FLT_ERR_STATE, "flt_gauge_start", flt_gauge_wait(g, FLT_GAUGE_WAIT_FOREVER));
+    /* A source that never ends: a timeout, then stopped by hand. */
+    flt_source *s = new_sim_source();
+    GOOD(flt_gauge_attach_source(g, s));
+    GOOD(flt_gauge_start(g));
+    BAD(FLT_ERR_TIMEOUT, "still delivers", flt_gauge_wait(g, 10));
+    GOOD(flt_gauge_stop(g));
+    BAD(FLT_ERR_STATE, "flt_gauge_start", flt_gauge_wait(g, 0));
+    GOOD(flt_gauge_attach_source(g, NULL));
+    flt_source_destroy(s);
+    flt_gauge_destroy(g);
+}
+
 static int g_callback_calls;
 static void count_callback(const flt_sheet *sheet, void *user) {
     (void)sheet;
@@ -4800,6 +4818,7 @@ static const row k_rows[] = {
     ROW(gauge_attach_source),
     ROW(gauge_start),
     ROW(gauge_stop),
+    ROW(gauge_wait),
     ROW(gauge_next_sheet),
     ROW(gauge_set_callback),
     ROW(gauge_count),

@@ -22,8 +22,10 @@
 
 #include <flatline/flatline.h>
 #include <flatline/testing.h>
+#include <zlib.h>
 
 #include "sheet.h"
+#include "test_files.h"
 
 #define OK(call) assert_int_equal((call), FLT_OK)
 
@@ -1265,7 +1267,7 @@ static double now_s(void) {
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
-enum { CALLS = 14 };
+enum { CALLS = 15 };
 typedef struct inside_log {
     flt_gauge *gauge;
     const flt_rules *rules;
@@ -1335,6 +1337,9 @@ static void calling_callback(const flt_sheet *sheet, void *user) {
             case 13:
                 flt_gauge_destroy(g);
                 break; /* ignored: it would wait for itself */
+            case 14:
+                st = flt_gauge_wait(g, 100);
+                break;
             default:
                 break;
         }
@@ -1357,7 +1362,7 @@ static void every_call_from_inside_the_callback(void **state) {
     const flt_status expect[CALLS] = {FLT_OK,        FLT_ERR_STATE, FLT_ERR_STATE, FLT_OK,
                                       FLT_ERR_STATE, FLT_ERR_STATE, FLT_ERR_STATE, FLT_ERR_STATE,
                                       FLT_ERR_STATE, FLT_ERR_STATE, FLT_OK,        FLT_OK,
-                                      FLT_OK,        FLT_OK};
+                                      FLT_OK,        FLT_OK,        FLT_ERR_STATE};
     for (int workers = 0; workers <= 2; ++workers) {
         flt_options *o = bag();
         set(o, FLT_OPT_LAG_KNOTS, 4); /* the first sheet finishes 400 mm after its cut */
@@ -1623,6 +1628,157 @@ static void acquisition_from_a_source(void **state) {
     flt_calib_destroy(calib);
 }
 
+/* ---------------------------------------------------------------------- */
+/* Running a finite source to its end                                      */
+/* ---------------------------------------------------------------------- */
+
+static void put32be(uint8_t *p, uint32_t v) {
+    p[0] = (uint8_t)(v >> 24);
+    p[1] = (uint8_t)(v >> 16);
+    p[2] = (uint8_t)(v >> 8);
+    p[3] = (uint8_t)v;
+}
+
+static void png_chunk(FILE *f, const char *type, const uint8_t *body, uint32_t n) {
+    uint8_t head[8], tail[4];
+    put32be(head, n);
+    memcpy(head + 4, type, 4);
+    fwrite(head, 1, 8, f);
+    if (n)
+        fwrite(body, 1, n, f);
+    uLong crc = crc32(0, (const Bytef *)type, 4);
+    if (n)
+        crc = crc32(crc, body, n);
+    put32be(tail, (uint32_t)crc);
+    fwrite(tail, 1, 4, f);
+}
+
+/* An 8-bit grey PNG. */
+static void write_png(const char *path, uint32_t w, uint32_t h, const uint8_t *pixels) {
+    FILE *f = tf_fopen(path, "wb");
+    assert_non_null(f);
+    static const uint8_t sig[8] = {0x89, 'P', 'N', 'G', 0x0D, 0x0A, 0x1A, 0x0A};
+    fwrite(sig, 1, 8, f);
+    uint8_t ihdr[13] = {0};
+    put32be(ihdr, w);
+    put32be(ihdr + 4, h);
+    ihdr[8] = 8; /* bits; colour type 0: grey */
+    png_chunk(f, "IHDR", ihdr, 13);
+    const size_t raw_n = ((size_t)w + 1) * h;
+    uint8_t *raw = malloc(raw_n);
+    for (uint32_t y = 0; y < h; ++y) {
+        raw[y * ((size_t)w + 1)] = 0; /* filter: none */
+        memcpy(raw + y * ((size_t)w + 1) + 1, pixels + (size_t)y * w, w);
+    }
+    uLongf packed_n = compressBound(raw_n);
+    uint8_t *packed = malloc(packed_n);
+    assert_int_equal(compress2(packed, &packed_n, raw, raw_n, 1), Z_OK);
+    png_chunk(f, "IDAT", packed, (uint32_t)packed_n);
+    png_chunk(f, "IEND", NULL, 0);
+    fclose(f);
+    free(raw);
+    free(packed);
+}
+
+static void count_callback(const flt_sheet *sheet, void *user) {
+    double *rows = user;
+    rows[0] += 1;
+    rows[1] += get(sheet, FLT_SHEET_ROWS);
+}
+
+/* 150 recorded frames, 10 mm apart (1.5 m), cuts at 500 and 1000 mm: the
+ * gauge runs them to their end with flt_gauge_wait, polled (0 and 2
+ * workers) or with a callback, and every sheet comes out. */
+static void running_a_recording_to_its_end(void **state) {
+    (void)state;
+    enum { FRAMES = 150 };
+    char dir[512], path[600];
+    assert_int_equal(tf_temp_dir(dir, sizeof dir, "test_gauge"), 0);
+    flt_calib *calib = NULL;
+    OK(flt_calib_create_reference(ROI_FIRST, ROI_ROWS, F_FIRST_X, F_PITCH, FK, &calib));
+    flt_options *so = bag();
+    set(so, FLT_OPT_SIM_FRAME_SPACING, F_STEP);
+    flt_sim *sim = NULL;
+    OK(flt_sim_create(calib, so, &sim));
+    flt_options_destroy(so);
+    OK(flt_sim_add_defect(sim, FLT_SIM_CENTRE_BUCKLE, 4.0, 800.0));
+    uint8_t *frame = malloc((size_t)WIDTH * ROI_ROWS);
+    for (int i = 0; i < FRAMES; ++i) {
+        double e = 0;
+        OK(flt_sim_next_frame(sim, frame, (size_t)WIDTH * ROI_ROWS, WIDTH, &e, 0, NULL, NULL, 0));
+        snprintf(path, sizeof path, "%s/frame_%03d.png", dir, i);
+        write_png(path, WIDTH, ROI_ROWS, frame);
+    }
+    free(frame);
+    flt_sim_destroy(sim);
+    flt_options *io = bag();
+    set(io, FLT_OPT_SOURCE_ENCODER_STEP, F_STEP); /* positions 0, 10, 20, ... mm */
+    for (int run = 0; run < 3; ++run) {
+        const int workers = run == 0 ? 0 : 2, with_callback = run == 2;
+        flt_source *src = NULL;
+        OK(flt_source_create_image_dir(dir, NULL, io, &src));
+        flt_options *o = bag();
+        set(o, FLT_OPT_GAUGE_FRAME_SPACING, 8.0);
+        set(o, FLT_OPT_LAG_KNOTS, 4);
+        set(o, FLT_OPT_GAUGE_WORKERS, workers);
+        set(o, FLT_OPT_GAUGE_QUEUE_FRAMES, 4); /* the source outruns the workers: it waits */
+        flt_gauge *g = NULL;
+        OK(flt_gauge_create(calib, o, &g));
+        flt_options_destroy(o);
+        /* Nothing started: nothing to wait for. */
+        assert_int_equal(flt_gauge_wait(g, 0), FLT_ERR_STATE);
+        assert_non_null(strstr(flt_last_error_message(), "flt_gauge_start"));
+        double by_callback[2] = {0, 0};
+        if (with_callback)
+            OK(flt_gauge_set_callback(g, count_callback, by_callback));
+        OK(flt_gauge_attach_source(g, src));
+        OK(flt_gauge_cut(g, 500.0));
+        OK(flt_gauge_cut(g, 1000.0));
+        OK(flt_gauge_start(g));
+        sheet_list l = {0};
+        flt_status st;
+        int timeouts = 0;
+        if (with_callback)
+            st = flt_gauge_wait(g, FLT_GAUGE_WAIT_FOREVER);
+        else
+            while ((st = flt_gauge_wait(g, 1)) == FLT_ERR_TIMEOUT) {
+                ++timeouts;
+                drain(g, &l, 0);
+            }
+        OK(st);
+        if (!with_callback)
+            drain(g, &l, 0);
+        if (with_callback) {
+            l.n = (size_t)by_callback[0];
+            assert_true(by_callback[1] + (double)count(g, FLT_GAUGE_COUNT_NO_STRIP) == FRAMES);
+        } else {
+            double rows = 0;
+            sum_values(&l, FLT_SHEET_ROWS, &rows);
+            assert_true(rows + (double)count(g, FLT_GAUGE_COUNT_NO_STRIP) == FRAMES);
+        }
+        print_message("%d workers%s: %zu sheets out of %d recorded frames, %d waits timed out\n",
+                      workers, with_callback ? ", callback" : "", l.n, FRAMES, timeouts);
+        /* Every frame in, the strip ended, every sheet out; nothing dropped
+         * (a recording waits for room). */
+        assert_int_equal(l.n, 3);
+        assert_int_equal(count(g, FLT_GAUGE_COUNT_FRAMES), FRAMES);
+        assert_int_equal(count(g, FLT_GAUGE_COUNT_DROPPED), 0);
+        assert_int_equal(count(g, FLT_GAUGE_COUNT_ACQUIRING), 0);
+        assert_int_equal(count(g, FLT_GAUGE_COUNT_QUEUED), 0);
+        if (!with_callback)
+            assert_true((unsigned)l.sheet[2].value[FLT_SHEET_FLAGS] & FLT_SHEET_FLAG_FLUSHED);
+        /* Done: a second wait has nothing to wait for. */
+        assert_int_equal(flt_gauge_wait(g, 0), FLT_ERR_STATE);
+        free_list(&l);
+        OK(flt_gauge_attach_source(g, NULL));
+        flt_gauge_destroy(g);
+        flt_source_destroy(src);
+    }
+    flt_options_destroy(io);
+    flt_calib_destroy(calib);
+    tf_remove_tree(dir);
+}
+
 /* A strip 1000 mm wide, 100 mm off the sensor's centre, on a 1500 mm
  * fiber grid, the roller table beside it: the extractor's edges give the sheet's width and
  * position, the fibers beside the strip are FLT_FLAG_OFF_STRIP (NaN) in the height map, and fibers
@@ -1739,6 +1895,7 @@ int main(void) {
         cmocka_unit_test(every_call_from_inside_the_callback),
         cmocka_unit_test(a_second_pusher_is_refused),
         cmocka_unit_test(acquisition_from_a_source),
+        cmocka_unit_test(running_a_recording_to_its_end),
         cmocka_unit_test(narrow_strip_has_edges),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -733,6 +733,95 @@ namespace Flatline
             }
         }
 
+        /// <summary>Runs a finite source (an image sequence, a recording) to
+        /// its end and yields every sheet, in order, as it comes, for
+        /// <c>await foreach</c>: attaches and starts the source, and after
+        /// its last frame ends the strip (a flush), so the last sheet comes
+        /// too; then detaches it. The source's own error (e.g. a file it
+        /// cannot read) is thrown after the sheets before it. Cancelling
+        /// stops the acquisition (the sheets finished so far are yielded)
+        /// and throws <see cref="OperationCanceledException"/>.
+        /// <code>
+        /// await foreach (var sheet in gauge.RunAsync(FrameSource.ImageDirectory("recording")))
+        ///     Console.WriteLine($"{sheet.Id}: {sheet.ShapeName}, {sheet.MaxIUnits:F1} I-Units");
+        /// </code></summary>
+        public async IAsyncEnumerable<Sheet> RunAsync(FrameSource source,
+                                                      [EnumeratorCancellation] CancellationToken cancellation = default)
+        {
+            if (source == null)
+                throw new ArgumentNullException(nameof(source));
+            var channel = new SheetChannel();
+            lock (sync)
+                channels.Add(channel);
+            UpdateCallback();
+            Task? ending = null;
+            try
+            {
+                Attach(source);
+                Start();
+                // flt_gauge_wait in short steps on a pool thread: the sheets
+                // reach the channel through the callback meanwhile, and the
+                // flush after the source's end delivers the last before it
+                // returns; then the channel ends.
+                ending = Task.Run(() =>
+                {
+                    try
+                    {
+                        while (true)
+                        {
+                            if (cancellation.IsCancellationRequested)
+                            {
+                                Stop();
+                                Flush();
+                                cancellation.ThrowIfCancellationRequested();
+                            }
+                            int status = FlatlineNative.flt_cs_gauge_wait(LiveHandle, 50);
+                            if (status != (int)Status.Timeout)
+                            {
+                                Errors.Check(status);
+                                return;
+                            }
+                        }
+                    }
+                    finally
+                    {
+                        channel.Complete();
+                    }
+                });
+                while (true)
+                {
+                    var sheet = await channel.ReadAsync(CancellationToken.None).ConfigureAwait(false);
+                    if (sheet == null)
+                        break;
+                    yield return sheet;
+                }
+                await ending.ConfigureAwait(false);  // the source's error, or the cancellation
+            }
+            finally
+            {
+                if (ending != null && !ending.IsCompleted && !handle.IsClosed)
+                {
+                    // Left early: stop the acquisition (the wait then ends).
+                    try
+                    {
+                        Stop();
+                        ending.Wait();  // its wait now returns at once
+                    }
+                    catch (Exception)
+                    {
+                        // why the source would have ended is moot now
+                    }
+                }
+                lock (sync)
+                    channels.Remove(channel);
+                if (!handle.IsClosed)
+                {
+                    UpdateCallback();
+                    Attach(null);
+                }
+            }
+        }
+
         /// <summary>The sheets as they are finished, for <c>await foreach</c>;
         /// the enumeration ends when the token is cancelled or the gauge is
         /// disposed.</summary>

@@ -79,6 +79,11 @@ flt_status flt_cs_gauge_coil_stats(const flt_gauge *gauge, int which, size_t rul
                                    double *values) {
     return flt_gauge_coil_stats(gauge, (flt_coil)which, rule, count, values);
 }
+/* flt_gauge_wait's status as it is: FLT_ERR_TIMEOUT is no error to
+ * RunAsync, which waits in short steps to notice a cancellation. */
+int flt_cs_gauge_wait(flt_gauge *gauge, uint32_t timeout_ms) {
+    return (int)flt_gauge_wait(gauge, timeout_ms);
+}
 /* No more rules (a null SafeHandle cannot be passed). */
 flt_status flt_cs_gauge_clear_rules(flt_gauge *gauge) {
     return flt_gauge_set_rules(gauge, NULL, 1.0, 0.0);

@@ -566,5 +566,101 @@ namespace Flatline.Tests
             Assert.Equal(3000, sheets.Sum(s => s.Rows));
             Assert.Equal((ulong)(3000 + taken), gauge.Count(GaugeCounter.Frames));
         }
+
+        private static void WritePng(string path, byte[,] image)
+        {
+            int h = image.GetLength(0), w = image.GetLength(1);
+            var raw = new System.IO.MemoryStream();
+            for (int y = 0; y < h; ++y)
+            {
+                raw.WriteByte(0);  // filter: none
+                for (int x = 0; x < w; ++x)
+                    raw.WriteByte(image[y, x]);
+            }
+            var packed = new System.IO.MemoryStream();
+            packed.Write(new byte[] { 0x78, 0x01 }, 0, 2);  // zlib header, fastest
+            using (var deflate = new System.IO.Compression.DeflateStream(packed, System.IO.Compression.CompressionLevel.Fastest, true))
+                raw.WriteTo(deflate);
+            uint adler = Adler32(raw.ToArray());
+            packed.Write(BigEndian(adler), 0, 4);
+            using var file = System.IO.File.Create(path);
+            file.Write(new byte[] { 0x89, (byte)'P', (byte)'N', (byte)'G', 0x0D, 0x0A, 0x1A, 0x0A }, 0, 8);
+            var header = new byte[13];
+            Array.Copy(BigEndian((uint)w), 0, header, 0, 4);
+            Array.Copy(BigEndian((uint)h), 0, header, 4, 4);
+            header[8] = 8;  // 8-bit grey
+            Chunk(file, "IHDR", header);
+            Chunk(file, "IDAT", packed.ToArray());
+            Chunk(file, "IEND", Array.Empty<byte>());
+        }
+
+        private static byte[] BigEndian(uint v) => new[] { (byte)(v >> 24), (byte)(v >> 16), (byte)(v >> 8), (byte)v };
+
+        private static uint Adler32(byte[] data)
+        {
+            uint a = 1, b = 0;
+            foreach (byte d in data)
+            {
+                a = (a + d) % 65521;
+                b = (b + a) % 65521;
+            }
+            return (b << 16) | a;
+        }
+
+        private static void Chunk(System.IO.Stream f, string type, byte[] body)
+        {
+            var tag = System.Text.Encoding.ASCII.GetBytes(type);
+            f.Write(BigEndian((uint)body.Length), 0, 4);
+            f.Write(tag, 0, 4);
+            f.Write(body, 0, body.Length);
+            uint crc = 0xFFFFFFFF;
+            foreach (byte x in tag.Concat(body))
+            {
+                crc ^= x;
+                for (int k = 0; k < 8; ++k)
+                    crc = (crc & 1) != 0 ? (crc >> 1) ^ 0xEDB88320 : crc >> 1;
+            }
+            f.Write(BigEndian(~crc), 0, 4);
+        }
+
+        [Fact]
+        public async Task RunAsyncRunsARecordingToItsEnd()
+        {
+            // 150 recorded frames 10 mm apart, cuts at 500 and 1000 mm: the
+            // 3 sheets, the last after the source's end, nothing dropped.
+            string dir = System.IO.Path.Combine(System.IO.Path.GetTempPath(), "flatline-run-" + Guid.NewGuid().ToString("N"));
+            System.IO.Directory.CreateDirectory(dir);
+            try
+            {
+                using var calibration = Calibration.Reference(firstRow: 900, rows: 240, firstXMm: -750, pitchMm: 10, fibers: 151);
+                using (var lineOptions = new FlatlineOptions { SimFrameSpacing = 10 })
+                using (var line = new SimulatedLine(calibration, lineOptions))
+                {
+                    line.AddDefect(DefectKind.CentreBuckle, 4, 800);
+                    for (int i = 0; i < 150; ++i)
+                        WritePng(System.IO.Path.Combine(dir, $"frame_{i:000}.png"), line.NextFrame().Pixels8!);
+                }
+                using var options = new FlatlineOptions { GaugeFrameSpacing = 8, LagKnots = 4, GaugeQueueFrames = 4 };
+                using var gauge = new Gauge(calibration, options);
+                gauge.Cut(500);
+                gauge.Cut(1000);
+                using var sourceOptions = new FlatlineOptions { SourceEncoderStep = 10 };
+                using var source = FrameSource.ImageDirectory(dir, null, sourceOptions);
+                var sheets = new List<Flatline.Sheet>();
+                await foreach (var sheet in gauge.RunAsync(source, TestContext.Current.CancellationToken))
+                    sheets.Add(sheet);
+                Assert.Equal(new long[] { 1, 2, 3 }, sheets.Select(s => s.Id));
+                Assert.Equal(500.0, sheets[0].SEndMm);
+                Assert.Equal(1000.0, sheets[1].SEndMm);
+                Assert.True((sheets[2].Flags & SheetFlags.Flushed) != 0);
+                Assert.Equal(150UL, gauge.Count(GaugeCounter.Frames));
+                Assert.Equal(0UL, gauge.Count(GaugeCounter.Dropped));
+                Assert.Equal(150L, sheets.Sum(s => (long)s.Rows) + (long)gauge.Count(GaugeCounter.NoStrip));
+            }
+            finally
+            {
+                System.IO.Directory.Delete(dir, true);
+            }
+        }
     }
 }

@@ -13,7 +13,7 @@ import numpy as np
 from . import capi as _capi
 from ._arrays import as_float64, as_mask, as_real
 from ._calib import Calibration
-from ._errors import StateError
+from ._errors import FlatlineError, StateError, TimeoutError
 from ._flatness import FiberResults, Shape, ShapeComponent
 from ._options import OptionValue, make_options, options_doc, prefixed_options
 from ._pixels import PixelFormat
@@ -484,6 +484,45 @@ class Gauge:
         strip stays open: :meth:`flush` ends it). Raises the error that ended
         the acquisition by itself, e.g. DeviceError for an unplugged camera."""
         self._live().stop_waiting()
+
+    def run(self, source: Source) -> Iterator[Sheet]:
+        """Runs a finite source (an image sequence, a recording) to its end
+        and yields every sheet, in order, as it comes: attaches and starts
+        the source, and after its last frame ends the strip (a flush), so
+        the last sheet comes too, then detaches the source. The source's
+        own error (e.g. a file it cannot read) is raised after the sheets
+        before it. Closing the iterator early stops the acquisition.
+
+            for sheet in gauge.run(flatline.Source.images("recording/")):
+                print(sheet.id, sheet.shape, sheet.max_i_units)
+        """
+        if not isinstance(source, Source):
+            raise TypeError(f"run() argument 'source' must be a Source, not "
+                            f"{type(source).__name__}")
+        self.attach(source)
+        self.start()
+        ended = False
+        try:
+            while True:
+                try:
+                    self._live().wait_waiting(50)
+                    ended = True
+                    break
+                except TimeoutError:
+                    yield from self  # the sheets so far; the source goes on
+                except FlatlineError:
+                    ended = True  # the strip was ended all the same
+                    yield from self
+                    raise
+            yield from self
+        finally:
+            if self._handle is not None:
+                if not ended:
+                    try:
+                        self.stop()
+                    except FlatlineError:
+                        pass  # closed early: why the source would have ended is moot
+                self.attach(None)  # the source may be closed after the run
 
     # -- output ---------------------------------------------------------------------
 

@@ -512,3 +512,47 @@ def test_a_second_thread_pushing_is_refused_and_the_gauge_goes_on(calib):
     assert sum(sh.rows for sh in sheets) == len(s)
     assert counters["frames"] == len(s) + len(taken)
     assert counters["skipped_reversal"] + counters["skipped_stop"] == len(taken)
+
+
+def _write_png(path, image):
+    """An 8-bit grey PNG without an imaging library."""
+    import struct
+    import zlib
+
+    raw = b"".join(b"\0" + image[r].tobytes() for r in range(image.shape[0]))
+
+    def chunk(tag, body):
+        return (struct.pack(">I", len(body)) + tag + body
+                + struct.pack(">I", zlib.crc32(tag + body) & 0xFFFFFFFF))
+
+    header = struct.pack(">IIBBBBB", image.shape[1], image.shape[0], 8, 0, 0, 0, 0)
+    with open(path, "wb") as f:
+        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header)
+                + chunk(b"IDAT", zlib.compress(raw, 1)) + chunk(b"IEND", b""))
+
+
+def test_run_a_recording_to_its_end(calib, tmp_path):
+    # 150 recorded frames 10 mm apart, cuts at 500 and 1000 mm: run() yields
+    # the 3 sheets, the last one after the source's end (the flush), and
+    # nothing is dropped (a recording waits for room).
+    with flatline.SimulatedLine(calib, sim_frame_spacing=10.0) as sim:
+        sim.add_defect("centre_buckle", 4.0, 800.0)
+        for i in range(150):
+            _write_png(tmp_path / f"frame_{i:03d}.png", sim.next_frame().image)
+    for workers in (0, 2):
+        with flatline.Gauge(calib, gauge_workers=workers, gauge_frame_spacing=8.0, lag_knots=4,
+                            gauge_queue_frames=4) as gauge:
+            gauge.cut(500.0)
+            gauge.cut(1000.0)
+            with flatline.Source.images(tmp_path, step=10.0) as source:
+                sheets = list(gauge.run(source))
+            counters = gauge.counters()
+        assert [sh.id for sh in sheets] == [1, 2, 3]
+        assert [sh.s_end for sh in sheets[:2]] == [500.0, 1000.0]
+        assert flatline.SheetFlag.FLUSHED in sheets[2].flags
+        assert counters["frames"] == 150 and counters["dropped"] == 0
+        assert sum(sh.rows for sh in sheets) + counters["no_strip"] == 150
+        assert counters["acquiring"] == 0
+    with flatline.Gauge(calib) as gauge:
+        with pytest.raises(TypeError, match="Source"):
+            next(gauge.run("recording/"))
