@@ -12,6 +12,7 @@
 #include <limits>
 
 #include "core/error.hpp"
+#include "core/log.hpp"
 #include "core/number_text.hpp"
 #include "flatline/extractor.h"
 #include "flatline/source.h"
@@ -457,16 +458,23 @@ void gauge::release_parts() noexcept {
 // ---------------------------------------------------------------- failures
 
 void gauge::record_failure(flt_status status, const char *message) {
-    std::lock_guard<std::mutex> lock(m_);
-    if (!failed_) {
-        failed_ = true;
-        failure_status_ = status;
-        failure_message_ = message;
+    bool first = false;
+    {
+        std::lock_guard<std::mutex> lock(m_);
+        if (!failed_) {
+            failed_ = true;
+            first = true;
+            failure_status_ = status;
+            failure_message_ = message;
+        }
+        work_cv_.notify_all();
+        room_cv_.notify_all();
+        idle_cv_.notify_all();
+        sheet_cv_.notify_all();
     }
-    work_cv_.notify_all();
-    room_cv_.notify_all();
-    idle_cv_.notify_all();
-    sheet_cv_.notify_all();
+    if (first)
+        FLT_LOG(FLT_LOG_ERROR, "gauge", "the gauge stopped processing (%s): %s",
+                flt_status_string(status), message);
 }
 
 flt_status gauge::failure(const char *fn) const {
@@ -556,6 +564,10 @@ void gauge::resolve_band(frame_slot &slot) {
     for (flt_extractor *&ex : extractors_)
         check(flt_extractor_create(calib_for_extractors_, extract_options_, &ex));
     band_known_ = true;
+    FLT_LOG(FLT_LOG_INFO, "gauge",
+            "laser bands found: laser 0 in rows %u..%u, laser 1 in rows %u..%u; every frame is "
+            "extracted with them",
+            first[0], first[0] + rows[0] - 1, first[1], first[1] + rows[1] - 1);
 }
 
 void gauge::fill_slot(frame_slot &slot, const gauge_input &in) const {
@@ -689,6 +701,13 @@ void gauge::take(const gauge_input &in, bool from_acquisition) {
         if (drop) {
             ++n_dropped_;
             ++pending_dropped_;
+            const unsigned long long dropped = n_dropped_;
+            lock.unlock();
+            FLT_LOG(FLT_LOG_WARNING, "gauge",
+                    "frame at encoder %.1f mm dropped: %s (gauge_overflow drops; %llu dropped so "
+                    "far)",
+                    e, queue_full ? "the frame queue is full" : "gauge_sheet_backlog is reached",
+                    dropped);
             return;
         }
         if (queue_full)
@@ -869,27 +888,51 @@ bool gauge::run_one(std::unique_lock<std::mutex> &lock, unsigned index) {
 // ---------------------------------------------------------------- sequencer
 
 void gauge::activate_cuts(std::uint64_t up_to_seq) {
-    std::lock_guard<std::mutex> lock(m_);
-    while (cut_count_ > 0 && cuts_[cut_head_].seq <= up_to_seq) {
-        const double c = cuts_[cut_head_].s;
-        cut_head_ = (cut_head_ + 1) % k_cut_capacity;
-        --cut_count_;
-        if (in_strip_ && c <= sheet_start_) {
-            ++n_cuts_ignored_;
-            continue;
+    std::size_t ignored = 0;
+    double last_ignored = 0.0;
+    {
+        std::lock_guard<std::mutex> lock(m_);
+        while (cut_count_ > 0 && cuts_[cut_head_].seq <= up_to_seq) {
+            const double c = cuts_[cut_head_].s;
+            cut_head_ = (cut_head_ + 1) % k_cut_capacity;
+            --cut_count_;
+            if (in_strip_ && c <= sheet_start_) {
+                ++n_cuts_ignored_;
+                ++ignored;
+                last_ignored = c;
+                continue;
+            }
+            active_[(active_head_ + active_count_) % k_cut_capacity] = c;
+            ++active_count_;
         }
-        active_[(active_head_ + active_count_) % k_cut_capacity] = c;
-        ++active_count_;
     }
+    log_cuts_ignored(ignored, last_ignored, "at or before the open sheet's start");
+}
+
+void gauge::log_cuts_ignored(std::size_t n, double s, const char *why) const {
+    if (n > 0)
+        FLT_LOG(FLT_LOG_WARNING, "gauge",
+                "%zu cut%s ignored, the last at encoder %.1f mm: %s (its sheet was already "
+                "finished, or no strip reached it)",
+                n, n == 1 ? "" : "s", s + mean_offset_, why);
 }
 
 void gauge::drop_active_cuts(double up_to, bool all) {
-    std::lock_guard<std::mutex> lock(m_);
-    while (active_count_ > 0 && (all || active_[active_head_] <= up_to)) {
-        active_head_ = (active_head_ + 1) % k_cut_capacity;
-        --active_count_;
-        ++n_cuts_ignored_;
+    std::size_t ignored = 0;
+    double last_ignored = 0.0;
+    {
+        std::lock_guard<std::mutex> lock(m_);
+        while (active_count_ > 0 && (all || active_[active_head_] <= up_to)) {
+            last_ignored = active_[active_head_];
+            active_head_ = (active_head_ + 1) % k_cut_capacity;
+            --active_count_;
+            ++n_cuts_ignored_;
+            ++ignored;
+        }
     }
+    log_cuts_ignored(ignored, last_ignored,
+                     all ? "the strip ended (a reversal or a jump of the encoder)"
+                         : "before the strip's head");
 }
 
 void gauge::sequence(frame_slot &slot) {
@@ -980,6 +1023,8 @@ void gauge::begin_strip(double s) {
         std::lock_guard<std::mutex> lock(m_);
         ++n_strips_;
     }
+    FLT_LOG(FLT_LOG_INFO, "gauge", "coil %llu: the strip's head at s = %.1f mm",
+            (unsigned long long)coil_, s);
     // Cuts at or before the head were for strip that never came.
     drop_active_cuts(s, false);
 }
@@ -1053,6 +1098,7 @@ void gauge::output_row(double s, const double *z, const std::uint8_t *flags, con
 void gauge::apply_cuts(double s_limit, const row_meta *incoming) {
     for (;;) {
         double c;
+        bool ignored = false;
         {
             std::lock_guard<std::mutex> lock(m_);
             if (active_count_ == 0 || !(active_[active_head_] <= s_limit))
@@ -1062,8 +1108,12 @@ void gauge::apply_cuts(double s_limit, const row_meta *incoming) {
             --active_count_;
             if (c <= sheet_start_) {
                 ++n_cuts_ignored_;
-                continue;
+                ignored = true;
             }
+        }
+        if (ignored) {
+            log_cuts_ignored(1, c, "at or before the open sheet's start");
+            continue;
         }
         split(c, 0, false, incoming);
     }
@@ -1169,6 +1219,12 @@ void gauge::end_strip(unsigned flag) {
     }
     if (pushed_)
         check(flt_recon_reset(recon_));
+    FLT_LOG(FLT_LOG_INFO, "gauge", "coil %llu: %s at s = %.1f mm, %llu sheets",
+            (unsigned long long)coil_,
+            flag == FLT_SHEET_FLAG_TAIL      ? "the strip's tail"
+            : flag == FLT_SHEET_FLAG_FLUSHED ? "the strip ended by a flush"
+                                             : "the strip ended by a reversal or a jump",
+            last_output_s_, (unsigned long long)sheet_in_coil_);
     pushed_ = false;
     in_strip_ = false;
     has_output_ = false;
@@ -1190,10 +1246,17 @@ flt_sheet *gauge::take_slot(std::size_t rows) {
     if (cfg_.sheet_backlog == 0) {
         // The caller chose to keep no backlog: the oldest waiting sheet
         // makes room for the newest.
-        std::lock_guard<std::mutex> lock(m_);
+        std::unique_lock<std::mutex> lock(m_);
         ++n_sheets_dropped_;
-        if (ready_count_ == 0)
+        const unsigned long long dropped = n_sheets_dropped_;
+        if (ready_count_ == 0) {
+            lock.unlock();
+            FLT_LOG(FLT_LOG_WARNING, "gauge",
+                    "a finished sheet was dropped: every sheet slot is held by the caller "
+                    "(gauge_sheet_backlog = 0; %llu sheets dropped so far)",
+                    dropped);
             return nullptr;  // every slot is held by the caller: this sheet is lost
+        }
         flt_sheet *sh = ready_[ready_head_];
         ready_head_ = (ready_head_ + 1) % ready_.size();
         --ready_count_;
@@ -1216,8 +1279,15 @@ flt_sheet *gauge::take_slot(std::size_t rows) {
     if (cfg_.keep_maps >= 2)
         sh->map_measured.assign(rows * K_, 0.0);
     pool_->out.fetch_add(1);
-    std::lock_guard<std::mutex> lock(m_);
-    ++n_sheets_grown_;
+    unsigned long long grown = 0;
+    {
+        std::lock_guard<std::mutex> lock(m_);
+        grown = ++n_sheets_grown_;
+    }
+    FLT_LOG(FLT_LOG_INFO, "gauge",
+            "every one of the %zu sheet slots is taken: another sheet made (%llu so far; read "
+            "the sheets sooner, or raise gauge_sheet_slots)",
+            cfg_.sheet_slots, grown);
     return sh.release();
 }
 
@@ -1310,6 +1380,22 @@ void gauge::evaluate(const sheet_job &job) {
         n_lost_lines_ += std::uint64_t(lost_lines);
         n_incomplete_ += incomplete ? 1 : 0;
     }
+    const auto id = (unsigned long long)job.id, coil = (unsigned long long)job.coil;
+    if (dropped + missing + lost_lines > 0)
+        FLT_LOG(FLT_LOG_WARNING, "gauge",
+                "sheet %llu (coil %llu) lost rows: %.0f dropped at a full queue, %.0f missing by "
+                "the encoder, %.0f lost lines; %.0f of %.0f rows measured (coverage %.1f %%)",
+                id, coil, dropped, missing, lost_lines, measured, expected, 100.0 * coverage);
+    if (incomplete)
+        FLT_LOG(FLT_LOG_WARNING, "gauge",
+                "sheet %llu (coil %llu) is incomplete: coverage %.1f %% is below "
+                "gauge_min_coverage %.1f %%; its shape and verdict are \"not judged\"",
+                id, coil, 100.0 * coverage, 100.0 * cfg_.min_coverage);
+    if (peaks > 0 && saturated > cfg_.saturation_limit * peaks)
+        FLT_LOG(FLT_LOG_WARNING, "gauge",
+                "sheet %llu (coil %llu): %.1f %% of the laser peaks on the strip are saturated "
+                "(gauge_saturation_limit %.1f %%): lower the exposure or the laser power",
+                id, coil, 100.0 * saturated / peaks, 100.0 * cfg_.saturation_limit);
 
     // The flatness of the rows: whole sheets through evaluate (which
     // refuses a sheet shorter than one wave or without a valid fiber), short
@@ -1546,6 +1632,20 @@ void gauge::judge(flt_sheet *sh, const sheet_buffer &b, std::size_t n) {
     } else {
         verdict::judge(vd.set, vd.given, vc->scratch, vc->thickness, width, map, vd.results.data(),
                        vd.gaps.data());
+        // A band that changes within a coil (a measured width crossing a
+        // band's edge) changes the limit: worth telling.
+        const double coil = v[FLT_SHEET_COIL];
+        for (std::size_t i = 0; i < vd.results.size() && i < vc->last_band.size(); ++i) {
+            const int band = int(vd.results[i].value[FLT_VERDICT_BAND]);
+            if (vc->last_coil == coil && band != vc->last_band[i])
+                FLT_LOG(FLT_LOG_INFO, "gauge",
+                        "sheet %.0f: rule '%s' is judged by band %d, was %d (thickness %g mm, "
+                        "width %.0f mm)",
+                        v[FLT_SHEET_ID], vd.set.rules[i].name.c_str(), band, vc->last_band[i],
+                        vc->thickness, width);
+            vc->last_band[i] = band;
+        }
+        vc->last_coil = coil;
     }
     vd.evaluated = true;
     double failed = 0, unjudged = 0;
@@ -1642,6 +1742,7 @@ flt_status gauge::set_rules(const char *fn, const flt_rules *rules, double thick
         vc->width = width;
         vc->needs_map = verdict::needs_map(rules->set);
         n = rules->set.rules.size();
+        vc->last_band.assign(n, -1);
         vc->slot.resize(cfg_.sheet_slots);
         for (std::unique_ptr<flt_verdict> &vd : vc->slot) {
             vd = std::make_unique<flt_verdict>();

@@ -85,6 +85,10 @@ struct verdict_config {
     // One verdict per sheet slot (flt_sheet::slot), borrowed.
     std::vector<std::unique_ptr<flt_verdict>> slot;
     verdict::straightedge scratch;
+    // The band each rule chose for the last sheet judged, and its coil
+    // (the log says when a band changes within a coil); evaluation only.
+    std::vector<int> last_band;
+    double last_coil = 0;
 };
 
 // One coil's statistics (flt_gauge_coil_stats).
@@ -242,6 +246,7 @@ class gauge {
     void sequence(frame_slot &slot);
     void activate_cuts(std::uint64_t up_to_seq);
     void drop_active_cuts(double up_to, bool all);
+    void log_cuts_ignored(std::size_t n, double s, const char *why) const;
     void begin_strip(double s);
     void end_strip(unsigned flag);
     void push_row(double s, const double *height, const double *slope, const std::uint8_t *flags,

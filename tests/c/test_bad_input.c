@@ -3423,6 +3423,21 @@ static void row_gauge_wait(void) {
     flt_gauge_destroy(g);
 }
 
+static void ignore_log(flt_log_level level, const char *component, const char *message,
+                       void *user) {
+    (void)level, (void)component, (void)message, (void)user;
+}
+
+static void row_log_set_callback(void) {
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'min_level'", flt_log_set_callback(ignore_log, NULL, 0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'min_level'",
+        flt_log_set_callback(ignore_log, NULL, (flt_log_level)-1));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'min_level'",
+        flt_log_set_callback(ignore_log, NULL, (flt_log_level)41));
+    GOOD(flt_log_set_callback(ignore_log, NULL, FLT_LOG_DEBUG));
+    GOOD(flt_log_set_callback(NULL, NULL, FLT_LOG_ERROR));
+}
+
 static int g_callback_calls;
 static void count_callback(const flt_sheet *sheet, void *user) {
     (void)sheet;
@@ -4819,6 +4834,7 @@ static const row k_rows[] = {
     ROW(gauge_start),
     ROW(gauge_stop),
     ROW(gauge_wait),
+    ROW(log_set_callback),
     ROW(gauge_next_sheet),
     ROW(gauge_set_callback),
     ROW(gauge_count),

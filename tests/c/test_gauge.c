@@ -1779,6 +1779,152 @@ static void running_a_recording_to_its_end(void **state) {
     tf_remove_tree(dir);
 }
 
+/* ---------------------------------------------------------------------- */
+/* The log                                                                 */
+/* ---------------------------------------------------------------------- */
+
+enum {
+    EV_DROPPED,
+    EV_LOST_ROWS,
+    EV_INCOMPLETE,
+    EV_CUT_IGNORED,
+    EV_SATURATED,
+    EV_HEAD,
+    EV_END,
+    EV_BANDS,
+    EV_N
+};
+typedef struct log_counts {
+    pthread_mutex_t m;
+    int n[EV_N], other, warnings;
+} log_counts;
+
+static void counting_log(flt_log_level level, const char *component, const char *message,
+                         void *user) {
+    log_counts *c = user;
+    pthread_mutex_lock(&c->m);
+    assert_string_equal(component, "gauge");
+    c->warnings += level == FLT_LOG_WARNING;
+    if (strstr(message, " dropped: "))
+        ++c->n[EV_DROPPED];
+    else if (strstr(message, " lost rows: "))
+        ++c->n[EV_LOST_ROWS];
+    else if (strstr(message, " is incomplete: "))
+        ++c->n[EV_INCOMPLETE];
+    else if (strstr(message, " ignored, the last at encoder 1200.0 mm"))
+        ++c->n[EV_CUT_IGNORED];
+    else if (strstr(message, " are saturated "))
+        ++c->n[EV_SATURATED];
+    else if (strstr(message, "the strip's head"))
+        ++c->n[EV_HEAD];
+    else if (strstr(message, "ended by a flush"))
+        ++c->n[EV_END];
+    else if (strstr(message, "laser bands found"))
+        ++c->n[EV_BANDS];
+    else
+        ++c->other;
+    pthread_mutex_unlock(&c->m);
+}
+
+/* A run with frames dropped at a full queue (a slow callback holds the only
+ * worker), a cut given after its sheet was finished and an overexposed
+ * line (peaks at 1.5 x full scale): the log tells each, as often as it
+ * happened, up to its rate. */
+static void log_tells_drops_cuts_and_saturation(void **state) {
+    (void)state;
+    enum { FRAMES = 300 };
+    flt_calib *calib = NULL;
+    OK(flt_calib_create_reference(ROI_FIRST, ROI_ROWS, F_FIRST_X, F_PITCH, FK, &calib));
+    flt_options *so = bag();
+    set(so, FLT_OPT_SIM_FRAME_SPACING, F_STEP);
+    set(so, FLT_OPT_SIM_LINE_PEAK, 1.5);
+    flt_sim *sim = NULL;
+    OK(flt_sim_create(calib, so, &sim));
+    flt_options_destroy(so);
+    uint8_t *frames = malloc((size_t)FRAMES * WIDTH * ROI_ROWS);
+    for (int i = 0; i < FRAMES; ++i) {
+        double e = 0;
+        OK(flt_sim_next_frame(sim, frames + (size_t)i * WIDTH * ROI_ROWS, (size_t)WIDTH * ROI_ROWS,
+                              WIDTH, &e, 0, NULL, NULL, 0));
+    }
+    flt_sim_destroy(sim);
+    log_counts c;
+    memset(&c, 0, sizeof c);
+    pthread_mutex_init(&c.m, NULL);
+    OK(flt_log_set_callback(counting_log, &c, FLT_LOG_INFO));
+    flt_options *o = bag();
+    set(o, FLT_OPT_GAUGE_FRAME_SPACING, 8.0);
+    set(o, FLT_OPT_LAG_KNOTS, 4);
+    set(o, FLT_OPT_GAUGE_WORKERS, 1);
+    set(o, FLT_OPT_GAUGE_QUEUE_FRAMES, 2);
+    set(o, FLT_OPT_GAUGE_OVERFLOW, FLT_GAUGE_OVERFLOW_DROP);
+    set(o, FLT_OPT_GAUGE_MAX_SHEET_LENGTH, 1000.0);
+    flt_gauge *g = NULL;
+    OK(flt_gauge_create(calib, o, &g));
+    flt_options_destroy(o);
+    g_first_sheet_seen = 0;
+    g_callback_frames = g_callback_dropped = 0;
+    OK(flt_gauge_set_callback(g, slow_callback, NULL));
+    OK(flt_gauge_cut(g, 400.0));
+    const double t0 = now_s();
+    for (int i = 0; i < FRAMES; ++i) {
+        /* No cut after 400 mm: the sheets from there are split every
+         * 1000 mm (gauge_max_sheet_length). Frames every 10 mm from 0;
+         * while the worker sleeps in the first sheet's callback, the queue
+         * of 2 overflows. */
+        sleep_ms(2); /* a frame every 2 ms: the worker keeps up but while it sleeps */
+        OK(flt_gauge_push_frame(g, frames + (size_t)i * WIDTH * ROI_ROWS, FLT_PIXEL_MONO8, WIDTH,
+                                ROI_ROWS, WIDTH, F_STEP * i));
+    }
+    OK(flt_gauge_flush(g));
+    const double elapsed = now_s() - t0;
+    OK(flt_gauge_set_callback(g, NULL, NULL));
+    const uint64_t dropped = count(g, FLT_GAUGE_COUNT_DROPPED);
+    const uint64_t sheets = count(g, FLT_GAUGE_COUNT_SHEETS);
+    /* A cut at 1200 mm given after the strip ended: the next strip's head
+     * (at 5000 mm) is past it, so it is ignored. */
+    OK(flt_gauge_cut(g, 1200.0));
+    OK(flt_gauge_push_frame(g, frames, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, 5000.0));
+    OK(flt_gauge_flush(g));
+    OK(flt_log_set_callback(NULL, NULL, FLT_LOG_INFO)); /* returns once no call is in progress */
+    print_message("log: %d frame-dropped, %d lost-rows, %d incomplete, %d cut-ignored, "
+                  "%d saturated, %d head, %d end, %d bands messages, %d others; %llu frames "
+                  "dropped, %llu sheets, %.1f s\n",
+                  c.n[EV_DROPPED], c.n[EV_LOST_ROWS], c.n[EV_INCOMPLETE], c.n[EV_CUT_IGNORED],
+                  c.n[EV_SATURATED], c.n[EV_HEAD], c.n[EV_END], c.n[EV_BANDS], c.other,
+                  (unsigned long long)dropped, (unsigned long long)sheets, elapsed);
+    /* Drops: one message each, at most 5 per 10 s (then held back). */
+    assert_true(dropped > 0);
+    const int windows = 1 + (int)(elapsed / 10.0);
+    assert_true(c.n[EV_DROPPED] >= (dropped < 5 ? (int)dropped : 5));
+    assert_true(c.n[EV_DROPPED] <= 5 * windows);
+    /* Per sheet: lost rows where a sheet lost any, saturation on each
+     * (every sheet of the overexposed line), and the one-frame sheet of the
+     * next strip. (The sheets: 0-400 mm, then split every 1000 mm from the
+     * first row past it: 3 or 4, as the drops fall.) */
+    assert_true(sheets >= 3 && sheets <= 4);
+    assert_true(c.n[EV_LOST_ROWS] >= 1 && c.n[EV_LOST_ROWS] <= (int)sheets);
+    assert_int_equal(c.n[EV_SATURATED], (int)sheets + 1);
+    assert_int_equal(c.n[EV_INCOMPLETE], (int)count(g, FLT_GAUGE_COUNT_SHEETS_INCOMPLETE));
+    assert_int_equal(c.other, 0);
+    assert_int_equal(c.n[EV_CUT_IGNORED], 1);
+    assert_int_equal(count(g, FLT_GAUGE_COUNT_CUTS_IGNORED), 1);
+    assert_int_equal(c.n[EV_HEAD], 2);
+    assert_int_equal(c.n[EV_END], 2);
+    assert_int_equal(c.n[EV_BANDS], 1);
+    /* Off: nothing more. */
+    const int before = c.n[EV_HEAD];
+    OK(flt_gauge_push_frame(g, frames, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, 1.0e6));
+    OK(flt_gauge_flush(g));
+    assert_int_equal(c.n[EV_HEAD], before);
+    assert_int_equal(flt_log_set_callback(counting_log, &c, (flt_log_level)15),
+                     FLT_ERR_INVALID_ARGUMENT);
+    flt_gauge_destroy(g);
+    pthread_mutex_destroy(&c.m);
+    free(frames);
+    flt_calib_destroy(calib);
+}
+
 /* A strip 1000 mm wide, 100 mm off the sensor's centre, on a 1500 mm
  * fiber grid, the roller table beside it: the extractor's edges give the sheet's width and
  * position, the fibers beside the strip are FLT_FLAG_OFF_STRIP (NaN) in the height map, and fibers
@@ -1896,6 +2042,7 @@ int main(void) {
         cmocka_unit_test(a_second_pusher_is_refused),
         cmocka_unit_test(acquisition_from_a_source),
         cmocka_unit_test(running_a_recording_to_its_end),
+        cmocka_unit_test(log_tells_drops_cuts_and_saturation),
         cmocka_unit_test(narrow_strip_has_edges),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
