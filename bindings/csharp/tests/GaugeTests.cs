@@ -662,5 +662,52 @@ namespace Flatline.Tests
                 System.IO.Directory.Delete(dir, true);
             }
         }
+
+        [Fact]
+        public void TheLogTellsDropsIgnoredCutsAndSaturation()
+        {
+            // A gauge that drops frames (a queue of 1, frames pushed faster
+            // than one worker extracts them), a cut for a strip that ended,
+            // and an overexposed line: a message for each. (The log is the
+            // process's: other tests' messages are told apart by content.)
+            var got = new System.Collections.Concurrent.ConcurrentQueue<FlatlineLogEventArgs>();
+            EventHandler<FlatlineLogEventArgs> handler = (sender, e) => got.Enqueue(e);
+            using var calibration = Calibration.Reference(firstRow: 900, rows: 240, firstXMm: -750, pitchMm: 10, fibers: 151);
+            var frames = new List<byte[,]>();
+            using (var lineOptions = new FlatlineOptions { SimFrameSpacing = 10 })
+            {
+                lineOptions.Set("sim_line_peak", 1.5);
+                using var line = new SimulatedLine(calibration, lineOptions);
+                for (int i = 0; i < 200; ++i)
+                    frames.Add(line.NextFrame().Pixels8!);
+            }
+            FlatlineLog.Message += handler;
+            try
+            {
+                using var options = new FlatlineOptions
+                {
+                    GaugeWorkers = 1, GaugeQueueFrames = 1, GaugeOverflow = GaugeOverflow.Drop, GaugeFrameSpacing = 8,
+                    LagKnots = 4,
+                };
+                using var gauge = new Gauge(calibration, options);
+                for (int i = 0; i < frames.Count; ++i)
+                    gauge.Push(frames[i], 10.0 * i);
+                gauge.Flush();
+                gauge.Cut(1234);  // the next strip's head (5000 mm) is past it: ignored
+                gauge.Push(frames[0], 5000);
+                gauge.Flush();
+                Assert.True(gauge.Count(GaugeCounter.Dropped) > 0);
+            }
+            finally
+            {
+                FlatlineLog.Message -= handler;  // returns once no message is in progress
+            }
+            var mine = got.Where(e => e.Component == "gauge").ToList();
+            Assert.Contains(mine, e => e.Level == FlatlineLogLevel.Warning && e.Message.Contains(" dropped: "));
+            Assert.Single(mine, e => e.Level == FlatlineLogLevel.Warning &&
+                                     e.Message.Contains("cut ignored, the last at encoder 1234.0 mm"));
+            Assert.Contains(mine, e => e.Level == FlatlineLogLevel.Warning && e.Message.Contains(" are saturated "));
+            Assert.Contains(mine, e => e.Level == FlatlineLogLevel.Information && e.Message.Contains("the strip's head at s = 5000.0 mm"));
+        }
     }
 }

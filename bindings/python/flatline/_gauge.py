@@ -12,6 +12,7 @@ import numpy as np
 
 from . import capi as _capi
 from ._arrays import as_float64, as_mask, as_real
+from . import _log
 from ._calib import Calibration
 from ._errors import FlatlineError, StateError, TimeoutError
 from ._flatness import FiberResults, Shape, ShapeComponent
@@ -461,7 +462,10 @@ class Gauge:
         """The end of the input: processes every frame pushed, ends the strip
         (its last sheet) and waits until that sheet is out (after a push
         another thread has in progress)."""
-        self._live().flush_waiting()
+        try:
+            self._live().flush_waiting()
+        finally:
+            _log.drain()
 
     # -- acquisition ----------------------------------------------------------------
 
@@ -483,7 +487,10 @@ class Gauge:
         """Stops the acquisition and waits until its frames are processed (the
         strip stays open: :meth:`flush` ends it). Raises the error that ended
         the acquisition by itself, e.g. DeviceError for an unplugged camera."""
-        self._live().stop_waiting()
+        try:
+            self._live().stop_waiting()
+        finally:
+            _log.drain()
 
     def run(self, source: Source) -> Iterator[Sheet]:
         """Runs a finite source (an image sequence, a recording) to its end
@@ -507,6 +514,7 @@ class Gauge:
                 try:
                     self._live().wait_waiting(50)
                     ended = True
+                    _log.drain()
                     break
                 except TimeoutError:
                     yield from self  # the sheets so far; the source goes on
@@ -534,6 +542,7 @@ class Gauge:
             raise ValueError(f"next_sheet() argument 'timeout' must be >= 0, got {timeout}")
         ms = int(min(seconds, 4e6) * 1000.0)
         handle = self._live().next_sheet_waiting(ms)
+        _log.drain()
         if handle is None:
             return None
         try:

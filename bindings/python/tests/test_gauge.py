@@ -2,6 +2,7 @@
 """The gauge from Python: sheets out of rows and frames, cuts early and late,
 counters, the iterators, a source on the gauge's thread, bad input."""
 
+import logging
 import math
 import threading
 
@@ -556,3 +557,34 @@ def test_run_a_recording_to_its_end(calib, tmp_path):
     with flatline.Gauge(calib) as gauge:
         with pytest.raises(TypeError, match="Source"):
             next(gauge.run("recording/"))
+
+
+def test_the_log_reaches_logging(calib, caplog):
+    # A gauge that drops frames (gauge_overflow="drop", a queue of 1 and a
+    # plain loop pushing faster than one worker extracts: most are dropped),
+    # a cut given for a strip that ended, and an overexposed line: the logger "flatline"
+    # gets a message for each, at its level, by the time flush returns.
+    with flatline.SimulatedLine(calib, sim_frame_spacing=10.0, sim_line_peak=1.5) as sim:
+        frames = [sim.next_frame().image for _ in range(200)]
+    caplog.set_level(logging.INFO, logger="flatline")
+    with flatline.Gauge(calib, gauge_workers=1, gauge_queue_frames=1, gauge_overflow="drop",
+                        gauge_frame_spacing=8.0, lag_knots=4) as gauge:
+        for i, frame in enumerate(frames):
+            gauge.push_frame(frame, 10.0 * i)
+        gauge.flush()
+        dropped = gauge.counters()["dropped"]
+        sheets = list(gauge)
+        gauge.cut(1200.0)  # the next strip's head (5000 mm) is past it: ignored
+        gauge.push_frame(frames[0], 5000.0)
+        gauge.flush()
+        counters = gauge.counters()
+    messages = [(r.levelname, r.getMessage()) for r in caplog.records if r.name == "flatline"]
+    drops = [m for level, m in messages if " dropped: " in m]
+    assert dropped > 0
+    assert 1 <= len(drops) <= 5 and all(m.startswith("gauge: frame at encoder") for m in drops)
+    assert sum("cut ignored, the last at encoder 1200.0 mm" in m for _, m in messages) == 1
+    saturated = [level for level, m in messages if " are saturated " in m]
+    assert len(sheets) >= 1 and saturated == ["WARNING"] * counters["sheets"]
+    # (a burst of drops wider than the tail length ends a strip: one head each)
+    assert sum("the strip's head at" in m for _, m in messages) == counters["strips"] >= 2
+    assert all(level in ("INFO", "WARNING") for level, _ in messages)
