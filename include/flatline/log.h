@@ -70,8 +70,7 @@ typedef void(FLT_CALL *flt_log_callback)(flt_log_level level, const char *compon
  *         the four; FLT_ERR_STATE from inside the callback.
  */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_log_set_callback(flt_log_callback callback,
-                                                               void *user,
-                                                               flt_log_level min_level);
+                                                               void *user, flt_log_level min_level);
 
 #ifdef __cplusplus
 }

@@ -34,10 +34,10 @@ void log_message(log_site &site, flt_log_level level, const char *format, ...)
 
 }  // namespace flt
 
-#define FLT_LOG(level, component, ...)                                  \
-    do {                                                                \
-        if (::flt::log_enabled(level)) {                                \
-            static ::flt::log_site flt_log_site_{component};            \
-            ::flt::log_message(flt_log_site_, level, __VA_ARGS__);      \
-        }                                                               \
-    } while (0)
+#define FLT_LOG(level, component, ...)                       \
+  do {                                                       \
+    if (::flt::log_enabled(level)) {                         \
+      static ::flt::log_site flt_log_site_{component};       \
+      ::flt::log_message(flt_log_site_, level, __VA_ARGS__); \
+    }                                                        \
+  } while (0)
