@@ -34,6 +34,7 @@ bool log_enabled(flt_log_level level) {
     return min != 0 && int(level) >= min;
 }
 
+// NOLINTNEXTLINE(cert-dcl50-cpp): printf-style on purpose, the format attribute checks it
 void log_message(log_site &site, flt_log_level level, const char *format, ...) {
     if (t_in_callback)
         return;  // the callback's own calls: it would wait for itself
