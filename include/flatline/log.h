@@ -15,7 +15,8 @@
  *   Each place in the library that logs passes at most 5 messages in any
  *   10 s; the next one that passes says how many it held back ("(12 more
  *   like this held back)"), so a flood of dropped frames cannot flood the
- *   caller.
+ *   caller. Installing a callback starts every place's count afresh: the
+ *   new listener has heard nothing yet.
  *
  * Threads
  *   Messages come from whichever thread the event happens on (a gauge

@@ -18,6 +18,9 @@ constexpr std::int64_t k_window_ms = 10000;
 std::atomic<int> g_min_level{0};  // 0: no callback
 std::mutex g_m;                   // the callback, its user, the rate limits
 flt_log_callback g_callback = nullptr;
+// Counts installations: a new listener has heard nothing, so every place's
+// window starts afresh for it.
+std::uint64_t g_generation = 1;
 void *g_user = nullptr;
 thread_local bool t_in_callback = false;
 
@@ -42,6 +45,11 @@ void log_message(log_site &site, flt_log_level level, const char *format, ...) {
     if (!g_callback || int(level) < g_min_level.load(std::memory_order_relaxed))
         return;
     const std::int64_t t = now_ms();
+    if (site.generation != g_generation) {
+        site.generation = g_generation;
+        site.window_start_ms = -1;
+        site.held_back = 0;
+    }
     if (site.window_start_ms < 0 || t - site.window_start_ms >= k_window_ms) {
         site.window_start_ms = t;
         site.passed = 0;
@@ -85,6 +93,7 @@ FLT_API flt_status FLT_CALL flt_log_set_callback(flt_log_callback callback, void
         std::lock_guard<std::mutex> lock(flt::g_m);  // waits for a call in progress
         flt::g_callback = callback;
         flt::g_user = user;
+        ++flt::g_generation;
         flt::g_min_level.store(callback ? level : 0);
         return FLT_OK;
     });

@@ -23,6 +23,7 @@ struct log_site {
     std::int64_t window_start_ms = -1;
     int passed = 0;
     std::uint32_t held_back = 0;
+    std::uint64_t generation = 0;  // the callback installation it counted for
     explicit constexpr log_site(const char *c) : component(c) {}
 };
 

@@ -18,7 +18,7 @@ import threading
 
 from . import capi as _capi
 
-__all__ = ["logger", "drain"]
+__all__ = ["logger", "drain", "install"]
 
 #: The logger the library's messages go to.
 logger = logging.getLogger("flatline")
@@ -45,5 +45,12 @@ def _pump() -> None:
             return
 
 
-_capi.flt_py_log_install()
+def install() -> None:
+    """(Re)installs the library's log callback; done at import. Each
+    installation starts the library's rate limits afresh (at most 5
+    messages per place in 10 s, log.h)."""
+    _capi.flt_py_log_install()
+
+
+install()
 threading.Thread(target=_pump, name="flatline log", daemon=True).start()
