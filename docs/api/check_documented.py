@@ -28,7 +28,7 @@ def has_text(element) -> bool:
 
 
 # Headers whose functions document every parameter and their result.
-PARAMETERS_COMPLETE = {"gauge.h", "genicam.h"}
+PARAMETERS_COMPLETE = {"gauge.h", "genicam.h", "log.h"}
 
 
 def missing_parameters(member) -> list:

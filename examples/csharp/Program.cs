@@ -65,11 +65,11 @@ internal static class Program
         // rigid_motion takes the strip's bounce out of its shape; the gauge
         // keeps each sheet's height map (here: to check it against the
         // truth); rendered frames may wait for the gauge (a camera's cannot:
-        // leave GaugeOverflowWait false and watch GaugeCounter.Dropped).
+        // set GaugeOverflow = GaugeOverflow.Drop and watch GaugeCounter.Dropped).
         using var options = new FlatlineOptions
         {
             RigidMotion = true, FlatZoneWidth = ZoneWidth, GaugeFrameSpacing = 0.8 * FrameSpacing,
-            GaugeOverflowWait = true, GaugeKeepMaps = 1,
+            GaugeOverflow = GaugeOverflow.Wait, GaugeKeepMaps = 1,
         };
         using var gauge = new Gauge(calibration, options);
         var finished = new BlockingCollection<Sheet>();

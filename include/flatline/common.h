@@ -595,9 +595,14 @@ typedef enum flt_option {
      * processing holds (integer 1..4096); it costs width x height x 2 bytes
      * each. Default 64 (32 ms at 2000 frames/s). */
     FLT_OPT_GAUGE_QUEUE_FRAMES = 701,
-    /** "gauge_overflow": what a full queue does with the next frame
-     * (integer): 0 drops it and counts it (a live camera cannot wait), 1
-     * makes the pushing thread wait for room (recorded frames). Default 0. */
+    /** "gauge_overflow" (flt_gauge_overflow, gauge.h): what a full queue
+     * does with the next frame: FLT_GAUGE_OVERFLOW_DROP (0) drops it and
+     * counts it, on the frame's sheet too (a live camera cannot wait);
+     * FLT_GAUGE_OVERFLOW_WAIT (1) makes the pushing thread wait for room;
+     * FLT_GAUGE_OVERFLOW_AUTO (2, the default) waits for pushed frames and
+     * for an attached image sequence or simulator, and drops for an
+     * attached camera (USB3 Vision, GigE Vision): nothing is lost unless
+     * the frames come from a camera that cannot wait. */
     FLT_OPT_GAUGE_OVERFLOW = 702,
     /** "gauge_frame_spacing": the least encoder advance past the furthest
      * frame taken for a frame to be taken, mm; closer frames are a line
@@ -625,9 +630,32 @@ typedef enum flt_option {
      * nothing (the default), 1 the reconstructed height map, 2 that and the
      * measured heights. */
     FLT_OPT_GAUGE_KEEP_MAPS = 708,
-    /** "gauge_sheet_slots": sheets that can exist at once, waiting for the
-     * caller or held by it (integer 1..1024). Default 4. */
+    /** "gauge_sheet_slots": sheets made at create time, which waiting and
+     * held sheets use without allocating (integer 1..1024). Default 4. */
     FLT_OPT_GAUGE_SHEET_SLOTS = 709,
+    /** "gauge_min_coverage": a sheet whose rows measured are less than
+     * this share of the rows its length should hold is flagged
+     * FLT_SHEET_FLAG_INCOMPLETE and not judged (0..1). Default 0.95: a
+     * stretch the reconstructor bridges instead of measuring hides the
+     * waves inside it, so a sheet missing more than 5 % of its rows could
+     * read up to 5 % of its I-Units short. */
+    FLT_OPT_GAUGE_MIN_COVERAGE = 710,
+    /** "gauge_sheet_backlog": sheets that may exist beyond
+     * gauge_sheet_slots (waiting to be read or held), each made when
+     * needed (integer 0..65536). When that many exist, flt_gauge_push_frame
+     * and flt_gauge_push_row refuse the frame (FLT_ERR_BUFFER_FULL) until
+     * the caller reads or frees sheets, and an attached source waits (or
+     * drops, with gauge_overflow dropping); flt_gauge_flush and the end of
+     * a strip never drop one. 0 drops the oldest waiting sheet instead
+     * when every slot is taken (FLT_GAUGE_COUNT_SHEETS_DROPPED), for a
+     * caller who only wants the newest. Default 16 (gauge.h, "Memory",
+     * gives what a sheet costs). */
+    FLT_OPT_GAUGE_SHEET_BACKLOG = 711,
+    /** "gauge_saturation_limit": a sheet whose share of saturated laser
+     * peaks on the strip exceeds this is logged (flatline/log.h) as
+     * overexposed (0..1). Default 0.05: beyond a few percent the
+     * plateaus' middles, not the lines' centres, carry the heights. */
+    FLT_OPT_GAUGE_SATURATION_LIMIT = 712,
 
     /* ---- leveler advisor (flatline/advisor.h) ---- */
     /** "advisor_damping": lambda of the advice, |P G d + gain r|^2 +

@@ -18,5 +18,6 @@
 #include "flatline/genicam.h"
 #include "flatline/verdict.h"
 #include "flatline/advisor.h"
+#include "flatline/log.h"
 
 #endif /* FLATLINE_FLATLINE_H */

@@ -258,6 +258,9 @@ typedef enum flt_shape {
     FLT_SHAPE_MIX = 6,                     /**< several of the above: see the component bits */
     /** Too short a window, no valid fiber, or fewer than 5 valid zones. */
     FLT_SHAPE_UNDETERMINED = 7,
+    /** Not judged: the sheet is incomplete (the gauge, flatline/gauge.h,
+     * FLT_SHEET_FLAG_INCOMPLETE); the flatness metrics never give it. */
+    FLT_SHAPE_NOT_JUDGED = 8,
     FLT_SHAPE_MAX_ENUM_ = 0x7FFFFFFF
 } flt_shape;
 

@@ -98,6 +98,31 @@
  *   per zone) and flt_sheet_height_map(). They arrive in order, either by
  *   polling (flt_gauge_next_sheet) or through a callback
  *   (flt_gauge_set_callback). A NaN value always comes with its flag.
+ *   No finished sheet is ever dropped unless the caller chose it
+ *   (gauge_sheet_backlog = 0): when more sheets exist at once than the
+ *   gauge_sheet_slots made at create time (a caller who reads them late,
+ *   several sheets that finish together at a flush), another is made for
+ *   each. Up to gauge_sheet_backlog of those may exist; then pushed
+ *   frames are refused (FLT_ERR_BUFFER_FULL, nothing taken) until the
+ *   caller reads or frees sheets, and an attached source waits.
+ *   flt_gauge_flush and the end of a strip finish every sheet whatever
+ *   the backlog.
+ *
+ * Lost rows
+ *   Every row a sheet should hold and does not is counted on the sheet
+ *   and flags it (FLT_SHEET_FLAG_LOST_ROWS): frames dropped at a full
+ *   queue (FLT_SHEET_DROPPED), frames the encoder says are missing (a step
+ *   wider than 1.5 frame pitches, FLT_SHEET_MISSING: a camera or a
+ *   recording lost them before the gauge saw them) and lost lines (frames
+ *   inside the strip that did not show it, FLT_SHEET_LOST_LINES). Frames
+ *   lost between two rows are spread evenly over that step, so a burst
+ *   across a cut counts on both sheets for its share. The sheet's coverage
+ *   is the rows that measured the strip over the rows expected (its rows
+ *   plus the frames dropped and missing in its stretch). A sheet whose
+ *   coverage is below gauge_min_coverage (0.95 by default) is
+ *   FLT_SHEET_FLAG_INCOMPLETE: it is not given a shape class
+ *   (FLT_SHAPE_NOT_JUDGED) or a verdict (FLT_VERDICT_NOT_JUDGED), as if
+ *   it were whole; its values describe the rows it has.
  *
  * Verdicts and coil statistics
  *   With a rule set (flt_gauge_set_rules, flatline/verdict.h) every
@@ -111,7 +136,13 @@
  *   measured strip width (FLT_SHEET_STRIP_WIDTH); they choose each rule's
  *   band. flt_sheet_verdict() gives the sheet's rules and verdict as
  *   read-only handles for flt_rules_rule() and flt_verdict_get().
- *   Per coil the gauge counts the sheets judged, passed and failed, and
+ *   A sheet's verdict (FLT_SHEET_VERDICT) is FAIL when a rule failed,
+ *   PASS only when every rule judged it and it passed each, and
+ *   FLT_VERDICT_NOT_JUDGED otherwise: a rule whose band does not cover its
+ *   thickness and width (NO_BAND), a measure that is missing
+ *   (NOT_MEASURED), or an incomplete sheet. A sheet no rule could judge is
+ *   never counted as passed.
+ *   Per coil the gauge counts the sheets passed, failed and not judged, and
  *   per rule the outcomes and the distribution of the worst values: min,
  *   max, mean, where the largest was, and a histogram of worst / limit in
  *   FLT_COIL_HISTOGRAM_BINS bins of a tenth of the limit (no percentiles:
@@ -125,19 +156,34 @@
  *   the reconstructor and the flatness metrics take the rows in order, one
  *   worker at a time, and a finished sheet is evaluated while the next one
  *   is being built. Between acquisition and processing sits a queue of
- *   gauge_queue_frames frames: when it is full, a frame is dropped and
- *   counted (gauge_overflow = 0, for a live camera), or the pushing thread
- *   waits for room (gauge_overflow = 1, for recorded frames). Results do
- *   not depend on the number of workers: with no frame dropped, every
- *   sheet is identical bit for bit (tests/c/test_gauge.c checks 0, 1 and 2
- *   workers).
- *   The calls of one gauge may come from any threads, except that frames
- *   (push_frame, push_row, or the attached source) must come from one
- *   thread at a time, in order; cut() may come from another thread.
- *   The callback runs on a gauge thread; it must not call
- *   flt_gauge_flush, flt_gauge_stop, flt_gauge_next_sheet or
- *   flt_gauge_set_callback of its gauge (FLT_ERR_STATE) nor
- *   flt_gauge_destroy (ignored there).
+ *   gauge_queue_frames frames: when it is full, the thread that delivers a
+ *   frame waits for room (frames pushed by the caller, an attached image
+ *   sequence or simulator), or, for an attached camera, which cannot wait,
+ *   the frame is dropped, counted and flagged on its sheet
+ *   (gauge_overflow, flt_gauge_overflow: "auto" by default; "drop" and
+ *   "wait" for every source). Results do not depend on the number of
+ *   workers: with no frame dropped, every sheet is identical bit for bit
+ *   (tests/c/test_gauge.c checks 0, 1 and 2 workers).
+ *   The calls of one gauge may come from any threads. Frames come from one
+ *   producer at a time, in order: push_frame and push_row from a thread
+ *   while another thread pushes or flushes return FLT_ERR_STATE at once
+ *   (nothing taken; the gauge stays usable), and so do they while an
+ *   attached source acquires. flt_gauge_flush and flt_gauge_start wait
+ *   for a push in progress to end. cut() may come from any thread.
+ *
+ * Inside the callback
+ *   The callback runs on a gauge thread (or the thread whose push, cut or
+ *   flush finished the sheet, with 0 workers), and no call of its own
+ *   gauge made there waits for itself or hangs. There flt_gauge_cut (the
+ *   cut is queued: it takes effect with the next frame),
+ *   flt_gauge_count, flt_gauge_get_option, flt_gauge_set_rules and
+ *   flt_gauge_coil_stats work; flt_gauge_push_frame, flt_gauge_push_row,
+ *   flt_gauge_flush, flt_gauge_wait, flt_gauge_attach_source,
+ *   flt_gauge_start, flt_gauge_stop, flt_gauge_next_sheet and
+ *   flt_gauge_set_callback return FLT_ERR_STATE (the message says why);
+ *   flt_gauge_destroy is ignored (it would wait for itself).
+ *   tests/c/test_gauge.c calls each of them from the callback with 0, 1
+ *   and 2 workers.
  *
  * Memory
  *   Everything is allocated by flt_gauge_create() (and flt_gauge_set_rules()
@@ -145,12 +191,18 @@
  *   workers' extractors when the bands are automatic (when the first frame
  *   has shown the two lines) and the flatness metrics' column scratch (at
  *   the first sheet longer than any before). Frames, cuts and sheets
- *   allocate nothing (tests/c/test_gauge_alloc.c counts). The big parts, with K fibers and F =
- * gauge_frame_spacing: the frame queue, gauge_queue_frames x width x height x 2 bytes; the
- *   reconstructor, about 9 bytes x K x its latency / F (rigid_motion and
- *   robust: about 17 m of strip); two sheet buffers and the sheet slots'
- *   maps, 9 (17 with measured heights) bytes x K x gauge_max_sheet_length
- *   / F each.
+ *   allocate nothing (tests/c/test_gauge_alloc.c counts) while no more
+ *   than gauge_sheet_slots sheets exist at once. The big parts, with K
+ *   fibers, Z zones and F = gauge_frame_spacing: the frame queue,
+ *   gauge_queue_frames x width x height x 2 bytes; the reconstructor,
+ *   about 9 bytes x K x its latency / F (rigid_motion and robust: about 17
+ *   m of strip); two sheet buffers and the sheet slots' maps, 9 (17 with
+ *   measured heights) bytes x K x gauge_max_sheet_length / F each. A
+ *   sheet made beyond the slots costs 8 x (8 K + 4 Z) bytes, and with
+ *   gauge_keep_maps 9 (17) bytes x K x its own rows; at most
+ *   gauge_sheet_backlog of them exist while frames are pushed, and a flush
+ *   adds at most the sheets in flight (the cuts waiting, at most 256, and
+ *   the strip the reconstructor holds over gauge_max_sheet_length).
  */
 #ifndef FLATLINE_GAUGE_H
 #define FLATLINE_GAUGE_H
@@ -253,6 +305,33 @@ typedef enum flt_sheet_value {
      * (flt_sheet_verdict has each rule's result). */
     FLT_SHEET_RULES = 36,
     FLT_SHEET_RULES_FAILED = 37, /**< rules failed (FLT_VERDICT_FAIL) */
+    /** The sheet's coverage, 0..1: FLT_SHEET_ROWS_MEASURED over
+     * FLT_SHEET_ROWS_EXPECTED (0 for a sheet expected to hold no row).
+     * Below gauge_min_coverage the sheet is FLT_SHEET_FLAG_INCOMPLETE (see
+     * "Lost rows"). */
+    FLT_SHEET_COVERAGE = 38,
+    /** The rows its length should hold: its rows, and the frames lost
+     * between them and at its ends (FLT_SHEET_DROPPED + FLT_SHEET_MISSING). */
+    FLT_SHEET_ROWS_EXPECTED = 39,
+    /** Its rows that measured the strip (FLT_SHEET_ROWS less
+     * FLT_SHEET_LOST_LINES). */
+    FLT_SHEET_ROWS_MEASURED = 40,
+    /** Rows inside the strip whose frame did not show it (lost lines: the
+     * reconstructor bridges them). */
+    FLT_SHEET_LOST_LINES = 41,
+    /** Frames missing by the encoder: a step between two frames wider than
+     * 1.5 times the recent frame pitch counts the frames that should lie
+     * in it (a camera or a recording that lost them before the gauge). */
+    FLT_SHEET_MISSING = 42,
+    /** The sheet's verdict (an flt_verdict_state, flatline/verdict.h):
+     * FLT_VERDICT_FAIL when a rule failed; FLT_VERDICT_PASS when every
+     * rule was judged and passed; else FLT_VERDICT_NOT_JUDGED (no rules,
+     * a rule whose band does not cover the sheet or whose measure is
+     * missing, or an incomplete sheet): never counted as passed. */
+    FLT_SHEET_VERDICT = 43,
+    /** Laser peaks found on the strip over the sheet's rows (both lasers;
+     * 0 for pushed rows): FLT_SHEET_SATURATED's denominator. */
+    FLT_SHEET_PEAKS = 44,
     /** Not a key: keeps the type int-sized whatever is added. */
     FLT_SHEET_VALUE_MAX_ENUM_ = 0x7FFFFFFF
 } flt_sheet_value;
@@ -308,8 +387,33 @@ enum {
     FLT_SHEET_FLAG_NO_WAVE = 64,
     /** No row: every result is NaN and flagged (two cuts with no frame
      * between them). */
-    FLT_SHEET_FLAG_EMPTY = 128
+    FLT_SHEET_FLAG_EMPTY = 128,
+    /** Its coverage (FLT_SHEET_COVERAGE) is below gauge_min_coverage: its
+     * shape is FLT_SHAPE_NOT_JUDGED and its verdict FLT_VERDICT_NOT_JUDGED
+     * ("not judged: incomplete"); its other values describe the rows it
+     * has. */
+    FLT_SHEET_FLAG_INCOMPLETE = 256,
+    /** It lost rows: frames dropped at a full queue, missing by the
+     * encoder, or lost lines (FLT_SHEET_DROPPED, _MISSING, _LOST_LINES). */
+    FLT_SHEET_FLAG_LOST_ROWS = 512
 };
+
+/** What a full frame queue does (option gauge_overflow). */
+typedef enum flt_gauge_overflow {
+    /** Drop the frame, count it (FLT_GAUGE_COUNT_DROPPED) and flag the
+     * sheet it belonged to (FLT_SHEET_FLAG_LOST_ROWS). */
+    FLT_GAUGE_OVERFLOW_DROP = 0,
+    /** Make the thread that delivers the frame wait for room. */
+    FLT_GAUGE_OVERFLOW_WAIT = 1,
+    /** Wait for frames pushed by the caller and for an attached image
+     * sequence or simulator; drop for an attached camera. The default. */
+    FLT_GAUGE_OVERFLOW_AUTO = 2,
+    FLT_GAUGE_OVERFLOW_MAX_ENUM_ = 0x7FFFFFFF
+} flt_gauge_overflow;
+
+/** flt_gauge_set_rules()'s width_mm for "each sheet's measured strip
+ * width" (FLT_SHEET_STRIP_WIDTH). */
+#define FLT_GAUGE_WIDTH_MEASURED 0.0
 
 /** Which coil's statistics flt_gauge_coil_stats() reads. */
 typedef enum flt_coil {
@@ -332,11 +436,13 @@ typedef enum flt_coil {
 typedef enum flt_coil_value {
     /** The coil's number (FLT_SHEET_COIL; 0: no sheet judged yet). */
     FLT_COIL_NUMBER = 0,
-    /** Sheets judged in the coil. */
+    /** Sheets of the coil evaluated under the rules: judged or not. */
     FLT_COIL_SHEETS = 1,
-    /** Sheets that failed no rule ... */
+    /** Sheets whose verdict (FLT_SHEET_VERDICT) is PASS: every rule judged
+     * them and they passed every one ... */
     FLT_COIL_SHEETS_PASSED = 2,
-    /** ... and sheets that failed at least one. */
+    /** ... FAIL: they failed at least one rule (FLT_COIL_SHEETS_NOT_JUDGED
+     * are the rest). */
     FLT_COIL_SHEETS_FAILED = 3,
     /** 1 once the coil's last sheet was judged, else 0. */
     FLT_COIL_FINISHED = 4,
@@ -344,7 +450,8 @@ typedef enum flt_coil_value {
      * when the coil's statistics began). */
     FLT_COIL_RULES = 5,
     /** This rule's outcomes over the coil's sheets (FLT_VERDICT_PASS,
-     * _FAIL, _NO_BAND, _NOT_MEASURED): they add up to FLT_COIL_SHEETS. */
+     * _FAIL, _NO_BAND, _NOT_MEASURED, and FLT_COIL_RULE_NOT_JUDGED for
+     * incomplete sheets): they add up to FLT_COIL_SHEETS. */
     FLT_COIL_RULE_PASSED = 6,
     FLT_COIL_RULE_FAILED = 7,       /**< sheets that failed the rule */
     FLT_COIL_RULE_NO_BAND = 8,      /**< sheets no band of the rule covers */
@@ -361,8 +468,16 @@ typedef enum flt_coil_value {
     FLT_COIL_WORST_S = 15, /**< s of the largest, mm */
     /** The first of FLT_COIL_HISTOGRAM_BINS counts (worst / limit). */
     FLT_COIL_HISTOGRAM = 16,
+    /** Sheets not judged: their verdict is FLT_VERDICT_NOT_JUDGED (a rule
+     * whose band does not cover them or whose measure is missing, and no
+     * rule failed; or incomplete). Never counted as passed. */
+    FLT_COIL_SHEETS_NOT_JUDGED = 16 + FLT_COIL_HISTOGRAM_BINS,
+    /** Sheets judged: passed + failed. */
+    FLT_COIL_SHEETS_JUDGED = 17 + FLT_COIL_HISTOGRAM_BINS,
+    /** This rule's FLT_VERDICT_NOT_JUDGED outcomes (incomplete sheets). */
+    FLT_COIL_RULE_NOT_JUDGED = 18 + FLT_COIL_HISTOGRAM_BINS,
     /** The number of values (the array's size). */
-    FLT_COIL_VALUES = 16 + FLT_COIL_HISTOGRAM_BINS,
+    FLT_COIL_VALUES = 19 + FLT_COIL_HISTOGRAM_BINS,
     FLT_COIL_VALUE_MAX_ENUM_ = 0x7FFFFFFF
 } flt_coil_value;
 
@@ -384,8 +499,8 @@ typedef enum flt_gauge_counter {
     FLT_GAUGE_COUNT_STRIPS = 6,
     /** Sheets finished. */
     FLT_GAUGE_COUNT_SHEETS = 7,
-    /** Sheets lost because every sheet slot was taken (the caller polls too
-     * rarely or holds too many sheets). */
+    /** Sheets dropped because every sheet slot was taken: only with
+     * gauge_sheet_backlog = 0 (else a sheet is never dropped). */
     FLT_GAUGE_COUNT_SHEETS_DROPPED = 8,
     /** Cuts given, and those ignored (at or before the open sheet's start). */
     FLT_GAUGE_COUNT_CUTS = 9,
@@ -400,6 +515,17 @@ typedef enum flt_gauge_counter {
     FLT_GAUGE_COUNT_ACQUIRING = 14,
     /** Sheets waiting for flt_gauge_next_sheet(). */
     FLT_GAUGE_COUNT_SHEETS_WAITING = 15,
+    /** Sheets made beyond gauge_sheet_slots (each allocated when needed). */
+    FLT_GAUGE_COUNT_SHEETS_GROWN = 16,
+    /** Sheets flagged FLT_SHEET_FLAG_INCOMPLETE. */
+    FLT_GAUGE_COUNT_SHEETS_INCOMPLETE = 17,
+    /** Frames missing by the encoder (FLT_SHEET_MISSING). */
+    FLT_GAUGE_COUNT_MISSING = 18,
+    /** Frames inside a strip that did not show it (FLT_SHEET_LOST_LINES). */
+    FLT_GAUGE_COUNT_LOST_LINES = 19,
+    /** Frames and rows push_frame / push_row refused because
+     * gauge_sheet_slots + gauge_sheet_backlog sheets existed. */
+    FLT_GAUGE_COUNT_REFUSED = 20,
     FLT_GAUGE_COUNT_MAX_ENUM_ = 0x7FFFFFFF
 } flt_gauge_counter;
 
@@ -467,11 +593,15 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_get_option(const flt_gauge *
  * @param encoder_mm    the strip position of the frame, mm (finite, at
  *                      most 1e12 in magnitude).
  * @return FLT_OK also when the frame was skipped (line stop, reversal) or
- *         dropped (full queue): the counters say so. FLT_ERR_INVALID_ARGUMENT
- *         for a frame the gauge cannot take (nothing is counted);
- *         FLT_ERR_STATE while an attached source is acquiring; a failure
- *         of processing (which stops the gauge) is returned by every later
- *         call. */
+ *         dropped (full queue, gauge_overflow "drop"): the counters say
+ *         so. FLT_ERR_INVALID_ARGUMENT for a frame the gauge cannot take
+ *         (nothing is counted); FLT_ERR_BUFFER_FULL when
+ *         gauge_sheet_slots + gauge_sheet_backlog sheets exist (read or
+ *         free sheets; the frame was not taken: push it again);
+ *         FLT_ERR_STATE while an attached source is acquiring, while
+ *         another thread pushes or flushes, or from inside the callback
+ *         (nothing taken); a failure of processing (which stops the gauge)
+ *         is returned by every later call. */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_push_frame(flt_gauge *gauge, const void *frame,
                                                                flt_pixel_format format,
                                                                uint32_t width, uint32_t height,
@@ -498,7 +628,7 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_push_row(flt_gauge *gauge, d
 /** The shear cut the strip at encoder_mm (see "Cuts"): finite, at most
  * 1e12 in magnitude, beyond the previous cut unless the encoder went back
  * since. FLT_ERR_BUFFER_FULL when 256 cuts wait for strip (the strip has
- * not reached them).
+ * not reached them). Any thread, the callback too (queued there).
  * @param gauge the gauge.
  * @param encoder_mm where the shear cut, mm of encoder position.
  * @return FLT_OK; FLT_ERR_BUFFER_FULL as above; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong
@@ -518,7 +648,8 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_cut(flt_gauge *gauge, double
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_flush(flt_gauge *gauge);
 
 /** Attaches a frame source (borrowed: it must outlive the gauge or be
- * detached with NULL first). FLT_ERR_STATE while acquiring.
+ * detached with NULL first). FLT_ERR_STATE while acquiring or from inside
+ * the callback.
  * @param gauge the gauge.
  * @param source the source, or NULL to detach it.
  * @return FLT_OK; FLT_ERR_STATE while acquiring; FLT_ERR_INVALID_ARGUMENT
@@ -531,8 +662,9 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_attach_source(flt_gauge *gau
  * thread, which takes every frame the source delivers as push_frame would
  * (frames the source dropped on the way are counted by the source,
  * flt_source_count). The thread ends by itself at the end of an image
- * sequence or when the source fails. FLT_ERR_STATE without a source or
- * while acquiring; the source's own error if it does not start.
+ * sequence or when the source fails. FLT_ERR_STATE without a source,
+ * while acquiring or from inside the callback; the source's own error if
+ * it does not start.
  * @param gauge the gauge.
  * @return FLT_OK; FLT_ERR_STATE as above; the source's status if it
  *         does not start.
@@ -551,15 +683,48 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_start(flt_gauge *gauge);
  */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_stop(flt_gauge *gauge);
 
+/** flt_gauge_wait()'s timeout for "as long as it takes". */
+#define FLT_GAUGE_WAIT_FOREVER UINT32_MAX
+
+/** Runs an attached, started finite source to its end: waits until the
+ * acquisition ends by itself (the end of an image sequence, or a failure
+ * of the source), then ends the input as flt_gauge_stop() and
+ * flt_gauge_flush() do, and returns when every sheet is out (delivered to
+ * the callback or waiting for flt_gauge_next_sheet). With a camera, which
+ * never ends, it returns FLT_ERR_TIMEOUT after timeout_ms and changes
+ * nothing: the acquisition goes on (call again, or flt_gauge_stop).
+ * Without a callback, read the sheets between calls with a short
+ * timeout (the sheets waiting count towards gauge_sheet_backlog, and the
+ * source waits while the backlog is full):
+ *
+ *     flt_gauge_attach_source(gauge, images);
+ *     flt_gauge_start(gauge);
+ *     flt_status st;
+ *     while ((st = flt_gauge_wait(gauge, 100)) == FLT_ERR_TIMEOUT)
+ *         take_sheets(gauge);                  // flt_gauge_next_sheet(gauge, 0, ...)
+ *     take_sheets(gauge);                      // the rest, after the flush
+ *
+ * @param gauge the gauge.
+ * @param timeout_ms how long to wait for the source's end, ms
+ *        (FLT_GAUGE_WAIT_FOREVER: as long as it takes); the flush after it
+ *        is waited for whatever the timeout.
+ * @return FLT_OK; FLT_ERR_TIMEOUT when the source still delivers;
+ *         FLT_ERR_STATE when no acquisition was started (flt_gauge_start)
+ *         or from inside the callback; the error that ended the
+ *         acquisition (e.g. FLT_ERR_DEVICE for an unplugged camera) after
+ *         its sheets were finished all the same; a failure of processing.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_wait(flt_gauge *gauge, uint32_t timeout_ms);
+
 /* ---------------------------------------------------------------------- */
 /* Output                                                                  */
 /* ---------------------------------------------------------------------- */
 
 /** Takes the next finished sheet, waiting up to timeout_ms for one.
  * *out is the sheet (the caller owns it: flt_sheet_destroy), or NULL when
- * none came in time (FLT_OK). At most gauge_sheet_slots sheets exist at
- * once (waiting and held together): when the next sheet finds none free,
- * the oldest waiting one is dropped (FLT_GAUGE_COUNT_SHEETS_DROPPED).
+ * none came in time (FLT_OK). Sheets wait until they are taken (see
+ * "Sheets"; with gauge_sheet_backlog = 0 the oldest waiting one is dropped
+ * when every slot is taken, FLT_GAUGE_COUNT_SHEETS_DROPPED).
  * FLT_ERR_STATE while a callback is set.
  * @param gauge the gauge.
  * @param timeout_ms how long to wait, ms (0: do not wait).
@@ -606,10 +771,13 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_count(const flt_gauge *gauge
  * @param gauge the gauge.
  * @param rules the rule set (flatline/verdict.h), or NULL.
  * @param thickness_mm the sheets' thickness, mm (> 0, <= 1000): chooses
- *        each rule's band, with the width.
- * @param width_mm the sheets' nominal width, mm (> 0, <= 100000), or 0 for
- *        each sheet's measured strip width (FLT_SHEET_STRIP_WIDTH; a sheet
- *        without it is NOT_MEASURED by every rule).
+ *        each rule's band, with the width. Required: there is no default
+ *        thickness (a wrong one puts every sheet outside the bands, where
+ *        it is not judged).
+ * @param width_mm the sheets' nominal width, mm (> 0, <= 100000), or
+ *        FLT_GAUGE_WIDTH_MEASURED (0) for each sheet's measured strip width
+ *        (FLT_SHEET_STRIP_WIDTH; a sheet without it is NOT_MEASURED by every
+ *        rule).
  * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL gauge, rules that are
  *         not a live handle, or a thickness or width out of range (the
  *         rules in force stay).

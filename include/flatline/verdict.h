@@ -103,6 +103,11 @@ typedef enum flt_verdict_state {
     /** The measure is missing: no line of the map has two samples, or the
      * value was not given (NaN). */
     FLT_VERDICT_NOT_MEASURED = 3,
+    /** Not judged: the gauge's sheet is incomplete (flatline/gauge.h,
+     * FLT_SHEET_FLAG_INCOMPLETE); also a whole sheet's verdict
+     * (FLT_SHEET_VERDICT) when a rule could not judge it.
+     * flt_verdict_evaluate() never gives it to a rule. */
+    FLT_VERDICT_NOT_JUDGED = 4,
     FLT_VERDICT_STATE_MAX_ENUM_ = 0x7FFFFFFF
 } flt_verdict_state;
 

@@ -7,6 +7,7 @@
 
 #include "core/error.hpp"
 #include "flatline/flatness.h"
+#include "flatline/gauge.h"
 #include "flatline/recon.h"
 #include "flatline/sim.h"
 #include "flatline/source.h"
@@ -99,7 +100,7 @@ const option_spec k_options[] = {
     // the gauge
     {FLT_OPT_GAUGE_WORKERS, "gauge_workers", 0.0, 64.0, 2.0, true},
     {FLT_OPT_GAUGE_QUEUE_FRAMES, "gauge_queue_frames", 1.0, 4096.0, 64.0, true},
-    {FLT_OPT_GAUGE_OVERFLOW, "gauge_overflow", 0.0, 1.0, 0.0, true},
+    {FLT_OPT_GAUGE_OVERFLOW, "gauge_overflow", 0.0, 2.0, 2.0, true},
     {FLT_OPT_GAUGE_FRAME_SPACING, "gauge_frame_spacing", 1.0e-3, 1.0e4, 1.0, false},
     {FLT_OPT_GAUGE_REVERSAL_LENGTH, "gauge_reversal_length", 0.0, 1.0e9, 500.0, false},
     {FLT_OPT_GAUGE_STRIP_MIN_WIDTH, "gauge_strip_min_width", 0.0, 1.0e6, 100.0, false},
@@ -107,6 +108,9 @@ const option_spec k_options[] = {
     {FLT_OPT_GAUGE_MAX_SHEET_LENGTH, "gauge_max_sheet_length", 1.0, 1.0e7, 6000.0, false},
     {FLT_OPT_GAUGE_KEEP_MAPS, "gauge_keep_maps", 0.0, 2.0, 0.0, true},
     {FLT_OPT_GAUGE_SHEET_SLOTS, "gauge_sheet_slots", 1.0, 1024.0, 4.0, true},
+    {FLT_OPT_GAUGE_MIN_COVERAGE, "gauge_min_coverage", 0.0, 1.0, 0.95, false},
+    {FLT_OPT_GAUGE_SHEET_BACKLOG, "gauge_sheet_backlog", 0.0, 65536.0, 16.0, true},
+    {FLT_OPT_GAUGE_SATURATION_LIMIT, "gauge_saturation_limit", 0.0, 1.0, 0.05, false},
     // simulated sensor: the line in the field (appended)
     {FLT_OPT_SIM_SURROUND, "sim_surround", 0.0, 2.0, 0.0, true},
     {FLT_OPT_SIM_STRIP_OFFSET, "sim_strip_offset", -1.0e5, 1.0e5, 0.0, false},
@@ -166,6 +170,9 @@ const option_choice k_choices[] = {
     {FLT_OPT_FLAT_DRIVE_SIDE, "high_x", FLT_SIDE_HIGH_X},
     {FLT_OPT_FLAT_ZONES_ON, "strip", FLT_ZONES_ON_STRIP},
     {FLT_OPT_FLAT_ZONES_ON, "grid", FLT_ZONES_ON_GRID},
+    {FLT_OPT_GAUGE_OVERFLOW, "drop", FLT_GAUGE_OVERFLOW_DROP},
+    {FLT_OPT_GAUGE_OVERFLOW, "wait", FLT_GAUGE_OVERFLOW_WAIT},
+    {FLT_OPT_GAUGE_OVERFLOW, "auto", FLT_GAUGE_OVERFLOW_AUTO},
 };
 
 // The components by the hundreds of their keys (common.h).

@@ -451,6 +451,8 @@ FLT_API const char *FLT_CALL flt_shape_string(flt_shape shape) {
             return "mix";
         case FLT_SHAPE_UNDETERMINED:
             return "undetermined";
+        case FLT_SHAPE_NOT_JUDGED:
+            return "not judged: incomplete";
         default:
             return "unknown";
     }

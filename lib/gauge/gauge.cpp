@@ -12,6 +12,7 @@
 #include <limits>
 
 #include "core/error.hpp"
+#include "core/log.hpp"
 #include "core/number_text.hpp"
 #include "flatline/extractor.h"
 #include "flatline/source.h"
@@ -120,6 +121,20 @@ sheet_pool::~sheet_pool() {
         delete s;
 }
 
+void sheet_pool::give_back(flt_sheet *sheet) {
+    sheet->magic = 0;
+    sheet->borrowed = false;
+    out.fetch_sub(1);
+    if (!sheet->grown) {
+        std::lock_guard<std::mutex> lock(m);
+        if (alive) {
+            free.push_back(sheet);  // capacity reserved: no allocation
+            return;
+        }
+    }
+    delete sheet;  // made beyond the slots, or the gauge is gone
+}
+
 // ---------------------------------------------------------------- create
 
 gauge::gauge(const flt_calib *calib, const flt_options *options) {
@@ -146,7 +161,10 @@ void gauge::init(const flt_calib *calib, const flt_options *options) {
     flt_options &eff = effective_;
     cfg_.workers = unsigned(option_value(&eff, FLT_OPT_GAUGE_WORKERS));
     cfg_.queue_frames = std::size_t(option_value(&eff, FLT_OPT_GAUGE_QUEUE_FRAMES));
-    cfg_.overflow_wait = option_value(&eff, FLT_OPT_GAUGE_OVERFLOW) != 0.0;
+    cfg_.overflow = int(option_value(&eff, FLT_OPT_GAUGE_OVERFLOW));
+    cfg_.min_coverage = option_value(&eff, FLT_OPT_GAUGE_MIN_COVERAGE);
+    cfg_.sheet_backlog = std::size_t(option_value(&eff, FLT_OPT_GAUGE_SHEET_BACKLOG));
+    cfg_.saturation_limit = option_value(&eff, FLT_OPT_GAUGE_SATURATION_LIMIT);
     cfg_.frame_spacing = option_value(&eff, FLT_OPT_GAUGE_FRAME_SPACING);
     cfg_.reversal_length = option_value(&eff, FLT_OPT_GAUGE_REVERSAL_LENGTH);
     cfg_.strip_min_width = option_value(&eff, FLT_OPT_GAUGE_STRIP_MIN_WIDTH);
@@ -440,16 +458,23 @@ void gauge::release_parts() noexcept {
 // ---------------------------------------------------------------- failures
 
 void gauge::record_failure(flt_status status, const char *message) {
-    std::lock_guard<std::mutex> lock(m_);
-    if (!failed_) {
-        failed_ = true;
-        failure_status_ = status;
-        failure_message_ = message;
+    bool first = false;
+    {
+        std::lock_guard<std::mutex> lock(m_);
+        if (!failed_) {
+            failed_ = true;
+            first = true;
+            failure_status_ = status;
+            failure_message_ = message;
+        }
+        work_cv_.notify_all();
+        room_cv_.notify_all();
+        idle_cv_.notify_all();
+        sheet_cv_.notify_all();
     }
-    work_cv_.notify_all();
-    room_cv_.notify_all();
-    idle_cv_.notify_all();
-    sheet_cv_.notify_all();
+    if (first)
+        FLT_LOG(FLT_LOG_ERROR, "gauge", "the gauge stopped processing (%s): %s",
+                flt_status_string(status), message);
 }
 
 flt_status gauge::failure(const char *fn) const {
@@ -497,6 +522,7 @@ void gauge::extract(frame_slot &slot, const void *pixels, flt_pixel_format forma
             flt_extractor_saturation(extractor, 2, &peaks, &saturated, nullptr) != FLT_OK)
             throw error(FLT_ERR_INTERNAL, flt_last_error_message());
         slot.saturated = std::uint32_t(saturated);
+        slot.peaks = std::uint32_t(peaks);
         return;
     }
     // A frame without the two lines while the band is automatic is a frame
@@ -510,7 +536,7 @@ void gauge::extract(frame_slot &slot, const void *pixels, flt_pixel_format forma
     std::fill(slot.flags.begin(), slot.flags.end(), std::uint8_t(FLT_FLAG_INVALID_INPUT));
     slot.left = slot.right = k_nan;
     slot.strip_flags = FLT_STRIP_NONE | FLT_STRIP_LEFT_OPEN | FLT_STRIP_RIGHT_OPEN;
-    slot.saturated = 0;
+    slot.saturated = slot.peaks = 0;
     clear_error();
 }
 
@@ -538,6 +564,10 @@ void gauge::resolve_band(frame_slot &slot) {
     for (flt_extractor *&ex : extractors_)
         check(flt_extractor_create(calib_for_extractors_, extract_options_, &ex));
     band_known_ = true;
+    FLT_LOG(FLT_LOG_INFO, "gauge",
+            "laser bands found: laser 0 in rows %u..%u, laser 1 in rows %u..%u; every frame is "
+            "extracted with them",
+            first[0], first[0] + rows[0] - 1, first[1], first[1] + rows[1] - 1);
 }
 
 void gauge::fill_slot(frame_slot &slot, const gauge_input &in) const {
@@ -556,7 +586,7 @@ void gauge::fill_slot(frame_slot &slot, const gauge_input &in) const {
         // A row from the caller says nothing of the strip's edges.
         slot.left = slot.right = k_nan;
         slot.strip_flags = 0;
-        slot.saturated = 0;
+        slot.saturated = slot.peaks = 0;
         return;
     }
     if (cfg_.workers == 0)
@@ -570,10 +600,72 @@ void gauge::fill_slot(frame_slot &slot, const gauge_input &in) const {
     slot.stride = row_bytes;
 }
 
+flt_status gauge::push(const char *fn, const gauge_input &in) {
+    // A frame from inside the callback would wait for the thread that runs
+    // the callback (its own queue, its own sequencer): refused, not hung.
+    if (in_gauge_callback(this))
+        return fail(FLT_ERR_STATE,
+                    "%s: called from inside the gauge's callback (push frames from another "
+                    "thread; flt_gauge_cut works there)",
+                    fn);
+    std::unique_lock<std::mutex> producer(produce_m_, std::try_to_lock);
+    if (!producer.owns_lock())
+        return fail(FLT_ERR_STATE,
+                    "%s: another thread is pushing frames or flushing this gauge: frames come "
+                    "from one thread at a time, in order (nothing was taken)",
+                    fn);
+    if (acquiring())
+        return fail(FLT_ERR_STATE,
+                    "%s: the attached source is acquiring: frames come from it "
+                    "(flt_gauge_stop first)",
+                    fn);
+    if (flt_status st = failure(fn))
+        return st;
+    take(in, false);
+    return FLT_OK;
+}
+
+bool gauge::backlog_full() const {
+    return cfg_.sheet_backlog > 0 && pool_->out.load() >= cfg_.sheet_slots + cfg_.sheet_backlog;
+}
+
+std::uint32_t gauge::frames_missing(double advance) {
+    // The pitch: the median of the last advances that were no gap. A step
+    // wider than 1.5 pitches holds round(step / pitch) - 1 frames that
+    // never came; it is not a pitch. Until 4 advances are known, none.
+    const std::size_t n = std::min(n_advances_, k_pitch_window);
+    if (n >= 4) {
+        double sorted[k_pitch_window];
+        std::copy(advances_, advances_ + n, sorted);
+        std::nth_element(sorted, sorted + n / 2, sorted + n);
+        const double pitch = sorted[n / 2];
+        if (advance > 1.5 * pitch) {
+            // A jump the reconstructor cannot bridge starts a new strip:
+            // nothing is missing from a sheet then.
+            if (advance > max_jump_)
+                return 0;
+            return std::uint32_t(std::min(1.0e6, std::floor(advance / pitch + 0.5) - 1.0));
+        }
+    }
+    advances_[n_advances_ % k_pitch_window] = advance;
+    ++n_advances_;
+    return 0;
+}
+
 void gauge::take(const gauge_input &in, bool from_acquisition) {
     std::unique_lock<std::mutex> lock(m_);
     if (failed_)
         throw error(failure_status_, failure_message_.c_str());
+    if (!from_acquisition && backlog_full()) {
+        ++n_refused_;
+        char why[400];
+        format_c(why, sizeof why,
+                 "%zu sheets wait to be read or are held (gauge_sheet_slots %zu + "
+                 "gauge_sheet_backlog %zu): read them (flt_gauge_next_sheet) and free them "
+                 "(flt_sheet_destroy), or set a callback; the frame was not taken, push it again",
+                 pool_->out.load(), cfg_.sheet_slots, cfg_.sheet_backlog);
+        throw error(FLT_ERR_BUFFER_FULL, why);
+    }
     ++n_frames_;
     // Line stops and reversals, from the encoder alone (in frame order).
     const double e = in.encoder_mm;
@@ -591,15 +683,37 @@ void gauge::take(const gauge_input &in, bool from_acquisition) {
             has_cut_floor_ = false;
         }
     }
+    if (has_furthest_ && !pending_new_strip_)
+        pending_missing_ += frames_missing(e - furthest_);
     has_furthest_ = true;
     furthest_ = e;
-    while (head_ - tail_ >= slots_.size()) {
-        if (!cfg_.overflow_wait) {
+    // A full queue (or, for an attached source, a full sheet backlog): the
+    // frame waits for room, or is dropped where the caller chose it or a
+    // camera cannot wait.
+    const bool drop =
+        cfg_.overflow == FLT_GAUGE_OVERFLOW_DROP ||
+        (cfg_.overflow == FLT_GAUGE_OVERFLOW_AUTO && from_acquisition && source_live_);
+    for (;;) {
+        const bool queue_full = head_ - tail_ >= slots_.size();
+        const bool sheets_full = from_acquisition && backlog_full();
+        if (!queue_full && !sheets_full)
+            break;
+        if (drop) {
             ++n_dropped_;
             ++pending_dropped_;
+            const unsigned long long dropped = n_dropped_;
+            lock.unlock();
+            FLT_LOG(FLT_LOG_WARNING, "gauge",
+                    "frame at encoder %.1f mm dropped: %s (gauge_overflow drops; %llu dropped so "
+                    "far)",
+                    e, queue_full ? "the frame queue is full" : "gauge_sheet_backlog is reached",
+                    dropped);
             return;
         }
-        room_cv_.wait(lock);
+        if (queue_full)
+            room_cv_.wait(lock);
+        else  // sheets are freed by the caller, who tells nobody: look again
+            room_cv_.wait_for(lock, std::chrono::milliseconds(10));
         if (failed_)
             throw error(failure_status_, failure_message_.c_str());
         if (stopping_ || (from_acquisition && acquisition_stop_))
@@ -610,8 +724,9 @@ void gauge::take(const gauge_input &in, bool from_acquisition) {
     slot.new_strip = pending_new_strip_;
     slot.skipped_before = pending_skipped_;
     slot.dropped_before = pending_dropped_;
+    slot.missing_before = pending_missing_;
     pending_new_strip_ = false;
-    pending_skipped_ = pending_dropped_ = 0;
+    pending_skipped_ = pending_dropped_ = pending_missing_ = 0;
     lock.unlock();
 
     fill_slot(slot, in);
@@ -773,27 +888,51 @@ bool gauge::run_one(std::unique_lock<std::mutex> &lock, unsigned index) {
 // ---------------------------------------------------------------- sequencer
 
 void gauge::activate_cuts(std::uint64_t up_to_seq) {
-    std::lock_guard<std::mutex> lock(m_);
-    while (cut_count_ > 0 && cuts_[cut_head_].seq <= up_to_seq) {
-        const double c = cuts_[cut_head_].s;
-        cut_head_ = (cut_head_ + 1) % k_cut_capacity;
-        --cut_count_;
-        if (in_strip_ && c <= sheet_start_) {
-            ++n_cuts_ignored_;
-            continue;
+    std::size_t ignored = 0;
+    double last_ignored = 0.0;
+    {
+        std::lock_guard<std::mutex> lock(m_);
+        while (cut_count_ > 0 && cuts_[cut_head_].seq <= up_to_seq) {
+            const double c = cuts_[cut_head_].s;
+            cut_head_ = (cut_head_ + 1) % k_cut_capacity;
+            --cut_count_;
+            if (in_strip_ && c <= sheet_start_) {
+                ++n_cuts_ignored_;
+                ++ignored;
+                last_ignored = c;
+                continue;
+            }
+            active_[(active_head_ + active_count_) % k_cut_capacity] = c;
+            ++active_count_;
         }
-        active_[(active_head_ + active_count_) % k_cut_capacity] = c;
-        ++active_count_;
     }
+    log_cuts_ignored(ignored, last_ignored, "at or before the open sheet's start");
+}
+
+void gauge::log_cuts_ignored(std::size_t n, double s, const char *why) const {
+    if (n > 0)
+        FLT_LOG(FLT_LOG_WARNING, "gauge",
+                "%zu cut%s ignored, the last at encoder %.1f mm: %s (its sheet was already "
+                "finished, or no strip reached it)",
+                n, n == 1 ? "" : "s", s + mean_offset_, why);
 }
 
 void gauge::drop_active_cuts(double up_to, bool all) {
-    std::lock_guard<std::mutex> lock(m_);
-    while (active_count_ > 0 && (all || active_[active_head_] <= up_to)) {
-        active_head_ = (active_head_ + 1) % k_cut_capacity;
-        --active_count_;
-        ++n_cuts_ignored_;
+    std::size_t ignored = 0;
+    double last_ignored = 0.0;
+    {
+        std::lock_guard<std::mutex> lock(m_);
+        while (active_count_ > 0 && (all || active_[active_head_] <= up_to)) {
+            last_ignored = active_[active_head_];
+            active_head_ = (active_head_ + 1) % k_cut_capacity;
+            --active_count_;
+            ++n_cuts_ignored_;
+            ++ignored;
+        }
     }
+    log_cuts_ignored(ignored, last_ignored,
+                     all ? "the strip ended (a reversal or a jump of the encoder)"
+                         : "before the strip's head");
 }
 
 void gauge::sequence(frame_slot &slot) {
@@ -806,6 +945,7 @@ void gauge::sequence(frame_slot &slot) {
     activate_cuts(slot.seq);
     pending_row_skipped_ += slot.skipped_before;
     pending_row_dropped_ += slot.dropped_before;
+    pending_row_missing_ += slot.missing_before;
     std::uint32_t valid = 0;
     for (std::size_t k = 0; k < K_; ++k)
         valid += slot.valid[k] != 0;
@@ -823,11 +963,14 @@ void gauge::sequence(frame_slot &slot) {
         std::lock_guard<std::mutex> lock(m_);
         ++n_reversals_;
     }
+    const double prev_s = has_last_seen_ ? last_seen_s_ : s;
+    has_last_seen_ = true;
+    last_seen_s_ = s;
     if (!in_strip_) {
         if (!present) {
             std::lock_guard<std::mutex> lock(m_);
             ++n_no_strip_;
-            pending_row_skipped_ = pending_row_dropped_ = 0;
+            pending_row_skipped_ = pending_row_dropped_ = pending_row_missing_ = 0;
             return;
         }
         begin_strip(s);
@@ -835,17 +978,21 @@ void gauge::sequence(frame_slot &slot) {
     // Late cuts: a cut given after the strip passed it splits the open
     // sheet now that it is known.
     if (has_output_)
-        apply_cuts(last_output_s_);
+        apply_cuts(last_output_s_, nullptr);
 
     row_meta meta;
     meta.s = s;
+    meta.prev_s = prev_s;
     meta.skipped = pending_row_skipped_;
     meta.dropped = pending_row_dropped_;
+    meta.missing = pending_row_missing_;
     meta.invalid = std::uint32_t(K_ - valid);
     meta.left = slot.left;
     meta.right = slot.right;
     meta.saturated = slot.saturated;
-    pending_row_skipped_ = pending_row_dropped_ = 0;
+    meta.peaks = slot.peaks;
+    meta.measured = present;
+    pending_row_skipped_ = pending_row_dropped_ = pending_row_missing_ = 0;
     if (present) {
         release_held();
         push_row(s, slot.height.data(), slot.slope.data(), slot.flags.data(), meta);
@@ -876,6 +1023,8 @@ void gauge::begin_strip(double s) {
         std::lock_guard<std::mutex> lock(m_);
         ++n_strips_;
     }
+    FLT_LOG(FLT_LOG_INFO, "gauge", "coil %llu: the strip's head at s = %.1f mm",
+            (unsigned long long)coil_, s);
     // Cuts at or before the head were for strip that never came.
     drop_active_cuts(s, false);
 }
@@ -927,10 +1076,10 @@ void gauge::pull_all() {
 void gauge::output_row(double s, const double *z, const std::uint8_t *flags, const row_meta &meta,
                        const double *measured) {
     // Cuts at or before this row end the sheet before it joins.
-    apply_cuts(s);
+    apply_cuts(s, &meta);
     if (buffers_[current_].rows > 0 &&
         (s - sheet_start_ >= cfg_.max_sheet_length || buffers_[current_].rows == sheet_capacity_))
-        split(s, FLT_SHEET_FLAG_SPLIT);
+        split(s, FLT_SHEET_FLAG_SPLIT, false, &meta);
     sheet_buffer &b = buffers_[current_];
     const std::size_t r = b.rows;
     b.s[r] = s;
@@ -946,9 +1095,10 @@ void gauge::output_row(double s, const double *z, const std::uint8_t *flags, con
     last_output_s_ = s;
 }
 
-void gauge::apply_cuts(double s_limit) {
+void gauge::apply_cuts(double s_limit, const row_meta *incoming) {
     for (;;) {
         double c;
+        bool ignored = false;
         {
             std::lock_guard<std::mutex> lock(m_);
             if (active_count_ == 0 || !(active_[active_head_] <= s_limit))
@@ -958,14 +1108,18 @@ void gauge::apply_cuts(double s_limit) {
             --active_count_;
             if (c <= sheet_start_) {
                 ++n_cuts_ignored_;
-                continue;
+                ignored = true;
             }
         }
-        split(c, 0);
+        if (ignored) {
+            log_cuts_ignored(1, c, "at or before the open sheet's start");
+            continue;
+        }
+        split(c, 0, false, incoming);
     }
 }
 
-void gauge::split(double s_at, unsigned end_flags, bool all_rows) {
+void gauge::split(double s_at, unsigned end_flags, bool all_rows, const row_meta *incoming) {
     sheet_buffer &old = buffers_[current_];
     const std::size_t i =
         all_rows
@@ -982,6 +1136,13 @@ void gauge::split(double s_at, unsigned end_flags, bool all_rows) {
     job.index = ++sheet_in_coil_;
     job.id = ++sheet_ids_;
     job.lookahead = std::max(0.0, last_pushed_s_ - s_at);
+    if (i < old.rows) {
+        job.has_after = true;
+        job.after = old.meta[i];
+    } else if (incoming) {
+        job.has_after = true;
+        job.after = *incoming;
+    }
     const int next = free_buffer_or_wait();
     sheet_buffer &nb = buffers_[next];
     const std::size_t rest = old.rows - i;
@@ -1054,44 +1215,105 @@ void gauge::end_strip(unsigned flag) {
     held_ = 0;
     if (buffers_[current_].rows > 0) {
         const sheet_buffer &b = buffers_[current_];
-        split(b.s[b.rows - 1], flag, true);
+        split(b.s[b.rows - 1], flag, true, nullptr);
     }
     if (pushed_)
         check(flt_recon_reset(recon_));
+    FLT_LOG(FLT_LOG_INFO, "gauge", "coil %llu: %s at s = %.1f mm, %llu sheets",
+            (unsigned long long)coil_,
+            flag == FLT_SHEET_FLAG_TAIL      ? "the strip's tail"
+            : flag == FLT_SHEET_FLAG_FLUSHED ? "the strip ended by a flush"
+                                             : "the strip ended by a reversal or a jump",
+            last_output_s_, (unsigned long long)sheet_in_coil_);
     pushed_ = false;
     in_strip_ = false;
     has_output_ = false;
-    pending_row_skipped_ = pending_row_dropped_ = 0;
+    pending_row_skipped_ = pending_row_dropped_ = pending_row_missing_ = 0;
 }
 
 // ---------------------------------------------------------------- evaluation
 
-flt_sheet *gauge::take_slot() {
+flt_sheet *gauge::take_slot(std::size_t rows) {
     {
         std::lock_guard<std::mutex> lock(pool_->m);
         if (!pool_->free.empty()) {
             flt_sheet *sh = pool_->free.back();
             pool_->free.pop_back();
+            pool_->out.fetch_add(1);
             return sh;
         }
     }
-    std::lock_guard<std::mutex> lock(m_);
-    ++n_sheets_dropped_;
-    if (ready_count_ == 0)
-        return nullptr;  // every slot is held by the caller: this sheet is lost
-    // The oldest waiting sheet makes room for the newest.
-    flt_sheet *sh = ready_[ready_head_];
-    ready_head_ = (ready_head_ + 1) % ready_.size();
-    --ready_count_;
-    return sh;
+    if (cfg_.sheet_backlog == 0) {
+        // The caller chose to keep no backlog: the oldest waiting sheet
+        // makes room for the newest.
+        std::unique_lock<std::mutex> lock(m_);
+        ++n_sheets_dropped_;
+        const unsigned long long dropped = n_sheets_dropped_;
+        if (ready_count_ == 0) {
+            lock.unlock();
+            FLT_LOG(FLT_LOG_WARNING, "gauge",
+                    "a finished sheet was dropped: every sheet slot is held by the caller "
+                    "(gauge_sheet_backlog = 0; %llu sheets dropped so far)",
+                    dropped);
+            return nullptr;  // every slot is held by the caller: this sheet is lost
+        }
+        flt_sheet *sh = ready_[ready_head_];
+        ready_head_ = (ready_head_ + 1) % ready_.size();
+        --ready_count_;
+        return sh;
+    }
+    // Every slot is taken: a sheet of its own (maps of its rows only),
+    // freed when it is given back. Never a finished sheet dropped.
+    auto sh = std::make_unique<flt_sheet>();
+    sh->pool = pool_;
+    sh->grown = true;
+    sh->fibers = K_;
+    sh->maps = cfg_.keep_maps;
+    for (int a = 0; a < k_sheet_arrays; ++a)
+        sh->array[a].assign(is_fiber_array(a) ? K_ : zones_, 0.0);
+    if (cfg_.keep_maps >= 1) {
+        sh->map_s.assign(rows, 0.0);
+        sh->map_z.assign(rows * K_, 0.0);
+        sh->map_flags.assign(rows * K_, 0);
+    }
+    if (cfg_.keep_maps >= 2)
+        sh->map_measured.assign(rows * K_, 0.0);
+    pool_->out.fetch_add(1);
+    unsigned long long grown = 0;
+    {
+        std::lock_guard<std::mutex> lock(m_);
+        grown = ++n_sheets_grown_;
+    }
+    FLT_LOG(FLT_LOG_INFO, "gauge",
+            "every one of the %zu sheet slots is taken: another sheet made (%llu so far; read "
+            "the sheets sooner, or raise gauge_sheet_slots)",
+            cfg_.sheet_slots, grown);
+    return sh.release();
 }
+
+namespace {
+
+// How many of `lost` frames spread evenly over (prev_s, s) lie in [a, b):
+// frame k (1..lost) lies at prev_s + k (s - prev_s) / (lost + 1).
+double lost_between(std::uint32_t lost, double prev_s, double s, double a, double b) {
+    if (lost == 0)
+        return 0.0;
+    const double step = (s - prev_s) / (double(lost) + 1.0);
+    if (!(step > 0.0))
+        return 0.0;
+    const double first = std::max(1.0, std::ceil((a - prev_s) / step));
+    const double last = std::min(double(lost), std::ceil((b - prev_s) / step) - 1.0);
+    return std::max(0.0, last - first + 1.0);
+}
+
+}  // namespace
 
 void gauge::evaluate(const sheet_job &job) {
     {
         std::lock_guard<std::mutex> lock(m_);
         ++n_sheets_;
     }
-    flt_sheet *sh = take_slot();
+    flt_sheet *sh = take_slot(job.rows);
     if (sh == nullptr)
         return;
     const sheet_buffer &b = buffers_[job.buffer];
@@ -1107,23 +1329,73 @@ void gauge::evaluate(const sheet_job &job) {
     v[FLT_SHEET_LOOKAHEAD] = job.lookahead;
     v[FLT_SHEET_FIBERS] = double(K_);
     v[FLT_SHEET_ZONES] = double(zones_);
-    double skipped = 0, dropped = 0, saturated = 0, invalid = 0;
+    // Frames lost before a row lie between it and the frame before, spread
+    // evenly: a sheet counts those in [s_start, s_end), its first row's and
+    // the next sheet's first row's included.
+    double skipped = 0, dropped = 0, missing = 0, saturated = 0, peaks = 0, invalid = 0;
+    double measured = 0;
+    const auto count_lost = [&](const row_meta &m) {
+        dropped += lost_between(m.dropped, m.prev_s, m.s, job.s_start, job.s_end);
+        missing += lost_between(m.missing, m.prev_s, m.s, job.s_start, job.s_end);
+    };
     for (std::size_t r = 0; r < n; ++r) {
-        skipped += b.meta[r].skipped;
-        dropped += b.meta[r].dropped;
-        saturated += b.meta[r].saturated;
-        invalid += b.meta[r].invalid;
+        const row_meta &m = b.meta[r];
+        skipped += m.skipped;
+        saturated += m.saturated;
+        peaks += m.peaks;
+        invalid += m.invalid;
+        measured += m.measured ? 1 : 0;
+        count_lost(m);
     }
+    if (job.has_after)
+        count_lost(job.after);
+    const double lost_lines = double(n) - measured;
+    const double expected = double(n) + dropped + missing;
+    const double coverage = expected > 0 ? measured / expected : 0.0;
     v[FLT_SHEET_FRAMES] = double(n);
     v[FLT_SHEET_SKIPPED] = skipped;
     v[FLT_SHEET_DROPPED] = dropped;
     v[FLT_SHEET_SATURATED] = saturated;
+    v[FLT_SHEET_PEAKS] = peaks;
     v[FLT_SHEET_INVALID] = invalid;
+    v[FLT_SHEET_MISSING] = missing;
+    v[FLT_SHEET_LOST_LINES] = lost_lines;
+    v[FLT_SHEET_ROWS_MEASURED] = measured;
+    v[FLT_SHEET_ROWS_EXPECTED] = expected;
+    v[FLT_SHEET_COVERAGE] = coverage;
     unsigned flags = job.flags;
     v[FLT_SHEET_S_FIRST] = n ? b.s[0] : k_nan;
     v[FLT_SHEET_S_LAST] = n ? b.s[n - 1] : k_nan;
     if (n == 0)
         flags |= FLT_SHEET_FLAG_EMPTY;
+    if (dropped + missing + lost_lines > 0)
+        flags |= FLT_SHEET_FLAG_LOST_ROWS;
+    // (a NaN-safe comparison: a sheet expected to hold nothing is incomplete)
+    const bool incomplete = !(coverage >= cfg_.min_coverage) || n == 0;
+    if (incomplete)
+        flags |= FLT_SHEET_FLAG_INCOMPLETE;
+    {
+        std::lock_guard<std::mutex> lock(m_);
+        n_missing_ += std::uint64_t(missing);
+        n_lost_lines_ += std::uint64_t(lost_lines);
+        n_incomplete_ += incomplete ? 1 : 0;
+    }
+    const auto id = (unsigned long long)job.id, coil = (unsigned long long)job.coil;
+    if (dropped + missing + lost_lines > 0)
+        FLT_LOG(FLT_LOG_WARNING, "gauge",
+                "sheet %llu (coil %llu) lost rows: %.0f dropped at a full queue, %.0f missing by "
+                "the encoder, %.0f lost lines; %.0f of %.0f rows measured (coverage %.1f %%)",
+                id, coil, dropped, missing, lost_lines, measured, expected, 100.0 * coverage);
+    if (incomplete)
+        FLT_LOG(FLT_LOG_WARNING, "gauge",
+                "sheet %llu (coil %llu) is incomplete: coverage %.1f %% is below "
+                "gauge_min_coverage %.1f %%; its shape and verdict are \"not judged\"",
+                id, coil, 100.0 * coverage, 100.0 * cfg_.min_coverage);
+    if (peaks > 0 && saturated > cfg_.saturation_limit * peaks)
+        FLT_LOG(FLT_LOG_WARNING, "gauge",
+                "sheet %llu (coil %llu): %.1f %% of the laser peaks on the strip are saturated "
+                "(gauge_saturation_limit %.1f %%): lower the exposure or the laser power",
+                id, coil, 100.0 * saturated / peaks, 100.0 * cfg_.saturation_limit);
 
     // The flatness of the rows: whole sheets through evaluate (which
     // refuses a sheet shorter than one wave or without a valid fiber), short
@@ -1179,9 +1451,10 @@ void gauge::evaluate(const sheet_job &job) {
         double confidence = 0, bow = 0, crossbow = 0;
         unsigned components = 0;
         check(flt_flatness_shape(f, &shape, &confidence, &components, &bow, &crossbow));
-        v[FLT_SHEET_SHAPE] = double(shape);
-        v[FLT_SHEET_CONFIDENCE] = confidence;
-        v[FLT_SHEET_COMPONENTS] = double(components);
+        // An incomplete sheet gets no class as if it were whole.
+        v[FLT_SHEET_SHAPE] = double(incomplete ? FLT_SHAPE_NOT_JUDGED : shape);
+        v[FLT_SHEET_CONFIDENCE] = incomplete ? 0.0 : confidence;
+        v[FLT_SHEET_COMPONENTS] = incomplete ? 0.0 : double(components);
         v[FLT_SHEET_BOW] = bow;
         v[FLT_SHEET_CROSSBOW] = crossbow;
     } else {
@@ -1197,7 +1470,7 @@ void gauge::evaluate(const sheet_job &job) {
             ziu[j] = zsx[j] = k_nan;
             zfl[j] = double(FLT_ZONE_NO_DATA);
         }
-        v[FLT_SHEET_SHAPE] = double(FLT_SHAPE_UNDETERMINED);
+        v[FLT_SHEET_SHAPE] = double(incomplete ? FLT_SHAPE_NOT_JUDGED : FLT_SHAPE_UNDETERMINED);
         v[FLT_SHEET_CONFIDENCE] = 0.0;
         v[FLT_SHEET_COMPONENTS] = 0.0;
         v[FLT_SHEET_BOW] = k_nan;
@@ -1288,9 +1561,21 @@ void gauge::judge(flt_sheet *sh, const sheet_buffer &b, std::size_t n) {
     sh->verdict = vc;  // may free a replaced rule set (never allocates)
     v[FLT_SHEET_RULES] = 0;
     v[FLT_SHEET_RULES_FAILED] = 0;
+    v[FLT_SHEET_VERDICT] = FLT_VERDICT_NOT_JUDGED;  // no rules: nothing judged it
     if (!vc)
         return;
-    flt_verdict &vd = *vc->slot[sh->slot];
+    if (sh->grown && !sh->own_verdict) {
+        // A sheet made beyond the slots has no verdict among the slots'.
+        auto own = std::make_unique<flt_verdict>();
+        own->borrowed = true;
+        own->set = vc->rules.set;
+        const std::size_t rules = own->set.rules.size();
+        own->results.resize(rules);
+        own->pending.resize(rules);
+        own->gaps.resize(rules);
+        sh->own_verdict = std::move(own);
+    }
+    flt_verdict &vd = sh->own_verdict ? *sh->own_verdict : *vc->slot[sh->slot];
     // The flatness measures and where they are: s the sheet's middle; x
     // the largest zone's centre, the largest wave's fiber, the strip's
     // centre for bow and crossbow (the sensor's centre without edges).
@@ -1329,20 +1614,59 @@ void gauge::judge(flt_sheet *sh, const sheet_buffer &b, std::size_t n) {
         map.z = b.z.data();
         map.flags = b.flags.data();
     }
-    verdict::judge(vd.set, vd.given, vc->scratch, vc->thickness, width, map, vd.results.data(),
-                   vd.gaps.data());
+    if (unsigned(v[FLT_SHEET_FLAGS]) & FLT_SHEET_FLAG_INCOMPLETE) {
+        // Not judged: an incomplete sheet's measures are those of the rows
+        // it has, not the sheet's. Each rule says which band would apply.
+        for (std::size_t i = 0; i < vd.results.size(); ++i) {
+            const verdict::rule &r = vd.set.rules[i];
+            double *out = vd.results[i].value;
+            std::fill(out, out + verdict::k_values, k_nan);
+            out[FLT_VERDICT_STATE] = FLT_VERDICT_NOT_JUDGED;
+            out[FLT_VERDICT_MEASURE] = double(r.measure);
+            out[FLT_VERDICT_LENGTH] = r.length;
+            const int band = width > 0 ? r.band_of(vc->thickness, width) : -1;
+            out[FLT_VERDICT_BAND] = band;
+            if (band >= 0)
+                out[FLT_VERDICT_LIMIT] = r.bands[std::size_t(band)].limit;
+        }
+    } else {
+        verdict::judge(vd.set, vd.given, vc->scratch, vc->thickness, width, map, vd.results.data(),
+                       vd.gaps.data());
+        // A band that changes within a coil (a measured width crossing a
+        // band's edge) changes the limit: worth telling.
+        const double coil = v[FLT_SHEET_COIL];
+        for (std::size_t i = 0; i < vd.results.size() && i < vc->last_band.size(); ++i) {
+            const int band = int(vd.results[i].value[FLT_VERDICT_BAND]);
+            if (vc->last_coil == coil && band != vc->last_band[i])
+                FLT_LOG(FLT_LOG_INFO, "gauge",
+                        "sheet %.0f: rule '%s' is judged by band %d, was %d (thickness %g mm, "
+                        "width %.0f mm)",
+                        v[FLT_SHEET_ID], vd.set.rules[i].name.c_str(), band, vc->last_band[i],
+                        vc->thickness, width);
+            vc->last_band[i] = band;
+        }
+        vc->last_coil = coil;
+    }
     vd.evaluated = true;
-    double failed = 0;
-    for (const verdict::rule_result &r : vd.results)
-        failed += r.value[FLT_VERDICT_STATE] == FLT_VERDICT_FAIL ? 1 : 0;
+    double failed = 0, unjudged = 0;
+    for (const verdict::rule_result &r : vd.results) {
+        const double state = r.value[FLT_VERDICT_STATE];
+        failed += state == FLT_VERDICT_FAIL ? 1 : 0;
+        unjudged += state != FLT_VERDICT_FAIL && state != FLT_VERDICT_PASS ? 1 : 0;
+    }
     v[FLT_SHEET_RULES] = double(vd.results.size());
     v[FLT_SHEET_RULES_FAILED] = failed;
+    // A failure is certain whatever else could not be judged; a pass needs
+    // every rule judged.
+    v[FLT_SHEET_VERDICT] = failed > 0                           ? FLT_VERDICT_FAIL
+                           : unjudged > 0 || vd.results.empty() ? FLT_VERDICT_NOT_JUDGED
+                                                                : FLT_VERDICT_PASS;
     count_in_coil(*vc, *sh);
 }
 
 void coil_stats::reset(std::uint64_t gen, std::size_t n_rules) {
     generation = gen;
-    coil = sheets = passed = failed = 0;
+    coil = sheets = passed = failed = not_judged = 0;
     finished = false;
     per_rule zero{};
     zero.min = zero.max = zero.worst_sheet = zero.worst_x = zero.worst_s = k_nan;
@@ -1350,7 +1674,7 @@ void coil_stats::reset(std::uint64_t gen, std::size_t n_rules) {
 }
 
 void gauge::count_in_coil(const verdict_config &vc, const flt_sheet &sh) {
-    const flt_verdict &vd = *vc.slot[sh.slot];
+    const flt_verdict &vd = sh.own_verdict ? *sh.own_verdict : *vc.slot[sh.slot];
     const double *v = sh.value;
     std::lock_guard<std::mutex> lock(stats_m_);
     coil_stats &c = coil_current_;
@@ -1366,13 +1690,16 @@ void gauge::count_in_coil(const verdict_config &vc, const flt_sheet &sh) {
         finish();  // the previous coil's last sheet was not judged (lost)
     c.coil = coil;
     c.sheets += 1;
-    const double failed = v[FLT_SHEET_RULES_FAILED];
-    (failed > 0 ? c.failed : c.passed) += 1;
+    // By the sheet's verdict: a sheet no rule could judge is not passed.
+    const double verdict = v[FLT_SHEET_VERDICT];
+    (verdict == FLT_VERDICT_FAIL   ? c.failed
+     : verdict == FLT_VERDICT_PASS ? c.passed
+                                   : c.not_judged) += 1;
     for (std::size_t i = 0; i < c.rules.size() && i < vd.results.size(); ++i) {
         const double *r = vd.results[i].value;
         coil_stats::per_rule &p = c.rules[i];
         const int state = int(r[FLT_VERDICT_STATE]);
-        if (state >= 0 && state < 4)
+        if (state >= 0 && state < 5)
             p.count[state] += 1;
         if (state != FLT_VERDICT_PASS && state != FLT_VERDICT_FAIL)
             continue;
@@ -1415,6 +1742,7 @@ flt_status gauge::set_rules(const char *fn, const flt_rules *rules, double thick
         vc->width = width;
         vc->needs_map = verdict::needs_map(rules->set);
         n = rules->set.rules.size();
+        vc->last_band.assign(n, -1);
         vc->slot.resize(cfg_.sheet_slots);
         for (std::unique_ptr<flt_verdict> &vd : vc->slot) {
             vd = std::make_unique<flt_verdict>();
@@ -1469,6 +1797,9 @@ flt_status gauge::coil_stats_of(const char *fn, flt_coil which, std::size_t rule
     all[FLT_COIL_RULE_FAILED] = p.count[FLT_VERDICT_FAIL];
     all[FLT_COIL_RULE_NO_BAND] = p.count[FLT_VERDICT_NO_BAND];
     all[FLT_COIL_RULE_NOT_MEASURED] = p.count[FLT_VERDICT_NOT_MEASURED];
+    all[FLT_COIL_RULE_NOT_JUDGED] = p.count[FLT_VERDICT_NOT_JUDGED];
+    all[FLT_COIL_SHEETS_NOT_JUDGED] = c.not_judged;
+    all[FLT_COIL_SHEETS_JUDGED] = c.passed + c.failed;
     all[FLT_COIL_WORST_MIN] = p.min;
     all[FLT_COIL_WORST_MAX] = p.max;
     all[FLT_COIL_WORST_MEAN] = p.measured > 0 ? p.sum / p.measured : k_nan;
@@ -1488,13 +1819,19 @@ void gauge::deliver(flt_sheet *sheet) {
         t_in_callback = this;
         callback_(sheet, callback_user_);
         t_in_callback = nullptr;
-        sheet->borrowed = false;
-        sheet->magic = 0;
-        std::lock_guard<std::mutex> lock(pool_->m);
-        pool_->free.push_back(sheet);
+        pool_->give_back(sheet);
         return;
     }
     std::lock_guard<std::mutex> lock(m_);
+    if (ready_count_ == ready_.size()) {
+        // More sheets wait than there are slots (they were made beyond
+        // them): a longer ring, in order.
+        std::vector<flt_sheet *> longer(2 * ready_.size(), nullptr);
+        for (std::size_t i = 0; i < ready_count_; ++i)
+            longer[i] = ready_[(ready_head_ + i) % ready_.size()];
+        ready_.swap(longer);
+        ready_head_ = 0;
+    }
     ready_[(ready_head_ + ready_count_) % ready_.size()] = sheet;
     ++ready_count_;
     sheet_cv_.notify_all();
@@ -1544,7 +1881,7 @@ flt_status gauge::cut(const char *fn, double encoder_mm) {
                     }
                     activate_cuts(next);
                     if (has_output_)
-                        apply_cuts(last_output_s_);
+                        apply_cuts(last_output_s_, nullptr);
                     run_jobs_inline();
                 }
             },
@@ -1559,6 +1896,8 @@ flt_status gauge::cut(const char *fn, double encoder_mm) {
 flt_status gauge::flush(const char *fn) {
     if (in_gauge_callback(this))
         return fail(FLT_ERR_STATE, "%s: called from inside the gauge's callback", fn);
+    // The end of the input: after the frame another thread is pushing.
+    const std::lock_guard<std::mutex> producer(produce_m_);
     if (flt_status st = failure(fn))
         return st;
     std::unique_lock<std::mutex> lock(m_);
@@ -1596,6 +1935,8 @@ flt_status gauge::flush(const char *fn) {
 }
 
 flt_status gauge::attach(const char *fn, flt_source *source) {
+    if (in_gauge_callback(this))
+        return fail(FLT_ERR_STATE, "%s: called from inside the gauge's callback", fn);
     std::lock_guard<std::mutex> lock(m_);
     if (acquiring_)
         return fail(FLT_ERR_STATE, "%s: the gauge is acquiring; call flt_gauge_stop first", fn);
@@ -1608,6 +1949,11 @@ flt_status gauge::attach(const char *fn, flt_source *source) {
 }
 
 flt_status gauge::start(const char *fn) {
+    if (in_gauge_callback(this))
+        return fail(FLT_ERR_STATE, "%s: called from inside the gauge's callback", fn);
+    // Not while a frame is being pushed: from here frames come from the
+    // source alone.
+    const std::lock_guard<std::mutex> producer(produce_m_);
     if (flt_status st = failure(fn))
         return st;
     std::unique_lock<std::mutex> lock(m_);
@@ -1627,6 +1973,10 @@ flt_status gauge::start(const char *fn) {
     clear_error();
     lock.lock();
     source_started_ = true;
+    flt_source_kind kind = FLT_SOURCE_IMAGES;
+    source_live_ = flt_source_kind_of(source_, &kind) == FLT_OK &&
+                   (kind == FLT_SOURCE_U3V || kind == FLT_SOURCE_GIGE);
+    clear_error();
     acquiring_ = true;
     acquisition_stop_ = false;
     acquisition_status_ = FLT_OK;
@@ -1717,6 +2067,39 @@ flt_status gauge::stop(const char *fn) {
     return FLT_OK;
 }
 
+flt_status gauge::wait(const char *fn, std::uint32_t timeout_ms) {
+    if (in_gauge_callback(this))
+        return fail(FLT_ERR_STATE, "%s: called from inside the gauge's callback", fn);
+    {
+        std::unique_lock<std::mutex> lock(m_);
+        if (!acquiring_ && !acquisition_.joinable())
+            return fail(FLT_ERR_STATE,
+                        "%s: no acquisition to wait for: attach a source "
+                        "(flt_gauge_attach_source) and start it (flt_gauge_start)",
+                        fn);
+        const auto ended = [&] {
+            return !acquiring_ || failed_;
+        };
+        if (timeout_ms == FLT_GAUGE_WAIT_FOREVER)
+            idle_cv_.wait(lock, ended);
+        else if (!idle_cv_.wait_for(lock, std::chrono::milliseconds(timeout_ms), ended))
+            return fail(FLT_ERR_TIMEOUT,
+                        "%s: the source still delivers frames after %u ms (a camera never "
+                        "ends: flt_gauge_stop ends its acquisition)",
+                        fn, unsigned(timeout_ms));
+    }
+    // The source is exhausted: its frames through, the strip ended, every
+    // sheet out; an error that ended the acquisition is said after that.
+    const flt_status stopped = stop(fn);
+    std::string why;
+    if (stopped != FLT_OK)
+        why = flt_last_error_message();
+    const flt_status flushed = flush(fn);
+    if (stopped != FLT_OK)
+        return fail(stopped, "%s", why.c_str());
+    return flushed;
+}
+
 flt_status gauge::next_sheet(const char *fn, std::uint32_t timeout_ms, flt_sheet **out) {
     if (in_gauge_callback(this))
         return fail(FLT_ERR_STATE, "%s: called from inside the gauge's callback", fn);
@@ -1767,10 +2150,7 @@ flt_status gauge::set_callback(const char *fn, flt_sheet_callback callback, void
         t_in_callback = this;
         callback(sh, user);
         t_in_callback = nullptr;
-        sh->borrowed = false;
-        sh->magic = 0;
-        std::lock_guard<std::mutex> lock(pool_->m);
-        pool_->free.push_back(sh);
+        pool_->give_back(sh);
     }
     return FLT_OK;
 }
@@ -1810,6 +2190,16 @@ std::uint64_t gauge::count(flt_gauge_counter counter) const {
             return acquiring_ ? 1 : 0;
         case FLT_GAUGE_COUNT_SHEETS_WAITING:
             return ready_count_;
+        case FLT_GAUGE_COUNT_SHEETS_GROWN:
+            return n_sheets_grown_;
+        case FLT_GAUGE_COUNT_SHEETS_INCOMPLETE:
+            return n_incomplete_;
+        case FLT_GAUGE_COUNT_MISSING:
+            return n_missing_;
+        case FLT_GAUGE_COUNT_LOST_LINES:
+            return n_lost_lines_;
+        case FLT_GAUGE_COUNT_REFUSED:
+            return n_refused_;
         default:
             return 0;
     }

@@ -3,6 +3,7 @@
 // stages, the threads and the invariants.
 #pragma once
 
+#include <atomic>
 #include <condition_variable>
 #include <cstdint>
 #include <memory>
@@ -20,7 +21,7 @@
 namespace flt {
 
 constexpr std::uint32_t k_sheet_magic = 0x464c5453u;  // "FLTS"
-constexpr int k_sheet_values = 38;                    // flt_sheet_value keys 0..37
+constexpr int k_sheet_values = 45;                    // flt_sheet_value keys 0..44
 constexpr int k_sheet_arrays = 12;                    // flt_sheet_array keys 0..11
 
 struct sheet_pool;
@@ -46,9 +47,16 @@ struct flt_sheet {
     std::vector<double> map_s, map_z, map_measured;
     std::vector<std::uint8_t> map_flags;
     std::size_t slot = 0;  // its number among the slots (its verdict's)
+    // Made beyond gauge_sheet_slots (freed, not pooled, when given back);
+    // it has a verdict of its own.
+    bool grown = false;
+    std::unique_ptr<flt_verdict> own_verdict;
     // The rules it was judged by (null: none); kept alive while the sheet
     // is (flt_sheet_verdict).
     std::shared_ptr<flt::verdict_config> verdict;
+
+    // Its verdict handle (flt_sheet_verdict), or null without rules.
+    const flt_verdict *verdict_handle() const;
 };
 
 namespace flt {
@@ -57,7 +65,13 @@ struct sheet_pool {
     std::mutex m;
     std::vector<flt_sheet *> free;  // capacity reserved for every slot
     bool alive = true;
+    // Sheets out of the pool: being filled, waiting or held by the caller
+    // (gauge_sheet_backlog bounds the ones beyond the slots).
+    std::atomic<std::size_t> out{0};
     ~sheet_pool();
+    // A sheet the gauge is done with or the caller gave back: into the
+    // pool, or freed when it was made beyond the slots or the gauge is gone.
+    void give_back(flt_sheet *sheet);
 };
 
 // A rule set in force (flt_gauge_set_rules): immutable after it is made,
@@ -71,18 +85,22 @@ struct verdict_config {
     // One verdict per sheet slot (flt_sheet::slot), borrowed.
     std::vector<std::unique_ptr<flt_verdict>> slot;
     verdict::straightedge scratch;
+    // The band each rule chose for the last sheet judged, and its coil
+    // (the log says when a band changes within a coil); evaluation only.
+    std::vector<int> last_band;
+    double last_coil = 0;
 };
 
 // One coil's statistics (flt_gauge_coil_stats).
 struct coil_stats {
     struct per_rule {
-        double count[4];  // by flt_verdict_state
+        double count[5];  // by flt_verdict_state
         double min, max, sum, measured;
         double worst_sheet, worst_x, worst_s;
         double histogram[FLT_COIL_HISTOGRAM_BINS];
     };
     std::uint64_t generation = 0;  // the verdict_config's (0: no rules)
-    double coil = 0, sheets = 0, passed = 0, failed = 0;
+    double coil = 0, sheets = 0, passed = 0, failed = 0, not_judged = 0;
     bool finished = false;
     std::vector<per_rule> rules;  // capacity reserved at set_rules
 
@@ -92,7 +110,9 @@ struct coil_stats {
 struct gauge_config {
     unsigned workers = 2;
     std::size_t queue_frames = 64;
-    bool overflow_wait = false;
+    int overflow = FLT_GAUGE_OVERFLOW_AUTO;
+    double min_coverage = 0.95, saturation_limit = 0.05;
+    std::size_t sheet_backlog = 16;
     double frame_spacing = 1.0, reversal_length = 500.0, strip_min_width = 100.0;
     double tail_length = 300.0, max_sheet_length = 6000.0;
     int keep_maps = 0;
@@ -113,10 +133,14 @@ struct gauge_input {
 // Per row on its way through the reconstructor: what its sheet counts.
 struct row_meta {
     double s = 0.0;
+    // The s of the frame before it (the frames lost between lie in
+    // (prev_s, s), spread evenly: a cut between them splits the count).
+    double prev_s = 0.0;
     // The strip's edges in the row, sensor x mm (the extractor's, both
     // lasers' mean; NaN where not seen).
     double left = 0.0, right = 0.0;
-    std::uint32_t skipped = 0, dropped = 0, saturated = 0, invalid = 0;
+    std::uint32_t skipped = 0, dropped = 0, missing = 0, saturated = 0, peaks = 0, invalid = 0;
+    bool measured = true;  // the frame showed the strip (else a lost line)
 };
 
 class gauge {
@@ -135,14 +159,19 @@ class gauge {
     flt_status check_frame(const char *fn, const void *pixels, int format, std::uint32_t width,
                            std::uint32_t height, std::size_t stride, double encoder_mm) const;
     static flt_status check_encoder(const char *fn, double encoder_mm);
-    // The producer's entry (push_frame, push_row, the acquisition thread),
-    // input already checked. Throws flt::error for a failure.
+    // push_frame and push_row, input already checked: refused inside the
+    // callback, while another thread pushes or flushes, or while a source
+    // acquires (FLT_ERR_STATE, message set); else take().
+    flt_status push(const char *fn, const gauge_input &in);
+    // The producer's entry (push, the acquisition thread), input already
+    // checked. Throws flt::error for a failure.
     void take(const gauge_input &in, bool from_acquisition);
     flt_status cut(const char *fn, double encoder_mm);
     flt_status flush(const char *fn);
     flt_status attach(const char *fn, flt_source *source);
     flt_status start(const char *fn);
     flt_status stop(const char *fn);
+    flt_status wait(const char *fn, std::uint32_t timeout_ms);
     flt_status next_sheet(const char *fn, std::uint32_t timeout_ms, flt_sheet **out);
     flt_status set_callback(const char *fn, flt_sheet_callback callback, void *user);
     std::uint64_t count(flt_gauge_counter counter) const;
@@ -168,7 +197,7 @@ class gauge {
         std::uint64_t seq = 0;
         slot_state state = slot_free;
         bool new_strip = false;  // a long reversal before this frame
-        std::uint32_t skipped_before = 0, dropped_before = 0;
+        std::uint32_t skipped_before = 0, dropped_before = 0, missing_before = 0;
         double s = 0.0;  // the profile row
         std::vector<double> height, slope;
         std::vector<std::uint8_t> valid;
@@ -178,6 +207,7 @@ class gauge {
         double left = 0.0, right = 0.0;  // the strip's edges (NaN: not seen)
         unsigned strip_flags = 0;        // FLT_STRIP_* of the frame
         std::uint32_t saturated = 0;     // saturated peaks on the strip
+        std::uint32_t peaks = 0;         // peaks on the strip
     };
     // ---- the sheets being built and evaluated
     struct sheet_buffer {
@@ -192,6 +222,10 @@ class gauge {
         double s_start = 0, s_end = 0, lookahead = 0;
         unsigned flags = 0;
         std::uint64_t id = 0, coil = 0, index = 0;
+        // The row after the sheet's end (the next sheet's first), whose
+        // lost frames may lie before the end.
+        bool has_after = false;
+        row_meta after;
     };
 
     // Producer side.
@@ -212,6 +246,7 @@ class gauge {
     void sequence(frame_slot &slot);
     void activate_cuts(std::uint64_t up_to_seq);
     void drop_active_cuts(double up_to, bool all);
+    void log_cuts_ignored(std::size_t n, double s, const char *why) const;
     void begin_strip(double s);
     void end_strip(unsigned flag);
     void push_row(double s, const double *height, const double *slope, const std::uint8_t *flags,
@@ -220,10 +255,17 @@ class gauge {
     void pull_all();
     void output_row(double s, const double *z, const std::uint8_t *flags, const row_meta &meta,
                     const double *measured);
-    void apply_cuts(double s_limit);
+    // Cuts at or before s_limit end their sheets; `incoming` is the row
+    // about to join the open sheet (null: none).
+    void apply_cuts(double s_limit, const row_meta *incoming);
     // Ends the open sheet at s_at: the rows before it (all rows with
-    // all_rows), the rest begin the next sheet.
-    void split(double s_at, unsigned end_flags, bool all_rows = false);
+    // all_rows), the rest begin the next sheet. `incoming` as above.
+    void split(double s_at, unsigned end_flags, bool all_rows, const row_meta *incoming);
+    // Frames the encoder says are missing before a frame that advanced by
+    // `advance` mm past the furthest (0 while the pitch is unknown).
+    std::uint32_t frames_missing(double advance);
+    // True when gauge_sheet_backlog sheets exist beyond the slots.
+    bool backlog_full() const;
     int free_buffer_or_wait();
     // Evaluation (one thread at a time, sheets in order).
     void evaluate(const sheet_job &job);
@@ -232,7 +274,7 @@ class gauge {
     void judge(flt_sheet *sh, const sheet_buffer &b, std::size_t n);
     void count_in_coil(const verdict_config &vc, const flt_sheet &sh);
     void deliver(flt_sheet *sheet);
-    flt_sheet *take_slot();
+    flt_sheet *take_slot(std::size_t rows);
     void acquisition_main();
 
     // ---- configuration (immutable after create)
@@ -255,6 +297,10 @@ class gauge {
     bool band_known_ = false;                  // producer-side
     flt_recon *recon_ = nullptr;
     flt_flatness *flat_ = nullptr, *flat_short_ = nullptr;
+
+    // ---- the producer role: held by push (tried: a second pusher is
+    // refused), flush and start (waited for)
+    std::mutex produce_m_;
 
     // ---- shared state, under m_
     mutable std::mutex m_;
@@ -285,13 +331,19 @@ class gauge {
     // Producer state (one producer at a time; under m_ for the counters).
     bool has_furthest_ = false;
     double furthest_ = 0.0;
-    std::uint32_t pending_skipped_ = 0, pending_dropped_ = 0;
+    std::uint32_t pending_skipped_ = 0, pending_dropped_ = 0, pending_missing_ = 0;
     bool pending_new_strip_ = false;
+    // The last advances between frames taken (mm), for the frame pitch.
+    static constexpr std::size_t k_pitch_window = 9;
+    double advances_[k_pitch_window] = {};
+    std::size_t n_advances_ = 0;
+    bool source_live_ = false;  // the attached source is a camera
     // counters
     std::uint64_t n_frames_ = 0, n_extracted_ = 0, n_skipped_stop_ = 0, n_skipped_rev_ = 0,
                   n_dropped_ = 0, n_no_strip_ = 0, n_strips_ = 0, n_sheets_ = 0,
                   n_sheets_dropped_ = 0, n_cuts_ = 0, n_cuts_ignored_ = 0, n_reversals_ = 0,
-                  n_extract_errors_ = 0;
+                  n_extract_errors_ = 0, n_sheets_grown_ = 0, n_incomplete_ = 0, n_missing_ = 0,
+                  n_lost_lines_ = 0, n_refused_ = 0;
 
     // ---- sequencer state (the thread holding the sequencing role)
     bool in_strip_ = false, pushed_ = false, has_output_ = false;
@@ -310,7 +362,9 @@ class gauge {
     std::vector<std::uint8_t> held_flags_;
     std::vector<row_meta> held_meta_;
     std::size_t held_ = 0;
-    std::uint32_t pending_row_skipped_ = 0, pending_row_dropped_ = 0;
+    std::uint32_t pending_row_skipped_ = 0, pending_row_dropped_ = 0, pending_row_missing_ = 0;
+    bool has_last_seen_ = false;
+    double last_seen_s_ = 0.0;  // the s of the last frame sequenced
     static constexpr std::size_t k_pull_rows = 64;
     std::vector<double> pull_s_, pull_z_;
     std::vector<std::uint8_t> pull_flags_;

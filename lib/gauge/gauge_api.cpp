@@ -16,6 +16,12 @@ namespace {
 constexpr std::uint32_t k_gauge_magic = 0x464c5447u;  // "FLTG"
 }  // namespace
 
+const flt_verdict *flt_sheet::verdict_handle() const {
+    if (!verdict)
+        return nullptr;
+    return own_verdict ? own_verdict.get() : verdict->slot[slot].get();
+}
+
 struct flt_gauge {
     std::uint32_t magic = k_gauge_magic;
     std::unique_ptr<gauge> impl;
@@ -37,15 +43,6 @@ flt_status check_sheet(const char *fn, const flt_sheet *s) {
         return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'sheet' is NULL", fn);
     if (s->magic != k_sheet_magic)
         return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'sheet' is not a live flt_sheet handle",
-                    fn);
-    return FLT_OK;
-}
-
-flt_status not_while_acquiring(const char *fn, const gauge &g) {
-    if (g.acquiring())
-        return fail(FLT_ERR_STATE,
-                    "%s: the attached source is acquiring: frames come from it "
-                    "(flt_gauge_stop first)",
                     fn);
     return FLT_OK;
 }
@@ -115,16 +112,13 @@ FLT_API flt_status FLT_CALL flt_gauge_push_frame(flt_gauge *gauge, const void *f
         if (flt_status st =
                 g.check_frame(fn, frame, enum_arg(format), width, height, stride_bytes, encoder_mm))
             return st;
-        if (flt_status st = not_while_acquiring(fn, g))
-            return st;
-        if (flt_status st = g.failure(fn))
-            return st;
         gauge_input in;
         in.pixels = frame;
         in.format = format;
         in.stride = stride_bytes;
         in.encoder_mm = encoder_mm;
-        g.take(in, false);
+        if (flt_status st = g.push(fn, in))
+            return st;
         return ok();
     });
 }
@@ -145,16 +139,13 @@ FLT_API flt_status FLT_CALL flt_gauge_push_row(flt_gauge *gauge, double encoder_
                         g.fibers());
         if (flt_status st = flt::gauge::check_encoder(fn, encoder_mm))
             return st;
-        if (flt_status st = not_while_acquiring(fn, g))
-            return st;
-        if (flt_status st = g.failure(fn))
-            return st;
         gauge_input in;
         in.height = height;
         in.slope = slope;
         in.valid = valid;
         in.encoder_mm = encoder_mm;
-        g.take(in, false);
+        if (flt_status st = g.push(fn, in))
+            return st;
         return ok();
     });
 }
@@ -218,6 +209,17 @@ FLT_API flt_status FLT_CALL flt_gauge_stop(flt_gauge *gauge) {
     });
 }
 
+FLT_API flt_status FLT_CALL flt_gauge_wait(flt_gauge *gauge, uint32_t timeout_ms) {
+    const char *fn = "flt_gauge_wait";
+    return guard(fn, [&] {
+        if (flt_status st = check_handle(fn, gauge))
+            return st;
+        if (flt_status st = gauge->impl->wait(fn, timeout_ms))
+            return st;
+        return ok();
+    });
+}
+
 FLT_API flt_status FLT_CALL flt_gauge_next_sheet(flt_gauge *gauge, uint32_t timeout_ms,
                                                  flt_sheet **out) {
     const char *fn = "flt_gauge_next_sheet";
@@ -248,7 +250,7 @@ FLT_API flt_status FLT_CALL flt_gauge_count(const flt_gauge *gauge, flt_gauge_co
             return st;
         FLT_CHECK_NOT_NULL(fn, out);
         const int raw = enum_arg(counter);
-        if (raw < 0 || raw > FLT_GAUGE_COUNT_SHEETS_WAITING)
+        if (raw < 0 || raw > FLT_GAUGE_COUNT_REFUSED)
             return fail(FLT_ERR_INVALID_ARGUMENT,
                         "%s: argument 'counter' = %d is not a flt_gauge_counter", fn, raw);
         *out = gauge->impl->count(counter);
@@ -303,17 +305,9 @@ FLT_API void FLT_CALL flt_sheet_destroy(flt_sheet *sheet) {
     guard_void([&] {
         if (!sheet || sheet->magic != k_sheet_magic || sheet->borrowed)
             return;
-        sheet->magic = 0;
         // A local reference keeps the pool alive while it is locked.
         const std::shared_ptr<sheet_pool> pool = sheet->pool;
-        {
-            std::lock_guard<std::mutex> lock(pool->m);
-            if (pool->alive) {
-                pool->free.push_back(sheet);  // capacity reserved: no allocation
-                return;
-            }
-        }
-        delete sheet;  // the gauge is gone
+        pool->give_back(sheet);
     });
 }
 
@@ -414,7 +408,7 @@ FLT_API flt_status FLT_CALL flt_sheet_verdict(const flt_sheet *sheet, const flt_
         if (rules_out)
             *rules_out = &sheet->verdict->rules;
         if (verdict_out)
-            *verdict_out = sheet->verdict->slot[sheet->slot].get();
+            *verdict_out = sheet->verdict_handle();
         return FLT_OK;
     });
 }

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <string>
 
+#include "core/log.hpp"
 #include "flatline/source.h"
 
 namespace flt::sources {
@@ -24,12 +25,25 @@ struct frame_accounting {
     std::uint64_t operator[](flt_source_counter which) const {
         return std::size_t(which) < counts.size() ? counts[std::size_t(which)] : 0;
     }
-    void add(flt_source_counter which, std::uint64_t n = 1) { counts[std::size_t(which)] += n; }
+    void add(flt_source_counter which, std::uint64_t n = 1) {
+        counts[std::size_t(which)] += n;
+        // The faults and recoveries a log reader wants (flatline/log.h).
+        if (which == FLT_COUNT_LOST)
+            FLT_LOG(FLT_LOG_WARNING, "camera", "%llu frames lost (block ids skipped)",
+                    (unsigned long long)n);
+        else if (which == FLT_COUNT_DISCONNECTS)
+            FLT_LOG(FLT_LOG_ERROR, "camera", "the camera was unplugged");
+        else if (which == FLT_COUNT_STREAM_RECOVERIES)
+            FLT_LOG(FLT_LOG_INFO, "camera", "recovered a camera found streaming");
+        else if (which == FLT_COUNT_COMMAND_RETRIES)
+            FLT_LOG(FLT_LOG_INFO, "camera", "a command got no answer: sent again");
+    }
     // A frame that arrived damaged: its reason and DROPPED grow.
     void drop(flt_source_counter reason, const std::string &why) {
         add(reason);
         add(FLT_COUNT_DROPPED);
         stream_error = why;
+        FLT_LOG(FLT_LOG_WARNING, "camera", "frame dropped: %s", why.c_str());
     }
 };
 

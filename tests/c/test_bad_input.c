@@ -3405,6 +3405,39 @@ static void row_gauge_stop(void) {
     flt_gauge_destroy(g);
 }
 
+static void row_gauge_wait(void) {
+    flt_gauge *g = new_gauge(0);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'gauge'", flt_gauge_wait(NULL, 0));
+    /* Wrong order: nothing started. */
+    BAD(FLT_ERR_STATE, "flt_gauge_start", flt_gauge_wait(g, 0));
+    BAD(FLT_ERR_STATE, "flt_gauge_start", flt_gauge_wait(g, FLT_GAUGE_WAIT_FOREVER));
+    /* A source that never ends: a timeout, then stopped by hand. */
+    flt_source *s = new_sim_source();
+    GOOD(flt_gauge_attach_source(g, s));
+    GOOD(flt_gauge_start(g));
+    BAD(FLT_ERR_TIMEOUT, "still delivers", flt_gauge_wait(g, 10));
+    GOOD(flt_gauge_stop(g));
+    BAD(FLT_ERR_STATE, "flt_gauge_start", flt_gauge_wait(g, 0));
+    GOOD(flt_gauge_attach_source(g, NULL));
+    flt_source_destroy(s);
+    flt_gauge_destroy(g);
+}
+
+static void ignore_log(flt_log_level level, const char *component, const char *message,
+                       void *user) {
+    (void)level, (void)component, (void)message, (void)user;
+}
+
+static void row_log_set_callback(void) {
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'min_level'", flt_log_set_callback(ignore_log, NULL, 0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'min_level'",
+        flt_log_set_callback(ignore_log, NULL, (flt_log_level)-1));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'min_level'",
+        flt_log_set_callback(ignore_log, NULL, (flt_log_level)41));
+    GOOD(flt_log_set_callback(ignore_log, NULL, FLT_LOG_DEBUG));
+    GOOD(flt_log_set_callback(NULL, NULL, FLT_LOG_ERROR));
+}
+
 static int g_callback_calls;
 static void count_callback(const flt_sheet *sheet, void *user) {
     (void)sheet;
@@ -3448,7 +3481,7 @@ static void row_gauge_count(void) {
     uint64_t v;
     BAD(FLT_ERR_INVALID_ARGUMENT, "'gauge'", flt_gauge_count(NULL, FLT_GAUGE_COUNT_FRAMES, &v));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_gauge_count(g, FLT_GAUGE_COUNT_FRAMES, NULL));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'counter' = 16", flt_gauge_count(g, (flt_gauge_counter)16, &v));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'counter' = 21", flt_gauge_count(g, (flt_gauge_counter)21, &v));
     ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "'counter' = -1",
                 flt_gauge_count(g, (flt_gauge_counter)-1, &v));
     GOOD(flt_gauge_count(g, FLT_GAUGE_COUNT_SHEETS_WAITING, &v));
@@ -3470,7 +3503,7 @@ static void row_sheet_get(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'sheet'", flt_sheet_get(NULL, FLT_SHEET_ID, &v));
     BAD(FLT_ERR_INVALID_ARGUMENT, "not a live", flt_sheet_get((flt_sheet *)junk, FLT_SHEET_ID, &v));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_sheet_get(sh, FLT_SHEET_ID, NULL));
-    BAD(FLT_ERR_NOT_FOUND, "'key' = 38", flt_sheet_get(sh, (flt_sheet_value)38, &v));
+    BAD(FLT_ERR_NOT_FOUND, "'key' = 45", flt_sheet_get(sh, (flt_sheet_value)45, &v));
     ENUM_UB_BAD(FLT_ERR_NOT_FOUND, "'key' = -1", flt_sheet_get(sh, (flt_sheet_value)-1, &v));
     GOOD(flt_sheet_get(sh, FLT_SHEET_ROWS, &v));
     ++g_checks;
@@ -4800,6 +4833,8 @@ static const row k_rows[] = {
     ROW(gauge_attach_source),
     ROW(gauge_start),
     ROW(gauge_stop),
+    ROW(gauge_wait),
+    ROW(log_set_callback),
     ROW(gauge_next_sheet),
     ROW(gauge_set_callback),
     ROW(gauge_count),

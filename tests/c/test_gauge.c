@@ -7,8 +7,10 @@
  * from a source.
  */
 #include <math.h>
+#include <pthread.h>
 #include <setjmp.h>
 #include <stdarg.h>
+#include <stdatomic.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -20,8 +22,10 @@
 
 #include <flatline/flatline.h>
 #include <flatline/testing.h>
+#include <zlib.h>
 
 #include "sheet.h"
+#include "test_files.h"
 
 #define OK(call) assert_int_equal((call), FLT_OK)
 
@@ -56,7 +60,7 @@ static void sleep_ms(int ms) {
 /* A sheet copied out of its handle, to compare runs                       */
 /* ---------------------------------------------------------------------- */
 
-enum { N_VALUES = 36, N_ARRAYS = 12 };
+enum { N_VALUES = 45, N_ARRAYS = 12 };
 
 /* Whether a sheet array has a value per fiber (else per zone). */
 static int fiber_array(int a) {
@@ -825,8 +829,19 @@ static void head_and_tail(void **state) {
     assert_int_equal(c1->value[FLT_SHEET_COIL], 1.0);
     assert_int_equal(c2->value[FLT_SHEET_COIL], 2.0);
     assert_int_equal(c2->value[FLT_SHEET_INDEX], 1.0);
-    assert_int_equal((int)c1->value[FLT_SHEET_FLAGS], FLT_SHEET_FLAG_HEAD | FLT_SHEET_FLAG_TAIL);
+    /* Coil 1 lost 30 lines of 1000 rows: flagged, counted, covered 97 %
+     * (above the default 95 %: complete, and judged). */
+    assert_int_equal((int)c1->value[FLT_SHEET_FLAGS],
+                     FLT_SHEET_FLAG_HEAD | FLT_SHEET_FLAG_TAIL | FLT_SHEET_FLAG_LOST_ROWS);
+    assert_int_equal(c1->value[FLT_SHEET_LOST_LINES], 30.0);
+    assert_int_equal(c1->value[FLT_SHEET_ROWS_MEASURED], 970.0);
+    assert_int_equal(c1->value[FLT_SHEET_ROWS_EXPECTED], 1000.0);
+    assert_true(c1->value[FLT_SHEET_COVERAGE] == 0.97);
+    assert_int_equal(c1->value[FLT_SHEET_MISSING], 0.0);
+    assert_true(c1->value[FLT_SHEET_SHAPE] != (double)FLT_SHAPE_NOT_JUDGED);
     assert_int_equal((int)c2->value[FLT_SHEET_FLAGS], FLT_SHEET_FLAG_HEAD | FLT_SHEET_FLAG_FLUSHED);
+    assert_true(c2->value[FLT_SHEET_COVERAGE] == 1.0);
+    assert_int_equal(count(g, FLT_GAUGE_COUNT_LOST_LINES), 30);
     /* Coil 1: its first row is the head, its last the last row with the
      * strip; the gap's rows are in it, bridged and flagged. */
     assert_true(c1->value[FLT_SHEET_S_START] == t->s[50]);
@@ -917,7 +932,35 @@ static void queue_overflow_is_counted(void **state) {
     assert_int_equal(count(g, FLT_GAUGE_COUNT_FRAMES), R);
     assert_true(sheet_dropped == (double)dropped);
     assert_true(sheet_frames + (double)dropped == (double)R);
+    /* Every sheet that lost frames says so, and its coverage counts them. */
+    for (size_t i = 0; i < l.n; ++i) {
+        const double *v = l.sheet[i].value;
+        if (v[FLT_SHEET_DROPPED] > 0)
+            assert_true((unsigned)v[FLT_SHEET_FLAGS] & FLT_SHEET_FLAG_LOST_ROWS);
+        assert_true(v[FLT_SHEET_ROWS_EXPECTED] == v[FLT_SHEET_ROWS] + v[FLT_SHEET_DROPPED]);
+    }
     free_list(&l);
+    flt_gauge_destroy(g);
+
+    /* The default (gauge_overflow "auto") waits for room when the caller
+     * pushes: the same callback, nothing dropped, every row in a sheet. */
+    flt_options *d = bag();
+    set(d, FLT_OPT_GAUGE_QUEUE_FRAMES, 4);
+    set(d, FLT_OPT_LAG_KNOTS, 4);
+    set(d, FLT_OPT_GAUGE_WORKERS, 1);
+    set(d, FLT_OPT_GAUGE_FRAME_SPACING, 2.0);
+    OK(flt_gauge_create(calib, d, &g));
+    flt_options_destroy(d);
+    g_first_sheet_seen = 0;
+    g_callback_frames = g_callback_dropped = 0;
+    OK(flt_gauge_set_callback(g, slow_callback, NULL));
+    for (double c = 600.0; c < 9000.0; c += 600.0)
+        OK(flt_gauge_cut(g, c));
+    push_rows(g, t, 0, R);
+    OK(flt_gauge_flush(g));
+    assert_int_equal(count(g, FLT_GAUGE_COUNT_DROPPED), 0);
+    assert_true(g_callback_dropped == 0.0);
+    assert_true(g_callback_frames == (double)R);
     flt_gauge_destroy(g);
     flt_options_destroy(o);
     flt_calib_destroy(calib);
@@ -952,15 +995,23 @@ static void callback_polling_and_slots(void **state) {
     set(o, FLT_OPT_GAUGE_OVERFLOW, 1);
     flt_gauge *g = NULL;
     OK(flt_gauge_create(calib, o, &g));
-    /* Six sheets of 1 m, nobody polls: two slots, so the four oldest are
-     * dropped, counted, and the newest two wait. */
+    /* Six sheets of 1 m, nobody polls: two slots, so four more sheets are
+     * made for the others; every one waits, in order. */
     for (double c = 1000.0; c < 6000.0; c += 1000.0)
         OK(flt_gauge_cut(g, c));
     push_rows(g, t, 0, R);
     OK(flt_gauge_flush(g));
     assert_int_equal(count(g, FLT_GAUGE_COUNT_SHEETS), 6);
-    assert_int_equal(count(g, FLT_GAUGE_COUNT_SHEETS_DROPPED), 4);
-    assert_int_equal(count(g, FLT_GAUGE_COUNT_SHEETS_WAITING), 2);
+    assert_int_equal(count(g, FLT_GAUGE_COUNT_SHEETS_DROPPED), 0);
+    assert_int_equal(count(g, FLT_GAUGE_COUNT_SHEETS_GROWN), 4);
+    assert_int_equal(count(g, FLT_GAUGE_COUNT_SHEETS_WAITING), 6);
+    for (int i = 1; i <= 4; ++i) {
+        flt_sheet *sh = NULL;
+        OK(flt_gauge_next_sheet(g, 0, &sh));
+        assert_non_null(sh);
+        assert_int_equal(get(sh, FLT_SHEET_ID), (double)i);
+        flt_sheet_destroy(sh);
+    }
     flt_sheet *s5 = NULL, *s6 = NULL, *none = NULL;
     OK(flt_gauge_next_sheet(g, 0, &s5));
     OK(flt_gauge_next_sheet(g, 0, &s6));
@@ -977,6 +1028,61 @@ static void callback_polling_and_slots(void **state) {
     assert_int_equal(get(s5, FLT_SHEET_ROWS), 333.0); /* 4002..4998 at 3 mm */
     flt_sheet_destroy(s5);
     flt_sheet_destroy(s6);
+
+    /* With gauge_sheet_backlog = 0 the caller chose to keep only the
+     * newest: the four oldest are dropped, counted, the newest two wait. */
+    set(o, FLT_OPT_GAUGE_SHEET_BACKLOG, 0);
+    OK(flt_gauge_create(calib, o, &g));
+    for (double c = 1000.0; c < 6000.0; c += 1000.0)
+        OK(flt_gauge_cut(g, c));
+    push_rows(g, t, 0, R);
+    OK(flt_gauge_flush(g));
+    assert_int_equal(count(g, FLT_GAUGE_COUNT_SHEETS_DROPPED), 4);
+    assert_int_equal(count(g, FLT_GAUGE_COUNT_SHEETS_GROWN), 0);
+    assert_int_equal(count(g, FLT_GAUGE_COUNT_SHEETS_WAITING), 2);
+    OK(flt_gauge_next_sheet(g, 0, &s5));
+    assert_int_equal(get(s5, FLT_SHEET_ID), 5.0);
+    flt_sheet_destroy(s5);
+    flt_gauge_destroy(g);
+
+    /* A caller who reads late: with 2 slots and a backlog of 2, a push is
+     * refused once 4 sheets exist (the row not taken, not counted), and
+     * taken again after the caller read them. */
+    set(o, FLT_OPT_GAUGE_SHEET_BACKLOG, 2);
+    set(o, FLT_OPT_LAG_KNOTS, 4); /* sheets finish 400 mm after their cut */
+    OK(flt_gauge_create(calib, o, &g));
+    for (double c = 300.0; c < 6000.0; c += 300.0)
+        OK(flt_gauge_cut(g, c));
+    sheet_list read = {0};
+    uint64_t refused = 0;
+    for (size_t r = 0; r < R;) {
+        const flt_status st = flt_gauge_push_row(g, t->s[r], t->fibers, &t->height[r * t->fibers],
+                                                 &t->slope[r * t->fibers], NULL);
+        if (st == FLT_OK) {
+            ++r;
+            continue;
+        }
+        assert_int_equal(st, FLT_ERR_BUFFER_FULL);
+        assert_non_null(strstr(flt_last_error_message(), "gauge_sheet_backlog"));
+        ++refused;
+        assert_int_equal(count(g, FLT_GAUGE_COUNT_FRAMES), r);
+        drain(g, &read, 0); /* (each read frees its sheet) */
+        sleep_ms(1);
+    }
+    OK(flt_gauge_flush(g));
+    drain(g, &read, 0);
+    /* Refused at least once (20 sheets, never read between pushes but
+     * when refused), counted; every sheet out, in order, none lost. */
+    assert_true(refused >= 1);
+    assert_int_equal(count(g, FLT_GAUGE_COUNT_REFUSED), refused);
+    assert_int_equal(count(g, FLT_GAUGE_COUNT_FRAMES), R);
+    assert_int_equal(count(g, FLT_GAUGE_COUNT_SHEETS_DROPPED), 0);
+    assert_int_equal(read.n, 20);
+    for (size_t i = 0; i < read.n; ++i)
+        assert_int_equal(read.sheet[i].value[FLT_SHEET_ID], (double)(i + 1));
+    free_list(&read);
+    flt_gauge_destroy(g);
+    set(o, FLT_OPT_GAUGE_SHEET_BACKLOG, 16);
 
     /* A callback receives every sheet, in order; polling is refused
      * meanwhile; without it polling works again. */
@@ -1001,6 +1107,98 @@ static void callback_polling_and_slots(void **state) {
     assert_null(sh);
     flt_gauge_destroy(g);
     flt_options_destroy(o);
+    flt_calib_destroy(calib);
+    test_sheet_free(t);
+}
+
+/* Rows every 3 mm with stretches missing, as a camera that lost frames
+ * before the gauge gives them; cuts at 3000 and 6000 mm. */
+static const char k_iu_rules[] =
+    "{ \"format\": \"flatline-tolerances\", \"version\": 1, \"name\": \"t\",\n"
+    "  \"rules\": [ { \"name\": \"IU\", \"measure\": \"zone_i_units\",\n"
+    "    \"bands\": [ { \"thickness_mm\": [0, 50], \"width_mm\": [0, 5000], \"limit\": 1000 } ] } "
+    "] "
+    "}\n";
+
+static void lost_rows_and_coverage(void **state) {
+    (void)state;
+    enum { R = 3000, K = 51 }; /* 9 m */
+    test_sheet *t = row_sheet(R, K, 3.0);
+    flt_calib *calib = row_calib(K);
+    flt_rules *rules = NULL;
+    OK(flt_rules_load_text(k_iu_rules, sizeof k_iu_rules - 1, &rules));
+    for (int workers = 0; workers <= 2; workers += 2) {
+        flt_gauge *g = row_gauge(calib, workers, NULL);
+        OK(flt_gauge_set_rules(g, rules, 2.0, FLT_GAUGE_WIDTH_MEASURED));
+        OK(flt_gauge_cut(g, 3000.0));
+        OK(flt_gauge_cut(g, 6000.0));
+        /* Missing: rows 500..599 (sheet 1: 100 of 1000), 1400..1419 (sheet
+         * 2: 20) and 1990..2009 (5970..6027 mm: 10 before the cut at 6000,
+         * 10 after it). */
+        for (size_t r = 0; r < R; ++r) {
+            const int missing =
+                (r >= 500 && r < 600) || (r >= 1400 && r < 1420) || (r >= 1990 && r < 2010);
+            if (!missing)
+                push_rows(g, t, r, r + 1);
+        }
+        OK(flt_gauge_flush(g));
+        sheet_list l = {0};
+        drain(g, &l, 0);
+        assert_int_equal(l.n, 3);
+        const double *v1 = l.sheet[0].value, *v2 = l.sheet[1].value, *v3 = l.sheet[2].value;
+        /* Sheet 1: 900 of 1000 rows, below 95 %: incomplete, no class and
+         * no verdict as if it were whole. */
+        assert_int_equal(v1[FLT_SHEET_ROWS], 900.0);
+        assert_int_equal(v1[FLT_SHEET_MISSING], 100.0);
+        assert_int_equal(v1[FLT_SHEET_ROWS_EXPECTED], 1000.0);
+        assert_true(v1[FLT_SHEET_COVERAGE] == 0.9);
+        assert_int_equal((unsigned)v1[FLT_SHEET_FLAGS] &
+                             (FLT_SHEET_FLAG_INCOMPLETE | FLT_SHEET_FLAG_LOST_ROWS),
+                         FLT_SHEET_FLAG_INCOMPLETE | FLT_SHEET_FLAG_LOST_ROWS);
+        assert_int_equal(v1[FLT_SHEET_SHAPE], (double)FLT_SHAPE_NOT_JUDGED);
+        assert_string_equal(flt_shape_string(FLT_SHAPE_NOT_JUDGED), "not judged: incomplete");
+        assert_int_equal(v1[FLT_SHEET_VERDICT], (double)FLT_VERDICT_NOT_JUDGED);
+        /* Sheet 2: 20 inside, 10 of the 20 across its end: 970 of 1000,
+         * complete but flagged; judged. Sheet 3: the other 10: 990 of
+         * 1000. The burst across the cut counts once, split by position. */
+        assert_int_equal(v2[FLT_SHEET_ROWS], 970.0);
+        assert_int_equal(v2[FLT_SHEET_MISSING], 30.0);
+        assert_true(v2[FLT_SHEET_COVERAGE] == 0.97);
+        assert_int_equal((unsigned)v2[FLT_SHEET_FLAGS] & FLT_SHEET_FLAG_INCOMPLETE, 0);
+        assert_true((unsigned)v2[FLT_SHEET_FLAGS] & FLT_SHEET_FLAG_LOST_ROWS);
+        assert_true(v2[FLT_SHEET_SHAPE] != (double)FLT_SHAPE_NOT_JUDGED);
+        assert_int_equal(v2[FLT_SHEET_VERDICT], (double)FLT_VERDICT_PASS);
+        assert_int_equal(v3[FLT_SHEET_ROWS], 990.0);
+        assert_int_equal(v3[FLT_SHEET_MISSING], 10.0);
+        assert_true(v3[FLT_SHEET_COVERAGE] == 0.99);
+        assert_int_equal(count(g, FLT_GAUGE_COUNT_MISSING), 140);
+        assert_int_equal(count(g, FLT_GAUGE_COUNT_SHEETS_INCOMPLETE), 1);
+        free_list(&l);
+        flt_gauge_destroy(g);
+    }
+    /* The rule's own state on an incomplete sheet: NOT_JUDGED, with the
+     * band that would apply and no worst value. */
+    flt_gauge *g = row_gauge(calib, 1, NULL);
+    OK(flt_gauge_set_rules(g, rules, 2.0, FLT_GAUGE_WIDTH_MEASURED));
+    for (size_t r = 0; r < 1000; ++r)
+        if (r < 500 || r >= 600)
+            push_rows(g, t, r, r + 1);
+    OK(flt_gauge_flush(g));
+    flt_sheet *sh = NULL;
+    OK(flt_gauge_next_sheet(g, 0, &sh));
+    assert_non_null(sh);
+    const flt_verdict *verdict = NULL;
+    OK(flt_sheet_verdict(sh, NULL, &verdict));
+    double rule_state = 0, band = 0, worst = 0;
+    OK(flt_verdict_get(verdict, 0, FLT_VERDICT_STATE, &rule_state));
+    OK(flt_verdict_get(verdict, 0, FLT_VERDICT_BAND, &band));
+    OK(flt_verdict_get(verdict, 0, FLT_VERDICT_WORST, &worst));
+    assert_int_equal(rule_state, (double)FLT_VERDICT_NOT_JUDGED);
+    assert_int_equal(band, 0.0);
+    assert_true(isnan(worst));
+    flt_sheet_destroy(sh);
+    flt_gauge_destroy(g);
+    flt_rules_destroy(rules);
     flt_calib_destroy(calib);
     test_sheet_free(t);
 }
@@ -1038,12 +1236,15 @@ static void splits_and_empty_sheets(void **state) {
     assert_true(l.sheet[1].value[FLT_SHEET_S_END] == 3601.0);
     const copied_sheet *e = &l.sheet[2];
     assert_int_equal(e->rows, 0);
+    /* A sheet with no row measured nothing: incomplete, not judged. */
     assert_int_equal((int)e->value[FLT_SHEET_FLAGS],
-                     FLT_SHEET_FLAG_EMPTY | FLT_SHEET_FLAG_NO_EDGES | FLT_SHEET_FLAG_NO_WAVE);
+                     FLT_SHEET_FLAG_EMPTY | FLT_SHEET_FLAG_NO_EDGES | FLT_SHEET_FLAG_NO_WAVE |
+                         FLT_SHEET_FLAG_INCOMPLETE);
+    assert_int_equal(e->value[FLT_SHEET_COVERAGE], 0.0);
     assert_true(isnan(e->value[FLT_SHEET_S_FIRST]) && isnan(e->value[FLT_SHEET_BOW]));
     assert_int_equal((int)e->value[FLT_SHEET_WINDOW_FLAGS] & FLT_WINDOW_NO_VALID_FIBER,
                      FLT_WINDOW_NO_VALID_FIBER);
-    assert_int_equal(e->value[FLT_SHEET_SHAPE], (double)FLT_SHAPE_UNDETERMINED);
+    assert_int_equal(e->value[FLT_SHEET_SHAPE], (double)FLT_SHAPE_NOT_JUDGED);
     /* Every value NaN is flagged: here every zone. */
     for (size_t j = 0; j < e->n_array[FLT_SHEET_ZONE_I_UNITS]; ++j)
         assert_true(isnan(e->array[FLT_SHEET_ZONE_I_UNITS][j]) &&
@@ -1052,6 +1253,246 @@ static void splits_and_empty_sheets(void **state) {
     free_list(&l);
     flt_gauge_destroy(g);
     flt_options_destroy(o);
+    flt_calib_destroy(calib);
+    test_sheet_free(t);
+}
+
+/* ---------------------------------------------------------------------- */
+/* Misuse: every call from inside the callback, two pushing threads        */
+/* ---------------------------------------------------------------------- */
+
+static double now_s(void) {
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+enum { CALLS = 15 };
+typedef struct inside_log {
+    flt_gauge *gauge;
+    const flt_rules *rules;
+    atomic_int done;
+    flt_status status[CALLS];
+    double slowest_s;
+} inside_log;
+
+static uint8_t g_frame[WIDTH * ROI_ROWS];
+
+/* Calls every gauge entry point from inside the callback, once, timing
+ * each: each returns at once with its documented status. */
+static void calling_callback(const flt_sheet *sheet, void *user) {
+    (void)sheet;
+    inside_log *log = user;
+    if (atomic_fetch_add(&log->done, 1) > 0)
+        return;
+    flt_gauge *g = log->gauge;
+    double row[64] = {0};
+    double v = 0;
+    uint64_t n = 0;
+    flt_sheet *other = NULL;
+    for (int i = 0; i < CALLS; ++i) {
+        const double t0 = now_s();
+        flt_status st = FLT_OK;
+        switch (i) {
+            case 0:
+                st = flt_gauge_get_option(g, FLT_OPT_GAUGE_WORKERS, &v);
+                break;
+            case 1:
+                st = flt_gauge_push_frame(g, g_frame, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH,
+                                          1.0e6);
+                break;
+            case 2:
+                st = flt_gauge_push_row(g, 1.0e6, 51, row, row, NULL);
+                break;
+            case 3:
+                st = flt_gauge_cut(g, 4000.0);
+                break; /* queued */
+            case 4:
+                st = flt_gauge_flush(g);
+                break;
+            case 5:
+                st = flt_gauge_attach_source(g, NULL);
+                break;
+            case 6:
+                st = flt_gauge_start(g);
+                break;
+            case 7:
+                st = flt_gauge_stop(g);
+                break;
+            case 8:
+                st = flt_gauge_next_sheet(g, 100, &other);
+                break;
+            case 9:
+                st = flt_gauge_set_callback(g, NULL, NULL);
+                break;
+            case 10:
+                st = flt_gauge_count(g, FLT_GAUGE_COUNT_SHEETS, &n);
+                break;
+            case 11:
+                st = flt_gauge_set_rules(g, log->rules, 2.0, FLT_GAUGE_WIDTH_MEASURED);
+                break;
+            case 12:
+                st = flt_gauge_coil_stats(g, FLT_COIL_CURRENT, 0, 1, &v);
+                break;
+            case 13:
+                flt_gauge_destroy(g);
+                break; /* ignored: it would wait for itself */
+            case 14:
+                st = flt_gauge_wait(g, 100);
+                break;
+            default:
+                break;
+        }
+        log->status[i] = st;
+        const double dt = now_s() - t0;
+        if (dt > log->slowest_s)
+            log->slowest_s = dt;
+    }
+}
+
+static void every_call_from_inside_the_callback(void **state) {
+    (void)state;
+    enum { R = 2000, K = 51 };
+    test_sheet *t = row_sheet(R, K, 3.0);
+    flt_calib *calib = row_calib(K);
+    flt_rules *rules = NULL;
+    OK(flt_rules_load_text(k_iu_rules, sizeof k_iu_rules - 1, &rules));
+    /* What each call returns inside the callback (flatline/gauge.h,
+     * "Inside the callback"). */
+    const flt_status expect[CALLS] = {FLT_OK,        FLT_ERR_STATE, FLT_ERR_STATE, FLT_OK,
+                                      FLT_ERR_STATE, FLT_ERR_STATE, FLT_ERR_STATE, FLT_ERR_STATE,
+                                      FLT_ERR_STATE, FLT_ERR_STATE, FLT_OK,        FLT_OK,
+                                      FLT_OK,        FLT_OK,        FLT_ERR_STATE};
+    for (int workers = 0; workers <= 2; ++workers) {
+        flt_options *o = bag();
+        set(o, FLT_OPT_LAG_KNOTS, 4); /* the first sheet finishes 400 mm after its cut */
+        flt_gauge *g = row_gauge(calib, workers, o);
+        flt_options_destroy(o);
+        inside_log log = {g, rules, 0, {FLT_OK}, 0.0};
+        atomic_init(&log.done, 0);
+        OK(flt_gauge_set_callback(g, calling_callback, &log));
+        OK(flt_gauge_cut(g, 1000.0));
+        /* 3.6 m, then the rest once the first sheet came: the cut the
+         * callback gives lies ahead of the frames pushed, so it takes
+         * effect (given after the last frame, it would wait for the next
+         * strip's). */
+        push_rows(g, t, 0, 1200);
+        for (int i = 0; i < 10000 && atomic_load(&log.done) == 0; ++i)
+            sleep_ms(1);
+        push_rows(g, t, 1200, R);
+        OK(flt_gauge_flush(g));
+        /* Every call returned at once, with its status; the gauge went on:
+         * the cut given inside took effect (sheets end at 1000 and 4000
+         * mm, then the flush), and the rules set there judged the rest. */
+        print_message("%d workers: the slowest call inside the callback took %.3f ms\n", workers,
+                      1e3 * log.slowest_s);
+        assert_true(log.slowest_s < 1.0);
+        for (int i = 0; i < CALLS; ++i)
+            if (log.status[i] != expect[i]) {
+                print_error("call %d returned %s, expected %s\n", i,
+                            flt_status_string(log.status[i]), flt_status_string(expect[i]));
+                fail();
+            }
+        assert_int_equal(atomic_load(&log.done), 3);
+        assert_int_equal(count(g, FLT_GAUGE_COUNT_SHEETS), 3);
+        assert_int_equal(count(g, FLT_GAUGE_COUNT_CUTS_IGNORED), 0);
+        OK(flt_gauge_set_callback(g, NULL, NULL));
+        double stats[FLT_COIL_VALUES];
+        OK(flt_gauge_coil_stats(g, FLT_COIL_LAST, 0, FLT_COIL_VALUES, stats));
+        assert_true(stats[FLT_COIL_SHEETS] >= 2); /* judged after the callback set rules */
+        flt_gauge_destroy(g);
+    }
+    flt_rules_destroy(rules);
+    flt_calib_destroy(calib);
+    test_sheet_free(t);
+}
+
+/* Two threads pushing at once: while one waits in a push (its worker is
+ * held by a slow callback), the other is refused at once, and the gauge
+ * goes on. The second thread's rows lie behind the strip (a short
+ * reversal), so those that are taken between the first's pushes are
+ * skipped. */
+typedef struct second_pusher {
+    flt_gauge *gauge;
+    const double *height;
+    atomic_int stop;
+    int refused, taken, other;
+    double slowest_s;
+} second_pusher;
+
+static void *second_pusher_main(void *arg) {
+    second_pusher *p = arg;
+    while (!atomic_load(&p->stop)) {
+        const double t0 = now_s();
+        const flt_status st = flt_gauge_push_row(p->gauge, 0.0, 51, p->height, p->height, NULL);
+        const double dt = now_s() - t0;
+        if (dt > p->slowest_s)
+            p->slowest_s = dt;
+        if (st == FLT_ERR_STATE)
+            ++p->refused;
+        else if (st == FLT_OK)
+            ++p->taken;
+        else
+            ++p->other;
+        sleep_ms(1);
+    }
+    return NULL;
+}
+
+static void a_second_pusher_is_refused(void **state) {
+    (void)state;
+    enum { R = 3000, K = 51 };
+    test_sheet *t = row_sheet(R, K, 3.0);
+    flt_calib *calib = row_calib(K);
+    flt_options *o = bag();
+    set(o, FLT_OPT_GAUGE_QUEUE_FRAMES, 1);
+    set(o, FLT_OPT_LAG_KNOTS, 4);
+    set(o, FLT_OPT_GAUGE_REVERSAL_LENGTH, 1.0e8); /* going back to 0 is a short reversal */
+    flt_gauge *g = row_gauge(calib, 1, o);
+    flt_options_destroy(o);
+    g_first_sheet_seen = 0;
+    g_callback_frames = g_callback_dropped = 0;
+    OK(flt_gauge_set_callback(g, slow_callback, NULL));
+    for (double c = 600.0; c < 9000.0; c += 600.0)
+        OK(flt_gauge_cut(g, c));
+    second_pusher p = {g, &t->height[0], 0, 0, 0, 0, 0.0};
+    atomic_init(&p.stop, 0);
+    pthread_t other;
+    push_rows(g, t, 0, 10);
+    assert_int_equal(pthread_create(&other, NULL, second_pusher_main, &p), 0);
+    /* Waits 300 ms for room once: the other is refused meanwhile. (This
+     * thread is refused too when it comes while the other pushes: again.) */
+    int main_refused = 0;
+    for (size_t r = 10; r < R;) {
+        const flt_status st = flt_gauge_push_row(g, t->s[r], t->fibers, &t->height[r * t->fibers],
+                                                 &t->slope[r * t->fibers], NULL);
+        if (st == FLT_ERR_STATE)
+            ++main_refused;
+        else {
+            OK(st);
+            ++r;
+        }
+    }
+    atomic_store(&p.stop, 1);
+    pthread_join(other, NULL);
+    OK(flt_gauge_flush(g));
+    OK(flt_gauge_set_callback(g, NULL, NULL));
+    print_message("second pusher: %d refused, %d taken (skipped), slowest call %.3f ms; the "
+                  "first refused %d times\n",
+                  p.refused, p.taken, 1e3 * p.slowest_s, main_refused);
+    assert_true(p.refused >= 1);
+    assert_int_equal(p.other, 0);
+    assert_true(p.slowest_s < 1.0);
+    /* Usable: every row of the first thread is in a sheet, the second's
+     * taken rows were skipped, nothing failed. */
+    assert_true(g_callback_frames == (double)R);
+    assert_int_equal(count(g, FLT_GAUGE_COUNT_FRAMES), R + p.taken);
+    assert_int_equal(count(g, FLT_GAUGE_COUNT_SKIPPED_REVERSAL) +
+                         count(g, FLT_GAUGE_COUNT_SKIPPED_STOP),
+                     p.taken);
+    flt_sheet *sh = NULL;
+    OK(flt_gauge_next_sheet(g, 0, &sh));
+    flt_gauge_destroy(g);
     flt_calib_destroy(calib);
     test_sheet_free(t);
 }
@@ -1187,6 +1628,326 @@ static void acquisition_from_a_source(void **state) {
     flt_calib_destroy(calib);
 }
 
+/* ---------------------------------------------------------------------- */
+/* Running a finite source to its end                                      */
+/* ---------------------------------------------------------------------- */
+
+static void put32be(uint8_t *p, uint32_t v) {
+    p[0] = (uint8_t)(v >> 24);
+    p[1] = (uint8_t)(v >> 16);
+    p[2] = (uint8_t)(v >> 8);
+    p[3] = (uint8_t)v;
+}
+
+static void png_chunk(FILE *f, const char *type, const uint8_t *body, uint32_t n) {
+    uint8_t head[8], tail[4];
+    put32be(head, n);
+    memcpy(head + 4, type, 4);
+    fwrite(head, 1, 8, f);
+    if (n)
+        fwrite(body, 1, n, f);
+    uLong crc = crc32(0, (const Bytef *)type, 4);
+    if (n)
+        crc = crc32(crc, body, n);
+    put32be(tail, (uint32_t)crc);
+    fwrite(tail, 1, 4, f);
+}
+
+/* An 8-bit grey PNG. */
+static void write_png(const char *path, uint32_t w, uint32_t h, const uint8_t *pixels) {
+    FILE *f = tf_fopen(path, "wb");
+    assert_non_null(f);
+    static const uint8_t sig[8] = {0x89, 'P', 'N', 'G', 0x0D, 0x0A, 0x1A, 0x0A};
+    fwrite(sig, 1, 8, f);
+    uint8_t ihdr[13] = {0};
+    put32be(ihdr, w);
+    put32be(ihdr + 4, h);
+    ihdr[8] = 8; /* bits; colour type 0: grey */
+    png_chunk(f, "IHDR", ihdr, 13);
+    const size_t raw_n = ((size_t)w + 1) * h;
+    uint8_t *raw = malloc(raw_n);
+    for (uint32_t y = 0; y < h; ++y) {
+        raw[y * ((size_t)w + 1)] = 0; /* filter: none */
+        memcpy(raw + y * ((size_t)w + 1) + 1, pixels + (size_t)y * w, w);
+    }
+    uLongf packed_n = compressBound(raw_n);
+    uint8_t *packed = malloc(packed_n);
+    assert_int_equal(compress2(packed, &packed_n, raw, raw_n, 1), Z_OK);
+    png_chunk(f, "IDAT", packed, (uint32_t)packed_n);
+    png_chunk(f, "IEND", NULL, 0);
+    fclose(f);
+    free(raw);
+    free(packed);
+}
+
+static void count_callback(const flt_sheet *sheet, void *user) {
+    double *rows = user;
+    rows[0] += 1;
+    rows[1] += get(sheet, FLT_SHEET_ROWS);
+}
+
+/* 150 recorded frames, 10 mm apart (1.5 m), cuts at 500 and 1000 mm: the
+ * gauge runs them to their end with flt_gauge_wait, polled (0 and 2
+ * workers) or with a callback, and every sheet comes out. */
+static void running_a_recording_to_its_end(void **state) {
+    (void)state;
+    enum { FRAMES = 150 };
+    char dir[512], path[600];
+    assert_int_equal(tf_temp_dir(dir, sizeof dir, "test_gauge"), 0);
+    flt_calib *calib = NULL;
+    OK(flt_calib_create_reference(ROI_FIRST, ROI_ROWS, F_FIRST_X, F_PITCH, FK, &calib));
+    flt_options *so = bag();
+    set(so, FLT_OPT_SIM_FRAME_SPACING, F_STEP);
+    flt_sim *sim = NULL;
+    OK(flt_sim_create(calib, so, &sim));
+    flt_options_destroy(so);
+    OK(flt_sim_add_defect(sim, FLT_SIM_CENTRE_BUCKLE, 4.0, 800.0));
+    uint8_t *frame = malloc((size_t)WIDTH * ROI_ROWS);
+    for (int i = 0; i < FRAMES; ++i) {
+        double e = 0;
+        OK(flt_sim_next_frame(sim, frame, (size_t)WIDTH * ROI_ROWS, WIDTH, &e, 0, NULL, NULL, 0));
+        snprintf(path, sizeof path, "%s/frame_%03d.png", dir, i);
+        write_png(path, WIDTH, ROI_ROWS, frame);
+    }
+    free(frame);
+    flt_sim_destroy(sim);
+    flt_options *io = bag();
+    set(io, FLT_OPT_SOURCE_ENCODER_STEP, F_STEP); /* positions 0, 10, 20, ... mm */
+    for (int run = 0; run < 3; ++run) {
+        const int workers = run == 0 ? 0 : 2, with_callback = run == 2;
+        flt_source *src = NULL;
+        OK(flt_source_create_image_dir(dir, NULL, io, &src));
+        flt_options *o = bag();
+        set(o, FLT_OPT_GAUGE_FRAME_SPACING, 8.0);
+        set(o, FLT_OPT_LAG_KNOTS, 4);
+        set(o, FLT_OPT_GAUGE_WORKERS, workers);
+        set(o, FLT_OPT_GAUGE_QUEUE_FRAMES, 4); /* the source outruns the workers: it waits */
+        flt_gauge *g = NULL;
+        OK(flt_gauge_create(calib, o, &g));
+        flt_options_destroy(o);
+        /* Nothing started: nothing to wait for. */
+        assert_int_equal(flt_gauge_wait(g, 0), FLT_ERR_STATE);
+        assert_non_null(strstr(flt_last_error_message(), "flt_gauge_start"));
+        double by_callback[2] = {0, 0};
+        if (with_callback)
+            OK(flt_gauge_set_callback(g, count_callback, by_callback));
+        OK(flt_gauge_attach_source(g, src));
+        OK(flt_gauge_cut(g, 500.0));
+        OK(flt_gauge_cut(g, 1000.0));
+        OK(flt_gauge_start(g));
+        sheet_list l = {0};
+        flt_status st;
+        int timeouts = 0;
+        if (with_callback)
+            st = flt_gauge_wait(g, FLT_GAUGE_WAIT_FOREVER);
+        else
+            while ((st = flt_gauge_wait(g, 1)) == FLT_ERR_TIMEOUT) {
+                ++timeouts;
+                drain(g, &l, 0);
+            }
+        OK(st);
+        if (!with_callback)
+            drain(g, &l, 0);
+        if (with_callback) {
+            l.n = (size_t)by_callback[0];
+            assert_true(by_callback[1] + (double)count(g, FLT_GAUGE_COUNT_NO_STRIP) == FRAMES);
+        } else {
+            double rows = 0;
+            sum_values(&l, FLT_SHEET_ROWS, &rows);
+            assert_true(rows + (double)count(g, FLT_GAUGE_COUNT_NO_STRIP) == FRAMES);
+        }
+        print_message("%d workers%s: %zu sheets out of %d recorded frames, %d waits timed out\n",
+                      workers, with_callback ? ", callback" : "", l.n, FRAMES, timeouts);
+        /* Every frame in, the strip ended, every sheet out; nothing dropped
+         * (a recording waits for room). */
+        assert_int_equal(l.n, 3);
+        assert_int_equal(count(g, FLT_GAUGE_COUNT_FRAMES), FRAMES);
+        assert_int_equal(count(g, FLT_GAUGE_COUNT_DROPPED), 0);
+        assert_int_equal(count(g, FLT_GAUGE_COUNT_ACQUIRING), 0);
+        assert_int_equal(count(g, FLT_GAUGE_COUNT_QUEUED), 0);
+        if (!with_callback)
+            assert_true((unsigned)l.sheet[2].value[FLT_SHEET_FLAGS] & FLT_SHEET_FLAG_FLUSHED);
+        /* Done: a second wait has nothing to wait for. */
+        assert_int_equal(flt_gauge_wait(g, 0), FLT_ERR_STATE);
+        free_list(&l);
+        OK(flt_gauge_attach_source(g, NULL));
+        flt_gauge_destroy(g);
+        flt_source_destroy(src);
+    }
+    flt_options_destroy(io);
+    flt_calib_destroy(calib);
+    tf_remove_tree(dir);
+}
+
+/* ---------------------------------------------------------------------- */
+/* The log                                                                 */
+/* ---------------------------------------------------------------------- */
+
+enum {
+    EV_DROPPED,
+    EV_LOST_ROWS,
+    EV_INCOMPLETE,
+    EV_CUT_IGNORED,
+    EV_SATURATED,
+    EV_HEAD,
+    EV_END,
+    EV_BANDS,
+    EV_N
+};
+typedef struct log_counts {
+    pthread_mutex_t m;
+    int n[EV_N], other, warnings;
+} log_counts;
+
+static void counting_log(flt_log_level level, const char *component, const char *message,
+                         void *user) {
+    log_counts *c = user;
+    pthread_mutex_lock(&c->m);
+    assert_string_equal(component, "gauge");
+    c->warnings += level == FLT_LOG_WARNING;
+    if (strstr(message, " dropped: "))
+        ++c->n[EV_DROPPED];
+    else if (strstr(message, " lost rows: "))
+        ++c->n[EV_LOST_ROWS];
+    else if (strstr(message, " is incomplete: "))
+        ++c->n[EV_INCOMPLETE];
+    else if (strstr(message, " ignored, the last at encoder 1200.0 mm"))
+        ++c->n[EV_CUT_IGNORED];
+    else if (strstr(message, " are saturated "))
+        ++c->n[EV_SATURATED];
+    else if (strstr(message, "the strip's head"))
+        ++c->n[EV_HEAD];
+    else if (strstr(message, "ended by a flush"))
+        ++c->n[EV_END];
+    else if (strstr(message, "laser bands found"))
+        ++c->n[EV_BANDS];
+    else
+        ++c->other;
+    pthread_mutex_unlock(&c->m);
+}
+
+/* A run with frames dropped at a full queue (a slow callback holds the only
+ * worker), a cut given after its sheet was finished and an overexposed
+ * line (peaks at 1.5 x full scale): the log tells each, as often as it
+ * happened, up to its rate. */
+static void log_tells_drops_cuts_and_saturation(void **state) {
+    (void)state;
+    enum { FRAMES = 300 };
+    flt_calib *calib = NULL;
+    OK(flt_calib_create_reference(ROI_FIRST, ROI_ROWS, F_FIRST_X, F_PITCH, FK, &calib));
+    flt_options *so = bag();
+    set(so, FLT_OPT_SIM_FRAME_SPACING, F_STEP);
+    set(so, FLT_OPT_SIM_LINE_PEAK, 1.5);
+    flt_sim *sim = NULL;
+    OK(flt_sim_create(calib, so, &sim));
+    flt_options_destroy(so);
+    uint8_t *frames = malloc((size_t)FRAMES * WIDTH * ROI_ROWS);
+    for (int i = 0; i < FRAMES; ++i) {
+        double e = 0;
+        OK(flt_sim_next_frame(sim, frames + (size_t)i * WIDTH * ROI_ROWS, (size_t)WIDTH * ROI_ROWS,
+                              WIDTH, &e, 0, NULL, NULL, 0));
+    }
+    flt_sim_destroy(sim);
+    log_counts c;
+    memset(&c, 0, sizeof c);
+    pthread_mutex_init(&c.m, NULL);
+    OK(flt_log_set_callback(counting_log, &c, FLT_LOG_INFO));
+    flt_options *o = bag();
+    set(o, FLT_OPT_GAUGE_FRAME_SPACING, 8.0);
+    set(o, FLT_OPT_LAG_KNOTS, 4);
+    set(o, FLT_OPT_GAUGE_WORKERS, 1);
+    set(o, FLT_OPT_GAUGE_QUEUE_FRAMES, 2);
+    set(o, FLT_OPT_GAUGE_OVERFLOW, FLT_GAUGE_OVERFLOW_DROP);
+    set(o, FLT_OPT_GAUGE_MAX_SHEET_LENGTH, 1000.0);
+    flt_gauge *g = NULL;
+    OK(flt_gauge_create(calib, o, &g));
+    flt_options_destroy(o);
+    g_first_sheet_seen = 0;
+    g_callback_frames = g_callback_dropped = 0;
+    OK(flt_gauge_set_callback(g, slow_callback, NULL));
+    OK(flt_gauge_cut(g, 400.0));
+    const double t0 = now_s();
+    for (int i = 0; i < FRAMES; ++i) {
+        /* No cut after 400 mm: the sheets from there are split every
+         * 1000 mm (gauge_max_sheet_length). Frames every 10 mm from 0;
+         * while the worker sleeps in the first sheet's callback, the queue
+         * of 2 overflows. */
+        sleep_ms(2); /* a frame every 2 ms: the worker keeps up but while it sleeps */
+        OK(flt_gauge_push_frame(g, frames + (size_t)i * WIDTH * ROI_ROWS, FLT_PIXEL_MONO8, WIDTH,
+                                ROI_ROWS, WIDTH, F_STEP * i));
+    }
+    OK(flt_gauge_flush(g));
+    const double elapsed = now_s() - t0;
+    OK(flt_gauge_set_callback(g, NULL, NULL));
+    const uint64_t dropped = count(g, FLT_GAUGE_COUNT_DROPPED);
+    const uint64_t sheets = count(g, FLT_GAUGE_COUNT_SHEETS);
+    /* A cut at 1200 mm given after the strip ended: the next strip's head
+     * (at 5000 mm) is past it, so it is ignored. */
+    OK(flt_gauge_cut(g, 1200.0));
+    OK(flt_gauge_push_frame(g, frames, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, 5000.0));
+    OK(flt_gauge_flush(g));
+    OK(flt_log_set_callback(NULL, NULL, FLT_LOG_INFO)); /* returns once no call is in progress */
+    print_message("log: %d frame-dropped, %d lost-rows, %d incomplete, %d cut-ignored, "
+                  "%d saturated, %d head, %d end, %d bands messages, %d others; %llu frames "
+                  "dropped, %llu sheets, %.1f s\n",
+                  c.n[EV_DROPPED], c.n[EV_LOST_ROWS], c.n[EV_INCOMPLETE], c.n[EV_CUT_IGNORED],
+                  c.n[EV_SATURATED], c.n[EV_HEAD], c.n[EV_END], c.n[EV_BANDS], c.other,
+                  (unsigned long long)dropped, (unsigned long long)sheets, elapsed);
+    /* Drops: one message each, at most 5 per 10 s (then held back). */
+    assert_true(dropped > 0);
+    const int windows = 1 + (int)(elapsed / 10.0);
+    assert_true(c.n[EV_DROPPED] >= (dropped < 5 ? (int)dropped : 5));
+    assert_true(c.n[EV_DROPPED] <= 5 * windows);
+    /* Per sheet: lost rows where a sheet lost any, saturation on each
+     * (every sheet of the overexposed line), and the one-frame sheet of the
+     * next strip. (The sheets: 0-400 mm, then split every 1000 mm from the
+     * first row past it: 3 or 4, as the drops fall.) */
+    assert_true(sheets >= 3 && sheets <= 4);
+    assert_true(c.n[EV_LOST_ROWS] >= 1 && c.n[EV_LOST_ROWS] <= (int)sheets);
+    assert_int_equal(c.n[EV_SATURATED], (int)sheets + 1);
+    assert_int_equal(c.n[EV_INCOMPLETE], (int)count(g, FLT_GAUGE_COUNT_SHEETS_INCOMPLETE));
+    assert_int_equal(c.other, 0);
+    assert_int_equal(c.n[EV_CUT_IGNORED], 1);
+    assert_int_equal(count(g, FLT_GAUGE_COUNT_CUTS_IGNORED), 1);
+    assert_int_equal(c.n[EV_HEAD], 2);
+    assert_int_equal(c.n[EV_END], 2);
+    assert_int_equal(c.n[EV_BANDS], 1);
+    /* Off: nothing more. */
+    const int before = c.n[EV_HEAD];
+    OK(flt_gauge_push_frame(g, frames, FLT_PIXEL_MONO8, WIDTH, ROI_ROWS, WIDTH, 1.0e6));
+    OK(flt_gauge_flush(g));
+    assert_int_equal(c.n[EV_HEAD], before);
+    /* A new installation starts every place's count afresh: the drops
+     * above used up to 5 messages of this 10 s window, the next strip's
+     * drops are told again (a sheet every 1000 mm; the callback's sleep at
+     * the first one overflows the queue of 2). */
+    const uint64_t dropped_first = count(g, FLT_GAUGE_COUNT_DROPPED);
+    memset(c.n, 0, sizeof c.n);
+    OK(flt_log_set_callback(counting_log, &c, FLT_LOG_INFO));
+    g_first_sheet_seen = 0;
+    OK(flt_gauge_set_callback(g, slow_callback, NULL));
+    for (int i = 0; i < FRAMES; ++i) {
+        sleep_ms(2);
+        OK(flt_gauge_push_frame(g, frames + (size_t)i * WIDTH * ROI_ROWS, FLT_PIXEL_MONO8, WIDTH,
+                                ROI_ROWS, WIDTH, 2.0e6 + F_STEP * i));
+    }
+    OK(flt_gauge_flush(g));
+    OK(flt_gauge_set_callback(g, NULL, NULL));
+    OK(flt_log_set_callback(NULL, NULL, FLT_LOG_INFO));
+    const uint64_t dropped_again = count(g, FLT_GAUGE_COUNT_DROPPED) - dropped_first;
+    print_message("log again: %d frame-dropped messages, %llu frames dropped (before: %llu)\n",
+                  c.n[EV_DROPPED], (unsigned long long)dropped_again,
+                  (unsigned long long)dropped_first);
+    assert_true(dropped_again > 0);
+    assert_true(c.n[EV_DROPPED] >= (dropped_again < 5 ? (int)dropped_again : 5));
+    assert_int_equal(flt_log_set_callback(counting_log, &c, (flt_log_level)15),
+                     FLT_ERR_INVALID_ARGUMENT);
+    flt_gauge_destroy(g);
+    pthread_mutex_destroy(&c.m);
+    free(frames);
+    flt_calib_destroy(calib);
+}
+
 /* A strip 1000 mm wide, 100 mm off the sensor's centre, on a 1500 mm
  * fiber grid, the roller table beside it: the extractor's edges give the sheet's width and
  * position, the fibers beside the strip are FLT_FLAG_OFF_STRIP (NaN) in the height map, and fibers
@@ -1298,8 +2059,13 @@ int main(void) {
         cmocka_unit_test(head_and_tail),
         cmocka_unit_test(queue_overflow_is_counted),
         cmocka_unit_test(callback_polling_and_slots),
+        cmocka_unit_test(lost_rows_and_coverage),
         cmocka_unit_test(splits_and_empty_sheets),
+        cmocka_unit_test(every_call_from_inside_the_callback),
+        cmocka_unit_test(a_second_pusher_is_refused),
         cmocka_unit_test(acquisition_from_a_source),
+        cmocka_unit_test(running_a_recording_to_its_end),
+        cmocka_unit_test(log_tells_drops_cuts_and_saturation),
         cmocka_unit_test(narrow_strip_has_edges),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -249,14 +249,20 @@ static void run_line(const flt_calib *calib, const line *l, const flt_rules *rul
 static void check_coil(const run *r, double coil, const double stats[RULES][FLT_COIL_VALUES]) {
     for (size_t i = 0; i < RULES; ++i) {
         const double *c = stats[i];
-        double sheets = 0, passed = 0, state[4] = {0, 0, 0, 0}, n = 0, sum = 0;
+        double sheets = 0, passed = 0, failed = 0, state[5] = {0, 0, 0, 0, 0}, n = 0, sum = 0;
         double lo = INFINITY, hi = -INFINITY, hi_id = NAN, hist[FLT_COIL_HISTOGRAM_BINS] = {0};
         for (size_t k = 0; k < r->sheets; ++k) {
             const judged *j = &r->sheet[k];
             if (j->coil != coil)
                 continue;
             sheets += 1;
-            passed += j->failed == 0;
+            /* A sheet passes only when every rule judged it and passed. */
+            int judged_all = 1;
+            for (size_t q = 0; q < RULES; ++q)
+                judged_all &= j->value[q][FLT_VERDICT_STATE] == FLT_VERDICT_PASS ||
+                              j->value[q][FLT_VERDICT_STATE] == FLT_VERDICT_FAIL;
+            failed += j->failed > 0;
+            passed += j->failed == 0 && judged_all;
             const int st = (int)j->value[i][FLT_VERDICT_STATE];
             state[st] += 1;
             if (st != FLT_VERDICT_PASS && st != FLT_VERDICT_FAIL)
@@ -280,7 +286,10 @@ static void check_coil(const run *r, double coil, const double stats[RULES][FLT_
         assert_true(c[FLT_COIL_RULES] == RULES);
         assert_true(c[FLT_COIL_SHEETS] == sheets);
         assert_true(c[FLT_COIL_SHEETS_PASSED] == passed);
-        assert_true(c[FLT_COIL_SHEETS_FAILED] == sheets - passed);
+        assert_true(c[FLT_COIL_SHEETS_FAILED] == failed);
+        assert_true(c[FLT_COIL_SHEETS_NOT_JUDGED] == sheets - passed - failed);
+        assert_true(c[FLT_COIL_SHEETS_JUDGED] == passed + failed);
+        assert_true(c[FLT_COIL_RULE_NOT_JUDGED] == state[4]);
         assert_true(c[FLT_COIL_RULE_PASSED] == state[0]);
         assert_true(c[FLT_COIL_RULE_FAILED] == state[1]);
         assert_true(c[FLT_COIL_RULE_NO_BAND] == state[2]);
@@ -417,6 +426,16 @@ static void nominal_width_and_no_rules(void **state) {
         OK(flt_verdict_get(v, i, FLT_VERDICT_STATE, &st));
         assert_int_equal((int)st, FLT_VERDICT_NO_BAND);
     }
+    /* No rule could judge it: not judged, never passed; the coil counts it
+     * so (it failed no rule, which is not the same as passing). */
+    double verdict = -1;
+    OK(flt_sheet_get(sh, FLT_SHEET_VERDICT, &verdict));
+    assert_int_equal((int)verdict, FLT_VERDICT_NOT_JUDGED);
+    double coil[FLT_COIL_VALUES];
+    OK(flt_gauge_coil_stats(g, FLT_COIL_LAST, 0, FLT_COIL_VALUES, coil));
+    assert_true(coil[FLT_COIL_SHEETS] == 1 && coil[FLT_COIL_SHEETS_NOT_JUDGED] == 1);
+    assert_true(coil[FLT_COIL_SHEETS_PASSED] == 0 && coil[FLT_COIL_SHEETS_FAILED] == 0);
+    assert_true(coil[FLT_COIL_SHEETS_JUDGED] == 0 && coil[FLT_COIL_RULE_NO_BAND] == 1);
     flt_sheet_destroy(sh);
     /* Rules off: the next sheet has none, the statistics are gone. */
     OK(flt_gauge_set_rules(g, NULL, 4.0, 0.0));

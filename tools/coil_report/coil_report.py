@@ -96,7 +96,22 @@ STATE_TEXT = {
     flatline.VerdictState.FAIL: "FAIL",
     flatline.VerdictState.NO_BAND: "no band",
     flatline.VerdictState.NOT_MEASURED: "not measured",
+    flatline.VerdictState.NOT_JUDGED: "not judged: incomplete",
 }
+
+
+def sheet_state(sheet: flatline.Sheet,
+                row: Sequence[flatline.RuleResult]) -> flatline.VerdictState:
+    """A sheet's verdict over its rules: FAIL when a rule failed, PASS only
+    when every rule judged it and passed; else NOT_JUDGED (a rule with no
+    band or a missing measure, or an incomplete sheet): never a pass."""
+    if sheet.incomplete:
+        return flatline.VerdictState.NOT_JUDGED
+    if any(r.state == flatline.VerdictState.FAIL for r in row):
+        return flatline.VerdictState.FAIL
+    if row and all(r.state == flatline.VerdictState.PASS for r in row):
+        return flatline.VerdictState.PASS
+    return flatline.VerdictState.NOT_JUDGED
 
 
 # ---------------------------------------------------------------------------
@@ -245,6 +260,11 @@ def judge(verdict: flatline.Verdict, sheet: flatline.Sheet, fiber_x: np.ndarray,
     """One sheet's verdict: its measures (set_sheet_measures) and its height
     map (when the gauge kept it) against every rule, for the coil's
     thickness and the sheet's strip width (or width_mm when given)."""
+    if sheet.incomplete:
+        # Too many rows missing: judged by no rule, as the gauge does.
+        return [flatline.RuleResult(rule, flatline.VerdictState.NOT_JUDGED, math.nan, math.nan,
+                                    math.nan, math.nan, math.nan, -1)
+                for rule in verdict.rules]
     set_sheet_measures(verdict, sheet)
     width = width_mm if width_mm is not None else sheet.strip_width
     if not math.isfinite(width):
@@ -568,7 +588,8 @@ td.num { text-align: right; font-variant-numeric: tabular-nums; }
 tr.pass td.state, td.pass { background: #cdebcd; }
 tr.fail td.state, td.fail { background: #f3bcbc; font-weight: bold; }
 tr.fail td.num.margin { color: #a00; font-weight: bold; }
-tr.no_band td.state, tr.not_measured td.state, td.none { background: #e4e4e4; color: #555; }
+tr.no_band td.state, tr.not_measured td.state, tr.not_judged td.state, td.none,
+td.not_judged { background: #e4e4e4; color: #555; }
 tr.first td { border-top: 2px solid #777; }
 img { max-width: 100%; border: 1px solid #ccc; }
 .note { color: #555; font-size: 0.9em; }
@@ -603,7 +624,8 @@ def state_text(sheet: flatline.Sheet, result: flatline.RuleResult, thickness_mm:
 def _state_class(state: flatline.VerdictState) -> str:
     return {flatline.VerdictState.PASS: "pass", flatline.VerdictState.FAIL: "fail",
             flatline.VerdictState.NO_BAND: "no_band",
-            flatline.VerdictState.NOT_MEASURED: "not_measured"}[state]
+            flatline.VerdictState.NOT_MEASURED: "not_measured",
+            flatline.VerdictState.NOT_JUDGED: "not_judged"}[state]
 
 
 @dataclass
@@ -613,9 +635,10 @@ class CoilReport:
     coil: int
     path: str  #: the page, <out>/coil_<id>/index.html
     sheets: int
-    passed: int  #: sheets that passed every rule that judged them
+    passed: int  #: sheets every rule judged and passed
     failed: int  #: sheets that failed at least one rule
     results: List[List[flatline.RuleResult]]  #: per sheet, per rule
+    not_judged: int = 0  #: sheets no rule failed that a rule could not judge, or incomplete
 
 
 def write_coil_report(coil: int, sheets: Sequence[flatline.Sheet], out_dir: str,
@@ -672,8 +695,11 @@ def write_coil_report(coil: int, sheets: Sequence[flatline.Sheet], out_dir: str,
     path = os.path.join(folder, "index.html")
     with open(path, "w", encoding="utf-8") as f:
         f.write(page)
-    n_failed = sum(1 for v in failed.values() if v)
-    return CoilReport(coil, path, len(sheets), len(sheets) - n_failed, n_failed, table)
+    states = [sheet_state(sh, row) for sh, row in zip(sheets, table)]
+    n_passed = sum(st == flatline.VerdictState.PASS for st in states)
+    n_failed = sum(st == flatline.VerdictState.FAIL for st in states)
+    return CoilReport(coil, path, len(sheets), n_passed, n_failed, table,
+                      len(sheets) - n_passed - n_failed)
 
 
 def _write_csv(path: str, coil: int, sheets: Sequence[flatline.Sheet],
@@ -702,8 +728,10 @@ def _page(coil: int, sheets: Sequence[flatline.Sheet],
     def width_of(sheet: flatline.Sheet) -> float:
         return width_mm if width_mm is not None else sheet.strip_width
 
-    failed_sheets = [sh for sh, row in zip(sheets, table)
-                     if any(r.state == flatline.VerdictState.FAIL for r in row)]
+    states = [sheet_state(sh, row) for sh, row in zip(sheets, table)]
+    failed_sheets = [sh for sh, st in zip(sheets, states) if st == flatline.VerdictState.FAIL]
+    unjudged = [sh for sh, st in zip(sheets, states) if st == flatline.VerdictState.NOT_JUDGED]
+    n_passed = n - len(failed_sheets) - len(unjudged)
     length = sum(sh.s_end - sh.s_start for sh in sheets)
     widths = [sh.strip_width for sh in sheets if math.isfinite(sh.strip_width)]
     width_text = f"{np.median(widths):.0f} mm" if widths else "unknown"
@@ -715,11 +743,14 @@ def _page(coil: int, sheets: Sequence[flatline.Sheet],
     add(f"<p class=\"lead\">{n} sheets, {length / 1000:.1f} m of strip, "
         f"{thickness_mm:g} mm thick, {width_text} wide. Rules: "
         f"<b>{e(rules_name or 'unnamed rule set')}</b>. libflatline {e(flatline.version())}.</p>")
-    cls = "fail" if failed_sheets else "pass"
-    add(f"<p class=\"big\"><span class=\"{cls}\" style=\"padding:0.1em 0.4em\">"
-        f"{n - len(failed_sheets)} of {n} sheets within every rule</span>"
+    cls = "fail" if failed_sheets else "pass" if not unjudged else "not_judged"
+    add(f"<p class=\"big\" id=\"headline\"><span class=\"{cls}\" style=\"padding:0.1em 0.4em\">"
+        f"{n_passed} of {n} sheets within every rule</span>"
         + (f" &nbsp; failed: sheets {', '.join(str(sh.index) for sh in failed_sheets)}"
-           if failed_sheets else "") + "</p>")
+           if failed_sheets else "")
+        + (f" &nbsp; <span class=\"not_judged\">not judged: sheets "
+           f"{', '.join(str(sh.index) for sh in unjudged)}</span>" if unjudged else "")
+        + "</p>")
 
     # -- summary per rule
     add("<h2>Summary per rule</h2>")
@@ -780,15 +811,21 @@ def _page(coil: int, sheets: Sequence[flatline.Sheet],
     add("<h2>Sheets</h2>")
     add("<table id=\"sheets\">\n<tr><th>sheet</th><th>id</th><th>s from [mm]</th>"
         "<th>s to [mm]</th><th>shape</th><th>largest zone [I-Units]</th>"
-        "<th>largest wave [mm]</th><th>rules failed</th><th>height map</th></tr>")
-    for sh, row in zip(sheets, table):
+        "<th>largest wave [mm]</th><th>coverage</th><th>verdict</th><th>rules failed</th>"
+        "<th>height map</th></tr>")
+    for sh, row, st in zip(sheets, table, states):
         nfail = sum(r.state == flatline.VerdictState.FAIL for r in row)
+        verdict_text = {flatline.VerdictState.PASS: "pass", flatline.VerdictState.FAIL: "FAIL",
+                        flatline.VerdictState.NOT_JUDGED: "not judged: incomplete"
+                        if sh.incomplete else "not judged"}[st]
         png = sheet_png.get(sh.id)
         link = f"<a href=\"{png}\">map</a>" if png else "–"
         add(f"<tr>" + _td(str(sh.index), "num") + _td(str(sh.id), "num")
             + _td(f"{sh.s_start:.0f}", "num") + _td(f"{sh.s_end:.0f}", "num")
             + _td(shape_text(sh)) + _td(_fmt(sh.max_i_units, "I-Units"), "num")
             + _td(_fmt(sh.wave_height, "mm"), "num")
+            + _td(f"{100 * sh.coverage:.1f} %", "num" + (" not_judged" if sh.incomplete else ""))
+            + _td(verdict_text, _state_class(st))
             + _td(str(nfail), "num " + ("fail" if nfail else "pass"))
             + f"<td>{link}</td></tr>")
     add("</table>")
@@ -875,14 +912,16 @@ def _index_page(reports: Sequence[CoilReport], rules_name: str) -> str:
     rows = "".join(
         f"<tr><td><a href=\"coil_{r.coil}/index.html\">coil {r.coil}</a></td>"
         f"<td class=\"num\">{r.sheets}</td><td class=\"num pass\">{r.passed}</td>"
-        f"<td class=\"num{' fail' if r.failed else ''}\">{r.failed}</td></tr>"
+        f"<td class=\"num{' fail' if r.failed else ''}\">{r.failed}</td>"
+        f"<td class=\"num{' not_judged' if r.not_judged else ''}\">{r.not_judged}</td></tr>"
         for r in reports)
     return (f"<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
             f"<title>Coil reports</title>\n<style>{CSS}</style>\n</head>\n<body>\n"
             f"<h1>Coil reports</h1>\n<p class=\"lead\">Rules: "
             f"<b>{html.escape(rules_name or 'unnamed rule set')}</b></p>\n"
             f"<table id=\"coils\">\n<tr><th>coil</th><th>sheets</th><th>within every rule</th>"
-            f"<th>failed a rule</th></tr>\n{rows}\n</table>\n</body>\n</html>\n")
+            f"<th>failed a rule</th><th>not judged</th></tr>\n{rows}\n</table>\n</body>\n"
+            f"</html>\n")
 
 
 def rules_title(path: str) -> str:
@@ -959,7 +998,8 @@ def write_reports(sheets: Sequence[flatline.Sheet], out_dir: str,
                                    drive_side_high_x=drive_side_high_x, progress=progress)
         if progress:
             progress(f"coil {coil}: {report.passed} of {report.sheets} sheets within every "
-                     f"rule; wrote {report.path}")
+                     f"rule, {report.failed} failed, {report.not_judged} not judged; wrote "
+                     f"{report.path}")
         reports.append(report)
     if suggestions is not None:
         known = {sh.id for sh in sheets}

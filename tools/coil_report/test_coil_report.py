@@ -172,7 +172,8 @@ def test_verdict_table_is_the_verdict(line, report):
         assert len(got) == 5
         state = {flatline.VerdictState.PASS: "pass", flatline.VerdictState.FAIL: "fail",
                  flatline.VerdictState.NO_BAND: "no_band",
-                 flatline.VerdictState.NOT_MEASURED: "not_measured"}[want.state]
+                 flatline.VerdictState.NOT_MEASURED: "not_measured",
+                 flatline.VerdictState.NOT_JUDGED: "not_judged"}[want.state]
         assert state in attrs["class"].split()
     assert len(seen) == len(rows)
 
@@ -184,12 +185,35 @@ def test_verdict_table_is_the_verdict(line, report):
         passed, failed = (float(c[0]["data-value"]) for c in cells[3:5])
         assert passed == sum(v[k].state == flatline.VerdictState.PASS for v in expected)
         assert failed == sum(v[k].state == flatline.VerdictState.FAIL for v in expected)
+    # A sheet passes only when every rule judged it and passed: the
+    # "thick strip" rule has no band for this coil, so no sheet can pass.
     bad = sum(any(r.state == flatline.VerdictState.FAIL for r in v) for v in expected)
-    assert (reports[0].passed, reports[0].failed) == (len(expected) - bad, bad)
+    good = sum(all(r.state == flatline.VerdictState.PASS for r in v) for v in expected)
+    assert (reports[0].passed, reports[0].failed, reports[0].not_judged) == \
+        (good, bad, len(expected) - good - bad)
     index = Page(out / "index.html")
     coil_row = [cells for a, cells in index.rows if cells and cells[0][1] == "coil 1"][0]
-    assert [c[1] for c in coil_row[1:]] == [str(len(expected)), str(len(expected) - bad),
-                                             str(bad)]
+    assert [c[1] for c in coil_row[1:]] == [str(len(expected)), str(good), str(bad),
+                                             str(len(expected) - good - bad)]
+
+
+def test_sheets_no_rule_could_judge_are_shown_as_not_judged(line, tmp_path):
+    # A rule every sheet passes, and one whose band is for thicker strip:
+    # no sheet failed, but none was judged by every rule, so none passed.
+    rules = {"format": "flatline-tolerances", "version": 1, "name": "pass + no band",
+             "rules": [RULES["rules"][1], RULES["rules"][6]]}
+    path = tmp_path / "rules.json"
+    path.write_text(json.dumps(rules), encoding="utf-8")
+    reports = coil_report.write_reports(line.sheets, str(tmp_path), str(path),
+                                        line.thickness_mm, line.fiber_x, progress=None)
+    n = len(line.sheets)
+    assert (reports[0].passed, reports[0].failed, reports[0].not_judged) == (0, 0, n)
+    page = Page(tmp_path / "coil_1" / "index.html")
+    assert f"0 of {n} sheets within every rule" in page.text
+    assert "not judged: sheets " + ", ".join(str(sh.index) for sh in line.sheets) in page.text
+    sheet_rows = [cells for _, cells in page.rows
+                  if len(cells) == 11 and cells[8][1] in ("pass", "FAIL", "not judged")]
+    assert [cells[8][1] for cells in sheet_rows] == ["not judged"] * n
 
 
 def test_known_defect_fails_below_and_passes_above(line, report):

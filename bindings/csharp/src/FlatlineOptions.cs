@@ -336,10 +336,10 @@ namespace Flatline
         /// <summary>Frames the queue between acquisition and processing holds
         /// (width x height x 2 bytes each).</summary>
         public int GaugeQueueFrames { get => (int)Get("gauge_queue_frames"); set => Set("gauge_queue_frames", value); }
-        /// <summary>True: the pushing thread waits for room in a full queue
-        /// (recorded frames); false: the frame is dropped and counted (a live
-        /// camera; gauge_overflow).</summary>
-        public bool GaugeOverflowWait { get => Get("gauge_overflow") != 0; set => Set("gauge_overflow", value ? 1 : 0); }
+        /// <summary>What a full frame queue does (<see cref="Flatline.GaugeOverflow"/>,
+        /// gauge_overflow): by default the pushing thread waits for room and
+        /// an attached camera drops (counted and flagged on its sheet).</summary>
+        public GaugeOverflow GaugeOverflow { get => (GaugeOverflow)(int)Get("gauge_overflow"); set => Set("gauge_overflow", (int)value); }
         /// <summary>The least encoder advance for a frame to be taken, mm
         /// (closer frames are a line stop); sizes the buffers.</summary>
         public double GaugeFrameSpacing { get => Get("gauge_frame_spacing"); set => Set("gauge_frame_spacing", value); }
@@ -354,8 +354,20 @@ namespace Flatline
         /// <summary>What each sheet keeps: 0 nothing, 1 its reconstructed
         /// height map, 2 also the measured heights.</summary>
         public int GaugeKeepMaps { get => (int)Get("gauge_keep_maps"); set => Set("gauge_keep_maps", value); }
-        /// <summary>Sheets that can exist at once, waiting or held.</summary>
+        /// <summary>Sheets made at create time, which waiting and held sheets
+        /// use without allocating.</summary>
         public int GaugeSheetSlots { get => (int)Get("gauge_sheet_slots"); set => Set("gauge_sheet_slots", value); }
+        /// <summary>A sheet whose rows measured are less than this share of
+        /// the rows its length should hold is incomplete and not judged
+        /// (0..1, default 0.95).</summary>
+        public double GaugeMinCoverage { get => Get("gauge_min_coverage"); set => Set("gauge_min_coverage", value); }
+        /// <summary>Sheets that may exist beyond <see cref="GaugeSheetSlots"/>
+        /// before pushes are refused (<see cref="BufferFullException"/>); 0
+        /// drops the oldest waiting sheet instead.</summary>
+        public int GaugeSheetBacklog { get => (int)Get("gauge_sheet_backlog"); set => Set("gauge_sheet_backlog", value); }
+        /// <summary>A sheet whose share of saturated laser peaks exceeds this
+        /// is logged as overexposed (0..1).</summary>
+        public double GaugeSaturationLimit { get => Get("gauge_saturation_limit"); set => Set("gauge_saturation_limit", value); }
 
         // ---- the leveler advisor (Advisor); flatline/advisor.h
         /// <summary>Lambda of the advice relative to the mean squared effect of

@@ -53,6 +53,8 @@ namespace Flatline
         Mix = NativeShape.FLT_SHAPE_MIX,
         /// <summary>Too short a window, no valid fiber, or fewer than 5 valid zones.</summary>
         Undetermined = NativeShape.FLT_SHAPE_UNDETERMINED,
+        /// <summary>Not judged: the gauge's sheet is incomplete (<see cref="Sheet.Incomplete"/>).</summary>
+        NotJudged = NativeShape.FLT_SHAPE_NOT_JUDGED,
     }
 
     /// <summary>Components of a shape (FLT_SHAPE_HAS_*). Bow and Crossbow

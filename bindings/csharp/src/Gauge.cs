@@ -31,6 +31,24 @@ namespace Flatline
         NoWave = FlatlineNative.FLT_SHEET_FLAG_NO_WAVE,
         /// <summary>No row: every result is NaN and flagged.</summary>
         Empty = FlatlineNative.FLT_SHEET_FLAG_EMPTY,
+        /// <summary>Its coverage is below GaugeMinCoverage: its shape and
+        /// verdict are "not judged".</summary>
+        Incomplete = FlatlineNative.FLT_SHEET_FLAG_INCOMPLETE,
+        /// <summary>It lost rows: frames dropped, missing by the encoder, or
+        /// lost lines.</summary>
+        LostRows = FlatlineNative.FLT_SHEET_FLAG_LOST_ROWS,
+    }
+
+    /// <summary>What a full frame queue does (the option gauge_overflow).</summary>
+    public enum GaugeOverflow
+    {
+        /// <summary>Drop the frame, count it and flag its sheet.</summary>
+        Drop = NativeGaugeOverflow.FLT_GAUGE_OVERFLOW_DROP,
+        /// <summary>The thread that delivers the frame waits for room.</summary>
+        Wait = NativeGaugeOverflow.FLT_GAUGE_OVERFLOW_WAIT,
+        /// <summary>Wait for pushed frames and an attached image sequence or
+        /// simulator; drop for an attached camera (the default).</summary>
+        Auto = NativeGaugeOverflow.FLT_GAUGE_OVERFLOW_AUTO,
     }
 
     /// <summary>A sheet's scalar results by key (flt_sheet_value), for
@@ -76,6 +94,45 @@ namespace Flatline
         StripCentreMax = NativeSheetValue.FLT_SHEET_STRIP_CENTRE_MAX,
         Rules = NativeSheetValue.FLT_SHEET_RULES,
         RulesFailed = NativeSheetValue.FLT_SHEET_RULES_FAILED,
+        Coverage = NativeSheetValue.FLT_SHEET_COVERAGE,
+        RowsExpected = NativeSheetValue.FLT_SHEET_ROWS_EXPECTED,
+        RowsMeasured = NativeSheetValue.FLT_SHEET_ROWS_MEASURED,
+        LostLines = NativeSheetValue.FLT_SHEET_LOST_LINES,
+        Missing = NativeSheetValue.FLT_SHEET_MISSING,
+        Verdict = NativeSheetValue.FLT_SHEET_VERDICT,
+        Peaks = NativeSheetValue.FLT_SHEET_PEAKS,
+    }
+
+    /// <summary>The width that chooses a rule's band (<see cref="Gauge.SetRules"/>):
+    /// a nominal width, or each sheet's measured strip width.</summary>
+    public readonly struct SheetWidth : IEquatable<SheetWidth>
+    {
+        private SheetWidth(double mm)
+        {
+            Mm = mm;
+        }
+
+        /// <summary>Each sheet's measured strip width (<see cref="Sheet.StripWidthMm"/>).</summary>
+        public static SheetWidth Measured => new SheetWidth(FlatlineNative.FLT_GAUGE_WIDTH_MEASURED);
+
+        /// <summary>A nominal width, mm (&gt; 0).</summary>
+        public static SheetWidth Nominal(double mm)
+        {
+            if (!(mm > 0))
+                throw new ArgumentOutOfRangeException(nameof(mm), mm, "a nominal width is > 0 mm; SheetWidth.Measured for the measured one");
+            return new SheetWidth(mm);
+        }
+
+        /// <summary>The width in mm, or 0 for <see cref="Measured"/>.</summary>
+        public double Mm { get; }
+
+        /// <summary>True for <see cref="Measured"/>.</summary>
+        public bool IsMeasured => Mm == FlatlineNative.FLT_GAUGE_WIDTH_MEASURED;
+
+        public bool Equals(SheetWidth other) => Mm.Equals(other.Mm);
+        public override bool Equals(object? obj) => obj is SheetWidth other && Equals(other);
+        public override int GetHashCode() => Mm.GetHashCode();
+        public override string ToString() => IsMeasured ? "measured" : $"{Mm} mm";
     }
 
     /// <summary>One rule's statistics over a coil (flt_gauge_coil_stats).</summary>
@@ -88,6 +145,7 @@ namespace Flatline
             Failed = (long)v[(int)NativeCoilValue.FLT_COIL_RULE_FAILED];
             NoBand = (long)v[(int)NativeCoilValue.FLT_COIL_RULE_NO_BAND];
             NotMeasured = (long)v[(int)NativeCoilValue.FLT_COIL_RULE_NOT_MEASURED];
+            NotJudged = (long)v[(int)NativeCoilValue.FLT_COIL_RULE_NOT_JUDGED];
             WorstMin = v[(int)NativeCoilValue.FLT_COIL_WORST_MIN];
             WorstMax = v[(int)NativeCoilValue.FLT_COIL_WORST_MAX];
             WorstMean = v[(int)NativeCoilValue.FLT_COIL_WORST_MEAN];
@@ -108,6 +166,8 @@ namespace Flatline
         public long Failed { get; }
         public long NoBand { get; }
         public long NotMeasured { get; }
+        /// <summary>Incomplete sheets, which no rule judged.</summary>
+        public long NotJudged { get; }
         /// <summary>The worst values of the sheets measured: smallest,
         /// largest, mean (NaN when none was).</summary>
         public double WorstMin { get; }
@@ -132,16 +192,23 @@ namespace Flatline
             Sheets = (long)first[(int)NativeCoilValue.FLT_COIL_SHEETS];
             Passed = (long)first[(int)NativeCoilValue.FLT_COIL_SHEETS_PASSED];
             Failed = (long)first[(int)NativeCoilValue.FLT_COIL_SHEETS_FAILED];
+            NotJudged = (long)first[(int)NativeCoilValue.FLT_COIL_SHEETS_NOT_JUDGED];
             Finished = first[(int)NativeCoilValue.FLT_COIL_FINISHED] != 0;
             Rules = rules;
         }
 
         /// <summary>The coil's number (0: no sheet judged yet).</summary>
         public long Coil { get; }
-        /// <summary>Sheets judged; those that failed no rule; those that failed one or more.</summary>
+        /// <summary>Sheets evaluated under the rules (Passed + Failed +
+        /// NotJudged); those every rule judged and passed; those that failed
+        /// one or more; those no rule failed that some rule could not judge
+        /// (no band, a missing measure, incomplete): never counted as passed.</summary>
         public long Sheets { get; }
         public long Passed { get; }
         public long Failed { get; }
+        public long NotJudged { get; }
+        /// <summary>Sheets judged: <see cref="Passed"/> + <see cref="Failed"/>.</summary>
+        public long Judged => Passed + Failed;
         /// <summary>True once the coil's last sheet was judged.</summary>
         public bool Finished { get; }
         /// <summary>Per rule, in rule order.</summary>
@@ -167,6 +234,11 @@ namespace Flatline
         Queued = NativeGaugeCounter.FLT_GAUGE_COUNT_QUEUED,
         Acquiring = NativeGaugeCounter.FLT_GAUGE_COUNT_ACQUIRING,
         SheetsWaiting = NativeGaugeCounter.FLT_GAUGE_COUNT_SHEETS_WAITING,
+        SheetsGrown = NativeGaugeCounter.FLT_GAUGE_COUNT_SHEETS_GROWN,
+        SheetsIncomplete = NativeGaugeCounter.FLT_GAUGE_COUNT_SHEETS_INCOMPLETE,
+        Missing = NativeGaugeCounter.FLT_GAUGE_COUNT_MISSING,
+        LostLines = NativeGaugeCounter.FLT_GAUGE_COUNT_LOST_LINES,
+        Refused = NativeGaugeCounter.FLT_GAUGE_COUNT_REFUSED,
     }
 
     /// <summary>
@@ -244,6 +316,26 @@ namespace Flatline
         /// <summary>Strip the reconstructor had taken beyond <see cref="SEndMm"/>
         /// when the sheet was finished, mm.</summary>
         public double LookaheadMm => Value(SheetValue.Lookahead);
+        /// <summary>Rows measured over the rows its length should hold, 0..1;
+        /// below GaugeMinCoverage the sheet is <see cref="Incomplete"/>.</summary>
+        public double Coverage => Value(SheetValue.Coverage);
+        /// <summary>Too many rows are missing for a class or a verdict: its
+        /// <see cref="Shape"/> is <see cref="ShapeClass.NotJudged"/> and its
+        /// <see cref="VerdictState"/> <see cref="Flatline.VerdictState.NotJudged"/>.</summary>
+        public bool Incomplete => (Flags & SheetFlags.Incomplete) != 0;
+        /// <summary>The rows its length should hold (rows + dropped + missing),
+        /// those that measured the strip, lost lines (rows inside the strip
+        /// whose frame did not show it), and frames missing by the encoder.</summary>
+        public long RowsExpected => (long)Value(SheetValue.RowsExpected);
+        public long RowsMeasured => (long)Value(SheetValue.RowsMeasured);
+        public long LostLines => (long)Value(SheetValue.LostLines);
+        public long Missing => (long)Value(SheetValue.Missing);
+        /// <summary>Laser peaks on the strip (the denominator of <see cref="Saturated"/>).</summary>
+        public long Peaks => (long)Value(SheetValue.Peaks);
+        /// <summary>The whole sheet's verdict: Fail when a rule failed, Pass
+        /// when every rule was judged and passed, else NotJudged (no rules, a
+        /// rule that could not judge it, an incomplete sheet): never a pass.</summary>
+        public VerdictState VerdictState => (VerdictState)(int)Value(SheetValue.Verdict);
 
         /// <summary>Per fiber [fibers]: x (mm), I-Units, arc length (mm), the
         /// largest wave's height (mm), period (mm) and steepness (%), flags.</summary>
@@ -282,7 +374,7 @@ namespace Flatline
 
         internal static unsafe Sheet Read(IntPtr sheet, int maps)
         {
-            int count = (int)NativeSheetValue.FLT_SHEET_RULES_FAILED + 1;
+            int count = (int)NativeSheetValue.FLT_SHEET_PEAKS + 1;
             var values = new double[count];
             for (int key = 0; key < count; ++key)
             {
@@ -409,7 +501,7 @@ namespace Flatline
         private readonly IntPtr callbackPointer;
         private readonly object sync = new object();            // handlers, channels, errors
         private readonly object registration = new object();    // the native callback's state
-        private readonly object push = new object();            // frames in order
+        private readonly object push = new object();            // the attached source
         private EventHandler<SheetEventArgs>? sheetFinished;
         private readonly List<SheetChannel> channels = new List<SheetChannel>();
         private bool callbackSet;
@@ -468,13 +560,13 @@ namespace Flatline
         public unsafe void Push(byte[,] frame, double encoderMm)
         {
             CheckFrame(frame);
-            lock (push)
-            {
-                ThrowHandlerError();
-                fixed (byte* pf = frame)
-                    FlatlineNative.flt_gauge_push_frame(LiveHandle, pf, (int)PixelFormat.Mono8, (uint)FrameWidth,
-                                                        (uint)FrameHeight, (ulong)FrameWidth, encoderMm);
-            }
+            // One producer at a time: the library refuses a second thread
+            // that pushes meanwhile, or a handler of this gauge's sheets
+            // (FlatlineStateException), instead of waiting for it.
+            ThrowHandlerError();
+            fixed (byte* pf = frame)
+                FlatlineNative.flt_gauge_push_frame(LiveHandle, pf, (int)PixelFormat.Mono8, (uint)FrameWidth,
+                                                    (uint)FrameHeight, (ulong)FrameWidth, encoderMm);
         }
 
         /// <summary>One 16-bit frame of <paramref name="format"/> (Mono10, 12 or 16).</summary>
@@ -484,13 +576,10 @@ namespace Flatline
                 throw new ArgumentException("a ushort[,] frame is Mono10, Mono12 or Mono16; pass Mono8 frames as byte[,]",
                                             nameof(format));
             CheckFrame(frame);
-            lock (push)
-            {
-                ThrowHandlerError();
-                fixed (ushort* pf = frame)
-                    FlatlineNative.flt_gauge_push_frame(LiveHandle, pf, (int)format, (uint)FrameWidth,
-                                                        (uint)FrameHeight, (ulong)FrameWidth * 2, encoderMm);
-            }
+            ThrowHandlerError();
+            fixed (ushort* pf = frame)
+                FlatlineNative.flt_gauge_push_frame(LiveHandle, pf, (int)format, (uint)FrameWidth,
+                                                    (uint)FrameHeight, (ulong)FrameWidth * 2, encoderMm);
         }
 
         /// <summary>A simulated frame, with its own format and encoder position.</summary>
@@ -527,13 +616,10 @@ namespace Flatline
             Shapes.Check(slope, height.Length, nameof(slope));
             if (valid != null)
                 Shapes.Check(valid, height.Length, nameof(valid));
-            lock (push)
-            {
-                ThrowHandlerError();
-                fixed (double* ph = height, pg = slope)
-                fixed (bool* pv = valid)
-                    FlatlineNative.flt_gauge_push_row(LiveHandle, encoderMm, (ulong)height.Length, ph, pg, (byte*)pv);
-            }
+            ThrowHandlerError();
+            fixed (double* ph = height, pg = slope)
+            fixed (bool* pv = valid)
+                FlatlineNative.flt_gauge_push_row(LiveHandle, encoderMm, (ulong)height.Length, ph, pg, (byte*)pv);
         }
 
         /// <summary>The shear cut the strip at <paramref name="encoderMm"/>
@@ -549,11 +635,8 @@ namespace Flatline
         /// the strip (its last sheet) and waits until that sheet is out.</summary>
         public void Flush()
         {
-            lock (push)
-            {
-                ThrowHandlerError();
-                FlatlineNative.flt_gauge_flush(LiveHandle);
-            }
+            ThrowHandlerError();
+            FlatlineNative.flt_gauge_flush(LiveHandle);
             ThrowHandlerError();
         }
 
@@ -650,6 +733,95 @@ namespace Flatline
             }
         }
 
+        /// <summary>Runs a finite source (an image sequence, a recording) to
+        /// its end and yields every sheet, in order, as it comes, for
+        /// <c>await foreach</c>: attaches and starts the source, and after
+        /// its last frame ends the strip (a flush), so the last sheet comes
+        /// too; then detaches it. The source's own error (e.g. a file it
+        /// cannot read) is thrown after the sheets before it. Cancelling
+        /// stops the acquisition (the sheets finished so far are yielded)
+        /// and throws <see cref="OperationCanceledException"/>.
+        /// <code>
+        /// await foreach (var sheet in gauge.RunAsync(FrameSource.ImageDirectory("recording")))
+        ///     Console.WriteLine($"{sheet.Id}: {sheet.ShapeName}, {sheet.MaxIUnits:F1} I-Units");
+        /// </code></summary>
+        public async IAsyncEnumerable<Sheet> RunAsync(FrameSource source,
+                                                      [EnumeratorCancellation] CancellationToken cancellation = default)
+        {
+            if (source == null)
+                throw new ArgumentNullException(nameof(source));
+            var channel = new SheetChannel();
+            lock (sync)
+                channels.Add(channel);
+            UpdateCallback();
+            Task? ending = null;
+            try
+            {
+                Attach(source);
+                Start();
+                // flt_gauge_wait in short steps on a pool thread: the sheets
+                // reach the channel through the callback meanwhile, and the
+                // flush after the source's end delivers the last before it
+                // returns; then the channel ends.
+                ending = Task.Run(() =>
+                {
+                    try
+                    {
+                        while (true)
+                        {
+                            if (cancellation.IsCancellationRequested)
+                            {
+                                Stop();
+                                Flush();
+                                cancellation.ThrowIfCancellationRequested();
+                            }
+                            int status = FlatlineNative.flt_cs_gauge_wait(LiveHandle, 50);
+                            if (status != (int)Status.Timeout)
+                            {
+                                Errors.Check(status);
+                                return;
+                            }
+                        }
+                    }
+                    finally
+                    {
+                        channel.Complete();
+                    }
+                });
+                while (true)
+                {
+                    var sheet = await channel.ReadAsync(CancellationToken.None).ConfigureAwait(false);
+                    if (sheet == null)
+                        break;
+                    yield return sheet;
+                }
+                await ending.ConfigureAwait(false);  // the source's error, or the cancellation
+            }
+            finally
+            {
+                if (ending != null && !ending.IsCompleted && !handle.IsClosed)
+                {
+                    // Left early: stop the acquisition (the wait then ends).
+                    try
+                    {
+                        Stop();
+                        ending.Wait();  // its wait now returns at once
+                    }
+                    catch (Exception)
+                    {
+                        // why the source would have ended is moot now
+                    }
+                }
+                lock (sync)
+                    channels.Remove(channel);
+                if (!handle.IsClosed)
+                {
+                    UpdateCallback();
+                    Attach(null);
+                }
+            }
+        }
+
         /// <summary>The sheets as they are finished, for <c>await foreach</c>;
         /// the enumeration ends when the token is cancelled or the gauge is
         /// disposed.</summary>
@@ -689,26 +861,38 @@ namespace Flatline
         /// <summary>The rule set sheets are judged by (<see cref="SetRules"/>), or null.</summary>
         public ToleranceRules? Rules { get; private set; }
 
-        /// <summary>Judges every sheet from now on against <paramref name="rules"/>
-        /// (null: no more): the sheets' thickness (mm) and nominal width (mm;
-        /// 0: each sheet's measured strip width) choose each rule's band. The
-        /// gauge keeps its own copy. The current coil's statistics restart;
+        /// <summary>Judges every sheet from now on against <paramref name="rules"/>:
+        /// the sheets' thickness (mm) and width (<see cref="SheetWidth.Nominal"/>
+        /// or <see cref="SheetWidth.Measured"/>) choose each rule's band; both
+        /// are required (a sheet no band covers is not judged, never passed).
+        /// The gauge keeps its own copy. The current coil's statistics restart;
         /// set the rules before a coil's first frame.</summary>
-        public void SetRules(ToleranceRules? rules, double thicknessMm = 1.0, double widthMm = 0.0)
+        public void SetRules(ToleranceRules rules, double thicknessMm, SheetWidth width)
         {
             if (rules == null)
-                FlatlineNative.flt_cs_gauge_clear_rules(LiveHandle);
-            else
-                FlatlineNative.flt_gauge_set_rules(LiveHandle, rules.LiveHandle, thicknessMm, widthMm);
+                throw new ArgumentNullException(nameof(rules), "ClearRules() judges no more");
+            FlatlineNative.flt_gauge_set_rules(LiveHandle, rules.LiveHandle, thicknessMm, width.Mm);
             Rules = rules;
         }
 
-        /// <summary>The verdict statistics of the coil being measured, or with
-        /// <paramref name="last"/> of the last finished coil; null when there
-        /// are none (no rules, no coil finished yet).</summary>
-        public unsafe CoilStats? CoilStatistics(bool last = false)
+        /// <summary>Judges no more sheets (the current coil's statistics end).</summary>
+        public void ClearRules()
         {
-            int which = (int)(last ? NativeCoil.FLT_COIL_LAST : NativeCoil.FLT_COIL_CURRENT);
+            FlatlineNative.flt_cs_gauge_clear_rules(LiveHandle);
+            Rules = null;
+        }
+
+        /// <summary>The verdict statistics of the coil being measured; null
+        /// without rules.</summary>
+        public CoilStats? CurrentCoilStatistics() => CoilStatistics((int)NativeCoil.FLT_COIL_CURRENT);
+
+        /// <summary>The verdict statistics of the last finished coil; null
+        /// when none finished under rules yet.</summary>
+        public CoilStats? LastCoilStatistics() => CoilStatistics((int)NativeCoil.FLT_COIL_LAST);
+
+        private unsafe CoilStats? CoilStatistics(int coil)
+        {
+            int which = coil;
             int n = (int)NativeCoilValue.FLT_COIL_VALUES;
             double[] Read(int rule)
             {

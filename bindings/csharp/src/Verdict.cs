@@ -35,6 +35,10 @@ namespace Flatline
         NoBand = NativeVerdictState.FLT_VERDICT_NO_BAND,
         /// <summary>No map (straightedges), or the value was not given.</summary>
         NotMeasured = NativeVerdictState.FLT_VERDICT_NOT_MEASURED,
+        /// <summary>Not judged: the gauge's sheet is incomplete; also a whole
+        /// sheet's verdict (<see cref="Sheet.VerdictState"/>) when a rule could
+        /// not judge it. Never a pass.</summary>
+        NotJudged = NativeVerdictState.FLT_VERDICT_NOT_JUDGED,
     }
 
     /// <summary>One rule of a rule set.</summary>

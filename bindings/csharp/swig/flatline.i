@@ -37,3 +37,4 @@
 %include "gauge.i"
 %include "genicam.i"
 %include "advisor.i"
+%include "log.i"

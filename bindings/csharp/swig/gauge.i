@@ -12,6 +12,8 @@ FLT_CS_INT_ENUM(flt_sheet_array, NativeSheetArray)
 FLT_CS_INT_ENUM(flt_gauge_counter, NativeGaugeCounter)
 FLT_CS_INT_ENUM(flt_coil, NativeCoil)
 FLT_CS_INT_ENUM(flt_coil_value, NativeCoilValue)
+FLT_CS_INT_ENUM(flt_gauge_overflow, NativeGaugeOverflow)
+%ignore FLT_GAUGE_OVERFLOW_MAX_ENUM_;
 %ignore FLT_COIL_MAX_ENUM_;
 %ignore FLT_COIL_VALUE_MAX_ENUM_;
 /* A sheet's verdict and a coil's statistics through the helpers below. */
@@ -76,6 +78,11 @@ flt_status flt_cs_sheet_verdict_get(void *sheet, size_t rule, int key, double *o
 flt_status flt_cs_gauge_coil_stats(const flt_gauge *gauge, int which, size_t rule, size_t count,
                                    double *values) {
     return flt_gauge_coil_stats(gauge, (flt_coil)which, rule, count, values);
+}
+/* flt_gauge_wait's status as it is: FLT_ERR_TIMEOUT is no error to
+ * RunAsync, which waits in short steps to notice a cancellation. */
+int flt_cs_gauge_wait(flt_gauge *gauge, uint32_t timeout_ms) {
+    return (int)flt_gauge_wait(gauge, timeout_ms);
 }
 /* No more rules (a null SafeHandle cannot be passed). */
 flt_status flt_cs_gauge_clear_rules(flt_gauge *gauge) {

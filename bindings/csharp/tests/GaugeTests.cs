@@ -49,7 +49,7 @@ namespace Flatline.Tests
 
         private static FlatlineOptions Options(int workers = 2) => new FlatlineOptions
         {
-            GaugeWorkers = workers, GaugeOverflowWait = true, GaugeKeepMaps = 1, GaugeSheetSlots = 16,
+            GaugeWorkers = workers, GaugeOverflow = GaugeOverflow.Wait, GaugeKeepMaps = 1, GaugeSheetSlots = 16,
             GaugeFrameSpacing = 2.0,
         };
 
@@ -209,7 +209,7 @@ namespace Flatline.Tests
             using var line = new SimulatedLine(calibration, lineOptions);
             line.AddDefect(DefectKind.CentreBuckle, 4, 800);
             using var source = FrameSource.Simulator(line);
-            using var options = new FlatlineOptions { GaugeFrameSpacing = 8, GaugeOverflowWait = true, LagKnots = 4 };
+            using var options = new FlatlineOptions { GaugeFrameSpacing = 8, GaugeOverflow = GaugeOverflow.Wait, LagKnots = 4 };
             using var gauge = new Gauge(calibration, options);
             Assert.Throws<FlatlineStateException>(() => gauge.Start());  // no source yet
             gauge.Attach(source);
@@ -238,7 +238,7 @@ namespace Flatline.Tests
             using var lineOptions = new FlatlineOptions { SimFrameSpacing = 10 };
             using var line = new SimulatedLine(calibration, lineOptions);
             line.AddDefect(DefectKind.CentreBuckle, 4, 800);
-            using var options = new FlatlineOptions { GaugeFrameSpacing = 8, GaugeOverflowWait = true, LagKnots = 4 };
+            using var options = new FlatlineOptions { GaugeFrameSpacing = 8, GaugeOverflow = GaugeOverflow.Wait, LagKnots = 4 };
             using var gauge = new Gauge(calibration, options);
             gauge.Cut(1000);
             for (int f = 0; f < 200; ++f)
@@ -260,7 +260,7 @@ namespace Flatline.Tests
             lineOptions.Set("sim_surround", 2); // the roller table beside the strip
             using var line = new SimulatedLine(calibration, lineOptions);
             line.AddDefect(DefectKind.CentreBuckle, 4, 800);
-            using var options = new FlatlineOptions { GaugeFrameSpacing = 8, GaugeOverflowWait = true, LagKnots = 4 };
+            using var options = new FlatlineOptions { GaugeFrameSpacing = 8, GaugeOverflow = GaugeOverflow.Wait, LagKnots = 4 };
             options.Set("gauge_keep_maps", 1);
             using var gauge = new Gauge(calibration, options);
             for (int f = 0; f < 200; ++f)
@@ -363,10 +363,10 @@ namespace Flatline.Tests
             using var calibration = Sensor();
             using var options = Options();
             using var gauge = new Gauge(calibration, options);
-            Assert.Null(gauge.CoilStatistics());
+            Assert.Null(gauge.CurrentCoilStatistics());
             using (var rules = ToleranceRules.Parse(VerdictRules))
             {
-                gauge.SetRules(rules, thicknessMm: 4.0);
+                gauge.SetRules(rules, thicknessMm: 4.0, SheetWidth.Measured);
                 Assert.Same(rules, gauge.Rules);
             }  // the gauge keeps its own copy
             gauge.Cut(3000);
@@ -400,7 +400,7 @@ namespace Flatline.Tests
                 Assert.InRange(verdict[0].Worst, 2.0 - 0.02, 2.0 + 0.001);
                 Assert.Equal(1.9 - verdict[0].Worst, verdict[0].Margin, 12);
             }
-            var coil = gauge.CoilStatistics(last: true);
+            var coil = gauge.LastCoilStatistics();
             Assert.NotNull(coil);
             Assert.True(coil!.Finished);
             Assert.Equal((1L, 3L, 0L, 3L), (coil.Coil, coil.Sheets, coil.Passed, coil.Failed));
@@ -408,12 +408,306 @@ namespace Flatline.Tests
             Assert.Equal(sheets.Max(s => s.Verdict![0].Worst), coil.Rules[0].WorstMax);
             Assert.Equal(3, coil.Rules[0].Histogram[10]);  // 2 / 1.9 in (1.0, 1.1]
             Assert.Equal(3, coil.Rules[1].Histogram[9]);   // 2 / 2.1 in (0.9, 1.0]
-            var now = gauge.CoilStatistics();
+            var now = gauge.CurrentCoilStatistics();
             Assert.Equal((0L, 0L), (now!.Coil, now.Sheets));
-            gauge.SetRules(null);
+            gauge.ClearRules();
             Assert.Null(gauge.Rules);
-            Assert.Null(gauge.CoilStatistics());
-            Assert.Throws<InvalidArgumentException>(() => gauge.SetRules(ToleranceRules.Parse(VerdictRules), -1.0));
+            Assert.Null(gauge.CurrentCoilStatistics());
+            Assert.Throws<InvalidArgumentException>(() => gauge.SetRules(ToleranceRules.Parse(VerdictRules), -1.0, SheetWidth.Measured));
+            Assert.Throws<ArgumentOutOfRangeException>(() => SheetWidth.Nominal(0));
+        }
+
+        [Fact]
+        public void ASheetNoBandCoversIsNotJudgedNeverPassed()
+        {
+            // The rules' bands are 1..10 mm thick: a 0.5 mm sheet is in none.
+            // Each sheet is not judged, and the coil counts 0 passed, 0 failed,
+            // 2 not judged.
+            using var calibration = Sensor();
+            using var options = Options();
+            using var gauge = new Gauge(calibration, options);
+            using (var rules = ToleranceRules.Parse(VerdictRules))
+                gauge.SetRules(rules, 0.5, SheetWidth.Nominal(1500));
+            gauge.Cut(3000);
+            var zero = new double[Fibers];
+            for (int r = 0; r < 2000; ++r)
+                gauge.PushRow(Step * r, zero, zero);
+            gauge.Flush();
+            var sheets = Drain(gauge);
+            Assert.Equal(2, sheets.Count);
+            Assert.All(sheets, s => Assert.Equal(VerdictState.NotJudged, s.VerdictState));
+            Assert.All(sheets, s => Assert.Equal(1.0, s.Coverage));
+            var coil = gauge.LastCoilStatistics();
+            Assert.NotNull(coil);
+            Assert.Equal((2L, 0L, 0L, 2L, 0L), (coil!.Sheets, coil.Passed, coil.Failed, coil.NotJudged, coil.Judged));
+        }
+
+        [Theory]
+        [InlineData(0)]
+        [InlineData(1)]
+        [InlineData(2)]
+        public void EveryCallFromASheetHandlerReturnsAtOnce(int workers)
+        {
+            // Each call of the gauge from inside its own SheetFinished handler
+            // either works (Cut is queued, Count, SetRules, statistics) or
+            // throws FlatlineStateException at once: none waits for itself.
+            using var calibration = Sensor();
+            using var options = Options(workers);
+            options.LagKnots = 4;
+            using var gauge = new Gauge(calibration, options);
+            using var rules = ToleranceRules.Parse(VerdictRules);
+            var outcome = new Dictionary<string, string>();
+            double slowest = 0;
+            int seen = 0;
+            var zero = new double[Fibers];
+            gauge.SheetFinished += (sender, e) =>
+            {
+                if (seen++ > 0)
+                    return;
+                void Try(string name, Action call)
+                {
+                    var watch = System.Diagnostics.Stopwatch.StartNew();
+                    try
+                    {
+                        call();
+                        outcome[name] = "ok";
+                    }
+                    catch (Exception x)
+                    {
+                        outcome[name] = x.GetType().Name;
+                    }
+                    slowest = Math.Max(slowest, watch.Elapsed.TotalSeconds);
+                }
+                Try("PushRow", () => gauge.PushRow(1e6, zero, zero));
+                Try("Push", () => gauge.Push(new byte[gauge.FrameHeight, gauge.FrameWidth], 1e6));
+                Try("Cut", () => gauge.Cut(4000));
+                Try("Flush", () => gauge.Flush());
+                Try("Start", () => gauge.Start());
+                Try("Stop", () => gauge.Stop());
+                Try("NextSheet", () => gauge.NextSheet(100));
+                Try("Count", () => gauge.Count(GaugeCounter.Sheets));
+                Try("SetRules", () => gauge.SetRules(rules, 2.0, SheetWidth.Measured));
+                Try("Statistics", () => gauge.CurrentCoilStatistics());
+                Try("GetOption", () => gauge.GetOption("gauge_workers"));
+            };
+            gauge.Cut(1000);
+            PushRows(gauge, 0, 2000);
+            gauge.Flush();
+            Assert.InRange(slowest, 0.0, 1.0);
+            foreach (var ok in new[] { "Cut", "Count", "SetRules", "Statistics", "GetOption" })
+                Assert.Equal("ok", outcome[ok]);
+            foreach (var refused in new[] { "PushRow", "Push", "Flush", "Start", "Stop", "NextSheet" })
+                Assert.Equal(nameof(FlatlineStateException), outcome[refused]);
+            // The cut given inside took effect: sheets end at 1000, 4000, the flush.
+            Assert.Equal(3, seen);
+            Assert.Equal(3UL, gauge.Count(GaugeCounter.Sheets));
+            Assert.Equal(0UL, gauge.Count(GaugeCounter.CutsIgnored));
+        }
+
+        [Fact]
+        public void ASecondThreadPushingIsRefusedAndTheGaugeGoesOn()
+        {
+            using var calibration = Sensor();
+            using var options = Options(1);
+            options.LagKnots = 4;
+            options.GaugeQueueFrames = 1;
+            options.GaugeReversalLength = 1e8;  // back to 0 is a short reversal: skipped
+            using var gauge = new Gauge(calibration, options);
+            for (int c = 600; c < 9000; c += 600)
+                gauge.Cut(c);
+            PushRows(gauge, 0, 10);
+            int refused = 0, taken = 0;
+            using var stop = new ManualResetEventSlim();
+            var zero = new double[Fibers];
+            var other = new Thread(() =>
+            {
+                while (!stop.IsSet)
+                {
+                    try
+                    {
+                        gauge.PushRow(0.0, zero, zero);
+                        ++taken;
+                    }
+                    catch (FlatlineStateException e)
+                    {
+                        Assert.Contains("another thread is pushing", e.Message);
+                        ++refused;
+                    }
+                    stop.Wait(1);
+                }
+            });
+            other.Start();
+            try
+            {
+                var height = new double[Fibers];
+                var slope = new double[Fibers];
+                for (int r = 10; r < 3000;)
+                {
+                    Row(r, height, slope);
+                    try
+                    {
+                        gauge.PushRow(Step * r, height, slope);
+                        ++r;
+                    }
+                    catch (FlatlineStateException)
+                    {
+                        // refused too when it comes while the other pushes
+                    }
+                }
+            }
+            finally
+            {
+                stop.Set();
+                other.Join();
+            }
+            gauge.Flush();
+            var sheets = Drain(gauge);
+            Assert.True(refused > 0, "the second thread never met the first one's push");
+            Assert.Equal(3000, sheets.Sum(s => s.Rows));
+            Assert.Equal((ulong)(3000 + taken), gauge.Count(GaugeCounter.Frames));
+        }
+
+        private static void WritePng(string path, byte[,] image)
+        {
+            int h = image.GetLength(0), w = image.GetLength(1);
+            var raw = new System.IO.MemoryStream();
+            for (int y = 0; y < h; ++y)
+            {
+                raw.WriteByte(0);  // filter: none
+                for (int x = 0; x < w; ++x)
+                    raw.WriteByte(image[y, x]);
+            }
+            var packed = new System.IO.MemoryStream();
+            packed.Write(new byte[] { 0x78, 0x01 }, 0, 2);  // zlib header, fastest
+            using (var deflate = new System.IO.Compression.DeflateStream(packed, System.IO.Compression.CompressionLevel.Fastest, true))
+                raw.WriteTo(deflate);
+            uint adler = Adler32(raw.ToArray());
+            packed.Write(BigEndian(adler), 0, 4);
+            using var file = System.IO.File.Create(path);
+            file.Write(new byte[] { 0x89, (byte)'P', (byte)'N', (byte)'G', 0x0D, 0x0A, 0x1A, 0x0A }, 0, 8);
+            var header = new byte[13];
+            Array.Copy(BigEndian((uint)w), 0, header, 0, 4);
+            Array.Copy(BigEndian((uint)h), 0, header, 4, 4);
+            header[8] = 8;  // 8-bit grey
+            Chunk(file, "IHDR", header);
+            Chunk(file, "IDAT", packed.ToArray());
+            Chunk(file, "IEND", Array.Empty<byte>());
+        }
+
+        private static byte[] BigEndian(uint v) => new[] { (byte)(v >> 24), (byte)(v >> 16), (byte)(v >> 8), (byte)v };
+
+        private static uint Adler32(byte[] data)
+        {
+            uint a = 1, b = 0;
+            foreach (byte d in data)
+            {
+                a = (a + d) % 65521;
+                b = (b + a) % 65521;
+            }
+            return (b << 16) | a;
+        }
+
+        private static void Chunk(System.IO.Stream f, string type, byte[] body)
+        {
+            var tag = System.Text.Encoding.ASCII.GetBytes(type);
+            f.Write(BigEndian((uint)body.Length), 0, 4);
+            f.Write(tag, 0, 4);
+            f.Write(body, 0, body.Length);
+            uint crc = 0xFFFFFFFF;
+            foreach (byte x in tag.Concat(body))
+            {
+                crc ^= x;
+                for (int k = 0; k < 8; ++k)
+                    crc = (crc & 1) != 0 ? (crc >> 1) ^ 0xEDB88320 : crc >> 1;
+            }
+            f.Write(BigEndian(~crc), 0, 4);
+        }
+
+        [Fact]
+        public async Task RunAsyncRunsARecordingToItsEnd()
+        {
+            // 150 recorded frames 10 mm apart, cuts at 500 and 1000 mm: the
+            // 3 sheets, the last after the source's end, nothing dropped.
+            string dir = System.IO.Path.Combine(System.IO.Path.GetTempPath(), "flatline-run-" + Guid.NewGuid().ToString("N"));
+            System.IO.Directory.CreateDirectory(dir);
+            try
+            {
+                using var calibration = Calibration.Reference(firstRow: 900, rows: 240, firstXMm: -750, pitchMm: 10, fibers: 151);
+                using (var lineOptions = new FlatlineOptions { SimFrameSpacing = 10 })
+                using (var line = new SimulatedLine(calibration, lineOptions))
+                {
+                    line.AddDefect(DefectKind.CentreBuckle, 4, 800);
+                    for (int i = 0; i < 150; ++i)
+                        WritePng(System.IO.Path.Combine(dir, $"frame_{i:000}.png"), line.NextFrame().Pixels8!);
+                }
+                using var options = new FlatlineOptions { GaugeFrameSpacing = 8, LagKnots = 4, GaugeQueueFrames = 4 };
+                using var gauge = new Gauge(calibration, options);
+                gauge.Cut(500);
+                gauge.Cut(1000);
+                using var sourceOptions = new FlatlineOptions { SourceEncoderStep = 10 };
+                using var source = FrameSource.ImageDirectory(dir, null, sourceOptions);
+                var sheets = new List<Flatline.Sheet>();
+                await foreach (var sheet in gauge.RunAsync(source, TestContext.Current.CancellationToken))
+                    sheets.Add(sheet);
+                Assert.Equal(new long[] { 1, 2, 3 }, sheets.Select(s => s.Id));
+                Assert.Equal(500.0, sheets[0].SEndMm);
+                Assert.Equal(1000.0, sheets[1].SEndMm);
+                Assert.True((sheets[2].Flags & SheetFlags.Flushed) != 0);
+                Assert.Equal(150UL, gauge.Count(GaugeCounter.Frames));
+                Assert.Equal(0UL, gauge.Count(GaugeCounter.Dropped));
+                Assert.Equal(150L, sheets.Sum(s => (long)s.Rows) + (long)gauge.Count(GaugeCounter.NoStrip));
+            }
+            finally
+            {
+                System.IO.Directory.Delete(dir, true);
+            }
+        }
+
+        [Fact]
+        public void TheLogTellsDropsIgnoredCutsAndSaturation()
+        {
+            // A gauge that drops frames (a queue of 1, frames pushed faster
+            // than one worker extracts them), a cut for a strip that ended,
+            // and an overexposed line: a message for each. (The log is the
+            // process's: other tests' messages are told apart by content.)
+            var got = new System.Collections.Concurrent.ConcurrentQueue<FlatlineLogEventArgs>();
+            EventHandler<FlatlineLogEventArgs> handler = (sender, e) => got.Enqueue(e);
+            using var calibration = Calibration.Reference(firstRow: 900, rows: 240, firstXMm: -750, pitchMm: 10, fibers: 151);
+            var frames = new List<byte[,]>();
+            using (var lineOptions = new FlatlineOptions { SimFrameSpacing = 10 })
+            {
+                lineOptions.Set("sim_line_peak", 1.5);
+                using var line = new SimulatedLine(calibration, lineOptions);
+                for (int i = 0; i < 200; ++i)
+                    frames.Add(line.NextFrame().Pixels8!);
+            }
+            FlatlineLog.Message += handler;
+            try
+            {
+                using var options = new FlatlineOptions
+                {
+                    GaugeWorkers = 1, GaugeQueueFrames = 1, GaugeOverflow = GaugeOverflow.Drop, GaugeFrameSpacing = 8,
+                    LagKnots = 4,
+                };
+                using var gauge = new Gauge(calibration, options);
+                for (int i = 0; i < frames.Count; ++i)
+                    gauge.Push(frames[i], 10.0 * i);
+                gauge.Flush();
+                gauge.Cut(1234);  // the next strip's head (5000 mm) is past it: ignored
+                gauge.Push(frames[0], 5000);
+                gauge.Flush();
+                Assert.True(gauge.Count(GaugeCounter.Dropped) > 0);
+            }
+            finally
+            {
+                FlatlineLog.Message -= handler;  // returns once no message is in progress
+            }
+            var mine = got.Where(e => e.Component == "gauge").ToList();
+            Assert.Contains(mine, e => e.Level == FlatlineLogLevel.Warning && e.Message.Contains(" dropped: "));
+            Assert.Single(mine, e => e.Level == FlatlineLogLevel.Warning &&
+                                     e.Message.Contains("cut ignored, the last at encoder 1234.0 mm"));
+            Assert.Contains(mine, e => e.Level == FlatlineLogLevel.Warning && e.Message.Contains(" are saturated "));
+            Assert.Contains(mine, e => e.Level == FlatlineLogLevel.Information && e.Message.Contains("the strip's head at s = 5000.0 mm"));
         }
     }
 }

@@ -108,6 +108,7 @@ from ._extractor import (
 )
 from ._flatness import FIBER_OFF_STRIP, WINDOW_ON_STRIP, ZONE_OFF_STRIP, StripWindow
 
+from . import _log
 from ._gauge import CoilStats, Gauge, RuleStats, Sheet, SheetFlag, SheetZones, gauge_options
 from ._advisor import Actuator, Advice, Advisor, AdvisorFit, advisor_options
 from ._verdict import (

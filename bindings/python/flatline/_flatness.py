@@ -87,6 +87,8 @@ class Shape(enum.IntEnum):
     QUARTER_BUCKLE = _capi.FLT_SHAPE_QUARTER_BUCKLE
     MIX = _capi.FLT_SHAPE_MIX
     UNDETERMINED = _capi.FLT_SHAPE_UNDETERMINED
+    #: not judged: the gauge's sheet is incomplete (SheetFlag.INCOMPLETE)
+    NOT_JUDGED = _capi.FLT_SHAPE_NOT_JUDGED
 
     @property
     def label(self) -> str:

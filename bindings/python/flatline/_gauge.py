@@ -5,21 +5,21 @@
 from __future__ import annotations
 
 import enum
-import threading
 from dataclasses import dataclass, field
-from typing import Any, Dict, Iterator, Optional, Tuple
+from typing import Any, Dict, Iterator, Optional, Tuple, Union
 
 import numpy as np
 
 from . import capi as _capi
 from ._arrays import as_float64, as_mask, as_real
+from . import _log
 from ._calib import Calibration
-from ._errors import StateError
+from ._errors import FlatlineError, StateError, TimeoutError
 from ._flatness import FiberResults, Shape, ShapeComponent
 from ._options import OptionValue, make_options, options_doc, prefixed_options
 from ._pixels import PixelFormat
 from ._source import Source
-from ._verdict import RuleResult, ToleranceRules, _results, _rule_list
+from ._verdict import RuleResult, ToleranceRules, VerdictState, _results, _rule_list
 
 __all__ = [
     "SheetFlag",
@@ -45,6 +45,10 @@ class SheetFlag(enum.IntFlag):
     NO_EDGES = _capi.FLT_SHEET_FLAG_NO_EDGES  #: strip edges unknown (NaN)
     NO_WAVE = _capi.FLT_SHEET_FLAG_NO_WAVE  #: no fiber has a wave (wave values NaN)
     EMPTY = _capi.FLT_SHEET_FLAG_EMPTY  #: no row: every result NaN and flagged
+    #: coverage below gauge_min_coverage: shape and verdict "not judged"
+    INCOMPLETE = _capi.FLT_SHEET_FLAG_INCOMPLETE
+    #: rows lost: frames dropped, missing by the encoder, or lost lines
+    LOST_ROWS = _capi.FLT_SHEET_FLAG_LOST_ROWS
 
 
 # flt_sheet_value keys by the names Sheet.values uses (in key order).
@@ -55,7 +59,8 @@ _VALUES = (
     "wave_steepness", "wave_x", "max_i_units", "flags", "window_flags", "frames",
     "skipped", "dropped", "saturated", "invalid", "lookahead", "fibers", "zones",
     "strip_width_min", "strip_width_max", "strip_centre_min", "strip_centre_max",
-    "rules", "rules_failed",
+    "rules", "rules_failed", "coverage", "rows_expected", "rows_measured", "lost_lines",
+    "missing", "verdict", "peaks",
 )
 
 _COUNTERS = {
@@ -75,6 +80,11 @@ _COUNTERS = {
     "queued": _capi.FLT_GAUGE_COUNT_QUEUED,
     "acquiring": _capi.FLT_GAUGE_COUNT_ACQUIRING,
     "sheets_waiting": _capi.FLT_GAUGE_COUNT_SHEETS_WAITING,
+    "sheets_grown": _capi.FLT_GAUGE_COUNT_SHEETS_GROWN,
+    "sheets_incomplete": _capi.FLT_GAUGE_COUNT_SHEETS_INCOMPLETE,
+    "missing": _capi.FLT_GAUGE_COUNT_MISSING,
+    "lost_lines": _capi.FLT_GAUGE_COUNT_LOST_LINES,
+    "refused": _capi.FLT_GAUGE_COUNT_REFUSED,
 }
 
 
@@ -145,6 +155,45 @@ class Sheet:
         """The number of rules the sheet failed (0 without rules)."""
         return int(self.values.get("rules_failed", 0))
 
+    @property
+    def coverage(self) -> float:
+        """Rows measured over the rows its length should hold, 0..1 (below
+        gauge_min_coverage the sheet is INCOMPLETE)."""
+        return self.values["coverage"]
+
+    @property
+    def incomplete(self) -> bool:
+        """True when too many rows are missing for a class or a verdict:
+        ``shape`` is Shape.NOT_JUDGED and ``verdict_state`` NOT_JUDGED."""
+        return bool(self.flags & SheetFlag.INCOMPLETE)
+
+    @property
+    def rows_expected(self) -> int:
+        """The rows its length should hold (rows + dropped + missing)."""
+        return int(self.values["rows_expected"])
+
+    @property
+    def rows_measured(self) -> int:
+        """Its rows that measured the strip (rows - lost_lines)."""
+        return int(self.values["rows_measured"])
+
+    @property
+    def lost_lines(self) -> int:
+        """Rows inside the strip whose frame did not show it."""
+        return int(self.values["lost_lines"])
+
+    @property
+    def missing(self) -> int:
+        """Frames missing by the encoder (lost before the gauge saw them)."""
+        return int(self.values["missing"])
+
+    @property
+    def verdict_state(self) -> VerdictState:
+        """The whole sheet's verdict: FAIL when a rule failed, PASS when every
+        rule was judged and passed, else NOT_JUDGED (no rules, a rule that
+        could not judge it, or an incomplete sheet): never a pass."""
+        return VerdictState(int(self.values["verdict"]))
+
 
 @dataclass(frozen=True)
 class RuleStats:
@@ -164,18 +213,27 @@ class RuleStats:
     #: (20,) sheets by worst / limit: bin i counts (i/10, (i+1)/10] (bin 0
     #: from 0, bin 19 everything above 1.9): bins 0-9 passed, 10-19 failed.
     histogram: np.ndarray
+    not_judged: int = 0  #: incomplete sheets (not judged by any rule)
 
 
 @dataclass(frozen=True)
 class CoilStats:
-    """A coil's verdict statistics (flt_gauge_coil_stats)."""
+    """A coil's verdict statistics (flt_gauge_coil_stats). Every sheet is
+    passed, failed or not judged: a sheet that no rule's band covers, whose
+    measure is missing, or that is incomplete is never counted as passed."""
 
     coil: int  #: the coil's number (0: no sheet judged yet)
-    sheets: int  #: sheets judged
-    passed: int  #: sheets that failed no rule
-    failed: int  #: sheets that failed at least one
+    sheets: int  #: sheets evaluated under the rules: passed + failed + not_judged
+    passed: int  #: sheets every rule judged and passed
+    failed: int  #: sheets that failed at least one rule
     finished: bool  #: its last sheet was judged
     rules: Tuple[RuleStats, ...]  #: per rule, in rule order
+    not_judged: int = 0  #: sheets no rule failed that some rule could not judge
+
+    @property
+    def judged(self) -> int:
+        """Sheets judged: passed + failed."""
+        return self.passed + self.failed
 
 
 def _read_sheet(handle: Any, maps: int) -> Sheet:
@@ -268,9 +326,16 @@ class Gauge:
             for sheet in gauge:
                 ...
 
-    Pushing is serialised (frames must arrive in order); iterating sheets
-    may run on another thread. The GIL is released while the gauge waits
-    (a full queue with gauge_overflow = 1, flush, stop, a sheet). While an
+    Nothing is lost by default: a push waits for room in a full queue
+    (gauge_overflow="auto"; an attached camera drops instead, counted and
+    flagged on its sheet), and every finished sheet waits to be read. A
+    sheet missing more than 5 % of its rows (gauge_min_coverage) is
+    ``incomplete``: its shape and verdict say "not judged".
+
+    Frames come from one thread at a time, in order: a push from a second
+    thread while one is in progress raises StateError (nothing taken, the
+    gauge goes on); iterating sheets may run on another thread. The GIL is released while the gauge waits
+    (a full queue, flush, stop, a sheet). While an
     attached source is acquiring, leave it (and the simulator or bus it
     reads) alone: the gauge's thread uses it.
 
@@ -287,7 +352,6 @@ class Gauge:
         with calib._reading():
             handle = _capi.flt_gauge_create(calib._live(), bag)
         self._handle: Optional[_capi.flt_gauge] = handle
-        self._push = threading.Lock()
         self._source: Optional[Source] = None
         self._maps = int(_capi.flt_gauge_get_option(handle, _capi.FLT_OPT_GAUGE_KEEP_MAPS))
         self._rules: Optional[ToleranceRules] = None
@@ -369,8 +433,9 @@ class Gauge:
                 and frame.strides[0] >= frame.shape[1] * item):
             frame = np.ascontiguousarray(frame, dtype=frame.dtype.newbyteorder("="))
         encoder_mm = as_real(fn, "encoder_mm", encoder_mm)
-        with self._push:
-            self._live().push_frame_array(frame, int(fmt), encoder_mm)
+        # One producer at a time: the library refuses a second thread that
+        # pushes meanwhile (StateError) rather than interleave its frames.
+        self._live().push_frame_array(frame, int(fmt), encoder_mm)
 
     def push_row(self, encoder_mm: float, height: Any, slope: Any,
                  valid: Any = None) -> None:
@@ -385,8 +450,7 @@ class Gauge:
             mask, flagged = np.zeros(1, dtype=np.uint8), 0
         else:
             mask, flagged = as_mask(fn, "valid", valid, 1), 1
-        with self._push:
-            self._live().push_row_arrays(encoder_mm, h, g, mask, flagged)
+        self._live().push_row_arrays(encoder_mm, h, g, mask, flagged)
 
     def cut(self, encoder_mm: float) -> None:
         """The shear cut the strip at encoder_mm (the reading at which the cut
@@ -396,9 +460,12 @@ class Gauge:
 
     def flush(self) -> None:
         """The end of the input: processes every frame pushed, ends the strip
-        (its last sheet) and waits until that sheet is out."""
-        with self._push:
+        (its last sheet) and waits until that sheet is out (after a push
+        another thread has in progress)."""
+        try:
             self._live().flush_waiting()
+        finally:
+            _log.drain()
 
     # -- acquisition ----------------------------------------------------------------
 
@@ -420,7 +487,50 @@ class Gauge:
         """Stops the acquisition and waits until its frames are processed (the
         strip stays open: :meth:`flush` ends it). Raises the error that ended
         the acquisition by itself, e.g. DeviceError for an unplugged camera."""
-        self._live().stop_waiting()
+        try:
+            self._live().stop_waiting()
+        finally:
+            _log.drain()
+
+    def run(self, source: Source) -> Iterator[Sheet]:
+        """Runs a finite source (an image sequence, a recording) to its end
+        and yields every sheet, in order, as it comes: attaches and starts
+        the source, and after its last frame ends the strip (a flush), so
+        the last sheet comes too, then detaches the source. The source's
+        own error (e.g. a file it cannot read) is raised after the sheets
+        before it. Closing the iterator early stops the acquisition.
+
+            for sheet in gauge.run(flatline.Source.images("recording/")):
+                print(sheet.id, sheet.shape, sheet.max_i_units)
+        """
+        if not isinstance(source, Source):
+            raise TypeError(f"run() argument 'source' must be a Source, not "
+                            f"{type(source).__name__}")
+        self.attach(source)
+        self.start()
+        ended = False
+        try:
+            while True:
+                try:
+                    self._live().wait_waiting(50)
+                    ended = True
+                    _log.drain()
+                    break
+                except TimeoutError:
+                    yield from self  # the sheets so far; the source goes on
+                except FlatlineError:
+                    ended = True  # the strip was ended all the same
+                    yield from self
+                    raise
+            yield from self
+        finally:
+            if self._handle is not None:
+                if not ended:
+                    try:
+                        self.stop()
+                    except FlatlineError:
+                        pass  # closed early: why the source would have ended is moot
+                self.attach(None)  # the source may be closed after the run
 
     # -- output ---------------------------------------------------------------------
 
@@ -432,6 +542,7 @@ class Gauge:
             raise ValueError(f"next_sheet() argument 'timeout' must be >= 0, got {timeout}")
         ms = int(min(seconds, 4e6) * 1000.0)
         handle = self._live().next_sheet_waiting(ms)
+        _log.drain()
         if handle is None:
             return None
         try:
@@ -464,18 +575,45 @@ class Gauge:
         """The rule set sheets are judged by (set_rules), or None."""
         return self._rules
 
-    def set_rules(self, rules: Optional[ToleranceRules], thickness_mm: float = 1.0,
-                  width_mm: float = 0.0) -> None:
-        """Judges every sheet from now on against `rules` (None: no more):
-        the sheets' thickness (mm) and nominal width (mm; 0: each sheet's
-        measured strip width) choose each rule's band. The gauge keeps its
-        own copy. The current coil's statistics restart; set the rules
-        before a coil's first frame."""
+    def set_rules(self, rules: Optional[ToleranceRules],
+                  thickness_mm: Optional[float] = None,
+                  width_mm: Union[float, str, None] = None) -> None:
+        """Judges every sheet from now on against `rules` (None: no more).
+        The sheets' thickness (mm) and width choose each rule's band, and
+        both are required with rules: ``width_mm`` is the nominal width
+        (mm) or ``"measured"`` for each sheet's measured strip width. A
+        sheet that no band covers is not judged (never passed). The gauge
+        keeps its own copy. The current coil's statistics restart; set the
+        rules before a coil's first frame.
+
+            gauge.set_rules(rules, thickness_mm=4.0, width_mm="measured")
+        """
+        fn = "set_rules"
         if rules is not None and not isinstance(rules, ToleranceRules):
-            raise TypeError(f"set_rules() argument 'rules' must be ToleranceRules or None, not "
+            raise TypeError(f"{fn}() argument 'rules' must be ToleranceRules or None, not "
                             f"{type(rules).__name__}")
-        _capi.flt_gauge_set_rules(self._live(), None if rules is None else rules._handle,
-                                  float(thickness_mm), float(width_mm))
+        if rules is None:
+            _capi.flt_gauge_set_rules(self._live(), None, 1.0, 0.0)
+            self._rules = None
+            return
+        if thickness_mm is None:
+            raise TypeError(f"{fn}() missing required argument 'thickness_mm': the sheets' "
+                            f"thickness, mm, chooses each rule's band (there is no default)")
+        if width_mm is None:
+            raise TypeError(f"{fn}() missing required argument 'width_mm': the sheets' "
+                            f"nominal width, mm, or \"measured\" for each sheet's strip width")
+        if isinstance(width_mm, str):
+            if width_mm != "measured":
+                raise ValueError(f"{fn}() argument 'width_mm' = {width_mm!r} must be a width "
+                                 f"in mm or \"measured\"")
+            width = _capi.FLT_GAUGE_WIDTH_MEASURED
+        else:
+            width = as_real(fn, "width_mm", width_mm)
+            if width == 0.0:
+                raise ValueError(f"{fn}() argument 'width_mm' = 0: give the nominal width in "
+                                 f"mm, or \"measured\" for each sheet's strip width")
+        _capi.flt_gauge_set_rules(self._live(), rules._handle,
+                                  as_real(fn, "thickness_mm", thickness_mm), width)
         self._rules = rules
 
     def coil_stats(self, last: bool = False) -> Optional[CoilStats]:
@@ -504,11 +642,13 @@ class Gauge:
                 int(row[_capi.FLT_COIL_RULE_NO_BAND]), int(row[_capi.FLT_COIL_RULE_NOT_MEASURED]),
                 float(row[_capi.FLT_COIL_WORST_MIN]), float(row[_capi.FLT_COIL_WORST_MAX]),
                 float(row[_capi.FLT_COIL_WORST_MEAN]), float(row[_capi.FLT_COIL_WORST_SHEET]),
-                float(row[_capi.FLT_COIL_WORST_X]), float(row[_capi.FLT_COIL_WORST_S]), hist))
+                float(row[_capi.FLT_COIL_WORST_X]), float(row[_capi.FLT_COIL_WORST_S]), hist,
+                int(row[_capi.FLT_COIL_RULE_NOT_JUDGED])))
         return CoilStats(int(first[_capi.FLT_COIL_NUMBER]), int(first[_capi.FLT_COIL_SHEETS]),
                          int(first[_capi.FLT_COIL_SHEETS_PASSED]),
                          int(first[_capi.FLT_COIL_SHEETS_FAILED]),
-                         bool(first[_capi.FLT_COIL_FINISHED]), tuple(stats))
+                         bool(first[_capi.FLT_COIL_FINISHED]), tuple(stats),
+                         int(first[_capi.FLT_COIL_SHEETS_NOT_JUDGED]))
 
     def counters(self) -> Dict[str, int]:
         """The gauge's counters by name: frames, extracted, skipped_stop,

@@ -46,6 +46,9 @@ class VerdictState(enum.IntEnum):
     FAIL = _capi.FLT_VERDICT_FAIL  #: the worst value exceeds the limit
     NO_BAND = _capi.FLT_VERDICT_NO_BAND  #: no band covers the sheet's thickness and width
     NOT_MEASURED = _capi.FLT_VERDICT_NOT_MEASURED  #: no map, or the value was not given
+    #: the gauge's sheet is incomplete; also a whole sheet's verdict
+    #: (Sheet.verdict_state) when a rule could not judge it
+    NOT_JUDGED = _capi.FLT_VERDICT_NOT_JUDGED
 
 
 @dataclass(frozen=True)
@@ -220,6 +223,11 @@ class Verdict:
     def results(self) -> List[RuleResult]:
         """The results of the last evaluation, in rule order."""
         return _results(self._handle, self._rules)
+
+    @property
+    def rules(self) -> Tuple[ToleranceRule, ...]:
+        """The rules this verdict judges by, in order."""
+        return tuple(self._rules)
 
     @property
     def failed(self) -> int:

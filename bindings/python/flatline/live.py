@@ -341,7 +341,8 @@ class LiveView:
         options.update(gauge_options or {})
         self.gauge = flatline.Gauge(calib, **options)
         if rules is not None:
-            self.gauge.set_rules(rules, thickness_mm, width_mm)
+            # width 0: each sheet's measured strip width chooses the band
+            self.gauge.set_rules(rules, thickness_mm, width_mm if width_mm > 0 else "measured")
         self.rules_name = ""
         self.extractor = flatline.Extractor(calib)
         self._lock = threading.Lock()

@@ -51,3 +51,4 @@
 %include "gauge.i"
 %include "genicam.i"
 %include "advisor.i"
+%include "log.i"

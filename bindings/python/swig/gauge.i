@@ -18,6 +18,7 @@
 %ignore flt_gauge_push_row;
 %ignore flt_gauge_flush;
 %ignore flt_gauge_stop;
+%ignore flt_gauge_wait;
 %ignore flt_gauge_next_sheet;
 %ignore flt_gauge_set_callback;
 %ignore flt_sheet_destroy;
@@ -118,6 +119,15 @@ struct flt_gauge {};
     flt_status status;
     Py_BEGIN_ALLOW_THREADS
     status = flt_gauge_flush($self);
+    Py_END_ALLOW_THREADS
+    return status;
+  }
+
+  /* flt_gauge_wait with the GIL released. */
+  flt_status wait_waiting(unsigned int timeout_ms) {
+    flt_status status;
+    Py_BEGIN_ALLOW_THREADS
+    status = flt_gauge_wait($self, timeout_ms);
     Py_END_ALLOW_THREADS
     return status;
   }

@@ -2,6 +2,7 @@
 """The gauge from Python: sheets out of rows and frames, cuts early and late,
 counters, the iterators, a source on the gauge's thread, bad input."""
 
+import logging
 import math
 import threading
 
@@ -218,7 +219,7 @@ def test_bad_input_raises_with_the_library_message(calib):
 def test_gauge_options_table():
     table = flatline.gauge_options()
     assert table["gauge_workers"] == 2.0 and table["gauge_frame_spacing"] == 1.0
-    assert all(name.startswith("gauge_") for name in table) and len(table) == 10
+    assert all(name.startswith("gauge_") for name in table) and len(table) == 13
     assert "gauge_workers (int): default 2" in flatline.Gauge.__doc__
 
 
@@ -287,7 +288,7 @@ def test_sheets_carry_their_verdict_and_the_coil_its_statistics(calib):
     rules = flatline.ToleranceRules.loads(VERDICT_RULES)
     gauge = flatline.Gauge(calib, gauge_workers=2, gauge_overflow=1, gauge_frame_spacing=2.0)
     assert gauge.rules is None and gauge.coil_stats() is None
-    gauge.set_rules(rules, thickness_mm=4.0)
+    gauge.set_rules(rules, thickness_mm=4.0, width_mm="measured")
     assert gauge.rules is rules
     for c in (3000.0, 6000.0):
         gauge.cut(c)
@@ -328,5 +329,265 @@ def test_sheets_carry_their_verdict_and_the_coil_its_statistics(calib):
     gauge.flush()
     assert all(sheet.verdict is None for sheet in gauge)
     with pytest.raises(flatline.InvalidArgumentError, match="thickness_mm"):
-        gauge.set_rules(rules, thickness_mm=-1.0)
+        gauge.set_rules(rules, thickness_mm=-1.0, width_mm="measured")
     gauge.close()
+
+
+# ---- nothing lost unless the caller chose it ------------------------------------
+
+
+def _frame_pool(calib, n=60):
+    """n rendered frames of the simulated line (a buckle), to push cyclically."""
+    with flatline.SimulatedLine(calib, sim_frame_spacing=3.0) as sim:
+        sim.add_defect("centre_buckle", 6.0, 1800.0)
+        return [sim.next_frame().image for _ in range(n)]
+
+
+def _push_frames_fast(gauge, pool, count, step=3.0, cut_every=1000.0):
+    for c in np.arange(cut_every, count * step, cut_every):
+        gauge.cut(float(c))
+    for i in range(count):
+        gauge.push_frame(pool[i % len(pool)], i * step)
+    gauge.flush()
+    return list(gauge)
+
+
+def _same_sheets(a, b):
+    assert len(a) == len(b)
+    for x, y in zip(a, b):
+        assert x.values.keys() == y.values.keys()
+        for key in x.values:
+            vx, vy = x.values[key], y.values[key]
+            assert (vx == vy) or (math.isnan(vx) and math.isnan(vy)), key
+        assert np.array_equal(x.zones.i_units, y.zones.i_units, equal_nan=True)
+
+
+def test_frames_pushed_as_fast_as_possible_are_never_dropped_by_default(calib):
+    # 2100 frames pushed by a plain loop into 2 workers: the loop outruns
+    # the extraction (gauge_overflow="drop" loses most of them, which shows
+    # it does), and by default it waits: 0 dropped, every frame in a sheet,
+    # the same sheets as with the queue set to wait explicitly.
+    pool = _frame_pool(calib)
+    with flatline.Gauge(calib, gauge_workers=2, gauge_overflow="drop",
+                        gauge_frame_spacing=2.0, gauge_queue_frames=8) as gauge:
+        lossy = _push_frames_fast(gauge, pool, 2100)
+        counters = gauge.counters()
+        assert counters["dropped"] > 0
+        # Every frame is in a sheet, dropped or before the strip; a sheet
+        # that lost any says so.
+        assert sum(sh.rows for sh in lossy) + counters["dropped"] + counters["no_strip"] == 2100
+        assert all(sh.dropped == 0 or flatline.SheetFlag.LOST_ROWS in sh.flags for sh in lossy)
+    runs = {}
+    for overflow in ("auto", "wait"):
+        with flatline.Gauge(calib, gauge_workers=2, gauge_overflow=overflow,
+                            gauge_frame_spacing=2.0, gauge_queue_frames=8) as gauge:
+            runs[overflow] = _push_frames_fast(gauge, pool, 2100)
+            counters = gauge.counters()
+            assert counters["dropped"] == 0 and counters["frames"] == 2100
+            assert sum(sh.rows for sh in runs[overflow]) == 2100 - counters["no_strip"]
+    assert all(sh.coverage == 1.0 and not sh.incomplete for sh in runs["auto"])
+    _same_sheets(runs["auto"], runs["wait"])
+    with flatline.Gauge(calib) as gauge:
+        assert gauge.option("gauge_overflow") == flatline.capi.FLT_GAUGE_OVERFLOW_AUTO
+
+
+def test_readme_streaming_pattern_returns_every_sheet(calib):
+    # The README's pattern: read the sheets while pushing, then flush and
+    # read the rest. With rigid_motion and robust the reconstructor holds
+    # about 17 m of strip, so the 10 sheets of 1 m all finish at the flush:
+    # more than the 4 sheet slots, and every one comes out, in order.
+    s, h, g, _ = reference_sheet(3400)  # 10.2 m
+    got = []
+    with flatline.Gauge(calib, rigid_motion=True, robust="huber",
+                        gauge_frame_spacing=2.0) as gauge:
+        for c in range(1000, 10000, 1000):
+            gauge.cut(float(c))
+        for r in range(len(s)):
+            gauge.push_row(s[r], h[r], g[r])
+            for sheet in gauge:
+                got.append(sheet)
+        gauge.flush()
+        got.extend(gauge)
+        counters = gauge.counters()
+    assert [sh.id for sh in got] == list(range(1, 11))
+    assert counters["sheets_dropped"] == 0 and counters["sheets_grown"] > 0
+    assert all(not sh.incomplete for sh in got)
+
+
+def test_a_sheet_missing_rows_is_not_judged(calib):
+    # Rows every 3 mm with 100 of the first sheet's 1000 missing (a camera
+    # that lost them): coverage 0.9 < 0.95, incomplete, shape and verdict
+    # "not judged"; the second sheet is whole.
+    s, h, g, _ = reference_sheet(2000)
+    keep = np.ones(len(s), bool)
+    keep[400:500] = False
+    rules = flatline.ToleranceRules.loads(VERDICT_RULES)
+    with flatline.Gauge(calib, gauge_frame_spacing=2.0) as gauge:
+        gauge.set_rules(rules, thickness_mm=4.0, width_mm="measured")
+        gauge.cut(3000.0)
+        for r in np.flatnonzero(keep):
+            gauge.push_row(s[r], h[r], g[r])
+        gauge.flush()
+        first, second = list(gauge)
+    assert first.incomplete and first.coverage == 0.9
+    assert (first.rows, first.missing, first.rows_expected) == (900, 100, 1000)
+    assert first.shape == flatline.Shape.NOT_JUDGED and str(first.shape) == "not judged: incomplete"
+    assert first.verdict_state == flatline.VerdictState.NOT_JUDGED
+    assert all(r.state == flatline.VerdictState.NOT_JUDGED for r in first.verdict)
+    assert not second.incomplete and second.coverage == 1.0
+    assert second.verdict_state != flatline.VerdictState.NOT_JUDGED
+
+
+def test_thickness_and_width_are_required_and_no_band_is_not_judged(calib):
+    rules = flatline.ToleranceRules.loads(VERDICT_RULES)  # bands: 1..10 mm thick
+    s, h, g, _ = reference_sheet(2000)
+    with flatline.Gauge(calib, gauge_frame_spacing=2.0) as gauge:
+        with pytest.raises(TypeError, match="thickness_mm"):
+            gauge.set_rules(rules)
+        with pytest.raises(TypeError, match="width_mm"):
+            gauge.set_rules(rules, thickness_mm=4.0)
+        with pytest.raises(ValueError, match="measured"):
+            gauge.set_rules(rules, thickness_mm=4.0, width_mm="nominal")
+        assert gauge.rules is None
+        # 0.5 mm is in no band: every rule NO_BAND, each sheet not judged,
+        # and the coil counts 0 passed, 0 failed, 2 not judged.
+        gauge.set_rules(rules, thickness_mm=0.5, width_mm=1500.0)
+        gauge.cut(3000.0)
+        for r in range(len(s)):
+            gauge.push_row(s[r], h[r], g[r])
+        gauge.flush()
+        sheets = list(gauge)
+        stats = gauge.coil_stats(last=True)
+    assert len(sheets) == 2
+    assert all(sh.verdict_state == flatline.VerdictState.NOT_JUDGED for sh in sheets)
+    assert all(r.state == flatline.VerdictState.NO_BAND for sh in sheets for r in sh.verdict)
+    assert stats is not None
+    assert (stats.sheets, stats.passed, stats.failed, stats.not_judged, stats.judged) == \
+        (2, 0, 0, 2, 0)
+    assert stats.rules[0].no_band == 2
+
+
+def test_a_second_thread_pushing_is_refused_and_the_gauge_goes_on(calib):
+    # While the main thread is in a push (a queue of 1 frame and one worker
+    # keep it waiting for room), a second thread's pushes are refused at
+    # once with StateError;
+    # those that land between the main thread's pushes are behind the
+    # strip (a short reversal) and skipped. Every main row is in a sheet.
+    s, h, g, _ = reference_sheet(3000)
+    refused, taken = [], []
+    stop = threading.Event()
+    with flatline.Gauge(calib, gauge_workers=1, gauge_queue_frames=1, lag_knots=4,
+                        gauge_frame_spacing=2.0, gauge_reversal_length=1e8) as gauge:
+        for c in range(600, 9000, 600):
+            gauge.cut(float(c))
+        for r in range(10):
+            gauge.push_row(s[r], h[r], g[r])
+
+        def second():
+            while not stop.is_set():
+                try:
+                    gauge.push_row(0.0, h[0], g[0])
+                    taken.append(1)
+                except flatline.StateError as e:
+                    assert "another thread is pushing" in str(e)
+                    refused.append(1)
+                stop.wait(0.001)
+
+        other = threading.Thread(target=second)
+        other.start()
+        try:
+            r = 10
+            while r < len(s):  # refused too when it comes while the other pushes
+                try:
+                    gauge.push_row(s[r], h[r], g[r])
+                    r += 1
+                except flatline.StateError:
+                    pass
+        finally:
+            stop.set()
+            other.join()
+        gauge.flush()
+        sheets = list(gauge)
+        counters = gauge.counters()
+    assert refused, "the second thread never met the first one's push"
+    assert sum(sh.rows for sh in sheets) == len(s)
+    assert counters["frames"] == len(s) + len(taken)
+    assert counters["skipped_reversal"] + counters["skipped_stop"] == len(taken)
+
+
+def _write_png(path, image):
+    """An 8-bit grey PNG without an imaging library."""
+    import struct
+    import zlib
+
+    raw = b"".join(b"\0" + image[r].tobytes() for r in range(image.shape[0]))
+
+    def chunk(tag, body):
+        return (struct.pack(">I", len(body)) + tag + body
+                + struct.pack(">I", zlib.crc32(tag + body) & 0xFFFFFFFF))
+
+    header = struct.pack(">IIBBBBB", image.shape[1], image.shape[0], 8, 0, 0, 0, 0)
+    with open(path, "wb") as f:
+        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header)
+                + chunk(b"IDAT", zlib.compress(raw, 1)) + chunk(b"IEND", b""))
+
+
+def test_run_a_recording_to_its_end(calib, tmp_path):
+    # 150 recorded frames 10 mm apart, cuts at 500 and 1000 mm: run() yields
+    # the 3 sheets, the last one after the source's end (the flush), and
+    # nothing is dropped (a recording waits for room).
+    with flatline.SimulatedLine(calib, sim_frame_spacing=10.0) as sim:
+        sim.add_defect("centre_buckle", 4.0, 800.0)
+        for i in range(150):
+            _write_png(tmp_path / f"frame_{i:03d}.png", sim.next_frame().image)
+    for workers in (0, 2):
+        with flatline.Gauge(calib, gauge_workers=workers, gauge_frame_spacing=8.0, lag_knots=4,
+                            gauge_queue_frames=4) as gauge:
+            gauge.cut(500.0)
+            gauge.cut(1000.0)
+            with flatline.Source.images(tmp_path, step=10.0) as source:
+                sheets = list(gauge.run(source))
+            counters = gauge.counters()
+        assert [sh.id for sh in sheets] == [1, 2, 3]
+        assert [sh.s_end for sh in sheets[:2]] == [500.0, 1000.0]
+        assert flatline.SheetFlag.FLUSHED in sheets[2].flags
+        assert counters["frames"] == 150 and counters["dropped"] == 0
+        assert sum(sh.rows for sh in sheets) + counters["no_strip"] == 150
+        assert counters["acquiring"] == 0
+    with flatline.Gauge(calib) as gauge:
+        with pytest.raises(TypeError, match="Source"):
+            next(gauge.run("recording/"))
+
+
+def test_the_log_reaches_logging(calib, caplog):
+    # A gauge that drops frames (gauge_overflow="drop", a queue of 1 and a
+    # plain loop pushing faster than one worker extracts: most are dropped),
+    # a cut given for a strip that ended, and an overexposed line: the logger "flatline"
+    # gets a message for each, at its level, by the time flush returns.
+    with flatline.SimulatedLine(calib, sim_frame_spacing=10.0, sim_line_peak=1.5) as sim:
+        frames = [sim.next_frame().image for _ in range(200)]
+    caplog.set_level(logging.INFO, logger="flatline")
+    # An earlier test's drops may have used this place's 5 messages of the
+    # last 10 s: a new installation starts the rate limits afresh.
+    flatline._log.install()
+    with flatline.Gauge(calib, gauge_workers=1, gauge_queue_frames=1, gauge_overflow="drop",
+                        gauge_frame_spacing=8.0, lag_knots=4) as gauge:
+        for i, frame in enumerate(frames):
+            gauge.push_frame(frame, 10.0 * i)
+        gauge.flush()
+        dropped = gauge.counters()["dropped"]
+        sheets = list(gauge)
+        gauge.cut(1200.0)  # the next strip's head (5000 mm) is past it: ignored
+        gauge.push_frame(frames[0], 5000.0)
+        gauge.flush()
+        counters = gauge.counters()
+    messages = [(r.levelname, r.getMessage()) for r in caplog.records if r.name == "flatline"]
+    drops = [m for level, m in messages if " dropped: " in m]
+    assert dropped > 0
+    assert 1 <= len(drops) <= 5 and all(m.startswith("gauge: frame at encoder") for m in drops)
+    assert sum("cut ignored, the last at encoder 1200.0 mm" in m for _, m in messages) == 1
+    saturated = [level for level, m in messages if " are saturated " in m]
+    assert len(sheets) >= 1 and saturated == ["WARNING"] * counters["sheets"]
+    # (a burst of drops wider than the tail length ends a strip: one head each)
+    assert sum("the strip's head at" in m for _, m in messages) == counters["strips"] >= 2
+    assert all(level in ("INFO", "WARNING") for level, _ in messages)

@@ -165,7 +165,7 @@ def test_enums_are_the_c_values():
     assert flatline.PixelFormat.MONO10.dtype == np.uint16
     assert [int(t) for t in flatline.Target] == [0, 1, 2]
     assert flatline.LASERS == 2
-    assert [int(s) for s in flatline.Shape] == list(range(8))
+    assert [int(s) for s in flatline.Shape] == list(range(9))
     assert int(flatline.ShapeComponent.CROSSBOW) == 32
     assert [int(k) for k in flatline.SourceKind] == [1, 2, 3, 4]
     from flatline.testing import U3VFault, U3VSimParam
