@@ -192,13 +192,30 @@
  *   has shown the two lines) and the flatness metrics' column scratch (at
  *   the first sheet longer than any before). Frames, cuts and sheets
  *   allocate nothing (tests/c/test_gauge_alloc.c counts) while no more
- *   than gauge_sheet_slots sheets exist at once. The big parts, with K
- *   fibers, Z zones and F = gauge_frame_spacing: the frame queue,
- *   gauge_queue_frames x width x height x 2 bytes; the reconstructor,
- *   about 9 bytes x K x its latency / F (rigid_motion and robust: about 17
- *   m of strip); two sheet buffers and the sheet slots' maps, 9 (17 with
- *   measured heights) bytes x K x gauge_max_sheet_length / F each. A
- *   sheet made beyond the slots costs 8 x (8 K + 4 Z) bytes, and with
+ *   than gauge_sheet_slots sheets exist at once. With K fibers, Z zones, a
+ *   W x H frame, R = row_capacity (as flt_gauge_get_option() reports it:
+ *   the reconstructor's latency at gauge_frame_spacing, a quarter more and
+ *   256 rows), S = gauge_max_sheet_length / gauge_frame_spacing + 2 rows
+ *   of a sheet, Q = gauge_queue_frames (0 without workers), P =
+ *   gauge_sheet_slots (0 with gauge_keep_maps 0) and E extractors (1 at
+ *   create with automatic bands or no workers, else one per worker),
+ *   create takes about
+ *     the reconstructor at R rows (recon.h, "Memory")
+ *   + two flatness metrics (flatness.h), at 16 rows and at
+ *     flat_min_length / gauge_frame_spacing + 2 rows
+ *   + E x the extractor (extractor.h)
+ *   + Q x 2 W H                         the frame queue
+ *   + 64 R                              the row ring
+ *   + 2 S (88 + 9 K) + P S (8 + 9 K)    two sheet buffers, the slots' maps
+ *   + 8 K (R + 2 S + P S)               with gauge_keep_maps 2 (measured)
+ *   + K (100 P + 20 Q + 400) + 30 kB    per-fiber arrays
+ *   bytes: 1,150 fibers, a 2048 x 256 frame and the defaults take about
+ *   160 MB, 320 MB with rigid_motion, robust and gauge_keep_maps 1.
+ *   tests/c/test_memory.c checks the formula against the measured peak.
+ *   flt_gauge_create() refuses a configuration whose own buffers (the
+ *   gauge's lines above) pass 8 GiB, before allocating them; the
+ *   reconstructor and the metrics refuse on their own formulas.
+ *   A sheet made beyond the slots costs 8 x (8 K + 4 Z) bytes, and with
  *   gauge_keep_maps 9 (17) bytes x K x its own rows; at most
  *   gauge_sheet_backlog of them exist while frames are pushed, and a flush
  *   adds at most the sheets in flight (the cuts waiting, at most 256, and

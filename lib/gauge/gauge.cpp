@@ -226,17 +226,15 @@ void gauge::init(const flt_calib *calib, const flt_options *options) {
     // configuration (micrometre frames, kilometre sheets) is refused with
     // its cost instead of exhausting the machine.
     {
+        // The gauge's own buffers by gauge.h's "Memory" formula (the
+        // reconstructor and the flatness metrics refuse on their own).
         const double K = double(K_), rows = double(row_capacity_);
-        const double robust_stages = option_value(&eff, FLT_OPT_ROBUST) != 0.0
-                                         ? option_value(&eff, FLT_OPT_ROBUST_ITERATIONS)
-                                         : 0.0;
-        const double per_sample = cfg_.keep_maps >= 2 ? 17.0 : 9.0;
-        double bytes = rows * K * (9.0 + 4.0 * robust_stages);  // reconstructor
-        bytes += 2.0 * sheet_rows * K * per_sample;             // sheet buffers
-        if (cfg_.keep_maps >= 1)
-            bytes += double(cfg_.sheet_slots) * sheet_rows * K * per_sample;
+        const double slots = cfg_.keep_maps >= 1 ? double(cfg_.sheet_slots) : 0.0;
+        double bytes = 64.0 * rows;                     // the row ring
+        bytes += 2.0 * sheet_rows * (88.0 + 9.0 * K);   // two sheet buffers
+        bytes += slots * sheet_rows * (8.0 + 9.0 * K);  // the slots' maps
         if (cfg_.keep_maps >= 2)
-            bytes += rows * K * 8.0;
+            bytes += 8.0 * K * (rows + 2.0 * sheet_rows + slots * sheet_rows);
         if (cfg_.workers > 0)
             bytes += double(cfg_.queue_frames) * double(width_) * double(height_) * 2.0;
         constexpr double limit = 8.0 * 1024 * 1024 * 1024;

@@ -210,6 +210,122 @@ static void test_reconstructor_follows_its_formula(void **state) {
     recon_case(1000, 65536, 0, 0, 1); /* 600 MB */
 }
 
+/* gauge.h, "Memory": the reconstructor at the gauge's row capacity (R,
+ * as flt_gauge_get_option reports it), two flatness metrics, the
+ * extractors, and the gauge's own buffers: the frame queue, the row ring,
+ * two sheet buffers and the sheet slots' maps, S rows each. */
+static double gauge_formula(double K, double Z, double W, double H, double R, double recon,
+                            double Q, double E, double S, double P, int keep_maps,
+                            double short_rows) {
+    double bytes = recon;
+    bytes += Q * 2 * W * H;                  /* the frame queue (with workers) */
+    bytes += E * (710 * W + 60 * K + 8 * H); /* the extractors */
+    bytes += flatness_formula(16, K, Z) + flatness_formula(short_rows, K, Z);
+    bytes += 64 * R;               /* the row ring */
+    bytes += 2 * S * (88 + 9 * K); /* two sheet buffers */
+    if (keep_maps >= 1)
+        bytes += P * S * (8 + 9 * K); /* the slots' maps */
+    if (keep_maps >= 2)
+        bytes += 8 * K * (R + 2 * S + P * S);      /* measured heights */
+    bytes += K * (100 * P + 20 * Q + 400) + 30000; /* slots' arrays, per-fiber scratch, fixed */
+    return bytes;
+}
+
+static void gauge_case(size_t fibers, uint32_t rows, double workers, double queue, double sheet_mm,
+                       double frame_mm, double slots, int keep_maps, int rigid, int robust) {
+    flt_calib *calib = NULL;
+    assert_int_equal(
+        flt_calib_create_reference(0, rows, -1000.0, 2000.0 / (double)fibers, fibers, &calib),
+        FLT_OK);
+    uint32_t width = 0, height = 0;
+    assert_int_equal(flt_calib_get_frame_size(calib, &width, &height), FLT_OK);
+    flt_options *options = bag();
+    set(options, FLT_OPT_GAUGE_WORKERS, workers);
+    set(options, FLT_OPT_GAUGE_QUEUE_FRAMES, queue);
+    set(options, FLT_OPT_GAUGE_MAX_SHEET_LENGTH, sheet_mm);
+    set(options, FLT_OPT_GAUGE_FRAME_SPACING, frame_mm);
+    set(options, FLT_OPT_GAUGE_SHEET_SLOTS, slots);
+    set(options, FLT_OPT_GAUGE_KEEP_MAPS, keep_maps);
+    set(options, FLT_OPT_RIGID_MOTION, rigid);
+    set(options, FLT_OPT_ROBUST, robust);
+#ifdef __linux__
+    malloc_trim(0);
+#endif
+    flt_gauge *gauge = NULL;
+    start();
+    assert_int_equal(flt_gauge_create(calib, options, &gauge), FLT_OK);
+    const double measured = peak_bytes();
+    double R = 0, Z = 0, min_length = 0;
+    assert_int_equal(flt_gauge_get_option(gauge, FLT_OPT_ROW_CAPACITY, &R), FLT_OK);
+    assert_int_equal(flt_gauge_get_option(gauge, FLT_OPT_FLAT_MIN_LENGTH, &min_length), FLT_OK);
+    flt_gauge_destroy(gauge);
+    /* The reconstructor alone at that capacity, by its own formula. */
+    double lag = 0, passes = 0, line_passes = 0;
+    assert_int_equal(flt_options_get(options, FLT_OPT_LAG_KNOTS, &lag), FLT_OK);
+    if (robust) {
+        assert_int_equal(flt_options_get(options, FLT_OPT_ROBUST_ITERATIONS, &passes), FLT_OK);
+        assert_int_equal(flt_options_get(options, FLT_OPT_ROBUST_LINE_ITERATIONS, &line_passes),
+                         FLT_OK);
+    }
+    const double recon = recon_formula((double)fibers, R, lag, passes, rigid, robust, line_passes);
+    {
+        double *x = malloc(fibers * sizeof *x);
+        for (size_t k = 0; k < fibers; ++k)
+            x[k] = -1000.0 + 2000.0 / (double)fibers * (double)k;
+        flt_flatness *flatness = NULL;
+        assert_int_equal(flt_flatness_create(fibers, x, NULL, &flatness), FLT_OK);
+        size_t zones = 0;
+        assert_int_equal(flt_flatness_zones(flatness, &zones), FLT_OK);
+        Z = (double)zones;
+        flt_flatness_destroy(flatness);
+        free(x);
+    }
+    const double S = ceil(sheet_mm / frame_mm) + 2;
+    const double E = 1; /* automatic bands (or no workers): one extractor at create */
+    const double documented =
+        gauge_formula((double)fibers, Z, width, height, R, recon, workers > 0 ? queue : 0, E, S,
+                      slots, keep_maps, fmax(16, ceil(min_length / frame_mm) + 2));
+    char what[120];
+    snprintf(what, sizeof what, "gauge: %zu fibers, %ux%u, %g workers, R %.0f, S %.0f, maps %d%s",
+             fibers, width, height, workers, R, S, keep_maps, robust ? ", robust" : "");
+    within(what, measured, documented);
+    flt_options_destroy(options);
+    flt_calib_destroy(calib);
+}
+
+/* A configuration whose own buffers pass 8 GiB (4,000 fibers, 100 m
+ * sheets at 1 mm, measured heights kept): refused, naming what to lower,
+ * before its buffers are allocated (only the reconstructor's probe of 16
+ * rows, some 40 MB, is made). */
+static void test_gauge_refuses_on_its_formula(void **state) {
+    (void)state;
+    flt_calib *calib = NULL;
+    assert_int_equal(flt_calib_create_reference(0, 256, -1000.0, 0.5, 4000, &calib), FLT_OK);
+    flt_options *options = bag();
+    set(options, FLT_OPT_GAUGE_MAX_SHEET_LENGTH, 100000);
+    set(options, FLT_OPT_GAUGE_FRAME_SPACING, 1);
+    set(options, FLT_OPT_GAUGE_KEEP_MAPS, 2);
+    flt_gauge *gauge = NULL;
+    start();
+    assert_int_equal(flt_gauge_create(calib, options, &gauge), FLT_ERR_INVALID_ARGUMENT);
+    assert_null(gauge);
+    assert_non_null(strstr(flt_last_error_message(), "gauge_max_sheet_length"));
+    print_message("refused after a peak of %.0f B: %s\n", peak_bytes(), flt_last_error_message());
+    assert_true(peak_bytes() < 100e6);
+    flt_options_destroy(options);
+    flt_calib_destroy(calib);
+}
+
+static void test_gauge_follows_its_formula(void **state) {
+    (void)state;
+    gauge_case(1150, 256, 2, 8, 6000, 3, 4, 0, 0, 0);
+    gauge_case(1150, 256, 2, 8, 6000, 3, 4, 1, 1, 1);
+    gauge_case(1150, 256, 0, 8, 6000, 3, 4, 2, 1, 1);
+    gauge_case(150, 1024, 2, 32, 12000, 1, 8, 1, 0, 0);
+    gauge_case(150, 64, 1, 4, 2000, 10, 2, 0, 1, 1);
+    gauge_case(4000, 256, 2, 8, 6000, 3, 16, 1, 1, 0);
+}
+
 /* extractor.h and sim.h, "Memory": per column of the frame, per pixel
  * (the simulator's frame scratch) and per fiber. */
 static void test_extractor_and_simulator_follow_their_formulas(void **state) {
@@ -290,6 +406,8 @@ int main(void) {
         cmocka_unit_test(test_reconstructor_follows_its_formula),
         cmocka_unit_test(test_extractor_and_simulator_follow_their_formulas),
         cmocka_unit_test(test_advisor_follows_its_formula),
+        cmocka_unit_test(test_gauge_follows_its_formula),
+        cmocka_unit_test(test_gauge_refuses_on_its_formula),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 #endif
