@@ -17,7 +17,7 @@ from ._calib import Calibration
 from ._errors import FlatlineError, StateError, TimeoutError
 from ._flatness import FiberResults, Shape, ShapeComponent
 from ._options import OptionValue, make_options, options_doc, prefixed_options
-from ._pixels import PixelFormat
+from ._pixels import PixelFormat, check_one_channel
 from ._source import Source
 from ._verdict import RuleResult, ToleranceRules, VerdictState, _results, _rule_list
 
@@ -35,6 +35,11 @@ __all__ = [
 class SheetFlag(enum.IntFlag):
     """How a sheet began and ended, and which of its values are NaN
     (FLT_SHEET_FLAG_*)."""
+
+    # print() and f-strings show the names (HEAD|FLUSHED), as repr does,
+    # not the number that IntFlag's str gives since Python 3.11.
+    __str__ = enum.Flag.__str__
+    __format__ = enum.Flag.__format__
 
     NONE = 0
     HEAD = _capi.FLT_SHEET_FLAG_HEAD  #: starts at its strip's head, not a cut
@@ -425,6 +430,7 @@ class Gauge:
             if fmt.dtype.itemsize != frame.dtype.itemsize:
                 raise TypeError(f"{fn}() argument 'frame' has dtype {frame.dtype}, but "
                                 f"{fmt.name} frames are {fmt.dtype}")
+        check_one_channel(fn, frame)
         if frame.shape != self._frame_shape:
             raise ValueError(f"{fn}() argument 'frame' has shape {frame.shape}, but the "
                              f"calibration's frames are {self._frame_shape} (height, width)")
