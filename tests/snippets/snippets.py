@@ -4,6 +4,7 @@
 
     snippets.py list                          every block and what happens to it
     snippets.py inventory                     tags and markers; sh, json, xml checked
+    snippets.py selftest                      the inventory's rules on made-up blocks
     snippets.py c --cc CC --include DIR --lib LIB [--run-env K=V]...
     snippets.py python                        (PYTHONPATH names the package)
     snippets.py csharp --dotnet DOTNET --feed FEED --version V [--rid RID --emulator WINE]
@@ -405,6 +406,34 @@ def cmd_inventory(args: argparse.Namespace) -> int:
     return 1 if failed else 0
 
 
+def cmd_selftest(args: argparse.Namespace) -> int:
+    """The inventory's rules on a Markdown file made for the purpose: each
+    way of leaving a block unaccounted for is caught, a proper one is not."""
+    cases = [
+        ("```\nx\n```\n", "no language tag"),
+        ("```rust\nfn main() {}\n```\n", "unknown language tag"),
+        ("<!-- snippet: skip: -->\n```c\nint x;\n```\n", "'skip:' needs a reason"),
+        ("<!-- snippet: no run: -->\n```python\npass\n```\n", "'no run:' needs a reason"),
+        ("<!-- snippet: wrap no_such_wrap -->\n```c\nint x;\n```\n", "is missing"),
+        ("<!-- snippet: maybe -->\n```c\nint x;\n```\n", "unknown marker"),
+        ("```c++\nint x;\n```\n", "mark it 'skip: REASON'"),
+        ("<!-- snippet: wrap recon_rows -->\n```json\n{}\n```\n", "do not apply"),
+        ("<!-- snippet: no run: needs a camera -->\n```python\npass\n```\n", None),
+        ("```text\na diagram\n```\n", None),
+    ]
+    failed = 0
+    with tempfile.TemporaryDirectory() as tmp:
+        for i, (text, want) in enumerate(cases):
+            md = Path(tmp) / f"case{i}.md"
+            md.write_text("Some prose.\n\n" + text, encoding="utf-8")
+            errors = "; ".join(e for b in blocks_of(md) for e in b.errors)
+            ok = (want in errors) if want else not errors
+            print(f"{'ok  ' if ok else 'FAIL'} case {i}: {errors or 'accepted'}")
+            failed += not ok
+    print(f"selftest: {len(cases) - failed} of {len(cases)} cases as expected")
+    return 1 if failed else 0
+
+
 def cmd_list(args: argparse.Namespace) -> int:
     for b in all_blocks():
         what = ("skip: " + b.skip if b.skip else
@@ -421,6 +450,7 @@ def main() -> int:
     sub = p.add_subparsers(dest="command", required=True)
     sub.add_parser("list")
     sub.add_parser("inventory")
+    sub.add_parser("selftest")
     c = sub.add_parser("c")
     c.add_argument("--cc", required=True)
     c.add_argument("--include", required=True)
@@ -436,7 +466,7 @@ def main() -> int:
     cs.add_argument("--rid")
     cs.add_argument("--emulator")
     args = p.parse_args()
-    return {"list": cmd_list, "inventory": cmd_inventory, "c": cmd_c, "python": cmd_python,
+    return {"list": cmd_list, "inventory": cmd_inventory, "selftest": cmd_selftest, "c": cmd_c, "python": cmd_python,
             "csharp": cmd_csharp}[args.command](args)
 
 
