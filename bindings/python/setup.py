@@ -120,6 +120,9 @@ class CMakeBuild(build_ext):
         # rules too), as the CMake build puts them beside the package.
         for name in ("coil_report.py", "example_rules.json"):
             shutil.copyfile(built / name, target.parent / name)
+        # The lookup tables generated from the public headers
+        # (bindings/gen_tables.py).
+        shutil.copyfile(built / "_tables.py", target.parent / "_tables.py")
         # The licence and the third-party notices travel with the binaries
         # (the package holds libflatline.so, which NOTICE describes).
         for notice in ("LICENSE", "NOTICE"):

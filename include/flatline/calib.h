@@ -36,6 +36,9 @@
  *   flt_calib_finish() checks that every part is present and freezes it.
  *   Mapping and saving need a finished model; setters on a finished model
  *   fail with FLT_ERR_STATE. flt_calib_load() returns a finished model.
+ *   A finished model of the reference sensor, without photos:
+ *   flt_calib_create_reference(), declared in flatline/sim.h with the
+ *   simulated sensor it describes (flatline/flatline.h includes both).
  *
  * Threads
  *   A finished flt_calib is immutable: any number of threads may map, query

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "core/options.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -194,6 +195,29 @@ flt_status unknown_key(const char *fn, int key) {
     return fail(FLT_ERR_NOT_FOUND, "%s: unknown option key %d", fn, key);
 }
 
+// The edit distance (insertions, deletions, substitutions) between a and b,
+// for names up to 63 characters (longer: SIZE_MAX); on the stack, no heap.
+std::size_t edit_distance(const char *a, const char *b) {
+    constexpr std::size_t cap = 64;
+    const std::size_t na = std::strlen(a), nb = std::strlen(b);
+    if (na >= cap || nb >= cap)
+        return static_cast<std::size_t>(-1);
+    std::size_t row[cap];
+    for (std::size_t j = 0; j <= nb; ++j)
+        row[j] = j;
+    for (std::size_t i = 1; i <= na; ++i) {
+        std::size_t diagonal = row[0];
+        row[0] = i;
+        for (std::size_t j = 1; j <= nb; ++j) {
+            const std::size_t above = row[j];
+            const std::size_t replace = diagonal + (a[i - 1] == b[j - 1] ? 0 : 1);
+            row[j] = std::min(std::min(above + 1, row[j - 1] + 1), replace);
+            diagonal = above;
+        }
+    }
+    return row[nb];
+}
+
 }  // namespace
 
 const char *option_component(int key) {
@@ -312,6 +336,20 @@ FLT_API flt_status FLT_CALL flt_option_find(const char *name, flt_option *out) {
                 *out = spec.key;
                 return FLT_OK;
             }
+        // The closest name, when it is close (a typo, a letter or two per
+        // word): "did you mean 'rigid_motion'?".
+        const char *closest = nullptr;
+        std::size_t best = std::strlen(name) / 3 + 1;  // at most a third of it wrong
+        for (const option_spec &spec : k_options) {
+            const std::size_t d = edit_distance(name, spec.name);
+            if (d < best) {
+                best = d;
+                closest = spec.name;
+            }
+        }
+        if (closest)
+            return fail(FLT_ERR_NOT_FOUND, "%s: no option is named '%.200s'; did you mean '%s'?",
+                        fn, name, closest);
         return fail(FLT_ERR_NOT_FOUND, "%s: no option is named '%.200s'", fn, name);
     });
 }

@@ -103,6 +103,13 @@ static void options_are_found_by_name_and_enumerated(void **state) {
     assert_int_equal(flt_option_find("knot_spacing", &key), FLT_OK);
     assert_int_equal(key, FLT_OPT_KNOT_SPACING);
     assert_int_equal(flt_option_find("Knot_Spacing", &key), FLT_ERR_NOT_FOUND);
+    /* A typo gets the closest name; a name like none gets none. */
+    assert_int_equal(flt_option_find("rigid_motoin", &key), FLT_ERR_NOT_FOUND);
+    assert_non_null(strstr(flt_last_error_message(), "did you mean 'rigid_motion'?"));
+    assert_int_equal(flt_option_find("gauge_worker", &key), FLT_ERR_NOT_FOUND);
+    assert_non_null(strstr(flt_last_error_message(), "did you mean 'gauge_workers'?"));
+    assert_int_equal(flt_option_find("banana", &key), FLT_ERR_NOT_FOUND);
+    assert_null(strstr(flt_last_error_message(), "did you mean"));
     assert_int_equal(flt_option_find(NULL, &key), FLT_ERR_INVALID_ARGUMENT);
     size_t count = 0;
     for (size_t i = 0;; ++i) {

@@ -51,58 +51,6 @@ namespace Flatline
         Auto = NativeGaugeOverflow.FLT_GAUGE_OVERFLOW_AUTO,
     }
 
-    /// <summary>A sheet's scalar results by key (flt_sheet_value), for
-    /// <see cref="Sheet.Value"/>; the properties of <see cref="Sheet"/> name
-    /// them too.</summary>
-    public enum SheetValue
-    {
-        Id = NativeSheetValue.FLT_SHEET_ID,
-        Coil = NativeSheetValue.FLT_SHEET_COIL,
-        Index = NativeSheetValue.FLT_SHEET_INDEX,
-        SStart = NativeSheetValue.FLT_SHEET_S_START,
-        SEnd = NativeSheetValue.FLT_SHEET_S_END,
-        Rows = NativeSheetValue.FLT_SHEET_ROWS,
-        SFirst = NativeSheetValue.FLT_SHEET_S_FIRST,
-        SLast = NativeSheetValue.FLT_SHEET_S_LAST,
-        StripLeft = NativeSheetValue.FLT_SHEET_STRIP_LEFT,
-        StripRight = NativeSheetValue.FLT_SHEET_STRIP_RIGHT,
-        StripWidth = NativeSheetValue.FLT_SHEET_STRIP_WIDTH,
-        StripCentre = NativeSheetValue.FLT_SHEET_STRIP_CENTRE,
-        Shape = NativeSheetValue.FLT_SHEET_SHAPE,
-        Confidence = NativeSheetValue.FLT_SHEET_CONFIDENCE,
-        Components = NativeSheetValue.FLT_SHEET_COMPONENTS,
-        Bow = NativeSheetValue.FLT_SHEET_BOW,
-        Crossbow = NativeSheetValue.FLT_SHEET_CROSSBOW,
-        WaveHeight = NativeSheetValue.FLT_SHEET_WAVE_HEIGHT,
-        WavePeriod = NativeSheetValue.FLT_SHEET_WAVE_PERIOD,
-        WaveSteepness = NativeSheetValue.FLT_SHEET_WAVE_STEEPNESS,
-        WaveX = NativeSheetValue.FLT_SHEET_WAVE_X,
-        MaxIUnits = NativeSheetValue.FLT_SHEET_MAX_I_UNITS,
-        Flags = NativeSheetValue.FLT_SHEET_FLAGS,
-        WindowFlags = NativeSheetValue.FLT_SHEET_WINDOW_FLAGS,
-        Frames = NativeSheetValue.FLT_SHEET_FRAMES,
-        Skipped = NativeSheetValue.FLT_SHEET_SKIPPED,
-        Dropped = NativeSheetValue.FLT_SHEET_DROPPED,
-        Saturated = NativeSheetValue.FLT_SHEET_SATURATED,
-        Invalid = NativeSheetValue.FLT_SHEET_INVALID,
-        Lookahead = NativeSheetValue.FLT_SHEET_LOOKAHEAD,
-        Fibers = NativeSheetValue.FLT_SHEET_FIBERS,
-        Zones = NativeSheetValue.FLT_SHEET_ZONES,
-        StripWidthMin = NativeSheetValue.FLT_SHEET_STRIP_WIDTH_MIN,
-        StripWidthMax = NativeSheetValue.FLT_SHEET_STRIP_WIDTH_MAX,
-        StripCentreMin = NativeSheetValue.FLT_SHEET_STRIP_CENTRE_MIN,
-        StripCentreMax = NativeSheetValue.FLT_SHEET_STRIP_CENTRE_MAX,
-        Rules = NativeSheetValue.FLT_SHEET_RULES,
-        RulesFailed = NativeSheetValue.FLT_SHEET_RULES_FAILED,
-        Coverage = NativeSheetValue.FLT_SHEET_COVERAGE,
-        RowsExpected = NativeSheetValue.FLT_SHEET_ROWS_EXPECTED,
-        RowsMeasured = NativeSheetValue.FLT_SHEET_ROWS_MEASURED,
-        LostLines = NativeSheetValue.FLT_SHEET_LOST_LINES,
-        Missing = NativeSheetValue.FLT_SHEET_MISSING,
-        Verdict = NativeSheetValue.FLT_SHEET_VERDICT,
-        Peaks = NativeSheetValue.FLT_SHEET_PEAKS,
-    }
-
     /// <summary>The width that chooses a rule's band (<see cref="Gauge.SetRules"/>):
     /// a nominal width, or each sheet's measured strip width.</summary>
     public readonly struct SheetWidth : IEquatable<SheetWidth>
@@ -213,32 +161,6 @@ namespace Flatline
         public bool Finished { get; }
         /// <summary>Per rule, in rule order.</summary>
         public IReadOnlyList<RuleStats> Rules { get; }
-    }
-
-    /// <summary>The gauge's counters (flt_gauge_counter).</summary>
-    public enum GaugeCounter
-    {
-        Frames = NativeGaugeCounter.FLT_GAUGE_COUNT_FRAMES,
-        Extracted = NativeGaugeCounter.FLT_GAUGE_COUNT_EXTRACTED,
-        SkippedStop = NativeGaugeCounter.FLT_GAUGE_COUNT_SKIPPED_STOP,
-        SkippedReversal = NativeGaugeCounter.FLT_GAUGE_COUNT_SKIPPED_REVERSAL,
-        Dropped = NativeGaugeCounter.FLT_GAUGE_COUNT_DROPPED,
-        NoStrip = NativeGaugeCounter.FLT_GAUGE_COUNT_NO_STRIP,
-        Strips = NativeGaugeCounter.FLT_GAUGE_COUNT_STRIPS,
-        Sheets = NativeGaugeCounter.FLT_GAUGE_COUNT_SHEETS,
-        SheetsDropped = NativeGaugeCounter.FLT_GAUGE_COUNT_SHEETS_DROPPED,
-        Cuts = NativeGaugeCounter.FLT_GAUGE_COUNT_CUTS,
-        CutsIgnored = NativeGaugeCounter.FLT_GAUGE_COUNT_CUTS_IGNORED,
-        Reversals = NativeGaugeCounter.FLT_GAUGE_COUNT_REVERSALS,
-        ExtractErrors = NativeGaugeCounter.FLT_GAUGE_COUNT_EXTRACT_ERRORS,
-        Queued = NativeGaugeCounter.FLT_GAUGE_COUNT_QUEUED,
-        Acquiring = NativeGaugeCounter.FLT_GAUGE_COUNT_ACQUIRING,
-        SheetsWaiting = NativeGaugeCounter.FLT_GAUGE_COUNT_SHEETS_WAITING,
-        SheetsGrown = NativeGaugeCounter.FLT_GAUGE_COUNT_SHEETS_GROWN,
-        SheetsIncomplete = NativeGaugeCounter.FLT_GAUGE_COUNT_SHEETS_INCOMPLETE,
-        Missing = NativeGaugeCounter.FLT_GAUGE_COUNT_MISSING,
-        LostLines = NativeGaugeCounter.FLT_GAUGE_COUNT_LOST_LINES,
-        Refused = NativeGaugeCounter.FLT_GAUGE_COUNT_REFUSED,
     }
 
     /// <summary>
@@ -374,7 +296,7 @@ namespace Flatline
 
         internal static unsafe Sheet Read(IntPtr sheet, int maps)
         {
-            int count = (int)NativeSheetValue.FLT_SHEET_PEAKS + 1;
+            int count = Tables.SheetValueCount;
             var values = new double[count];
             for (int key = 0; key < count; ++key)
             {

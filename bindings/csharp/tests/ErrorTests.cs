@@ -119,6 +119,7 @@ namespace Flatline.Tests
             var e = Assert.Throws<NotFoundException>(() => options.Set("knot_spacingg", 50));
             Assert.Equal(Status.NotFound, e.Status);
             Assert.Contains("knot_spacingg", e.Message);
+            Assert.Contains("did you mean 'knot_spacing'?", e.Message);
             using var recon = new Reconstructor(1);
             Assert.Throws<NotFoundException>(() => recon.GetOption("no_such_option"));
         }

@@ -144,6 +144,11 @@ _BY_STATUS: dict[int, type[FlatlineError]] = {
     )
 }
 
+# Tracebacks and reprs name the public module (flatline.FileError), where a
+# user imports and catches them, not this private one.
+for _cls in (FlatlineError, *_BY_STATUS.values()):
+    _cls.__module__ = "flatline"
+
 
 def _from_status(status: int, message: str) -> FlatlineError:
     """The exception for a C status (called by the extension on failure).

@@ -14,7 +14,7 @@ from ._arrays import as_index, as_real
 from ._calib import LASERS, Calibration
 from ._errors import StateError
 from ._options import OptionValue, make_options, options_doc, prefixed_options
-from ._pixels import PixelFormat
+from ._pixels import PixelFormat, check_one_channel
 
 __all__ = ["ExtractedRow", "Extractor", "Saturation", "StripEdges", "STRIP_LEFT_OPEN", "STRIP_NONE",
            "STRIP_RIGHT_OPEN", "extractor_options"]
@@ -210,6 +210,7 @@ class Extractor:
         elif fmt.dtype.itemsize != frame.dtype.itemsize:
             raise TypeError(f"{function}() argument 'frame' has dtype {frame.dtype}, but "
                             f"the extractor's pixel format {fmt.name} needs {fmt.dtype}")
+        check_one_channel(function, frame)
         width, height = self._frame_size
         if frame.shape != (height, width):
             raise ValueError(f"{function}() argument 'frame' has shape {frame.shape}, but "

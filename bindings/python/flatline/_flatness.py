@@ -103,6 +103,11 @@ class ShapeComponent(enum.IntFlag):
     """Components of a shape (FLT_SHAPE_HAS_* bits). BOW and CROSSBOW are set
     when |bow_mm| >= flat_bow_limit and |crossbow_mm| >= flat_crossbow_limit."""
 
+    # print() and f-strings show the names (HEAD|FLUSHED), as repr does,
+    # not the number that IntFlag's str gives since Python 3.11.
+    __str__ = enum.Flag.__str__
+    __format__ = enum.Flag.__format__
+
     NONE = 0
     CENTRE = _capi.FLT_SHAPE_HAS_CENTRE
     EDGE_LEFT = _capi.FLT_SHAPE_HAS_EDGE_LEFT

@@ -10,6 +10,7 @@ from typing import Any, Dict, Iterator, Optional, Tuple, Union
 
 import numpy as np
 
+from . import _tables
 from . import capi as _capi
 from ._arrays import as_float64, as_mask, as_real
 from . import _log
@@ -17,7 +18,7 @@ from ._calib import Calibration
 from ._errors import FlatlineError, StateError, TimeoutError
 from ._flatness import FiberResults, Shape, ShapeComponent
 from ._options import OptionValue, make_options, options_doc, prefixed_options
-from ._pixels import PixelFormat
+from ._pixels import PixelFormat, check_one_channel
 from ._source import Source
 from ._verdict import RuleResult, ToleranceRules, VerdictState, _results, _rule_list
 
@@ -36,6 +37,11 @@ class SheetFlag(enum.IntFlag):
     """How a sheet began and ended, and which of its values are NaN
     (FLT_SHEET_FLAG_*)."""
 
+    # print() and f-strings show the names (HEAD|FLUSHED), as repr does,
+    # not the number that IntFlag's str gives since Python 3.11.
+    __str__ = enum.Flag.__str__
+    __format__ = enum.Flag.__format__
+
     NONE = 0
     HEAD = _capi.FLT_SHEET_FLAG_HEAD  #: starts at its strip's head, not a cut
     TAIL = _capi.FLT_SHEET_FLAG_TAIL  #: ends at its strip's tail
@@ -51,41 +57,11 @@ class SheetFlag(enum.IntFlag):
     LOST_ROWS = _capi.FLT_SHEET_FLAG_LOST_ROWS
 
 
-# flt_sheet_value keys by the names Sheet.values uses (in key order).
-_VALUES = (
-    "id", "coil", "index", "s_start", "s_end", "rows", "s_first", "s_last",
-    "strip_left", "strip_right", "strip_width", "strip_centre", "shape",
-    "confidence", "components", "bow", "crossbow", "wave_height", "wave_period",
-    "wave_steepness", "wave_x", "max_i_units", "flags", "window_flags", "frames",
-    "skipped", "dropped", "saturated", "invalid", "lookahead", "fibers", "zones",
-    "strip_width_min", "strip_width_max", "strip_centre_min", "strip_centre_max",
-    "rules", "rules_failed", "coverage", "rows_expected", "rows_measured", "lost_lines",
-    "missing", "verdict", "peaks",
-)
+# flt_sheet_value keys by the names Sheet.values uses (in key order), and
+# the counters: generated from gauge.h (bindings/gen_tables.py).
+_VALUES = _tables.SHEET_VALUES
 
-_COUNTERS = {
-    "frames": _capi.FLT_GAUGE_COUNT_FRAMES,
-    "extracted": _capi.FLT_GAUGE_COUNT_EXTRACTED,
-    "skipped_stop": _capi.FLT_GAUGE_COUNT_SKIPPED_STOP,
-    "skipped_reversal": _capi.FLT_GAUGE_COUNT_SKIPPED_REVERSAL,
-    "dropped": _capi.FLT_GAUGE_COUNT_DROPPED,
-    "no_strip": _capi.FLT_GAUGE_COUNT_NO_STRIP,
-    "strips": _capi.FLT_GAUGE_COUNT_STRIPS,
-    "sheets": _capi.FLT_GAUGE_COUNT_SHEETS,
-    "sheets_dropped": _capi.FLT_GAUGE_COUNT_SHEETS_DROPPED,
-    "cuts": _capi.FLT_GAUGE_COUNT_CUTS,
-    "cuts_ignored": _capi.FLT_GAUGE_COUNT_CUTS_IGNORED,
-    "reversals": _capi.FLT_GAUGE_COUNT_REVERSALS,
-    "extract_errors": _capi.FLT_GAUGE_COUNT_EXTRACT_ERRORS,
-    "queued": _capi.FLT_GAUGE_COUNT_QUEUED,
-    "acquiring": _capi.FLT_GAUGE_COUNT_ACQUIRING,
-    "sheets_waiting": _capi.FLT_GAUGE_COUNT_SHEETS_WAITING,
-    "sheets_grown": _capi.FLT_GAUGE_COUNT_SHEETS_GROWN,
-    "sheets_incomplete": _capi.FLT_GAUGE_COUNT_SHEETS_INCOMPLETE,
-    "missing": _capi.FLT_GAUGE_COUNT_MISSING,
-    "lost_lines": _capi.FLT_GAUGE_COUNT_LOST_LINES,
-    "refused": _capi.FLT_GAUGE_COUNT_REFUSED,
-}
+_COUNTERS = _tables.GAUGE_COUNTERS
 
 
 @dataclass(frozen=True)
@@ -237,8 +213,7 @@ class CoilStats:
 
 
 def _read_sheet(handle: Any, maps: int) -> Sheet:
-    raw = [float(_capi.flt_sheet_get(handle, key)) for key in range(len(_VALUES))]
-    v = dict(zip(_VALUES, raw))
+    v = {name: float(_capi.flt_sheet_get(handle, key)) for name, key in _VALUES.items()}
     fibers, zones, rows = int(v["fibers"]), int(v["zones"]), int(v["rows"])
 
     def array(key: int, n: int) -> np.ndarray:
@@ -425,6 +400,7 @@ class Gauge:
             if fmt.dtype.itemsize != frame.dtype.itemsize:
                 raise TypeError(f"{fn}() argument 'frame' has dtype {frame.dtype}, but "
                                 f"{fmt.name} frames are {fmt.dtype}")
+        check_one_channel(fn, frame)
         if frame.shape != self._frame_shape:
             raise ValueError(f"{fn}() argument 'frame' has shape {frame.shape}, but the "
                              f"calibration's frames are {self._frame_shape} (height, width)")

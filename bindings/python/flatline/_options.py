@@ -153,10 +153,13 @@ def make_options(function: str, kwargs: Mapping[str, OptionValue],
     for name, value in kwargs.items():
         try:
             key = _capi.flt_option_find(name)
-        except NotFoundError:
+        except NotFoundError as e:
+            # the library's closest name, when it has one (a typo)
+            hint = str(e).partition("; did you mean ")[2]
+            hint = f"; did you mean {hint}" if hint else ";"
             raise TypeError(
                 f"{function}() got an unexpected keyword argument '{name}' "
-                f"(libflatline has no option of that name; flatline.options() "
+                f"(libflatline has no option of that name{hint} flatline.options() "
                 f"lists them)"
             ) from None
         if prefixes is not None and not name.startswith(prefixes):

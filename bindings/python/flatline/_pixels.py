@@ -32,3 +32,13 @@ class PixelFormat(enum.IntEnum):
     def full_scale(self) -> int:
         """The largest pixel value, 2^bits - 1."""
         return (1 << int(self)) - 1
+
+
+def check_one_channel(function: str, frame: np.ndarray) -> None:
+    """A colour frame (height, width, 3 or 4) is refused with what to do:
+    the lasers' lines are measured on one channel."""
+    if frame.ndim == 3 and frame.shape[2] in (3, 4):
+        raise ValueError(
+            f"{function}() argument 'frame' has shape {frame.shape}: {frame.shape[2]} "
+            f"channels; pass one channel (frame[:, :, 0], or the channel of the lasers' "
+            f"colour), a (height, width) array")

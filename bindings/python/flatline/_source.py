@@ -14,6 +14,7 @@ from typing import (TYPE_CHECKING, Any, Dict, Iterator, List, NamedTuple, Option
 
 import numpy as np
 
+from . import _tables
 from . import capi as _capi
 from ._arrays import as_index, as_real
 from ._errors import StateError
@@ -66,69 +67,11 @@ class CameraInfo(NamedTuple):
 
 
 #: flt_source_counter by its Python name (counters() keys), in C order.
-_COUNTERS = {
-    "frames": _capi.FLT_COUNT_FRAMES,
-    "dropped": _capi.FLT_COUNT_DROPPED,
-    "short": _capi.FLT_COUNT_SHORT,
-    "incomplete": _capi.FLT_COUNT_INCOMPLETE,
-    "overflow": _capi.FLT_COUNT_OVERFLOW,
-    "submit_dropped": _capi.FLT_COUNT_SUBMIT_DROPPED,
-    "timeout_dropped": _capi.FLT_COUNT_TIMEOUT_DROPPED,
-    "lost": _capi.FLT_COUNT_LOST,
-    "submit_refused": _capi.FLT_COUNT_SUBMIT_REFUSED,
-    "timeouts": _capi.FLT_COUNT_TIMEOUTS,
-    "disconnects": _capi.FLT_COUNT_DISCONNECTS,
-    "bad_packets": _capi.FLT_COUNT_BAD_PACKETS,
-    "bad_leaders": _capi.FLT_COUNT_BAD_LEADERS,
-    "pending_acks": _capi.FLT_COUNT_PENDING_ACKS,
-    "stale_acks": _capi.FLT_COUNT_STALE_ACKS,
-    "command_retries": _capi.FLT_COUNT_COMMAND_RETRIES,
-    "stream_recoveries": _capi.FLT_COUNT_STREAM_RECOVERIES,
-    "packets_missing": _capi.FLT_COUNT_PACKETS_MISSING,
-    "resend_requests": _capi.FLT_COUNT_RESEND_REQUESTS,
-    "packets_resent": _capi.FLT_COUNT_PACKETS_RESENT,
-    "packets_duplicate": _capi.FLT_COUNT_PACKETS_DUPLICATE,
-}
+_COUNTERS = _tables.SOURCE_COUNTERS  # generated from source.h (bindings/gen_tables.py)
 
-_CAMERA_STRINGS = {
-    "vendor": _capi.FLT_CAMERA_VENDOR,
-    "model": _capi.FLT_CAMERA_MODEL,
-    "family": _capi.FLT_CAMERA_FAMILY,
-    "device_version": _capi.FLT_CAMERA_DEVICE_VERSION,
-    "manufacturer_info": _capi.FLT_CAMERA_MANUFACTURER_INFO,
-    "serial": _capi.FLT_CAMERA_SERIAL,
-    "user_name": _capi.FLT_CAMERA_USER_NAME,
-}
+_CAMERA_STRINGS = _tables.CAMERA_STRINGS  # generated from source.h (bindings/gen_tables.py)
 
-_CAMERA_VALUES = {
-    "gencp_version": _capi.FLT_CAMERA_GENCP_VERSION,
-    "u3v_version": _capi.FLT_CAMERA_U3V_VERSION,
-    "response_time_ms": _capi.FLT_CAMERA_RESPONSE_TIME_MS,
-    "control_timeout_ms": _capi.FLT_CAMERA_CONTROL_TIMEOUT_MS,
-    "max_command_bytes": _capi.FLT_CAMERA_MAX_COMMAND_BYTES,
-    "max_ack_bytes": _capi.FLT_CAMERA_MAX_ACK_BYTES,
-    "sirm_address": _capi.FLT_CAMERA_SIRM_ADDRESS,
-    "manifest_address": _capi.FLT_CAMERA_MANIFEST_ADDRESS,
-    "xml_bytes": _capi.FLT_CAMERA_XML_BYTES,
-    "xml_zipped": _capi.FLT_CAMERA_XML_ZIPPED,
-    "speed_mbps": _capi.FLT_CAMERA_SPEED_MBPS,
-    "alignment": _capi.FLT_CAMERA_ALIGNMENT,
-    "payload_bytes": _capi.FLT_CAMERA_PAYLOAD_BYTES,
-    "transfer_bytes": _capi.FLT_CAMERA_TRANSFER_BYTES,
-    "transfer_count": _capi.FLT_CAMERA_TRANSFER_COUNT,
-    "final_transfer_bytes": _capi.FLT_CAMERA_FINAL_TRANSFER_BYTES,
-    "max_leader_bytes": _capi.FLT_CAMERA_MAX_LEADER_BYTES,
-    "max_trailer_bytes": _capi.FLT_CAMERA_MAX_TRAILER_BYTES,
-    "gev_version": _capi.FLT_CAMERA_GEV_VERSION,
-    "ip_address": _capi.FLT_CAMERA_IP_ADDRESS,
-    "heartbeat_timeout_ms": _capi.FLT_CAMERA_HEARTBEAT_TIMEOUT_MS,
-    "heartbeats": _capi.FLT_CAMERA_HEARTBEATS,
-    "packet_size": _capi.FLT_CAMERA_PACKET_SIZE,
-    "stream_port": _capi.FLT_CAMERA_STREAM_PORT,
-    "timestamp_hz": _capi.FLT_CAMERA_TIMESTAMP_HZ,
-    "resend_capable": _capi.FLT_CAMERA_RESEND_CAPABLE,
-    "receive_buffer_bytes": _capi.FLT_CAMERA_RECEIVE_BUFFER_BYTES,
-}
+_CAMERA_VALUES = _tables.CAMERA_VALUES  # generated from source.h (bindings/gen_tables.py)
 
 
 def source_options() -> Dict[str, float]:

@@ -9,7 +9,7 @@ import pytest
 
 import flatline
 from flatline import capi
-from flatline._errors import _from_status
+from flatline._errors import _BY_STATUS, _from_status
 
 from conftest import sine_sheet
 
@@ -53,6 +53,17 @@ def test_errors_pickle_with_their_status():
     import pickle
     exc = pickle.loads(pickle.dumps(_from_status(-9, "gone")))
     assert type(exc) is flatline.NotFoundError and exc.status == -9 and exc.message == "gone"
+
+
+def test_errors_name_the_public_module():
+    # what a traceback prints: "flatline.FileError: ...", where users import it
+    import traceback
+    with pytest.raises(flatline.FileError) as e:
+        flatline.Calibration.load("/nonexistent/sensor.json")
+    assert type(e.value).__module__ == "flatline"
+    assert "flatline.FileError: " in "".join(traceback.format_exception_only(e.type, e.value))
+    for status, cls in _BY_STATUS.items():
+        assert getattr(flatline, cls.__name__) is cls, cls
 
 
 # --- raised through the extension ------------------------------------------
@@ -171,6 +182,12 @@ def test_integers_out_of_range_are_value_errors_not_overflow_errors():
 def test_unknown_keyword_is_a_type_error_naming_it():
     with pytest.raises(TypeError, match="unexpected keyword argument 'knot_spcing'"):
         flatline.reconstruct([0.0, 3.0], np.zeros((2, 1)), np.zeros((2, 1)), knot_spcing=50)
+    # a typo gets the closest name, a name like none gets none
+    with pytest.raises(TypeError, match="did you mean 'rigid_motion'\\?"):
+        flatline.Reconstructor(1, rigid_motoin=1)
+    with pytest.raises(TypeError) as e:
+        flatline.Reconstructor(1, banana=1)
+    assert "did you mean" not in str(e.value)
     with pytest.raises(TypeError, match="'robustt'"):
         flatline.Reconstructor(1, robustt=1)
 

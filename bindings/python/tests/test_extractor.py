@@ -160,6 +160,7 @@ def test_frames_of_wrong_type_or_shape_are_refused_naming_frame(calib):
             (good[:, :1024], ValueError, r"shape \(256, 1024\)"),
             (good[None], ValueError, r"shape \(1, 256, 2048\)"),
             (good.T, ValueError, r"shape \(2048, 256\)"),
+            (np.zeros((256, 2048, 3), np.uint8), ValueError, r"3 channels; pass one channel"),
         ]:
             with pytest.raises(error, match=f"argument 'frame'.*{needle}|{needle}"):
                 extractor.process(bad, 0.0)

@@ -196,6 +196,8 @@ def test_bad_input_raises_with_the_library_message(calib):
     gauge = flatline.Gauge(calib)
     with pytest.raises(ValueError, match="shape"):
         gauge.push_frame(np.zeros((10, 10), np.uint8), 0.0)
+    with pytest.raises(ValueError, match="3 channels; pass one channel"):
+        gauge.push_frame(np.zeros((240, 2048, 3), np.uint8), 0.0)
     with pytest.raises(TypeError, match="dtype"):
         gauge.push_frame(np.zeros((240, 2048), np.float32), 0.0)
     with pytest.raises(flatline.InvalidArgumentError, match="encoder_mm"):
@@ -591,3 +593,11 @@ def test_the_log_reaches_logging(calib, caplog):
     # (a burst of drops wider than the tail length ends a strip: one head each)
     assert sum("the strip's head at" in m for _, m in messages) == counters["strips"] >= 2
     assert all(level in ("INFO", "WARNING") for level, _ in messages)
+
+
+def test_flags_print_by_name():
+    # print(sheet.flags) names the bits (IntFlag alone prints the number)
+    flags = flatline.SheetFlag.HEAD | flatline.SheetFlag.FLUSHED
+    assert "HEAD" in str(flags) and "FLUSHED" in str(flags) and "HEAD" in f"{flags}"
+    assert int(flags) == flatline.capi.FLT_SHEET_FLAG_HEAD | flatline.capi.FLT_SHEET_FLAG_FLUSHED
+    assert "BOW" in str(flatline.ShapeComponent.BOW)
