@@ -1280,10 +1280,11 @@ static void test_description_size_is_capped(void **state) {
     assert_error(flt_genicam_load_memory(elements, strlen(elements), &g), FLT_ERR_FORMAT,
                  "more than 1000000 elements");
     free(elements);
-    /* Just below the node cap loads (and the duplicates are its own problem). */
+    /* Exactly at the node cap loads (X and 65535 N: 65536 nodes; the
+     * duplicates are its own problem). */
     char *many =
         repeated("<RegisterDescription><Integer Name=\"X\"><Value>42</Value></Integer>",
-                 "<Integer Name=\"N\"><Value>1</Value></Integer>", 60000, "</RegisterDescription>");
+                 "<Integer Name=\"N\"><Value>1</Value></Integer>", 65535, "</RegisterDescription>");
     ok(flt_genicam_load_memory(many, strlen(many), &g));
     assert_int_equal(get_int(g, "X"), 42);
     flt_genicam_destroy(g);

@@ -118,6 +118,11 @@ struct parser_state {
     }
 
     int new_node(const std::string &tag, const char *name) {
+        // One node past the cap is made (the caller needs its index) and
+        // stops the parser: a description of exactly k_max_nodes loads.
+        if (m.nodes.size() >= k_max_nodes)
+            refuse("the GenICam XML defines more than " + std::to_string(k_max_nodes) +
+                   " nodes (a real description has a few thousand)");
         node n;
         n.tag = tag;
         n.k = kind_of_tag(tag);
@@ -147,11 +152,6 @@ struct parser_state {
         if (++elements > k_max_elements) {
             refuse("the GenICam XML has more than " + std::to_string(k_max_elements) +
                    " elements (a real description has a few ten thousand)");
-            return;
-        }
-        if (m.nodes.size() >= k_max_nodes) {
-            refuse("the GenICam XML defines more than " + std::to_string(k_max_nodes) +
-                   " nodes (a real description has a few thousand)");
             return;
         }
         const std::string t = tag;
