@@ -167,13 +167,16 @@ frame_assembler::slot *frame_assembler::open_frame(std::uint16_t block, std::uin
         reset_slot(s->got, s->attempts, s->noticed);
         s->received = s->highest = s->scan_from = 0;
         s->first_packet = now;
+        s->fault = FLT_COUNT_FRAMES;
+        s->why.clear();
     }
+    // An early slot keeps its fault: a packet it took was marked received
+    // though its bytes were refused (a payload of the wrong size), and the
+    // frame must not be delivered with that part unwritten.
     s->state = slot_state::open;
     s->block = block;
     s->seq = seq;
     s->given_up = false;
-    s->fault = FLT_COUNT_FRAMES;
-    s->why.clear();
     s->last_packet = now;
     return s;
 }
@@ -200,11 +203,10 @@ void frame_assembler::confirm_early(std::uint64_t below_seq) {
         if ((have_final_ && seq <= final_seq_) || seq < floor_seq_) {
             discard_early(s);
         } else if (seq < below_seq) {
+            // Its fault, if any, stays (see open_frame).
             s.state = slot_state::open;
             s.seq = seq;
             s.given_up = false;
-            s.fault = FLT_COUNT_FRAMES;
-            s.why.clear();
         }
     }
 }
