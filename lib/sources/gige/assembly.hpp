@@ -149,7 +149,7 @@ class frame_assembler {
     void discard_early(slot &s);
     void finalized(std::uint64_t seq);
     std::uint64_t delivered_id(std::uint64_t seq) const;
-    void fail_frame(slot &s, flt_source_counter reason, const std::string &why);
+    static void fail_frame(slot &s, flt_source_counter reason, const std::string &why);
 
     sources::frame_accounting &acc_;
     resend_sink &resend_;
