@@ -201,7 +201,10 @@ void control_channel::transact(std::uint16_t command, const std::uint8_t *data,
             ack.assign(a + k_gvcp_header, a + k_gvcp_header + length);
             return;
         }
-        if (pending_capped && socket_->now() >= pending_end)
+        // (A wait's end is reached to the millisecond: on Windows a timed
+        // receive may return a fraction of one early, so the cap counts as
+        // reached within 1 ms.)
+        if (pending_capped && socket_->now() + std::chrono::milliseconds(1) >= pending_end)
             raise(FLT_ERR_TIMEOUT,
                   "%s at 0x%llx: the camera kept the command pending for more than %u ms",
                   command_name(command), (unsigned long long)address,
