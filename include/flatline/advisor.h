@@ -100,7 +100,11 @@
  *   to aim at instead of flat. 1 <= zones <= FLT_ADVISOR_MAX_ZONES,
  *   1 <= actuators <= FLT_ADVISOR_MAX_ACTUATORS. Every error names the
  *   field and its line; unknown fields are errors; numbers are read
- *   without the process's locale.
+ *   without the process's locale. A file is at most 16 MiB and holds at
+ *   most as many JSON values as the largest valid one can (about 68,000:
+ *   1024 zones of 64 actuators, a target, the actuators' fields); more is
+ *   refused while it is read, so the cost of a file is bounded before it
+ *   is parsed to its end.
  *
  * Units
  *   Profiles and targets in I-Units; settings, ranges and steps in each

@@ -124,7 +124,8 @@ extern "C" {
  *                           FLT_CALIB_MAX_X_MM
  *                           (100 m: first_x_mm and the last fiber)
  *   file                    at most FLT_CALIB_MAX_FILE_BYTES (64 KiB; a
- *                           calibration is about 1.5 kB)
+ *                           calibration is about 1.5 kB) and 256 JSON
+ *                           values (a calibration has 50)
  */
 #define FLT_CALIB_MAX_FRAME_SIDE       16384    /**< Largest frame width or height, px. */
 #define FLT_CALIB_MIN_FOCAL_PX         1.0      /**< Smallest fx, fy, px. */

@@ -180,7 +180,8 @@ FLT_API const char *FLT_CALL flt_version_string(void);
  * bindings use as the keyword), bounds and a default; see flt_option_info().
  * Keys are numbered by component, a hundred each: 100s the reconstructor,
  * 200s calibration, 300s the simulator, 400s the extractor, 500s flatness,
- * 600s frame sources (700s to 900s are reserved for later components).
+ * 600s frame sources, 700s the gauge, 800s quality (tolerance verdicts),
+ * 900s the advisor (CONTRIBUTING.md keeps the table).
  * A component refuses a bag in which a key of another component was set
  * (FLT_ERR_INVALID_ARGUMENT, naming the key and both components): such a
  * value would have no effect, which hides a mistake. Give each component
@@ -572,8 +573,10 @@ typedef enum flt_option {
      * frame is dropped (integer 0..32; 0 never asks). Default 3. */
     FLT_OPT_GIGE_RESEND_ATTEMPTS = 644,
     /** "gige_resend_timeout": wait for a packet asked again before asking
-     * once more, and silence after which a frame's remaining packets count
-     * as lost, ms (integer). Default 20. */
+     * once more; the reorder window (a gap must last this long, or 64 more
+     * packets, before its packet counts as missing: packets that overtake
+     * each other are no loss); and the silence after which a frame's
+     * remaining packets count as missing, ms (integer). Default 20. */
     FLT_OPT_GIGE_RESEND_TIMEOUT = 645,
     /** "gige_socket_buffer": receive buffer asked for the stream socket,
      * bytes (integer; Linux grants at most net.core.rmem_max). Default
@@ -584,8 +587,11 @@ typedef enum flt_option {
     FLT_OPT_GIGE_DISCOVERY_TIMEOUT = 647,
     /** "gige_assembly_frames": frames assembled at once while packets of the
      * older ones are asked again (integer 2..64); a frame still incomplete
-     * when this many later frames arrive is dropped. Costs one frame buffer
-     * each. Default 8 (80 ms at 100 frames/s for resends to come). */
+     * when this many later frames arrive is dropped; a packet more than 4
+     * times this many block ids from the newest frame is no packet of the
+     * stream. Costs one frame buffer each; fewer are assembled when that
+     * many would pass FLT_SOURCE_MAX_BUFFER_BYTES (source.h, "Frame
+     * bounds"). Default 8 (80 ms at 100 frames/s for resends to come). */
     FLT_OPT_GIGE_ASSEMBLY_FRAMES = 648,
     /* --- the gauge (flatline/gauge.h) --- */
     /** "gauge_workers": threads that process the frames (integer 0..64); 0

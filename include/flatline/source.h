@@ -48,6 +48,23 @@
  *                 source_encoder_start + source_encoder_mm_per_count *
  *                 count, with 32-bit wraps unrolled.
  *
+ * Frame bounds (cameras)
+ *   A camera says how large its frames are (Width, Height, PixelFormat),
+ *   and a wrong or hostile camera can say anything. flt_source_start()
+ *   checks the sizes before anything is allocated: each side 1 ..
+ *   FLT_CALIB_MAX_FRAME_SIDE px (16384, the bound of the whole library),
+ *   Mono8, Mono10, Mono12 or Mono16 (unpacked), so a frame is at most
+ *   512 MiB; everything else is FLT_ERR_DEVICE (FLT_ERR_FORMAT for the
+ *   pixel format) naming the values. The buffers a camera source allocates
+ *   (frame slots, transfers) together stay within
+ *   FLT_SOURCE_MAX_BUFFER_BYTES: GigE Vision assembles fewer frames at once
+ *   than gige_assembly_frames when that many would not fit (never fewer
+ *   than one, with the one lent to the caller); USB3 Vision refuses a
+ *   stream set-up that would not fit. Every frame delivered, of every kind
+ *   of source, lies in its buffer: `height` rows of `stride_bytes`, the
+ *   last one `width` pixels, and a leader that announces another size or
+ *   format than the stream's is never delivered (BAD_LEADERS).
+ *
  * Frame accounting (USB3 Vision)
  *   A frame that arrives damaged is dropped and counted, and the next good
  *   frame is delivered by the same flt_source_next() call when it arrives
@@ -76,19 +93,39 @@
  *                                       every later call; destroy still works
  *     garbage transfers                 BAD_PACKETS
  *   The control channel counts PENDING_ACKS, STALE_ACKS and COMMAND_RETRIES.
+ *   A camera that keeps answering "pending" is given up 10 s after its
+ *   first pending acknowledge (FLT_ERR_TIMEOUT; both transports), whatever
+ *   time the acknowledges ask for.
  *
  * Frame accounting (GigE Vision)
- *   Each packet found missing counts PACKETS_MISSING and is asked again
- *   (RESEND_REQUESTS per request); one that then arrives counts
- *   PACKETS_RESENT; a copy of a packet already here, DUPLICATE. A frame
- *   still missing packets after gige_resend_attempts requests (or at once,
- *   when the camera does not resend), or pushed out by gige_assembly_frames
- *   later frames in assembly, is DROPPED and INCOMPLETE; a leader announcing another size
- *   or format than the stream's, BAD_LEADERS; a payload packet of the wrong
- *   size, OVERFLOW; block ids never seen, LOST; datagrams that are no GVSP
- *   packet of the stream, BAD_PACKETS; TIMEOUTS as for USB3 Vision. So
+ *   The network is hostile (docs/gigevision.md): only the camera speaks,
+ *   and one packet can neither stop the stream nor get a frame delivered
+ *   damaged. A datagram on the stream socket from another address than the
+ *   camera's, or another port than its stream source port (the one it
+ *   reports, or that of the first leader after start), and one on the
+ *   control socket from anyone but the camera's GVCP port, is BAD_PACKETS
+ *   and ignored. A frame opens only at its leader, at most
+ *   4 x gige_assembly_frames block ids ahead of the newest frame. A packet
+ *   further away is BAD_PACKETS, but one of a block the stream passed up to
+ *   16 x gige_assembly_frames ago is a late DUPLICATE; a camera that
+ *   restarts its block ids is recognised by two leaders. A packet is
+ *   missing once a later packet (of its frame or of a later one) arrived
+ *   and then gige_resend_timeout passed or 64 more packets arrived, or once
+ *   its frame fell silent for gige_resend_timeout: two packets that
+ *   overtake each other are no loss. Each packet found missing counts
+ *   PACKETS_MISSING and is asked again (RESEND_REQUESTS per request); one
+ *   that then arrives counts PACKETS_RESENT; a copy of a packet already
+ *   here, DUPLICATE (a copy with other bytes: BAD_PACKETS, and its frame is
+ *   dropped). A frame still missing packets after gige_resend_attempts
+ *   requests (or at once, when the camera does not resend), or pushed out
+ *   by gige_assembly_frames later frames in assembly, is DROPPED and
+ *   INCOMPLETE, and the packets it lacked count PACKETS_MISSING; a leader
+ *   announcing another size, format or padding than the stream's,
+ *   BAD_LEADERS; a payload packet of the wrong size, OVERFLOW; block ids
+ *   never seen inside that window, LOST; TIMEOUTS as for USB3 Vision. So
  *   PACKETS_MISSING = PACKETS_RESENT + the packets of the frames dropped
- *   for them.
+ *   for them, and FRAMES + DROPPED + LOST = the block ids from the first
+ *   frame to the last.
  *
  * GenICam features (USB3 Vision)
  *   Opening a camera reads its bootstrap registers, its manifest and its
@@ -131,6 +168,10 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/** The most bytes of frame buffers one camera source allocates (1 GiB):
+ * see "Frame bounds". */
+#define FLT_SOURCE_MAX_BUFFER_BYTES 1073741824
 
 /** A frame source (opaque handle). */
 typedef struct flt_source flt_source;
@@ -381,30 +422,38 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_kind_of(const flt_source *s
 /* Acquisition                                                             */
 /* ---------------------------------------------------------------------- */
 
-/** Starts acquisition. Camera: reads Width, Height, PixelFormat, sets
- * AcquisitionMode = Continuous, sets up the stream interface (SIRM: payload
- * transfer size a multiple of the alignment, at most u3v_transfer_size),
- * allocates the pool of u3v_transfers bulk transfers and the frame buffer,
- * and executes AcquisitionStart. A camera still streaming (SI control on,
- * or left so by a stop or start that failed) is stopped first, as open
- * does (FLT_COUNT_STREAM_RECOVERIES). When a start fails after SI control
- * was set, it stops the camera again; if even that fails, the message says
- * the camera may still be streaming, and the next start or stop stops it.
+/** Starts acquisition. Camera: sets AcquisitionMode = Continuous, reads
+ * Width, Height, PixelFormat and checks them (see "Frame bounds") before
+ * anything is allocated, sets up the stream (USB3 Vision: SIRM, payload
+ * transfer size a multiple of the alignment, at most u3v_transfer_size,
+ * the pool of u3v_transfers bulk transfers and the frame buffer; GigE
+ * Vision: the frame slots), turns the stream channel on (SI control = 1;
+ * SCDA and SCP), sets TLParamsLocked = 1 and executes AcquisitionStart. A
+ * camera still streaming (SI control on, or left so by a stop or start
+ * that failed) is stopped first, as open does
+ * (FLT_COUNT_STREAM_RECOVERIES). When a start fails after the channel was
+ * turned on, it stops the camera again; if even that fails, the message
+ * says the camera may still be streaming, and the next start or stop stops
+ * it.
  * Simulator and images: resets the block ids (a started source starts again
  * from its first frame only for images). FLT_ERR_STATE if already started.
  * @param source the source.
- * @return FLT_OK; FLT_ERR_STATE as above; FLT_ERR_DEVICE or
- *         FLT_ERR_TIMEOUT from the camera; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ * @return FLT_OK; FLT_ERR_STATE as above; FLT_ERR_DEVICE for a size beyond
+ *         the frame bounds, or from the camera; FLT_ERR_FORMAT for a pixel
+ *         format not delivered; FLT_ERR_TIMEOUT from the camera;
+ *         FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
  */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_start(flt_source *source);
 
 /** Stops acquisition. The source is stopped on the host side whatever the
  * camera answers (transfers cancelled, no frame until the next start).
- * Camera: AcquisitionStop, then SI control = 0 read back as 0; a step whose
- * answer timed out, was busy or malformed is sent again (up to
- * u3v_command_attempts rounds, each command with its own attempts). A camera
- * that was unplugged streams to no one: FLT_OK. Stopping a stopped source is
- * a no-op, unless its camera may still be streaming.
+ * Camera: AcquisitionStop, then its stream channel off, read back as off
+ * (USB3 Vision: SI control = 0; GigE Vision: SCP = 0); a step whose answer
+ * timed out, was busy or malformed is sent again (up to
+ * u3v_command_attempts or gige_command_attempts rounds, each command with
+ * its own attempts). A camera that was unplugged streams to no one: FLT_OK.
+ * Stopping a stopped source is a no-op, unless its camera may still be
+ * streaming.
  * @param source the source.
  * @return FLT_OK only when the camera took both; otherwise the last
  *         failure's status (FLT_ERR_TIMEOUT, FLT_ERR_DEVICE) and a message
@@ -512,7 +561,11 @@ FLT_API const char *FLT_CALL flt_source_stream_error(const flt_source *source);
 /* ---------------------------------------------------------------------- */
 
 /** Camera strings from the bootstrap registers (USB3 Vision: ABRM; GigE
- * Vision: 0x0048.., no family: ""). */
+ * Vision: 0x0048.., no family: ""). They are the camera's words: every
+ * control byte (ESC and the rest of C0, DEL, the C1 controls) and every
+ * byte that is not UTF-8 is replaced by '?' before a caller sees them,
+ * here and in camera lists, so that printing them cannot drive a
+ * terminal. */
 typedef enum flt_camera_string {
     FLT_CAMERA_VENDOR = 0,            /**< vendor name */
     FLT_CAMERA_MODEL = 1,             /**< model name */

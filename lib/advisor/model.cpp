@@ -76,8 +76,17 @@ actuator read_actuator(const json::node &n, const std::string &path) {
 
 }  // namespace
 
+// The most JSON values a valid leveler file holds: the influence rows and
+// their numbers, the target, the actuators' objects and fields, and the top
+// level's few. A file with more is refused while it is read, so a 16 MiB
+// file of tiny values costs a few hundred kilobytes of reading, not
+// millions of nodes.
+constexpr std::size_t k_max_values = FLT_ADVISOR_MAX_ZONES * (FLT_ADVISOR_MAX_ACTUATORS + 1) +
+                                     (FLT_ADVISOR_MAX_ZONES + 1) + FLT_ADVISOR_MAX_ACTUATORS * 6 +
+                                     16;
+
 leveler_model read_leveler(const char *text, std::size_t length) {
-    const json::node root = json::parse(text, length, "the leveler file");
+    const json::node root = json::parse(text, length, "the leveler file", k_max_values);
     json::expect_kind(root, json::node::object, "(top level)");
     // The version decides what else must be there, so it is read first.
     const json::node *format = json::member(root, "format");

@@ -1,11 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
-// The calibration file: JSON text, version 1 (documented in calib.h).
-//
-// A small strict reader instead of a general JSON library: the format is
-// fixed, and every error must name the field it concerns ("lasers[1].
-// homography[4]"), which generic parsers do not do. Numbers keep their text
-// until a field reads them, so a NaN or a fraction is reported against the
-// field, not as a syntax error.
+// The calibration file: JSON text, version 1 (documented in calib.h), read
+// by the library's strict JSON reader (core/json.hpp): the format is fixed,
+// and every error names the field it concerns ("lasers[1].homography[4]").
+// Numbers keep their text until a field reads them, so a NaN or a fraction
+// is reported against the field, not as a syntax error.
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -17,6 +15,7 @@
 
 #include "calibration/calib_model.hpp"
 #include "core/error.hpp"
+#include "core/json.hpp"
 #include "core/number_text.hpp"
 
 namespace flt {
@@ -40,305 +39,10 @@ void append_field(std::string &s, const char *indent, const char *name, double v
 }
 
 // ------------------------------------------------------------------ reader
-
-[[noreturn]] void format_error(const std::string &message) {
-    throw error(FLT_ERR_FORMAT, message.c_str());
-}
-
-struct node {
-    enum kind_t { number, string, word, object, array } kind = number;
-    std::string text;                                   // number, string, word
-    std::vector<std::pair<std::string, node>> members;  // object, in order
-    std::vector<node> items;                            // array
-    int line = 0;
-};
-
-const char *kind_name(node::kind_t k) {
-    switch (k) {
-        case node::number:
-            return "a number";
-        case node::string:
-            return "a string";
-        case node::word:
-            return "a bare word";
-        case node::object:
-            return "an object";
-        case node::array:
-            return "an array";
-    }
-    return "?";
-}
-
-class parser {
-  public:
-    parser(const char *text, std::size_t length) : p_(text), end_(text + length) {}
-
-    node parse_document() {
-        skip_space();
-        if (p_ == end_)
-            format_error("the file is empty");
-        node root = parse_value("(top level)", 0);
-        skip_space();
-        if (p_ != end_)
-            format_error("line " + std::to_string(line_) +
-                         ": unexpected text after the end of the calibration");
-        return root;
-    }
-
-  private:
-    const char *p_, *end_;
-    int line_ = 1;
-
-    void skip_space() {
-        while (p_ != end_ && (*p_ == ' ' || *p_ == '\t' || *p_ == '\r' || *p_ == '\n')) {
-            if (*p_ == '\n')
-                ++line_;
-            ++p_;
-        }
-    }
-
-    [[noreturn]] void truncated(const std::string &path) const {
-        format_error("the file ends early (truncated?) inside '" + path + "' at line " +
-                     std::to_string(line_));
-    }
-
-    [[noreturn]] void unexpected(const std::string &path, const char *expected) {
-        std::string found = p_ == end_ ? "end of file" : std::string("'") + *p_ + "'";
-        format_error("line " + std::to_string(line_) + ": in '" + path + "' expected " + expected +
-                     ", found " + found);
-    }
-
-    node parse_value(const std::string &path, int depth) {
-        if (depth > 16)
-            format_error("'" + path + "' is nested too deeply");
-        skip_space();
-        if (p_ == end_)
-            truncated(path);
-        node n;
-        n.line = line_;
-        const char c = *p_;
-        if (c == '{') {
-            n.kind = node::object;
-            ++p_;
-            skip_space();
-            if (p_ == end_)
-                truncated(path);
-            if (*p_ == '}') {
-                ++p_;
-                return n;
-            }
-            for (;;) {
-                skip_space();
-                if (p_ == end_)
-                    truncated(path);
-                if (*p_ != '"')
-                    unexpected(path, "a field name in quotes");
-                std::string key = parse_string(path);
-                skip_space();
-                if (p_ == end_)
-                    truncated(path);
-                if (*p_ != ':')
-                    unexpected(path, "':' after a field name");
-                ++p_;
-                std::string child;
-                if (path != "(top level)") {
-                    child = path;
-                    child += '.';
-                }
-                child += key;
-                node value = parse_value(child, depth + 1);
-                n.members.emplace_back(std::move(key), std::move(value));
-                skip_space();
-                if (p_ == end_)
-                    truncated(path);
-                if (*p_ == ',') {
-                    ++p_;
-                    continue;
-                }
-                if (*p_ == '}') {
-                    ++p_;
-                    return n;
-                }
-                unexpected(path, "',' or '}'");
-            }
-        }
-        if (c == '[') {
-            n.kind = node::array;
-            ++p_;
-            skip_space();
-            if (p_ == end_)
-                truncated(path);
-            if (*p_ == ']') {
-                ++p_;
-                return n;
-            }
-            for (;;) {
-                n.items.push_back(
-                    parse_value(path + "[" + std::to_string(n.items.size()) + "]", depth + 1));
-                skip_space();
-                if (p_ == end_)
-                    truncated(path);
-                if (*p_ == ',') {
-                    ++p_;
-                    continue;
-                }
-                if (*p_ == ']') {
-                    ++p_;
-                    return n;
-                }
-                unexpected(path, "',' or ']'");
-            }
-        }
-        if (c == '"') {
-            n.kind = node::string;
-            n.text = parse_string(path);
-            return n;
-        }
-        // A number or a bare word (true, null, nan, inf, ...): the token runs
-        // to the next delimiter; the field that reads it judges it.
-        const char *start = p_;
-        while (p_ != end_ && !std::strchr(" \t\r\n,]}:", *p_))
-            ++p_;
-        if (p_ == start)
-            unexpected(path, "a value");
-        n.text.assign(start, p_);
-        n.kind = is_json_number(n.text) ? node::number : node::word;
-        // A number cut off by the end of the file looks complete; the
-        // enclosing object's missing '}' reports the truncation.
-        return n;
-    }
-
-    std::string parse_string(const std::string &path) {
-        ++p_;  // opening quote
-        std::string s;
-        while (p_ != end_ && *p_ != '"') {
-            if (*p_ == '\n')
-                format_error("line " + std::to_string(line_) + ": a string in '" + path +
-                             "' runs past the end of the line");
-            if (*p_ == '\\')
-                format_error("line " + std::to_string(line_) +
-                             ": escapes are not used in a "
-                             "calibration file ('" +
-                             path + "')");
-            s += *p_++;
-        }
-        if (p_ == end_)
-            truncated(path);
-        ++p_;  // closing quote
-        return s;
-    }
-
-    static bool is_json_number(const std::string &t) {
-        std::size_t i = 0, n = t.size();
-        auto digits = [&] {
-            std::size_t b = i;
-            while (i < n && t[i] >= '0' && t[i] <= '9')
-                ++i;
-            return i > b;
-        };
-        if (i < n && t[i] == '-')
-            ++i;
-        if (!digits())
-            return false;
-        if (i < n && t[i] == '.') {
-            ++i;
-            if (!digits())
-                return false;
-        }
-        if (i < n && (t[i] == 'e' || t[i] == 'E')) {
-            ++i;
-            if (i < n && (t[i] == '+' || t[i] == '-'))
-                ++i;
-            if (!digits())
-                return false;
-        }
-        return i == n;
-    }
-};
-
-// ------------------------------------------------------------------ schema
-
-std::string join(const std::string &path, const char *key) {
-    return path.empty() ? std::string(key) : path + "." + key;
-}
-
-void expect_kind(const node &n, node::kind_t kind, const std::string &path) {
-    if (n.kind == kind)
-        return;
-    format_error("field '" + path + "' (line " + std::to_string(n.line) + ") must be " +
-                 kind_name(kind) + ", found " + kind_name(n.kind) +
-                 (n.kind == node::word ? " '" + n.text + "'" : std::string()));
-}
-
-// Checks that obj has exactly the fields `names`, each once; returns them in
-// that order.
-std::vector<const node *> fields(const node &obj, const std::string &path,
-                                 std::initializer_list<const char *> names) {
-    expect_kind(obj, node::object, path.empty() ? "(top level)" : path);
-    for (std::size_t i = 0; i < obj.members.size(); ++i) {
-        const std::string &key = obj.members[i].first;
-        bool known = false;
-        for (const char *name : names)
-            known |= key == name;
-        if (!known)
-            format_error("unknown field '" + join(path, key.c_str()) + "' (line " +
-                         std::to_string(obj.members[i].second.line) + ")");
-        for (std::size_t j = 0; j < i; ++j)
-            if (obj.members[j].first == key)
-                format_error("duplicate field '" + join(path, key.c_str()) + "' (line " +
-                             std::to_string(obj.members[i].second.line) + ")");
-    }
-    std::vector<const node *> out;
-    for (const char *name : names) {
-        const node *found = nullptr;
-        for (const auto &m : obj.members)
-            if (m.first == name)
-                found = &m.second;
-        if (!found)
-            format_error("missing field '" + join(path, name) + "'");
-        out.push_back(found);
-    }
-    return out;
-}
-
-double number(const node &n, const std::string &path) {
-    if (n.kind == node::word) {
-        std::string lower;
-        for (char c : n.text)
-            lower += char(c >= 'A' && c <= 'Z' ? c - 'A' + 'a' : c);
-        if (lower.find("nan") != std::string::npos)
-            format_error("field '" + path + "' is NaN (line " + std::to_string(n.line) + ")");
-        if (lower.find("inf") != std::string::npos)
-            format_error("field '" + path + "' is infinite (line " + std::to_string(n.line) + ")");
-    }
-    expect_kind(n, node::number, path);
-    // parse_double reads the C syntax whatever LC_NUMERIC says (strtod
-    // would stop at the '.' of "1090.9" under a decimal-comma locale). The
-    // token is a JSON number (is_json_number), so it only fails on range.
-    double v = 0;
-    if (!parse_double(n.text, v))
-        format_error("field '" + path + "' = " + n.text + " is outside the range of a double");
-    return v;
-}
-
-double positive(const node &n, const std::string &path) {
-    const double v = number(n, path);
-    if (!(v > 0))
-        format_error("field '" + path + "' = " + n.text + " must be > 0");
-    return v;
-}
-
-std::uint64_t integer(const node &n, const std::string &path, double min_value, double max_value) {
-    const double v = number(n, path);
-    if (v != std::floor(v))
-        format_error("field '" + path + "' = " + n.text + " must be a whole number");
-    if (v < min_value || v > max_value) {
-        char range[96];
-        format_c(range, sizeof range, " is outside [%.17g, %.17g]", min_value, max_value);
-        format_error("field '" + path + "' = " + n.text + range);
-    }
-    return std::uint64_t(v);
-}
+// lib/core's strict JSON reader (core/json.hpp). A calibration file holds
+// 50 values; 256 bound the work a file of millions of tiny values
+// could cost long before its 64 KiB limit.
+constexpr std::size_t k_max_values = 256;
 
 }  // namespace
 
@@ -390,7 +94,14 @@ std::string write_model(const calib_model &m) {
 }
 
 calib_model read_model(const char *text, std::size_t length) {
-    const node root = parser(text, length).parse_document();
+    using json::expect_kind;
+    using json::fields;
+    using json::format_error;
+    using json::integer;
+    using json::node;
+    using json::number;
+    using json::positive;
+    const node root = json::parse(text, length, "the calibration file", k_max_values);
     expect_kind(root, node::object, "(top level)");
     // The version decides what else must be there, so it is read first: a
     // newer file reports its version, not its new fields.

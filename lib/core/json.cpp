@@ -58,16 +58,45 @@ bool is_json_number(const std::string &t) {
     return i == n;
 }
 
+// Where a value is, for messages: a chain from the value to the top,
+// rendered ("rules[2].bands[0].limit") only when an error names it.
+struct path_ref {
+    const path_ref *parent = nullptr;
+    const std::string *key = nullptr;  // a member's name, or
+    std::size_t index = 0;             // an array item's index
+};
+
+std::string render(const path_ref *p) {
+    if (p == nullptr)
+        return "(top level)";
+    std::vector<const path_ref *> chain;
+    for (; p != nullptr; p = p->parent)
+        chain.push_back(p);
+    std::string out;
+    for (auto it = chain.rbegin(); it != chain.rend(); ++it) {
+        if ((*it)->key != nullptr) {
+            if (!out.empty())
+                out += '.';
+            out += *(*it)->key;
+        } else {
+            if (out.empty())
+                out = "(top level)";
+            out += "[" + std::to_string((*it)->index) + "]";
+        }
+    }
+    return out;
+}
+
 class parser {
   public:
-    parser(const char *text, std::size_t length, const char *document)
-        : p_(text), end_(text + length), document_(document) {}
+    parser(const char *text, std::size_t length, const char *document, std::size_t max_values)
+        : p_(text), end_(text + length), document_(document), max_values_(max_values) {}
 
     node parse_document() {
         skip_space();
         if (p_ == end_)
             format_error(std::string(document_) + " is empty");
-        node root = parse_value("(top level)", 0);
+        node root = parse_value(nullptr, 0);
         skip_space();
         if (p_ != end_)
             format_error("line " + std::to_string(line_) + ": unexpected text after the end of " +
@@ -78,6 +107,8 @@ class parser {
   private:
     const char *p_, *end_;
     const char *document_;
+    std::size_t max_values_;
+    std::size_t values_ = 0;
     int line_ = 1;
 
     void skip_space() {
@@ -88,20 +119,24 @@ class parser {
         }
     }
 
-    [[noreturn]] void truncated(const std::string &path) const {
-        format_error(std::string(document_) + " ends early (truncated?) inside '" + path +
+    [[noreturn]] void truncated(const path_ref *path) const {
+        format_error(std::string(document_) + " ends early (truncated?) inside '" + render(path) +
                      "' at line " + std::to_string(line_));
     }
 
-    [[noreturn]] void unexpected(const std::string &path, const char *expected) const {
+    [[noreturn]] void unexpected(const path_ref *path, const char *expected) const {
         const std::string found = p_ == end_ ? "end of file" : std::string("'") + *p_ + "'";
-        format_error("line " + std::to_string(line_) + ": in '" + path + "' expected " + expected +
-                     ", found " + found);
+        format_error("line " + std::to_string(line_) + ": in '" + render(path) + "' expected " +
+                     expected + ", found " + found);
     }
 
-    node parse_value(const std::string &path, int depth) {
+    node parse_value(const path_ref *path, int depth) {
         if (depth > 16)
-            format_error("'" + path + "' is nested too deeply");
+            format_error("'" + render(path) + "' is nested too deeply");
+        if (++values_ > max_values_)
+            format_error(std::string(document_) + " holds more than " +
+                         std::to_string(max_values_) + " values (line " + std::to_string(line_) +
+                         ", '" + render(path) + "'): more than its format can have");
         skip_space();
         if (p_ == end_)
             truncated(path);
@@ -131,13 +166,10 @@ class parser {
                 if (*p_ != ':')
                     unexpected(path, "':' after a field name");
                 ++p_;
-                std::string child;
-                if (path != "(top level)") {
-                    child = path;
-                    child += '.';
-                }
-                child += key;
-                node value = parse_value(child, depth + 1);
+                path_ref child;
+                child.parent = path;
+                child.key = &key;
+                node value = parse_value(&child, depth + 1);
                 n.members.emplace_back(std::move(key), std::move(value));
                 skip_space();
                 if (p_ == end_)
@@ -164,8 +196,10 @@ class parser {
                 return n;
             }
             for (;;) {
-                n.items.push_back(
-                    parse_value(path + "[" + std::to_string(n.items.size()) + "]", depth + 1));
+                path_ref child;
+                child.parent = path;
+                child.index = n.items.size();
+                n.items.push_back(parse_value(&child, depth + 1));
                 skip_space();
                 if (p_ == end_)
                     truncated(path);
@@ -194,23 +228,26 @@ class parser {
             unexpected(path, "a value");
         n.text.assign(start, p_);
         n.kind = is_json_number(n.text) ? node::number : node::word;
+        // A number cut off by the end of the file looks complete; the
+        // enclosing object's missing '}' reports the truncation.
         return n;
     }
 
-    std::string parse_string(const std::string &path) {
+    std::string parse_string(const path_ref *path) {
         ++p_;  // opening quote
-        std::string s;
+        const char *start = p_;
         while (p_ != end_ && *p_ != '"') {
             if (*p_ == '\n')
-                format_error("line " + std::to_string(line_) + ": a string in '" + path +
+                format_error("line " + std::to_string(line_) + ": a string in '" + render(path) +
                              "' runs past the end of the line");
             if (*p_ == '\\')
                 format_error("line " + std::to_string(line_) + ": escapes are not used in " +
-                             document_ + " ('" + path + "')");
-            s += *p_++;
+                             document_ + " ('" + render(path) + "')");
+            ++p_;
         }
         if (p_ == end_)
             truncated(path);
+        std::string s(start, p_);
         ++p_;  // closing quote
         return s;
     }
@@ -224,8 +261,8 @@ std::string text_of(double v) {
     return std::string(buf, r.ptr);
 }
 
-node parse(const char *text, std::size_t length, const char *document) {
-    return parser(text, length, document).parse_document();
+node parse(const char *text, std::size_t length, const char *document, std::size_t max_values) {
+    return parser(text, length, document, max_values).parse_document();
 }
 
 void format_error(const std::string &message) {

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
-// Internal: a small strict JSON reader for the library's data files (rule
-// sets of tolerances; the calibration file has its own copy in
-// calibration/calib_io.cpp until it moves here).
+// Internal: the one small strict JSON reader of the library's data files:
+// calibration files (lib/calibration), rule sets of tolerances
+// (lib/verdict), leveler files (lib/advisor).
 //
 // Strict instead of general: every error names the field it concerns
 // ("rules[2].bands[0].limit", with its line), which generic parsers do not
@@ -9,6 +9,13 @@
 // fraction is reported against the field, not as a syntax error, and are
 // read with std::from_chars (never the C locale's decimal point). Strings
 // take no escapes. Errors are thrown as flt::error(FLT_ERR_FORMAT).
+//
+// Bounded work: a document is read in one pass over its bytes, at most 16
+// levels deep, with at most `max_values` values (numbers, strings, words,
+// objects, arrays; k_max_values unless the caller knows a tighter bound
+// from its format): a file of millions of tiny values is refused when it
+// passes the bound, before it costs more than that many nodes (about 100
+// bytes each). Paths for messages are built only when an error needs one.
 #pragma once
 
 #include <cstddef>
@@ -29,9 +36,14 @@ struct node {
     int line = 0;
 };
 
+// The values a document may hold unless its reader says fewer: 1,000,000
+// (about 100 MB of nodes).
+constexpr std::size_t k_max_values = 1000000;
+
 // Parses a whole document; `document` names it in messages ("the
 // tolerances file").
-node parse(const char *text, std::size_t length, const char *document);
+node parse(const char *text, std::size_t length, const char *document,
+           std::size_t max_values = k_max_values);
 
 [[noreturn]] void format_error(const std::string &message);
 

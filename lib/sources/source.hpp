@@ -2,7 +2,8 @@
 // Internal: the interface every kind of frame source implements behind the
 // one public handle, flt_source (source_api.cpp). One implementation per
 // kind, each in its folder: sim/ (the simulator), images/ (recorded image
-// sequences), u3v/ (USB3 Vision cameras) and, next, gige/ (GigE Vision).
+// sequences), u3v/ (USB3 Vision cameras) and gige/ (GigE Vision cameras),
+// the last two over the camera base in camera/.
 //
 // The public face keeps what is common to every kind: argument checks, the
 // started/stopped state, the borrowed flt_frame, and the encoder position
@@ -29,6 +30,7 @@ namespace flt::sources {
 // the kind's next call of next(), stop() or its destruction.
 struct raw_frame {
     const void *pixels = nullptr;
+    std::size_t bytes = 0;  // the size of the buffer `pixels` lies in
     std::uint32_t width = 0, height = 0;
     std::size_t stride = 0;  // bytes per row
     flt_pixel_format format = FLT_PIXEL_MONO8;
@@ -74,9 +76,9 @@ class source_impl {
     virtual camera_device *camera() { return nullptr; }
 };
 
-// What a camera offers whatever its transport (USB3 Vision now, GigE Vision
-// next): its identity, values of its protocol, GenICam features by name and
-// raw register access. Features and registers throw flt::error.
+// What a camera offers whatever its transport (USB3 Vision, GigE Vision;
+// camera/camera.hpp implements it once for both): its identity, values of its protocol, GenICam
+// features by name and raw register access. Features and registers throw flt::error.
 class camera_device {
   public:
     virtual ~camera_device() = default;

@@ -13,6 +13,7 @@
 #include "core/error.hpp"
 #include "core/options.hpp"
 #include "flatline/source.h"
+#include "sources/camera/pixel_format.hpp"
 #include "sources/encoder.hpp"
 #include "sources/gige/discovery.hpp"
 #include "sources/gige/gige_source.hpp"
@@ -97,6 +98,18 @@ flt_status need_camera(const char *fn, const flt_source *source, sources::camera
     if (out == nullptr)
         return fail(FLT_ERR_STATE, "%s: the source is not a camera (USB3 or GigE Vision)", fn);
     return FLT_OK;
+}
+
+// Whether a frame's rows lie in its buffer: stride >= width x bytes per
+// pixel, and (height - 1) x stride + width x bytes per pixel <= bytes,
+// computed without overflow.
+bool frame_fits(const sources::raw_frame &f) {
+    if (f.pixels == nullptr || f.width == 0 || f.height == 0)
+        return false;
+    const std::uint64_t row = std::uint64_t(f.width) * (f.format > 8 ? 2 : 1);
+    if (f.stride < row)
+        return false;
+    return sources::image_size_fits(f.stride, 0, f.height - 1, row, f.bytes);
 }
 
 // Checks a raw memory range: 1 byte .. 64 MiB, not past 2^64.
@@ -441,6 +454,14 @@ FLT_API flt_status FLT_CALL flt_source_next(flt_source *source, uint32_t timeout
         sources::raw_frame raw;
         if (!source->impl->next(timeout_ms, raw))
             return FLT_OK;  // the end of an image sequence
+        // Every kind checks what it delivers; this is the promise of
+        // flt_frame_info() kept in one place: `height` rows of
+        // `stride_bytes` (the last one `width` pixels) lie in the buffer.
+        if (!frame_fits(raw))
+            return fail(FLT_ERR_INTERNAL,
+                        "%s: a %u x %u px frame of stride %zu does not fit its %zu-byte buffer "
+                        "(not delivered)",
+                        fn, raw.width, raw.height, raw.stride, raw.bytes);
         flt_frame &f = source->frame;
         f.pixels = raw.pixels;
         f.width = raw.width;

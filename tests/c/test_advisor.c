@@ -610,6 +610,64 @@ static void leveler_file_errors_name_field_and_line(void **state) {
                  "missing field 'actuators[1].unit'");
 }
 
+/* The work a leveler file costs is bounded before it is parsed further: a
+ * file may hold no more values than the largest valid one (1024 zones x 64
+ * actuators, with a target), so 16 MiB of tiny values are refused after
+ * reading about 68,000 of them, while the largest valid file loads. */
+static void leveler_file_cost_is_bounded(void **state) {
+    (void)state;
+    const size_t zones = 1024, actuators = 64;
+    char *text = malloc(16u << 20);
+    assert_non_null(text);
+    char *p = text;
+    p += sprintf(p,
+                 "{ \"format\": \"flatline-leveler\", \"version\": 1, \"zones\": %zu,\n"
+                 "  \"actuators\": [",
+                 zones);
+    for (size_t j = 0; j < actuators; ++j)
+        p += sprintf(p,
+                     "%s{ \"name\": \"a%zu\", \"unit\": \"mm\", \"min\": -1, \"max\": 1, "
+                     "\"step\": 0.1 }",
+                     j ? ", " : "", j);
+    p += sprintf(p, "],\n  \"influence\": [");
+    for (size_t z = 0; z < zones; ++z) {
+        p += sprintf(p, "%s[", z ? ",\n" : "");
+        for (size_t j = 0; j < actuators; ++j)
+            p += sprintf(p, "%s%d", j ? ", " : "", (int)((z * 7 + j * 3) % 19) - 9);
+        p += sprintf(p, "]");
+    }
+    p += sprintf(p, "],\n  \"target\": [");
+    for (size_t z = 0; z < zones; ++z)
+        p += sprintf(p, "%s0", z ? ", " : "");
+    p += sprintf(p, "] }\n");
+    flt_advisor *a = NULL;
+    OK(flt_advisor_load_text(text, (size_t)(p - text), NULL, &a));
+    size_t nz = 0, na = 0;
+    OK(flt_advisor_size(a, &nz, &na));
+    assert_int_equal(nz, zones);
+    assert_int_equal(na, actuators);
+    flt_advisor_destroy(a);
+    /* 16 MiB of "1," inside an influence row: refused at the bound. */
+    const size_t head = (size_t)sprintf(text, "{ \"format\": \"flatline-leveler\", \"version\": 1, "
+                                              "\"zones\": 1, \"influence\": [[");
+    size_t n = head;
+    while (n + 8 < (16u << 20)) {
+        text[n++] = '1';
+        text[n++] = ',';
+    }
+    text[n++] = '1';
+    text[n++] = ']';
+    text[n++] = ']';
+    text[n++] = '}';
+    a = (flt_advisor *)&state; /* not NULL: must be cleared */
+    assert_int_equal(flt_advisor_load_text(text, n, NULL, &a), FLT_ERR_FORMAT);
+    assert_null(a);
+    const char *msg = flt_last_error_message();
+    if (!strstr(msg, "holds more than") || !strstr(msg, "influence[0][67"))
+        fail_msg("message \"%s\"", msg);
+    free(text);
+}
+
 /* ------------------------------------------------------------------ */
 /* The closed loop on the simulated line                                */
 /* ------------------------------------------------------------------ */
@@ -773,6 +831,7 @@ int main(void) {
         cmocka_unit_test(identification_refuses_unexplained_data),
         cmocka_unit_test(leveler_file_is_read),
         cmocka_unit_test(leveler_file_errors_name_field_and_line),
+        cmocka_unit_test(leveler_file_cost_is_bounded),
         cmocka_unit_test(loop_converges_with_g_exact),
         cmocka_unit_test(loop_converges_with_g_30_percent_small),
         cmocka_unit_test(loop_converges_with_g_30_percent_large),

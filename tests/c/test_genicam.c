@@ -704,6 +704,20 @@ static void test_floats_and_converters(void **state) {
     const uint8_t d[8] = {0x40, 0x04, 0, 0, 0, 0, 0, 0};
     put(g, 0x1058, d, 8);
     assert_true(get_float(g, "BigDouble") == 2.5);
+    /* A float register holding NaN or an infinity is refused, never read
+     * as a number. */
+    const uint8_t nan8[8] = {0x7F, 0xF8, 0, 0, 0, 0, 0, 0},
+                  inf8[8] = {0x7F, 0xF0, 0, 0, 0, 0, 0, 0};
+    double x = 0;
+    put(g, 0x1058, nan8, 8);
+    assert_error(flt_genicam_get_float(g, "BigDouble", &x), FLT_ERR_NUMERIC, "holds NaN");
+    put(g, 0x1058, inf8, 8);
+    assert_error(flt_genicam_get_float(g, "BigDouble", &x), FLT_ERR_NUMERIC, "an infinity");
+    const uint8_t nan4[4] = {0, 0, 0xC0, 0x7F}; /* little-endian float NaN */
+    put(g, 0x1050, nan4, 4);
+    assert_error(flt_genicam_get_float(g, "Gain", &x), FLT_ERR_NUMERIC, "'GainReg' holds NaN");
+    put(g, 0x1050, b, 4);
+    put(g, 0x1058, d, 8);
     assert_true(get_float(g, "Ratio") == 1.5);
     ok(flt_genicam_set_float(g, "Gain", 12.5));
     memcpy(b, &(float){12.5f}, 4);
@@ -1039,6 +1053,12 @@ static void test_formula_refusals(void **state) {
     refused("SwissKnife", "A / 0", FLT_ERR_NUMERIC, "division by zero");
     refused("IntSwissKnife", "A % 0", FLT_ERR_NUMERIC, "division by zero");
     refused("IntSwissKnife", "1 << 64", FLT_ERR_NUMERIC, "shift by 64");
+    /* 1 << 63 would wrap to the most negative value; -1 << 63 is that
+     * value and fits. */
+    refused("IntSwissKnife", "1 << 63", FLT_ERR_NUMERIC, "overflows");
+    refused("IntSwissKnife", "0xFFFFFFFF << 32", FLT_ERR_NUMERIC, "overflows");
+    assert_int_equal(int_swiss("(0 - 1) << 63"), INT64_MIN);
+    assert_int_equal(int_swiss("1 << 62"), INT64_C(1) << 62);
     refused("IntSwissKnife", "0x7FFFFFFFFFFFFFFF + 1", FLT_ERR_NUMERIC, "overflow");
     refused("IntSwissKnife", "2 ** 64", FLT_ERR_NUMERIC, "overflow");
     refused("SwissKnife", "0.5 && 1", FLT_ERR_NUMERIC, "a condition needs an integer");
@@ -1228,6 +1248,49 @@ static void test_memory_image_limits(void **state) {
     flt_genicam_destroy(NULL);
 }
 
+/* A description's size is bounded while it is read: more than 65536 nodes
+ * or 1,000,000 elements is refused (the largest real one has about 4,000
+ * nodes in 24,000 elements) before its nodes cost gigabytes. */
+static char *repeated(const char *head, const char *item, size_t count, const char *tail) {
+    const size_t n = strlen(head) + strlen(item) * count + strlen(tail) + 1;
+    char *text = malloc(n);
+    assert_non_null(text);
+    char *p = text;
+    p += sprintf(p, "%s", head);
+    for (size_t i = 0; i < count; ++i)
+        p += sprintf(p, "%s", item);
+    sprintf(p, "%s", tail);
+    return text;
+}
+
+static void test_description_size_is_capped(void **state) {
+    (void)state;
+    flt_genicam *g = NULL;
+    char *nodes =
+        repeated("<RegisterDescription>", "<Integer Name=\"N\"><Value>1</Value></Integer>", 65537,
+                 "</RegisterDescription>");
+    /* (all named N: the cap comes before the duplicate-name check can
+     * matter, which marks nodes broken without refusing the file) */
+    assert_error(flt_genicam_load_memory(nodes, strlen(nodes), &g), FLT_ERR_FORMAT,
+                 "more than 65536 nodes");
+    assert_null(g);
+    free(nodes);
+    char *elements = repeated("<RegisterDescription><Integer Name=\"X\"><Value>1</Value>",
+                              "<ToolTip/>", 1000000, "</Integer></RegisterDescription>");
+    assert_error(flt_genicam_load_memory(elements, strlen(elements), &g), FLT_ERR_FORMAT,
+                 "more than 1000000 elements");
+    free(elements);
+    /* Exactly at the node cap loads (X and 65535 N: 65536 nodes; the
+     * duplicates are its own problem). */
+    char *many =
+        repeated("<RegisterDescription><Integer Name=\"X\"><Value>42</Value></Integer>",
+                 "<Integer Name=\"N\"><Value>1</Value></Integer>", 65535, "</RegisterDescription>");
+    ok(flt_genicam_load_memory(many, strlen(many), &g));
+    assert_int_equal(get_int(g, "X"), 42);
+    flt_genicam_destroy(g);
+    free(many);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_lists_features_with_type_kind_and_unit),
@@ -1244,6 +1307,7 @@ int main(void) {
         cmocka_unit_test(test_loads_what_real_files_carry),
         cmocka_unit_test(test_registers_through_callbacks),
         cmocka_unit_test(test_memory_image_limits),
+        cmocka_unit_test(test_description_size_is_capped),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

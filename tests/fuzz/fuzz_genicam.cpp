@@ -10,18 +10,25 @@
 // Registers repeat: address a reads register byte a % n. Then features are
 // evaluated - the camera's usual ones, the first 64 of the description and
 // a name made of the input's last 16 bytes: values, access, flags, bounds,
-// entries, the register behind them, and writes. Bad input must raise
+// entries, the register behind them, and writes. The same description is
+// then read the way a camera source reads it (lib/sources/camera/
+// features.cpp: the engine behind feature_layer, a register mapped by
+// address in front of it, both byte orders). Bad input must raise
 // flt::error with a status the public API documents for it (FORMAT,
 // NOT_FOUND, NUMERIC, STATE, INVALID_ARGUMENT) or std::bad_alloc; any other
 // exception, or FLT_ERR_INTERNAL, would reach a caller as an internal
-// error: the harness aborts.
+// error: the harness aborts. A float value read without an error must be
+// finite (a NaN only ever appears with its flag, and features have none).
+#include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <memory>
 #include <new>
 #include <string>
 #include <vector>
 
 #include "core/error.hpp"
+#include "sources/camera/features.hpp"
 #include "sources/genicam/node_map.hpp"
 #include "sources/genicam/text.hpp"
 
@@ -62,7 +69,10 @@ void evaluate(flt::genicam::node_map &map, const std::string &name) {
     interface_kind kind = interface_kind::none;
     expect([&] { kind = map.interface_of(name); });
     expect([&] { (void)map.get_int(name, false); });
-    expect([&] { (void)map.get_float(name, false); });
+    expect([&] {
+        if (!std::isfinite(map.get_float(name, false)))
+            std::abort();
+    });
     expect([&] { (void)map.get_string(name, false); });
     expect([&] { (void)map.int_min(name); });
     expect([&] { (void)map.int_max(name); });
@@ -119,6 +129,32 @@ void load_and_evaluate(const std::string &text, fuzz_port &port, const std::stri
     for (std::size_t i = 0; i < names.size() && i < 64; ++i)
         evaluate(map, names[i]);
     evaluate(map, extra);
+
+    // The camera's path: the engine behind feature_layer, with a register
+    // mapped by address (what flt_source_map_feature does).
+    std::unique_ptr<flt::sources::feature_layer> layer;
+    expect([&] {
+        layer = std::make_unique<flt::sources::feature_layer>(
+            port, flt::sources::make_feature_engine(text, port), (port.n & 1) != 0);
+    });
+    if (!layer)
+        return;
+    const std::uint32_t lengths[] = {1, 2, 4, 8};
+    expect([&] {
+        layer->map_feature("Mapped", port.n, lengths[port.n % 4],
+                           port.n % 3 == 0 && port.n % 4 >= 2);
+    });
+    for (const std::string &name : {std::string("Mapped"), extra, std::string("Width"),
+                                    names.empty() ? std::string() : names.front()}) {
+        expect([&] { (void)layer->get_int(name); });
+        expect([&] {
+            if (!std::isfinite(layer->get_float(name)))
+                std::abort();
+        });
+        expect([&] { layer->set_int(name, 7); });
+        expect([&] { layer->set_float(name, 0.25); });
+        expect([&] { (void)layer->kind_of(name); });
+    }
 }
 
 }  // namespace

@@ -5,7 +5,8 @@
  *      -lflatline -Wl,-rpath,build/dev/lib -o /tmp/make_seeds && /tmp/make_seeds tests/fuzz/corpus
  * Seeds are valid inputs the harnesses parse deeply (a real calibration
  * file, the simulated camera's GenICam XML plain and zipped, a well-formed
- * frame on the U3V stream), plus small structured ones. */
+ * frame on the U3V stream, a camera's bootstrap block over GVCP, the JSON
+ * files of every reader), plus small structured ones. */
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -248,6 +249,126 @@ int main(int argc, char **argv) {
         put("source_faults", "busy_stop", busy_stop, sizeof busy_stop);
         put("source_faults", "stream_faults", stream_faults, sizeof stream_faults);
         put("source_faults", "unplug", unplug, sizeof unplug);
+    }
+
+    /* genicam: a FloatReg holding NaN and a formula shifting into the sign
+     * bit (both refused with FLT_ERR_NUMERIC); 16 register bytes. */
+    {
+        static const char refusals[] =
+            "<RegisterDescription><FloatReg Name=\"Gain\"><Address>0</Address><Length>8"
+            "</Length><AccessMode>RO</AccessMode><pPort>Device</pPort><Endianess>BigEndian"
+            "</Endianess></FloatReg><IntSwissKnife Name=\"Width\"><pVariable Name=\"A\">Raw"
+            "</pVariable><Formula>A &lt;&lt; 63</Formula></IntSwissKnife><IntReg Name=\"Raw\">"
+            "<Address>8</Address><Length>4</Length><AccessMode>RO</AccessMode><pPort>Device"
+            "</pPort></IntReg></RegisterDescription>";
+        uint8_t seed[3 + 16 + sizeof refusals];
+        const uint8_t registers[16] = {0x7F, 0xF8, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0};
+        seed[0] = 2;
+        seed[1] = 0;
+        seed[2] = 16;
+        memcpy(seed + 3, registers, 16);
+        memcpy(seed + 3 + 16, refusals, sizeof refusals - 1);
+        put("genicam", "nan_and_shift", seed, 3 + 16 + sizeof refusals - 1);
+    }
+
+    /* gvsp: shape (bit 0 Mono16, bit 1 resends, bits 2-3 attempts, bits
+     * 4+ frames in assembly), width - 1, height - 1, data bytes - 4,
+     * resend timeout - 1 (ms), the first block id (u16 LE); then
+     * operations (fuzz_gvsp.cpp): 0..3 a frame (bit 7: a fate byte per
+     * packet: 1 lost, 2 twice, 3 delayed, 4 swapped, 5 forged first),
+     * 4 ms, 5 a stray, 6 the delayed ones, 7 take, 8 resends answered,
+     * 9 new block ids. Frames of 32 x 4 px Mono8 in 64-byte packets: 4
+     * packets each, across the block-id wrap. */
+    {
+        static const uint8_t clean[] = {0x20, 31, 3, 60, 9, 0xF0, 0xFF, 0,  0, 0,
+                                        0,    7,  0, 0,  0, 7,    4,    30, 7};
+        put("gvsp", "clean_across_wrap", clean, sizeof clean);
+        static const uint8_t resends[] = {0x2A, 31, 3,    60, 9, 1,  0, 0x80, 0,  1,
+                                          0,    0,  0x80, 0,  0, 1,  0, 7,    4,  12,
+                                          8,    1,  1,    7,  4, 30, 7, 4,    30, 7};
+        put("gvsp", "losses_and_resends", resends, sizeof resends);
+        static const uint8_t hostile[] = {
+            0x20, 31, 3, 60, 9, 100,  0, 0x80, 4, 0, 5, 0, 5,    1,    0, 0x80, 0, 3, 0,  0,
+            6,    7,  5, 9,  1, 0x80, 0, 0,    0, 0, 7, 9, 0x34, 0x12, 0, 0,    7, 4, 40, 7};
+        put("gvsp", "swaps_forgeries_strays_restart", hostile, sizeof hostile);
+    }
+
+    /* gvcp: timeout - 1 (ms), attempts - 1, pending-ack limit, preset
+     * length / 8 and the camera's first bytes of memory; then operations
+     * (fuzz_gvcp.cpp), each command answered as the input says (a count,
+     * then per answer a kind byte: 0 = the camera's own answer). Here a
+     * bootstrap block ("flatline" with an ESC in its model name), the
+     * first URL at 0x200 naming a 22-byte description at 0x220, read by
+     * operation 5 with every command answered once; then a READREG
+     * answered by a stranger, a pending acknowledge and the camera. */
+    {
+        static uint8_t gvcp[16 + 0x240 + 64];
+        size_t g = 0;
+        gvcp[g++] = 4;
+        gvcp[g++] = 1;
+        gvcp[g++] = 5;
+        gvcp[g++] = 0x240 / 8;
+        uint8_t *memory = gvcp + g;
+        memset(memory, 0, 0x240);
+        memory[2] = 2; /* version 2.0 */
+        memcpy(memory + 0x48, "flatline", 8);
+        memcpy(memory + 0x68, "Fuzz\x1b[2J", 8);
+        memcpy(memory + 0xD8, "F0001", 5);
+        const char url[] = "Local:f.xml;220;16";
+        memcpy(memory + 0x200, url, sizeof url - 1);
+        memcpy(memory + 0x220, "<RegisterDescription/>", 22);
+        g += 0x240;
+        gvcp[g++] = 5;
+        for (int command = 0; command < 12; ++command) {
+            gvcp[g++] = 1;
+            gvcp[g++] = 0;
+        }
+        gvcp[g++] = 0; /* READREG */
+        gvcp[g++] = 0;
+        gvcp[g++] = 0;
+        gvcp[g++] = 0x0A;
+        gvcp[g++] = 0; /* of 0x0A00 */
+        gvcp[g++] = 3;
+        gvcp[g++] = 0x80;
+        gvcp[g++] = 0x08;
+        gvcp[g++] = 0x01;
+        gvcp[g++] = 0x00;
+        gvcp[g++] = 0x00;
+        put("gvcp", "bootstrap_pending_stranger", gvcp, g);
+    }
+
+    /* json: byte 0 picks the reader (0 rules, 1 leveler, 2 calibration). */
+    {
+        static const char rules[] =
+            "\0{ \"format\": \"flatline-tolerances\", \"version\": 1, \"name\": \"seed\",\n"
+            "  \"rules\": [\n"
+            "    { \"name\": \"straightedge\", \"measure\": \"straightedge_along\", "
+            "\"length_mm\": 1000,\n"
+            "      \"bands\": [ { \"thickness_mm\": [1.5, 4], \"width_mm\": [600, 2100], "
+            "\"limit\": 3.0 },\n"
+            "                 { \"thickness_mm\": [4, 12], \"width_mm\": [600, 2100], "
+            "\"limit\": 2.5 } ] },\n"
+            "    { \"name\": \"crossbow\", \"measure\": \"crossbow\",\n"
+            "      \"bands\": [ { \"thickness_mm\": [1.5, 12], \"width_mm\": [600, 2100], "
+            "\"limit\": 1.5 } ] } ] }\n";
+        put("json", "rules", rules, sizeof rules - 1);
+        static const char leveler[] =
+            "\1{ \"format\": \"flatline-leveler\", \"version\": 1,\n"
+            "  \"name\": \"seed leveler\",\n"
+            "  \"zones\": 3,\n"
+            "  \"actuators\": [\n"
+            "    { \"name\": \"entry gap\", \"unit\": \"mm\", \"min\": -3, \"max\": 3, "
+            "\"step\": 0.5 },\n"
+            "    { \"name\": \"tilt\", \"unit\": \"mm\", \"min\": -2, \"max\": 2, \"step\": 0.3 } "
+            "],\n"
+            "  \"influence\": [ [ 4.0, -6.0 ], [ -8.0, 0.0 ], [ 4.0, 6.0 ] ],\n"
+            "  \"target\": [ 0, 2, 0 ] }\n";
+        put("json", "leveler", leveler, sizeof leveler - 1);
+        check(flt_calib_create_reference(0, 2048, -1000, 2, 1001, &c));
+        text[0] = 2;
+        check(flt_calib_save_text(c, text + 1, sizeof text - 1, &n));
+        put("json", "calibration", text, n + 1);
+        flt_calib_destroy(c);
     }
 
     printf("seeds written to %s\n", g_root);

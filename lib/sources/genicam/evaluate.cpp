@@ -507,14 +507,21 @@ struct evaluator {
             fail(FLT_ERR_FORMAT, "float register '" + at(n).name + "' has Length " +
                                      std::to_string(len) + " (4 or 8)");
         const std::uint64_t w = word_of(bytes, at(n).big_endian);
+        double d;
         if (len == 4) {
             const std::uint32_t b32 = std::uint32_t(w);
             float f;
             std::memcpy(&f, &b32, 4);
-            return double(f);
+            d = double(f);
+        } else {
+            std::memcpy(&d, &w, 8);
         }
-        double d;
-        std::memcpy(&d, &w, 8);
+        // A register holding NaN or an infinity has no value a caller can
+        // use: refused, never passed on as a number.
+        if (!std::isfinite(d))
+            fail(FLT_ERR_NUMERIC, "float register '" + at(n).name + "' holds " +
+                                      (d != d ? std::string("NaN") : std::string("an infinity")) +
+                                      ", not a value");
         return d;
     }
     void write_float_register(int n, double value) {

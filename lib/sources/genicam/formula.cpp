@@ -482,8 +482,16 @@ number formula::eval(int index, mode m, const std::function<number(std::size_t)>
             const std::int64_t x = bits(a, "a shift"), n = need_int(b, "a shift's bit count");
             if (n < 0 || n > 63)
                 refuse("a shift by " + std::to_string(n) + " bits");
-            if (t.what == op::shift_left)
-                return number::of(std::int64_t(std::uint64_t(x) << n));
+            if (t.what == op::shift_left) {
+                // Integer overflow is refused: 1 << 63 does not fit a signed
+                // 64-bit value (it would wrap to its most negative one), nor
+                // does any shift that pushes bits out or into the sign.
+                const std::int64_t shifted = std::int64_t(std::uint64_t(x) << n);
+                if ((shifted >> n) != x)
+                    refuse(std::to_string(x) + " << " + std::to_string(n) +
+                           " overflows a signed 64-bit integer");
+                return number::of(shifted);
+            }
             return number::of(x >> n);  // arithmetic: sign bits come in
         }
         case op::equal:

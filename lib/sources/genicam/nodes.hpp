@@ -135,6 +135,13 @@ struct cache_entry {
     std::vector<std::uint8_t> bytes;
 };
 
+// Bounded work on any description: the largest of 32 real ones (10+
+// vendors) has about 4,000 nodes in 24,000 elements; a description beyond
+// these caps is refused (FLT_ERR_FORMAT) while it is read, before its nodes
+// cost more memory (a node is about 1.5 KB).
+constexpr std::size_t k_max_nodes = 65536;
+constexpr std::size_t k_max_elements = 1000000;
+
 struct node_map::impl {
     std::vector<node> nodes;
     std::unordered_map<std::string, int> index;

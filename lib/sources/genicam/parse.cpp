@@ -105,8 +105,24 @@ struct parser_state {
     std::vector<frame> stack;
     std::string text;
     bool saw_root = false;
+    XML_Parser parser = nullptr;
+    std::size_t elements = 0;
+    std::string refused;  // why parsing stopped early (a resource cap)
+
+    // Stops the parser (the caller reports `why`).
+    void refuse(const std::string &why) {
+        if (refused.empty()) {
+            refused = why;
+            XML_StopParser(parser, XML_FALSE);
+        }
+    }
 
     int new_node(const std::string &tag, const char *name) {
+        // One node past the cap is made (the caller needs its index) and
+        // stops the parser: a description of exactly k_max_nodes loads.
+        if (m.nodes.size() >= k_max_nodes)
+            refuse("the GenICam XML defines more than " + std::to_string(k_max_nodes) +
+                   " nodes (a real description has a few thousand)");
         node n;
         n.tag = tag;
         n.k = kind_of_tag(tag);
@@ -131,6 +147,13 @@ struct parser_state {
     static void apply_entry(enum_entry &e, const property &p);
 
     void start(const char *tag, const char **attributes) {
+        if (!refused.empty())
+            return;
+        if (++elements > k_max_elements) {
+            refuse("the GenICam XML has more than " + std::to_string(k_max_elements) +
+                   " elements (a real description has a few ten thousand)");
+            return;
+        }
         const std::string t = tag;
         const char *name = nullptr;
         for (int i = 0; attributes[i]; i += 2)
@@ -453,10 +476,14 @@ void XMLCALL on_start(void *user, const XML_Char *tag, const XML_Char **attribut
     static_cast<parser_state *>(user)->start(tag, attributes);
 }
 void XMLCALL on_end(void *user, const XML_Char * /*tag*/) {
-    static_cast<parser_state *>(user)->end();
+    parser_state &s = *static_cast<parser_state *>(user);
+    if (s.refused.empty())
+        s.end();
 }
 void XMLCALL on_text(void *user, const XML_Char *text, int length) {
     parser_state &s = *static_cast<parser_state *>(user);
+    if (!s.refused.empty())
+        return;
     // Only a property's text is kept (a description's prose is not needed
     // for anything but the property it belongs to).
     if (!s.stack.empty() && s.stack.back().type == frame::prop)
@@ -470,23 +497,29 @@ void node_map::impl::parse(const std::string &xml) {
     index.clear();
     cache.clear();
     root_attributes.clear();
-    parser_state s{*this, {}, {}};
+    parser_state s{*this, {}, {}, false, nullptr, 0, {}};
     XML_Parser p = XML_ParserCreate(nullptr);
     if (!p)
         throw std::bad_alloc();
+    s.parser = p;
     XML_SetUserData(p, &s);
     XML_SetElementHandler(p, on_start, on_end);
     XML_SetCharacterDataHandler(p, on_text);
     std::string message;
     // expat takes an int length; a description is at most 64 MiB (text.cpp).
     const XML_Status rc = XML_Parse(p, xml.data(), int(xml.size()), 1);
-    if (rc != XML_STATUS_OK)
+    if (!s.refused.empty())
+        message = s.refused;
+    else if (rc != XML_STATUS_OK)
         message = std::string("the GenICam XML is malformed: ") +
                   XML_ErrorString(XML_GetErrorCode(p)) + " at line " +
                   std::to_string(XML_GetCurrentLineNumber(p));
     XML_ParserFree(p);
-    if (!message.empty())
+    if (!message.empty()) {
+        nodes.clear();
+        index.clear();
         throw error(FLT_ERR_FORMAT, message.c_str());
+    }
     if (index.empty())
         throw error(FLT_ERR_FORMAT, "the GenICam XML defines no node");
 

@@ -11,6 +11,7 @@
 #include <cstring>
 
 #include "core/error.hpp"
+#include "sources/camera/camera.hpp"
 #include "sources/gige/protocol.hpp"
 #include "sources/source.hpp"
 
@@ -78,14 +79,21 @@ std::uint32_t address32(std::uint64_t address, std::size_t bytes, const char *wh
 }  // namespace
 
 control_channel::control_channel(endpoint camera, const control_config &config)
-    : camera_(camera), config_(config) {
+    : control_channel(camera, config, nullptr, 0) {}
+
+control_channel::control_channel(endpoint camera, const control_config &config,
+                                 std::unique_ptr<datagram_port> port, std::uint32_t host_address)
+    : camera_(camera), config_(config), socket_(std::move(port)), host_address_(host_address) {
     config_.timeout_ms = std::max(config_.timeout_ms, 1u);
     config_.command_attempts = std::max(config_.command_attempts, 1u);
-    socket_.bind(0, 0);
-    socket_.connect(camera);
-    // The address the system routes to the camera from: where the camera
-    // must send the stream.
-    host_address_ = socket_.local().address;
+    if (!socket_) {
+        auto s = std::make_unique<udp_socket>();
+        s->bind(0, 0);
+        socket_ = std::move(s);
+        // The address the system routes to the camera from: where the
+        // camera must send the stream.
+        host_address_ = route_to(camera);
+    }
     command_.reserve(k_gvcp_header + 8 + k_memory_chunk);
     answer_.resize(1500);
 }
@@ -102,13 +110,20 @@ std::uint16_t control_channel::next_id() {
     return request_id_;
 }
 
+// Camera fault point: a command the camera does not answer, answers with
+// an error, or keeps pending.
 void control_channel::transact(std::uint16_t command, const std::uint8_t *data,
                                std::size_t data_bytes, std::vector<std::uint8_t> &ack,
                                std::uint64_t address) {
-    using clock = std::chrono::steady_clock;
+    using clock = datagram_port::clock;
     std::lock_guard<std::mutex> lock(mutex_);
     command_.assign(k_gvcp_header + data_bytes, 0);
     const std::uint16_t expected = std::uint16_t(command + 1);
+    // The pending acknowledges of this command may extend its wait to this
+    // at most (set by the first one).
+    bool pending_capped = false;
+    clock::time_point pending_end;
+    unsigned pending = 0;
     for (unsigned attempt = 0; attempt < config_.command_attempts; ++attempt) {
         if (attempt > 0)
             ++retries_;
@@ -121,18 +136,24 @@ void control_channel::transact(std::uint16_t command, const std::uint8_t *data,
         put_be16(c + 6, id);
         if (data_bytes)
             std::memcpy(c + k_gvcp_header, data, data_bytes);
-        socket_.send(c, command_.size());
-        auto deadline = clock::now() + std::chrono::milliseconds(config_.timeout_ms);
-        unsigned pending = 0;
+        socket_->send_to(c, command_.size(), camera_);
+        auto deadline = socket_->now() + std::chrono::milliseconds(config_.timeout_ms);
+        if (pending_capped)
+            deadline = std::min(deadline, pending_end);
         for (;;) {
             const auto left =
-                std::chrono::duration_cast<std::chrono::milliseconds>(deadline - clock::now());
+                std::chrono::duration_cast<std::chrono::milliseconds>(deadline - socket_->now());
             if (left.count() <= 0)
                 break;
             std::size_t got = 0;
-            if (!socket_.receive(answer_.data(), answer_.size(), got, nullptr,
-                                 unsigned(left.count())))
+            endpoint from;
+            if (!socket_->receive(answer_.data(), answer_.size(), got, &from,
+                                  unsigned(left.count())))
                 continue;  // timed out (the loop ends) or an ICMP error
+            if (from.address != camera_.address || from.port != camera_.port) {
+                ++strangers_;  // only the camera speaks
+                continue;
+            }
             const std::uint8_t *a = answer_.data();
             if (got < k_gvcp_header || get_be16(a + 6) != id) {
                 ++stale_;  // an answer to an earlier attempt, or noise
@@ -147,11 +168,27 @@ void control_channel::transact(std::uint16_t command, const std::uint8_t *data,
                           "%s at 0x%llx: the camera answered %u pending acknowledges and no "
                           "result",
                           command_name(command), (unsigned long long)address, pending - 1);
+                const auto now = socket_->now();
+                if (!pending_capped) {
+                    pending_capped = true;
+                    pending_end = now + std::chrono::milliseconds(sources::k_pending_wait_cap_ms);
+                }
+                if (now >= pending_end)
+                    raise(FLT_ERR_TIMEOUT,
+                          "%s at 0x%llx: the camera kept the command pending for more than %u ms",
+                          command_name(command), (unsigned long long)address,
+                          sources::k_pending_wait_cap_ms);
+                // The time it asks for (ms), at least the timeout, at most
+                // what is left of the cap.
                 const unsigned wait_ms = get_be16(a + k_gvcp_header + 2);
                 deadline =
-                    clock::now() + std::chrono::milliseconds(std::max(wait_ms, config_.timeout_ms));
+                    std::min(now + std::chrono::milliseconds(std::max(wait_ms, config_.timeout_ms)),
+                             pending_end);
                 continue;
             }
+            if (status == k_status_busy)
+                raise(FLT_ERR_TIMEOUT, "%s at 0x%llx: the camera answered status 0x%04x (busy)",
+                      command_name(command), (unsigned long long)address, status);
             if (status != 0)
                 raise(FLT_ERR_DEVICE, "%s at 0x%llx: the camera answered status 0x%04x (%s)",
                       command_name(command), (unsigned long long)address, status,
@@ -164,6 +201,14 @@ void control_channel::transact(std::uint16_t command, const std::uint8_t *data,
             ack.assign(a + k_gvcp_header, a + k_gvcp_header + length);
             return;
         }
+        // (A wait's end is reached to the millisecond: on Windows a timed
+        // receive may return a fraction of one early, so the cap counts as
+        // reached within 1 ms.)
+        if (pending_capped && socket_->now() + std::chrono::milliseconds(1) >= pending_end)
+            raise(FLT_ERR_TIMEOUT,
+                  "%s at 0x%llx: the camera kept the command pending for more than %u ms",
+                  command_name(command), (unsigned long long)address,
+                  sources::k_pending_wait_cap_ms);
     }
     raise(FLT_ERR_TIMEOUT,
           "%s at 0x%llx: no acknowledge from the camera at %s in %u attempt(s) "
@@ -320,7 +365,7 @@ void control_channel::request_resend(std::uint16_t block_id, std::uint32_t first
     put_be32(c + 8, block_id);  // stream channel 0 (high half), block id
     put_be32(c + 12, first & 0xFFFFFFu);
     put_be32(c + 16, last & 0xFFFFFFu);
-    socket_.send(c, sizeof c);
+    socket_->send_to(c, sizeof c, camera_);
 }
 
 std::uint64_t control_channel::count(int which) const {
@@ -331,6 +376,8 @@ std::uint64_t control_channel::count(int which) const {
             return stale_.load();
         case FLT_COUNT_PENDING_ACKS:
             return pending_.load();
+        case FLT_COUNT_BAD_PACKETS:
+            return strangers_.load();
         default:
             return 0;
     }

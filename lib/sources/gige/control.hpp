@@ -8,12 +8,13 @@
 #include <atomic>
 #include <condition_variable>
 #include <cstdint>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <thread>
 #include <vector>
 
-#include "sources/features.hpp"
+#include "sources/camera/features.hpp"
 #include "sources/gige/socket.hpp"
 
 namespace flt::gige {
@@ -27,17 +28,28 @@ struct control_config {
 
 // Thread-safe: the heartbeat thread and the user's calls share it (one
 // transaction at a time).
+//
+// Only the camera speaks: a datagram on the control socket from any other
+// address or port than the camera's GVCP endpoint is counted BAD_PACKETS
+// and ignored (the socket is not connected, so that such datagrams reach
+// the client to be counted instead of vanishing in the system).
 class control_channel final : public sources::register_port {
   public:
     // A socket talking to `camera` (its GVCP port); nothing is sent yet.
     control_channel(endpoint camera, const control_config &config);
+    // The same over `port` (a scripted camera: the fuzzing harness), the
+    // host's address given.
+    control_channel(endpoint camera, const control_config &config,
+                    std::unique_ptr<datagram_port> port, std::uint32_t host_address);
     ~control_channel() override;
 
     // READMEM / WRITEMEM in chunks of at most 512 bytes; unaligned ranges
     // are widened to whole 4-byte words (a write reads the words first).
-    // Throw FLT_ERR_TIMEOUT (no acknowledge in any attempt), FLT_ERR_DEVICE
-    // (a GVCP error status, a socket failure) or FLT_ERR_FORMAT (a malformed
-    // answer), each naming the command and the address.
+    // Throw FLT_ERR_TIMEOUT (no acknowledge in any attempt, the camera
+    // busy, pending acknowledges beyond gige's limit or beyond
+    // sources::k_pending_wait_cap_ms), FLT_ERR_DEVICE (a GVCP error status,
+    // a socket failure) or FLT_ERR_FORMAT (a malformed answer), each naming
+    // the command and the address.
     void read(std::uint64_t address, std::uint8_t *out, std::size_t bytes) override;
     void write(std::uint64_t address, const std::uint8_t *in, std::size_t bytes) override;
     std::uint32_t read_register(std::uint32_t address);
@@ -76,11 +88,11 @@ class control_channel final : public sources::register_port {
     endpoint camera_;
     control_config config_;
     std::mutex mutex_;  // one transaction at a time
-    udp_socket socket_;
+    std::unique_ptr<datagram_port> socket_;
     std::uint32_t host_address_ = 0;
     std::uint16_t request_id_ = 0;
     std::vector<std::uint8_t> command_, answer_;
-    std::atomic<std::uint64_t> retries_{0}, stale_{0}, pending_{0}, heartbeats_{0};
+    std::atomic<std::uint64_t> retries_{0}, stale_{0}, pending_{0}, heartbeats_{0}, strangers_{0};
 
     std::thread heartbeat_;
     mutable std::mutex heartbeat_mutex_;

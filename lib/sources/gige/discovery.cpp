@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "core/error.hpp"
+#include "sources/camera/camera.hpp"
 #include "sources/gige/protocol.hpp"
 #include "sources/source.hpp"
 
@@ -15,12 +16,14 @@ using sources::raise;
 
 namespace {
 
-// A fixed-size bootstrap string: NUL-padded, not always NUL-terminated.
+// A fixed-size bootstrap string: NUL-padded, not always NUL-terminated;
+// the camera's words, which reach callers who print them, with control
+// bytes (a terminal's escape sequences) replaced.
 std::string field(const std::uint8_t *data, std::size_t offset, std::size_t size) {
     std::size_t n = 0;
     while (n < size && data[offset + n] != 0)
         ++n;
-    return std::string(reinterpret_cast<const char *>(data + offset), n);
+    return sources::visible_text(std::string(reinterpret_cast<const char *>(data + offset), n));
 }
 
 }  // namespace

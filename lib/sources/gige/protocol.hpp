@@ -8,24 +8,15 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "sources/camera/byte_order.hpp"
+
 namespace flt::gige {
 
 // --- big-endian access (the wire order, whatever the host order) ----------
-inline std::uint16_t get_be16(const std::uint8_t *p) {
-    return std::uint16_t((p[0] << 8) | p[1]);
-}
-inline std::uint32_t get_be32(const std::uint8_t *p) {
-    return (std::uint32_t(p[0]) << 24) | (std::uint32_t(p[1]) << 16) | (std::uint32_t(p[2]) << 8) |
-           std::uint32_t(p[3]);
-}
-inline void put_be16(std::uint8_t *p, std::uint16_t v) {
-    p[0] = std::uint8_t(v >> 8);
-    p[1] = std::uint8_t(v);
-}
-inline void put_be32(std::uint8_t *p, std::uint32_t v) {
-    for (int i = 0; i < 4; ++i)
-        p[i] = std::uint8_t(v >> (24 - 8 * i));
-}
+using sources::get_be16;
+using sources::get_be32;
+using sources::put_be16;
+using sources::put_be32;
 
 // --- GVCP -------------------------------------------------------------------
 constexpr std::uint16_t k_gvcp_port = 3956;
@@ -41,6 +32,9 @@ constexpr std::uint16_t k_writereg_cmd = 0x0082;
 constexpr std::uint16_t k_readmem_cmd = 0x0084;
 constexpr std::uint16_t k_writemem_cmd = 0x0086;
 constexpr std::uint16_t k_pending_ack = 0x0089;
+// Acknowledge statuses with a meaning of their own (status_name() in
+// control.cpp has the rest).
+constexpr std::uint16_t k_status_busy = 0x8007;
 // READMEM / WRITEMEM carry at most 536 bytes of data (a 576-byte datagram);
 // 512 keeps requests and answers clear of every limit.
 constexpr std::size_t k_memory_chunk = 512;
@@ -60,6 +54,8 @@ constexpr std::uint32_t serial = 0x00D8;             // 16
 constexpr std::uint32_t user_name = 0x00E8;          // 16
 constexpr std::uint32_t first_url = 0x0200;          // 512
 constexpr std::uint32_t stream_channels = 0x0904;
+constexpr std::uint32_t gvsp_capability = 0x092C;
+constexpr std::uint32_t gvsp_capability_scsp = 1u << 31;  // SCSPx registers exist
 constexpr std::uint32_t gvcp_capability = 0x0934;
 constexpr std::uint32_t capability_packet_resend = 1u << 2;
 constexpr std::uint32_t capability_pending_ack = 1u << 5;
@@ -75,6 +71,7 @@ constexpr std::uint32_t scps_do_not_fragment = 1u << 30;
 constexpr std::uint32_t scps_size_mask = 0xFFFF;
 constexpr std::uint32_t scpd = 0x0D08;  // inter-packet delay, ticks
 constexpr std::uint32_t scda = 0x0D18;  // host address
+constexpr std::uint32_t scsp = 0x0D1C;  // the camera's source port (low 16 bits; optional)
 }  // namespace bootstrap
 
 // --- GVSP -------------------------------------------------------------------
@@ -86,5 +83,12 @@ constexpr std::uint8_t k_format_leader = 1, k_format_trailer = 2, k_format_paylo
 constexpr std::uint16_t k_payload_image = 0x0001;
 constexpr std::size_t k_image_leader_bytes = 36;  // after the GVSP header
 constexpr std::size_t k_trailer_bytes = 8;
+// Fields of an image leader, from the end of the GVSP header.
+namespace leader {
+constexpr std::size_t payload_type = 2;  // 16 bits
+constexpr std::size_t timestamp = 4;     // 64 bits, in two words
+constexpr std::size_t pixel_format = 12, width = 16, height = 20;
+constexpr std::size_t padding_x = 32, padding_y = 34;  // 16 bits each
+}  // namespace leader
 
 }  // namespace flt::gige

@@ -184,6 +184,13 @@ std::vector<interface_address> ipv4_interfaces() {
     return out;
 }
 
+std::uint32_t route_to(endpoint peer) {
+    udp_socket probe;
+    probe.bind(0, 0);
+    probe.connect(peer);  // UDP: nothing is sent, the system picks a route
+    return probe.local().address;
+}
+
 udp_socket::udp_socket() {
     start_winsock();
     native_socket s = ::socket(AF_INET, SOCK_DGRAM, IPPROTO_UDP);

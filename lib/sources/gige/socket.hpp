@@ -5,6 +5,7 @@
 // includes a system socket header.
 #pragma once
 
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -30,13 +31,31 @@ struct interface_address {
 // The host's IPv4 interfaces that are up (loopback included). Throws
 // FLT_ERR_DEVICE when the system cannot list them.
 std::vector<interface_address> ipv4_interfaces();
+// The host address the system would send to `peer` from (a connected
+// socket's own address, the socket then closed).
+std::uint32_t route_to(endpoint peer);
+
+// What the control channel sends and receives datagrams through, and the
+// clock it measures its timeouts by: a UDP socket (udp_socket below), or a
+// scripted camera in the fuzzing harnesses, whose clock moves only when it
+// is waited on (tests/fuzz/fuzz_gvcp.cpp).
+class datagram_port {
+  public:
+    using clock = std::chrono::steady_clock;
+    virtual ~datagram_port() = default;
+    virtual void send_to(const void *data, std::size_t bytes, endpoint to) = 0;
+    // As udp_socket::receive.
+    virtual bool receive(void *buffer, std::size_t capacity, std::size_t &got, endpoint *from,
+                         unsigned timeout_ms) = 0;
+    virtual clock::time_point now() const { return clock::now(); }
+};
 
 // One UDP socket. Errors throw flt::error(FLT_ERR_DEVICE) naming the call
 // and the system's reason.
-class udp_socket {
+class udp_socket final : public datagram_port {
   public:
     udp_socket();
-    ~udp_socket();
+    ~udp_socket() override;
     udp_socket(const udp_socket &) = delete;
     udp_socket &operator=(const udp_socket &) = delete;
 
@@ -50,14 +69,14 @@ class udp_socket {
     // (Linux caps it at net.core.rmem_max and reports twice the size).
     int set_receive_buffer(int bytes);
 
-    void send_to(const void *data, std::size_t bytes, endpoint to);
+    void send_to(const void *data, std::size_t bytes, endpoint to) override;
     void send(const void *data, std::size_t bytes);  // connected sockets
     // Waits up to timeout_ms (0: only what is already there) for one
     // datagram: true with `got` bytes (a datagram longer than `capacity` is
     // cut) and its sender in `from` (may be NULL), false when none came.
     // An ICMP "port unreachable" reported on the socket counts as nothing.
     bool receive(void *buffer, std::size_t capacity, std::size_t &got, endpoint *from,
-                 unsigned timeout_ms);
+                 unsigned timeout_ms) override;
 
   private:
     std::intptr_t fd_;  // SOCKET on Windows, int elsewhere

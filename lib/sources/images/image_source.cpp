@@ -86,6 +86,7 @@ class image_source final : public source_impl {
         out.width = width_;
         out.height = height_;
         out.stride = image_.step[0];
+        out.bytes = image_.step[0] * std::size_t(image_.rows);
         out.format = flt_pixel_format(bits_);
         out.block_id = index;
         out.timestamp_ns = host_ns();

@@ -35,6 +35,7 @@ class sim_source final : public source_impl {
                                nullptr, nullptr, 0) != FLT_OK)
             raise(flt_last_error_status(), "the simulator failed: %s", flt_last_error_message());
         out.pixels = pixels_.data();
+        out.bytes = pixels_.size();
         out.width = width_;
         out.height = height_;
         out.stride = stride_;

@@ -10,6 +10,7 @@
 #include <cstring>
 
 #include "core/error.hpp"
+#include "sources/camera/camera.hpp"
 #include "sources/source.hpp"
 #include "sources/u3v/protocol.hpp"
 
@@ -49,6 +50,10 @@ void control_channel::transact(std::uint16_t command, const std::uint8_t *body,
     command_buffer_.resize(k_gencp_header + body_bytes);
     ack_buffer_.resize(std::max<std::size_t>(max_ack_, k_gencp_header + 8));
     const std::uint16_t expected_ack = std::uint16_t(command + 1);
+    // The pending acknowledges of this command may extend its wait to this
+    // at most (set by the first one; ../camera/camera.hpp).
+    bool pending_capped = false;
+    clock::time_point pending_end;
     for (unsigned attempt = 0; attempt < config_.command_attempts; ++attempt) {
         if (attempt > 0)
             acc_.add(FLT_COUNT_COMMAND_RETRIES);
@@ -75,6 +80,8 @@ void control_channel::transact(std::uint16_t command, const std::uint8_t *body,
             raise(FLT_ERR_DEVICE, "%s at 0x%llx: sending the command failed: %s",
                   command_name(command), (unsigned long long)address, usb_status_name(st));
         auto deadline = clock::now() + std::chrono::milliseconds(timeout_ms_);
+        if (pending_capped)
+            deadline = std::min(deadline, pending_end);
         unsigned pending = 0;
         for (;;) {
             // Whole milliseconds, rounded up: the first read waits the full
@@ -88,8 +95,14 @@ void control_channel::transact(std::uint16_t command, const std::uint8_t *body,
                                       n, wait);
             if (st == usb_status::no_device)
                 lost_device(link_, acc_, "control channel");
-            if (st == usb_status::timeout)
+            if (st == usb_status::timeout) {
+                if (pending_capped && clock::now() >= pending_end)
+                    raise(FLT_ERR_TIMEOUT,
+                          "%s at 0x%llx: the camera kept the command pending for more than %u ms",
+                          command_name(command), (unsigned long long)address,
+                          sources::k_pending_wait_cap_ms);
                 break;  // retry with a new request id
+            }
             if (st != usb_status::ok)
                 raise(FLT_ERR_DEVICE, "%s at 0x%llx: reading the acknowledge failed: %s",
                       command_name(command), (unsigned long long)address, usb_status_name(st));
@@ -112,8 +125,19 @@ void control_channel::transact(std::uint16_t command, const std::uint8_t *body,
                           "of %u",
                           command_name(command), (unsigned long long)address, pending,
                           config_.pending_ack_limit);
+                const auto now = clock::now();
+                if (!pending_capped) {
+                    pending_capped = true;
+                    pending_end = now + std::chrono::milliseconds(sources::k_pending_wait_cap_ms);
+                }
+                if (now >= pending_end)
+                    raise(FLT_ERR_TIMEOUT,
+                          "%s at 0x%llx: the camera kept the command pending for more than %u ms",
+                          command_name(command), (unsigned long long)address,
+                          sources::k_pending_wait_cap_ms);
                 const unsigned more = n >= k_gencp_header + 4 ? get_u16(a + 14) : 0;
-                deadline = clock::now() + std::chrono::milliseconds(std::max(more, timeout_ms_));
+                deadline = std::min(now + std::chrono::milliseconds(std::max(more, timeout_ms_)),
+                                    pending_end);
                 continue;
             }
             if (ack_id != expected_ack)

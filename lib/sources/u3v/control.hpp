@@ -7,8 +7,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "sources/accounting.hpp"
-#include "sources/features.hpp"
+#include "sources/camera/accounting.hpp"
+#include "sources/camera/features.hpp"
 #include "sources/u3v/discovery.hpp"
 
 namespace flt::u3v {

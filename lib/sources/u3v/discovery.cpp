@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "core/error.hpp"
+#include "sources/camera/camera.hpp"
 #include "sources/source.hpp"
 #include "sources/u3v/protocol.hpp"
 
@@ -82,6 +83,10 @@ std::vector<camera_entry> list_cameras(usb_backend &bus) {
             dev->string_descriptor(layout.string_index[1], e.vendor);
             dev->string_descriptor(layout.string_index[2], e.model);
             dev->string_descriptor(layout.string_index[6], e.serial);
+            // The camera's words reach callers who print them.
+            e.vendor = sources::visible_text(e.vendor);
+            e.model = sources::visible_text(e.model);
+            e.serial = sources::visible_text(e.serial);
         }
         out.push_back(std::move(e));
     }

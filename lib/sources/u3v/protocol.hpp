@@ -8,41 +8,36 @@
 #include <cstdint>
 #include <cstring>
 
+#include "sources/camera/byte_order.hpp"
+#include "sources/camera/pixel_format.hpp"
+
 namespace flt::u3v {
 
 // --- little-endian access (the wire order, whatever the host order) ------
+// (camera/byte_order.hpp, under the names this folder has always used)
 inline std::uint16_t get_u16(const std::uint8_t *p) {
-    return std::uint16_t(p[0] | (p[1] << 8));
+    return sources::get_le16(p);
 }
 inline std::uint32_t get_u32(const std::uint8_t *p) {
-    return std::uint32_t(p[0]) | (std::uint32_t(p[1]) << 8) | (std::uint32_t(p[2]) << 16) |
-           (std::uint32_t(p[3]) << 24);
+    return sources::get_le32(p);
 }
 inline std::uint64_t get_u64(const std::uint8_t *p) {
-    return std::uint64_t(get_u32(p)) | (std::uint64_t(get_u32(p + 4)) << 32);
+    return sources::get_le64(p);
 }
 inline void put_u16(std::uint8_t *p, std::uint16_t v) {
-    p[0] = std::uint8_t(v);
-    p[1] = std::uint8_t(v >> 8);
+    sources::put_le16(p, v);
 }
 inline void put_u32(std::uint8_t *p, std::uint32_t v) {
-    for (int i = 0; i < 4; ++i)
-        p[i] = std::uint8_t(v >> (8 * i));
+    sources::put_le32(p, v);
 }
 inline void put_u64(std::uint8_t *p, std::uint64_t v) {
-    for (int i = 0; i < 8; ++i)
-        p[i] = std::uint8_t(v >> (8 * i));
+    sources::put_le64(p, v);
 }
-// An unsigned little-endian integer of 1..8 bytes.
 inline std::uint64_t get_uint(const std::uint8_t *p, std::size_t length) {
-    std::uint64_t v = 0;
-    for (std::size_t i = 0; i < length && i < 8; ++i)
-        v |= std::uint64_t(p[i]) << (8 * i);
-    return v;
+    return sources::get_le(p, length);
 }
 inline void put_uint(std::uint8_t *p, std::size_t length, std::uint64_t v) {
-    for (std::size_t i = 0; i < length && i < 8; ++i)
-        p[i] = std::uint8_t(v >> (8 * i));
+    sources::put_le(p, length, v);
 }
 
 // --- USB class codes --------------------------------------------------------
@@ -182,42 +177,19 @@ constexpr std::uint32_t k_magic_leader = 0x4C563355u;   // "U3VL"
 constexpr std::uint32_t k_magic_trailer = 0x54563355u;  // "U3VT"
 constexpr std::size_t k_leader_image_size = 52;
 constexpr std::size_t k_trailer_min_size = 32;
+// The largest leader or trailer a camera may ask for in SIRM: real ones
+// are 52 .. a few hundred bytes; more would size every host transfer.
+constexpr std::uint32_t k_max_leader_trailer = 65536;
 constexpr std::uint16_t k_payload_image = 0x0001;
 constexpr std::uint16_t k_payload_image_chunk = 0x4001;  // image + chunk data
 constexpr std::uint16_t k_payload_chunk = 0x4000;
 
-// PFNC pixel formats we deliver (unpacked monochrome).
-constexpr std::uint32_t k_pfnc_mono8 = 0x01080001u;
-constexpr std::uint32_t k_pfnc_mono10 = 0x01100003u;
-constexpr std::uint32_t k_pfnc_mono12 = 0x01100005u;
-constexpr std::uint32_t k_pfnc_mono16 = 0x01100007u;
-
-// The flt_pixel_format bits of a PFNC value, 0 if unsupported.
-inline int pfnc_bits(std::uint32_t pfnc) {
-    switch (pfnc) {
-        case k_pfnc_mono8:
-            return 8;
-        case k_pfnc_mono10:
-            return 10;
-        case k_pfnc_mono12:
-            return 12;
-        case k_pfnc_mono16:
-            return 16;
-    }
-    return 0;
-}
-inline std::uint32_t pfnc_of_bits(int bits) {
-    switch (bits) {
-        case 8:
-            return k_pfnc_mono8;
-        case 10:
-            return k_pfnc_mono10;
-        case 12:
-            return k_pfnc_mono12;
-        case 16:
-            return k_pfnc_mono16;
-    }
-    return 0;
-}
+// PFNC pixel formats (camera/pixel_format.hpp: the same on every transport).
+using sources::k_pfnc_mono10;
+using sources::k_pfnc_mono12;
+using sources::k_pfnc_mono16;
+using sources::k_pfnc_mono8;
+using sources::pfnc_bits;
+using sources::pfnc_of_bits;
 
 }  // namespace flt::u3v

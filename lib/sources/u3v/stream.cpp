@@ -11,6 +11,7 @@
 #include <cstring>
 
 #include "core/error.hpp"
+#include "sources/camera/camera.hpp"
 #include "sources/u3v/control.hpp"
 #include "sources/u3v/protocol.hpp"
 
@@ -27,8 +28,7 @@ std::uint64_t align_up(std::uint64_t v, std::uint64_t a) {
 
 }  // namespace
 
-void stream_channel::prepare(std::uint64_t sirm_address, std::uint32_t width, std::uint32_t height,
-                             int bits) {
+void stream_channel::prepare(std::uint64_t sirm_address, const sources::frame_geometry &g) {
     release();
     stream_layout &l = layout_;
     std::uint8_t s[sirm::size];
@@ -43,16 +43,21 @@ void stream_channel::prepare(std::uint64_t sirm_address, std::uint32_t width, st
     if (l.payload_bytes == 0 || l.payload_bytes > (std::uint64_t(1) << 31))
         raise(FLT_ERR_FORMAT, "SIRM: required payload size %llu bytes",
               (unsigned long long)l.payload_bytes);
-    if (leader < k_leader_image_size || l.required_trailer < k_trailer_min_size)
-        raise(FLT_ERR_FORMAT, "SIRM: leader %u / trailer %u bytes are below the U3V minimum",
-              leader, l.required_trailer);
-    width_ = width;
-    height_ = height;
-    bits_ = bits;
-    image_bytes_ = std::size_t(width) * (bits > 8 ? 2 : 1) * height;
-    if (l.payload_bytes < image_bytes_)
+    // A leader or trailer is a few dozen bytes; a camera asking for more
+    // than a transfer would make every buffer of the pool that large.
+    if (leader < k_leader_image_size || l.required_trailer < k_trailer_min_size ||
+        leader > k_max_leader_trailer || l.required_trailer > k_max_leader_trailer)
+        raise(FLT_ERR_FORMAT,
+              "SIRM: leader %u / trailer %u bytes are outside the U3V range (%zu / %zu .. %u)",
+              leader, l.required_trailer, k_leader_image_size, k_trailer_min_size,
+              unsigned(k_max_leader_trailer));
+    width_ = g.width;
+    height_ = g.height;
+    bits_ = g.bits;
+    image_bytes_ = std::size_t(g.image_bytes);
+    if (l.payload_bytes < g.image_bytes)
         raise(FLT_ERR_FORMAT, "SIRM: payload %llu bytes is less than Width x Height = %u x %u",
-              (unsigned long long)l.payload_bytes, width, height);
+              (unsigned long long)l.payload_bytes, g.width, g.height);
     // The transfer size: a multiple of the alignment, at most the option.
     const std::uint64_t cap = std::max<std::uint64_t>(l.alignment, config_.max_transfer_bytes /
                                                                        l.alignment * l.alignment);
@@ -78,10 +83,21 @@ void stream_channel::prepare(std::uint64_t sirm_address, std::uint32_t width, st
     }
 
     // Host buffers: one size fits every transfer (a leader, a payload
-    // transfer, the final one or a trailer), in one block.
+    // transfer, the final one or a trailer), in one block; with the frame,
+    // bounded in total before anything is allocated.
     slot_bytes_ = std::max({std::size_t(l.transfer_bytes), std::size_t(l.final1_bytes),
                             std::size_t(l.max_leader), std::size_t(l.max_trailer)});
     const std::size_t slots = std::max<std::size_t>(2, config_.transfers);
+    const std::uint64_t pool_bytes = std::uint64_t(slots) * slot_bytes_;
+    const std::uint64_t frame_bytes = l.payload_bytes + l.alignment;
+    const std::uint64_t stream_bytes = pool_bytes + frame_bytes;
+    if (stream_bytes > sources::k_max_buffer_bytes)
+        raise(FLT_ERR_DEVICE,
+              "the stream would take %llu bytes (a %llu-byte frame and %zu transfers of %zu), "
+              "more than the %llu a camera source may (FLT_SOURCE_MAX_BUFFER_BYTES); lower "
+              "Width or Height, u3v_transfers or u3v_transfer_size",
+              (unsigned long long)stream_bytes, (unsigned long long)frame_bytes, slots, slot_bytes_,
+              (unsigned long long)sources::k_max_buffer_bytes);
     pool_.assign(slots * slot_bytes_, 0);
     slot_buffers_.resize(slots);
     for (std::size_t i = 0; i < slots; ++i)
@@ -125,6 +141,8 @@ void stream_channel::release() noexcept {
         link_.dev->clear_halt(link_.ep_stream);
 }
 
+// Camera fault point: a frame of the camera is dropped (the reason goes to
+// flt_source_stream_error()).
 void stream_channel::drop(flt_source_counter reason, const std::string &why) {
     acc_.drop(reason, why);
     frame_open_ = false;
@@ -207,7 +225,9 @@ bool stream_channel::on_leader(const std::uint8_t *p, std::size_t n) {
     else if (bits == 0)
         std::snprintf(text, sizeof text, "block %llu: pixel format 0x%08x is not Mono8/10/12/16",
                       (unsigned long long)block, pfnc);
-    else if (w == 0 || h == 0 || (std::uint64_t(w) * (bits > 8 ? 2 : 1) + pad) * h > payload)
+    else if (w == 0 || h == 0 || w > sources::k_max_frame_side || h > sources::k_max_frame_side ||
+             !sources::image_size_fits(std::uint64_t(w) * sources::bytes_per_pixel(bits), pad, h, 0,
+                                       payload))
         std::snprintf(text, sizeof text,
                       "block %llu: a %u x %u image does not fit the %llu "
                       "payload bytes the stream was set up for",
@@ -226,7 +246,7 @@ bool stream_channel::on_leader(const std::uint8_t *p, std::size_t n) {
     height_ = h;
     bits_ = bits;
     padding_x_ = pad;
-    image_bytes_ = (std::size_t(w) * (bits > 8 ? 2 : 1) + pad) * h;
+    image_bytes_ = (std::size_t(w) * sources::bytes_per_pixel(bits) + pad) * h;  // <= payload
     received_ = 0;
     return true;
 }
@@ -275,6 +295,7 @@ bool stream_channel::on_trailer(const std::uint8_t *p, std::size_t n, raw_frame 
     }
     frame_open_ = false;
     out.pixels = frame_.data();
+    out.bytes = frame_.size();
     out.width = width_;
     out.height = height_;
     out.stride = std::size_t(width_) * (bits_ > 8 ? 2 : 1) + padding_x_;

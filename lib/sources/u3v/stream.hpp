@@ -10,8 +10,9 @@
 #include <string>
 #include <vector>
 
-#include "sources/accounting.hpp"
-#include "sources/features.hpp"
+#include "sources/camera/accounting.hpp"
+#include "sources/camera/features.hpp"
+#include "sources/camera/pixel_format.hpp"
 #include "sources/source.hpp"
 #include "sources/u3v/discovery.hpp"
 
@@ -38,11 +39,14 @@ class stream_channel {
                    const stream_config &config)
         : link_(link), control_(control), acc_(acc), config_(config) {}
 
-    // Reads SIRM at `sirm_address`, writes the transfer set-up for a
-    // width x height image of `bits` per pixel, allocates the host buffers,
-    // clears a halt of the stream endpoint and submits the transfers. The
-    // stream interface stays disabled (SI control is the caller's).
-    void prepare(std::uint64_t sirm_address, std::uint32_t width, std::uint32_t height, int bits);
+    // Reads SIRM at `sirm_address`, writes the transfer set-up for images
+    // of `g` (checked against the frame bounds by the camera base),
+    // allocates the host buffers (the frame and the transfer pool, at most
+    // k_max_buffer_bytes together: FLT_ERR_DEVICE naming both before
+    // anything is allocated), clears a halt of the stream endpoint and
+    // submits the transfers. The stream interface stays disabled (SI
+    // control is the caller's).
+    void prepare(std::uint64_t sirm_address, const sources::frame_geometry &g);
     // Cancels every transfer in flight and clears the endpoint's halt
     // (unless the device is gone). Safe to call when nothing is prepared.
     void release() noexcept;

@@ -4,7 +4,7 @@
 // address); the GenICam engine (lib/sources/genicam/) behind the
 // feature_engine interface; and the layer that puts the user's mapped
 // registers in front of the engine.
-#include "sources/features.hpp"
+#include "sources/camera/features.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -15,16 +15,9 @@
 #include "sources/source.hpp"
 #include "sources/genicam/node_map.hpp"
 #include "sources/genicam/text.hpp"
-#include "sources/u3v/protocol.hpp"
+#include "sources/camera/byte_order.hpp"
 
 namespace flt::sources {
-
-using u3v::get_u32;
-using u3v::get_u64;
-using u3v::get_uint;
-using u3v::put_u32;
-using u3v::put_u64;
-using u3v::put_uint;
 
 namespace {
 
@@ -33,7 +26,7 @@ std::uint64_t read_bits(register_port &port, const register_view &r) {
     port.read(r.address, b, r.length);
     if (!r.little_endian)
         std::reverse(b, b + r.length);
-    std::uint64_t raw = get_uint(b, r.length);
+    std::uint64_t raw = get_le(b, r.length);
     const int width = r.msb - r.lsb + 1;
     raw >>= r.lsb;
     if (width < 64)
@@ -51,13 +44,13 @@ void write_bits(register_port &port, const register_view &r, std::uint64_t raw) 
         port.read(r.address, b, r.length);
         if (!r.little_endian)
             std::reverse(b, b + r.length);
-        word = get_uint(b, r.length);
+        word = get_le(b, r.length);
         const std::uint64_t mask = (width < 64 ? (std::uint64_t(1) << width) - 1 : ~0ull) << r.lsb;
         word = (word & ~mask) | ((raw << r.lsb) & mask);
     } else {
         word = raw;
     }
-    put_uint(b, r.length, word);
+    put_le(b, r.length, word);
     if (!r.little_endian)
         std::reverse(b, b + r.length);
     port.write(r.address, b, r.length);
@@ -66,8 +59,13 @@ void write_bits(register_port &port, const register_view &r, std::uint64_t raw) 
 }  // namespace
 
 std::int64_t read_int(register_port &port, const register_view &r, const std::string &feature) {
-    if (r.is_float)
-        return std::int64_t(std::llround(read_float(port, r, feature)));
+    if (r.is_float) {
+        const double d = read_float(port, r, feature);
+        if (std::fabs(d) >= 9.2e18)
+            raise(FLT_ERR_NUMERIC, "feature '%s': %g does not fit a 64-bit integer",
+                  feature.c_str(), d);
+        return std::int64_t(std::llround(d));
+    }
     std::uint64_t raw = read_bits(port, r);
     const int width = r.msb - r.lsb + 1;
     if (r.is_signed && width < 64 && (raw >> (width - 1)) & 1)
@@ -99,15 +97,21 @@ double read_float(register_port &port, const register_view &r, const std::string
     port.read(r.address, b, r.length);
     if (!r.little_endian)
         std::reverse(b, b + r.length);
+    double d;
     if (r.length == 4) {
         float f;
-        const std::uint32_t bits = get_u32(b);
+        const std::uint32_t bits = get_le32(b);
         std::memcpy(&f, &bits, 4);
-        return f;
+        d = f;
+    } else {
+        const std::uint64_t bits = get_le64(b);
+        std::memcpy(&d, &bits, 8);
     }
-    double d;
-    const std::uint64_t bits = get_u64(b);
-    std::memcpy(&d, &bits, 8);
+    // NaN or an infinity in the camera's register is no value: refused,
+    // never passed on as a number.
+    if (!std::isfinite(d))
+        raise(FLT_ERR_NUMERIC, "feature '%s': its register at 0x%llx holds %s, not a value",
+              feature.c_str(), (unsigned long long)r.address, d != d ? "NaN" : "an infinity");
     return d;
 }
 
@@ -132,11 +136,11 @@ void write_float(register_port &port, const register_view &r, const std::string 
         const float f = float(value);
         std::uint32_t bits;
         std::memcpy(&bits, &f, 4);
-        put_u32(b, bits);
+        put_le32(b, bits);
     } else {
         std::uint64_t bits;
         std::memcpy(&bits, &value, 8);
-        put_u64(b, bits);
+        put_le64(b, bits);
     }
     if (!r.little_endian)
         std::reverse(b, b + r.length);
