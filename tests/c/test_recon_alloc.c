@@ -92,6 +92,80 @@ static void stream_and_count(const flt_options *options) {
     test_sheet_free(t);
 }
 
+/* flt_reconstruct keeps its working memory for the next call of the same
+ * shape: the reference's production sheet (2000 rows x 1150 fibers),
+ * reconstructed again and again, allocates nothing after the first call,
+ * in every mode, with flags out or not, with the extractor's flags in, and
+ * after a sheet of another shape in between. Control: the first call of
+ * each allocates. */
+static void batch_allocates_nothing_after_the_first_call(void **state) {
+    (void)state;
+    const size_t R = 2000, K = 1150;
+    test_sheet *t = test_sheet_make(R, K, 0.0, 3.0, 0.0, 2.0, 100.0, 3);
+    test_sheet_add_noise(t, 2.5, 0.05, 4);
+    double *z = malloc(R * K * sizeof(double));
+    uint8_t *flags = malloc(R * K), *in_flags = calloc(R * K, 1);
+    assert_non_null(z);
+    assert_non_null(flags);
+    assert_non_null(in_flags);
+    for (size_t r = 0; r < R; ++r)
+        in_flags[r * K + 7] = FLT_FLAG_OFF_STRIP;
+    test_sheet *other = test_sheet_make(300, 20, 0.0, 3.0, 0.0, 10.0, 100.0, 5);
+    double *z_other = malloc(300 * 20 * sizeof(double));
+    for (int mode = 0; mode < 4; ++mode) {
+        /* 0 plain, 1 rigid_motion + robust, 2 plain without flags out,
+         * 3 plain with the extractor's flags in. */
+        flt_options *o = NULL;
+        assert_int_equal(flt_options_create(&o), FLT_OK);
+        assert_int_equal(flt_options_set(o, FLT_OPT_RIGID_MOTION, mode == 1), FLT_OK);
+        assert_int_equal(flt_options_set(o, FLT_OPT_ROBUST, mode == 1 ? FLT_ROBUST_HUBER : 0),
+                         FLT_OK);
+        uint8_t *out_flags = mode == 2 ? NULL : flags;
+#define CALL()                                                                                     \
+  (mode == 3 ? flt_reconstruct_flagged(o, R, K, t->s, t->height, t->slope, in_flags, z, out_flags) \
+             : flt_reconstruct(o, R, K, t->s, t->height, t->slope, NULL, z, out_flags))
+        g_allocations = 0;
+        g_counting = 1;
+        flt_status first = CALL();
+        g_counting = 0;
+        assert_int_equal(first, FLT_OK);
+        const size_t first_allocations = g_allocations;
+        /* The control: the counter sees them (mode 3 solves in mode 0's
+         * workspace, and adds its mask of the flags in). */
+        assert_true(first_allocations >= (mode == 3 ? 1u : 5u));
+        g_allocations = 0;
+        g_counting = 1;
+        flt_status again = CALL();
+        flt_status between = flt_reconstruct(NULL, 300, 20, other->s, other->height, other->slope,
+                                             NULL, z_other, NULL);
+        flt_status third = CALL();
+        g_counting = 0;
+        const size_t later = g_allocations;
+        g_allocations = 0;
+        g_counting = 1;
+        flt_status fourth = CALL();
+        g_counting = 0;
+        assert_int_equal(again, FLT_OK);
+        assert_int_equal(between, FLT_OK);
+        assert_int_equal(third, FLT_OK);
+        assert_int_equal(fourth, FLT_OK);
+        print_message("mode %d: first call %zu allocations; then %zu (with a sheet of another "
+                      "shape's first call between), then %zu\n",
+                      mode, first_allocations, later, g_allocations);
+        /* The sheet between is new: its own workspace's allocations only. */
+        assert_true(later < first_allocations + 20);
+        assert_int_equal(g_allocations, 0);
+#undef CALL
+        flt_options_destroy(o);
+    }
+    free(z);
+    free(flags);
+    free(in_flags);
+    free(z_other);
+    test_sheet_free(other);
+    test_sheet_free(t);
+}
+
 /* The counter must be in place, or every count below would be 0. */
 static int install_counter(void **state) {
     (void)state;
@@ -102,6 +176,7 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(streaming_allocates_nothing_after_create),
         cmocka_unit_test(robust_rigid_streaming_allocates_nothing_after_create),
+        cmocka_unit_test(batch_allocates_nothing_after_the_first_call),
     };
     return cmocka_run_group_tests(tests, install_counter, NULL);
 }

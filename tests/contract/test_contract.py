@@ -290,7 +290,9 @@ def recon_bytes(fibers, o):
     ("Memory"), to keep the suite's draws within a budget."""
     laser = o.get("laser_spacing", 100.0)
     knot = o.get("knot_spacing", 0.0) or laser
-    lag = o.get("lag_knots", 64.0)
+    lag = o.get("lag_knots", -1.0)
+    if lag < 0:  # from latency_mm: at most that many knots, twice at the head
+        lag = 2 * o.get("latency_mm", 2000.0) / knot
     rows = o.get("row_capacity", 8192.0)
     robust = bool(o.get("robust", 0.0))
     passes = o.get("robust_iterations", 2.0) if robust else 0.0
