@@ -25,23 +25,34 @@ constexpr std::size_t k_chunk_fibers = 64;
 #endif
 
 // A row as the window keeps it: the value where it is a sample (finite, at
-// most k_max_sample, valid when a mask is given), NaN elsewhere. Returns
-// the fibers with an invalid height or slope.
-FLT_WINDOW_KERNEL std::size_t store_row(std::size_t K, const double *__restrict h,
-                                        const double *__restrict g,
-                                        const std::uint8_t *__restrict valid,
-                                        double *__restrict out_h, double *__restrict out_g) {
+// most k_max_sample, valid when a mask is given), NaN elsewhere, in double
+// (out_h, out_g: this row's plain sums) and in float (keep_h, keep_g: the
+// window's store, read again when the row is judged; robust_window says
+// why float).
+FLT_WINDOW_KERNEL void store_row(std::size_t K, const double *__restrict h,
+                                 const double *__restrict g, const std::uint8_t *__restrict valid,
+                                 double *__restrict out_h, double *__restrict out_g,
+                                 float *__restrict keep_h, float *__restrict keep_g) {
     const double big = k_max_sample;
-    double bad = 0.0;
     for (std::size_t k = 0; k < K; ++k) {
         const double ok = valid == nullptr || valid[k] != 0 ? 1.0 : 0.0;
         const bool hok = ok != 0.0 && std::fabs(h[k]) <= big;
         const bool gok = ok != 0.0 && std::fabs(g[k]) <= big;
         out_h[k] = hok ? h[k] : k_nan;
         out_g[k] = gok ? g[k] : k_nan;
-        bad += hok && gok ? 0.0 : 1.0;
+        keep_h[k] = float(out_h[k]);
+        keep_g[k] = float(out_g[k]);
     }
-    return std::size_t(bad);
+}
+
+// A kept row back in double.
+FLT_WINDOW_KERNEL void widen_row(std::size_t K, const float *__restrict h,
+                                 const float *__restrict g, double *__restrict out_h,
+                                 double *__restrict out_g) {
+    for (std::size_t k = 0; k < K; ++k) {
+        out_h[k] = double(h[k]);
+        out_g[k] = double(g[k]);
+    }
 }
 
 // What a sample adds to the right-hand sides (value times its multiplier,
@@ -102,6 +113,62 @@ FLT_WINDOW_KERNEL void add_prediction(std::size_t K, double a, double b, const d
         pred_h[k] += a * x[k];
         pred_g[k] += b * x[k];
     }
+}
+
+// The default geometry (knots every laser spacing: a row spans three knots,
+// six unknowns) in one pass over the fibers each, where the general loops
+// above take one pass per unknown:
+// the two lasers' view of the solution from the six unknowns' states x0..x5,
+FLT_WINDOW_KERNEL void predict6(std::size_t K, const double *a, const double *b,
+                                const double *__restrict x0, const double *__restrict x1,
+                                const double *__restrict x2, const double *__restrict x3,
+                                const double *__restrict x4, const double *__restrict x5,
+                                double *__restrict pred_h, double *__restrict pred_g) {
+    const double a0 = a[0], a1 = a[1], a2 = a[2], a3 = a[3], a4 = a[4], a5 = a[5];
+    const double b0 = b[0], b1 = b[1], b2 = b[2], b3 = b[3], b4 = b[4], b5 = b[5];
+    for (std::size_t k = 0; k < K; ++k) {
+        pred_h[k] = a0 * x0[k] + a1 * x1[k] + a2 * x2[k] + a3 * x3[k] + a4 * x4[k] + a5 * x5[k];
+        pred_g[k] = b0 * x0[k] + b1 * x1[k] + b2 * x2[k] + b3 * x3[k] + b4 * x4[k] + b5 * x5[k];
+    }
+}
+
+// and a sample's share of the block's right-hand sides (weigh_values and
+// add_rhs for the six unknowns at once). Returns the fibers that take any
+// weight back (their complements in dmh, dmg).
+FLT_WINDOW_KERNEL std::size_t accumulate6(std::size_t K, double D, const double *a, const double *b,
+                                          const double *__restrict yh, const double *__restrict yg,
+                                          const double *__restrict mh, const double *__restrict mg,
+                                          double *rh_out, double *rg_out, double *__restrict dmh,
+                                          double *__restrict dmg) {
+    double *__restrict rh0 = rh_out, *__restrict rh1 = rh_out + K, *__restrict rh2 = rh_out + 2 * K;
+    double *__restrict rh3 = rh_out + 3 * K, *__restrict rh4 = rh_out + 4 * K;
+    double *__restrict rh5 = rh_out + 5 * K;
+    double *__restrict rg0 = rg_out, *__restrict rg1 = rg_out + K, *__restrict rg2 = rg_out + 2 * K;
+    double *__restrict rg3 = rg_out + 3 * K, *__restrict rg4 = rg_out + 4 * K;
+    double *__restrict rg5 = rg_out + 5 * K;
+    const double a0 = a[0], a1 = a[1], a2 = a[2], a3 = a[3], a4 = a[4], a5 = a[5];
+    const double b0 = b[0], b1 = b[1], b2 = b[2], b3 = b[3], b4 = b[4], b5 = b[5];
+    double affected = 0.0;
+    for (std::size_t k = 0; k < K; ++k) {
+        const double hv = mh[k] != 0.0 ? mh[k] * yh[k] : 0.0;
+        const double gv = mg[k] != 0.0 ? mg[k] * (D * yg[k]) : 0.0;
+        rh0[k] += a0 * hv;
+        rh1[k] += a1 * hv;
+        rh2[k] += a2 * hv;
+        rh3[k] += a3 * hv;
+        rh4[k] += a4 * hv;
+        rh5[k] += a5 * hv;
+        rg0[k] += b0 * gv;
+        rg1[k] += b1 * gv;
+        rg2[k] += b2 * gv;
+        rg3[k] += b3 * gv;
+        rg4[k] += b4 * gv;
+        rg5[k] += b5 * gv;
+        dmh[k] = 1.0 - mh[k];
+        dmg[k] = 1.0 - mg[k];
+        affected += mh[k] * mg[k] != 1.0 ? 1.0 : 0.0;
+    }
+    return std::size_t(affected);
 }
 
 inline void sub_product(std::size_t C, double *__restrict out, const double *__restrict a,
@@ -257,9 +324,9 @@ robust_window::robust_window(std::size_t fibers, const recon_params &params,
     dg_.assign(ring_ * ntri_ * K_, 0.0);
     x_.assign(ring_ * 2 * K_, 0.0);
     row_cap_ = params.row_capacity;
-    row_s_.reset(new double[row_cap_]);
-    row_h_.reset(new double[row_cap_ * K_]);
-    row_g_.reset(new double[row_cap_ * K_]);
+    row_s_.assign(row_cap_, 0.0);
+    row_h_.assign(row_cap_ * K_, 0.0f);
+    row_g_.assign(row_cap_ * K_, 0.0f);
     chunk_ = std::min(K_, k_chunk_fibers);
     const std::size_t unknowns = 2 * std::size_t(max_knots_), P = std::size_t(bw_) + 1;
     bh_.assign(unknowns * P, 0.0);
@@ -268,9 +335,8 @@ robust_window::robust_window(std::size_t fibers, const recon_params &params,
     brhs_.assign(unknowns * chunk_, 0.0);
     floor_.assign(chunk_, 0.0);
     for (auto *v : {&pred_h_, &pred_g_, &out_h_, &out_g_, &mult_h_, &mult_g_, &sink_sum_,
-                    &sink_count_, &down_h_, &down_g_})
+                    &sink_count_, &down_h_, &down_g_, &row_dh_, &row_dg_})
         v->assign(K_, 0.0);
-    ones_.assign(K_, 1.0);
     wh_.assign(K_, frozen_.default_height_weight());
     wg_.assign(K_, frozen_.default_slope_weight());
 }
@@ -330,8 +396,8 @@ void robust_window::push_row(double s, const double *height, const double *slope
         throw error(FLT_ERR_INTERNAL, "robust window: row store overflow");
     const std::size_t r = row_tail_ % row_cap_;
     row_s_[r] = s;
-    double *h = row_h_.get() + r * K_, *g = row_g_.get() + r * K_;
-    store_row(K_, height, slope, valid, h, g);
+    double *h = row_dh_.data(), *g = row_dg_.data();
+    store_row(K_, height, slope, valid, h, g, row_h_.data() + r * K_, row_g_.data() + r * K_);
     ++row_tail_;
     block &bl = block_at(i1);
     ++bl.rows;
@@ -358,10 +424,15 @@ void robust_window::add_row(long b, std::size_t /*r*/, const double *ch, const d
                             const double *mg) {
     double *hv = pred_h_.data(), *gv = pred_g_.data();  // free after the prediction
     double *dmh = down_h_.data(), *dmg = down_g_.data();
-    const std::size_t affected = weigh_values(K_, D_, yh, yg, mh, mg, hv, gv, dmh, dmg);
     double *bh = rh(b), *bg = rg(b);
-    for (int u = 0; u < n_; ++u)
-        add_rhs(K_, ch[u], cg[u], hv, gv, bh + std::size_t(u) * K_, bg + std::size_t(u) * K_);
+    std::size_t affected = 0;
+    if (n_ == 6) {
+        affected = accumulate6(K_, D_, ch, cg, yh, yg, mh, mg, bh, bg, dmh, dmg);
+    } else {
+        affected = weigh_values(K_, D_, yh, yg, mh, mg, hv, gv, dmh, dmg);
+        for (int u = 0; u < n_; ++u)
+            add_rhs(K_, ch[u], cg[u], hv, gv, bh + std::size_t(u) * K_, bg + std::size_t(u) * K_);
+    }
     if (affected == 0)
         return;
     block &bl = block_at(b);
@@ -471,14 +542,21 @@ void robust_window::judge(long b, bool feed) {
     for (std::size_t i = 0; i < bl.rows; ++i) {
         const std::size_t r = (bl.first_row + i) % row_cap_;
         const double s = row_s_[r];
-        const double *h = row_h_.get() + r * K_, *g = row_g_.get() + r * K_;
+        const double *h = row_dh_.data(), *g = row_dg_.data();
+        widen_row(K_, row_h_.data() + r * K_, row_g_.data() + r * K_, row_dh_.data(),
+                  row_dg_.data());
         frozen_.coefficients(s, b, ch, cg);
         // What the two lasers would see on the current solution.
-        std::fill(pred_h_.begin(), pred_h_.end(), 0.0);
-        std::fill(pred_g_.begin(), pred_g_.end(), 0.0);
-        for (int u = 0; u < n_; ++u)
-            if (ch[u] != 0.0 || cg[u] != 0.0)
-                add_prediction(K_, ch[u], cg[u], xs[u], pred_h_.data(), pred_g_.data());
+        if (n_ == 6) {
+            predict6(K_, ch, cg, xs[0], xs[1], xs[2], xs[3], xs[4], xs[5], pred_h_.data(),
+                     pred_g_.data());
+        } else {
+            std::fill(pred_h_.begin(), pred_h_.end(), 0.0);
+            std::fill(pred_g_.begin(), pred_g_.end(), 0.0);
+            for (int u = 0; u < n_; ++u)
+                if (ch[u] != 0.0 || cg[u] != 0.0)
+                    add_prediction(K_, ch[u], cg[u], xs[u], pred_h_.data(), pred_g_.data());
+        }
         robust_weigh_row(robust_.kind, K_, D_, h, g, nullptr, nullptr, pred_h_.data(),
                          pred_g_.data(), hs_, gs_, feed, sink_sum_.data(), sink_count_.data(),
                          out_h_.data(), out_g_.data(), mult_h_.data(), mult_g_.data());
