@@ -234,7 +234,7 @@ typedef enum flt_option {
     /** "row_capacity": rows the streaming reconstructor can hold, pending
      * and finished-but-not-pulled together (integer). It costs 9 bytes per
      * row and fiber, and robust mode keeps the raw rows of its window in as
-     * many slots again (16 bytes per row and fiber). Default 8192: enough
+     * many slots again (8 bytes per row and fiber). Default 8192: enough
      * for the default latency (3.6 m at a strip's head) at rows every
      * 0.5 mm. A push that does not fit while no row is finished says so. */
     FLT_OPT_ROW_CAPACITY = 107,
