@@ -109,9 +109,11 @@ class robust_window {
     void add_row(long b, std::size_t r, const double *ch, const double *cg, const double *yh,
                  const double *yg, const double *mh, const double *mg);
     void freeze_upto(long last);  // blocks up to last leave the window
-    void solve();                 // the window, every fiber
+    // The window, every fiber; provisional: into peek_x_ (peek), leaving
+    // the solution (x_, solved_*) as it was.
+    void solve(bool provisional = false);
     void solve_chunk(long w0, int knots, std::size_t k0, std::size_t k1, const double *W,
-                     const double *R0);
+                     const double *R0, double *out);
     void update_weights();  // from the scales
 
     std::size_t K_;
@@ -151,6 +153,7 @@ class robust_window {
     std::vector<float> row_h_, row_g_;
     std::vector<double> x_;  // knot states of the last solve, [ring][2][K]
     long solved_w0_ = 0, solved_last_ = -1;
+    std::vector<double> peek_x_;  // peek's provisional solve, [knot - w0][2][K]
 
     // Scratch of the solve: shared bands [2 knots][bw + 1], a chunk's band
     // [2 knots][bw + 1][chunk] and right-hand side [2 knots][chunk].

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 /* "No allocation in per-row hot paths": counts every malloc/calloc/realloc
  * made by libflatline (and the C++ runtime under it) while a reconstructor
- * streams rows, finishes sheets and resets. The counting allocator
+ * streams rows, peeks at its pending rows, finishes sheets and resets. The counting allocator
  * (alloc_count.h) sees the shared library's calls too. Not built under
  * sanitizers, which own malloc. */
 #include <setjmp.h>
@@ -46,7 +46,8 @@ static void stream_and_count(const flt_options *options) {
     for (size_t i = 7; i < t->rows * K; i += 13)
         valid[i] = 0;
     double *s_out = malloc(8192 * sizeof(double)), *z_out = malloc(8192 * K * sizeof(double));
-    uint8_t *flags = malloc(8192 * K);
+    double *s_peek = malloc(8192 * sizeof(double)), *z_peek = malloc(8192 * K * sizeof(double));
+    uint8_t *flags = malloc(8192 * K), *flags_peek = malloc(8192 * K);
     flt_recon *rc = NULL;
     /* Control: the counter does see the library's allocations. */
     g_allocations = 0;
@@ -57,7 +58,7 @@ static void stream_and_count(const flt_options *options) {
 
     g_allocations = 0;
     g_counting = 1;
-    size_t pulled = 0, n = 0;
+    size_t pulled = 0, n = 0, peeks = 0, peeked = 0;
     for (size_t r = 0; r < t->rows; ++r) {
         const uint8_t *v = r < 3000 ? valid + r * K : NULL;
         if (flt_recon_push(rc, 1, K, &t->s[r], t->height + r * K, t->slope + r * K, v) != FLT_OK)
@@ -65,6 +66,15 @@ static void stream_and_count(const flt_options *options) {
         if (flt_recon_pull(rc, 8192, K, s_out, z_out, flags, &n) != FLT_OK)
             break;
         pulled += n;
+        if (r % 97 == 0) { /* a provisional look, as at a sheet's cut */
+            size_t pending = 0;
+            if (flt_recon_pending(rc, &pending) != FLT_OK ||
+                flt_recon_peek(rc, 8192, K, s_peek, z_peek, flags_peek, &n) != FLT_OK ||
+                n != pending)
+                break;
+            ++peeks;
+            peeked += n;
+        }
         if (r == 2999 || r == 4999) {
             if (flt_recon_end_sheet(rc) != FLT_OK)
                 break;
@@ -81,14 +91,20 @@ static void stream_and_count(const flt_options *options) {
     assert_int_equal(reset, FLT_OK);
     assert_int_equal(again, FLT_OK);
 
-    print_message("%zu rows pushed and pulled, %zu allocations\n", pulled, g_allocations);
+    print_message("%zu rows pushed and pulled, %zu peeks at %zu pending rows, %zu allocations\n",
+                  pulled, peeks, peeked, g_allocations);
     assert_int_equal(pulled, t->rows);
+    assert_int_equal(peeks, (t->rows + 96) / 97); /* every peek worked */
+    assert_true(peeked > 0);
     assert_int_equal(g_allocations, 0);
     flt_recon_destroy(rc);
     free(valid);
     free(s_out);
     free(z_out);
     free(flags);
+    free(s_peek);
+    free(z_peek);
+    free(flags_peek);
     test_sheet_free(t);
 }
 
