@@ -261,6 +261,15 @@ FLT_ROW_KERNEL void evaluate_row(std::size_t K, const double *__restrict w,
         z[k] = w[0] * z0[k] + w[1] * m0[k] + w[2] * z1[k] + w[3] * m1[k];
 }
 
+// The same, plus a constant c (the bits of evaluate_row's value + c).
+FLT_ROW_KERNEL void evaluate_row_plus(std::size_t K, const double *__restrict w,
+                                      const double *__restrict z0, const double *__restrict m0,
+                                      const double *__restrict z1, const double *__restrict m1,
+                                      double c, double *__restrict z) {
+    for (std::size_t k = 0; k < K; ++k)
+        z[k] = (w[0] * z0[k] + w[1] * m0[k] + w[2] * z1[k] + w[3] * m1[k]) + c;
+}
+
 // Cubic Hermite basis at t in [0, 1] of a knot interval: the weights of
 // (z_i, m_i, z_i+1, m_i+1), m = L z'.
 void hermite_weights(double t, double w[4]) {
@@ -772,7 +781,10 @@ void recon_engine::finish_rows() {
         basis(s, i, w);
         const double *a = hist_at(i), *b = hist_at(i + 1);
         double *z = ring_z_ + r * K_;
-        evaluate_row(K_, w, a, a + K_, b, b + K_, z);
+        if (output_offset_ != 0.0)
+            evaluate_row_plus(K_, w, a, a + K_, b, b + K_, output_offset_, z);
+        else
+            evaluate_row(K_, w, a, a + K_, b, b + K_, z);
         std::uint8_t *fl = ring_flags_ + r * K_;
         if (ring_any_invalid_[r] || no_height_fibers_ > 0) {
             for (std::size_t k = 0; k < K_; ++k) {
@@ -1217,7 +1229,10 @@ std::size_t recon_engine::peek(std::size_t offset, std::size_t max_rows, double 
         double w[4];
         basis(s, iv, w);
         const double *a = hist_at(iv), *b = hist_at(iv + 1);
-        evaluate_row(K_, w, a, a + K_, b, b + K_, z);
+        if (output_offset_ != 0.0)
+            evaluate_row_plus(K_, w, a, a + K_, b, b + K_, output_offset_, z);
+        else
+            evaluate_row(K_, w, a, a + K_, b, b + K_, z);
         // The flags as finish_rows() would set them now.
         const std::uint8_t *own = ring_flags_ + r * K_;
         for (std::size_t k = 0; k < K_; ++k) {

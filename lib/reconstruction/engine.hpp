@@ -195,6 +195,10 @@ class recon_engine {
     // z_store / flags_store; nullptr flags_store: the engine's own, which
     // it must have been constructed with). Resets the engine.
     void rebind_rows(double *z_store, std::uint8_t *flags_store);
+    // A constant (mm) added to the heights of every row finished from now
+    // on (0 by default): batch adds the sheet's level while it writes the
+    // rows, instead of in a pass of its own over the whole output.
+    void set_output_offset(double c) { output_offset_ = c; }
 
     // ---- provisional values (flt_recon_peek) ----
     // Rows held from the oldest not pulled, skipping `offset` of them: up to
@@ -392,7 +396,8 @@ class recon_engine {
     std::uint8_t *ring_flags_;
     std::size_t head_ = 0, ready_ = 0, tail_ = 0;  // monotonic counters
     bool keep_rows_ = true;
-    bool has_row_ring_ = true;  // constructed with keep_rows
+    double output_offset_ = 0.0;  // set_output_offset
+    bool has_row_ring_ = true;    // constructed with keep_rows
     engine_role role_ = engine_role::solve;
     long solved_upto_ = -1;      // knots in hist_ solved at the last solve
     bool solved_fresh_ = false;  // no row pushed since that solve

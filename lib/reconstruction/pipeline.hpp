@@ -108,7 +108,9 @@ class recon_pipeline {
     // Splits one kind of measurement (heights or slopes) of a row.
     void split(double s, const double *value, const std::uint8_t *valid, bool is_height, double *a,
                double *b, double *dev);
-    void add_lines(std::size_t rows, const double *a, const double *b, double *z) const;
+    // z += (a + b xi) + level, row by row.
+    void add_lines(std::size_t rows, const double *a, const double *b, double level,
+                   double *z) const;
     // batch() on heights relative to the level.
     void batch_fibers(std::size_t rows, const double *s, const double *height, const double *slope,
                       const std::uint8_t *valid, double *z_store);

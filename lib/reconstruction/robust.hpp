@@ -164,6 +164,9 @@ class recon_chain {
     void rebind_rows(double *z_store, std::uint8_t *flags_store) {
         engine_->rebind_rows(z_store, flags_store);
     }
+    // Batch: a constant added to every row's heights as they are written
+    // (recon_engine::set_output_offset).
+    void set_output_offset(double c) { engine_->set_output_offset(c); }
 
   private:
     // Weighs one raw row for a batch pass from its residuals against the
