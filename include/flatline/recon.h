@@ -127,24 +127,29 @@
  * Memory
  *   Everything is allocated by flt_recon_create(); push, pull, peek,
  *   end_sheet and reset allocate nothing (tests/c/test_recon_alloc.c
- *   counts). flt_reconstruct() keeps its working memory for the next call
- *   of the same shape (fibers, rows, options): a loop of calls allocates
- *   nothing after the first (up to 4 shapes and 256 MB are kept, freed
- *   when the library is unloaded). With K
- *   fibers, R = row_capacity, L = lag_knots, P = robust_iterations (0
- *   without robust mode), P_line = robust_line_iterations and S =
- *   ceil(laser_spacing / knot_spacing) + 2 (3 at the default knots), create
- *   takes about
- *     R x (9 + (9 + 4 P) K)              the rows kept (heights, flags) and
- *                                        the robust passes' row queues
- *   + K x (L + L / 8 + 12) x 8 (4 S + 3) each fiber's knots within the lag
- *   + K x P x 3000                       each robust pass's own state
- *   + R x (60 + 12 P_line)               with rigid_motion only (P_line
- *                                        counts only in robust mode)
+ *   counts). With K fibers, R = row_capacity, L = the lag in knots (from
+ *   latency_mm, as flt_recon_get_option reports it), W = the knots a row
+ *   may wait, 2 (L + L/8 + 2) with latency_mm (the strip's head), L + L/8
+ *   + 1 with lag_knots set, and S = ceil(laser_spacing / knot_spacing) + 2
+ *   (3 at the default knots), create takes about
+ *     R x (9 + 9 K)                      the rows kept (position, heights,
+ *                                        flags)
+ *   + K x (W + L/8 + 12) x 8 (4 S + 3)   each fiber's knots within the wait
+ *     (in robust mode, in place of that line:
+ *   + R x (8 + 8 K)                      the window's raw rows, in float
+ *   + K x 16 ((2S + 1)(S + 1)(W + 2S + 8) + W + L/8 + 170)
+ *                                        its blocks' sums and knots)
+ *   + R x 60 (92 in robust mode)         with rigid_motion: the line across
+ *                                        the strip
  *   bytes, all written at create: 1,150 fibers with the defaults and 8192
- *   rows take 96 MB, 180 MB with rigid_motion and robust.
- *   tests/c/test_memory.c checks the formula against the measured peak;
- *   FLT_RECON_MAX_BYTES refuses on it before allocating.
+ *   rows take 92 MB, 191 MB with rigid_motion and robust (the robust
+ *   passes cost time, not memory). tests/c/test_memory.c checks the
+ *   formula against the measured peak; FLT_RECON_MAX_BYTES refuses on it
+ *   before allocating.
+ *   flt_reconstruct() keeps its working memory for the next call of the
+ *   same shape (fibers, rows, options): a loop of calls allocates nothing
+ *   after the first. Up to 4 shapes and 256 MB are kept (a larger one is
+ *   freed after its call), until the library is unloaded.
  *
  * Threads
  *   A flt_recon must not be used from two threads at once. Separate handles

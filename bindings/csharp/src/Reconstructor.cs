@@ -356,14 +356,21 @@ namespace Flatline
             }
         }
 
-        /// <summary>An estimate of the native memory held (recon.h: 9 bytes
-        /// per row and fiber for the row ring, plus the per-knot factors of
-        /// the lag window), reported to the GC as memory pressure.</summary>
+        /// <summary>An estimate of the native memory held (recon.h, "Memory":
+        /// 9 bytes per row and fiber for the row ring, 17 in robust mode, plus
+        /// the knots a row may wait), reported to the GC as memory
+        /// pressure.</summary>
         private long NativeBytes()
         {
-            double rowCapacity = GetOption("row_capacity");
-            double lag = 2.0 * GetOption("lag_knots") + 8.0;  // the head waits twice the lag
-            return (long)(Fibers * (9.0 * rowCapacity + 8.0 * 64.0 * (lag + 16.0)));
+            double rows = GetOption("row_capacity");
+            double lag = GetOption("lag_knots");
+            double wait = 2.0 * (lag + Math.Floor(lag / 8.0) + 2.0);  // the strip's head, at most
+            double s = Math.Ceiling(GetOption("laser_spacing") / GetOption("knot_spacing") - 1e-9) + 2.0;
+            bool robust = GetOption("robust") != 0.0;
+            double perFiber = robust
+                ? 17.0 * rows + 16.0 * ((2.0 * s + 1.0) * (s + 1.0) * (wait + 2.0 * s + 8.0) + wait + 170.0)
+                : 9.0 * rows + 8.0 * (4.0 * s + 3.0) * (wait + lag / 8.0 + 12.0);
+            return (long)(Fibers * perFiber);
         }
     }
 }

@@ -142,10 +142,12 @@ class Reconstructor:
     """A streaming reconstructor for a fixed number of fibers.
 
     Rows (one camera frame each, at material position s along travel) go in
-    with :meth:`push`; finished rows come out with :meth:`pull`, about
-    lag_knots knots of travel later. :meth:`end_sheet` finishes every pushed
-    row and carries the last knot's height and slope into the next sheet, so
-    consecutive sheets join smoothly; :meth:`reset` starts a new strip.
+    with :meth:`push`; finished rows come out with :meth:`pull`, at most
+    latency_mm of travel later (twice that at a strip's head); :meth:`peek`
+    gives the rows not finished yet, provisionally. :meth:`end_sheet`
+    finishes every pushed row and carries the last knot's height and slope
+    into the next sheet, so consecutive sheets join smoothly; :meth:`reset`
+    starts a new strip.
 
     Args:
         fibers: a finished :class:`Calibration`, the way to create one for a
@@ -158,7 +160,8 @@ class Reconstructor:
         **options: reconstructor options by their C name (see below).
 
     Use it as a context manager, or call :meth:`close`, to free the C
-    buffers (9 bytes per row and fiber of row_capacity) deterministically.
+    buffers (9 bytes per row and fiber of row_capacity, 17 in robust mode;
+    recon.h, "Memory") deterministically.
     One instance may be used from several threads; its calls are then
     serialised. Separate instances run in parallel (the GIL is released in
     push, pull and end_sheet).
