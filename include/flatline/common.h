@@ -220,24 +220,24 @@ typedef enum flt_option {
      * curvature_jump_weight / 1e8 as that (flatline/recon.h: the most
      * double precision carries). */
     FLT_OPT_CURVATURE_WEIGHT = 104,
-    /** "lag_knots": how many knots beyond a knot must be complete before the
-     * streaming reconstructor emits it (integer). Larger is closer to the
-     * whole-sheet solution and later. Default 64 (6.4 m of strip at the
-     * default spacing, 3.2 s at 120 m/min): under 2.5 mm of vibration the
-     * level of a fiber is an average of heights over about 25 knots, and a
-     * shorter lag leaves the streamed level measurably noisier than the
-     * whole-sheet one (tests/c/test_recon.c measures it). */
+    /** "lag_knots": the streaming lag in knots (integer): a knot is
+     * emitted once this many knots beyond it are complete. -1 (the
+     * default) derives it from latency_mm, the way to set it; lag_knots and
+     * latency_mm are one setting, so a bag may set one of them only
+     * (flt_recon_create fails with FLT_ERR_INVALID_ARGUMENT otherwise). A
+     * lag set here is taken as it is, at a strip's head too (latency_mm's
+     * longer wait there does not apply). flt_recon_get_option reports the
+     * lag in use. */
     FLT_OPT_LAG_KNOTS = 105,
     /** "max_gap": rows in a run of invalid samples whose valid neighbours are
      * more than this far apart are flagged FLT_FLAG_GAP, mm. Default 200. */
     FLT_OPT_MAX_GAP = 106,
     /** "row_capacity": rows the streaming reconstructor can hold, pending
      * and finished-but-not-pulled together (integer). It costs 9 bytes per
-     * row and fiber, and robust mode queues up to a quarter of it per
-     * reweighted pass (16 bytes per row and fiber). Default 8192: enough
-     * for the default lag at 1.5 mm row spacing, and for robust mode with
-     * rigid_motion (a row finished about 18 m after it) at 3 mm. A push
-     * that does not fit while no row is finished says so. */
+     * row and fiber, and robust mode keeps the raw rows of its window in as
+     * many slots again (8 bytes per row and fiber). Default 8192: enough
+     * for the default latency (3.6 m at a strip's head) at rows every
+     * 0.5 mm. A push that does not fit while no row is finished says so. */
     FLT_OPT_ROW_CAPACITY = 107,
     /** "rigid_motion": 1 to model the strip's vibration as what it is, a
      * rigid heave and roll of each frame: every fiber of a frame is offset
@@ -279,8 +279,9 @@ typedef enum flt_option {
      * it streams. (integer 0..2) */
     FLT_OPT_ROBUST = 111,
     /** "robust_iterations": reweighted passes over the fibers after the plain
-     * one (integer 1..10). Each costs about 15 ms per 2000 x 1150 sheet and,
-     * streaming, about 13 knots of latency. Default 2. With rigid_motion the
+     * one (integer 1..10). Each costs about 15 ms per 2000 x 1150 sheet;
+     * streaming, the times each row is judged within the one lag (at most
+     * once per emission group; no latency of its own). Default 2. With rigid_motion the
      * fibers' deviations carry the peak noise and isolated spurious peaks
      * (the ringing hits every fiber alike, so it lives in the line across
      * the strip, see robust_line_iterations): with 1% of samples 2.5-5 mm
@@ -291,11 +292,25 @@ typedef enum flt_option {
     /** "robust_line_iterations": with rigid_motion and robust, the reweighted
      * passes over the line across the strip (its offset and tilt), which
      * carries the shear station's ringing (integer 1..32). The line is one
-     * value per row, so a pass costs about 0.5 ms per sheet, but streaming,
-     * each adds about 13 knots of latency. Default 8: 4 passes leave
+     * value per row, so a pass costs about 0.5 ms per sheet; streaming, as
+     * robust_iterations (within the lag). Default 8: 4 passes leave
      * 0.12 mm of ringing on the reference's sheet, 6 leave 0.09 mm, 8 leave
      * 0.08 mm (examples/python/compare_filters.py). */
     FLT_OPT_ROBUST_LINE_ITERATIONS = 113,
+    /** "latency_mm": the most strip, mm, the streaming reconstructor may take
+     * beyond a row before the row is final (plus one row spacing): rows are
+     * finished at most this far behind the newest row pushed, in every mode
+     * (robust mode's reweighting happens within it). The reconstructor takes
+     * the longest lag that keeps it: lag_knots + lag_knots/8 + 2 knots and
+     * half the laser spacing; flt_recon_get_option reports that bound.
+     * The first rows of a strip (after create or reset) wait up to twice as
+     * long: with no strip behind them their level is known from the strip
+     * ahead only. Default 2000 (1 s at 120 m/min; with the default spacing
+     * a lag of 15 knots, rows final 1.85 m behind, 3.6 m at a strip's
+     * head). Shorter costs accuracy, longer costs time: the price is
+     * tabled in docs/reconstruction.md (examples/bench/bench_latency).
+     * At least 2 knots and half the laser spacing (250 mm by default). */
+    FLT_OPT_LATENCY_MM = 114,
 
     /* --- calibration (flatline/calib.h) --- */
     /** "calib_ransac": 1 to estimate laser homographies inside RANSAC

@@ -58,13 +58,26 @@
  *   push() takes rows; pull() returns finished rows. A knot is complete once
  *   no later row can touch it (rows are increasing, so this is known after
  *   the row whose s - Delta-d/2 passes it). The estimate of knot j is emitted
- *   once knot j + lag_knots is complete; it is the least-squares solution
- *   given every row pushed so far (a fixed-lag smoother, not a truncated
- *   window), so larger lags converge to the whole-sheet result. Knots are
- *   emitted in groups of 1 + lag_knots/8 so that one back-substitution serves
- *   several. Rows between two emitted knots are finished and can be pulled.
- *   Latency is therefore between (lag_knots + 2) * L + Delta-d and
- *   (lag_knots + lag_knots/8 + 3) * L + Delta-d of travel.
+ *   once knot j + lag is complete; it is the least-squares solution given
+ *   every row pushed so far (a fixed-lag smoother, not a truncated window),
+ *   so longer lags converge to the whole-sheet result. Knots are emitted in
+ *   groups of G = 1 + lag/8 so that one back-substitution serves several.
+ *   Rows between two emitted knots are finished and can be pulled.
+ *
+ * Latency
+ *   A row is finished at most (lag + G + 1) * L + Delta-d/2 of strip behind
+ *   the newest row pushed (plus one row spacing). The option latency_mm
+ *   sets that bound (default 2000 mm: a lag of 15 knots at 100 mm, rows
+ *   final 1850 mm behind at most, 0.9 s at 120 m/min); the reconstructor
+ *   takes the longest lag that keeps it, in every mode. Rows at a strip's
+ *   head (after create or reset) wait up to twice as long: with no strip
+ *   behind them, their level is known from the strip ahead only. A shorter
+ *   latency costs accuracy: docs/reconstruction.md tables the price
+ *   (examples/bench/bench_latency). lag_knots instead sets the lag itself
+ *   (as before latency_mm; no longer wait at the head).
+ *   peek() returns the rows not finished yet with provisional values (the
+ *   estimate given every row so far), for an early answer that the final
+ *   rows replace; it changes nothing pull() returns.
  *
  *   end_sheet() finishes every pushed row now, with all data so far, and
  *   keeps the height and slope of the last emitted knot of every fiber as
@@ -101,37 +114,47 @@
  *   every sample. With rigid_motion the line across the strip, which
  *   carries the ringing, takes robust_line_iterations passes of its own.
  *   flt_reconstruct() runs the passes over the whole sheet one after the
- *   other. Streaming, every pass is a stage with an 8-knot lag ahead of
- *   the final one: the latency grows by about 13 knots per pass (with
- *   rigid_motion, per pass of the larger of the two counts; with the
- *   defaults a row is finished about 18 m of strip after it), so
- *   row_capacity must hold that much strip (see its option); carry-over
- *   and flags work as without it.
+ *   other. Streaming, every pass runs in one sliding window: each row is
+ *   judged robust_iterations times (the line robust_line_iterations times)
+ *   as the strip moves on, each time against the window's solution at that
+ *   moment, the last time when its knots become final, so the latency is
+ *   the same one lag as without robust mode (docs/reconstruction.md,
+ *   "Robust mode, streaming"). Carry-over and flags work as without it.
  *   Together with rigid_motion it takes the reference article's hardest
  *   noise (shear ringing) down to 0.083 mm at most (tests/c/test_recon.c,
  *   examples/python/compare_filters.py); speed in examples/bench.
  *
  * Memory
- *   Everything is allocated by flt_recon_create(); push, pull, end_sheet
- *   and reset allocate nothing (tests/c/test_recon_alloc.c counts). With K
- *   fibers, R = row_capacity, L = lag_knots, P = robust_iterations (0
- *   without robust mode), P_line = robust_line_iterations and S =
- *   ceil(laser_spacing / knot_spacing) + 2 (3 at the default knots), create
- *   takes about
- *     R x (9 + (9 + 4 P) K)              the rows kept (heights, flags) and
- *                                        the robust passes' row queues
- *   + K x (L + L / 8 + 12) x 8 (4 S + 3) each fiber's knots within the lag
- *   + K x P x 3000                       each robust pass's own state
- *   + R x (60 + 12 P_line)               with rigid_motion only (P_line
- *                                        counts only in robust mode)
+ *   Everything is allocated by flt_recon_create(); push, pull, peek,
+ *   end_sheet and reset allocate nothing (tests/c/test_recon_alloc.c
+ *   counts). With K fibers, R = row_capacity, L = the lag in knots (from
+ *   latency_mm, as flt_recon_get_option reports it), W = the knots a row
+ *   may wait, 2 (L + L/8 + 2) with latency_mm (the strip's head), L + L/8
+ *   + 1 with lag_knots set, and S = ceil(laser_spacing / knot_spacing) + 2
+ *   (3 at the default knots), create takes about
+ *     R x (9 + 9 K)                      the rows kept (position, heights,
+ *                                        flags)
+ *   + K x (W + L/8 + 12) x 8 (4 S + 3)   each fiber's knots within the wait
+ *     (in robust mode, in place of that line:
+ *   + R x (8 + 8 K)                      the window's raw rows, in float
+ *   + K x 16 ((2S + 1)(S + 1)(W + 2S + 8) + W + L/8 + 170)
+ *                                        its blocks' sums and knots)
+ *   + R x 60 (92 in robust mode)         with rigid_motion: the line across
+ *                                        the strip
  *   bytes, all written at create: 1,150 fibers with the defaults and 8192
- *   rows take 96 MB, 180 MB with rigid_motion and robust.
- *   tests/c/test_memory.c checks the formula against the measured peak;
- *   FLT_RECON_MAX_BYTES refuses on it before allocating.
+ *   rows take 92 MB, 191 MB with rigid_motion and robust (the robust
+ *   passes cost time, not memory). tests/c/test_memory.c checks the
+ *   formula against the measured peak; FLT_RECON_MAX_BYTES refuses on it
+ *   before allocating.
+ *   flt_reconstruct() keeps its working memory for the next call of the
+ *   same shape (fibers, rows, options): a loop of calls allocates nothing
+ *   after the first. Up to 4 shapes and 256 MB are kept (a larger one is
+ *   freed after its call), until the library is unloaded.
  *
  * Threads
  *   A flt_recon must not be used from two threads at once. Separate handles
- *   are independent. flt_reconstruct() is reentrant.
+ *   are independent. flt_reconstruct() is reentrant: calls on several
+ *   threads at once each take a working memory of their own.
  */
 #ifndef FLATLINE_RECON_H
 #define FLATLINE_RECON_H
@@ -182,7 +205,7 @@ typedef enum flt_robust {
  * fibers (common.h). flt_recon_create() and flt_reconstruct() refuse, with
  * FLT_ERR_INVALID_ARGUMENT and a message giving the estimate, a
  * configuration whose buffers would take more: many fibers with a large
- * row_capacity, lag_knots or robust_iterations, or a sheet for
+ * row_capacity or latency_mm (lag_knots), or a sheet for
  * flt_reconstruct() whose rows are so sparse that it spans far more knots
  * than it has rows (a long strip is streamed through flt_recon_push
  * instead, which keeps only its lag). */
@@ -197,8 +220,8 @@ typedef struct flt_recon flt_recon;
  * flt_recon_create_from_calib(), which takes both from it.
  * options: NULL for the defaults, else read for the FLT_OPT_* keys of the
  * reconstructor (knot_spacing, laser_spacing, height_sigma, slope_sigma,
- * curvature_weight, curvature_jump_weight, lag_knots, max_gap, row_capacity,
- * rigid_motion, shape_sigma, robust, robust_iterations,
+ * curvature_weight, curvature_jump_weight, latency_mm or lag_knots, max_gap,
+ * row_capacity, rigid_motion, shape_sigma, robust, robust_iterations,
  * robust_line_iterations); copied, not kept.
  * Fails with FLT_ERR_INVALID_ARGUMENT if fibers is 0 or too many, the
  * options are inconsistent or set a key of another component (common.h),
@@ -352,6 +375,43 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_pull(flt_recon *recon, size_
  */
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_ready(const flt_recon *recon, size_t *out);
 
+/** The number of rows pushed and not finished yet (their values are
+ * provisional: flt_recon_peek).
+ * @param recon the reconstructor.
+ * @param out receives the number of pending rows.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL or wrong argument.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_pending(const flt_recon *recon, size_t *out);
+
+/**
+ * The rows pushed and not finished yet, as the reconstructor estimates them
+ * now: provisional values, given every row pushed so far (a row is final
+ * only when flt_recon_pull returns it, latency_mm of strip later). For an
+ * early answer that a final one replaces later, e.g. a sheet's provisional
+ * verdict at its cut. Copies up to max_rows of them, oldest first, without
+ * taking them: finished rows not pulled yet are skipped (pull them first),
+ * and nothing that flt_recon_pull returns changes. Costs a solve of the
+ * reconstructor's window (about one emission's work) per call.
+ *
+ * @param recon     the reconstructor.
+ * @param max_rows  rows the outputs can hold (flt_recon_pending tells how
+ *                  many there are).
+ * @param fibers    the handle's fiber count.
+ * @param s_out     [max_rows] positions, mm.
+ * @param z_out     [max_rows * fibers] provisional heights, mm (NaN only
+ *                  with FLT_FLAG_NO_DATA or FLT_FLAG_OFF_STRIP, as pull).
+ * @param flags_out [max_rows * fibers] FLT_FLAG_* bits as known now, or
+ *                  NULL.
+ * @param rows_out  receives the number of rows written.
+ * @return FLT_OK (also when no row is pending); FLT_ERR_STATE if nothing was
+ *         pushed since create or reset; FLT_ERR_INVALID_ARGUMENT for a NULL
+ *         or wrong argument.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_peek(flt_recon *recon, size_t max_rows,
+                                                         size_t fibers, double *s_out,
+                                                         double *z_out, uint8_t *flags_out,
+                                                         size_t *rows_out);
+
 /** Finishes the current sheet: every pushed row becomes ready to pull, solved
  * with all data so far, and the last emitted knot becomes the hard boundary
  * condition of the next sheet (carry-over). FLT_ERR_STATE if no row was
@@ -384,10 +444,11 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recon_boundary(const flt_recon *re
 /** Reconstructs one whole sheet in one call: the least-squares spline of all
  * rows at once (no lag, no carry-over). Arguments as in flt_recon_push;
  * z_out [rows * fibers] and flags_out [rows * fibers] (or NULL) as in
- * flt_recon_pull. Allocates its working memory for the duration of the call
- * (about 20 doubles per fiber and knot at the default knot spacing, up to
- * about 80 at the finest; at most FLT_RECON_MAX_BYTES, else
- * FLT_ERR_INVALID_ARGUMENT); reentrant.
+ * flt_recon_pull. Its working memory (about 20 doubles per fiber and knot at
+ * the default knot spacing, up to about 80 at the finest; at most
+ * FLT_RECON_MAX_BYTES, else FLT_ERR_INVALID_ARGUMENT) is allocated by the
+ * first call of a shape and kept for the next calls of that shape (see
+ * "Memory" above); reentrant.
  * @param options   NULL, or the reconstructor's options.
  * @param rows      rows of the sheet (>= 1).
  * @param fibers    fibers (>= 1).

@@ -26,7 +26,7 @@ const option_spec k_options[] = {
     {FLT_OPT_HEIGHT_SIGMA, "height_sigma", 1.0e-9, 1.0e6, 2.5, false},
     {FLT_OPT_SLOPE_SIGMA, "slope_sigma", 1.0e-12, 1.0e3, 1.0e-3, false},
     {FLT_OPT_CURVATURE_WEIGHT, "curvature_weight", 1.0e-12, 1.0e12, 1.0e-3, false},
-    {FLT_OPT_LAG_KNOTS, "lag_knots", 0.0, 100000.0, 64.0, true},
+    {FLT_OPT_LAG_KNOTS, "lag_knots", -1.0, 100000.0, -1.0, true},
     {FLT_OPT_MAX_GAP, "max_gap", 0.0, inf, 200.0, false},
     {FLT_OPT_ROW_CAPACITY, "row_capacity", 16.0, 1.0e8, 8192.0, true},
     {FLT_OPT_RIGID_MOTION, "rigid_motion", 0.0, 1.0, 0.0, true},
@@ -149,6 +149,8 @@ const option_spec k_options[] = {
     // the leveler advisor
     {FLT_OPT_ADVISOR_DAMPING, "advisor_damping", 0.0, 1.0e6, 0.01, false},
     {FLT_OPT_ADVISOR_GAIN, "advisor_gain", 0.01, 1.0, 0.5, false},
+    // reconstructor, later additions
+    {FLT_OPT_LATENCY_MM, "latency_mm", 1.0, 1.0e9, 2000.0, false},
 };
 constexpr std::size_t k_option_count = sizeof k_options / sizeof k_options[0];
 

@@ -261,6 +261,15 @@ FLT_ROW_KERNEL void evaluate_row(std::size_t K, const double *__restrict w,
         z[k] = w[0] * z0[k] + w[1] * m0[k] + w[2] * z1[k] + w[3] * m1[k];
 }
 
+// The same, plus a constant c (the bits of evaluate_row's value + c).
+FLT_ROW_KERNEL void evaluate_row_plus(std::size_t K, const double *__restrict w,
+                                      const double *__restrict z0, const double *__restrict m0,
+                                      const double *__restrict z1, const double *__restrict m1,
+                                      double c, double *__restrict z) {
+    for (std::size_t k = 0; k < K; ++k)
+        z[k] = (w[0] * z0[k] + w[1] * m0[k] + w[2] * z1[k] + w[3] * m1[k]) + c;
+}
+
 // Cubic Hermite basis at t in [0, 1] of a knot interval: the weights of
 // (z_i, m_i, z_i+1, m_i+1), m = L z'.
 void hermite_weights(double t, double w[4]) {
@@ -275,17 +284,19 @@ void hermite_weights(double t, double w[4]) {
 }  // namespace
 
 double recon_engine::bytes_needed(std::size_t fibers, const recon_params &params,
-                                  std::size_t knot_capacity, bool owns_rows, bool keep_rows) {
+                                  std::size_t knot_capacity, bool owns_rows, bool keep_rows,
+                                  engine_role role) {
     // The same sizes as the constructor below.
     const double K = double(fibers);
     const double rows = keep_rows ? double(params.row_capacity) : 1.0;
     const double S = std::ceil(params.laser_spacing / params.knot_spacing - 1e-9) + 2;
     const double n = 2 * S, ntri = n * (n + 1) / 2, nf = 5 + 2 * (n - 2);
     const double hist = double(knot_capacity) + 2 * S + 4;
-    double doubles_per_fiber = double(knot_capacity) * nf  // factor ring
-                               + hist * 2                  // knot states
-                               + 3 * ntri + 2 * n          // window, Schur, rhs
-                               + 16;                       // weights, scratch, bookkeeping
+    double doubles_per_fiber = hist * 2  // knot states
+                               + 16;     // weights, scratch, bookkeeping
+    if (role == engine_role::solve)
+        doubles_per_fiber += double(knot_capacity) * nf  // factor ring
+                             + 3 * ntri + 2 * n;         // window, Schur, rhs
     double bytes = 8 * K * doubles_per_fiber + 9 * rows + 24 * n * n;
     if (owns_rows)
         bytes += 9 * rows * K;  // z and flags of the row ring
@@ -294,8 +305,8 @@ double recon_engine::bytes_needed(std::size_t fibers, const recon_params &params
 
 recon_engine::recon_engine(std::size_t fibers, const recon_params &params,
                            std::size_t knot_capacity, double *z_store, std::uint8_t *flags_store,
-                           bool keep_rows)
-    : K_(fibers), p_(params), keep_rows_(keep_rows), has_row_ring_(keep_rows) {
+                           bool keep_rows, engine_role role)
+    : K_(fibers), p_(params), keep_rows_(keep_rows), has_row_ring_(keep_rows), role_(role) {
     if (!keep_rows_)
         p_.row_capacity = 1;  // no row ring
     // The row ring first: the largest buffer, so an impossible size fails
@@ -353,27 +364,29 @@ recon_engine::recon_engine(std::size_t fibers, const recon_params &params,
     factor_cap_ = knot_capacity;
     hist_cap_ = knot_capacity + 2 * std::size_t(S_) + 4;
 
-    Rh_.assign(std::size_t(n_) * n_, 0.0);
-    Rg_.assign(std::size_t(n_) * n_, 0.0);
-    Rp_.assign(std::size_t(n_) * n_, 0.0);
-    wh_.assign(K_, w_h_);
-    wg_.assign(K_, w_g_);
-    next_wh_.assign(K_, w_h_);
-    next_wg_.assign(K_, w_g_);
-    schur_.assign(std::size_t(ntri_) * K_, 0.0);
-    down_.assign(std::size_t(ntri_) * K_, 0.0);
-    rhs_.assign(std::size_t(n_) * K_, 0.0);
-    factor_.assign(factor_cap_ * nf_ * K_, 0.0);
     hist_.assign(hist_cap_ * 2 * K_, 0.0);
-    work_.assign(std::size_t(ntri_) * K_, 0.0);
-    xwin_.assign(std::size_t(n_) * K_, 0.0);
-    hv_.assign(K_, 0.0);
-    gv_.assign(K_, 0.0);
-    hm_.assign(K_, 0.0);
-    gm_.assign(K_, 0.0);
-    ones_.assign(K_, 1.0);
-    pivot_floor_.assign(K_, 0.0);
-    bad_.reserve(K_);
+    if (role_ == engine_role::solve) {
+        Rh_.assign(std::size_t(n_) * n_, 0.0);
+        Rg_.assign(std::size_t(n_) * n_, 0.0);
+        Rp_.assign(std::size_t(n_) * n_, 0.0);
+        wh_.assign(K_, w_h_);
+        wg_.assign(K_, w_g_);
+        next_wh_.assign(K_, w_h_);
+        next_wg_.assign(K_, w_g_);
+        schur_.assign(std::size_t(ntri_) * K_, 0.0);
+        down_.assign(std::size_t(ntri_) * K_, 0.0);
+        rhs_.assign(std::size_t(n_) * K_, 0.0);
+        factor_.assign(factor_cap_ * nf_ * K_, 0.0);
+        work_.assign(std::size_t(ntri_) * K_, 0.0);
+        xwin_.assign(std::size_t(n_) * K_, 0.0);
+        hv_.assign(K_, 0.0);
+        gv_.assign(K_, 0.0);
+        hm_.assign(K_, 0.0);
+        gm_.assign(K_, 0.0);
+        ones_.assign(K_, 1.0);
+        pivot_floor_.assign(K_, 0.0);
+        bad_.reserve(K_);
+    }
     last_valid_s_.assign(K_, 0.0);
     has_height_.assign(K_, 0);
     bc_z_.assign(K_, 0.0);
@@ -641,6 +654,8 @@ void recon_engine::close_knot() {
 void recon_engine::maybe_emit() {
     if (p_.lag_knots == recon_params::no_lag)
         return;
+    if (strip_head_ && w0_ < p_.start_lag_knots)
+        return;  // the head of the strip waits longer
     const long last = w0_ - 1 - p_.lag_knots;
     if (last - next_emit_ + 1 >= emit_group())
         emit_upto(last);
@@ -649,6 +664,17 @@ void recon_engine::maybe_emit() {
 // Solves for every knot from next_emit_ to the end of the window given all
 // rows so far, and emits knots up to `last`.
 void recon_engine::emit_upto(long last) {
+    strip_head_ = false;
+    solve_all();
+    last_emitted_ = last;
+    next_emit_ = last + 1;
+    finish_rows();
+}
+
+// Every knot from next_emit_ to the end of the window, given all rows so
+// far, into hist_ (emitted or not: the states of knots not emitted yet are
+// provisional, overwritten by the next solve).
+void recon_engine::solve_all() {
     // 1. The open window: W x = rhs, per fiber, dense Cholesky W = U^T U
     //    on the packed upper triangle.
     for (int r = 0; r < n_; ++r)
@@ -736,11 +762,8 @@ void recon_engine::emit_upto(long last) {
             xz[k] = (xz[k] - l10[k] * xm[k]) * il00[k];
         }
     }
-    last_emitted_ = last;
-    next_emit_ = last + 1;
     solved_upto_ = w0_ + S_ - 1;
     solved_fresh_ = true;
-    finish_rows();
 }
 
 // Evaluates every pending row whose knot interval is fully emitted.
@@ -758,7 +781,10 @@ void recon_engine::finish_rows() {
         basis(s, i, w);
         const double *a = hist_at(i), *b = hist_at(i + 1);
         double *z = ring_z_ + r * K_;
-        evaluate_row(K_, w, a, a + K_, b, b + K_, z);
+        if (output_offset_ != 0.0)
+            evaluate_row_plus(K_, w, a, a + K_, b, b + K_, output_offset_, z);
+        else
+            evaluate_row(K_, w, a, a + K_, b, b + K_, z);
         std::uint8_t *fl = ring_flags_ + r * K_;
         if (ring_any_invalid_[r] || no_height_fibers_ > 0) {
             for (std::size_t k = 0; k < K_; ++k) {
@@ -785,7 +811,8 @@ void recon_engine::finish_row(double s, std::size_t nbad, HeightOk h_ok, SlopeOk
         last_s_ = s;
         ++rows_in_sheet_;
         solved_fresh_ = false;
-        maybe_emit();
+        if (role_ == engine_role::solve)
+            maybe_emit();
         return;
     }
 
@@ -844,7 +871,8 @@ void recon_engine::finish_row(double s, std::size_t nbad, HeightOk h_ok, SlopeOk
     ++rows_in_sheet_;
     solved_fresh_ = false;
 
-    maybe_emit();
+    if (role_ == engine_role::solve)
+        maybe_emit();
     finish_rows();
 }
 
@@ -856,7 +884,9 @@ void recon_engine::begin_strip(double s) {
     anchored_ = false;
     next_emit_ = 0;
     last_emitted_ = -1;
-    start_window(0);
+    strip_head_ = true;
+    if (role_ == engine_role::solve)
+        start_window(0);
     const double before = std::nextafter(s, -std::numeric_limits<double>::infinity());
     std::fill(last_valid_s_.begin(), last_valid_s_.end(), before);
     all_valid_s_ = before;
@@ -886,6 +916,22 @@ void recon_engine::push_row(double s, const double *height, const double *slope,
                             const std::uint8_t *valid, const double *mult_h, const double *mult_g) {
     if (!have_t0_)
         begin_strip(s);
+    if (role_ == engine_role::rows_only) {
+        // Only the bookkeeping: which samples are valid (as below).
+        const double big = k_max_sample;
+        auto ok_h = [&](std::size_t k) {
+            return (valid == nullptr || valid[k] != 0) && std::fabs(height[k]) <= big;
+        };
+        auto ok_g = [&](std::size_t k) {
+            return (valid == nullptr || valid[k] != 0) && std::fabs(slope[k]) <= big;
+        };
+        std::size_t nbad = 0;
+        if (valid != nullptr || !row_is_finite(K_, height, slope))
+            for (std::size_t k = 0; k < K_; ++k)
+                nbad += !(ok_h(k) && ok_g(k));
+        finish_row(s, nbad, ok_h, ok_g);
+        return;
+    }
 
     const double p1 = s - 0.5 * D_;
     const long i1 = interval_of(p1);
@@ -1045,9 +1091,17 @@ std::size_t recon_engine::pull(std::size_t max_rows, double *s_out, double *z_ou
 }
 
 void recon_engine::end_sheet() {
+    if (role_ != engine_role::solve)
+        throw error(FLT_ERR_INTERNAL, "end_sheet() on an engine that does not solve");
     const long e_end = interval_of(last_s_) + 1;
     emit_upto(e_end);
-    // Carry-over: knots up to e_end are now hard boundary conditions.
+    end_sheet_common(e_end);
+}
+
+// Carry-over: knots up to e_end are now hard boundary conditions, with the
+// states in hist_.
+void recon_engine::end_sheet_common(long e_end) {
+    strip_head_ = false;
     fixed_upto_ = e_end;
     anchored_ = true;
     bc_s_ = knot_pos(e_end);
@@ -1055,9 +1109,12 @@ void recon_engine::end_sheet() {
     std::copy_n(h, K_, bc_z_.data());
     std::copy_n(h + K_, K_, bc_m_.data());
     rows_in_sheet_ = 0;
+    last_emitted_ = std::max(last_emitted_, e_end);
     next_emit_ = e_end + 1;
-    bad_fibers_seen_ = false;
-    start_window(e_end + 1);
+    if (role_ == engine_role::solve) {
+        bad_fibers_seen_ = false;
+        start_window(e_end + 1);
+    }
 }
 
 void recon_engine::reset() {
@@ -1120,6 +1177,14 @@ void recon_engine::set_keep_rows(bool keep) {
     keep_rows_ = keep;
 }
 
+void recon_engine::rebind_rows(double *z_store, std::uint8_t *flags_store) {
+    if (!z_store || (!flags_store && own_flags_.empty()))
+        throw error(FLT_ERR_INTERNAL, "rebind_rows needs row storage");
+    reset();  // the rows held were the previous storage's
+    ring_z_ = z_store;
+    ring_flags_ = flags_store ? flags_store : own_flags_.data();
+}
+
 void recon_engine::boundary(double *s_out, double *height_out, double *slope_out) const {
     if (s_out)
         *s_out = bc_s_;
@@ -1128,6 +1193,218 @@ void recon_engine::boundary(double *s_out, double *height_out, double *slope_out
     if (slope_out)
         for (std::size_t k = 0; k < K_; ++k)
             slope_out[k] = bc_m_[k] / L_;
+}
+
+// ---------------------------------------------------------------------------
+// Provisional values
+// ---------------------------------------------------------------------------
+
+std::size_t recon_engine::peek(std::size_t offset, std::size_t max_rows, double *s_out,
+                               double *z_out, std::uint8_t *flags_out) {
+    if (!keep_rows_ || !have_t0_)
+        return 0;
+    const std::size_t held = tail_ - head_;
+    if (offset >= held)
+        return 0;
+    const std::size_t n = std::min(max_rows, held - offset);
+    bool solved = role_ != engine_role::solve;
+    const std::size_t cap = p_.row_capacity;
+    for (std::size_t i = 0; i < n; ++i) {
+        const std::size_t at = head_ + offset + i, r = at % cap;
+        const double s = ring_s_[r];
+        s_out[i] = s;
+        double *z = z_out + i * K_;
+        std::uint8_t *fl = flags_out ? flags_out + i * K_ : nullptr;
+        if (at < ready_) {  // finished: as pull() will give it
+            std::copy_n(ring_z_ + r * K_, K_, z);
+            if (fl)
+                std::copy_n(ring_flags_ + r * K_, K_, fl);
+            continue;
+        }
+        if (!solved) {
+            solve_all();
+            solved = true;
+        }
+        const long iv = interval_of(s);
+        double w[4];
+        basis(s, iv, w);
+        const double *a = hist_at(iv), *b = hist_at(iv + 1);
+        if (output_offset_ != 0.0)
+            evaluate_row_plus(K_, w, a, a + K_, b, b + K_, output_offset_, z);
+        else
+            evaluate_row(K_, w, a, a + K_, b, b + K_, z);
+        // The flags as finish_rows() would set them now.
+        const std::uint8_t *own = ring_flags_ + r * K_;
+        for (std::size_t k = 0; k < K_; ++k) {
+            std::uint8_t f = own[k];
+            const double last = std::max(last_valid_s_[k], all_valid_s_);
+            if ((f & FLT_FLAG_INVALID_INPUT) && last < s && last_s_ - last > p_.max_gap)
+                f |= FLT_FLAG_GAP;
+            if (!has_height_[k]) {
+                z[k] = std::numeric_limits<double>::quiet_NaN();
+                f |= FLT_FLAG_NO_DATA;
+            }
+            if (fl)
+                fl[k] = f;
+        }
+    }
+    return n;
+}
+
+// ---------------------------------------------------------------------------
+// rows_only role and robust_window's frozen part
+// ---------------------------------------------------------------------------
+
+void recon_engine::set_knot_state(long j, const double *z, const double *m, std::size_t k0,
+                                  std::size_t k1) {
+    double *h = hist_at(j);
+    std::copy(z + k0, z + k1, h + k0);
+    std::copy(m + k0, m + k1, h + K_ + k0);
+}
+
+void recon_engine::mark_emitted(long last) {
+    if (last < next_emit_)
+        return;
+    last_emitted_ = last;
+    next_emit_ = last + 1;
+    finish_rows();
+}
+
+void recon_engine::carry_over(long e_end) {
+    end_sheet_common(e_end);
+}
+
+void recon_engine::start_strip(double s) {
+    if (!have_t0_)
+        begin_strip(s);
+}
+
+void recon_engine::forget_upto(long last) {
+    next_emit_ = std::max(next_emit_, std::min(last + 1, w0_));
+}
+
+const double *recon_engine::open_window_matrix() {
+    for (int r = 0; r < n_; ++r)
+        for (int c = r; c < n_; ++c)
+            assemble_entry(r, c);
+    return work_.data();
+}
+
+void recon_engine::add_block(long i1, const double *gh, const double *gg, const double *rh,
+                             const double *rg, const double *dh, const double *dg) {
+    if (!have_t0_)
+        throw error(FLT_ERR_INTERNAL, "add_block before the strip started");
+    while (w0_ < i1)
+        close_knot();
+    // The block's unknowns off..n-1 are window unknowns 0..n-1-off; its
+    // knots before the window are carried boundary conditions.
+    const int off = 2 * int(w0_ - i1);
+    if (off > 0 && i1 + off / 2 - 1 > fixed_upto_)
+        throw error(FLT_ERR_INTERNAL, "block touches an eliminated knot");
+    const int m = n_ - off;
+    for (int u = 0; u < m; ++u)
+        for (int v = 0; v < m; ++v) {
+            const std::size_t at = std::size_t(u) * n_ + v;
+            const std::size_t from = std::size_t(u + off) * n_ + (v + off);
+            Rh_[at] += gh[from];
+            Rg_[at] += gg[from];
+        }
+    const std::size_t ntri = std::size_t(n_) * (n_ + 1) / 2;
+    // Packed index of (u, v), u <= v, in an n x n triangle (as tri()).
+    auto packed = [&](int u, int v) {
+        if (u > v)
+            std::swap(u, v);
+        return std::size_t(u) * n_ - std::size_t(u) * (u - 1) / 2 + std::size_t(v - u);
+    };
+    for (int u = 0; u < m; ++u) {
+        const double *bh = rh + std::size_t(u + off) * K_, *bg = rg + std::size_t(u + off) * K_;
+        double *r = rhs_.data() + std::size_t(u) * K_;
+        for (std::size_t k = 0; k < K_; ++k)
+            r[k] += wh_[k] * bh[k] + wg_[k] * bg[k];
+        // The carried knots' part moves to the right-hand side, per fiber.
+        for (int q = 0; q < off; ++q) {
+            const double *x = hist_at(i1 + q / 2) + std::size_t(q % 2) * K_;
+            const std::size_t at = std::size_t(u + off) * n_ + q;
+            const std::size_t e = packed(u + off, q);
+            for (std::size_t k = 0; k < K_; ++k) {
+                double a = wh_[k] * gh[at] + wg_[k] * gg[at];
+                if (dh)
+                    a -= wh_[k] * dh[e * K_ + k] + wg_[k] * dg[e * K_ + k];
+                r[k] -= a * x[k];
+            }
+        }
+    }
+    if (dh) {
+        for (int u = 0; u < m; ++u)
+            for (int v = u; v < m; ++v) {
+                const std::size_t e = packed(u + off, v + off);
+                const double *a = dh + e * K_, *b = dg + e * K_;
+                double *d = down_.data() + tri(u, v) * K_;
+                for (std::size_t k = 0; k < K_; ++k)
+                    d[k] += wh_[k] * a[k] + wg_[k] * b[k];
+            }
+        bad_fibers_seen_ = true;
+    }
+    (void)ntri;
+}
+
+int recon_engine::knot_priors(long j, prior_term *out) const {
+    // The same terms as add_priors_for_knot(j), which the engine itself uses.
+    int count = 0;
+    {
+        prior_term &t = out[count++];  // ridge, relative to a height sample
+        t.count = 1;
+        t.knot[0] = j;
+        t.unit[0] = 0;
+        t.m[0][0] = w_ridge_;
+        t.slope_weighted = false;
+        prior_term &g = out[count++];  // and to a slope sample
+        g = t;
+        g.m[0][0] = k_ridge;
+        g.slope_weighted = true;
+    }
+    if (j - 2 >= 0) {
+        prior_term &t = out[count++];  // curvature jump at j - 1
+        const long knot[5] = {j - 2, j - 1, j, j, j - 2};
+        const int unit[5] = {1, 1, 1, 0, 0};
+        const double coef[5] = {1.0, 4.0, 1.0, -3.0, 3.0};
+        t.count = 5;
+        for (int a = 0; a < 5; ++a) {
+            t.knot[a] = knot[a];
+            t.unit[a] = unit[a];
+            for (int b = 0; b < 5; ++b)
+                t.m[a][b] = w_curv_jump_ * coef[a] * coef[b];
+        }
+        t.slope_weighted = false;
+    }
+    if (j - 1 >= 0) {
+        prior_term &t = out[count++];  // curvature of [j - 1, j]
+        t.count = 4;
+        const long knot[4] = {j - 1, j - 1, j, j};
+        const int unit[4] = {0, 1, 0, 1};
+        for (int a = 0; a < 4; ++a) {
+            t.knot[a] = knot[a];
+            t.unit[a] = unit[a];
+            for (int b = 0; b < 4; ++b)
+                t.m[a][b] = w_curv_ * k_stiffness[a][b];
+        }
+        t.slope_weighted = false;
+        prior_term &g = out[count++];
+        g = t;
+        for (int a = 0; a < 4; ++a)
+            for (int b = 0; b < 4; ++b)
+                g.m[a][b] = k_min_curvature_weight * k_stiffness[a][b];
+        g.slope_weighted = true;
+    }
+    return count;
+}
+
+double recon_engine::max_weight_ratio() {
+    return k_max_weight_ratio;
+}
+
+double recon_engine::pivot_floor() {
+    return k_pivot_floor;
 }
 
 }  // namespace flt

@@ -29,6 +29,7 @@
 //   samples (down). Everything is allocated in the constructor.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -56,6 +57,12 @@ struct recon_params {
     double curvature_jump_weight = 10.0;
     double max_gap = 200.0;  // mm
     long lag_knots = 40;     // batch: no_lag
+    // The head of a strip (after create or reset): no knot is emitted before
+    // the newest row is this many knot intervals into the strip. With no
+    // strip behind them, the first knots' level is known from the strip
+    // ahead only, and at a short lag that is too little (docs/
+    // reconstruction.md); 0: none. head_lag() gives the rule.
+    long start_lag_knots = 0;
     std::size_t row_capacity = 4096;
 
     // Knots are emitted in groups: one back-substitution through the lag
@@ -64,9 +71,50 @@ struct recon_params {
     // complete knots after it.
     long emit_group() const { return 1 + lag_knots / 8; }
     // Eliminated knots that can wait for emission at once.
-    std::size_t knot_capacity() const { return std::size_t(lag_knots + emit_group()) + 2; }
+    std::size_t knot_capacity() const {
+        return std::size_t(std::max(lag_knots, start_lag_knots) + emit_group()) + 2;
+    }
+    // The head rule: the first knots of a strip wait for twice the strip a
+    // row waits for at most afterwards.
+    static long head_lag(long lag_knots) { return 2 * (lag_knots + 1 + lag_knots / 8 + 1); }
+    // The most strip (mm) beyond a row when it is finished, past the head,
+    // and in the head, each plus one row spacing (recon.h, "Latency").
+    double latency_bound_mm() const {
+        return double(lag_knots + emit_group() + 1) * knot_spacing + 0.5 * laser_spacing;
+    }
+    double head_latency_bound_mm() const {
+        return std::max(double(start_lag_knots) * knot_spacing, latency_bound_mm());
+    }
+    // Knot intervals of strip beyond a row before it is finished, at most
+    // (the head's when it is longer): what a caller must hold rows for.
+    long latency_knots() const { return std::max(lag_knots + emit_group(), start_lag_knots) + 2; }
 
     static constexpr long no_lag = std::numeric_limits<long>::max();
+};
+
+// What an engine does with the rows it is given (see recon_engine).
+enum class engine_role {
+    // Solves: rows enter the normal equations, knots are eliminated and
+    // emitted with the lag (the plain streaming reconstructor, batch).
+    solve,
+    // Keeps the rows only (the row ring, flags, gaps, the strip's level
+    // bookkeeping) and evaluates them from knot states that another solver
+    // computes and hands over (set_knot_state, mark_emitted): the output
+    // side of robust_window. No normal equations are allocated.
+    rows_only,
+};
+
+// One prior term (engine.cpp, add_priors_for_knot): weight * x^T M x over
+// `count` unknowns, unknown i being unit[i] (0: z, 1: m) of knot[i].
+// slope_weighted: it scales with the fiber's slope weight (the floors of
+// the ridge and the curvature that follow robust mode's weights), else with
+// its height weight.
+struct prior_term {
+    int count = 0;
+    long knot[5] = {0, 0, 0, 0, 0};
+    int unit[5] = {0, 0, 0, 0, 0};
+    double m[5][5] = {};
+    bool slope_weighted = false;
 };
 
 class recon_engine {
@@ -77,9 +125,10 @@ class recon_engine {
     // straight into the caller's output), or nullptr to own it.
     // keep_rows = false: an intermediate stage of a robust chain, whose
     // rows are never pulled; it keeps no row ring at all.
+    // role: engine_role::rows_only for the output side of robust_window.
     recon_engine(std::size_t fibers, const recon_params &params, std::size_t knot_capacity,
                  double *z_store = nullptr, std::uint8_t *flags_store = nullptr,
-                 bool keep_rows = true);
+                 bool keep_rows = true, engine_role role = engine_role::solve);
 
     // The bytes a constructor with these arguments allocates (its large
     // buffers; an upper bound within a few hundred bytes), computed in
@@ -87,7 +136,8 @@ class recon_engine {
     // beyond FLT_RECON_MAX_BYTES before constructing anything.
     // owns_rows: no z_store given (the engine keeps its own row ring).
     static double bytes_needed(std::size_t fibers, const recon_params &params,
-                               std::size_t knot_capacity, bool owns_rows, bool keep_rows);
+                               std::size_t knot_capacity, bool owns_rows, bool keep_rows,
+                               engine_role role = engine_role::solve);
 
     std::size_t fibers() const { return K_; }
     const recon_params &params() const { return p_; }
@@ -140,8 +190,102 @@ class recon_engine {
     void predict_saved(const double *saved, double saved_t0, double s, double *height_out,
                        double *dslope_out) const;
     void set_keep_rows(bool keep);
+    // Batch workspaces (recon_api.cpp) serve one call after another: the
+    // caller's storage of this call for the rows (as the constructor's
+    // z_store / flags_store; nullptr flags_store: the engine's own, which
+    // it must have been constructed with). Resets the engine.
+    void rebind_rows(double *z_store, std::uint8_t *flags_store);
+    // A constant (mm) added to the heights of every row finished from now
+    // on (0 by default): batch adds the sheet's level while it writes the
+    // rows, instead of in a pass of its own over the whole output.
+    void set_output_offset(double c) { output_offset_ = c; }
+
+    // ---- provisional values (flt_recon_peek) ----
+    // Rows held from the oldest not pulled, skipping `offset` of them: up to
+    // max_rows of them into s_out, z_out, flags_out (may be nullptr); a
+    // finished row as it will be pulled, a pending one evaluated from the
+    // current knot states (provisional: it changes until the row is
+    // finished). A solve-role engine first solves for every knot given
+    // every row so far (solve_all); a rows_only one evaluates from the
+    // states its solver last set. Returns the rows written.
+    std::size_t peek(std::size_t offset, std::size_t max_rows, double *s_out, double *z_out,
+                     std::uint8_t *flags_out);
+    // Rows held (finished and pending), and pending.
+    std::size_t held_rows() const { return tail_ - head_; }
+
+    // ---- rows_only role (robust_window's output) ----
+    // The state of knot j (z, m per fiber; fibers [k0, k1) of it), final
+    // once mark_emitted covers it; states of later knots may be set for
+    // peek(). Also for carry_over() in either role.
+    void set_knot_state(long j, const double *z, const double *m) {
+        set_knot_state(j, z, m, 0, K_);
+    }
+    void set_knot_state(long j, const double *z, const double *m, std::size_t k0, std::size_t k1);
+    // Knots up to `last` have their final states: the rows between them are
+    // finished.
+    void mark_emitted(long last);
+    // The first knot not emitted yet.
+    long next_emit() const { return next_emit_; }
+
+    // ---- solve role, as robust_window's frozen part ----
+    // The strip starts with a row at s (the knot grid: s - Delta-d/2),
+    // as the first push_row would.
+    void start_strip(double s);
+    // A block of rows that all start in knot interval i1 (their rear laser
+    // reading there), given by its sums over the rows, each unweighted (the
+    // engine weighs them with its current fiber weights): gh, gg (n x n,
+    // shared) the outer products of the rows' height and Delta-d * slope
+    // coefficients over the knots i1 .. i1 + S - 1; rh, rg ([n][K]) the
+    // coefficients times each sample's value and weight multiplier; dh, dg
+    // ([packed n x n][K], or nullptr for none) what each fiber's samples
+    // take back out of gh, gg (the multipliers' complements). The knots
+    // before i1 are eliminated first (as push_row does).
+    void add_block(long i1, const double *gh, const double *gg, const double *rh, const double *rg,
+                   const double *dh, const double *dg);
+    // The open window: the first open knot, and every fiber's assembled
+    // window matrix (packed upper, window_entry(r, c) per fiber) and
+    // right-hand side ([n][K]), good until the next call that changes the
+    // engine.
+    long first_open_knot() const { return w0_; }
+    const double *open_window_matrix();
+    const double *open_window_rhs() const { return rhs_.data(); }
+    std::size_t window_entry(int r, int c) const { return tri(r, c); }
+    // Knots up to fixed_upto() (and from 0) are hard boundary conditions
+    // carried from the previous sheet; knot_state(j) is their state.
+    long fixed_upto() const { return fixed_upto_; }
+    const double *knot_state(long j) const { return hist_at(j); }
+    // Eliminated knots up to `last` will never be solved for: their factors
+    // may be dropped (robust_window keeps the states it emits itself).
+    void forget_upto(long last);
+    // Both roles: ends the sheet with knots up to e_end final, with the
+    // states last set (set_knot_state; at least those of knots e_end - S +
+    // 1 .. e_end, which the next sheet's rows and priors touch): the
+    // carry-over of end_sheet() without a solve of this engine's own.
+    void carry_over(long e_end);
+    // The prior terms that complete with knot j (engine.cpp): fills out
+    // (at most 5) and returns how many.
+    int knot_priors(long j, prior_term *out) const;
+    // Interval and Hermite basis of a position on this strip's grid.
+    long interval_at(double p) const { return interval_of(p); }
+    void basis_at(double p, long i, double w[4]) const { basis(p, i, w); }
+    // The row's coefficients over the knots i1 .. i1 + S - 1 (as push_row).
+    void coefficients(double s, long i1, double *ch, double *cg) const {
+        row_coefficients(s, i1, ch, cg);
+    }
+    double laser_spacing() const { return D_; }
+    double knot_spacing() const { return L_; }
+    bool strip_started() const { return have_t0_; }
+    double strip_origin() const { return t0_; }
+    // The caps on the weights (engine.cpp): a slope sample weighs at most
+    // this many height samples of its fiber.
+    static double max_weight_ratio();
+    // The pivot floor of the factorisations, relative to the largest
+    // diagonal entry of a fiber's matrix.
+    static double pivot_floor();
 
   private:
+    void solve_all();  // every knot from next_emit_ on, given every row
+    void end_sheet_common(long e_end);
     // ---- geometry ----
     long interval_of(double p) const { return interval_on(t0_, p); }  // knot interval of p
     double knot_pos(long j) const { return t0_ + double(j) * L_; }
@@ -204,8 +348,9 @@ class recon_engine {
     long w0_ = 0;         // first open knot (window start)
     long next_emit_ = 0;  // first knot not emitted yet
     long last_emitted_ = -1;
-    long fixed_upto_ = -1;   // knots <= this are hard boundary conditions
-    bool anchored_ = false;  // a boundary condition has been carried
+    long fixed_upto_ = -1;     // knots <= this are hard boundary conditions
+    bool anchored_ = false;    // a boundary condition has been carried
+    bool strip_head_ = false;  // no knot emitted since the strip began
 
     // Shared, unweighted contributions since the last elimination, n x n
     // dense: the rows' height and slope outer products, and the priors (in
@@ -251,7 +396,9 @@ class recon_engine {
     std::uint8_t *ring_flags_;
     std::size_t head_ = 0, ready_ = 0, tail_ = 0;  // monotonic counters
     bool keep_rows_ = true;
-    bool has_row_ring_ = true;   // constructed with keep_rows
+    double output_offset_ = 0.0;  // set_output_offset
+    bool has_row_ring_ = true;    // constructed with keep_rows
+    engine_role role_ = engine_role::solve;
     long solved_upto_ = -1;      // knots in hist_ solved at the last solve
     bool solved_fresh_ = false;  // no row pushed since that solve
     double last_s_ = 0.0;

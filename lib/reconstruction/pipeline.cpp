@@ -118,6 +118,32 @@ FLT_SPLIT_KERNEL void line_sums(std::size_t K, double centre, const double *__re
     }
 }
 
+// Asks for a row of the caller's sheet ahead of its use: the batch reads
+// the sheet once, row after row, and a row (9 KB at 1150 fibers) waits for
+// memory; fetched while the row before it is solved, it is in the cache
+// when its turn comes.
+inline void prefetch_row(const double *row, std::size_t K) {
+#if defined(__GNUC__)
+    const char *p = reinterpret_cast<const char *>(row);
+    for (std::size_t b = 0; b < K * sizeof(double); b += 64)
+        __builtin_prefetch(p + b, 0, 3);
+#else
+    (void)row;
+    (void)K;
+#endif
+}
+
+// A row of heights relative to the level: NaN where the height is no
+// sample or too far from the level (relative_heights).
+FLT_SPLIT_KERNEL void relative_row(std::size_t K, double level, const double *__restrict height,
+                                   double *__restrict out) {
+    const double big = k_max_sample;
+    for (std::size_t k = 0; k < K; ++k) {
+        const double h = height[k], d = h - level;
+        out[k] = std::fabs(h) <= big && std::fabs(d) <= big ? d : k_nan;
+    }
+}
+
 // Deviations of a row from the line a + b * xi, every fiber.
 FLT_SPLIT_KERNEL void line_deviations(std::size_t K, double centre, double a, double b,
                                       const double *__restrict value, double *__restrict dev) {
@@ -131,8 +157,7 @@ double recon_pipeline::bytes_needed(std::size_t fibers, const recon_config &conf
     // The channels of the constructor below; the line channels have one
     // fiber each, and parameters that do not change their sizes.
     const bool owns_rows = !batch;
-    // batch(): the sheet's heights relative to its level.
-    double bytes = batch ? 8.0 * double(config.params.row_capacity) * double(fibers) : 0.0;
+    double bytes = 0.0;
     bytes += recon_chain::bytes_needed(fibers, config.params, config.robust, knot_capacity,
                                        owns_rows, batch);
     if (!config.rigid_motion)
@@ -181,6 +206,18 @@ recon_pipeline::recon_pipeline(std::size_t fibers, const recon_config &config,
     const double sum_xi2 = std::max(1.0, K * (K * K - 1.0) / 12.0);
     tilt.height_sigma = config_.params.height_sigma / half;
     tilt.slope_sigma = config_.params.slope_sigma / std::sqrt(sum_xi2);
+    // The curvature-jump prior holds the wiggle the secant slopes cannot see
+    // (engine.cpp); it is relative to one height sample, and the line's
+    // heights carry the heave as a single fiber's do while its slopes average
+    // many fibers'. Left so, the line channels' slopes outweigh it K times
+    // (the offset's) or about K/3 times (the tilt's) more than a fiber's do,
+    // and a disturbance near the newest rows (the shear's ringing before it
+    // is judged) moved the line's knot slopes some 20 knots back: streamed,
+    // the reference's third experiment came out 0.10 mm at a 3 m latency,
+    // 0.077 mm with the prior scaled to keep a single fiber's balance. It
+    // bends the 1800 mm reference wave by 0.02 um more.
+    offset.curvature_jump_weight *= K;
+    tilt.curvature_jump_weight *= sum_xi2 / (half * half);
     robust_params line_robust = config_.robust;
     line_robust.iterations = config_.line_iterations;
     offset_ = std::make_unique<recon_chain>(1, offset, line_robust, knot_capacity, nullptr, nullptr,
@@ -224,13 +261,9 @@ void recon_pipeline::find_level(const double *height, const std::uint8_t *valid)
 }
 
 void recon_pipeline::relative_heights(const double *height, double *out) const {
-    const double level = has_level_ ? level_ : 0.0;
-    for (std::size_t k = 0; k < K_; ++k) {
-        const double h = height[k], d = h - level;
-        // Invalid stays invalid (NaN here; the valid mask is passed on as it
-        // is), and a height too far from the level becomes invalid.
-        out[k] = std::fabs(h) <= k_max_sample && std::fabs(d) <= k_max_sample ? d : k_nan;
-    }
+    // Invalid stays invalid (NaN here; the valid mask is passed on as it
+    // is), and a height too far from the level becomes invalid.
+    relative_row(K_, has_level_ ? level_ : 0.0, height, out);
 }
 
 void recon_pipeline::split(double s, const double *value, const std::uint8_t *valid, bool is_height,
@@ -328,7 +361,7 @@ void recon_pipeline::push_row(double s, const double *raw_height, const double *
     tilt_->push_row(s, &hb, &gb, nullptr);
 }
 
-void recon_pipeline::add_lines(std::size_t rows, const double *a, const double *b,
+void recon_pipeline::add_lines(std::size_t rows, const double *a, const double *b, double level,
                                double *z) const {
     for (std::size_t r = 0; r < rows; ++r) {
         // An unseen line (no valid sample since reset) adds nothing: the
@@ -337,46 +370,56 @@ void recon_pipeline::add_lines(std::size_t rows, const double *a, const double *
         const double br = std::isfinite(b[r]) ? b[r] : 0.0;
         double *zr = z + r * K_;
         for (std::size_t k = 0; k < K_; ++k)
-            zr[k] += ar + br * xi(k);
+            zr[k] = (zr[k] + (ar + br * xi(k))) + level;
     }
 }
 
 void recon_pipeline::batch(std::size_t rows, const double *s, const double *raw_height,
                            const double *slope, const std::uint8_t *valid, double *z_store) {
     const std::size_t K = K_;
-    // The sheet's heights relative to its level (find_level says why).
-    has_level_ = false;
+    // A workspace may serve many calls (recon_api.cpp): every channel starts
+    // a new strip.
+    reset();
+    // The sheet's heights relative to its level (find_level says why); each
+    // row is taken relative as it is read, into a row of scratch, so that
+    // no copy of the sheet is made.
     for (std::size_t r = 0; r < rows && !has_level_; ++r)
         find_level(raw_height + r * K, valid ? valid + r * K : nullptr);
-    std::vector<double> relative(rows * K);
-    for (std::size_t r = 0; r < rows; ++r)
-        relative_heights(raw_height + r * K, relative.data() + r * K);
-    const double *height = relative.data();
-    batch_fibers(rows, s, height, slope, valid, z_store);
-    if (has_level_)
-        for (std::size_t i = 0; i < rows * K; ++i)
-            z_store[i] += level_;  // NaN stays NaN
+    // The level goes back on as the rows are written (NaN stays NaN): by the
+    // engine, or with rigid_motion with the line across the strip.
+    batch_fibers(rows, s, raw_height, slope, valid, z_store);
 }
 
-void recon_pipeline::batch_fibers(std::size_t rows, const double *s, const double *height,
+void recon_pipeline::batch_fibers(std::size_t rows, const double *s, const double *raw_height,
                                   const double *slope, const std::uint8_t *valid, double *z_store) {
     const std::size_t K = K_;
     if (!config_.rigid_motion) {
         struct raw_rows final : row_source {
+            const recon_pipeline *self;
             const double *h, *g;
             const std::uint8_t *v;
-            std::size_t K;
+            double *rel;
+            std::size_t K, rows;
             void row(int /*pass*/, std::size_t r, const double **ho, const double **go,
                      const std::uint8_t **vo, double * /*line*/) override {
-                *ho = h + r * K;
+                if (r + 1 < rows) {
+                    prefetch_row(h + (r + 1) * K, K);
+                    prefetch_row(g + (r + 1) * K, K);
+                }
+                self->relative_heights(h + r * K, rel);
+                *ho = rel;
                 *go = g + r * K;
                 *vo = v ? v + r * K : nullptr;
             }
         } source;
-        source.h = height;
+        source.self = this;
+        source.h = raw_height;
         source.g = slope;
         source.v = valid;
+        source.rel = rel_h_.data();
         source.K = K;
+        source.rows = rows;
+        main_->set_output_offset(has_level_ ? level_ : 0.0);
         main_->batch(rows, s, source);
         return;
     }
@@ -401,8 +444,9 @@ void recon_pipeline::batch_fibers(std::size_t rows, const double *s, const doubl
             recon_pipeline &p = *self;
             const std::size_t K = p.K_;
             const std::uint8_t *vr = v ? v + r * K : nullptr;
+            p.relative_heights(h + r * K, p.rel_h_.data());
             if (pass == 0) {
-                p.split(s[r], h + r * K, vr, true, &p.batch_ha_[r], &p.batch_hb_[r],
+                p.split(s[r], p.rel_h_.data(), vr, true, &p.batch_ha_[r], &p.batch_hb_[r],
                         p.dev_h_.data());
                 p.split(s[r], g + r * K, vr, false, &p.batch_ga_[r], &p.batch_gb_[r],
                         p.dev_g_.data());
@@ -420,13 +464,13 @@ void recon_pipeline::batch_fibers(std::size_t rows, const double *s, const doubl
             line[2] = or0(p.batch_ga_[r]);
             line[3] = or0(p.batch_gb_[r]);
             line[4] = 0.5 * double(K - 1);
-            *ho = h + r * K;
+            *ho = p.rel_h_.data();
             *go = g + r * K;
             *vo = vr;
         }
     } fiber_rows;
     fiber_rows.self = this;
-    fiber_rows.h = height;
+    fiber_rows.h = raw_height;
     fiber_rows.g = slope;
     fiber_rows.v = valid;
     fiber_rows.s = s;
@@ -451,7 +495,7 @@ void recon_pipeline::batch_fibers(std::size_t rows, const double *s, const doubl
     if (offset_->pull(rows, line_s_.data(), line_a_.data(), nullptr) != rows ||
         tilt_->pull(rows, line_s_.data(), line_b_.data(), nullptr) != rows)
         throw error(FLT_ERR_INTERNAL, "line channels out of step with the fibers");
-    add_lines(rows, line_a_.data(), line_b_.data(), z_store);
+    add_lines(rows, line_a_.data(), line_b_.data(), has_level_ ? level_ : 0.0, z_store);
 }
 
 std::size_t recon_pipeline::free_rows() const {
@@ -483,11 +527,30 @@ std::size_t recon_pipeline::pull(std::size_t max_rows, double *s_out, double *z_
         if (offset_->pull(n, line_s_.data(), line_a_.data(), nullptr) != n ||
             tilt_->pull(n, line_s_.data(), line_b_.data(), nullptr) != n)
             throw error(FLT_ERR_INTERNAL, "line channels out of step with the fibers");
-        add_lines(n, line_a_.data(), line_b_.data(), z_out);
-    }
-    if (has_level_)
+        // With the level, in one pass (NaN stays NaN).
+        add_lines(n, line_a_.data(), line_b_.data(), has_level_ ? level_ : 0.0, z_out);
+    } else if (has_level_) {
         for (std::size_t i = 0; i < n * K_; ++i)
             z_out[i] += level_;  // NaN stays NaN
+    }
+    return n;
+}
+
+std::size_t recon_pipeline::peek(std::size_t offset, std::size_t max_rows, double *s_out,
+                                 double *z_out, std::uint8_t *flags_out) {
+    const std::size_t n = main_->peek(offset, max_rows, s_out, z_out, flags_out);
+    if (config_.rigid_motion && n > 0) {
+        // The line channels hold the same rows (they see every row the
+        // fibers see, on the same knots with the same lag).
+        if (offset_->peek(offset, n, line_s_.data(), line_a_.data(), nullptr) != n ||
+            tilt_->peek(offset, n, line_s_.data(), line_b_.data(), nullptr) != n)
+            throw error(FLT_ERR_INTERNAL, "line channels out of step with the fibers");
+        // With the level, in one pass (NaN stays NaN).
+        add_lines(n, line_a_.data(), line_b_.data(), has_level_ ? level_ : 0.0, z_out);
+    } else if (has_level_) {
+        for (std::size_t i = 0; i < n * K_; ++i)
+            z_out[i] += level_;  // NaN stays NaN
+    }
     return n;
 }
 

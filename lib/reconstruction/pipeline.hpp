@@ -78,6 +78,12 @@ class recon_pipeline {
 
     void push_row(double s, const double *height, const double *slope, const std::uint8_t *valid);
     std::size_t pull(std::size_t max_rows, double *s_out, double *z_out, std::uint8_t *flags_out);
+    // The rows held, skipping the `offset` oldest: finished ones as pull()
+    // will give them, pending ones as the reconstructor estimates them now
+    // (provisional, given every row pushed so far). Changes nothing that
+    // pull() gives. Returns the rows written.
+    std::size_t peek(std::size_t offset, std::size_t max_rows, double *s_out, double *z_out,
+                     std::uint8_t *flags_out);
     void end_sheet();
     void reset();
     void boundary(double *s_out, double *height_out, double *slope_out) const;
@@ -85,6 +91,12 @@ class recon_pipeline {
     // 0..rows-1, the row capacity) and flags_store. valid may be nullptr.
     void batch(std::size_t rows, const double *s, const double *height, const double *slope,
                const std::uint8_t *valid, double *z_store);
+    // Batch: the next call's z_store / flags_store (a workspace serves one
+    // call after another; flags_store nullptr only if it was constructed
+    // so).
+    void rebind_rows(double *z_store, std::uint8_t *flags_store) {
+        main_->rebind_rows(z_store, flags_store);
+    }
 
   private:
     // Through a 32-bit integer, which vectorises (fibers < 2^31, recon_api.cpp).
@@ -96,7 +108,9 @@ class recon_pipeline {
     // Splits one kind of measurement (heights or slopes) of a row.
     void split(double s, const double *value, const std::uint8_t *valid, bool is_height, double *a,
                double *b, double *dev);
-    void add_lines(std::size_t rows, const double *a, const double *b, double *z) const;
+    // z += (a + b xi) + level, row by row.
+    void add_lines(std::size_t rows, const double *a, const double *b, double level,
+                   double *z) const;
     // batch() on heights relative to the level.
     void batch_fibers(std::size_t rows, const double *s, const double *height, const double *slope,
                       const std::uint8_t *valid, double *z_store);

@@ -5,6 +5,7 @@
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <vector>
 
 #include "core/error.hpp"
@@ -86,6 +87,25 @@ class off_strip_fifo {
         }
     }
 
+    // Applies the bits of `rows` rows from the `offset`-th oldest on to
+    // output (peeked rows), keeping them.
+    void apply(std::size_t offset, std::size_t rows, double *z, std::uint8_t *flags) const {
+        for (std::size_t r = 0; r < rows && offset + r < count_; ++r) {
+            const std::size_t slot = (head_ + offset + r) % any_.size();
+            if (!any_[slot])
+                continue;
+            const std::uint8_t *bits = &bits_[slot * stride_];
+            for (std::size_t k = 0; k < fibers_; ++k)
+                if (bits[k / 8] & (1u << (k % 8))) {
+                    z[r * fibers_ + k] = std::numeric_limits<double>::quiet_NaN();
+                    if (flags)
+                        flags[r * fibers_ + k] = FLT_FLAG_OFF_STRIP;
+                }
+        }
+    }
+    // Rows held (pushed, not pulled).
+    std::size_t count() const { return count_; }
+
   private:
     std::size_t stride_ = 0, fibers_ = 0, head_ = 0, count_ = 0;
     std::vector<std::uint8_t> any_, bits_, valid_;
@@ -99,9 +119,59 @@ struct flt_recon {
 
 namespace {
 
+// The largest lag (knots) whose rows are finished within latency_mm of strip
+// (recon_params::latency_bound_mm), or -1 if even a lag of 0 takes more.
+long lag_for_latency(double latency_mm, double knot_spacing, double laser_spacing) {
+    recon_params p;
+    p.knot_spacing = knot_spacing;
+    p.laser_spacing = laser_spacing;
+    const double most = std::floor((latency_mm - 0.5 * laser_spacing) / knot_spacing);
+    p.lag_knots = long(std::max(-1.0, std::min(most, 1.0e15)));
+    while (p.lag_knots >= 0 && p.latency_bound_mm() > latency_mm)
+        --p.lag_knots;
+    return p.lag_knots;
+}
+
+// The streaming lag from lag_knots or latency_mm (they are one setting: at
+// most one of them may be set), and the head's wait.
+flt_status read_lag(const char *fn, const flt_options *options, recon_params &p) {
+    const double lag = option_value(options, FLT_OPT_LAG_KNOTS);
+    const double latency = option_value(options, FLT_OPT_LATENCY_MM);
+    if (lag >= 0.0 && option_is_set(options, FLT_OPT_LATENCY_MM))
+        return fail(FLT_ERR_INVALID_ARGUMENT,
+                    "%s: options 'lag_knots' = %g and 'latency_mm' = %g are both set; they are "
+                    "one setting (the streaming lag), set one of them",
+                    fn, lag, latency);
+    if (lag >= 0.0) {
+        // The lag as given, exactly (also at the strip's head), as before
+        // latency_mm existed.
+        p.lag_knots = long(lag);
+        p.start_lag_knots = 0;
+        return FLT_OK;
+    }
+    p.lag_knots = lag_for_latency(latency, p.knot_spacing, p.laser_spacing);
+    recon_params least = p;
+    least.lag_knots = 0;
+    if (p.lag_knots < 0)
+        return fail(FLT_ERR_INVALID_ARGUMENT,
+                    "%s: option 'latency_mm' = %g mm is shorter than the least the "
+                    "reconstructor can do, %g mm (a row spans %g mm of strip, and the knots "
+                    "under it must be complete: 2 knots of %g mm and half the laser spacing)",
+                    fn, latency, least.latency_bound_mm(), p.laser_spacing, p.knot_spacing);
+    const option_spec *spec = find_option(FLT_OPT_LAG_KNOTS);
+    if (double(p.lag_knots) > spec->max_value)
+        return fail(FLT_ERR_INVALID_ARGUMENT,
+                    "%s: option 'latency_mm' = %g mm is a lag of %ld knots of %g mm, more "
+                    "than lag_knots allows (%g)",
+                    fn, latency, p.lag_knots, p.knot_spacing, spec->max_value);
+    p.start_lag_knots = recon_params::head_lag(p.lag_knots);
+    return FLT_OK;
+}
+
 // laser_spacing: the sensor's, from a calibration, or 0 to read the option.
+// streaming: read the lag (flt_reconstruct has none).
 flt_status read_params(const char *fn, const flt_options *options, recon_config *out,
-                       double laser_spacing = 0.0) {
+                       double laser_spacing = 0.0, bool streaming = true) {
     if (flt_status st = check_option_component(fn, options, {FLT_OPT_KNOT_SPACING}))
         return st;
     recon_config config;
@@ -114,7 +184,6 @@ flt_status read_params(const char *fn, const flt_options *options, recon_config 
     p.slope_sigma = option_value(options, FLT_OPT_SLOPE_SIGMA);
     p.curvature_weight = option_value(options, FLT_OPT_CURVATURE_WEIGHT);
     p.curvature_jump_weight = option_value(options, FLT_OPT_CURVATURE_JUMP_WEIGHT);
-    p.lag_knots = long(option_value(options, FLT_OPT_LAG_KNOTS));
     p.max_gap = option_value(options, FLT_OPT_MAX_GAP);
     p.row_capacity = std::size_t(option_value(options, FLT_OPT_ROW_CAPACITY));
     config.rigid_motion = option_value(options, FLT_OPT_RIGID_MOTION) != 0.0;
@@ -127,6 +196,9 @@ flt_status read_params(const char *fn, const flt_options *options, recon_config 
                     "%s: knot_spacing = %g mm is more than %g times finer than "
                     "laser_spacing = %g mm",
                     fn, p.knot_spacing, k_max_knots_per_laser_spacing, p.laser_spacing);
+    if (streaming)
+        if (flt_status st = read_lag(fn, options, p))
+            return st;
     *out = config;
     return FLT_OK;
 }
@@ -286,15 +358,14 @@ flt_status push_rows(const char *fn, flt_recon *recon, std::size_t rows, std::si
                 // Nothing to pull: the rows held are all waiting for the
                 // strip the reconstructor needs beyond them.
                 const long knots = e.latency_knots();
-                const bool robust = e.config().robust.kind != robust_kind::none;
                 return fail(FLT_ERR_BUFFER_FULL,
                             "%s: %zu rows do not fit, and no row is finished yet: a row is "
-                            "finished about %ld knots (%.0f mm) of strip after it, and "
-                            "row_capacity = %zu%s; create the reconstructor with a larger "
-                            "row_capacity or a shorter lag, or end the sheet",
+                            "finished up to about %ld knots (%.0f mm) of strip after it (at a "
+                            "strip's head), and row_capacity = %zu; create the reconstructor "
+                            "with a larger row_capacity or a shorter latency_mm, or end the "
+                            "sheet",
                             fn, rows, knots, double(knots) * e.config().params.knot_spacing,
-                            e.config().params.row_capacity,
-                            robust ? " (robust mode queues up to a quarter of it per pass)" : "");
+                            e.config().params.row_capacity);
             }
             return fail(FLT_ERR_BUFFER_FULL,
                         "%s: %zu rows do not fit: %zu of row_capacity = %zu are "
@@ -316,6 +387,88 @@ flt_status push_rows(const char *fn, flt_recon *recon, std::size_t rows, std::si
 
 namespace {
 
+// flt_reconstruct's working memory, kept for the next call: a sheet of the
+// same shape (fibers, rows, options) is solved in the same buffers, without
+// allocating (mapping and faulting in tens of megabytes per call cost more
+// than the solve). Calls on several threads each take a workspace of their
+// own. Up to k_batch_keep workspaces and k_batch_keep_bytes are kept; a
+// larger one is freed after its call.
+constexpr std::size_t k_batch_keep = 4;
+constexpr double k_batch_keep_bytes = 256.0 * 1024 * 1024;
+
+struct batch_workspace {
+    std::size_t fibers = 0, rows = 0, knots = 0;
+    bool own_flags = false;  // constructed without flags_out: keeps its own
+    recon_config config;
+    double bytes = 0.0;
+    std::unique_ptr<recon_pipeline> pipeline;
+    std::vector<std::uint8_t> mask;  // flt_reconstruct_flagged's validity
+};
+
+// Exact equality of everything but the sizes: the engines precompute their
+// weights from the options.
+bool same_options(const recon_config &a, const recon_config &b) {
+    const recon_params &p = a.params, &q = b.params;
+    return p.knot_spacing == q.knot_spacing && p.laser_spacing == q.laser_spacing &&
+           p.height_sigma == q.height_sigma && p.slope_sigma == q.slope_sigma &&
+           p.curvature_weight == q.curvature_weight &&
+           p.curvature_jump_weight == q.curvature_jump_weight && p.max_gap == q.max_gap &&
+           p.lag_knots == q.lag_knots && p.start_lag_knots == q.start_lag_knots &&
+           a.robust.kind == b.robust.kind && a.robust.iterations == b.robust.iterations &&
+           a.robust.block_rows == b.robust.block_rows &&
+           a.robust.scale_blocks == b.robust.scale_blocks &&
+           a.line_iterations == b.line_iterations && a.rigid_motion == b.rigid_motion &&
+           a.shape_sigma == b.shape_sigma;
+}
+
+class batch_pool {
+  public:
+    // A kept workspace that fits (the same options and fibers, at least the
+    // rows and knots, flags kept the same way), or nullptr.
+    std::unique_ptr<batch_workspace> take(std::size_t fibers, const recon_config &config,
+                                          std::size_t rows, std::size_t knots, bool own_flags) {
+        std::lock_guard<std::mutex> lock(m_);
+        for (auto it = idle_.begin(); it != idle_.end(); ++it) {
+            batch_workspace &w = **it;
+            if (w.fibers == fibers && w.rows >= rows && w.knots >= knots &&
+                w.own_flags == own_flags && same_options(w.config, config)) {
+                std::unique_ptr<batch_workspace> found = std::move(*it);
+                idle_.erase(it);
+                return found;
+            }
+        }
+        return nullptr;
+    }
+    // Keeps a workspace for the next call (the most recent first), freeing
+    // the oldest beyond the limits.
+    void give(std::unique_ptr<batch_workspace> w) {
+        if (w->bytes > k_batch_keep_bytes)
+            return;
+        std::vector<std::unique_ptr<batch_workspace>> dropped;
+        std::lock_guard<std::mutex> lock(m_);
+        idle_.insert(idle_.begin(), std::move(w));
+        double bytes = 0.0;
+        for (std::size_t i = 0; i < idle_.size(); ++i) {
+            bytes += idle_[i]->bytes;
+            if (i >= k_batch_keep || bytes > k_batch_keep_bytes) {
+                for (std::size_t j = i; j < idle_.size(); ++j)
+                    dropped.push_back(std::move(idle_[j]));
+                idle_.resize(i);
+                break;
+            }
+        }
+    }
+
+  private:
+    std::mutex m_;
+    std::vector<std::unique_ptr<batch_workspace>> idle_;
+};
+
+batch_pool &workspaces() {
+    static batch_pool pool;
+    return pool;
+}
+
 flt_status reconstruct_sheet(const char *fn, const flt_options *options, std::size_t rows,
                              std::size_t fibers, const double *s, const double *height,
                              const double *slope, const std::uint8_t *valid,
@@ -330,7 +483,7 @@ flt_status reconstruct_sheet(const char *fn, const flt_options *options, std::si
         if (flt_status st = check_shape(fn, rows, fibers))
             return st;
         recon_config config;
-        if (flt_status st = read_params(fn, options, &config))
+        if (flt_status st = read_params(fn, options, &config, 0.0, false))
             return st;
         recon_params &p = config.params;
         if (flt_status st = check_positions(fn, rows, s, false, 0.0, p.knot_spacing))
@@ -342,15 +495,34 @@ flt_status reconstruct_sheet(const char *fn, const flt_options *options, std::si
         const std::size_t knots = std::size_t(span / p.knot_spacing) + 4;
         if (flt_status st = check_bytes(fn, fibers, config, knots, true))
             return st;
-        std::vector<std::uint8_t> mask;
-        if (flagged) {
-            mask.resize(rows * fibers);
-            for (std::size_t i = 0; i < rows * fibers; ++i)
-                mask[i] = flags[i] == 0 ? 1 : 0;
-            valid = mask.data();
+        const bool own_flags = flags_out == nullptr;
+        std::unique_ptr<batch_workspace> w =
+            workspaces().take(fibers, config, rows, knots, own_flags);
+        if (w) {
+            w->pipeline->rebind_rows(z_out, flags_out);
+        } else {
+            w = std::make_unique<batch_workspace>();
+            w->fibers = fibers;
+            w->rows = rows;
+            w->knots = knots;
+            w->own_flags = own_flags;
+            w->config = config;
+            w->bytes = recon_pipeline::bytes_needed(fibers, config, knots, true) +
+                       (own_flags ? double(rows) * double(fibers) : 0.0);
+            w->pipeline =
+                std::make_unique<recon_pipeline>(fibers, config, knots, z_out, flags_out, true);
         }
-        recon_pipeline e(fibers, config, knots, z_out, flags_out, true);
-        e.batch(rows, s, height, slope, valid, z_out);
+        if (flagged) {
+            if (w->mask.size() < rows * fibers) {
+                w->bytes += double(rows * fibers - w->mask.size());
+                w->mask.resize(rows * fibers);
+            }
+            for (std::size_t i = 0; i < rows * fibers; ++i)
+                w->mask[i] = flags[i] == 0 ? 1 : 0;
+            valid = w->mask.data();
+        }
+        w->pipeline->batch(rows, s, height, slope, valid, z_out);
+        workspaces().give(std::move(w));
         if (flagged)
             for (std::size_t i = 0; i < rows * fibers; ++i)
                 if (flags[i] & FLT_FLAG_OFF_STRIP) {
@@ -481,6 +653,9 @@ FLT_API flt_status FLT_CALL flt_recon_get_option(const flt_recon *recon, flt_opt
             case FLT_OPT_LAG_KNOTS:
                 *out = double(p.lag_knots);
                 break;
+            case FLT_OPT_LATENCY_MM:
+                *out = p.latency_bound_mm();
+                break;
             case FLT_OPT_MAX_GAP:
                 *out = p.max_gap;
                 break;
@@ -568,6 +743,49 @@ FLT_API flt_status FLT_CALL flt_recon_ready(const flt_recon *recon, size_t *out)
     });
 }
 
+FLT_API flt_status FLT_CALL flt_recon_pending(const flt_recon *recon, size_t *out) {
+    const char *fn = "flt_recon_pending";
+    return guard(fn, [&] {
+        if (flt_status st = check_handle(fn, recon))
+            return st;
+        FLT_CHECK_NOT_NULL(fn, out);
+        *out = recon->off_strip.count() - recon->engine->ready_rows();
+        return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_recon_peek(flt_recon *recon, size_t max_rows, size_t fibers,
+                                           double *s_out, double *z_out, uint8_t *flags_out,
+                                           size_t *rows_out) {
+    const char *fn = "flt_recon_peek";
+    return guard(fn, [&] {
+        if (flt_status st = check_handle(fn, recon))
+            return st;
+        recon_pipeline &e = *recon->engine;
+        FLT_CHECK_NOT_NULL(fn, rows_out);
+        *rows_out = 0;
+        if (flt_status st = check_fibers(fn, fibers, e.fibers()))
+            return st;
+        if (max_rows > 0) {
+            FLT_CHECK_NOT_NULL(fn, s_out);
+            FLT_CHECK_NOT_NULL(fn, z_out);
+            if (flt_status st = check_shape(fn, max_rows, fibers))
+                return st;
+        }
+        if (!e.pushed_since_reset())
+            return fail(FLT_ERR_STATE,
+                        "%s: nothing was pushed since the reconstructor was "
+                        "created or reset",
+                        fn);
+        const std::size_t ready = e.ready_rows();
+        if (max_rows == 0 || recon->off_strip.count() <= ready)
+            return FLT_OK;
+        *rows_out = e.peek(ready, max_rows, s_out, z_out, flags_out);
+        recon->off_strip.apply(ready, *rows_out, z_out, flags_out);
+        return FLT_OK;
+    });
+}
+
 FLT_API flt_status FLT_CALL flt_recon_end_sheet(flt_recon *recon) {
     const char *fn = "flt_recon_end_sheet";
     return guard(fn, [&] {
@@ -640,4 +858,13 @@ FLT_API flt_status FLT_CALL flt_reconstruct_flagged(const flt_options *options, 
 
 long flt::recon_latency_knots(const flt_recon *recon) {
     return recon->engine->latency_knots();
+}
+
+flt_status flt::recon_read_config(const char *fn, const flt_options *options, double laser_spacing,
+                                  recon_config *out) {
+    return read_params(fn, options, out, laser_spacing);
+}
+
+flt::recon_pipeline &flt::recon_pipeline_of(flt_recon *recon) {
+    return *recon->engine;
 }

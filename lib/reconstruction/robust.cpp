@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "core/error.hpp"
+#include "reconstruction/window.hpp"
 
 namespace flt {
 namespace {
@@ -55,7 +56,8 @@ constexpr double k_min_sigma_fraction = 1e-3;
 // estimate. Tukey's biweight takes weights on every sample (plain IRLS):
 // its objective is not convex, and its pseudo-observations let a shifted
 // level persist between shear cuts. Invalid samples (not finite, or masked
-// out by valid when given; queued rows carry them as NaN) get multiplier 0.
+// out by valid when given; the robust window stores them as NaN) get
+// multiplier 0.
 // Every pointer is a restrict parameter: GCC vectorises across fibers only
 // when it need not check the arrays for overlap.
 constexpr double k_gross = 4.0;
@@ -149,14 +151,6 @@ const weigh_kernel k_weigh[2][2][2][2] = {
      {{weigh_tukey_masked_h, weigh_tukey_masked_g},
       {weigh_tukey_masked_lh, weigh_tukey_masked_lg}}},
 };
-
-// out = in where it is a sample (finite, at most k_max_sample), NaN elsewhere
-// (the queues' mark of an invalid sample).
-FLT_ROBUST_KERNEL void copy_sample(std::size_t K, const double *__restrict in,
-                                   double *__restrict out) {
-    for (std::size_t k = 0; k < K; ++k)
-        out[k] = std::fabs(in[k]) <= k_max_sample ? in[k] : k_nan;
-}
 
 // A completed block's estimate per fiber: the clipped mean as a Gaussian
 // sigma, NaN with too few values; the block's sums restart.
@@ -292,155 +286,37 @@ bool robust_scale::end_row() {
 
 // ---------------------------------------------------------------------------
 
-double recon_chain::bytes_needed(std::size_t fibers, const recon_params &params,
-                                 const robust_params &robust, std::size_t knot_capacity,
-                                 bool owns_rows, bool batch) {
-    // The same sizes as the constructor below.
-    const std::size_t n_stages =
-        robust.kind == robust_kind::none ? 1 : 1 + std::size_t(robust.iterations);
-    const double K = double(fibers);
-    const double final_stage =
-        recon_engine::bytes_needed(fibers, params, knot_capacity, owns_rows, true);
-    // Per reweighted stage: running scales (a ring of blocks, a few more
-    // per fiber) and the per-fiber residual scratch.
-    const double scales = 8 * K * (2 * double(robust.scale_blocks) + 16);
-    if (batch)  // one engine; the previous pass's knot states
-        return final_stage +
-               (n_stages > 1 ? 8 * K * 2 * (double(knot_capacity) + 200) + scales : 0);
-    recon_params stage = params;
-    stage.lag_knots = robust.stage_lag_knots;
-    const double intermediate =
-        recon_engine::bytes_needed(fibers, stage, stage.knot_capacity(), true, false);
-    const double queue_rows = std::max(256.0, std::floor(double(params.row_capacity) / 4.0));
-    const double queue = 8 * queue_rows * (2 * K + 1);
-    return final_stage + double(n_stages - 1) * (intermediate + queue + scales);
-}
-
-recon_chain::recon_chain(std::size_t fibers, const recon_params &params,
-                         const robust_params &robust, std::size_t knot_capacity, double *z_store,
-                         std::uint8_t *flags_store, bool batch)
-    : K_(fibers), robust_(robust), D_(params.laser_spacing), batch_(batch) {
-    const std::size_t n_stages =
-        robust_.kind == robust_kind::none ? 1 : 1 + std::size_t(robust_.iterations);
-    if (n_stages > 1) {
-        for (auto *v : {&pred_h_, &pred_g_, &out_h_, &out_g_, &mult_h_, &mult_g_})
-            v->assign(K_, 0.0);
-    }
-    if (batch_) {
-        // One engine for every pass, and one pair of running scales.
-        stages_.push_back(
-            std::make_unique<recon_engine>(K_, params, knot_capacity, z_store, flags_store, true));
-        if (n_stages == 1)
-            return;
-        saved_.assign(stages_[0]->solution_size(), 0.0);
-        initial_wh_.assign(K_, stages_[0]->default_height_weight());
-        initial_wg_.assign(K_, stages_[0]->default_slope_weight());
-        h_scale_.resize(2);
-        g_scale_.resize(2);
-        h_scale_[1] = std::make_unique<robust_scale>(K_, robust_.block_rows, robust_.scale_blocks,
-                                                     params.height_sigma);
-        g_scale_[1] = std::make_unique<robust_scale>(K_, robust_.block_rows, robust_.scale_blocks,
-                                                     D_ * params.slope_sigma);
-        return;
-    }
-    // Streaming: the reweighting stages stream with a short lag; rows move
-    // through short queues.
-    for (std::size_t i = 0; i + 1 < n_stages; ++i) {
-        recon_params stage = params;
-        stage.lag_knots = robust_.stage_lag_knots;
-        stages_.push_back(std::make_unique<recon_engine>(K_, stage, stage.knot_capacity(), nullptr,
-                                                         nullptr, false));
-    }
-    stages_.push_back(
-        std::make_unique<recon_engine>(K_, params, knot_capacity, z_store, flags_store, true));
-    if (n_stages == 1)
-        return;
-
-    // A row waits in queue i until stage i-1 has emitted the knots under it:
-    // its lag and emission group plus the row's own span, a few knots more
-    // for the group's phase. Streaming use does not know the row spacing,
-    // so it takes a quarter of the row capacity.
-    queue_capacity_ = std::max<std::size_t>(256, params.row_capacity / 4);
-    queues_.resize(n_stages);
-    h_scale_.resize(n_stages);
-    g_scale_.resize(n_stages);
-    for (std::size_t i = 1; i < n_stages; ++i) {
-        pending &q = queues_[i];
-        q.s.reset(new double[queue_capacity_]);
-        q.height.reset(new double[queue_capacity_ * K_]);
-        q.slope.reset(new double[queue_capacity_ * K_]);
-        h_scale_[i] = std::make_unique<robust_scale>(K_, robust_.block_rows, robust_.scale_blocks,
-                                                     params.height_sigma);
-        g_scale_[i] = std::make_unique<robust_scale>(K_, robust_.block_rows, robust_.scale_blocks,
-                                                     D_ * params.slope_sigma);
+void robust_scale::weights(const robust_scale &h, const robust_scale &g, double max_ratio,
+                           double *wh, double *wg) {
+    const double *ih = h.inv_var(), *ig = g.inv_var();
+    for (std::size_t k = 0; k < h.K_; ++k) {
+        wh[k] = ih[k];
+        wg[k] = std::min(ig[k], max_ratio * ih[k]);
     }
 }
 
-long recon_chain::latency_knots() const {
-    long knots = 0;
-    for (const auto &stage : stages_) {
-        const recon_params &p = stage->params();
-        if (p.lag_knots == recon_params::no_lag)
-            return recon_params::no_lag;
-        knots += p.lag_knots + p.emit_group() + stage->knots_per_row();
-    }
-    return knots;
-}
-
-std::size_t recon_chain::free_rows() const {
-    // Every queued row is on its way into the last stage's ring: it takes a
-    // slot there too. (Counting only the rows already in the ring let a
-    // push fill the queues beyond the ring, and end_sheet then wrote the
-    // last rows over the first ones: the contract suite, robust mode with
-    // row_capacity = 32.)
-    std::size_t queued = 0, free = last().free_rows();
-    for (std::size_t i = 1; i < queues_.size(); ++i) {
-        const std::size_t in_queue = queues_[i].tail - queues_[i].head;
-        queued += in_queue;
-        free = std::min(free, queue_capacity_ - in_queue);
-    }
-    const std::size_t ring = last().free_rows();
-    return std::min(free, ring > queued ? ring - queued : 0);
-}
-
-void recon_chain::enqueue(std::size_t stage, double s, const double *height, const double *slope,
-                          const std::uint8_t *valid) {
-    pending &q = queues_[stage];
-    if (q.tail - q.head >= queue_capacity_)
-        throw error(FLT_ERR_BUFFER_FULL, "robust stage queue is full");
-    const std::size_t r = q.tail % queue_capacity_;
-    q.s[r] = s;
-    // Invalid samples (masked, NaN or infinite) are stored as NaN: the
-    // stages and the scale estimate then need no mask.
-    double *qh = q.height.get() + r * K_, *qg = q.slope.get() + r * K_;
-    copy_sample(K_, height, qh);
-    copy_sample(K_, slope, qg);
-    if (valid)
-        for (std::size_t k = 0; k < K_; ++k)
-            if (!valid[k])
-                qh[k] = qg[k] = k_nan;
-    ++q.tail;
-}
-
-void recon_chain::reweigh(std::size_t scale, recon_engine &next, const double *h, const double *g,
-                          const std::uint8_t *valid, const double *line) {
+void robust_weigh_row(robust_kind kind, std::size_t K, double D, const double *h, const double *g,
+                      const std::uint8_t *valid, const double *line, const double *pred_h,
+                      const double *pred_g, robust_scale &hs, robust_scale &gs, bool feed,
+                      double *sink_sum, double *sink_count, double *out_h, double *out_g,
+                      double *mult_h, double *mult_g) {
+    static const double no_line[5] = {0, 0, 0, 0, 0};
     if (!line)
-        line = no_line_;
-    robust_scale &hs = *h_scale_[scale], &gs = *g_scale_[scale];
+        line = no_line;
     // From the scales before this row; its residuals then join the current
-    // block.
-    const int tukey = robust_.kind == robust_kind::tukey, masked = valid != nullptr;
+    // block (or the sink).
+    const int tukey = kind == robust_kind::tukey, masked = valid != nullptr;
     const int lined = line[0] != 0 || line[1] != 0 || line[2] != 0 || line[3] != 0;
     const bool gross_h = k_weigh[tukey][masked][lined][0](
-        K_, 1.0, 1.0, h, valid, line[0], line[1], line[4], pred_h_.data(), hs.sigma(), hs.inv_var(),
-        hs.sum(), hs.count(), out_h_.data(), mult_h_.data());
+        K, 1.0, 1.0, h, valid, line[0], line[1], line[4], pred_h, hs.sigma(), hs.inv_var(),
+        feed ? hs.sum() : sink_sum, feed ? hs.count() : sink_count, out_h, mult_h);
     const bool gross_g = k_weigh[tukey][masked][lined][1](
-        K_, D_, 1.0 / D_, g, valid, line[2], line[3], line[4], pred_g_.data(), gs.sigma(),
-        gs.inv_var(), gs.sum(), gs.count(), out_g_.data(), mult_g_.data());
+        K, D, 1.0 / D, g, valid, line[2], line[3], line[4], pred_g, gs.sigma(), gs.inv_var(),
+        feed ? gs.sum() : sink_sum, feed ? gs.count() : sink_count, out_g, mult_g);
     // Gross Huber samples keep their value and take the weight c / |r|.
     auto gross_weights = [&](const double *value, double a, double b, double scale_d,
                              const double *pred, const double *sigma, double *mult) {
-        for (std::size_t k = 0; k < K_; ++k) {
+        for (std::size_t k = 0; k < K; ++k) {
             if (mult[k] >= 0.0)
                 continue;
             const double x = double(std::int32_t(k)) - line[4];
@@ -449,9 +325,136 @@ void recon_chain::reweigh(std::size_t scale, recon_engine &next, const double *h
         }
     };
     if (gross_h)
-        gross_weights(h, line[0], line[1], 1.0, pred_h_.data(), hs.sigma(), mult_h_.data());
+        gross_weights(h, line[0], line[1], 1.0, pred_h, hs.sigma(), mult_h);
     if (gross_g)
-        gross_weights(g, line[2], line[3], D_, pred_g_.data(), gs.sigma(), mult_g_.data());
+        gross_weights(g, line[2], line[3], D, pred_g, gs.sigma(), mult_g);
+}
+
+// ---------------------------------------------------------------------------
+
+double recon_chain::bytes_needed(std::size_t fibers, const recon_params &params,
+                                 const robust_params &robust, std::size_t knot_capacity,
+                                 bool owns_rows, bool batch) {
+    // The same sizes as the constructor below.
+    const bool robust_on = robust.kind != robust_kind::none;
+    const double K = double(fibers);
+    if (!batch && robust_on)
+        return robust_window::bytes_needed(fibers, params, robust);
+    const double engine =
+        recon_engine::bytes_needed(fibers, params, knot_capacity, owns_rows, true);
+    if (!batch || !robust_on)
+        return engine;
+    // Batch passes: the running scales (a ring of blocks, a few more per
+    // fiber), the per-fiber residual scratch, the previous pass's knots.
+    const double scales = 8 * K * (2 * double(robust.scale_blocks) + 16);
+    return engine + 8 * K * 2 * (double(knot_capacity) + 200) + scales;
+}
+
+recon_chain::recon_chain(std::size_t fibers, const recon_params &params,
+                         const robust_params &robust, std::size_t knot_capacity, double *z_store,
+                         std::uint8_t *flags_store, bool batch)
+    : K_(fibers), robust_(robust), D_(params.laser_spacing), batch_(batch) {
+    const bool robust_on = robust_.kind != robust_kind::none;
+    if (!batch_ && robust_on) {
+        window_ = std::make_unique<robust_window>(K_, params, robust_, z_store, flags_store);
+        return;
+    }
+    engine_ = std::make_unique<recon_engine>(K_, params, knot_capacity, z_store, flags_store, true);
+    if (!batch_ || !robust_on)
+        return;
+    // Batch passes: one engine for every pass, and one pair of running
+    // scales.
+    for (auto *v : {&pred_h_, &pred_g_, &out_h_, &out_g_, &mult_h_, &mult_g_})
+        v->assign(K_, 0.0);
+    saved_.assign(engine_->solution_size(), 0.0);
+    initial_wh_.assign(K_, engine_->default_height_weight());
+    initial_wg_.assign(K_, engine_->default_slope_weight());
+    h_scale_ = std::make_unique<robust_scale>(K_, robust_.block_rows, robust_.scale_blocks,
+                                              params.height_sigma);
+    g_scale_ = std::make_unique<robust_scale>(K_, robust_.block_rows, robust_.scale_blocks,
+                                              D_ * params.slope_sigma);
+}
+
+recon_chain::~recon_chain() = default;
+
+long recon_chain::latency_knots() const {
+    if (window_)
+        return window_->latency_knots();
+    const recon_params &p = engine_->params();
+    if (p.lag_knots == recon_params::no_lag)
+        return recon_params::no_lag;
+    return p.latency_knots() + engine_->knots_per_row() - 2;
+}
+
+std::size_t recon_chain::free_rows() const {
+    return window_ ? window_->free_rows() : engine_->free_rows();
+}
+std::size_t recon_chain::ready_rows() const {
+    return window_ ? window_->ready_rows() : engine_->ready_rows();
+}
+bool recon_chain::has_last_s() const {
+    return window_ ? window_->has_last_s() : engine_->has_last_s();
+}
+double recon_chain::last_s() const {
+    return window_ ? window_->last_s() : engine_->last_s();
+}
+bool recon_chain::rows_since_sheet() const {
+    return window_ ? window_->rows_since_sheet() : engine_->rows_since_sheet();
+}
+bool recon_chain::pushed_since_reset() const {
+    return window_ ? window_->pushed_since_reset() : engine_->pushed_since_reset();
+}
+bool recon_chain::has_boundary() const {
+    return window_ ? window_->has_boundary() : engine_->has_boundary();
+}
+
+void recon_chain::push_row(double s, const double *height, const double *slope,
+                           const std::uint8_t *valid) {
+    if (window_)
+        window_->push_row(s, height, slope, valid);
+    else
+        engine_->push_row(s, height, slope, valid);
+}
+
+std::size_t recon_chain::pull(std::size_t max_rows, double *s_out, double *z_out,
+                              std::uint8_t *flags_out) {
+    return window_ ? window_->pull(max_rows, s_out, z_out, flags_out)
+                   : engine_->pull(max_rows, s_out, z_out, flags_out);
+}
+
+std::size_t recon_chain::peek(std::size_t offset, std::size_t max_rows, double *s_out,
+                              double *z_out, std::uint8_t *flags_out) {
+    return window_ ? window_->peek(offset, max_rows, s_out, z_out, flags_out)
+                   : engine_->peek(offset, max_rows, s_out, z_out, flags_out);
+}
+
+void recon_chain::end_sheet() {
+    if (window_)
+        window_->end_sheet();
+    else
+        engine_->end_sheet();
+}
+
+void recon_chain::reset() {
+    if (window_)
+        window_->reset();
+    else
+        engine_->reset();
+}
+
+void recon_chain::boundary(double *s_out, double *height_out, double *slope_out) const {
+    if (window_)
+        window_->boundary(s_out, height_out, slope_out);
+    else
+        engine_->boundary(s_out, height_out, slope_out);
+}
+
+void recon_chain::reweigh(recon_engine &next, const double *h, const double *g,
+                          const std::uint8_t *valid, const double *line) {
+    robust_scale &hs = *h_scale_, &gs = *g_scale_;
+    robust_weigh_row(robust_.kind, K_, D_, h, g, valid, line, pred_h_.data(), pred_g_.data(), hs,
+                     gs, true, nullptr, nullptr, out_h_.data(), out_g_.data(), mult_h_.data(),
+                     mult_g_.data());
     const bool new_h = hs.end_row();
     const bool new_g = gs.end_row();
     // A completed block sets the fibers' weights, 1 / sigma^2.
@@ -459,47 +462,21 @@ void recon_chain::reweigh(std::size_t scale, recon_engine &next, const double *h
         next.set_fiber_weights(hs.inv_var(), gs.inv_var());
 }
 
-void recon_chain::advance(std::size_t stage) {
-    pending &q = queues_[stage];
-    recon_engine &prev = *stages_[stage - 1], &next = *stages_[stage];
-    while (q.head < q.tail) {
-        const std::size_t r = q.head % queue_capacity_;
-        const double s = q.s[r];
-        const double *h = q.height.get() + r * K_, *g = q.slope.get() + r * K_;
-        if (prev.predict(s, pred_h_.data(), pred_g_.data())) {
-            reweigh(stage, next, h, g, nullptr, nullptr);
-            next.push_row(s, out_h_.data(), out_g_.data(), nullptr, mult_h_.data(), mult_g_.data());
-        } else if (prev.prediction_lost(s)) {
-            // Rows far sparser than the knots (or a jump in s) moved stage
-            // i-1 on past this row's knots before it could be judged: it
-            // goes on as measured, at full weight (fuzz_recon found rows
-            // left queued for good).
-            next.push_row(s, h, g, nullptr);
-        } else {
-            break;  // stage i-1 has not emitted its knots yet
-        }
-        ++q.head;
-        // Hand the row on at once: the next stage must take rows as this
-        // one emits knots, before its ring of emitted knots moves on.
-        if (stage + 1 < stages_.size()) {
-            enqueue(stage + 1, s, h, g, nullptr);
-            advance(stage + 1);
-        }
-    }
-}
-
 void recon_chain::batch(std::size_t rows, const double *s, row_source &source) {
     if (!batch_)
         throw error(FLT_ERR_INTERNAL, "batch() on a streaming chain");
-    recon_engine &e = *stages_.front();
+    recon_engine &e = *engine_;
     const int passes = robust_.kind == robust_kind::none ? 1 : 1 + robust_.iterations;
     double saved_t0 = 0.0;
     for (int pass = 0; pass < passes; ++pass) {
-        if (pass > 0) {
+        // Every pass starts a strip; the first one too, as a workspace may
+        // have served an earlier sheet (recon_api.cpp).
+        if (pass > 0)
             e.save_solution(saved_.data(), &saved_t0);
-            e.reset();
-            h_scale_[1]->reset();
-            g_scale_[1]->reset();
+        e.reset();
+        if (passes > 1) {
+            h_scale_->reset();
+            g_scale_->reset();
             e.set_fiber_weights(initial_wh_.data(), initial_wg_.data());
         }
         // Only the last pass's rows are wanted.
@@ -516,42 +493,10 @@ void recon_chain::batch(std::size_t rows, const double *s, row_source &source) {
                 continue;
             }
             e.predict_saved(saved_.data(), saved_t0, s[r], pred_h_.data(), pred_g_.data());
-            reweigh(1, e, h, g, valid, line);
+            reweigh(e, h, g, valid, line);
             e.push_row(s[r], out_h_.data(), out_g_.data(), valid, mult_h_.data(), mult_g_.data());
         }
         e.end_sheet();
-    }
-}
-
-void recon_chain::push_row(double s, const double *height, const double *slope,
-                           const std::uint8_t *valid) {
-    first().push_row(s, height, slope, valid);
-    if (stages_.size() == 1)
-        return;
-    enqueue(1, s, height, slope, valid);
-    advance(1);
-}
-
-void recon_chain::end_sheet() {
-    // Each stage finishes with all its rows, which lets the next one take
-    // every row still queued for it.
-    for (std::size_t i = 0; i < stages_.size(); ++i) {
-        if (i > 0) {
-            advance(i);
-            if (queues_[i].head != queues_[i].tail)
-                throw error(FLT_ERR_INTERNAL, "robust stage left rows queued at end_sheet");
-        }
-        stages_[i]->end_sheet();
-    }
-}
-
-void recon_chain::reset() {
-    for (auto &stage : stages_)
-        stage->reset();
-    for (std::size_t i = 1; i < queues_.size(); ++i) {
-        queues_[i].head = queues_[i].tail = 0;
-        h_scale_[i]->reset();
-        g_scale_[i]->reset();
     }
 }
 

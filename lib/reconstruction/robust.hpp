@@ -1,27 +1,23 @@
 // SPDX-License-Identifier: Apache-2.0
-// Internal: robust reconstruction, an M-estimator (Huber or Tukey) that
-// streams.
+// Internal: robust reconstruction, an M-estimator (Huber or Tukey).
 //
-// Stage 0 is the plain fit (the options' noise levels); stage i refits the
-// same raw rows judged against stage i-1: each sample's residual against
-// stage i-1's estimate (what the two lasers would have measured on it)
-// gives
+// A plain fit first (the options' noise levels); then each sample is judged
+// by its residual against the current estimate (what the two lasers would
+// have measured on it), which gives
 //   - per fiber and measurement kind, a running robust scale (a clipped mean
 //     of |residual| per block of rows, the median of the last blocks': no
 //     noise level needs to be given), which sets the fiber's weight
 //     1/scale^2, and
-//   - per sample, how it enters: Huber's moderate residuals as
-//     pseudo-observations (prediction + clipped residual, no change to the
-//     window matrix), gross ones and all of Tukey's with a weight multiplier
-//     on the raw value (robust.cpp says why).
-// Streaming, the stages are a pipeline: a row enters stage i once stage i-1
-// has emitted every knot under it, so each stage adds its lag to the
-// latency; intermediate stages use a short lag (stage_lag_knots), the last
-// one the reconstructor's lag_knots. Every stage carries its own boundary
-// across sheets, and the output, from the last stage, is C1 like the plain
-// one. Batch (flt_reconstruct), the stages are passes over the whole sheet
-// in one engine (recon_chain::batch). Deterministic: no randomness, a fixed
-// number of stages.
+//   - per sample, how it enters the next solve: Huber's moderate residuals
+//     as pseudo-observations (prediction + clipped residual, no change to
+//     the matrix), gross ones and all of Tukey's with a weight multiplier on
+//     the raw value (robust.cpp says why).
+// Batch (flt_reconstruct, recon_chain::batch), the judging runs as passes
+// over the whole sheet in one engine, each against the previous pass's
+// solution. Streaming, it runs in one sliding window (robust_window,
+// window.hpp): every row is judged a few times as the strip moves on, and
+// a row is finished one lag after it, whatever the number of passes.
+// Deterministic: no randomness, a fixed schedule.
 #pragma once
 
 #include <memory>
@@ -35,8 +31,7 @@ enum class robust_kind { none = 0, huber = 1, tukey = 2 };
 
 struct robust_params {
     robust_kind kind = robust_kind::none;
-    int iterations = 2;            // reweighted stages after the plain one
-    long stage_lag_knots = 8;      // lag of the intermediate stages
+    int iterations = 2;            // times each sample is judged (reweighted)
     std::size_t block_rows = 64;   // rows per scale block (192 mm at 3 mm)
     std::size_t scale_blocks = 9;  // blocks whose medians make the scale
 };
@@ -60,6 +55,11 @@ class robust_scale {
     const double *sigma() const { return sigma_.data(); }
     const double *inv_var() const { return inv_var_.data(); }  // 1 / sigma^2
     void reset();
+    // The fibers' weights from the scales: 1/sigma^2 of the heights (wh)
+    // and of Delta-d * slope (wg, at most max_ratio * wh, as
+    // recon_engine::set_fiber_weights caps it).
+    static void weights(const robust_scale &h, const robust_scale &g, double max_ratio, double *wh,
+                        double *wg);
 
   private:
     void median_scalar(std::size_t k);
@@ -75,6 +75,21 @@ class robust_scale {
     std::vector<double> inv_var_;     // per fiber, 1 / sigma^2
     std::vector<double> incomplete_;  // scratch: 1 where a fiber has a NaN block
 };
+
+// Judges one row of K fibers: each sample's residual against the
+// prediction (pred_h: height, mm; pred_g: Delta-d * slope, mm) decides the
+// value it enters the next solve with (out_h in mm, out_g in mm/mm: a
+// pseudo-observation or the raw value) and its weight multiplier (mult_h,
+// mult_g in [0, 1]; 0 for an invalid sample). The residuals' clipped
+// magnitudes go to the scales' current blocks when feed is set (then call
+// end_row() on both), else to sink_sum / sink_count ([K], overwritten,
+// never read). h, g: the row (invalid: not finite, or valid[k] == 0 when
+// valid is given); line: as row_source gives it, or nullptr.
+void robust_weigh_row(robust_kind kind, std::size_t K, double D, const double *h, const double *g,
+                      const std::uint8_t *valid, const double *line, const double *pred_h,
+                      const double *pred_g, robust_scale &hs, robust_scale &gs, bool feed,
+                      double *sink_sum, double *sink_count, double *out_h, double *out_g,
+                      double *mult_h, double *mult_g);
 
 // Where batch pass `pass` (0, 1, ...) reads row r of the sheet: its heights
 // and slopes, and validity (nullptr: every finite sample is valid), good
@@ -94,21 +109,25 @@ class row_source {
     ~row_source() = default;
 };
 
-// One channel (a set of fibers) reconstructed robustly, or plainly when
-// robust.kind is none (a single stage). Same interface as recon_engine.
+class robust_window;
+
+// One channel (a set of fibers): a plain engine, or in robust mode the
+// one-stage robust window (streaming) or the passes of batch().
 //
-// Batch use (flt_reconstruct) has the whole sheet at hand, so it need not
-// pipeline the stages: batch() runs them as passes over the sheet, one
-// after the other, in one engine, each pass predicting from the previous
-// pass's whole-sheet solution (no lag at all, where streaming stages have
-// 8 knots). Nothing is queued, and the memory is one engine's.
+// Batch use (flt_reconstruct) has the whole sheet at hand: batch() runs the
+// passes over the sheet one after the other, in one engine, each pass
+// predicting from the previous pass's whole-sheet solution. Nothing is
+// queued, and the memory is one engine's.
 class recon_chain {
   public:
-    // batch: made for batch() (a single engine, no queues), with the
-    // caller's z_store / flags_store for every row of the sheet.
+    // batch: made for batch() (a single engine), with the caller's
+    // z_store / flags_store for every row of the sheet.
     recon_chain(std::size_t fibers, const recon_params &params, const robust_params &robust,
                 std::size_t knot_capacity, double *z_store = nullptr,
                 std::uint8_t *flags_store = nullptr, bool batch = false);
+    ~recon_chain();
+    recon_chain(const recon_chain &) = delete;
+    recon_chain &operator=(const recon_chain &) = delete;
 
     // The bytes the constructor with these arguments allocates (see
     // recon_engine::bytes_needed).
@@ -118,64 +137,56 @@ class recon_chain {
 
     std::size_t fibers() const { return K_; }
     std::size_t free_rows() const;
-    std::size_t ready_rows() const { return last().ready_rows(); }
-    bool has_last_s() const { return first().has_last_s(); }
-    double last_s() const { return first().last_s(); }
-    bool rows_since_sheet() const { return first().rows_since_sheet(); }
-    bool pushed_since_reset() const { return first().pushed_since_reset(); }
-    bool has_boundary() const { return last().has_boundary(); }
-    // Streaming: about how many knot intervals of strip a row waits in
-    // this chain before it is finished (every stage's lag and emission
-    // group, plus the knots a row spans).
+    std::size_t ready_rows() const;
+    bool has_last_s() const;
+    double last_s() const;
+    bool rows_since_sheet() const;
+    bool pushed_since_reset() const;
+    bool has_boundary() const;
+    // Streaming: about how many knot intervals of strip a row waits before
+    // it is finished (the lag and emission group, plus the knots a row
+    // spans).
     long latency_knots() const;
 
     void push_row(double s, const double *height, const double *slope, const std::uint8_t *valid);
-    std::size_t pull(std::size_t max_rows, double *s_out, double *z_out, std::uint8_t *flags_out) {
-        return last().pull(max_rows, s_out, z_out, flags_out);
-    }
+    std::size_t pull(std::size_t max_rows, double *s_out, double *z_out, std::uint8_t *flags_out);
+    // Rows held, skipping `offset`: finished ones as pull() gives them,
+    // pending ones provisional (recon_engine::peek).
+    std::size_t peek(std::size_t offset, std::size_t max_rows, double *s_out, double *z_out,
+                     std::uint8_t *flags_out);
     void end_sheet();
     void reset();
-    void boundary(double *s_out, double *height_out, double *slope_out) const {
-        last().boundary(s_out, height_out, slope_out);
-    }
+    void boundary(double *s_out, double *height_out, double *slope_out) const;
     // Batch: every row of the sheet (s strictly increasing), then end of
     // sheet; the rows are in z_store / flags_store, or can be pulled.
     void batch(std::size_t rows, const double *s, row_source &source);
+    // Batch: this call's storage for the rows (recon_engine::rebind_rows).
+    void rebind_rows(double *z_store, std::uint8_t *flags_store) {
+        engine_->rebind_rows(z_store, flags_store);
+    }
+    // Batch: a constant added to every row's heights as they are written
+    // (recon_engine::set_output_offset).
+    void set_output_offset(double c) { engine_->set_output_offset(c); }
 
   private:
-    recon_engine &first() const { return *stages_.front(); }
-    recon_engine &last() const { return *stages_.back(); }
-    // Raw rows waiting for stage i (1..iterations) to be able to take them.
-    struct pending {
-        // ring [capacity][K], NaN = invalid; not zero-filled: a slot is
-        // written before it is read, and untouched pages cost nothing.
-        std::unique_ptr<double[]> s, height, slope;
-        std::size_t head = 0, tail = 0;
-    };
-    void enqueue(std::size_t stage, double s, const double *height, const double *slope,
-                 const std::uint8_t *valid);
-    void advance(std::size_t stage);  // feed stage every row it can take
-    // Weighs one raw row for a reweighted stage from its residuals against
-    // the previous stage's prediction (pred_h_, pred_g_): adds them to the
-    // running scales `scale` (new fiber weights for `next` when a block
-    // completes), and leaves what the stage takes instead of the row in
-    // out_h_, out_g_ (pseudo-observations or raw values) and mult_h_,
-    // mult_g_ (weight multipliers); see robust.cpp.
-    // line: as row_source gives it, or nullptr for none.
-    void reweigh(std::size_t scale, recon_engine &next, const double *h, const double *g,
-                 const std::uint8_t *valid, const double *line);
+    // Weighs one raw row for a batch pass from its residuals against the
+    // previous pass's prediction (pred_h_, pred_g_): adds them to the running
+    // scales (new fiber weights for `next` when a block completes), and
+    // leaves what the pass takes instead of the row in out_h_, out_g_ and
+    // mult_h_, mult_g_ (robust_weigh_row). line: as row_source gives it.
+    void reweigh(recon_engine &next, const double *h, const double *g, const std::uint8_t *valid,
+                 const double *line);
 
     std::size_t K_;
     robust_params robust_;
     double D_;
     bool batch_ = false;
-    std::vector<double> saved_;  // batch: the previous pass's knots
+    std::unique_ptr<recon_engine> engine_;   // plain streaming, or batch
+    std::unique_ptr<robust_window> window_;  // streaming in robust mode
+    std::vector<double> saved_;              // batch: the previous pass's knots
     std::vector<double> initial_wh_, initial_wg_;
     const double no_line_[5] = {0, 0, 0, 0, 0};
-    std::vector<std::unique_ptr<recon_engine>> stages_;
-    std::vector<pending> queues_;                                   // [stage], 0 unused
-    std::vector<std::unique_ptr<robust_scale>> h_scale_, g_scale_;  // [stage]
-    std::size_t queue_capacity_ = 0;
+    std::unique_ptr<robust_scale> h_scale_, g_scale_;  // batch
     // Scratch, one row each.
     std::vector<double> pred_h_, pred_g_, out_h_, out_g_, mult_h_, mult_g_;
 };

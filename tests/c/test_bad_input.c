@@ -747,6 +747,50 @@ static void row_recon_ready(void) {
     flt_recon_destroy(r);
 }
 
+static void row_recon_pending(void) {
+    flt_recon *r = new_recon();
+    size_t n = 99;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'recon'", flt_recon_pending(NULL, &n));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_recon_pending(r, NULL));
+    GOOD(flt_recon_pending(r, &n));
+    ++g_checks;
+    if (n != 0)
+        ERR("pending = %zu before any push", n);
+    flt_recon_destroy(r);
+}
+
+static void row_recon_peek(void) {
+    flt_recon *r = new_recon();
+    make_rows(8);
+    double s_out[8], *z = malloc(sizeof(double) * 8 * FIBERS);
+    uint8_t *flags = malloc(8 * FIBERS);
+    size_t n = 99;
+    /* Wrong order: peek before any push. */
+    BAD(FLT_ERR_STATE, "nothing was pushed", flt_recon_peek(r, 8, FIBERS, s_out, z, flags, &n));
+    ++g_checks;
+    if (n != 0)
+        ERR("rows_out = %zu after a failure", n);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'recon'", flt_recon_peek(NULL, 8, FIBERS, s_out, z, flags, &n));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'rows_out'",
+        flt_recon_peek(r, 8, FIBERS, s_out, z, flags, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'s_out'", flt_recon_peek(r, 8, FIBERS, NULL, z, flags, &n));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'z_out'", flt_recon_peek(r, 8, FIBERS, s_out, NULL, flags, &n));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'", flt_recon_peek(r, 8, 3, s_out, z, flags, &n));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "overflows", flt_recon_peek(r, NEG, FIBERS, s_out, z, flags, &n));
+    GOOD(flt_recon_push(r, 8, FIBERS, g_rows.s, g_rows.h, g_rows.k, NULL));
+    GOOD(flt_recon_peek(r, 8, FIBERS, s_out, z, flags, &n));
+    ++g_checks;
+    if (n != 8) /* 8 rows, none finished at the default latency */
+        ERR("peek gave %zu of 8 pending rows", n);
+    GOOD(flt_recon_peek(r, 0, FIBERS, NULL, NULL, NULL, &n)); /* max_rows 0: NULLs fine */
+    GOOD(flt_recon_peek(r, 8, FIBERS, s_out, z, NULL, &n));   /* flags optional */
+    GOOD(flt_recon_reset(r));
+    BAD(FLT_ERR_STATE, "reset", flt_recon_peek(r, 8, FIBERS, s_out, z, flags, &n));
+    free(z);
+    free(flags);
+    flt_recon_destroy(r);
+}
+
 static void row_recon_end_sheet(void) {
     flt_recon *r = new_recon();
     make_rows(8);
@@ -4700,6 +4744,8 @@ static const row k_rows[] = {
     ROW(recon_push_flagged),
     ROW(recon_pull),
     ROW(recon_ready),
+    ROW(recon_pending),
+    ROW(recon_peek),
     ROW(recon_end_sheet),
     ROW(recon_reset),
     ROW(recon_boundary),

@@ -650,6 +650,10 @@ static void cuts_given_early_and_late(void **state) {
      * last one is 7.2 m.) */
     flt_options *o = bag();
     set(o, FLT_OPT_GAUGE_MAX_SHEET_LENGTH, 8000.0);
+    /* A reconstructor latency of about 7 m (lag 64 knots), so that the late
+     * cuts come while the rows before them are still within a sheet's
+     * length (at the default 2 m the gauge ends an 8 m sheet on its own). */
+    set(o, FLT_OPT_LAG_KNOTS, 64);
     flt_gauge *early = row_gauge(calib, 2, o);
     for (int i = 0; i < 3; ++i)
         OK(flt_gauge_cut(early, cuts[i]));

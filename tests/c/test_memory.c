@@ -151,29 +151,56 @@ static void test_flatness_refuses_on_its_formula(void **state) {
     free(x);
 }
 
-/* recon.h, "Memory". */
-static double recon_formula(double fibers, double rows, double lag, double passes, int rigid,
-                            int robust, double line_passes) {
-    const double S = 3; /* knots as far apart as the lasers: the default */
-    double bytes = rows * (9 + (9 + 4 * passes) * fibers);
-    bytes += fibers * (lag + lag / 8 + 12) * 8 * (4 * S + 3);
-    bytes += fibers * passes * 3000;
+/* recon.h, "Memory": the lag in knots that latency_mm gives (the longest
+ * whose rows are final within it: lag + lag/8 + 2 knots and half the laser
+ * spacing), the knots a row may wait (w: twice that at a strip's head; the
+ * lag and its emission group with lag_knots set) and the formula. */
+static double lag_for_latency(double latency_mm, double knot, double laser) {
+    double lag = 0;
+    while ((lag + 1 + 1 + floor((lag + 1) / 8) + 1) * knot + 0.5 * laser <= latency_mm)
+        ++lag;
+    return lag;
+}
+
+static double recon_formula(double fibers, double rows, double lag, double wait, double S,
+                            int rigid, int robust) {
+    const double K = fibers, L = lag, W = wait, R = rows;
+    double bytes = R * (9 + 9 * K);
+    if (!robust) {
+        bytes += K * (W + floor(L / 8) + 12) * 8 * (4 * S + 3);
+    } else {
+        bytes += R * (8 + 8 * K);
+        bytes += K * 16 * ((2 * S + 1) * (S + 1) * (W + 2 * S + 8) + W + floor(L / 8) + 170);
+    }
     if (rigid)
-        bytes += rows * (60 + (robust ? 12 * line_passes : 0));
+        bytes += R * (robust ? 92 : 60);
     return bytes;
 }
 
-static void recon_case(size_t fibers, double rows, int rigid, int robust, int check_resident) {
+/* lag_knots < 0: the default latency_mm; knot_spacing 0: the default (the
+ * laser spacing, 100 mm). */
+static void recon_case(size_t fibers, double rows, int rigid, int robust, double lag_knots,
+                       double knot_spacing, int check_resident) {
     flt_options *options = bag();
     set(options, FLT_OPT_ROW_CAPACITY, rows);
     set(options, FLT_OPT_RIGID_MOTION, rigid);
     set(options, FLT_OPT_ROBUST, robust);
-    double lag = 0, passes = 0, line_passes = 0;
-    assert_int_equal(flt_options_get(options, FLT_OPT_LAG_KNOTS, &lag), FLT_OK);
-    if (robust) {
-        assert_int_equal(flt_options_get(options, FLT_OPT_ROBUST_ITERATIONS, &passes), FLT_OK);
-        assert_int_equal(flt_options_get(options, FLT_OPT_ROBUST_LINE_ITERATIONS, &line_passes),
-                         FLT_OK);
+    if (lag_knots >= 0)
+        set(options, FLT_OPT_LAG_KNOTS, lag_knots);
+    if (knot_spacing > 0)
+        set(options, FLT_OPT_KNOT_SPACING, knot_spacing);
+    double latency = 0, laser = 0, knot = knot_spacing > 0 ? knot_spacing : 0;
+    assert_int_equal(flt_options_get(options, FLT_OPT_LATENCY_MM, &latency), FLT_OK);
+    assert_int_equal(flt_options_get(options, FLT_OPT_LASER_SPACING, &laser), FLT_OK);
+    if (knot == 0)
+        knot = laser;
+    const double S = ceil(laser / knot - 1e-9) + 2;
+    double lag = lag_knots, wait = 0;
+    if (lag_knots < 0) {
+        lag = lag_for_latency(latency, knot, laser);
+        wait = 2 * (lag + floor(lag / 8) + 2);
+    } else {
+        wait = lag + floor(lag / 8) + 1;
     }
 #ifdef __linux__
     malloc_trim(0);
@@ -184,11 +211,14 @@ static void recon_case(size_t fibers, double rows, int rigid, int robust, int ch
     assert_int_equal(flt_recon_create(fibers, options, &recon), FLT_OK);
     const double measured = peak_bytes();
     const double resident = resident_bytes() - resident_before;
+    /* The lag the formula takes is the one the reconstructor took. */
+    double taken = 0;
+    assert_int_equal(flt_recon_get_option(recon, FLT_OPT_LAG_KNOTS, &taken), FLT_OK);
+    assert_true(taken == lag);
     char what[96];
-    snprintf(what, sizeof what, "recon: %zu fibers, %.0f rows%s%s", fibers, rows,
-             rigid ? ", rigid motion" : "", robust ? ", robust" : "");
-    const double documented =
-        recon_formula((double)fibers, rows, lag, passes, rigid, robust, line_passes);
+    snprintf(what, sizeof what, "recon: %zu fibers, %.0f rows, lag %.0f, S %.0f%s%s", fibers, rows,
+             lag, S, rigid ? ", rigid" : "", robust ? ", robust" : "");
+    const double documented = recon_formula((double)fibers, rows, lag, wait, S, rigid, robust);
     within(what, measured, documented);
     if (check_resident) {
         strncat(what, " (resident)", sizeof what - strlen(what) - 1);
@@ -202,12 +232,38 @@ static void test_reconstructor_follows_its_formula(void **state) {
     (void)state;
     for (int rigid = 0; rigid <= 1; ++rigid) {
         for (int robust = 0; robust <= 1; ++robust) {
-            recon_case(10, 65536, rigid, robust, 0);
-            recon_case(150, 8192, rigid, robust, 0);
-            recon_case(1150, 8192, rigid, robust, 0);
+            recon_case(10, 65536, rigid, robust, -1, 0, 0);
+            recon_case(150, 8192, rigid, robust, -1, 0, 0);
+            recon_case(1150, 8192, rigid, robust, -1, 0, 0);
+            /* The older setting, a long lag, and knots closer than the
+             * lasers (a row spans 4 of them). */
+            recon_case(150, 8192, rigid, robust, 64, 50, 0);
         }
     }
-    recon_case(1000, 65536, 0, 0, 1); /* 600 MB */
+    recon_case(1000, 65536, 0, 0, -1, 0, 1); /* 600 MB */
+    recon_case(300, 16384, 1, 1, -1, 0, 1);  /* 160 MB, robust */
+}
+
+static void test_reconstructor_refuses_on_its_formula(void **state) {
+    (void)state;
+    /* 3000 fibers in robust mode with 40,000 rows: 2.07 GB by the formula,
+     * just under FLT_RECON_MAX_BYTES (2.147 GB, not created here: it would
+     * take the memory); 42,000 rows, 2.17 GB, is refused before anything
+     * is allocated. */
+    const double lag = lag_for_latency(2000, 100, 100), wait = 2 * (lag + floor(lag / 8) + 2);
+    assert_true(recon_formula(3000, 42000, lag, wait, 3, 0, 1) > FLT_RECON_MAX_BYTES);
+    assert_true(recon_formula(3000, 40000, lag, wait, 3, 0, 1) < FLT_RECON_MAX_BYTES);
+    flt_options *options = bag();
+    set(options, FLT_OPT_ROW_CAPACITY, 42000);
+    set(options, FLT_OPT_ROBUST, 1);
+    flt_recon *recon = NULL;
+    start();
+    assert_int_equal(flt_recon_create(3000, options, &recon), FLT_ERR_INVALID_ARGUMENT);
+    assert_null(recon);
+    assert_non_null(strstr(flt_last_error_message(), "row_capacity"));
+    /* Refused before the buffers: only the option bag's copy was made. */
+    assert_true(peak_bytes() < 1e6);
+    flt_options_destroy(options);
 }
 
 /* gauge.h, "Memory": the reconstructor at the gauge's row capacity (R,
@@ -404,6 +460,7 @@ int main(void) {
         cmocka_unit_test(test_flatness_follows_its_formula),
         cmocka_unit_test(test_flatness_refuses_on_its_formula),
         cmocka_unit_test(test_reconstructor_follows_its_formula),
+        cmocka_unit_test(test_reconstructor_refuses_on_its_formula),
         cmocka_unit_test(test_extractor_and_simulator_follow_their_formulas),
         cmocka_unit_test(test_advisor_follows_its_formula),
         cmocka_unit_test(test_gauge_follows_its_formula),

@@ -150,11 +150,12 @@ static void streaming_equals_batch_noise_free(void **state) {
     flt_recon *rc = make_recon(t->fibers, NULL);
     size_t pulled = 0;
     stream_rows(rc, t, 0, t->rows, NULL, zs, NULL, &pulled);
-    /* With the default lag (64 knots, emitted in groups of 9) the first
-     * ~1.6 m of the 9 m sheet is out before end_sheet: knots 0..17, rows
-     * below t_17 = 1650 mm, 550 rows. They are real lagged output. */
+    /* With the default latency (a lag of 15 knots emitted in groups of 2;
+     * the head's first emission once the newest row is 36 knots in) about
+     * 7.1 m of the 9 m sheet is out before end_sheet: rows below about
+     * 9000 - 1850 mm, some 2380. They are real lagged output. */
     print_message("rows finished before end_sheet: %zu of %zu\n", pulled, t->rows);
-    assert_true(pulled >= 500);
+    assert_true(pulled >= 2300);
     finish_sheet(rc, t, zs, NULL, &pulled);
     assert_int_equal(pulled, t->rows);
     double d = max_abs_diff(zs, zb, N);
@@ -168,9 +169,18 @@ static void streaming_equals_batch_noise_free(void **state) {
 
 static void streaming_rms_within_5pct_of_batch_noisy(void **state) {
     (void)state;
-    /* A 30 m strip so that most rows come out at the default lag rather than
-     * at end_sheet; fibers are independent, so 11 fibers suffice. Three noise
-     * seeds: the ratio must hold for each. */
+    /* A 30 m strip so that most rows come out at the lag rather than at
+     * end_sheet; fibers are independent, so 11 fibers suffice. Three noise
+     * seeds: the ratios must hold for each. With a long lag (64 knots, 6.4 m
+     * of strip) the streamed fixed-lag solution is within 5% of the whole
+     * strip's; with the default latency (2 m; a fiber's level under 2.5 mm
+     * of vibration averages heights over about 25 knots, more than the 15
+     * knots of lag) it pays for the shorter wait: measured 1.12-1.18 times
+     * the batch rms, bounded at 1.25 (docs/reconstruction.md tables the
+     * price). */
+    flt_options *o = NULL;
+    assert_int_equal(flt_options_create(&o), FLT_OK);
+    assert_int_equal(flt_options_set(o, FLT_OPT_LAG_KNOTS, 64), FLT_OK);
     for (unsigned seed = 1; seed <= 3; ++seed) {
         test_sheet *t = test_sheet_make(10000, 11, 0.0, REF_DX, 0.0, 150.0, LASER, seed);
         test_sheet_add_noise(t, VIB_SIGMA, PEAK_SIGMA, 100 + seed);
@@ -178,23 +188,32 @@ static void streaming_rms_within_5pct_of_batch_noisy(void **state) {
         assert_int_equal(
             flt_reconstruct(NULL, t->rows, t->fibers, t->s, t->height, t->slope, NULL, zb, NULL),
             FLT_OK);
-        flt_recon *rc = make_recon(t->fibers, NULL);
-        size_t pulled = 0;
-        stream_rows(rc, t, 0, t->rows, NULL, zs, NULL, &pulled);
-        finish_sheet(rc, t, zs, NULL, &pulled);
-        double mxb, rmsb, mxs, rmss;
+        double mxb, rmsb, mxs, rmss, rms_lagged = 0, rms_default = 0;
         test_error(t, zb, 0, t->rows, &mxb, &rmsb);
-        test_error(t, zs, 0, t->rows, &mxs, &rmss);
-        print_message("noisy seed %u: batch rms %.4f mm, streaming rms %.4f mm (ratio %.3f)\n",
-                      seed, rmsb, rmss, rmss / rmsb);
-        assert_true(rmss <= 1.05 * rmsb); /* goal: within 5% */
+        for (int lagged = 1; lagged >= 0; --lagged) {
+            flt_recon *rc = make_recon(t->fibers, lagged ? o : NULL);
+            size_t pulled = 0;
+            stream_rows(rc, t, 0, t->rows, NULL, zs, NULL, &pulled);
+            finish_sheet(rc, t, zs, NULL, &pulled);
+            test_error(t, zs, 0, t->rows, &mxs, &rmss);
+            if (lagged)
+                rms_lagged = rmss;
+            else
+                rms_default = rmss;
+            flt_recon_destroy(rc);
+        }
+        print_message("noisy seed %u: batch rms %.4f mm, streaming rms with lag 64 %.4f mm "
+                      "(ratio %.3f), at the default latency %.4f mm (ratio %.3f)\n",
+                      seed, rmsb, rms_lagged, rms_lagged / rmsb, rms_default, rms_default / rmsb);
+        assert_true(rms_lagged <= 1.05 * rmsb); /* goal: within 5% */
+        assert_true(rms_default <= 1.25 * rmsb);
         /* And the batch itself beats the reference's 0.12 mm sigma. */
         assert_true(rmsb < 0.12);
-        flt_recon_destroy(rc);
         free(zb);
         free(zs);
         test_sheet_free(t);
     }
+    flt_options_destroy(o);
 }
 
 /* ---- carry-over -------------------------------------------------------- */
@@ -688,16 +707,17 @@ static void bad_input_is_rejected_and_handle_stays_usable(void **state) {
 
 static void buffer_full_with_nothing_finished_says_why(void **state) {
     (void)state;
-    /* rigid_motion + robust streams through a stage per pass, the line's
-     * eight among them: a row is finished some 180 knots (18 m) after it.
-     * Rows every 1 mm into 4096 slots fill the ring before any is finished;
-     * the refusal must say so, with the latency and what to do, and the
-     * handle must stay usable: end_sheet finishes what it holds. */
+    /* At the head of a strip a row waits up to twice latency_mm (3.6 m of
+     * strip by default) before it is finished. Rows every 1 mm into 2048
+     * slots fill the ring before any is finished; the refusal must say so,
+     * with the latency and what to do, and the handle must stay usable:
+     * end_sheet finishes what it holds. rigid_motion + robust: every
+     * channel's window holds the rows too. */
     const size_t K = 3;
     test_sheet *t = test_sheet_make(5000, K, 0.0, 1.0, 0.0, 100.0, LASER, 7);
     flt_options *o = NULL;
     assert_int_equal(flt_options_create(&o), FLT_OK);
-    assert_int_equal(flt_options_set(o, FLT_OPT_ROW_CAPACITY, 4096), FLT_OK);
+    assert_int_equal(flt_options_set(o, FLT_OPT_ROW_CAPACITY, 2048), FLT_OK);
     assert_int_equal(flt_options_set(o, FLT_OPT_RIGID_MOTION, 1), FLT_OK);
     assert_int_equal(flt_options_set(o, FLT_OPT_ROBUST, FLT_ROBUST_HUBER), FLT_OK);
     flt_recon *rc = make_recon(K, o);
@@ -728,10 +748,11 @@ static void buffer_full_with_nothing_finished_says_why(void **state) {
 
 static void robust_streaming_with_rows_sparser_than_knots(void **state) {
     (void)state;
-    /* Rows 20 knots apart: an intermediate robust stage has moved past a
-     * row's knots before the row could be judged against them. Such a row
-     * goes on unweighted; end_sheet finishes every row (fuzz_recon found
-     * rows left queued, an internal error). Laser and knots 3 mm apart. */
+    /* Rows 20 knots apart: the window moves on over knots without rows, a
+     * row may be judged only once before its knots are final, and end_sheet
+     * finishes every row (fuzz_recon once found rows left queued, an
+     * internal error, in the pipelined stages robust mode had before).
+     * Laser and knots 3 mm apart. */
     const size_t K = 2;
     flt_options *o = NULL;
     assert_int_equal(flt_options_create(&o), FLT_OK);
@@ -844,8 +865,12 @@ static void options_are_reported_back(void **state) {
     size_t k = 0;
     assert_int_equal(flt_recon_get_option(rc, FLT_OPT_KNOT_SPACING, &v), FLT_OK);
     assert_true(v == 120.0); /* knot spacing defaults to the laser spacing */
+    /* The lag from the default latency_mm (2000): the longest with lag +
+     * lag/8 + 2 knots of 120 mm and 60 mm within it, 13 knots (1980 mm). */
     assert_int_equal(flt_recon_get_option(rc, FLT_OPT_LAG_KNOTS, &v), FLT_OK);
-    assert_true(v == 64.0);
+    assert_true(v == 13.0);
+    assert_int_equal(flt_recon_get_option(rc, FLT_OPT_LATENCY_MM, &v), FLT_OK);
+    assert_true(v == 1980.0);
     assert_int_equal(flt_recon_fibers(rc, &k), FLT_OK);
     assert_int_equal(k, 5);
     /* The robust passes' defaults, and one set. */
@@ -1035,10 +1060,11 @@ static void robust_mode_removes_shear_transients(void **state) {
         assert_true(mr <= 0.30);
         assert_true(sr <= 0.06);
         if (seed == 1) {
-            /* Streamed row by row, pulled as rows finish: the
-             * intermediate stages see 8 knots ahead where the batch passes
-             * see the whole sheet, so the bounds are the targets
-             * themselves (measured 0.13 mm, 0.02 mm with 751 fibers). */
+            /* Streamed row by row, pulled as rows finish, at the default
+             * latency (2 m, 3.6 m at the strip's head): each row is judged
+             * against the window's solution, which sees a lag ahead where
+             * the batch passes see the whole sheet, so the bounds are the
+             * targets themselves (measured 0.065 mm, 0.022 mm). */
             flt_options *o = NULL;
             assert_int_equal(flt_options_create(&o), FLT_OK);
             assert_int_equal(flt_options_set(o, FLT_OPT_RIGID_MOTION, 1), FLT_OK);
@@ -1068,11 +1094,10 @@ static void robust_mode_removes_shear_transients(void **state) {
 static void robust_mode_is_exact_and_streams_like_batch(void **state) {
     (void)state;
     /* On exact data the robust passes must change nothing that matters:
-     * within 1 um of the truth, and the streamed output (a stage per pass,
-     * each with its lag) within 1 um of the batch one (passes over the
-     * whole sheet). Deterministic: a second run is bit-identical. */
-    /* 18 m: the stages' lags (8 + 8 + 64 knots) let rows out before the
-     * end of the strip. */
+     * within 1 um of the truth, and the streamed output (every pass in one
+     * window) within 1 um of the batch one (passes over the whole sheet).
+     * Deterministic: a second run (in the workspace the first one left) is
+     * bit-identical. 18 m, so that most rows come out at the lag. */
     test_sheet *t = test_sheet_make(2 * REF_ROWS, 21, 0.0, REF_DX, 0.0, 75.0, LASER, 14);
     double *zb = reconstruct_modes(t, 0, 1), *zb2 = reconstruct_modes(t, 0, 1);
     assert_memory_equal(zb, zb2, t->rows * t->fibers * sizeof(double));
@@ -1095,9 +1120,9 @@ static void robust_mode_is_exact_and_streams_like_batch(void **state) {
                   mx * 1e3, d * 1e3, before_end);
     assert_true(mx <= 1e-3);
     assert_true(d <= 1e-3);
-    /* Latency about 8+2+3 knots per reweighted stage plus 64+9+3: rows
-     * below about 18000 - 10200 mm are out, some 2600 rows. */
-    assert_true(before_end >= 2000);
+    /* Latency at most 1850 mm (3.6 m at the strip's head): rows below
+     * about 18000 - 1850 mm are out before end_sheet, 5383 of 6000. */
+    assert_true(before_end >= 5300);
     flt_recon_destroy(rc);
     free(zb);
     free(zb2);
@@ -1226,6 +1251,98 @@ static void robust_batch_with_a_mask_is_exact(void **state) {
     test_sheet_free(t);
 }
 
+/* ---- provisional rows ------------------------------------------------ */
+
+static void peek_is_provisional_and_changes_nothing(void **state) {
+    (void)state;
+    /* Every mode: one reconstructor peeks at its pending rows every 40 rows,
+     * a twin never does; what they pull must be identical bit for bit
+     * (peek solves the window, but nothing final may depend on it). On
+     * noise-free data the provisional rows are already the spline (within
+     * 1 um of the truth: the fit is exact up to the spline's own 0.25 um
+     * wherever rows are, and the newest rows are measured by both lasers),
+     * and each comes out of pull later with the value peek gave to within
+     * 1 um. The fiber off the strip is NaN flagged in peek as in pull. */
+    const size_t K = 9;
+    test_sheet *t = test_sheet_make(2400, K, 0.0, REF_DX, 0.0, 150.0, LASER, 21);
+    uint8_t *in_flags = calloc(t->rows * K, 1);
+    for (size_t r = 0; r < t->rows; ++r)
+        in_flags[r * K + 3] = FLT_FLAG_OFF_STRIP;
+    for (int mode = 0; mode < 3; ++mode) {
+        flt_options *o = NULL;
+        assert_int_equal(flt_options_create(&o), FLT_OK);
+        assert_int_equal(flt_options_set(o, FLT_OPT_RIGID_MOTION, mode == 2), FLT_OK);
+        assert_int_equal(flt_options_set(o, FLT_OPT_ROBUST, mode ? FLT_ROBUST_HUBER : 0), FLT_OK);
+        flt_recon *a = make_recon(K, o), *b = make_recon(K, o);
+        flt_options_destroy(o);
+        double *za = alloc_rows(t->rows, K), *zb = alloc_rows(t->rows, K);
+        double *zp = alloc_rows(t->rows, K), *sp = malloc(t->rows * sizeof(double));
+        double *peeked = alloc_rows(t->rows, K); /* the first provisional value of each row */
+        uint8_t *fp = malloc(t->rows * K), *seen = calloc(t->rows, 1);
+        size_t na = 0, nb = 0, n = 0, peeks = 0;
+        double worst_truth = 0;
+        double s_out[64];
+        for (size_t r = 0; r < t->rows; ++r) {
+            const double *h = t->height + r * K, *g = t->slope + r * K;
+            const uint8_t *f = in_flags + r * K;
+            assert_int_equal(flt_recon_push_flagged(a, 1, K, &t->s[r], h, g, f), FLT_OK);
+            assert_int_equal(flt_recon_push_flagged(b, 1, K, &t->s[r], h, g, f), FLT_OK);
+            do {
+                assert_int_equal(flt_recon_pull(a, 64, K, s_out, za + na * K, NULL, &n), FLT_OK);
+                na += n;
+            } while (n == 64);
+            do {
+                assert_int_equal(flt_recon_pull(b, 64, K, s_out, zb + nb * K, NULL, &n), FLT_OK);
+                nb += n;
+            } while (n == 64);
+            if (r % 40 != 39)
+                continue;
+            size_t pending = 0;
+            assert_int_equal(flt_recon_pending(a, &pending), FLT_OK);
+            assert_int_equal(pending, r + 1 - na);
+            assert_int_equal(flt_recon_peek(a, t->rows, K, sp, zp, fp, &n), FLT_OK);
+            assert_int_equal(n, pending);
+            ++peeks;
+            for (size_t i = 0; i < n; ++i) {
+                const size_t row = na + i;
+                assert_true(sp[i] == t->s[row]);
+                for (size_t k = 0; k < K; ++k) {
+                    const double v = zp[i * K + k];
+                    if (k == 3) {
+                        assert_true(isnan(v) && fp[i * K + k] == FLT_FLAG_OFF_STRIP);
+                        continue;
+                    }
+                    assert_true(isfinite(v) && fp[i * K + k] == 0);
+                    worst_truth = fmax(worst_truth, fabs(v - t->truth[row * K + k]));
+                    if (!seen[row])
+                        peeked[row * K + k] = v;
+                }
+                seen[row] = 1;
+            }
+        }
+        finish_sheet(a, t, za, NULL, &na);
+        finish_sheet(b, t, zb, NULL, &nb);
+        assert_int_equal(na, t->rows);
+        assert_int_equal(nb, t->rows);
+        assert_memory_equal(za, zb, t->rows * K * sizeof(double));
+        double worst_final = 0;
+        for (size_t row = 0; row < t->rows; ++row)
+            for (size_t k = 0; seen[row] && k < K; ++k)
+                if (k != 3)
+                    worst_final = fmax(worst_final, fabs(peeked[row * K + k] - za[row * K + k]));
+        print_message("mode %d: %zu peeks, provisional rows within %.3g um of the truth and "
+                      "%.3g um of their final values; pulls identical\n",
+                      mode, peeks, worst_truth * 1e3, worst_final * 1e3);
+        assert_true(worst_truth <= 1e-3);
+        assert_true(worst_final <= 1e-3);
+        flt_recon_destroy(a);
+        flt_recon_destroy(b);
+        free(za), free(zb), free(zp), free(sp), free(peeked), free(fp), free(seen);
+    }
+    free(in_flags);
+    test_sheet_free(t);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(noise_free_reference_sheet_within_1um),
@@ -1253,6 +1370,7 @@ int main(void) {
         cmocka_unit_test(robust_mode_with_invalid_samples_and_carry_over),
         cmocka_unit_test(robust_mode_takes_out_spurious_peaks),
         cmocka_unit_test(robust_batch_with_a_mask_is_exact),
+        cmocka_unit_test(peek_is_provisional_and_changes_nothing),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

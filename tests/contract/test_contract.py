@@ -290,17 +290,26 @@ def recon_bytes(fibers, o):
     ("Memory"), to keep the suite's draws within a budget."""
     laser = o.get("laser_spacing", 100.0)
     knot = o.get("knot_spacing", 0.0) or laser
-    lag = o.get("lag_knots", 64.0)
+    lag = o.get("lag_knots", -1.0)
+    if lag < 0:
+        # From latency_mm: the longest lag with lag + lag/8 + 2 knots and
+        # half the laser spacing within it (a float: knot may be 1e-306);
+        # the strip's head waits twice as long.
+        lag = max(0.0, ((o.get("latency_mm", 2000.0) - laser / 2) / knot - 2) * 8 / 9)
+        wait = 2 * (lag + lag / 8 + 2)
+    else:
+        wait = lag + lag / 8 + 1
     rows = o.get("row_capacity", 8192.0)
     robust = bool(o.get("robust", 0.0))
-    passes = o.get("robust_iterations", 2.0) if robust else 0.0
-    line_passes = o.get("robust_line_iterations", 8.0) if robust else 0.0
-    knots_per_laser = float(np.ceil(laser / knot - 1e-9)) + 2  # a float: knot may be 1e-306
-    total = rows * (9 + (9 + 4 * passes) * fibers)
-    total += fibers * (lag + lag / 8 + 12) * 8 * (4 * knots_per_laser + 3)
-    total += fibers * passes * 3000
+    S = float(np.ceil(laser / knot - 1e-9)) + 2
+    total = rows * (9 + 9 * fibers)
+    if not robust:
+        total += fibers * (wait + lag / 8 + 12) * 8 * (4 * S + 3)
+    else:
+        total += rows * (8 + 8 * fibers)
+        total += fibers * 16 * ((2 * S + 1) * (S + 1) * (wait + 2 * S + 8) + wait + lag / 8 + 170)
     if o.get("rigid_motion", 0.0):
-        total += rows * (60 + 12 * line_passes)
+        total += rows * (92 if robust else 60)
     return total
 
 

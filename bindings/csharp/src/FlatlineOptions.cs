@@ -127,8 +127,13 @@ namespace Flatline
         /// secant slopes cannot see.</summary>
         public double CurvatureJumpWeight { get => Get("curvature_jump_weight"); set => Set("curvature_jump_weight", value); }
         /// <summary>Knots beyond a knot that must be complete before the
-        /// streaming reconstructor emits it.</summary>
+        /// streaming reconstructor emits it; -1 (the default) derives it from
+        /// <see cref="LatencyMm"/>. Set one of the two.</summary>
         public int LagKnots { get => (int)Get("lag_knots"); set => Set("lag_knots", value); }
+        /// <summary>The most strip (mm) the streaming reconstructor takes
+        /// beyond a row before the row is final (twice that at a strip's
+        /// head); default 2000. docs/reconstruction.md tables its price.</summary>
+        public double LatencyMm { get => Get("latency_mm"); set => Set("latency_mm", value); }
         /// <summary>Runs of invalid samples whose valid neighbours are further
         /// apart than this are flagged Gap, mm.</summary>
         public double MaxGap { get => Get("max_gap"); set => Set("max_gap", value); }

@@ -272,6 +272,48 @@ namespace Flatline
             return new ReconResult(s, z, flags);
         }
 
+        /// <summary>Rows pushed and not finished yet (see <see cref="Peek()"/>).</summary>
+        public int Pending
+        {
+            get
+            {
+                FlatlineNative.flt_recon_pending(LiveHandle, out UIntPtr pending);
+                return checked((int)pending.ToUInt64());
+            }
+        }
+
+        /// <summary>Every row pushed and not finished yet, as the
+        /// reconstructor estimates it now (provisional values, given every row
+        /// pushed so far; final only when <see cref="Pull()"/> returns the row,
+        /// latency_mm of strip later). Finished rows not pulled yet are
+        /// skipped; nothing Pull returns changes.
+        /// <see cref="FlatlineStateException"/> if nothing was pushed since
+        /// create or <see cref="Reset"/>.</summary>
+        public ReconResult Peek() => Peek(int.MaxValue);
+
+        /// <summary>Up to <paramref name="maxRows"/> of the provisional rows,
+        /// oldest first (see <see cref="Peek()"/>).</summary>
+        public unsafe ReconResult Peek(int maxRows)
+        {
+            if (maxRows < 0)
+                throw new ArgumentOutOfRangeException(nameof(maxRows), maxRows, "maxRows must not be negative");
+            var live = LiveHandle;
+            int rows = Math.Min(maxRows, Pending);
+            var s = new double[rows];
+            var z = new double[rows, Fibers];
+            var flags = new byte[rows, Fibers];
+            UIntPtr got;
+            fixed (double* ps = s, pz = z)
+            fixed (byte* pf = flags)
+            {
+                FlatlineNative.flt_recon_peek(live, (ulong)rows, (ulong)Fibers, ps, pz, pf, out got);
+            }
+            if (got.ToUInt64() != (ulong)rows)
+                throw new FlatlineInternalException(Status.Internal,
+                    $"flt_recon_peek returned {got} rows where {rows} were pending");
+            return new ReconResult(s, z, flags);
+        }
+
         /// <summary>Finishes the current sheet: every pushed row becomes ready
         /// to pull, and the last emitted knot becomes the boundary condition
         /// of the next sheet. <see cref="FlatlineStateException"/> if no row was
@@ -314,14 +356,21 @@ namespace Flatline
             }
         }
 
-        /// <summary>An estimate of the native memory held (recon.h: 9 bytes
-        /// per row and fiber for the row ring, plus the per-knot factors of
-        /// the lag window), reported to the GC as memory pressure.</summary>
+        /// <summary>An estimate of the native memory held (recon.h, "Memory":
+        /// 9 bytes per row and fiber for the row ring, 17 in robust mode, plus
+        /// the knots a row may wait), reported to the GC as memory
+        /// pressure.</summary>
         private long NativeBytes()
         {
-            double rowCapacity = GetOption("row_capacity");
+            double rows = GetOption("row_capacity");
             double lag = GetOption("lag_knots");
-            return (long)(Fibers * (9.0 * rowCapacity + 8.0 * 64.0 * (lag + 16.0)));
+            double wait = 2.0 * (lag + Math.Floor(lag / 8.0) + 2.0);  // the strip's head, at most
+            double s = Math.Ceiling(GetOption("laser_spacing") / GetOption("knot_spacing") - 1e-9) + 2.0;
+            bool robust = GetOption("robust") != 0.0;
+            double perFiber = robust
+                ? 17.0 * rows + 16.0 * ((2.0 * s + 1.0) * (s + 1.0) * (wait + 2.0 * s + 8.0) + wait + 170.0)
+                : 9.0 * rows + 8.0 * (4.0 * s + 3.0) * (wait + lag / 8.0 + 12.0);
+            return (long)(Fibers * perFiber);
         }
     }
 }

@@ -22,7 +22,8 @@ namespace Flatline.Tests
             Assert.Equal(keys.Count, keys.Select(k => k.Name).Distinct().Count());
             var lag = keys.Single(k => k.Name == "lag_knots");
             Assert.True(lag.IsInteger);
-            Assert.Equal(64.0, lag.Default);
+            Assert.Equal(-1.0, lag.Default);  // derived from latency_mm
+            Assert.Equal(2000.0, keys.Single(k => k.Name == "latency_mm").Default);
             var laser = FlatlineOptions.Describe("laser_spacing");
             Assert.False(laser.IsInteger);
             Assert.Equal(100.0, laser.Default);
@@ -41,7 +42,8 @@ namespace Flatline.Tests
             Assert.Equal(0.001, options.SlopeSigma);
             Assert.Equal(1e-3, options.CurvatureWeight);
             Assert.Equal(10.0, options.CurvatureJumpWeight);
-            Assert.Equal(64, options.LagKnots);
+            Assert.Equal(-1, options.LagKnots);
+            Assert.Equal(2000.0, options.LatencyMm);
             Assert.Equal(200.0, options.MaxGap);
             Assert.Equal(8192, options.RowCapacity);
             Assert.False(options.RigidMotion);
@@ -107,7 +109,8 @@ namespace Flatline.Tests
             var info = FlatlineOptions.Describe("height_sigma");
             Assert.Throws<InvalidArgumentException>(() => options.HeightSigma = info.Min - 1);
             Assert.Equal(2.0, options.HeightSigma);
-            Assert.Equal(64, options.LagKnots);
+            Assert.Equal(-1, options.LagKnots);
+            Assert.Equal(2000.0, options.LatencyMm);
         }
 
         [Fact]

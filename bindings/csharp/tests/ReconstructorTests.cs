@@ -65,6 +65,36 @@ namespace Flatline.Tests
         }
 
         [Fact]
+        public void PeekGivesThePendingRowsProvisionallyAndChangesNothing()
+        {
+            var sheet = SineSheet();
+            using var a = new Reconstructor(1);
+            using var b = new Reconstructor(1);
+            a.Push(Sheet.Slice(sheet.S, 0, 800), Sheet.Slice(sheet.Height, 0, 800), Sheet.Slice(sheet.Slope, 0, 800));
+            b.Push(Sheet.Slice(sheet.S, 0, 800), Sheet.Slice(sheet.Height, 0, 800), Sheet.Slice(sheet.Slope, 0, 800));
+            var firstA = a.Pull();
+            var firstB = b.Pull();
+            Assert.Equal(800 - firstA.Rows, a.Pending);
+            var peeked = a.Peek();
+            Assert.Equal(a.Pending, peeked.Rows);
+            Assert.Equal(Sheet.Slice(sheet.S, firstA.Rows, 800 - firstA.Rows), peeked.S);
+            // Noise-free: the provisional rows are already the spline, within
+            // the 1 um of the final ones (the spline's own error is 0.46 um).
+            double error = Sheet.MaxError(peeked.Z, Sheet.Slice(sheet.TrueZ, firstA.Rows, 800 - firstA.Rows));
+            output.WriteLine($"provisional sine rows: max error {error:E2} mm");
+            Assert.True(error < 1e-3, $"max error {error} mm");
+            Assert.Equal(2, a.Peek(2).Rows);
+            a.EndSheet();
+            b.EndSheet();
+            Assert.Equal(0, a.Pending);
+            Assert.Equal(0, a.Peek().Rows);
+            // Nothing pull gives changed.
+            Assert.Equal(b.Pull().Z, a.Pull().Z);
+            Assert.Equal(firstB.Z, firstA.Z);
+            Assert.Throws<ArgumentOutOfRangeException>(() => a.Peek(-1));
+        }
+
+        [Fact]
         public void SingleRowPushesEqualOneBlockBitwise()
         {
             var sheet = Sheet.Measure(Sheet.Waves, 200, 3, 500.0, 8.0, vibrationSigma: 2.5);

@@ -142,10 +142,12 @@ class Reconstructor:
     """A streaming reconstructor for a fixed number of fibers.
 
     Rows (one camera frame each, at material position s along travel) go in
-    with :meth:`push`; finished rows come out with :meth:`pull`, about
-    lag_knots knots of travel later. :meth:`end_sheet` finishes every pushed
-    row and carries the last knot's height and slope into the next sheet, so
-    consecutive sheets join smoothly; :meth:`reset` starts a new strip.
+    with :meth:`push`; finished rows come out with :meth:`pull`, at most
+    latency_mm of travel later (twice that at a strip's head); :meth:`peek`
+    gives the rows not finished yet, provisionally. :meth:`end_sheet`
+    finishes every pushed row and carries the last knot's height and slope
+    into the next sheet, so consecutive sheets join smoothly; :meth:`reset`
+    starts a new strip.
 
     Args:
         fibers: a finished :class:`Calibration`, the way to create one for a
@@ -158,7 +160,8 @@ class Reconstructor:
         **options: reconstructor options by their C name (see below).
 
     Use it as a context manager, or call :meth:`close`, to free the C
-    buffers (9 bytes per row and fiber of row_capacity) deterministically.
+    buffers (9 bytes per row and fiber of row_capacity, 17 in robust mode;
+    recon.h, "Memory") deterministically.
     One instance may be used from several threads; its calls are then
     serialised. Separate instances run in parallel (the GIL is released in
     push, pull and end_sheet).
@@ -324,6 +327,43 @@ class Reconstructor:
             flags = np.empty((rows, self._fibers), dtype=np.uint8)
             got = int(handle.pull_into(s, z, flags))
         if got != rows:  # only if the library disagrees with its ready count
+            s, z, flags = s[:got], z[:got], flags[:got]
+        return s, z, flags
+
+    @property
+    def pending(self) -> int:
+        """The number of rows pushed and not finished yet (see :meth:`peek`)."""
+        with self._lock:
+            return int(_capi.flt_recon_pending(self._live()))
+
+    def peek(self, max_rows: Optional[int] = None
+             ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The rows pushed and not finished yet, as the reconstructor
+        estimates them now (at most max_rows, oldest first): provisional
+        values, given every row pushed so far. They are final only when
+        :meth:`pull` returns them, latency_mm of strip later; an early answer
+        (a sheet's provisional verdict at its cut) can be computed from them
+        and replaced by the final one. Finished rows not pulled yet are
+        skipped (pull them first); nothing :meth:`pull` returns changes.
+
+        Returns:
+            (s, z, flags) as :meth:`pull`: s (n,) mm, z (n, K) mm (NaN only
+            with FLAG_NO_DATA or FLAG_OFF_STRIP), flags (n, K) uint8.
+
+        Raises StateError if nothing was pushed since creation or reset.
+        """
+        with self._lock:
+            handle = self._live()
+            rows = int(_capi.flt_recon_pending(handle))
+            if max_rows is not None:
+                if max_rows < 0:
+                    raise ValueError(f"peek() argument 'max_rows' must be >= 0, got {max_rows}")
+                rows = min(rows, int(max_rows))
+            s = np.empty(rows, dtype=np.float64)
+            z = np.empty((rows, self._fibers), dtype=np.float64)
+            flags = np.empty((rows, self._fibers), dtype=np.uint8)
+            got = int(handle.peek_into(s, z, flags))
+        if got != rows:
             s, z, flags = s[:got], z[:got], flags[:got]
         return s, z, flags
 

@@ -712,8 +712,9 @@ def _arguments(argv: Optional[Sequence[str]]) -> argparse.Namespace:
                    help="simulator: the strip's width (default 1500)")
     p.add_argument("--seed", type=int, default=1, help="simulator: noise seed")
     p.add_argument("--lag-knots", type=int, default=0, metavar="N",
-                   help="the reconstructor's lag, knots (default: the library's, 64); fewer "
-                        "show sheets sooner, less smoothed")
+                   help="the reconstructor's lag, knots (default: from the library's "
+                        "latency_mm, 2000 mm: 15 knots); fewer show sheets sooner, less "
+                        "smoothed")
     p.add_argument("--listen", default="127.0.0.1", metavar="ADDRESS",
                    help="the address to serve on (default 127.0.0.1: this computer only; "
                         "0.0.0.0 for every interface, a network you trust)")

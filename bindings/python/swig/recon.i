@@ -2,8 +2,9 @@
 /*
  * flatline/recon.h: the streaming Hermite reconstructor.
  *
- * flt_recon_create, _fibers, _ready, _get_option and _reset are wrapped as
- * they are. The array calls (push, pull, boundary, flt_reconstruct) and
+ * flt_recon_create, _fibers, _ready, _pending, _get_option and _reset are
+ * wrapped as they are. The array calls (push, pull, peek, boundary,
+ * flt_reconstruct) and
  * end_sheet (which may solve a whole sheet) are replaced by methods whose
  * arguments follow numpy.i's patterns; they release the GIL around the C
  * call, so threads with their own handles run in parallel.
@@ -17,6 +18,7 @@
 %ignore flt_recon_destroy;
 %ignore flt_recon_push;
 %ignore flt_recon_pull;
+%ignore flt_recon_peek;
 %ignore flt_recon_end_sheet;
 %ignore flt_recon_boundary;
 %ignore flt_reconstruct;
@@ -118,6 +120,29 @@ struct flt_recon {};
                                   flags_out_fibers, z_out_fibers);
     Py_BEGIN_ALLOW_THREADS
     status = flt_recon_pull($self, s_out_rows, z_out_fibers, s_out, z_out,
+                            flags_out, out);
+    Py_END_ALLOW_THREADS
+    return status;
+  }
+
+  /* The provisional rows (flt_recon_peek), up to s_out_rows of them into
+   * the caller's arrays; returns the count. */
+  flt_status peek_into(double *s_out, size_t s_out_rows,
+                  double *z_out, size_t z_out_rows, size_t z_out_fibers,
+                  unsigned char *flags_out, size_t flags_out_rows,
+                  size_t flags_out_fibers, size_t *out) {
+    flt_status status;
+    if (z_out_rows != s_out_rows)
+        return flt_py_shape_error("flt_recon_peek", "z_out.shape[0]", z_out_rows,
+                                  s_out_rows);
+    if (flags_out_rows != s_out_rows)
+        return flt_py_shape_error("flt_recon_peek", "flags_out.shape[0]",
+                                  flags_out_rows, s_out_rows);
+    if (flags_out_fibers != z_out_fibers)
+        return flt_py_shape_error("flt_recon_peek", "flags_out.shape[1]",
+                                  flags_out_fibers, z_out_fibers);
+    Py_BEGIN_ALLOW_THREADS
+    status = flt_recon_peek($self, s_out_rows, z_out_fibers, s_out, z_out,
                             flags_out, out);
     Py_END_ALLOW_THREADS
     return status;

@@ -395,12 +395,13 @@ def test_frames_pushed_as_fast_as_possible_are_never_dropped_by_default(calib):
 
 def test_readme_streaming_pattern_returns_every_sheet(calib):
     # The README's pattern: read the sheets while pushing, then flush and
-    # read the rest. With rigid_motion and robust the reconstructor holds
-    # about 17 m of strip, so the 10 sheets of 1 m all finish at the flush:
-    # more than the 4 sheet slots, and every one comes out, in order.
+    # read the rest. At a latency_mm of 6000 the strip's first rows wait up
+    # to 11.8 m (twice the latency at a strip's head), longer than this
+    # 10.2 m strip, so the 10 sheets of 1 m all finish at the flush: more
+    # than the 4 sheet slots, and every one comes out, in order.
     s, h, g, _ = reference_sheet(3400)  # 10.2 m
     got = []
-    with flatline.Gauge(calib, rigid_motion=True, robust="huber",
+    with flatline.Gauge(calib, rigid_motion=True, robust="huber", latency_mm=6000.0,
                         gauge_frame_spacing=2.0) as gauge:
         for c in range(1000, 10000, 1000):
             gauge.cut(float(c))

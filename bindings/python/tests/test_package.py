@@ -33,9 +33,9 @@ def test_options_table_lists_every_reconstructor_option_with_c_defaults():
     table = flatline.options()
     expected_defaults = {
         "knot_spacing": 0.0, "laser_spacing": 100.0, "height_sigma": 2.5,
-        "slope_sigma": 1e-3, "curvature_weight": 1e-3, "lag_knots": 64.0,
+        "slope_sigma": 1e-3, "curvature_weight": 1e-3, "lag_knots": -1.0,
         "max_gap": 200.0, "row_capacity": 8192.0, "rigid_motion": 0.0,
-        "shape_sigma": 0.1, "curvature_jump_weight": 10.0,
+        "shape_sigma": 0.1, "curvature_jump_weight": 10.0, "latency_mm": 2000.0,
     }
     for name, default in expected_defaults.items():
         assert table[name].default == default
@@ -56,7 +56,10 @@ def test_option_info_round_trips_through_the_key():
 def test_reconstructor_options_are_the_resolved_defaults():
     opts = flatline.reconstructor_options()
     assert opts["knot_spacing"] == 100.0  # 0 resolves to laser_spacing
-    assert opts["lag_knots"] == 64.0 and opts["row_capacity"] == 8192.0
+    # lag_knots -1 resolves to the lag latency_mm allows: 15 knots at 100 mm
+    # (15 + 2 + 1 knots and half the laser spacing, 1850 mm, within 2000).
+    assert opts["lag_knots"] == 15.0 and opts["row_capacity"] == 8192.0
+    assert opts["latency_mm"] == 1850.0
     assert set(opts) >= {"knot_spacing", "laser_spacing", "height_sigma",
                          "slope_sigma", "curvature_weight", "lag_knots",
                          "max_gap", "row_capacity"}

@@ -80,7 +80,7 @@ def test_row_by_row_and_block_pushes_give_identical_bits():
 def test_streaming_converges_to_the_batch_solution_with_enough_lag():
     s, h, sl, z_true = sine_sheet(fibers=2)
     batch = flatline.reconstruct(s, h, sl)
-    with flatline.Reconstructor(2) as recon:  # default lag 64 knots
+    with flatline.Reconstructor(2) as recon:  # default latency: a lag of 15 knots
         pulled = []
         for start in range(0, len(s), 500):
             recon.push(s[start:start + 500], h[start:start + 500], sl[start:start + 500])
@@ -260,3 +260,46 @@ def test_an_80mm_sensor_is_reconstructed_right_only_with_its_spacing():
         errors[name] = np.max(np.abs(z - rows.truth))
     assert errors["calibration"] <= 0.032, errors
     assert errors["default"] >= 0.1, errors
+
+
+def test_peek_gives_the_pending_rows_provisionally_and_changes_nothing():
+    s, h, sl, z_true = sine_sheet(fibers=3)
+    with flatline.Reconstructor(3) as a, flatline.Reconstructor(3) as b:
+        a.push(s[:1000], h[:1000], sl[:1000])
+        b.push(s[:1000], h[:1000], sl[:1000])
+        pulled_a, pulled_b = [a.pull()], [b.pull()]
+        assert a.pending == 1000 - len(pulled_a[0][0])
+        ps, pz, pf = a.peek()
+        assert ps.shape == (a.pending,) and pz.shape == (a.pending, 3)
+        assert pf.dtype == np.uint8 and not pf.any()
+        np.testing.assert_array_equal(ps, s[len(pulled_a[0][0]):1000])
+        # Noise-free: the provisional rows are already the spline (the
+        # spline's own accuracy is 0.25 um; bound 1 um, as for final rows).
+        assert np.abs(pz - z_true[len(pulled_a[0][0]):1000]).max() <= 1e-3
+        assert len(a.peek(max_rows=2)[0]) == 2
+        a.push(s[1000:], h[1000:], sl[1000:])
+        b.push(s[1000:], h[1000:], sl[1000:])
+        for recon, pulled in ((a, pulled_a), (b, pulled_b)):
+            recon.end_sheet()
+            pulled.append(recon.pull())
+            assert recon.pending == 0 and len(recon.peek()[0]) == 0
+        # Peeking changed nothing that pull gives, bit for bit.
+        za = np.concatenate([p[1] for p in pulled_a])
+        zb = np.concatenate([p[1] for p in pulled_b])
+        np.testing.assert_array_equal(za, zb)
+    with pytest.raises(flatline.StateError):
+        flatline.Reconstructor(2).peek()
+    with pytest.raises(ValueError, match="max_rows"):
+        flatline.Reconstructor(2).peek(-1)
+
+
+def test_latency_mm_sets_the_lag_and_conflicts_with_lag_knots():
+    with flatline.Reconstructor(2, latency_mm=1000) as recon:
+        # The longest lag L with L + L/8 + 2 knots of 100 mm and 50 mm within
+        # 1000 mm: 7 knots, rows final within 950 mm.
+        assert recon.option("lag_knots") == 7.0
+        assert recon.option("latency_mm") == 950.0
+    with pytest.raises(flatline.InvalidArgumentError, match="one setting"):
+        flatline.Reconstructor(2, latency_mm=1000, lag_knots=8)
+    with pytest.raises(flatline.InvalidArgumentError, match="shorter than the least"):
+        flatline.Reconstructor(2, latency_mm=200)

@@ -1,0 +1,62 @@
+#!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
+"""flatline.reconstruct in a loop, to set beside the C figure of
+examples/bench/bench_recon built against the same library ("batch ...
+then N calls"): the reference's
+production sheet (2000 rows x 1150 fibers, 6000 mm x 2300 mm at 3 mm x
+2 mm), noise-free, default options. Prints the first call (which sets up
+the working memory the library keeps for the next call of the same shape),
+then per call over the loop: wall-clock and CPU time of the process, and the
+page faults (none once the library and numpy reuse their memory).
+
+Usage (with the package the dev preset builds, not installed), and the C
+figure from the same build:
+    PYTHONPATH=build/dev/bindings/python/package \\
+        taskset -c 1 /usr/bin/python3 examples/python/bench_reconstruct.py [calls]
+    taskset -c 1 build/dev/examples/bench/bench_recon 3 [calls]
+"""
+
+import resource
+import sys
+import time
+
+import numpy as np
+
+import flatline
+
+ROWS, FIBERS, DX, PITCH, LASER = 2000, 1150, 3.0, 2.0, 100.0
+
+
+def surface(x, s):
+    """12 mm waves, 1800 mm along and 1500 mm across (bench_recon's)."""
+    return 12.0 * np.sin(2 * np.pi * s / 1800.0)[:, None] * np.cos(2 * np.pi * x / 1500.0)[None, :]
+
+
+def main():
+    calls = int(sys.argv[1]) if len(sys.argv) > 1 else 100
+    s = np.arange(ROWS) * DX
+    x = (np.arange(FIBERS) - 0.5 * (FIBERS - 1)) * PITCH
+    behind, ahead = surface(x, s - LASER / 2), surface(x, s + LASER / 2)
+    height, slope = 0.5 * (behind + ahead), (ahead - behind) / LASER
+
+    start = time.perf_counter()
+    z = flatline.reconstruct(s, height, slope)
+    first = time.perf_counter() - start
+    error = np.abs(z - surface(x, s)).max()
+
+    faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+    wall, cpu = time.perf_counter(), time.process_time()
+    for i in range(calls):
+        flatline.reconstruct(s, height, slope)
+        if (i + 1) % 10 == 0:
+            print(f"\rcall {i + 1}/{calls}", end="", file=sys.stderr, flush=True)
+    print(file=sys.stderr)
+    wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+    faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt - faults
+    print(f"flatline.reconstruct, {ROWS} rows x {FIBERS} fibers: first call {1e3 * first:.2f} ms; "
+          f"then {calls} calls: {1e3 * wall / calls:.2f} ms per call, CPU {1e3 * cpu / calls:.2f} ms, "
+          f"{faults / calls:.0f} page faults per call; max error {1e3 * error:.2g} um")
+
+
+if __name__ == "__main__":
+    main()
