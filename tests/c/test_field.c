@@ -531,12 +531,15 @@ static void the_off_strip_flag_passes_through_the_reconstructor(void **state) {
     for (size_t i = 0; i < n; ++i)
         flags[i] = valid[i] ? 0 : FLT_FLAG_OFF_STRIP;
     /* Sheets: rows [0, 1500) and [1500, 3000), a new strip after the first.
-     * The default lag (64 knots) is longer than a sheet (45 knots): every
-     * row is finished by end_sheet, solved with the whole sheet, so the
-     * streamed values are the batch's to rounding. (With a shorter lag the
-     * rows next to long stretches off the strip, bridged by the prior
-     * alone, keep changing while data arrives beyond them.) */
+     * A lag of 64 knots is longer than a sheet (45 knots): every row is
+     * finished by end_sheet, solved with the whole sheet, so the streamed
+     * values are the batch's to rounding. (With a shorter lag, as the
+     * default latency_mm's, the rows next to long stretches off the strip,
+     * bridged by the prior alone, keep changing while data arrives beyond
+     * them.) */
     flt_options *ro = NULL;
+    assert_int_equal(flt_options_create(&ro), FLT_OK);
+    assert_int_equal(flt_options_set(ro, FLT_OPT_LAG_KNOTS, 64), FLT_OK);
     for (int sheet = 0; sheet < 2; ++sheet)
         assert_int_equal(flt_reconstruct_flagged(
                              ro, ROWS / 2, K, s + sheet * ROWS / 2, h + (size_t)sheet * n / 2,
@@ -596,6 +599,7 @@ static void the_off_strip_flag_passes_through_the_reconstructor(void **state) {
     for (size_t i = 0; i < n; ++i)
         assert_false(f_out[i] & FLT_FLAG_OFF_STRIP);
     flt_recon_destroy(recon);
+    flt_options_destroy(ro);
     free(s), free(h), free(g), free(z_batch), free(z), free(s_out);
     free(valid), free(flags), free(f_batch), free(f_out);
     flt_sim_destroy(sim);
