@@ -460,6 +460,7 @@ namespace Flatline.Tests
             double slowest = 0;
             int seen = 0;
             var zero = new double[Fibers];
+            using var firstDone = new ManualResetEventSlim();
             gauge.SheetFinished += (sender, e) =>
             {
                 if (seen++ > 0)
@@ -489,9 +490,17 @@ namespace Flatline.Tests
                 Try("SetRules", () => gauge.SetRules(rules, 2.0, SheetWidth.Measured));
                 Try("Statistics", () => gauge.CurrentCoilStatistics());
                 Try("GetOption", () => gauge.GetOption("gauge_workers"));
+                firstDone.Set();
             };
             gauge.Cut(1000);
-            PushRows(gauge, 0, 2000);
+            // Rows to 3000 mm: the first sheet (to 1000 mm) finishes within
+            // the lag of 4 knots. The rest only after its handler ran, so
+            // its cut at 4000 mm lies ahead of every row (a flush that came
+            // first would end the strip before the cut is seen).
+            PushRows(gauge, 0, 1000);
+            Assert.True(firstDone.Wait(TimeSpan.FromSeconds(30), TestContext.Current.CancellationToken),
+                        "the first sheet did not finish");
+            PushRows(gauge, 1000, 2000);
             gauge.Flush();
             Assert.InRange(slowest, 0.0, 1.0);
             foreach (var ok in new[] { "Cut", "Count", "SetRules", "Statistics", "GetOption" })
