@@ -191,6 +191,111 @@ def test_bad_arguments():
     assert run.returncode == 2 and "--sheet-length" in run.stderr
 
 
+def wait_overlay(address, proc, seconds=60):
+    """The state once the first overlay is drawn (fails with the view's
+    own error or output if none comes)."""
+    deadline = time.monotonic() + seconds
+    while True:
+        st = state(address)
+        if st["overlay"]["seq"] >= 1:
+            return st
+        if proc.poll() is not None or time.monotonic() > deadline:
+            proc.kill()
+            pytest.fail(f"no overlay: {st['error']!r}; {proc.stdout.read().decode()}")
+        time.sleep(0.1)
+
+
+def stop_live(proc):
+    proc.terminate()
+    try:
+        proc.wait(timeout=20)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+
+
+def test_a_folder_of_images(tmp_path):
+    # A folder of the simulated sensor's frames and its calibration file, as
+    # a commissioning engineer views recorded frames: the overlay finds the
+    # two lines and the strip's edges in them.
+    calib = flatline.Calibration.reference(first_row=892, rows=256, pitch_mm=5.0, fibers=401)
+    calib.save(tmp_path / "sensor.json")
+    frames = tmp_path / "frames"
+    frames.mkdir()
+    with flatline.SimulatedLine(calib, sim_surround=2, sim_strip_width=1500.0,
+                                sim_strip_offset=50.0, sim_frame_spacing=10.0) as sim:
+        for i in range(40):
+            (frames / f"frame_{i:03d}.png").write_bytes(live.png_bytes(sim.next_frame().image))
+    proc, address, _ = start_live("--images", str(frames), "--calib", str(tmp_path / "sensor.json"))
+    try:
+        st = wait_overlay(address, proc)
+        assert st["source"] == f"images in {frames}"
+        assert st["error"] in ("", None)
+        lasers = st["overlay"]["lasers"]
+        assert len(lasers) == 2
+        for laser in lasers:
+            # the same strip as test_overlay_matches_the_simulated_sensor:
+            # its edges within 3 mm (the line's blur at the edge)
+            assert abs(laser["strip_left_mm"] - LEFT_MM) < 3.0
+            assert abs(laser["strip_right_mm"] - RIGHT_MM) < 3.0
+        image = decode_png(fetch(address + "overlay.png")[2])
+        assert image.shape == (256, 2048, 3)
+        # the frames reach the gauge: all 40 in a few seconds (the folder
+        # ends; the view keeps the last picture)
+        deadline = time.monotonic() + 60
+        while state(address)["frames"] < 40 and time.monotonic() < deadline:
+            time.sleep(0.2)
+        assert state(address)["frames"] == 40
+    finally:
+        stop_live(proc)
+
+
+def test_a_gige_camera(tmp_path):
+    # aravis's fake GigE camera on 127.0.0.1 (Debian package aravis-tools;
+    # its frames are a ramp, no laser line): the view shows the camera's
+    # frames as they are and says where they come from.
+    exe = shutil.which("arv-fake-gv-camera-0.8")
+    if not exe:
+        pytest.skip("arv-fake-gv-camera-0.8 (Debian package aravis-tools) is not installed")
+    serial = f"FLTLIVE{os.getpid() % 100000}"
+    camera = subprocess.Popen([exe, "-i", "127.0.0.1", "-s", serial],
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        # the sensor's 2048 x 256 window, set on the camera as a
+        # commissioning engineer does before the view (flatline-camera set)
+        calib = flatline.Calibration.reference(first_row=892, rows=256, pitch_mm=5.0, fibers=401)
+        calib.save(tmp_path / "sensor.json")
+        deadline = time.monotonic() + 15  # it answers within ~50 ms; wine and load
+        while True:
+            try:
+                with flatline.Source.gige("127.0.0.1") as cam:
+                    cam.set_int("Width", 2048)
+                    cam.set_int("Height", 256)
+                break
+            except flatline.FlatlineError:
+                if camera.poll() is not None or time.monotonic() > deadline:
+                    pytest.skip("arv-fake-gv-camera-0.8 did not answer on 127.0.0.1:3956")
+                time.sleep(0.3)
+        proc, address, _ = start_live("--camera", "gige:127.0.0.1", "--calib",
+                                      str(tmp_path / "sensor.json"))
+        try:
+            st = wait_overlay(address, proc)
+            assert st["source"] == "camera gige:127.0.0.1"
+            raw = decode_png(fetch(address + "raw.png")[2])
+            assert raw.shape == (256, 2048)
+            # the fake camera's ramp: pixel (x, y) of frame f = (x + y + f) mod 255
+            ys, xs = np.mgrid[0:256, 0:2048]
+            assert (raw == (xs + ys + int(raw[0, 0])) % 255).mean() > 0.99
+            deadline = time.monotonic() + 30
+            while state(address)["frames"] < 10 and time.monotonic() < deadline:
+                time.sleep(0.2)
+            assert state(address)["frames"] >= 10
+        finally:
+            stop_live(proc)
+    finally:
+        camera.terminate()
+        camera.wait()
+
+
 # --- headless Chromium ------------------------------------------------------
 
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
