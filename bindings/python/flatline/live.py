@@ -358,6 +358,9 @@ class LiveView:
         self._sheets: Deque[Dict[str, Any]] = collections.deque(maxlen=SHEETS_SHOWN)
         self._sheet_png: Dict[int, bytes] = {}
         self._error = ""
+        # the source has no more frames (the end of a folder of images): a
+        # state, not an error; the view keeps the last picture
+        self._finished = ""
         self._stop = threading.Event()
         self._next_cut = cut_every_mm
         self._first_encoder: Optional[float] = None
@@ -406,7 +409,7 @@ class LiveView:
                         self._want = False
         except EOFError as exc:
             with self._lock:
-                self._error = str(exc)
+                self._finished = str(exc)
         except Exception as exc:  # shown on the page: the view stays up
             with self._lock:
                 self._error = f"acquisition stopped: {type(exc).__name__}: {exc}"
@@ -474,6 +477,7 @@ class LiveView:
                 "sheets": list(self._sheets)[::-1],
                 "rules": self.rules_name,
                 "error": self._error,
+                "finished": self._finished,
             }
         state["gauge"] = self.gauge.counters()
         return _json_safe(state)
@@ -598,7 +602,8 @@ async function poll() {
   try {
     const st = await (await fetch("/state.json", {cache: "no-store"})).json();
     $("source").textContent = st.source + " \\u2014 up " + st.uptime_s.toFixed(0) + " s";
-    $("error").textContent = st.error || st.overlay.error || "";
+    $("error").textContent = st.error || st.overlay.error ||
+      (st.finished ? st.finished + ": the view keeps the last picture" : "");
     if (st.overlay.seq > shownSeq) {
       shownSeq = loadingSeq = st.overlay.seq;
       $("frame").src = "/overlay.png?seq=" + st.overlay.seq;

@@ -230,6 +230,7 @@ def test_a_folder_of_images(tmp_path):
         st = wait_overlay(address, proc)
         assert st["source"] == f"images in {frames}"
         assert st["error"] in ("", None)
+        assert st["finished"] in ("", "the end of the images")
         lasers = st["overlay"]["lasers"]
         assert len(lasers) == 2
         for laser in lasers:
@@ -244,7 +245,10 @@ def test_a_folder_of_images(tmp_path):
         deadline = time.monotonic() + 60
         while state(address)["frames"] < 40 and time.monotonic() < deadline:
             time.sleep(0.2)
-        assert state(address)["frames"] == 40
+        st = state(address)
+        assert st["frames"] == 40
+        assert st["finished"] == "the end of the images"
+        assert st["error"] == ""
     finally:
         stop_live(proc)
 
