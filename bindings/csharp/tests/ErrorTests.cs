@@ -35,9 +35,9 @@ namespace Flatline.Tests
         [InlineData((Status)(-77), typeof(FlatlineException))]
         public void EachStatusMapsToItsExceptionType(Status status, Type expected)
         {
-            FlatlineException e = Errors.Create(status, "the message");
+            Exception e = Errors.Create(status, "the message");
             Assert.Equal(expected, e.GetType());
-            Assert.Equal(status, e.Status);
+            Assert.Equal(status, Assert.IsAssignableFrom<IFlatlineException>(e).Status);
             Assert.Equal("the message", e.Message);
         }
 
@@ -46,10 +46,42 @@ namespace Flatline.Tests
         {
             Assert.IsAssignableFrom<FlatlineIOException>(Errors.Create(Status.Format, "x"));
             Assert.IsAssignableFrom<DeviceException>(Errors.Create(Status.Timeout, "x"));
-            Assert.IsAssignableFrom<FlatlineException>(Errors.Create(Status.BufferFull, "x"));
+            Assert.IsAssignableFrom<FlatlineException>(Errors.Create(Status.Internal, "x"));
             // An empty C message still says what went wrong.
             Assert.Equal("FLT_ERR_STATE", Errors.Create(Status.State, "").Message);
-            Assert.Equal("FLT_ERR_STATE", Errors.Create(Status.State, "").StatusName);
+            Assert.Equal("FLT_ERR_STATE", ((IFlatlineException)Errors.Create(Status.State, "")).StatusName);
+        }
+
+        [Theory]
+        [InlineData(Status.InvalidArgument, typeof(ArgumentException))]
+        [InlineData(Status.OutOfMemory, typeof(OutOfMemoryException))]
+        [InlineData(Status.State, typeof(InvalidOperationException))]
+        [InlineData(Status.BufferFull, typeof(InvalidOperationException))]
+        [InlineData(Status.IO, typeof(System.IO.IOException))]
+        [InlineData(Status.Format, typeof(System.IO.IOException))]
+        [InlineData(Status.Device, typeof(System.IO.IOException))]
+        [InlineData(Status.Timeout, typeof(System.IO.IOException))]
+        [InlineData(Status.NotFound, typeof(System.Collections.Generic.KeyNotFoundException))]
+        [InlineData(Status.Numeric, typeof(ArithmeticException))]
+        public void EachIsTheDotNetExceptionOfTheSameMeaning(Status status, Type dotnet)
+        {
+            // catch (IOException) around a file read, catch (ArgumentException)
+            // around a setter: .NET code catches libflatline's failures with
+            // the types it already knows.
+            Exception e = Errors.Create(status, "x");
+            Assert.IsAssignableFrom(dotnet, e);
+            Assert.IsAssignableFrom<IFlatlineException>(e);
+        }
+
+        [Fact]
+        public void ACatchForTheDotNetTypeCatchesARealFailure()
+        {
+            string missing = System.IO.Path.Combine(System.IO.Path.GetTempPath(), "flatline-no-such-dir", "none.json");
+            var io = Assert.ThrowsAny<System.IO.IOException>(() => Calibration.Load(missing));
+            Assert.Equal(Status.IO, ((IFlatlineException)io).Status);
+            Assert.Contains("none.json", io.Message);
+            var arg = Assert.ThrowsAny<ArgumentException>(() => new Reconstructor(0));
+            Assert.Equal("FLT_ERR_INVALID_ARGUMENT", ((IFlatlineException)arg).StatusName);
         }
 
         [Fact]

@@ -104,7 +104,8 @@ namespace Flatline.Tests
                 Library.Reconstruct(sheet.S, sheet.Height, sheet.Slope, new bool[20, 4]));
             Assert.Equal("valid", e.ParamName);
             Assert.Throws<ArgumentNullException>(() => Library.Reconstruct(null!, sheet.Height, sheet.Slope));  // null on purpose: the check under test
-            // Positions are the C library's business: a typed FlatlineException.
+            // Positions are the C library's business: an InvalidArgumentException
+            // (an ArgumentException whose message names the position).
             var s = (double[])sheet.S.Clone();
             s[5] = s[4];
             var invalid = Assert.Throws<InvalidArgumentException>(() => Library.Reconstruct(s, sheet.Height, sheet.Slope));

@@ -143,7 +143,7 @@ namespace Flatline.Tests
                 using var loaded = Calibration.Parse(inC);
                 Assert.Equal(expected, Bits(loaded));
                 using var unfinished = new Calibration();
-                var error = Assert.ThrowsAny<FlatlineException>(() => unfinished.FiberGrid = new FiberGrid(-999.5, -0.25, 10));
+                var error = Assert.ThrowsAny<InvalidArgumentException>(() => unfinished.FiberGrid = new FiberGrid(-999.5, -0.25, 10));
                 Assert.Contains("-0.25", error.Message);
             }
             finally
