@@ -229,6 +229,7 @@
 #include "flatline/extractor.h"
 #include "flatline/flatness.h" /* FLT_WINDOW_*, FLT_FIBER_*, FLT_ZONE_*, flt_shape */
 #include "flatline/recon.h"    /* FLT_FLAG_* of the height maps */
+#include "flatline/record.h"   /* flt_recorder, flt_archive */
 #include "flatline/source.h"
 #include "flatline/verdict.h" /* flt_rules, flt_verdict */
 
@@ -901,6 +902,25 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sheet_measured_map(const flt_sheet
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sheet_verdict(const flt_sheet *sheet,
                                                             const flt_rules **rules_out,
                                                             const flt_verdict **verdict_out);
+
+/* ---------------------------------------------------------------------- */
+/* The quality record (flatline/record.h)                                  */
+/* ---------------------------------------------------------------------- */
+
+/** Queues a copy of a sheet for the archive (its values, arrays, verdict
+ * and, when the archive keeps maps, its height map: the sheet must have
+ * one, gauge_keep_maps >= 1). The map is encoded on the calling thread
+ * (about 30 ms for a 3 m sheet of 1,150 fibers); the archive's writer
+ * stores the copy. A sheet added twice is stored once.
+ * @param archive the archive (flatline/record.h).
+ * @param sheet   the sheet (one the caller holds, or the callback's).
+ * @return FLT_OK; FLT_ERR_BUFFER_FULL when archive_buffer_mb is taken by
+ *         sheets the database has not taken yet (the sheet is counted
+ *         lost, FLT_ARCHIVE_COUNT_LOST); FLT_ERR_INVALID_ARGUMENT for a
+ *         NULL or dead handle.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_archive_add_sheet(flt_archive *archive,
+                                                                const flt_sheet *sheet);
 
 #ifdef __cplusplus
 }

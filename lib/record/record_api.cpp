@@ -11,6 +11,7 @@
 #include "flatline/recon.h"
 #include "flatline/record.h"
 #include "record/recorder.hpp"
+#include "record/archive.hpp"
 #include "record/recording_reader.hpp"
 
 using flt::fail;
@@ -389,6 +390,101 @@ FLT_API flt_status FLT_CALL flt_recording_read_rows(const flt_recording *recordi
             }
         }
         *rows_out = got;
+        return FLT_OK;
+    });
+}
+
+}  // extern "C"
+
+// ---------------------------------------------------------------- archive
+
+namespace {
+
+flt_status check_archive(const char *fn, const flt_archive *a) {
+    if (a == nullptr)
+        return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'archive' is NULL", fn);
+    if (a->magic != 0x41524348u || !a->impl)
+        return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'archive' is not an open archive", fn);
+    return FLT_OK;
+}
+
+}  // namespace
+
+extern "C" {
+
+FLT_API flt_status FLT_CALL flt_archive_open(const char *location, const char *line,
+                                             const flt_options *options, flt_archive **out) {
+    const char *fn = "flt_archive_open";
+    if (out)
+        *out = nullptr;
+    return guard(fn, [&] {
+        FLT_CHECK_NOT_NULL(fn, location);
+        FLT_CHECK_NOT_NULL(fn, line);
+        FLT_CHECK_NOT_NULL(fn, out);
+        if (location[0] == '\0')
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'location' is empty", fn);
+        const std::string why = flt::coil_text_problem(line);
+        if (!why.empty())
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'line' %s", fn, why.c_str());
+        if (flt_status st = flt::check_option_component(fn, options, {1000}))
+            return st;
+        auto a = std::make_unique<flt_archive>();
+        a->impl = std::make_unique<flt::record::archive>(location, line, options);
+        *out = a.release();
+        return FLT_OK;
+    });
+}
+
+FLT_API void FLT_CALL flt_archive_close(flt_archive *archive) {
+    flt::guard_void([&] {
+        if (archive && archive->magic == 0x41524348u) {
+            archive->magic = 0;
+            delete archive;
+        }
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_archive_flush(flt_archive *archive, uint32_t timeout_ms) {
+    const char *fn = "flt_archive_flush";
+    return guard(fn, [&] {
+        if (flt_status st = check_archive(fn, archive))
+            return st;
+        return archive->impl->flush(fn, timeout_ms);
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_archive_prune(flt_archive *archive, uint64_t *removed_out) {
+    const char *fn = "flt_archive_prune";
+    return guard(fn, [&] {
+        if (flt_status st = check_archive(fn, archive))
+            return st;
+        return archive->impl->prune(fn, removed_out);
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_archive_count(const flt_archive *archive,
+                                              flt_archive_counter counter, uint64_t *out) {
+    const char *fn = "flt_archive_count";
+    return guard(fn, [&] {
+        if (flt_status st = check_archive(fn, archive))
+            return st;
+        FLT_CHECK_NOT_NULL(fn, out);
+        const int c = flt::enum_arg(counter);
+        if (c < 0 || c > FLT_ARCHIVE_COUNT_PENDING_BYTES)
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'counter' is %d (0..%d)", fn, c,
+                        int(FLT_ARCHIVE_COUNT_PENDING_BYTES));
+        *out = archive->impl->count(flt_archive_counter(c));
+        return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_archive_backend(const flt_archive *archive, int *out) {
+    const char *fn = "flt_archive_backend";
+    return guard(fn, [&] {
+        if (flt_status st = check_archive(fn, archive))
+            return st;
+        FLT_CHECK_NOT_NULL(fn, out);
+        *out = archive->impl->backend();
         return FLT_OK;
     });
 }

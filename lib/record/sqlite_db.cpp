@@ -149,6 +149,10 @@ std::string sqlite_statement::column_text(int i) const {
     return t ? std::string(reinterpret_cast<const char *>(t), std::size_t(n)) : std::string();
 }
 
+int sqlite_statement::column_count() const {
+    return sqlite3_column_count(stmt_);
+}
+
 bool sqlite_statement::column_null(int i) const {
     return sqlite3_column_type(stmt_, i) == SQLITE_NULL;
 }

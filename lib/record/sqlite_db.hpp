@@ -60,6 +60,7 @@ class sqlite_statement {
     double column_double(int i) const;
     std::string column_text(int i) const;
     bool column_null(int i) const;
+    int column_count() const;
     const std::uint8_t *column_blob(int i, std::size_t *size) const;
 
   private:
