@@ -146,6 +146,7 @@ recording_reader::recording_reader(const std::string &path) {
             } else if (kind == "coil") {
                 e.kind = recorded_event::coil;
                 auto info = std::make_shared<flt_coil_info>();
+                info->lent = true;  // read-only for the caller (flt_frame_event)
                 for (int f = 0; f < k_coil_fields; ++f) {
                     info->text[f] = q.column_text(6 + f);
                     if (!coil_text_problem(info->text[f].c_str()).empty())

@@ -301,6 +301,93 @@ static void test_writer_failure_counts_rows(void **state) {
     flt_calib_destroy(calib);
 }
 
+/* A recording replays as a source: one frame per row, with its encoder
+ * position, its row and the events recorded before it, in order; the
+ * events after the last row come with one frame more. */
+static void test_source_replays_rows(void **state) {
+    (void)state;
+    char path[600];
+    path_in_dir(path, sizeof path, "replay.flrec");
+    write_recording(path, NULL, 900);
+    flt_source *src = NULL;
+    flt_options *o = NULL;
+    ok(flt_options_create(&o));
+    ok(flt_options_set(o, FLT_OPT_SOURCE_ENCODER_MODE, FLT_ENCODER_FIXED_STEP));
+    assert_error(flt_source_open_recording(path, o, &src), FLT_ERR_INVALID_ARGUMENT, "auto");
+    flt_options_destroy(o);
+    ok(flt_source_open_recording(path, NULL, &src));
+    flt_source_kind kind;
+    ok(flt_source_kind_of(src, &kind));
+    assert_int_equal(kind, FLT_SOURCE_RECORDING);
+    ok(flt_source_start(src));
+    flt_recording *rd = NULL;
+    ok(flt_recording_open(path, &rd));
+    static double eh[900 * FIBERS];
+    size_t got = 0;
+    ok(flt_recording_read_rows(rd, 0, 900, FIBERS, NULL, NULL, eh, NULL, NULL, &got));
+    flt_recording_close(rd);
+    unsigned frames = 0, cuts = 0, coils = 0;
+    for (;;) {
+        const flt_frame *f = NULL;
+        ok(flt_source_next(src, 0, &f));
+        if (!f)
+            break;
+        double e = 0, h[FIBERS];
+        uint64_t block = 0;
+        const void *pixels = (const void *)1;
+        uint32_t w = 9;
+        ok(flt_frame_info(f, &pixels, &w, NULL, NULL, NULL, &block, NULL, &e));
+        assert_null(pixels); /* rows only: no camera frames were kept */
+        assert_int_equal(w, 0);
+        size_t events = 0;
+        ok(flt_frame_event_count(f, &events));
+        for (size_t i = 0; i < events; ++i) {
+            flt_recorded_event k;
+            double at = 0;
+            const flt_coil_info *coil = NULL;
+            ok(flt_frame_event(f, i, &k, &at, NULL, &coil));
+            if (k == FLT_RECORDED_CUT) {
+                ++cuts;
+                assert_int_equal(block, 700); /* recorded before row 700 */
+                assert_true(at == 750.0);
+            } else if (k == FLT_RECORDED_COIL) {
+                ++coils;
+                assert_int_equal(block, 0);
+                const char *id = NULL, *v = NULL;
+                ok(flt_coil_info_get_text(coil, FLT_COIL_FIELD_ID, &id));
+                assert_string_equal(id, "4711");
+                ok(flt_coil_info_find_extra(coil, "line", &v));
+                assert_string_equal(v, "CTL 2 \"Süd\"");
+                assert_int_equal(
+                    flt_coil_info_set_text((flt_coil_info *)coil, FLT_COIL_FIELD_HEAT, "x"),
+                    FLT_ERR_STATE); /* lent: read-only */
+            }
+        }
+        assert_error(flt_frame_event(f, events, NULL, NULL, NULL, NULL), FLT_ERR_NOT_FOUND,
+                     "index");
+        assert_true(e == (double)frames + 0.5);
+        assert_int_equal(block, frames);
+        ok(flt_frame_row(f, FIBERS, h, NULL, NULL));
+        for (unsigned k = 0; k < FIBERS; ++k) {
+            const double want = eh[(size_t)frames * FIBERS + k];
+            assert_true(h[k] == want || (isnan(h[k]) && isnan(want)));
+        }
+        ++frames;
+    }
+    assert_int_equal(frames, 900);
+    assert_int_equal(cuts, 1);
+    assert_int_equal(coils, 1);
+    /* Started again: the first row again. */
+    ok(flt_source_stop(src));
+    ok(flt_source_start(src));
+    const flt_frame *f = NULL;
+    ok(flt_source_next(src, 0, &f));
+    double e = -1;
+    ok(flt_frame_info(f, NULL, NULL, NULL, NULL, NULL, NULL, NULL, &e));
+    assert_true(e == 0.5);
+    flt_source_destroy(src);
+}
+
 static void test_coil_info(void **state) {
     (void)state;
     flt_coil_info *c = NULL;
@@ -363,8 +450,11 @@ static void test_coil_info(void **state) {
 
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_round_trip),    cmocka_unit_test(test_refuses_existing_file),
-        cmocka_unit_test(test_damaged_block), cmocka_unit_test(test_writer_failure_counts_rows),
+        cmocka_unit_test(test_round_trip),
+        cmocka_unit_test(test_refuses_existing_file),
+        cmocka_unit_test(test_damaged_block),
+        cmocka_unit_test(test_writer_failure_counts_rows),
+        cmocka_unit_test(test_source_replays_rows),
         cmocka_unit_test(test_coil_info),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
