@@ -52,3 +52,4 @@
 %include "genicam.i"
 %include "advisor.i"
 %include "log.i"
+%include "record.i"
