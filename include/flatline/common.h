@@ -741,7 +741,7 @@ typedef enum flt_option {
     /** "archive_retry_interval": wait between attempts to reach the
      * database again, ms (integer 10..600000). Default 1000. */
     FLT_OPT_ARCHIVE_RETRY_INTERVAL = 1053,
-    /** "archive_close_timeout": how long flt_archive_close() keeps trying
+    /** "archive_close_timeout": how long flt_archive_destroy() keeps trying
      * to store pending sheets, ms (integer 0..600000). Default 10000. */
     FLT_OPT_ARCHIVE_CLOSE_TIMEOUT = 1054,
     /** "archive_map_quantum": the resolution of the archived height maps,

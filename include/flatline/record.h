@@ -241,7 +241,7 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_recording_open(const char *path, f
 /** Closes a recording. NULL is a no-op.
  * @param recording the recording, or NULL.
  */
-FLT_API void FLT_CALL flt_recording_close(flt_recording *recording);
+FLT_API void FLT_CALL flt_recording_destroy(flt_recording *recording);
 
 /** What flt_recording_info() tells about a recording. */
 typedef enum flt_recording_value {
@@ -360,7 +360,7 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_archive_open(const char *location,
  * must have detached it first. NULL is a no-op.
  * @param archive the archive, or NULL.
  */
-FLT_API void FLT_CALL flt_archive_close(flt_archive *archive);
+FLT_API void FLT_CALL flt_archive_destroy(flt_archive *archive);
 
 /** Waits until every sheet given so far is stored (or the timeout).
  * @param archive    the archive.

@@ -196,7 +196,7 @@ FLT_API flt_status FLT_CALL flt_recording_open(const char *path, flt_recording *
     });
 }
 
-FLT_API void FLT_CALL flt_recording_close(flt_recording *recording) {
+FLT_API void FLT_CALL flt_recording_destroy(flt_recording *recording) {
     flt::guard_void([&] {
         if (recording && recording->magic == 0x52454344u) {
             recording->magic = 0;
@@ -435,7 +435,7 @@ FLT_API flt_status FLT_CALL flt_archive_open(const char *location, const char *l
     });
 }
 
-FLT_API void FLT_CALL flt_archive_close(flt_archive *archive) {
+FLT_API void FLT_CALL flt_archive_destroy(flt_archive *archive) {
     flt::guard_void([&] {
         if (archive && archive->magic == 0x41524348u) {
             archive->magic = 0;

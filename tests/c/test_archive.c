@@ -161,7 +161,7 @@ static void test_sheets_stored_once(void **state) {
     assert_int_equal(n, 5);
     ok(flt_archive_count(ar, FLT_ARCHIVE_COUNT_LOST, &n));
     assert_int_equal(n, 0);
-    flt_archive_close(ar);
+    flt_archive_destroy(ar);
 
     sqlite3 *db = NULL;
     assert_int_equal(sqlite3_open(path, &db), SQLITE_OK);
@@ -232,7 +232,7 @@ static void test_retention(void **state) {
     uint64_t pruned = 0;
     ok(flt_archive_count(ar, FLT_ARCHIVE_COUNT_PRUNED, &pruned));
     assert_int_equal(pruned, 1);
-    flt_archive_close(ar);
+    flt_archive_destroy(ar);
     /* By bytes: room for the newest sheet only (its bytes, in MiB). */
     ok(flt_options_set(o, FLT_OPT_ARCHIVE_RETENTION_DAYS, 0));
     ok(flt_options_set(o, FLT_OPT_ARCHIVE_RETENTION_MB, (double)last / 1048576.0 + 1e-6));
@@ -242,7 +242,7 @@ static void test_retention(void **state) {
     assert_int_equal(removed, 0); /* already done at open */
     ok(flt_archive_count(ar, FLT_ARCHIVE_COUNT_PRUNED, &pruned));
     assert_int_equal(pruned, 2);
-    flt_archive_close(ar);
+    flt_archive_destroy(ar);
     flt_options_destroy(o);
 
     assert_int_equal(sqlite3_open(path, &db), SQLITE_OK);

@@ -190,7 +190,7 @@ static void test_server_restart_mid_coil(void **state) {
     assert_int_equal(stored, SHEETS);
     assert_int_equal(lost, 0);
     assert_true(reconnects >= 1);
-    flt_archive_close(ar);
+    flt_archive_destroy(ar);
 
     assert_int_equal(psql_number("SELECT count(*) FROM sheets"), SHEETS);
     assert_int_equal(psql_number("SELECT count(DISTINCT sheet_index) FROM sheets"), SHEETS);

@@ -181,7 +181,7 @@ static void test_round_trip(void **state) {
     assert_true(e[0] == (double)(ROWS - 10) + 0.5);
     ok(flt_recording_read_rows(rd, ROWS + 5, 10, FIBERS, e, NULL, NULL, NULL, NULL, &got));
     assert_int_equal(got, 0);
-    flt_recording_close(rd);
+    flt_recording_destroy(rd);
 }
 
 /* A record is never overwritten. */
@@ -253,7 +253,7 @@ static void test_damaged_block(void **state) {
                  FLT_ERR_FORMAT, "CRC");
     ok(flt_recording_read_rows(rd, 400, 100, FIBERS, e, NULL, NULL, NULL, NULL, &got));
     assert_true(e[0] == 400.5);
-    flt_recording_close(rd);
+    flt_recording_destroy(rd);
 }
 
 /* A writer that cannot write (another program holds the file's write lock
@@ -325,7 +325,7 @@ static void test_source_replays_rows(void **state) {
     static double eh[900 * FIBERS];
     size_t got = 0;
     ok(flt_recording_read_rows(rd, 0, 900, FIBERS, NULL, NULL, eh, NULL, NULL, &got));
-    flt_recording_close(rd);
+    flt_recording_destroy(rd);
     unsigned frames = 0, cuts = 0, coils = 0;
     for (;;) {
         const flt_frame *f = NULL;

@@ -168,7 +168,7 @@ static void test_killed_writer(void **state) {
         worst_margin = fmin(worst_margin, (rows - (double)required) / RATE);
         free(e);
         free(t);
-        flt_recording_close(rd);
+        flt_recording_destroy(rd);
         print_message("kill %2d after %.2f s: %6.0f rows stored, %6lld pushed, %6lld required\n",
                       kill_no, delay, rows, (long long)pushed, (long long)required);
     }

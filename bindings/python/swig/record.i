@@ -14,10 +14,10 @@
 %ignore flt_recorder_destroy;
 %ignore flt_recorder_push_row;
 %ignore flt_recorder_sync;
-%ignore flt_recording_close;
+%ignore flt_recording_destroy;
 %ignore flt_recording_verify;
 %ignore flt_recording_read_rows;
-%ignore flt_archive_close;
+%ignore flt_archive_destroy;
 %ignore flt_archive_flush;
 
 %typemap(in, numinputs=0) flt_coil_info **out (flt_coil_info *temp = NULL) { $1 = &temp; }
@@ -121,7 +121,7 @@ struct flt_recorder {};
 %nodefaultctor flt_recording;
 struct flt_recording {};
 %extend flt_recording {
-  ~flt_recording() { flt_recording_close($self); }
+  ~flt_recording() { flt_recording_destroy($self); }
 
   flt_status verify_waiting(uint64_t *out) {
     flt_status status;
@@ -161,7 +161,7 @@ struct flt_archive {};
 %extend flt_archive {
   ~flt_archive() {
     Py_BEGIN_ALLOW_THREADS
-    flt_archive_close($self);
+    flt_archive_destroy($self);
     Py_END_ALLOW_THREADS
   }
 
