@@ -722,6 +722,8 @@ typedef enum flt_recorded_event {
     /** Rows were lost before this frame (the recorder's writer was behind):
      * count_out says how many. */
     FLT_RECORDED_GAP = 3,
+    /** A note (flt_gauge_note): see flt_frame_event_note(). */
+    FLT_RECORDED_NOTE = 4,
     FLT_RECORDED_EVENT_MAX_ENUM_ = 0x7FFFFFFF
 } flt_recorded_event;
 
@@ -781,6 +783,19 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_frame_event(const flt_frame *frame
                                                           double *encoder_mm_out,
                                                           uint64_t *count_out,
                                                           const flt_coil_info **coil_out);
+
+/** The kind and text of a note event (FLT_RECORDED_NOTE) before a frame.
+ * Either output may be NULL.
+ * @param frame    the frame.
+ * @param index    the event, 0 .. flt_frame_event_count() - 1.
+ * @param kind_out receives the note's kind, owned by the source.
+ * @param text_out receives its text, owned by the source.
+ * @return FLT_OK; FLT_ERR_NOT_FOUND past the last event or for an event
+ *         that is no note; FLT_ERR_INVALID_ARGUMENT for a NULL frame.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_frame_event_note(const flt_frame *frame, size_t index,
+                                                               const char **kind_out,
+                                                               const char **text_out);
 
 #ifdef __cplusplus
 }

@@ -9,6 +9,7 @@
 #include <chrono>
 
 #include "core/error.hpp"
+#include "core/log.hpp"
 #include "core/number_text.hpp"
 #include "core/options.hpp"
 #include "record/recorder.hpp"  // utc_now_ns
@@ -60,7 +61,7 @@ bool archive::add(std::unique_ptr<sheet_record> sheet) {
         ++given_;
         if (pending_bytes_ + bytes > buffer_bytes_) {
             ++lost_;
-            return false;
+            return false;  // the caller logs it, with the sheet's number
         }
         pending_bytes_ += bytes;
         pending_.push_back(std::move(sheet));
@@ -128,6 +129,13 @@ void archive::writer_main() {
         }
         if (stop_ && clock::now() - stop_since > close_timeout_) {
             // Closing, and the database is still away: what is left is lost.
+            const unsigned long long left = pending_.size();
+            lock.unlock();
+            FLT_LOG(FLT_LOG_ERROR, "archive",
+                    "closing: %llu sheets could not be stored within archive_close_timeout (%s): "
+                    "they are lost",
+                    left, last_error_.c_str());
+            lock.lock();
             lost_ += pending_.size();
             pending_.clear();
             pending_bytes_ = 0;
@@ -158,6 +166,18 @@ void archive::writer_main() {
         in_store_ = false;
         if (reconnected)
             ++reconnects_;
+        if (ok && failing_since_ > 0) {
+            // The database is back: say so, with what it cost.
+            const unsigned long long attempts = failures_ - failing_since_ + 1,
+                                     waiting = pending_.size();
+            failing_since_ = 0;
+            lock.unlock();
+            FLT_LOG(FLT_LOG_WARNING, "archive",
+                    "the database takes sheets again after %llu failed attempts%s; %llu sheets "
+                    "that waited in memory are being stored",
+                    attempts, reconnected ? " (connected again)" : "", waiting);
+            lock.lock();
+        }
         if (ok) {
             pending_bytes_ -= r.bytes();
             bytes_ += r.bytes();
@@ -176,6 +196,17 @@ void archive::writer_main() {
         ++failures_;
         last_error_ = why;
         done_cv_.notify_all();
+        if (failing_since_ == 0) {
+            failing_since_ = failures_;
+            const unsigned long long waiting = pending_.size();
+            const long long retry_ms = retry_.count();
+            lock.unlock();
+            FLT_LOG(FLT_LOG_WARNING, "archive",
+                    "the database does not take sheets (%s): %llu sheets wait in memory "
+                    "(archive_buffer_mb), trying again every %lld ms",
+                    why.c_str(), waiting, retry_ms);
+            lock.lock();
+        }
         // Try again after the retry interval (sooner when closing ends).
         cv_.wait_for(lock, retry_);
     }

@@ -64,6 +64,7 @@ class archive {
     std::string last_error_;
     std::uint64_t given_ = 0, stored_ = 0, lost_ = 0, failures_ = 0, reconnects_ = 0, pruned_ = 0,
                   bytes_ = 0, since_prune_ = 0;
+    std::uint64_t failing_since_ = 0;  // failures_ at the first failure of a run; 0: fine
     std::thread writer_;
 };
 

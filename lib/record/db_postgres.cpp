@@ -115,6 +115,10 @@ std::string dollar_parameters(const std::string &sql) {
 
 std::string trimmed(const char *message) {
     std::string m = message ? message : "";
+    // libpq's messages span lines; a log line and an error message do not.
+    for (char &c : m)
+        if (c == '\n' || c == '\t')
+            c = ' ';
     while (!m.empty() && (m.back() == '\n' || m.back() == ' '))
         m.pop_back();
     return m;

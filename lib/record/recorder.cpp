@@ -11,6 +11,7 @@
 #include <limits>
 
 #include "core/error.hpp"
+#include "core/log.hpp"
 #include "core/number_text.hpp"
 #include "core/options.hpp"
 #include "core/utf8_path.hpp"
@@ -232,6 +233,18 @@ void recorder::add_row(const row_in &row, const double *height, const double *sl
             lost_run_start_ = number;
         ++lost_run_;
         ++rows_lost_;
+        if (lost_run_ == 1) {
+            const unsigned long long lost = rows_lost_;
+            const bool failed = failed_;
+            // The lock is this recorder's own: no callback can need it.
+            FLT_LOG(FLT_LOG_WARNING, "record",
+                    "rows are not recorded from row %llu on: %s (%llu rows lost so far; the gap is "
+                    "marked in the file)",
+                    (unsigned long long)number,
+                    failed ? "the writer stopped on an error"
+                           : "the writer is behind by record_queue_blocks blocks",
+                    lost);
+        }
     }
     // Under the lock: the writer's timer may close the open block (a few
     // microseconds per row; the writer takes the lock rarely).
@@ -312,6 +325,15 @@ void recorder::add_coil(const flt_coil_info &coil, std::int64_t before_row) {
 void recorder::add_flush(std::int64_t before_row) {
     event e;
     e.kind = 2;
+    e.before_row = before_row;
+    push_event(std::move(e));
+}
+
+void recorder::add_note(const std::string &kind, const std::string &text, std::int64_t before_row) {
+    event e;
+    e.kind = 4;
+    e.label = kind;
+    e.text = text;
     e.before_row = before_row;
     push_event(std::move(e));
 }
@@ -456,13 +478,17 @@ std::uint64_t recorder::count(flt_recorder_counter which) const {
 }
 
 void recorder::record_failure(flt_status st, const char *message) {
-    std::lock_guard<std::mutex> lock(m_);
-    if (!failed_) {
+    {
+        std::lock_guard<std::mutex> lock(m_);
+        if (failed_)
+            return;
         failed_ = true;
         failure_status_ = st;
         failure_message_ = message;
+        done_cv_.notify_all();
     }
-    done_cv_.notify_all();
+    FLT_LOG(FLT_LOG_ERROR, "record", "the recording stopped: %s (later rows are counted lost)",
+            message);
 }
 
 void recorder::writer_main() {
@@ -626,7 +652,7 @@ void recorder::write_round(std::vector<row_block *> &blocks, std::vector<event> 
         }
         if (!events.empty()) {
             sqlite_statement ins(*db_, "INSERT INTO events (before_row, time_ns, kind, encoder_mm, "
-                                       "count, text) VALUES (?1, ?2, ?3, ?4, ?5, NULL)");
+                                       "count, label, text) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)");
             sqlite_statement coil(*db_,
                                   "INSERT INTO coils (event, coil_id, order_no, heat, grade, "
                                   "customer, nominal_thickness_mm, nominal_width_mm) VALUES (?1, "
@@ -634,13 +660,15 @@ void recorder::write_round(std::vector<row_block *> &blocks, std::vector<event> 
             sqlite_statement extra(
                 *db_,
                 "INSERT INTO coil_extras (event, position, key, value) VALUES (?1, ?2, ?3, ?4)");
-            static const char *const kinds[] = {"cut", "coil", "flush", "gap"};
+            static const char *const kinds[] = {"cut", "coil", "flush", "gap", "note"};
             for (const event &e : events) {
                 ins.bind(1, e.before_row).bind(2, e.time_ns).bind(3, std::string(kinds[e.kind]));
                 if (e.kind == 0)
                     ins.bind(4, e.encoder_mm);
                 if (e.kind == 3)
                     ins.bind(5, std::int64_t(e.count));
+                if (e.kind == 4)
+                    ins.bind(6, e.label).bind(7, e.text);
                 ins.run();
                 const std::int64_t id = db_->last_insert_rowid();
                 if (e.kind == 1 && e.coil) {

@@ -63,6 +63,7 @@ class recorder {
     void add_cut(double encoder_mm, std::int64_t before_row = -1);
     void add_coil(const flt_coil_info &coil, std::int64_t before_row = -1);
     void add_flush(std::int64_t before_row = -1);
+    void add_note(const std::string &kind, const std::string &text, std::int64_t before_row = -1);
     // The options of the gauge that records (stored once; replaced).
     void set_gauge_options(const flt_options &effective);
     // Raw frames (record_frames), `row`: the row number of its profile.
@@ -86,7 +87,8 @@ class recorder {
   private:
     struct event {
         std::int64_t before_row = 0, time_ns = 0;
-        int kind = 0;  // 0 cut, 1 coil, 2 flush, 3 gap
+        int kind = 0;             // 0 cut, 1 coil, 2 flush, 3 gap, 4 note
+        std::string label, text;  // note
         double encoder_mm = 0.0;
         std::uint64_t count = 0;
         std::unique_ptr<flt_coil_info> coil;

@@ -30,6 +30,7 @@ CREATE TABLE events (
   kind TEXT NOT NULL,
   encoder_mm REAL,
   count INTEGER,
+  label TEXT,
   text TEXT);
 CREATE INDEX events_by_row ON events (before_row);
 CREATE TABLE coils (

@@ -121,7 +121,8 @@ recording_reader::recording_reader(const std::string &path) {
     {
         sqlite_statement q(*db_,
                            "SELECT e.event, e.before_row, e.time_ns, e.kind, e.encoder_mm, "
-                           "e.count, c.coil_id, c.order_no, c.heat, c.grade, c.customer, "
+                           "e.count, e.label, e.text, c.coil_id, c.order_no, c.heat, c.grade, "
+                           "c.customer, "
                            "c.nominal_thickness_mm, c.nominal_width_mm FROM events e LEFT JOIN "
                            "coils c ON c.event = e.event ORDER BY e.event");
         sqlite_statement extras(*db_,
@@ -140,6 +141,13 @@ recording_reader::recording_reader(const std::string &path) {
                     malformed(path, "a cut's position is out of range");
             } else if (kind == "flush") {
                 e.kind = recorded_event::flush;
+            } else if (kind == "note") {
+                e.kind = recorded_event::note;
+                e.label = q.column_text(6);
+                e.text = q.column_text(7);
+                if (!coil_key_problem(e.label.c_str()).empty() ||
+                    !coil_text_problem(e.text.c_str()).empty())
+                    malformed(path, "a note's kind or text is malformed");
             } else if (kind == "gap") {
                 e.kind = recorded_event::gap;
                 rows_lost_ += e.count;
@@ -148,12 +156,12 @@ recording_reader::recording_reader(const std::string &path) {
                 auto info = std::make_shared<flt_coil_info>();
                 info->lent = true;  // read-only for the caller (flt_frame_event)
                 for (int f = 0; f < k_coil_fields; ++f) {
-                    info->text[f] = q.column_text(6 + f);
+                    info->text[f] = q.column_text(8 + f);
                     if (!coil_text_problem(info->text[f].c_str()).empty())
                         malformed(path, "a coil's text is malformed");
                 }
-                info->thickness_mm = q.column_double(11);
-                info->width_mm = q.column_double(12);
+                info->thickness_mm = q.column_double(13);
+                info->width_mm = q.column_double(14);
                 if (info->text[0].empty() ||
                     !(info->thickness_mm >= 0 && info->thickness_mm <= 1000) ||
                     !(info->width_mm >= 0 && info->width_mm <= 100000))

@@ -19,7 +19,8 @@ namespace flt::record {
 
 struct recorded_event {
     std::int64_t before_row = 0, time_ns = 0;
-    enum kind_t { cut, coil, flush, gap, other } kind = other;
+    enum kind_t { cut, coil, flush, gap, note, other } kind = other;
+    std::string label, text;  // note
     double encoder_mm = 0.0;
     std::uint64_t count = 0;
     std::shared_ptr<flt_coil_info> coil_info;  // kind coil

@@ -21,6 +21,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include <cmocka.h>
 #include <sqlite3.h>
@@ -47,7 +48,7 @@ static const char k_rules[] =
     "}\n"
     "] }\n";
 
-static char dir[512];
+static char dir[512], gauge_archive[600];
 
 static int setup(void **state) {
     (void)state;
@@ -91,6 +92,20 @@ static void run_coil(coil_run *run) {
     ok(flt_rules_load_text(k_rules, strlen(k_rules), &rules));
     ok(flt_gauge_set_rules(g, rules, 4.0, 0.0));
     flt_rules_destroy(rules);
+    /* The gauge archives its sheets itself too, with the coil's identity
+     * (its nominal thickness chooses the bands) and a leveler note. */
+    snprintf(gauge_archive, sizeof gauge_archive, "%s/gauge.sqlite", dir);
+    flt_archive *ga = NULL;
+    ok(flt_archive_open(gauge_archive, "CTL 2", NULL, &ga));
+    ok(flt_gauge_attach_archive(g, ga));
+    flt_coil_info *coil = NULL;
+    ok(flt_coil_info_create("4711", &coil));
+    ok(flt_coil_info_set_text(coil, FLT_COIL_FIELD_GRADE, "S355MC"));
+    ok(flt_coil_info_set_text(coil, FLT_COIL_FIELD_CUSTOMER, "Acme"));
+    ok(flt_coil_info_set_nominal(coil, 4.0, 0.0));
+    ok(flt_coil_info_set_extra(coil, "shift", "B"));
+    ok(flt_gauge_set_coil(g, coil));
+    flt_coil_info_destroy(coil);
     for (int c = 1; c * SHEET_MM < ROWS; ++c)
         ok(flt_gauge_cut(g, c * SHEET_MM));
     double *h = malloc(sizeof(double) * FIBERS), *s = malloc(sizeof(double) * FIBERS);
@@ -98,6 +113,8 @@ static void run_coil(coil_run *run) {
     for (int r = 0; r < ROWS; ++r) {
         double e = 0, sr = 0;
         ok(flt_sim_next_rows(sim, 1, FIBERS, &e, &sr, h, s, v, NULL));
+        if (r == 4000)
+            ok(flt_gauge_note(g, "leveler", "roll 2 -0.10 mm"));
         ok(flt_gauge_push_row(g, e, FIBERS, h, s, v));
         flt_sheet *sh = NULL;
         ok(flt_gauge_next_sheet(g, 0, &sh));
@@ -120,6 +137,9 @@ static void run_coil(coil_run *run) {
     free(h);
     free(s);
     free(v);
+    ok(flt_gauge_attach_archive(g, NULL));
+    ok(flt_archive_flush(ga, 30000));
+    flt_archive_destroy(ga);
     flt_gauge_destroy(g);
     flt_sim_destroy(sim);
     flt_calib_destroy(calib);
@@ -199,12 +219,57 @@ static void test_sheets_stored_once(void **state) {
             assert_true(bytes <= 2000000);
         sqlite3_finalize(q);
     }
-    /* "The failed sheets of coil X" and "every sheet of a grade last week"
-     * are one query each (the coil here has no identity: id ""). */
-    const int64_t failed_count = scalar(db, "SELECT count(*) FROM sheets WHERE coil_id = '' AND "
-                                            "verdict = 'fail'");
+    /* "The failed sheets of coil 4711" and "every sheet of grade S355MC
+     * last week" are one query each. */
+    const int64_t failed_count = scalar(db, "SELECT count(*) FROM sheets WHERE coil_id = '4711' "
+                                            "AND verdict = 'fail'");
     const int64_t fails = scalar(db, "SELECT count(*) FROM sheets WHERE rules_failed > 0");
     assert_int_equal(failed_count, fails);
+    char week[200];
+    snprintf(week, sizeof week,
+             "SELECT count(*) FROM sheets WHERE grade = 'S355MC' AND utc_ns > %lld",
+             (long long)time(NULL) * 1000000000LL - 7LL * 86400 * 1000000000LL);
+    assert_int_equal(scalar(db, week), 4);
+    sqlite3_close(db);
+}
+
+/* The gauge's own archive: the coil's identity on its row and its sheets',
+ * its statistics at its end, the note on the sheet it was given in. */
+static void test_gauge_archives_coil(void **state) {
+    (void)state;
+    if (g_run.sheets == 0)
+        run_coil(&g_run);
+    sqlite3 *db = NULL;
+    assert_int_equal(sqlite3_open(gauge_archive, &db), SQLITE_OK);
+    assert_int_equal(scalar(db, "SELECT count(*) FROM sheets WHERE coil_id = '4711' AND grade = "
+                                "'S355MC'"),
+                     4);
+    assert_int_equal(scalar(db, "SELECT count(*) FROM coils WHERE coil_id = '4711' AND "
+                                "customer = 'Acme' AND finished = 1 AND sheets = 4"),
+                     1);
+    assert_int_equal(scalar(db, "SELECT count(*) FROM coil_extras WHERE key = 'shift' AND "
+                                "value = 'B'"),
+                     1);
+    assert_int_equal(scalar(db, "SELECT count(*) FROM coil_stats"), 3);
+    /* The note: given at row 4000 (s ~ 4000 mm), on the second sheet. */
+    assert_int_equal(scalar(db, "SELECT s.sheet_index FROM notes n JOIN sheets s ON s.sheet_uid = "
+                                "n.sheet_uid WHERE n.kind = 'leveler'"),
+                     2);
+    /* The bands were chosen by the coil's nominal thickness. */
+    assert_int_equal(scalar(db, "SELECT count(*) FROM sheets WHERE thickness_mm = 4.0"), 4);
+    /* The verdicts agree with the sheets the caller read. */
+    for (size_t i = 0; i < g_run.sheets; ++i) {
+        double id = 0, verdict = 0;
+        ok(flt_sheet_get(g_run.sheet[i], FLT_SHEET_ID, &id));
+        ok(flt_sheet_get(g_run.sheet[i], FLT_SHEET_VERDICT, &verdict));
+        char sql[160];
+        snprintf(sql, sizeof sql,
+                 "SELECT count(*) FROM sheets WHERE sheet_id = %d AND verdict = '%s'", (int)id,
+                 verdict == FLT_VERDICT_FAIL   ? "fail"
+                 : verdict == FLT_VERDICT_PASS ? "pass"
+                                               : "not_judged");
+        assert_int_equal(scalar(db, sql), 1);
+    }
     sqlite3_close(db);
 }
 
@@ -293,6 +358,7 @@ static int free_run(void **state) {
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_sheets_stored_once),
+        cmocka_unit_test(test_gauge_archives_coil),
         cmocka_unit_test(test_retention),
         cmocka_unit_test(test_archive_refuses),
     };

@@ -2,12 +2,14 @@
 /*
  * The archive on a real PostgreSQL server that the test starts (Debian's
  * postgresql, a throwaway cluster: tests/postgres/pg_cluster.sh), stopped
- * in the middle of a coil and started again: the sheets measured while it
- * was away wait in the archive's buffer, the archive reconnects, and all
- * 10 sheets of the coil are in the database, each once, with their
- * verdicts; the counters say how many attempts failed and how often it
- * reconnected. Skipped (with a message) where no PostgreSQL server is
- * installed.
+ * in the middle of a coil and started again: a gauge archives every sheet
+ * of the coil (flt_gauge_attach_archive); the sheets measured while the
+ * server was away wait in the archive's buffer, the archive reconnects, and
+ * all 10 sheets of the coil are in the database, each once, with their
+ * verdicts, the coil's identity and statistics; the counters say how many
+ * attempts failed and how often it reconnected, and the log says when the
+ * database went away and when it came back. Skipped (with a message) where
+ * no PostgreSQL server is installed.
  */
 #include <math.h>
 #include <setjmp.h>
@@ -38,6 +40,20 @@ static const char k_rules[] =
     "\"limit\": 2 } ] } ] }\n";
 
 static char g_dir[64], g_conninfo[512], g_location[600];
+
+/* What the archive told the log. */
+static int g_log_away, g_log_back;
+static void FLT_CALL on_log(flt_log_level level, const char *component, const char *message,
+                            void *user) {
+    (void)user;
+    if (strcmp(component, "archive") != 0)
+        return;
+    if (level >= FLT_LOG_WARNING && strstr(message, "does not take sheets"))
+        ++g_log_away;
+    if (strstr(message, "takes sheets again"))
+        ++g_log_back;
+    print_message("log [%s] %s\n", component, message);
+}
 
 static int cluster(const char *cmd, char *out, size_t cap) {
     char line[400];
@@ -125,6 +141,13 @@ static void test_server_restart_mid_coil(void **state) {
     ok(flt_rules_load_text(k_rules, strlen(k_rules), &rules));
     ok(flt_gauge_set_rules(g, rules, 4.0, 0.0));
     flt_rules_destroy(rules);
+    flt_coil_info *coil = NULL;
+    ok(flt_coil_info_create("4711", &coil));
+    ok(flt_coil_info_set_text(coil, FLT_COIL_FIELD_GRADE, "S355MC"));
+    ok(flt_gauge_set_coil(g, coil));
+    flt_coil_info_destroy(coil);
+    ok(flt_gauge_attach_archive(g, ar));
+    ok(flt_log_set_callback(on_log, NULL, FLT_LOG_WARNING));
     for (int c = 1; c < SHEETS; ++c)
         ok(flt_gauge_cut(g, c * SHEET_MM));
 
@@ -142,8 +165,7 @@ static void test_server_restart_mid_coil(void **state) {
             ok(flt_gauge_next_sheet(g, 0, &sh));
             if (!sh)
                 break;
-            ok(flt_archive_add_sheet(ar, sh));
-            flt_sheet_destroy(sh);
+            flt_sheet_destroy(sh); /* archived by the gauge before it came out */
             ++added;
             if (added == 4) {
                 /* Four sheets stored; then the server goes away. */
@@ -168,7 +190,6 @@ static void test_server_restart_mid_coil(void **state) {
         ok(flt_gauge_next_sheet(g, 0, &sh));
         if (!sh)
             break;
-        ok(flt_archive_add_sheet(ar, sh));
         flt_sheet_destroy(sh);
         ++added;
     }
@@ -190,12 +211,22 @@ static void test_server_restart_mid_coil(void **state) {
     assert_int_equal(stored, SHEETS);
     assert_int_equal(lost, 0);
     assert_true(reconnects >= 1);
+    ok(flt_gauge_attach_archive(g, NULL));
     flt_archive_destroy(ar);
+    ok(flt_log_set_callback(NULL, NULL, FLT_LOG_WARNING));
+    /* The log said the database went away, and that it came back. */
+    assert_int_equal(g_log_away, 1);
+    assert_int_equal(g_log_back, 1);
 
     assert_int_equal(psql_number("SELECT count(*) FROM sheets"), SHEETS);
     assert_int_equal(psql_number("SELECT count(DISTINCT sheet_index) FROM sheets"), SHEETS);
     assert_int_equal(psql_number("SELECT count(*) FROM verdicts"), 2 * SHEETS);
     assert_int_equal(psql_number("SELECT sheets FROM coils"), SHEETS);
+    assert_int_equal(psql_number("SELECT count(*) FROM coils WHERE coil_id = '4711' AND grade = "
+                                 "'S355MC' AND finished = 1"),
+                     1);
+    assert_int_equal(psql_number("SELECT count(*) FROM coil_stats"), 2);
+    assert_int_equal(psql_number("SELECT count(*) FROM sheets WHERE coil_id = '4711'"), SHEETS);
     assert_int_equal(psql_number("SELECT count(*) FROM sheets WHERE map IS NOT NULL AND "
                                  "octet_length(map) > 1000"),
                      SHEETS);

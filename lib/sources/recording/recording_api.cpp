@@ -105,6 +105,9 @@ FLT_API flt_status FLT_CALL flt_frame_event(const flt_frame *frame, size_t index
             case flt::record::recorded_event::flush:
                 kind = FLT_RECORDED_FLUSH;
                 break;
+            case flt::record::recorded_event::note:
+                kind = FLT_RECORDED_NOTE;
+                break;
             default:
                 break;
         }
@@ -120,6 +123,28 @@ FLT_API flt_status FLT_CALL flt_frame_event(const flt_frame *frame, size_t index
             if (e.coil_info)
                 *coil_out = e.coil_info.get();  // lent (the reader made it so)
         }
+        return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_frame_event_note(const flt_frame *frame, size_t index,
+                                                 const char **kind_out, const char **text_out) {
+    const char *fn = "flt_frame_event_note";
+    return guard(fn, [&] {
+        if (flt_status st = check_frame(fn, frame))
+            return st;
+        const flt::sources::recorded_frame *r = frame->recorded;
+        const std::size_t n = r ? r->event_count : 0;
+        if (index >= n)
+            return fail(FLT_ERR_NOT_FOUND, "%s: argument 'index' is %zu (the frame has %zu events)",
+                        fn, index, n);
+        const flt::record::recorded_event &e = r->events[index];
+        if (e.kind != flt::record::recorded_event::note)
+            return fail(FLT_ERR_NOT_FOUND, "%s: event %zu is no note", fn, index);
+        if (kind_out)
+            *kind_out = e.label.c_str();
+        if (text_out)
+            *text_out = e.text.c_str();
         return FLT_OK;
     });
 }
