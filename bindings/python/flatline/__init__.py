@@ -109,7 +109,8 @@ from ._extractor import (
 from ._flatness import FIBER_OFF_STRIP, WINDOW_ON_STRIP, ZONE_OFF_STRIP, StripWindow
 
 from . import _log
-from ._gauge import CoilStats, Gauge, RuleStats, Sheet, SheetFlag, SheetZones, gauge_options
+from ._gauge import (CoilStats, Gauge, RuleStats, Sheet, SheetFlag, SheetNote, SheetZones,
+                     gauge_options)
 from ._advisor import Actuator, Advice, Advisor, AdvisorFit, advisor_options
 from ._record import (
     Archive,
@@ -157,6 +158,7 @@ if (_abi(_capi.flt_version()) != _abi(_capi.FLT_HEADER_VERSION_NUMBER)
 __all__ = [
     "__version__",
     "CoilInfo",
+    "SheetNote",
     "Recorder",
     "Recording",
     "RecordedRows",

@@ -22,6 +22,7 @@
 %ignore flt_frame_row;          /* a recording source's rows: flatline.Recording reads them */
 %ignore flt_frame_event_count;
 %ignore flt_frame_event;
+%ignore flt_frame_event_note;
 %ignore flt_source_read_memory;
 %ignore flt_source_write_memory;
 

@@ -131,3 +131,83 @@ def test_archive_opens_and_counts(tmp_path):
     db = sqlite3.connect(tmp_path / "a.sqlite")
     assert dict(db.execute("SELECT key, value FROM archive_meta")) == {
         "format": "flatline-archive", "version": "1"}
+
+
+def _simulated_rows(calib, rows=2400):
+    with flatline.SimulatedLine(calib, sim_seed=4, sim_frame_spacing=3.0,
+                                sim_heave_sigma=0.3, sim_peak_sigma=1 / 16) as sim:
+        sim.add_defect("centre_buckle", 3.0, 900.0)
+        return sim.next_rows(rows)
+
+
+def _run_live(calib, rows, recorder=None, archive=None):
+    sheets = []
+    with flatline.Gauge(calib, gauge_frame_spacing=2.5, gauge_keep_maps=1,
+                        rigid_motion=True, gauge_workers=2) as gauge:
+        gauge.set_rules(flatline.ToleranceRules.loads(RULES), thickness_mm=4.0,
+                        width_mm="measured")
+        if recorder is not None:
+            gauge.attach_recorder(recorder)
+        if archive is not None:
+            gauge.attach_archive(archive)
+        gauge.set_coil(flatline.CoilInfo("4711", grade="S355MC", thickness_mm=4.0))
+        for cut in (1000.0, 2000.0, 3000.0, 4000.0, 5000.0, 6000.0):
+            gauge.cut(cut)
+        for r in range(len(rows.s)):
+            if r == 1200:
+                gauge.note("leveler", "roll 3 +0.2 mm")
+            gauge.push_row(rows.encoder_mm[r], rows.height[r], rows.slope[r], rows.valid[r])
+            sheets.extend(gauge)
+        gauge.flush()
+        sheets.extend(gauge)
+        if recorder is not None:
+            gauge.attach_recorder(None)
+        if archive is not None:
+            gauge.attach_archive(None)
+        last = gauge.coil_info(last=True)
+    return sheets, last
+
+
+RULES = """{ "format": "flatline-tolerances", "version": 1, "name": "py", "rules": [
+  { "name": "I-Units", "measure": "zone_i_units",
+    "bands": [ { "thickness_mm": [1, 10], "width_mm": [0, 3000], "limit": 8 } ] } ] }"""
+
+
+def test_recorded_line_replays_bit_for_bit_and_is_archived(tmp_path):
+    calib = flatline.Calibration.reference(first_x_mm=-400.0, pitch_mm=20.0, fibers=41)
+    rows = _simulated_rows(calib)
+    path = tmp_path / "line.flrec"
+    with flatline.Recorder(path, calib) as rec, \
+            flatline.Archive(tmp_path / "archive.sqlite", line="py") as archive:
+        live, last = _run_live(calib, rows, rec, archive)
+        archive.flush()
+        assert archive.counters()["stored"] == len(live)
+    assert len(live) == 7
+    assert last == flatline.CoilInfo("4711", grade="S355MC", thickness_mm=4.0)
+    assert all(s.coil_info.coil_id == "4711" for s in live)
+    assert sum(len(s.notes) for s in live) == 1
+    assert [n.kind for s in live for n in s.notes] == ["leveler"]
+
+    with flatline.Recording(path) as rd:
+        replay_calib, options = rd.calibration(), rd.options()
+    assert options["rigid_motion"] == 1.0
+    with flatline.Gauge(replay_calib, **options) as gauge:
+        gauge.set_rules(flatline.ToleranceRules.loads(RULES), thickness_mm=4.0,
+                        width_mm="measured")
+        again = list(gauge.run(flatline.Source.open_recording(path)))
+    assert len(again) == len(live)
+    for a, b in zip(live, again):
+        for key, value in a.values.items():
+            assert np.array_equal(value, b.values[key], equal_nan=True), key
+        assert b.finished_time >= a.finished_time > 1.6e9
+        assert np.array_equal(a.z, b.z, equal_nan=True)  # bit for bit: tolerance 0
+        assert a.coil_info == b.coil_info and a.notes == b.notes
+        assert [r.worst for r in a.verdict] == [r.worst for r in b.verdict]
+
+    # The archive: one query for the failed sheets of coil 4711.
+    db = sqlite3.connect(tmp_path / "archive.sqlite")
+    failed = [row[0] for row in db.execute(
+        "SELECT sheet_index FROM sheets WHERE coil_id = '4711' AND verdict = 'fail' "
+        "ORDER BY sheet_index")]
+    assert failed == [s.index for s in live if s.values["verdict"] == 1.0]
+    assert db.execute("SELECT count(*) FROM notes WHERE kind = 'leveler'").fetchone()[0] == 1
