@@ -285,6 +285,15 @@ namespace Flatline
             return Flatline.Calibration.FromHandle(calib);
         }
 
+        /// <summary>The options of the gauge that made the recording (every
+        /// default when none were recorded): a gauge made with them and
+        /// <see cref="Calibration"/> replays the recording bit for bit.</summary>
+        public FlatlineOptions Options()
+        {
+            FlatlineNative.flt_recording_options(LiveHandle, out OptionsHandle bag);
+            return new FlatlineOptions(bag);
+        }
+
         /// <summary>Checks every block (its CRC-32, and that it decodes);
         /// throws <see cref="FlatlineFormatException"/> naming the first bad one.</summary>
         public unsafe void Verify()

@@ -34,6 +34,7 @@ FLT_CS_INT_ENUM(flt_recorded_event, NativeRecordedEvent)
 %ignore flt_frame_row;
 %ignore flt_frame_event_count;
 %ignore flt_frame_event;
+%ignore flt_frame_event_note;
 FLT_CS_INT_ENUM(flt_source_counter, NativeCounter)
 FLT_CS_INT_ENUM(flt_camera_string, NativeCameraString)
 FLT_CS_INT_ENUM(flt_camera_value, NativeCameraValue)

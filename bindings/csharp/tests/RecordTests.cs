@@ -2,6 +2,7 @@
 using System;
 using System.Collections.Generic;
 using System.IO;
+using System.Linq;
 using Xunit;
 
 namespace Flatline.Tests
@@ -93,6 +94,77 @@ namespace Flatline.Tests
                     }
                 }
             Assert.Equal(rows, row);
+        }
+
+        [Fact]
+        public async System.Threading.Tasks.Task ARecordedLineReplaysBitForBitAndIsArchived()
+        {
+            // A wavy strip of 51 fibers, rows every 3 mm over 9 m, cut every
+            // 1500 mm, measured by 2 workers with a recorder and an archive.
+            using var calib = Calibration.Reference(firstRow: 900, rows: 240, firstXMm: -750, pitchMm: 30, fibers: 51);
+            string path = Path.Combine(dir, "line.flrec"), archivePath = Path.Combine(dir, "line.sqlite");
+            var live = new List<Flatline.Sheet>();
+            using (var options = new FlatlineOptions { GaugeWorkers = 2, GaugeKeepMaps = 1, GaugeFrameSpacing = 2.0 })
+            using (var gauge = new Gauge(calib, options))
+            using (var rec = new Recorder(path, calib))
+            using (var archive = new Archive(archivePath, "C# line"))
+            {
+                gauge.AttachRecorder(rec);
+                gauge.AttachArchive(archive);
+                gauge.SetCoil(new CoilInfo("C-42", grade: "DC04", thicknessMm: 1.5));
+                for (int c = 1; c < 6; ++c)
+                    gauge.Cut(1500.0 * c);
+                var h = new double[51];
+                var sl = new double[51];
+                var rng = new Random(11);
+                for (int r = 0; r < 3000; ++r)
+                {
+                    double s = 3.0 * r;
+                    for (int k = 0; k < 51; ++k)
+                    {
+                        double behind = 4 * Math.Sin(2 * Math.PI * (s - 50) / 1300) * Math.Cos(k * 0.1),
+                               ahead = 4 * Math.Sin(2 * Math.PI * (s + 50) / 1300) * Math.Cos(k * 0.1);
+                        h[k] = 0.5 * (behind + ahead) + 0.02 * (rng.NextDouble() - 0.5);
+                        sl[k] = (ahead - behind) / 100.0;
+                    }
+                    if (r == 1000)
+                        gauge.Note("leveler", "roll 2 -0.1 mm");
+                    gauge.PushRow(s, h, sl);
+                    for (Flatline.Sheet? sheet; (sheet = gauge.NextSheet()) != null;)
+                        live.Add(sheet);
+                }
+                gauge.Flush();
+                for (Flatline.Sheet? sheet; (sheet = gauge.NextSheet()) != null;)
+                    live.Add(sheet);
+                gauge.AttachRecorder(null);
+                gauge.AttachArchive(null);
+                archive.Flush();
+                Assert.Equal((ulong)live.Count, archive.Counters()["stored"]);
+            }
+            Assert.Equal(6, live.Count);
+            Assert.All(live, s => Assert.Equal("C-42", s.CoilInfo!.CoilId));
+            Assert.Single(live.SelectMany(s => s.Notes));
+
+            var again = new List<Flatline.Sheet>();
+            using (var rd = new Recording(path))
+            using (var replayCalib = rd.Calibration())
+            using (var replayOptions = rd.Options())
+            using (var gauge = new Gauge(replayCalib, replayOptions))
+            using (var source = FrameSource.OpenRecording(path))
+            {
+                await foreach (var sheet in gauge.RunAsync(source, TestContext.Current.CancellationToken))
+                    again.Add(sheet);
+            }
+            Assert.Equal(live.Count, again.Count);
+            for (int i = 0; i < live.Count; ++i)
+            {
+                // Bit for bit (tolerance 0: the same doubles through the same code).
+                Assert.Equal(live[i].Z, again[i].Z);
+                Assert.Equal(live[i].ZoneIUnits, again[i].ZoneIUnits);
+                Assert.Equal(live[i].MaxIUnits, again[i].MaxIUnits);
+                Assert.Equal(live[i].CoilInfo, again[i].CoilInfo);
+                Assert.Equal(live[i].Notes.Count, again[i].Notes.Count);
+            }
         }
 
         [Fact]
