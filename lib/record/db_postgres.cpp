@@ -20,6 +20,7 @@
 
 #include "core/error.hpp"
 #include "core/number_text.hpp"
+#include "core/utf8_path.hpp"
 #include "record/database.hpp"
 
 namespace flt::record {
@@ -71,8 +72,14 @@ const libpq &load_libpq() {
     std::call_once(once, [] {
         const char *env = std::getenv("FLT_LIBPQ");
 #ifdef _WIN32
+        // FLT_LIBPQ is UTF-8, as every path the library takes (a folder
+        // named "Jürgen" too): converted to UTF-16 for LoadLibraryW.
         const char *name = env && *env ? env : "libpq.dll";
-        void *lib = LoadLibraryA(name);
+        void *lib = nullptr;
+        try {
+            lib = LoadLibraryW(utf8_path(name).c_str());
+        } catch (const error &) {  // not UTF-8: no file has that name
+        }
 #elif defined(__APPLE__)
         const char *name = env && *env ? env : "libpq.5.dylib";
         void *lib = dlopen(name, RTLD_NOW | RTLD_LOCAL);
