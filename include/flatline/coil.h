@@ -111,7 +111,7 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_coil_info_get_text(const flt_coil_
 
 /** Sets the nominal thickness and width, mm (0: not given). With rules
  * set, the gauge judges the coil's sheets in the bands these choose
- * (flt_gauge_set_rules says when the caller's values win).
+ * (flt_gauge_set_coil), in place of those given to flt_gauge_set_rules.
  * @param info         the identity (not a lent one).
  * @param thickness_mm 0, or 0 < thickness <= 1000.
  * @param width_mm     0, or 0 < width <= 100000.

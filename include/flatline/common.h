@@ -736,7 +736,7 @@ typedef enum flt_option {
     FLT_OPT_ARCHIVE_RETENTION_MB = 1051,
     /** "archive_buffer_mb": sheets kept in memory while the database is
      * away (a server restart), MiB (integer 1..65536); beyond it a sheet
-     * is counted lost and logged. Default 256 (about 200 sheets of 3 m). */
+     * is counted lost and logged. Default 256 (about 300 sheets of 3 m). */
     FLT_OPT_ARCHIVE_BUFFER_MB = 1052,
     /** "archive_retry_interval": wait between attempts to reach the
      * database again, ms (integer 10..600000). Default 1000. */

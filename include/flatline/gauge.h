@@ -814,6 +814,9 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_count(const flt_gauge *gauge
  *        FLT_GAUGE_WIDTH_MEASURED (0) for each sheet's measured strip width
  *        (FLT_SHEET_STRIP_WIDTH; a sheet without it is NOT_MEASURED by every
  *        rule).
+ * The sheets of a coil whose identity gives a nominal thickness or width
+ * (flt_gauge_set_coil) are judged with the coil's value in place of the
+ * one given here; a value the coil does not give (0) is taken from here.
  * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL gauge, rules that are
  *         not a live handle, or a thickness or width out of range (the
  *         rules in force stay).
@@ -1035,10 +1038,12 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sheet_note(const flt_sheet *sheet,
                                                          const char **text_out, double *s_mm_out);
 
 /** Queues a copy of a sheet for the archive (its values, arrays, verdict
- * and, when the archive keeps maps, its height map: the sheet must have
- * one, gauge_keep_maps >= 1). The map is encoded on the calling thread
- * (about 30 ms for a 3 m sheet of 1,150 fibers); the archive's writer
- * stores the copy. A sheet added twice is stored once.
+ * and, when the archive keeps maps, its height map; a sheet of a gauge
+ * with gauge_keep_maps = 0 has none and is stored without, map_codec 0 in
+ * docs/record.md). The map is encoded on the calling thread (about 30 ms
+ * for a 3 m sheet of 1,150 fibers); the archive's writer stores the copy.
+ * A sheet added twice is one row in the archive (both adds count as
+ * stored: FLT_ARCHIVE_COUNT_SHEETS = stored + pending + lost).
  * @param archive the archive (flatline/record.h).
  * @param sheet   the sheet (one the caller holds, or the callback's).
  * @return FLT_OK; FLT_ERR_BUFFER_FULL when archive_buffer_mb is taken by

@@ -345,8 +345,9 @@ flt_recording_read_rows(const flt_recording *recording, uint64_t first, size_t c
  * @param options  NULL, or the archive_* keys.
  * @param out      receives the archive; NULL on failure.
  * @return FLT_OK; FLT_ERR_IO when the file or the server cannot be opened
- *         (with the server's words); FLT_ERR_FORMAT for an archive of
- *         another schema version; FLT_ERR_NOT_FOUND when libpq cannot be
+ *         (with the server's words); FLT_ERR_FORMAT for a file that is
+ *         no SQLite database, a database whose tables are no flatline
+ *         archive, or an archive of another schema version; FLT_ERR_NOT_FOUND when libpq cannot be
  *         loaded (the message names the file tried);
  *         FLT_ERR_INVALID_ARGUMENT for a NULL or malformed argument.
  */

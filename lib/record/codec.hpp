@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // Internal: the codecs of the quality record (docs/record.md gives the
-// byte layouts; bindings/python/flatline/recording.py decodes them with
+// byte layouts; examples/python/read_recording.py decodes them with
 // numpy alone).
 //
 // Heights are quantized to integers and predicted; the residuals are
