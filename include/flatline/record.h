@@ -63,11 +63,15 @@
  *   A flt_recording is read by one thread at a time.
  *
  * Memory
- *   flt_recorder_create() allocates the block buffers (record_queue_blocks
- *   + 2 blocks of the largest rows, about 10 bytes x fibers x rows per
- *   block each, and the frame ring when raw frames are kept); rows and
- *   cuts allocate nothing after that. The archive allocates a copy of
- *   each sheet it stores (freed once stored).
+ *   flt_recorder_create() allocates the block buffers: (record_queue_blocks
+ *   + 2) x record_block_rows x (9 K + 58) bytes for K fibers (49 MB at
+ *   the defaults and 1,150 fibers), and 1.5 MB for SQLite's connection and
+ *   page cache (tests/c/test_memory.c checks it, docs/memory.md); the
+ *   frame ring (record_frames = "ring") fills up to record_frame_mb as
+ *   frames come. Rows and cuts allocate nothing after that; the writer
+ *   thread's encoding scratch grows to its largest block once. The
+ *   archive allocates a copy of each sheet it stores (freed once
+ *   stored), bounded by archive_buffer_mb.
  */
 #ifndef FLATLINE_RECORD_H
 #define FLATLINE_RECORD_H
