@@ -4,7 +4,7 @@
 # bounded time under AddressSanitizer + UndefinedBehaviorSanitizer; fails on
 # any crash, sanitizer report, leak, timeout (10 s per input) or out-of-memory
 # (2 GB). See tests/fuzz/README.md.
-#   tests/fuzz/run.sh [harness...]     (default: all eleven)
+#   tests/fuzz/run.sh [harness...]     (default: all twelve)
 #   FUZZ_SECONDS=20   seconds per harness
 #   FUZZ_SEED=1       libFuzzer's seed: fixed, so CI explores the same inputs
 #                     each run (a red CI is reproducible); 0 = random, for
@@ -22,7 +22,7 @@ seed=${FUZZ_SEED:-1}
 build=${FUZZ_BUILD:-build/fuzz}
 jobs=${FUZZ_JOBS:-2}
 harnesses=("$@")
-((${#harnesses[@]})) || harnesses=(calib_load extractor recon genicam u3v gauge chain source_faults gvsp gvcp json)
+((${#harnesses[@]})) || harnesses=(calib_load extractor recon genicam u3v gauge chain source_faults gvsp gvcp json record)
 
 command -v clang >/dev/null || { echo "fuzz: clang not found (apt-get install clang libclang-rt-14-dev)"; exit 1; }
 san="-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer"
