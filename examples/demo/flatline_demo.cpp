@@ -21,6 +21,15 @@
  * maps (raw and reconstructed, with a colour scale), one fiber's profile, the
  * zone profiles as bar charts, and CSV and JSON files.
  *
+ * The quality record (flatline/record.h, docs/record.md): the strip is one
+ * coil with its identity (--coil); the gauge judges its sheets against a
+ * rule file (--rules), records its rows (--record FILE) and archives every
+ * sheet (--archive FILE, an SQLite file or a PostgreSQL connection
+ * string). A recording is replayed at the end through a second gauge with
+ * the recording's options, and its sheets are compared with the live ones
+ * value for value. The coil report is printed from the archive by
+ * `python -m flatline.report ARCHIVE --out DIR`.
+ *
  * Run with --help for the options.
  */
 #include <algorithm>
@@ -62,6 +71,11 @@ struct settings {
     double peak_noise = 1.0 / 16;  // px
     unsigned seed = 1;
     std::string out = "flatline_report";
+    std::string coil = "DEMO-1";  // the coil's id
+    double thickness = 3.0;       // mm, the coil's nominal thickness
+    std::string rules;            // rule file, or none
+    std::string record;           // recording to write, or none
+    std::string archive;          // archive to write, or none
 };
 
 void usage() {
@@ -86,6 +100,16 @@ void usage() {
         "  --peak-noise PX       laser peak detection noise (default 0.0625 = 1/16 px)\n"
         "  --seed N              random seed (default 1)\n"
         "  --out DIR             report directory (default flatline_report)\n"
+        "  --coil ID             the coil's id (default DEMO-1); its nominal width is\n"
+        "                        --width and its nominal thickness --thickness\n"
+        "  --thickness MM        the coil's nominal thickness (default 3)\n"
+        "  --rules FILE          judge every sheet by this rule file (flatline-tolerances\n"
+        "                        JSON; tools/coil_report/example_rules.json is an example)\n"
+        "  --record FILE         record the gauge's rows (a new file), then replay it\n"
+        "                        through a second gauge and compare the sheets\n"
+        "  --archive LOCATION    archive every sheet: an SQLite file, or a PostgreSQL\n"
+        "                        connection string (postgresql://... or pg:key=value);\n"
+        "                        python -m flatline.report LOCATION prints the coil\n"
         "  --help                this text\n");
 }
 
@@ -404,8 +428,13 @@ bool parse(int argc, char **argv, settings &st) {
         char *end = nullptr;
         const double d = std::strtod(v, &end);
         const bool number = end && *end == '\0' && std::isfinite(d);
-        if (a == "--out") {
-            st.out = v;
+        if (a == "--out" || a == "--coil" || a == "--rules" || a == "--record" ||
+            a == "--archive") {
+            (a == "--out"      ? st.out
+             : a == "--coil"   ? st.coil
+             : a == "--rules"  ? st.rules
+             : a == "--record" ? st.record
+                               : st.archive) = v;
             continue;
         }
         if (!number)
@@ -438,12 +467,15 @@ bool parse(int argc, char **argv, settings &st) {
             st.peak_noise = d;
         else if (a == "--seed")
             st.seed = unsigned(d);
+        else if (a == "--thickness")
+            st.thickness = d;
         else
             return false;
     }
     return st.sheets >= 1 && st.sheet_length >= 600 && st.width >= 100 && st.width <= 2000 &&
            st.pitch > 0 && st.width / st.pitch <= 4000 && st.speed > 0 && st.period > 0 &&
-           st.vibration >= 0 && st.eccentricity >= 0 && st.shear >= 0 && st.peak_noise >= 0;
+           st.vibration >= 0 && st.eccentricity >= 0 && st.shear >= 0 && st.peak_noise >= 0 &&
+           st.thickness > 0 && !st.coil.empty();
 }
 
 flt_options *make_options(std::initializer_list<std::pair<flt_option, double>> kv) {
@@ -452,6 +484,69 @@ flt_options *make_options(std::initializer_list<std::pair<flt_option, double>> k
     for (auto &p : kv)
         CHECK(flt_options_set(o, p.first, p.second));
     return o;
+}
+
+// Everything a sheet says that a replay must give again: its values (but
+// when it was finished) and its zone profile.
+std::vector<double> sheet_fingerprint(const flt_sheet *sh, size_t zones) {
+    std::vector<double> v(FLT_SHEET_FINISHED_TIME + zones);
+    for (int k = 0; k < FLT_SHEET_FINISHED_TIME; ++k)
+        CHECK(flt_sheet_get(sh, flt_sheet_value(k), &v[size_t(k)]));
+    CHECK(
+        flt_sheet_get_array(sh, FLT_SHEET_ZONE_I_UNITS, zones, v.data() + FLT_SHEET_FINISHED_TIME));
+    return v;
+}
+
+// The recording through a second gauge with the recording's options (and
+// the same rules): the same sheets, compared bit for bit with the live ones.
+std::string replay(const std::string &path, const std::string &rules_path, double thickness,
+                   double width, size_t zones, const std::vector<std::vector<double>> &live) {
+    flt_recording *recording = nullptr;
+    flt_options *options = nullptr;
+    flt_calib *calib = nullptr;
+    CHECK(flt_recording_open(path.c_str(), &recording));
+    CHECK(flt_recording_options(recording, &options));
+    CHECK(flt_recording_calib(recording, &calib));
+    flt_recording_destroy(recording);
+    flt_gauge *gauge = nullptr;
+    CHECK(flt_gauge_create(calib, options, &gauge));
+    flt_rules *rules = nullptr;
+    if (!rules_path.empty()) {
+        CHECK(flt_rules_load(rules_path.c_str(), &rules));
+        CHECK(flt_gauge_set_rules(gauge, rules, thickness, width));
+    }
+    flt_source *source = nullptr;
+    CHECK(flt_source_open_recording(path.c_str(), nullptr, &source));
+    CHECK(flt_gauge_attach_source(gauge, source));
+    const double t0 = process_cpu_s();
+    CHECK(flt_gauge_start(gauge));
+    CHECK(flt_gauge_wait(gauge, FLT_GAUGE_WAIT_FOREVER));
+    const double cpu = process_cpu_s() - t0;
+    size_t sheets = 0, differ = 0;
+    for (;;) {
+        flt_sheet *sh = nullptr;
+        CHECK(flt_gauge_next_sheet(gauge, 0, &sh));
+        if (!sh)
+            break;
+        const std::vector<double> v = sheet_fingerprint(sh, zones);
+        flt_sheet_destroy(sh);
+        if (sheets >= live.size() ||
+            std::memcmp(v.data(), live[sheets].data(), v.size() * sizeof(double)) != 0)
+            ++differ;
+        ++sheets;
+    }
+    CHECK(flt_gauge_attach_source(gauge, nullptr));
+    flt_source_destroy(source);
+    flt_gauge_destroy(gauge);
+    flt_rules_destroy(rules);
+    flt_calib_destroy(calib);
+    flt_options_destroy(options);
+    char line[300];
+    std::snprintf(
+        line, sizeof line, "  replayed              %zu sheets in %.1f s of CPU: %s\n", sheets, cpu,
+        differ == 0 && sheets == live.size() ? "every value identical to the live ones, bit for bit"
+                                             : "SOME SHEETS DIFFER from the live ones");
+    return line;
 }
 
 }  // namespace
@@ -515,6 +610,32 @@ int main(int argc, char **argv) {
     for (int i = 1; i < st.sheets; ++i)
         CHECK(flt_gauge_cut(gauge, st.sheet_length * i));
 
+    // The quality record: the coil's identity (its nominal thickness and
+    // width choose the rule bands), the rules, a recorder and an archive,
+    // all before the first frame.
+    flt_coil_info *coil = nullptr;
+    CHECK(flt_coil_info_create(st.coil.c_str(), &coil));
+    CHECK(flt_coil_info_set_text(coil, FLT_COIL_FIELD_GRADE, "S355MC"));
+    CHECK(flt_coil_info_set_text(coil, FLT_COIL_FIELD_CUSTOMER, "simulated line"));
+    CHECK(flt_coil_info_set_nominal(coil, st.thickness, st.width));
+    CHECK(flt_gauge_set_coil(gauge, coil));
+    flt_coil_info_destroy(coil);
+    flt_rules *rules = nullptr;
+    if (!st.rules.empty()) {
+        CHECK(flt_rules_load(st.rules.c_str(), &rules));
+        CHECK(flt_gauge_set_rules(gauge, rules, st.thickness, st.width));
+    }
+    flt_recorder *recorder = nullptr;
+    if (!st.record.empty()) {
+        CHECK(flt_recorder_create(st.record.c_str(), calib, nullptr, &recorder));
+        CHECK(flt_gauge_attach_recorder(gauge, recorder));
+    }
+    flt_archive *archive = nullptr;
+    if (!st.archive.empty()) {
+        CHECK(flt_archive_open(st.archive.c_str(), "demo line", nullptr, &archive));
+        CHECK(flt_gauge_attach_archive(gauge, archive));
+    }
+
     // The report compares each sheet with the ground truth, evaluated by a
     // flatness handle of its own.
     flt_options *flat_opt = make_options({{FLT_OPT_FLAT_WINDOW_LENGTH, 0}});
@@ -543,6 +664,7 @@ int main(int argc, char **argv) {
     std::vector<uint8_t> frame(frame_bytes);
     std::vector<double> truth;  // every frame's true heights, [frame * fibers]
     std::vector<sheet_result> results;
+    std::vector<std::vector<double>> live_values;  // each sheet's values and zone I-Units
     std::vector<double> fiber_plot_raw, fiber_plot_z, fiber_plot_truth, fiber_plot_s;
     const size_t plot_fiber = fibers / 2;  // the centre, where the buckle is
     double render = 0.0, report_time = 0.0;
@@ -573,6 +695,7 @@ int main(int argc, char **argv) {
         r.zone_true.resize(zones);
         CHECK(flt_sheet_get_array(sh, FLT_SHEET_ZONE_I_UNITS, zones, r.zone_i.data()));
         invalid_samples += value(FLT_SHEET_INVALID);
+        live_values.push_back(sheet_fingerprint(sh, zones));
         // The sheet's rows: reconstructed and measured heights, and the
         // truth of the frames they came from (a frame every 3 mm from 0).
         const size_t rows = size_t(value(FLT_SHEET_ROWS));
@@ -693,6 +816,39 @@ int main(int argc, char **argv) {
     // report's, which a real line does not have.
     const double busy = process_cpu_s() - cpu0 - render - report_time;
     std::fprintf(stderr, "\r%78s\r", "");
+    CHECK(flt_gauge_attach_recorder(gauge, nullptr));
+    CHECK(flt_gauge_attach_archive(gauge, nullptr));
+    std::string record_summary;
+    if (recorder) {
+        uint64_t rows = 0, lost = 0, bytes = 0, samples = 0;
+        CHECK(flt_recorder_sync(recorder, 60000));
+        CHECK(flt_recorder_count(recorder, FLT_RECORDER_COUNT_ROWS_STORED, &rows));
+        CHECK(flt_recorder_count(recorder, FLT_RECORDER_COUNT_ROWS_LOST, &lost));
+        CHECK(flt_recorder_count(recorder, FLT_RECORDER_COUNT_BYTES, &bytes));
+        CHECK(flt_recorder_count(recorder, FLT_RECORDER_COUNT_SAMPLES, &samples));
+        flt_recorder_destroy(recorder);
+        char line[300];
+        std::snprintf(
+            line, sizeof line,
+            "  recorded              %llu rows (%llu lost) in %s, %.2f bytes per sample\n",
+            (unsigned long long)rows, (unsigned long long)lost, st.record.c_str(),
+            samples ? double(bytes) / double(samples) : 0.0);
+        record_summary += line;
+        record_summary += replay(st.record, st.rules, st.thickness, st.width, zones, live_values);
+    }
+    if (archive) {
+        uint64_t stored = 0, lost = 0;
+        const flt_status flushed = flt_archive_flush(archive, 60000);
+        CHECK(flt_archive_count(archive, FLT_ARCHIVE_COUNT_STORED, &stored));
+        CHECK(flt_archive_count(archive, FLT_ARCHIVE_COUNT_LOST, &lost));
+        char line[400];
+        std::snprintf(
+            line, sizeof line, "  archived              %llu sheets (%llu lost) in %s%s%s\n",
+            (unsigned long long)stored, (unsigned long long)lost, st.archive.c_str(),
+            flushed == FLT_OK ? "" : ": ", flushed == FLT_OK ? "" : flt_last_error_message());
+        record_summary += line;
+        flt_archive_destroy(archive);
+    }
 
     // ---------------------------------------------------------- summary
     const double strip_s = total_length / 1000.0 / (st.speed / 60.0);
@@ -706,6 +862,7 @@ int main(int argc, char **argv) {
                 strip_s / busy, st.speed, busy, strip_s, render);
     std::printf("  shape accuracy        rms %.3f mm, max %.3f mm against the true surface\n",
                 std::sqrt(sq_all / double(std::max<size_t>(1, n_all))), max_error_all);
+    std::printf("%s", record_summary.c_str());
     for (const sheet_result &r : results) {
         std::printf("  sheet %d: %s%s (confidence %.2f)  bow %+.2f mm  crossbow %+.2f mm  "
                     "zones within %.2f I-Units of the truth\n    I-Units:",
@@ -785,6 +942,7 @@ int main(int argc, char **argv) {
                 st.out.c_str());
 
     flt_gauge_destroy(gauge);
+    flt_rules_destroy(rules);
     flt_flatness_destroy(truth_flatness);
     flt_sim_destroy(sim);
     flt_calib_destroy(calib);
