@@ -3,6 +3,7 @@
 // recordings and the archive copy around.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <utility>
@@ -32,15 +33,16 @@ struct flt_coil_info {
     // Lent by a sheet or a gauge: read-only for the caller, and not freed
     // by flt_coil_info_destroy.
     bool lent = false;
-    std::string text[flt::k_coil_fields];
+    // std::array, not a C array: the copy a gauge makes of an identity is
+    // then a plain member-wise copy (clang-tidy flags the loop variable
+    // the compiler invents for a C array's implicit copy).
+    std::array<std::string, flt::k_coil_fields> text;
     double thickness_mm = 0.0, width_mm = 0.0;  // 0: not given
     std::vector<std::pair<std::string, std::string>> extras;
 
     bool operator==(const flt_coil_info &o) const {
-        for (int i = 0; i < flt::k_coil_fields; ++i)
-            if (text[i] != o.text[i])
-                return false;
-        return thickness_mm == o.thickness_mm && width_mm == o.width_mm && extras == o.extras;
+        return text == o.text && thickness_mm == o.thickness_mm && width_mm == o.width_mm &&
+               extras == o.extras;
     }
     bool operator!=(const flt_coil_info &o) const { return !(*this == o); }
 };

@@ -109,7 +109,7 @@ const libpq &load_libpq() {
     return pq;
 }
 
-void quiet_notices(void *, const char *) {}
+void quiet_notices(void * /*arg*/, const char * /*message*/) {}
 
 // ?N -> $N (the statements are written for SQLite).
 std::string dollar_parameters(const std::string &sql) {
@@ -238,6 +238,7 @@ class postgres_backend final : public database {
             const int nt = pq_.ntuples(r), nf = pq_.nfields(r);
             for (int t = 0; t < nt; ++t) {
                 std::vector<std::string> row;
+                row.reserve(std::size_t(nf));
                 for (int f = 0; f < nf; ++f)
                     row.push_back(pq_.getisnull(r, t, f) ? std::string() : pq_.getvalue(r, t, f));
                 rows->push_back(std::move(row));

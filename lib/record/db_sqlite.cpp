@@ -79,6 +79,7 @@ class sqlite_backend final : public database {
             if (!rows)
                 continue;
             std::vector<std::string> row;
+            row.reserve(std::size_t(st.column_count()));
             for (int c = 0; c < st.column_count(); ++c)
                 row.push_back(st.column_null(c) ? std::string() : st.column_text(c));
             rows->push_back(std::move(row));
