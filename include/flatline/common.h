@@ -693,7 +693,7 @@ typedef enum flt_option {
     FLT_OPT_ADVISOR_GAIN = 901,
     /* ---- the quality record: recordings and the archive (flatline/record.h) ---- */
     /** "record_quantum": the height quantum of a recording, mm: each laser's
-     * height at each fiber is rounded to it (a power of two, 2^-12 ..
+     * height at each fiber is rounded to it (a power of two from 2^-12 to
      * 2^-4). Default 2^-8 = 0.00390625 (an error of at most 0.002 mm, 2 %
      * of the reference sensor's noise; docs/record.md has the bytes per
      * sample it costs). */
