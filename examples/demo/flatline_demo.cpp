@@ -27,7 +27,9 @@
  * sheet (--archive FILE, an SQLite file or a PostgreSQL connection
  * string). A recording is replayed at the end through a second gauge with
  * the recording's options, and its sheets are compared with the live ones
- * value for value. The coil report is printed from the archive by
+ * value for value. sheets.csv and report.json name the coil and give each
+ * sheet's verdict as the gauge judged it ("none" without --rules); the
+ * coil report is printed from the archive by
  * `python -m flatline.report ARCHIVE --out DIR`.
  *
  * Run with --help for the options.
@@ -160,7 +162,42 @@ struct sheet_result {
     double rms_error, max_error;  // mm, after removing the sheet's mean level
     double zone_error;            // largest |I - I_true| over the zones
     std::vector<double> zone_i, zone_true;
+    std::string coil_id;  // the coil the gauge says the sheet is of
+    int verdict;          // flt_verdict_state (FLT_SHEET_VERDICT)
+    int rules_failed;
 };
+
+// The sheet's verdict as the reports write it.
+const char *verdict_word(int verdict) {
+    return verdict == FLT_VERDICT_PASS   ? "pass"
+           : verdict == FLT_VERDICT_FAIL ? "fail"
+                                         : "not judged";
+}
+
+// A text as one CSV field (RFC 4180: quoted, quotes doubled).
+std::string csv_quoted(const std::string &in) {
+    std::string out = "\"";
+    for (const char c : in)
+        out += c == '"' ? std::string("\"\"") : std::string(1, c);
+    return out + "\"";
+}
+
+// A text as a JSON string's content (the coil id is the user's).
+std::string json_escaped(const std::string &in) {
+    std::string out;
+    for (const char c : in) {
+        if (c == '"' || c == '\\')
+            out += '\\';
+        if (static_cast<unsigned char>(c) < 0x20) {
+            char u[8];
+            std::snprintf(u, sizeof u, "\\u%04x", unsigned(c));
+            out += u;
+        } else {
+            out += c;
+        }
+    }
+    return out;
+}
 
 // ---------------------------------------------------------------- pictures
 
@@ -691,6 +728,16 @@ int main(int argc, char **argv) {
         r.components = unsigned(value(FLT_SHEET_COMPONENTS));
         r.bow = value(FLT_SHEET_BOW);
         r.crossbow = value(FLT_SHEET_CROSSBOW);
+        r.verdict = int(value(FLT_SHEET_VERDICT));
+        r.rules_failed = int(value(FLT_SHEET_RULES_FAILED));
+        const flt_coil_info *sheet_coil = nullptr;
+        const char *coil_id = nullptr;
+        // FLT_ERR_NOT_FOUND: a sheet of a coil without identity (not here:
+        // the demo names its coil before the first frame).
+        if (flt_sheet_coil(sh, &sheet_coil) == FLT_OK) {
+            CHECK(flt_coil_info_get_text(sheet_coil, FLT_COIL_FIELD_ID, &coil_id));
+            r.coil_id = coil_id ? coil_id : "";
+        }
         r.zone_i.resize(zones);
         r.zone_true.resize(zones);
         CHECK(flt_sheet_get_array(sh, FLT_SHEET_ZONE_I_UNITS, zones, r.zone_i.data()));
@@ -897,27 +944,38 @@ int main(int argc, char **argv) {
         return 1;
     }
     std::fprintf(csv, "sheet,s_first_mm,s_last_mm,shape,confidence,bow_mm,crossbow_mm,"
-                      "rms_error_mm,max_error_mm,max_zone_error_iu\n");
+                      "rms_error_mm,max_error_mm,max_zone_error_iu,coil_id,verdict,"
+                      "rules_failed\n");
     std::fprintf(zcsv, "sheet,zone,x_centre_mm,i_units,true_i_units\n");
     std::fprintf(json,
                  "{\n  \"version\": \"%s\",\n  \"fibers\": %zu,\n  \"pitch_mm\": %g,\n"
                  "  \"zone_width_mm\": %g,\n  \"real_time_factor\": %.3f,\n"
                  "  \"line_speed_m_per_min\": %g,\n  \"rms_error_mm\": %.4f,\n"
-                 "  \"max_error_mm\": %.4f,\n  \"sheets\": [\n",
+                 "  \"max_error_mm\": %.4f,\n"
+                 "  \"coil\": {\"id\": \"%s\", \"grade\": \"S355MC\", "
+                 "\"nominal_thickness_mm\": %g, \"nominal_width_mm\": %g},\n"
+                 "  \"rules\": %s,\n  \"sheets\": [\n",
                  flt_version_string(), fibers, st.pitch, zone_width, strip_s / busy, st.speed,
-                 std::sqrt(sq_all / double(std::max<size_t>(1, n_all))), max_error_all);
+                 std::sqrt(sq_all / double(std::max<size_t>(1, n_all))), max_error_all,
+                 json_escaped(st.coil).c_str(), st.thickness, st.width,
+                 st.rules.empty() ? "null" : ("\"" + json_escaped(st.rules) + "\"").c_str());
     for (size_t p = 0; p < results.size(); ++p) {
         const sheet_result &r = results[p];
-        std::fprintf(csv, "%d,%.1f,%.1f,%s,%.3f,%.3f,%.3f,%.4f,%.4f,%.3f\n", r.index, r.s_first,
-                     r.s_last, flt_shape_string(r.shape), r.confidence, r.bow, r.crossbow,
-                     r.rms_error, r.max_error, r.zone_error);
+        // Without a rule file the gauge judges nothing: "none", as the archive.
+        const char *verdict = st.rules.empty() ? "none" : verdict_word(r.verdict);
+        std::fprintf(csv, "%d,%.1f,%.1f,%s,%.3f,%.3f,%.3f,%.4f,%.4f,%.3f,%s,%s,%d\n", r.index,
+                     r.s_first, r.s_last, flt_shape_string(r.shape), r.confidence, r.bow,
+                     r.crossbow, r.rms_error, r.max_error, r.zone_error,
+                     csv_quoted(r.coil_id).c_str(), verdict, r.rules_failed);
         std::fprintf(json,
                      "    {\"sheet\": %d, \"s_first_mm\": %.1f, \"s_last_mm\": %.1f, "
                      "\"shape\": \"%s\", \"confidence\": %.3f, \"bow_mm\": %.3f, "
                      "\"crossbow_mm\": %.3f, \"rms_error_mm\": %.4f, \"max_error_mm\": %.4f,\n"
+                     "     \"coil_id\": \"%s\", \"verdict\": \"%s\", \"rules_failed\": %d,\n"
                      "     \"zones\": [",
                      r.index, r.s_first, r.s_last, flt_shape_string(r.shape), r.confidence, r.bow,
-                     r.crossbow, r.rms_error, r.max_error);
+                     r.crossbow, r.rms_error, r.max_error, json_escaped(r.coil_id).c_str(), verdict,
+                     r.rules_failed);
         for (size_t j = 0; j < zones; ++j) {
             // JSON has no NaN: a zone without data is null.
             if (std::isfinite(r.zone_i[j]))
