@@ -437,7 +437,11 @@ FLT_API flt_status FLT_CALL flt_source_next(flt_source *source, uint32_t timeout
         // Every kind checks what it delivers; this is the promise of
         // flt_frame_info() kept in one place: `height` rows of
         // `stride_bytes` (the last one `width` pixels) lie in the buffer.
-        if (!frame_fits(raw))
+        // A recording's row whose camera frame was not kept has no pixels
+        // and a size of 0 (flt_frame_info says so); pixels a frame has fit.
+        const bool row_only =
+            raw.recorded != nullptr && raw.pixels == nullptr && raw.width == 0 && raw.height == 0;
+        if (!row_only && !frame_fits(raw))
             return fail(FLT_ERR_INTERNAL,
                         "%s: a %u x %u px frame of stride %zu does not fit its %zu-byte buffer "
                         "(not delivered)",
