@@ -345,8 +345,17 @@ void recorder::set_gauge_options(const flt_options &effective) {
         const int hundreds = int(key) / 100;
         // The gauge's bag: the reconstructor's, the extractor's, the
         // flatness metrics' and its own keys.
-        if (hundreds == 1 || hundreds == 4 || hundreds == 5 || hundreds == 7)
-            values.emplace_back(int(key), option_value(&effective, key));
+        if (hundreds != 1 && hundreds != 4 && hundreds != 5 && hundreds != 7)
+            continue;
+        // lag_knots and latency_mm are one setting in two units, refused
+        // when both are set: only the one the caller gave is recorded
+        // (neither: the reconstructor's default, as live). Every other key
+        // is recorded with its value, set or default, so that a replay
+        // runs with the live values whatever a later version's defaults.
+        if ((key == FLT_OPT_LAG_KNOTS || key == FLT_OPT_LATENCY_MM) &&
+            !option_is_set(&effective, key))
+            continue;
+        values.emplace_back(int(key), option_value(&effective, key));
     }
     clear_error();
     std::lock_guard<std::mutex> lock(m_);
