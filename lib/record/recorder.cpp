@@ -591,6 +591,25 @@ void recorder::writer_main() {
             free_.push_back(b);
         }
         blocks.clear();
+        if (failed_) {
+            // Nothing is written after a failure: the rows still waiting
+            // (blocks closed while this round wrote, and the open one) are
+            // lost now, and counted; later rows find no block and are
+            // counted as they come. Left queued they would be neither
+            // stored nor lost.
+            for (row_block *b : closed_) {
+                rows_lost_ += b->rows;
+                b->rows = 0;
+                free_.push_back(b);
+            }
+            closed_.clear();
+            if (open_) {
+                rows_lost_ += open_->rows;
+                open_->rows = 0;
+                free_.push_back(open_);
+                open_ = nullptr;
+            }
+        }
         // Frames written leave the ring (they are the oldest).
         for (frame_entry *f : frames) {
             f->used = false;
