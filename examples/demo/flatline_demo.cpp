@@ -28,9 +28,12 @@
  * string). A recording is replayed at the end through a second gauge with
  * the recording's options, and its sheets are compared with the live ones
  * value for value. sheets.csv and report.json name the coil and give each
- * sheet's verdict as the gauge judged it ("none" without --rules); the
- * coil report is printed from the archive by
- * `python -m flatline.report ARCHIVE --out DIR`.
+ * sheet's verdict as the gauge judged it ("none" without --rules); coil.png
+ * is the coil on one page: its identity, a run chart per rule (each
+ * sheet's worst value and the rule's limit; without rules the largest
+ * zone I-Units and the flat limit), the disposition per run of sheets with
+ * the same verdict and the sign-off. The full coil report is printed from
+ * the archive by `python -m flatline.report ARCHIVE --out DIR`.
  *
  * Run with --help for the options.
  */
@@ -165,6 +168,9 @@ struct sheet_result {
     std::string coil_id;  // the coil the gauge says the sheet is of
     int verdict;          // flt_verdict_state (FLT_SHEET_VERDICT)
     int rules_failed;
+    // Per rule of the gauge's rule set: the worst value the gauge found and
+    // the limit of the band that applied (NaN where it did not judge).
+    std::vector<double> rule_worst, rule_limit;
 };
 
 // The sheet's verdict as the reports write it.
@@ -450,6 +456,177 @@ void zone_chart_png(const std::string &path, const std::vector<sheet_result> &sh
         std::fprintf(stderr, "could not write %s\n", path.c_str());
 }
 
+// The coil on one page, as a quality engineer reads it: the coil's
+// identity at the top; a run chart per rule of the worst value the gauge
+// found on each sheet, with the limit that applied (red dashes; failed
+// sheets red), and one of the largest zone I-Units with the flat limit;
+// then the disposition, one line per run of sheets with the same verdict
+// (the engineer ticks accept, downgrade or reject and gives a reason),
+// and the sign-off. The gauge's verdicts, never computed again here.
+struct coil_identity {
+    std::string id, grade, customer;
+    double thickness, width;
+};
+
+void coil_chart_png(const std::string &path, const coil_identity &coil, bool judged,
+                    const std::vector<sheet_result> &sheets,
+                    const std::vector<std::string> &rule_names,
+                    const std::vector<flt_measure> &rule_measures, double flat_limit) {
+    const int W = 1100, left = 90, right = 30, panel = 190, ph = 130, pw = W - left - right;
+    // The largest zone I-Units get a panel of their own (with the flat
+    // limit) unless a rule already judges them.
+    const bool iu_rule = std::find(rule_measures.begin(), rule_measures.end(),
+                                   FLT_MEASURE_ZONE_I_UNITS) != rule_measures.end();
+    const size_t panels = rule_names.size() + (iu_rule ? 0 : 1);
+    // Runs of sheets with the same verdict: the disposition's lines.
+    struct run {
+        size_t first, last;
+        int verdict;
+    };
+    std::vector<run> runs;
+    for (size_t i = 0; i < sheets.size(); ++i) {
+        const int v = judged ? sheets[i].verdict : -1;
+        if (runs.empty() || runs.back().verdict != v)
+            runs.push_back({i, i, v});
+        else
+            runs.back().last = i;
+    }
+    const int head = 110, disp_top = head + int(panels) * panel + 20;
+    const int H = disp_top + 70 + 28 * int(runs.size()) + 90;
+    cv::Mat img(H, W, CV_8UC3, k_white);
+    const cv::Scalar red(40, 40, 210), blue(180, 110, 30), green(60, 150, 60);
+    size_t pass = 0, fail = 0, not_judged = 0;
+    for (const sheet_result &r : sheets)
+        (r.verdict == FLT_VERDICT_PASS   ? pass
+         : r.verdict == FLT_VERDICT_FAIL ? fail
+                                         : not_judged)++;
+    text(img, "Coil " + coil.id, {left, 38}, 0.9, k_black, 2);
+    char line[300];
+    std::snprintf(line, sizeof line,
+                  "grade %s   customer %s   nominal %.2f mm x %.0f mm   %zu sheets, %.1f m",
+                  coil.grade.c_str(), coil.customer.c_str(), coil.thickness, coil.width,
+                  sheets.size(), sheets.empty() ? 0.0 : sheets.back().s_last / 1000);
+    text(img, line, {left, 66}, 0.55);
+    if (judged)
+        std::snprintf(line, sizeof line, "the gauge's verdicts: %zu pass, %zu fail, %zu not judged",
+                      pass, fail, not_judged);
+    else
+        std::snprintf(line, sizeof line, "no rule file: the gauge judged no sheet");
+    text(img, line, {left, 92}, 0.55, fail ? red : k_black);
+    const double n = double(std::max<size_t>(1, sheets.size()));
+    auto X = [&](double i) {  // sheet i (0-based) at the centre of its slot
+        return left + int(std::lround((i + 0.5) / n * pw));
+    };
+    for (size_t p = 0; p < panels; ++p) {
+        const bool iu = p == rule_names.size();
+        const int top = head + int(p) * panel + 25;
+        std::vector<double> y(sheets.size()), lim(sheets.size());
+        double y1 = 0;
+        for (size_t i = 0; i < sheets.size(); ++i) {
+            const sheet_result &r = sheets[i];
+            if (iu) {
+                double m = NAN;
+                for (double z : r.zone_i)
+                    if (std::isfinite(z))
+                        m = std::isfinite(m) ? std::max(m, z) : z;
+                y[i] = m;
+                lim[i] = flat_limit;
+            } else {
+                y[i] = p < r.rule_worst.size() ? r.rule_worst[p] : NAN;
+                lim[i] = p < r.rule_limit.size() ? r.rule_limit[p] : NAN;
+            }
+            for (double v : {y[i], lim[i]})
+                if (std::isfinite(v))
+                    y1 = std::max(y1, v);
+        }
+        y1 = y1 > 0 ? 1.15 * y1 : 1.0;
+        auto Y = [&](double v) {
+            return top + ph - int(std::lround(v / y1 * ph));
+        };
+        const double ys = tick_step(y1, 4);
+        for (double v = 0; v <= y1; v += ys) {
+            cv::line(img, {left, Y(v)}, {left + pw, Y(v)}, cv::Scalar(230, 230, 230));
+            const std::string l = fmt(ys < 0.1 ? "%.2f" : ys < 1 ? "%.1f" : "%.0f", v);
+            text(img, l, {left - 8 - text_width(l, 0.45), Y(v) + 5}, 0.45);
+        }
+        cv::rectangle(img, cv::Rect(left, top, pw, ph), k_black);
+        // The limit per sheet (a band may differ from sheet to sheet).
+        for (size_t i = 0; i < sheets.size(); ++i)
+            if (std::isfinite(lim[i])) {
+                const int a = X(double(i) - 0.5), b = X(double(i) + 0.5);
+                for (int xx = a; xx < b; xx += 10)
+                    cv::line(img, {xx, Y(lim[i])}, {std::min(b, xx + 5), Y(lim[i])}, red, 1);
+            }
+        std::vector<cv::Point> pts;
+        for (size_t i = 0; i <= sheets.size(); ++i) {
+            if (i == sheets.size() || !std::isfinite(y[i])) {
+                if (pts.size() > 1)
+                    cv::polylines(img, pts, false, blue, 2, cv::LINE_AA);
+                pts.clear();
+                continue;
+            }
+            pts.emplace_back(X(double(i)), Y(y[i]));
+        }
+        for (size_t i = 0; i < sheets.size(); ++i) {
+            if (!std::isfinite(y[i]))
+                continue;  // not judged: no point, the disposition says so
+            const bool over = std::isfinite(lim[i]) && y[i] > lim[i];
+            cv::circle(img, {X(double(i)), Y(y[i])}, 4, over ? red : blue, cv::FILLED, cv::LINE_AA);
+        }
+        const flt_measure m = iu ? FLT_MEASURE_ZONE_I_UNITS : rule_measures[p];
+        const char *unit = m == FLT_MEASURE_ZONE_I_UNITS     ? "I-Units"
+                           : m == FLT_MEASURE_WAVE_STEEPNESS ? "%"
+                                                             : "mm";
+        const std::string name =
+            iu ? "largest zone I-Units (red dashes: the flat limit)"
+               : rule_names[p] + " (" + unit + "; red dashes: the rule's limit)";
+        text(img, name, {left, top - 8}, 0.5);
+        const size_t every = std::max<size_t>(1, sheets.size() / 15 + 1);
+        for (size_t i = 0; i < sheets.size(); i += every) {
+            const std::string l = std::to_string(sheets[i].index);
+            text(img, l, {X(double(i)) - text_width(l, 0.4) / 2, top + ph + 16}, 0.4);
+        }
+    }
+    text(img, "sheet (along the coil, head first)",
+         {left + pw / 2 - text_width("sheet (along the coil, head first)") / 2, disp_top - 8});
+    // Disposition and sign-off.
+    int y = disp_top + 30;
+    text(img, "Disposition", {left, y}, 0.7, k_black, 2);
+    y += 28;
+    const int c1 = left, c2 = left + 150, c3 = left + 300, c4 = left + 650;
+    text(img, "sheets", {c1, y}, 0.5, k_black, 2);
+    text(img, "verdict", {c2, y}, 0.5, k_black, 2);
+    text(img, "disposition (tick one)", {c3, y}, 0.5, k_black, 2);
+    text(img, "reason", {c4, y}, 0.5, k_black, 2);
+    cv::line(img, {left, y + 8}, {left + pw, y + 8}, k_black);
+    for (const run &r : runs) {
+        y += 28;
+        const std::string range = r.first == r.last ? std::to_string(sheets[r.first].index)
+                                                    : std::to_string(sheets[r.first].index) + "-" +
+                                                          std::to_string(sheets[r.last].index);
+        text(img, range, {c1, y});
+        const char *word = r.verdict < 0 ? "none" : verdict_word(r.verdict);
+        text(img, word, {c2, y}, 0.5,
+             r.verdict == FLT_VERDICT_FAIL   ? red
+             : r.verdict == FLT_VERDICT_PASS ? green
+                                             : k_black);
+        int bx = c3;
+        for (const char *choice : {"accept", "downgrade", "reject"}) {
+            cv::rectangle(img, cv::Rect(bx, y - 12, 13, 13), k_black);
+            text(img, choice, {bx + 19, y});
+            bx += 40 + text_width(choice);
+        }
+        cv::line(img, {c4, y + 3}, {left + pw, y + 3}, k_grey);
+    }
+    y += 60;
+    text(img, "Quality engineer (name, signature):", {left, y});
+    cv::line(img, {left + 300, y + 3}, {left + 640, y + 3}, k_black);
+    text(img, "Date:", {left + 680, y});
+    cv::line(img, {left + 730, y + 3}, {left + pw, y + 3}, k_black);
+    if (!cv::imwrite(path, img))
+        std::fprintf(stderr, "could not write %s\n", path.c_str());
+}
+
 // ---------------------------------------------------------------- the line
 
 bool parse(int argc, char **argv, settings &st) {
@@ -701,6 +878,8 @@ int main(int argc, char **argv) {
     std::vector<uint8_t> frame(frame_bytes);
     std::vector<double> truth;  // every frame's true heights, [frame * fibers]
     std::vector<sheet_result> results;
+    std::vector<std::string> rule_names;           // the gauge's rules, from its first verdict
+    std::vector<flt_measure> rule_measures;        // ... and what each measures
     std::vector<std::vector<double>> live_values;  // each sheet's values and zone I-Units
     std::vector<double> fiber_plot_raw, fiber_plot_z, fiber_plot_truth, fiber_plot_s;
     const size_t plot_fiber = fibers / 2;  // the centre, where the buckle is
@@ -730,6 +909,27 @@ int main(int argc, char **argv) {
         r.crossbow = value(FLT_SHEET_CROSSBOW);
         r.verdict = int(value(FLT_SHEET_VERDICT));
         r.rules_failed = int(value(FLT_SHEET_RULES_FAILED));
+        const flt_rules *sheet_rules = nullptr;
+        const flt_verdict *sheet_verdict = nullptr;
+        // FLT_ERR_STATE: the gauge has no rules (no --rules): nothing judged.
+        if (flt_sheet_verdict(sh, &sheet_rules, &sheet_verdict) == FLT_OK) {
+            size_t n = 0;
+            CHECK(flt_rules_count(sheet_rules, &n));
+            for (size_t i = 0; i < n; ++i) {
+                double worst = NAN, limit = NAN;
+                CHECK(flt_verdict_get(sheet_verdict, i, FLT_VERDICT_WORST, &worst));
+                CHECK(flt_verdict_get(sheet_verdict, i, FLT_VERDICT_LIMIT, &limit));
+                r.rule_worst.push_back(worst);
+                r.rule_limit.push_back(limit);
+                if (rule_names.size() < n) {
+                    const char *name = nullptr;
+                    flt_measure measure = FLT_MEASURE_STRAIGHTEDGE_ALONG;
+                    CHECK(flt_rules_rule(sheet_rules, i, &name, &measure, nullptr));
+                    rule_names.push_back(name ? name : "");
+                    rule_measures.push_back(measure);
+                }
+            }
+        }
         const flt_coil_info *sheet_coil = nullptr;
         const char *coil_id = nullptr;
         // FLT_ERR_NOT_FOUND: a sheet of a coil without identity (not here:
@@ -923,6 +1123,9 @@ int main(int argc, char **argv) {
 
     // ---------------------------------------------------------- report
     zone_chart_png(st.out + "/zones.png", results, zone_x, zone_width, flat_limit);
+    coil_chart_png(st.out + "/coil.png",
+                   {st.coil, "S355MC", "simulated line", st.thickness, st.width}, !st.rules.empty(),
+                   results, rule_names, rule_measures, flat_limit);
     {
         char title[160];
         std::snprintf(title, sizeof title,
@@ -994,10 +1197,11 @@ int main(int argc, char **argv) {
     std::fclose(csv);
     std::fclose(zcsv);
     std::fclose(json);
-    std::printf("\nreport written to %s/: sheet<N>_raw.png, sheet<N>_reconstructed.png, "
-                "sheet<N>_true.png,\n  fiber_profile.png, zones.png, sheets.csv, zones.csv, "
-                "report.json\n",
-                st.out.c_str());
+    std::printf(
+        "\nreport written to %s/: sheet<N>_raw.png, sheet<N>_reconstructed.png, "
+        "sheet<N>_true.png,\n  fiber_profile.png, zones.png, coil.png, sheets.csv, zones.csv, "
+        "report.json\n",
+        st.out.c_str());
 
     flt_gauge_destroy(gauge);
     flt_rules_destroy(rules);
