@@ -52,16 +52,23 @@ struct libpq {
     notice_processor (*set_notice_processor)(pg_conn *, notice_processor, void *) = nullptr;
     bool loaded = false;
     std::string tried;
+    std::string missing;  // a function the loaded library lacks
 };
 
-template <class F> void resolve(void *lib, const char *name, F &out, bool &ok) {
+// `missing` names the first function the library lacks (then it is no
+// libpq, or one too old).
+template <class F>
+void resolve(void *lib, const char *name, F &out, bool &ok, std::string &missing) {
 #ifdef _WIN32
     auto *sym = reinterpret_cast<void *>(GetProcAddress(static_cast<HMODULE>(lib), name));
 #else
     void *sym = dlsym(lib, name);
 #endif
-    if (!sym)
+    if (!sym) {
+        if (ok)
+            missing = name;
         ok = false;
+    }
     std::memcpy(&out, &sym, sizeof out);
 }
 
@@ -91,19 +98,19 @@ const libpq &load_libpq() {
         if (!lib)
             return;
         bool ok = true;
-        resolve(lib, "PQconnectdb", pq.connectdb, ok);
-        resolve(lib, "PQstatus", pq.status, ok);
-        resolve(lib, "PQerrorMessage", pq.error_message, ok);
-        resolve(lib, "PQfinish", pq.finish, ok);
-        resolve(lib, "PQexecParams", pq.exec_params, ok);
-        resolve(lib, "PQresultStatus", pq.result_status, ok);
-        resolve(lib, "PQresultErrorMessage", pq.result_error_message, ok);
-        resolve(lib, "PQclear", pq.clear, ok);
-        resolve(lib, "PQntuples", pq.ntuples, ok);
-        resolve(lib, "PQnfields", pq.nfields, ok);
-        resolve(lib, "PQgetvalue", pq.getvalue, ok);
-        resolve(lib, "PQgetisnull", pq.getisnull, ok);
-        resolve(lib, "PQsetNoticeProcessor", pq.set_notice_processor, ok);
+        resolve(lib, "PQconnectdb", pq.connectdb, ok, pq.missing);
+        resolve(lib, "PQstatus", pq.status, ok, pq.missing);
+        resolve(lib, "PQerrorMessage", pq.error_message, ok, pq.missing);
+        resolve(lib, "PQfinish", pq.finish, ok, pq.missing);
+        resolve(lib, "PQexecParams", pq.exec_params, ok, pq.missing);
+        resolve(lib, "PQresultStatus", pq.result_status, ok, pq.missing);
+        resolve(lib, "PQresultErrorMessage", pq.result_error_message, ok, pq.missing);
+        resolve(lib, "PQclear", pq.clear, ok, pq.missing);
+        resolve(lib, "PQntuples", pq.ntuples, ok, pq.missing);
+        resolve(lib, "PQnfields", pq.nfields, ok, pq.missing);
+        resolve(lib, "PQgetvalue", pq.getvalue, ok, pq.missing);
+        resolve(lib, "PQgetisnull", pq.getisnull, ok, pq.missing);
+        resolve(lib, "PQsetNoticeProcessor", pq.set_notice_processor, ok, pq.missing);
         pq.loaded = ok;
     });
     return pq;
@@ -134,6 +141,14 @@ std::string trimmed(const char *message) {
 class postgres_backend final : public database {
   public:
     explicit postgres_backend(const std::string &location) : pq_(load_libpq()) {
+        if (!pq_.loaded && !pq_.missing.empty()) {
+            char message[400];
+            format_c(message, sizeof message,
+                     "PostgreSQL needs libpq: '%s' was loaded but has no function %s (not libpq, "
+                     "or one too old; the environment variable FLT_LIBPQ names the file)",
+                     pq_.tried.c_str(), pq_.missing.c_str());
+            throw error(FLT_ERR_NOT_FOUND, message);
+        }
         if (!pq_.loaded) {
             char message[400];
             format_c(message, sizeof message,
