@@ -14,8 +14,8 @@
  * Windows: skipped (exit code 77, which ctest reports as skipped). The
  * server is started by a bash script from Debian's postgresql, and the
  * win64 build has no libpq.dll to load; the Windows side of loading libpq
- * (LoadLibraryW, and the clear error when it is missing) runs in
- * test_archive.
+ * (LoadLibraryW of a UTF-8 path, the clear errors when it is missing or
+ * is not libpq) runs in test_archive and test_archive_libpq.
  */
 #include <math.h>
 #include <setjmp.h>
@@ -30,7 +30,8 @@
 int main(void) {
     fprintf(stderr, "skipped on Windows: the test starts a PostgreSQL server with Debian's "
                     "postgresql (pg_cluster.sh) and the win64 build has no libpq.dll; the "
-                    "libpq loading of Windows is tested by test_archive\n");
+                    "libpq loading of Windows is tested by test_archive and "
+                    "test_archive_libpq\n");
     return 77;
 }
 #else
