@@ -21,6 +21,20 @@
  * maps (raw and reconstructed, with a colour scale), one fiber's profile, the
  * zone profiles as bar charts, and CSV and JSON files.
  *
+ * The quality record (flatline/record.h, docs/record.md): the strip is one
+ * coil with its identity (--coil); the gauge judges its sheets against a
+ * rule file (--rules), records its rows (--record FILE) and archives every
+ * sheet (--archive FILE, an SQLite file or a PostgreSQL connection
+ * string). A recording is replayed at the end through a second gauge with
+ * the recording's options, and its sheets are compared with the live ones
+ * value for value. sheets.csv and report.json name the coil and give each
+ * sheet's verdict as the gauge judged it ("none" without --rules); coil.png
+ * is the coil on one page: its identity, a run chart per rule (each
+ * sheet's worst value and the rule's limit; without rules the largest
+ * zone I-Units and the flat limit), the disposition per run of sheets with
+ * the same verdict and the sign-off. The full coil report is printed from
+ * the archive by `python -m flatline.report ARCHIVE --out DIR`.
+ *
  * Run with --help for the options.
  */
 #include <algorithm>
@@ -62,6 +76,11 @@ struct settings {
     double peak_noise = 1.0 / 16;  // px
     unsigned seed = 1;
     std::string out = "flatline_report";
+    std::string coil = "DEMO-1";  // the coil's id
+    double thickness = 3.0;       // mm, the coil's nominal thickness
+    std::string rules;            // rule file, or none
+    std::string record;           // recording to write, or none
+    std::string archive;          // archive to write, or none
 };
 
 void usage() {
@@ -86,6 +105,16 @@ void usage() {
         "  --peak-noise PX       laser peak detection noise (default 0.0625 = 1/16 px)\n"
         "  --seed N              random seed (default 1)\n"
         "  --out DIR             report directory (default flatline_report)\n"
+        "  --coil ID             the coil's id (default DEMO-1); its nominal width is\n"
+        "                        --width and its nominal thickness --thickness\n"
+        "  --thickness MM        the coil's nominal thickness (default 3)\n"
+        "  --rules FILE          judge every sheet by this rule file (flatline-tolerances\n"
+        "                        JSON; tools/coil_report/example_rules.json is an example)\n"
+        "  --record FILE         record the gauge's rows (a new file), then replay it\n"
+        "                        through a second gauge and compare the sheets\n"
+        "  --archive LOCATION    archive every sheet: an SQLite file, or a PostgreSQL\n"
+        "                        connection string (postgresql://... or pg:key=value);\n"
+        "                        python -m flatline.report LOCATION prints the coil\n"
         "  --help                this text\n");
 }
 
@@ -136,7 +165,45 @@ struct sheet_result {
     double rms_error, max_error;  // mm, after removing the sheet's mean level
     double zone_error;            // largest |I - I_true| over the zones
     std::vector<double> zone_i, zone_true;
+    std::string coil_id;  // the coil the gauge says the sheet is of
+    int verdict;          // flt_verdict_state (FLT_SHEET_VERDICT)
+    int rules_failed;
+    // Per rule of the gauge's rule set: the worst value the gauge found and
+    // the limit of the band that applied (NaN where it did not judge).
+    std::vector<double> rule_worst, rule_limit;
 };
+
+// The sheet's verdict as the reports write it.
+const char *verdict_word(int verdict) {
+    return verdict == FLT_VERDICT_PASS   ? "pass"
+           : verdict == FLT_VERDICT_FAIL ? "fail"
+                                         : "not judged";
+}
+
+// A text as one CSV field (RFC 4180: quoted, quotes doubled).
+std::string csv_quoted(const std::string &in) {
+    std::string out = "\"";
+    for (const char c : in)
+        out += c == '"' ? std::string("\"\"") : std::string(1, c);
+    return out + "\"";
+}
+
+// A text as a JSON string's content (the coil id is the user's).
+std::string json_escaped(const std::string &in) {
+    std::string out;
+    for (const char c : in) {
+        if (c == '"' || c == '\\')
+            out += '\\';
+        if (static_cast<unsigned char>(c) < 0x20) {
+            char u[8];
+            std::snprintf(u, sizeof u, "\\u%04x", unsigned(c));
+            out += u;
+        } else {
+            out += c;
+        }
+    }
+    return out;
+}
 
 // ---------------------------------------------------------------- pictures
 
@@ -389,6 +456,177 @@ void zone_chart_png(const std::string &path, const std::vector<sheet_result> &sh
         std::fprintf(stderr, "could not write %s\n", path.c_str());
 }
 
+// The coil on one page, as a quality engineer reads it: the coil's
+// identity at the top; a run chart per rule of the worst value the gauge
+// found on each sheet, with the limit that applied (red dashes; failed
+// sheets red), and one of the largest zone I-Units with the flat limit;
+// then the disposition, one line per run of sheets with the same verdict
+// (the engineer ticks accept, downgrade or reject and gives a reason),
+// and the sign-off. The gauge's verdicts, never computed again here.
+struct coil_identity {
+    std::string id, grade, customer;
+    double thickness, width;
+};
+
+void coil_chart_png(const std::string &path, const coil_identity &coil, bool judged,
+                    const std::vector<sheet_result> &sheets,
+                    const std::vector<std::string> &rule_names,
+                    const std::vector<flt_measure> &rule_measures, double flat_limit) {
+    const int W = 1100, left = 90, right = 30, panel = 190, ph = 130, pw = W - left - right;
+    // The largest zone I-Units get a panel of their own (with the flat
+    // limit) unless a rule already judges them.
+    const bool iu_rule = std::find(rule_measures.begin(), rule_measures.end(),
+                                   FLT_MEASURE_ZONE_I_UNITS) != rule_measures.end();
+    const size_t panels = rule_names.size() + (iu_rule ? 0 : 1);
+    // Runs of sheets with the same verdict: the disposition's lines.
+    struct run {
+        size_t first, last;
+        int verdict;
+    };
+    std::vector<run> runs;
+    for (size_t i = 0; i < sheets.size(); ++i) {
+        const int v = judged ? sheets[i].verdict : -1;
+        if (runs.empty() || runs.back().verdict != v)
+            runs.push_back({i, i, v});
+        else
+            runs.back().last = i;
+    }
+    const int head = 110, disp_top = head + int(panels) * panel + 20;
+    const int H = disp_top + 70 + 28 * int(runs.size()) + 90;
+    cv::Mat img(H, W, CV_8UC3, k_white);
+    const cv::Scalar red(40, 40, 210), blue(180, 110, 30), green(60, 150, 60);
+    size_t pass = 0, fail = 0, not_judged = 0;
+    for (const sheet_result &r : sheets)
+        (r.verdict == FLT_VERDICT_PASS   ? pass
+         : r.verdict == FLT_VERDICT_FAIL ? fail
+                                         : not_judged)++;
+    text(img, "Coil " + coil.id, {left, 38}, 0.9, k_black, 2);
+    char line[300];
+    std::snprintf(line, sizeof line,
+                  "grade %s   customer %s   nominal %.2f mm x %.0f mm   %zu sheets, %.1f m",
+                  coil.grade.c_str(), coil.customer.c_str(), coil.thickness, coil.width,
+                  sheets.size(), sheets.empty() ? 0.0 : sheets.back().s_last / 1000);
+    text(img, line, {left, 66}, 0.55);
+    if (judged)
+        std::snprintf(line, sizeof line, "the gauge's verdicts: %zu pass, %zu fail, %zu not judged",
+                      pass, fail, not_judged);
+    else
+        std::snprintf(line, sizeof line, "no rule file: the gauge judged no sheet");
+    text(img, line, {left, 92}, 0.55, fail ? red : k_black);
+    const double n = double(std::max<size_t>(1, sheets.size()));
+    auto X = [&](double i) {  // sheet i (0-based) at the centre of its slot
+        return left + int(std::lround((i + 0.5) / n * pw));
+    };
+    for (size_t p = 0; p < panels; ++p) {
+        const bool iu = p == rule_names.size();
+        const int top = head + int(p) * panel + 25;
+        std::vector<double> y(sheets.size()), lim(sheets.size());
+        double y1 = 0;
+        for (size_t i = 0; i < sheets.size(); ++i) {
+            const sheet_result &r = sheets[i];
+            if (iu) {
+                double m = NAN;
+                for (double z : r.zone_i)
+                    if (std::isfinite(z))
+                        m = std::isfinite(m) ? std::max(m, z) : z;
+                y[i] = m;
+                lim[i] = flat_limit;
+            } else {
+                y[i] = p < r.rule_worst.size() ? r.rule_worst[p] : NAN;
+                lim[i] = p < r.rule_limit.size() ? r.rule_limit[p] : NAN;
+            }
+            for (double v : {y[i], lim[i]})
+                if (std::isfinite(v))
+                    y1 = std::max(y1, v);
+        }
+        y1 = y1 > 0 ? 1.15 * y1 : 1.0;
+        auto Y = [&](double v) {
+            return top + ph - int(std::lround(v / y1 * ph));
+        };
+        const double ys = tick_step(y1, 4);
+        for (double v = 0; v <= y1; v += ys) {
+            cv::line(img, {left, Y(v)}, {left + pw, Y(v)}, cv::Scalar(230, 230, 230));
+            const std::string l = fmt(ys < 0.1 ? "%.2f" : ys < 1 ? "%.1f" : "%.0f", v);
+            text(img, l, {left - 8 - text_width(l, 0.45), Y(v) + 5}, 0.45);
+        }
+        cv::rectangle(img, cv::Rect(left, top, pw, ph), k_black);
+        // The limit per sheet (a band may differ from sheet to sheet).
+        for (size_t i = 0; i < sheets.size(); ++i)
+            if (std::isfinite(lim[i])) {
+                const int a = X(double(i) - 0.5), b = X(double(i) + 0.5);
+                for (int xx = a; xx < b; xx += 10)
+                    cv::line(img, {xx, Y(lim[i])}, {std::min(b, xx + 5), Y(lim[i])}, red, 1);
+            }
+        std::vector<cv::Point> pts;
+        for (size_t i = 0; i <= sheets.size(); ++i) {
+            if (i == sheets.size() || !std::isfinite(y[i])) {
+                if (pts.size() > 1)
+                    cv::polylines(img, pts, false, blue, 2, cv::LINE_AA);
+                pts.clear();
+                continue;
+            }
+            pts.emplace_back(X(double(i)), Y(y[i]));
+        }
+        for (size_t i = 0; i < sheets.size(); ++i) {
+            if (!std::isfinite(y[i]))
+                continue;  // not judged: no point, the disposition says so
+            const bool over = std::isfinite(lim[i]) && y[i] > lim[i];
+            cv::circle(img, {X(double(i)), Y(y[i])}, 4, over ? red : blue, cv::FILLED, cv::LINE_AA);
+        }
+        const flt_measure m = iu ? FLT_MEASURE_ZONE_I_UNITS : rule_measures[p];
+        const char *unit = m == FLT_MEASURE_ZONE_I_UNITS     ? "I-Units"
+                           : m == FLT_MEASURE_WAVE_STEEPNESS ? "%"
+                                                             : "mm";
+        const std::string name =
+            iu ? "largest zone I-Units (red dashes: the flat limit)"
+               : rule_names[p] + " (" + unit + "; red dashes: the rule's limit)";
+        text(img, name, {left, top - 8}, 0.5);
+        const size_t every = std::max<size_t>(1, sheets.size() / 15 + 1);
+        for (size_t i = 0; i < sheets.size(); i += every) {
+            const std::string l = std::to_string(sheets[i].index);
+            text(img, l, {X(double(i)) - text_width(l, 0.4) / 2, top + ph + 16}, 0.4);
+        }
+    }
+    text(img, "sheet (along the coil, head first)",
+         {left + pw / 2 - text_width("sheet (along the coil, head first)") / 2, disp_top - 8});
+    // Disposition and sign-off.
+    int y = disp_top + 30;
+    text(img, "Disposition", {left, y}, 0.7, k_black, 2);
+    y += 28;
+    const int c1 = left, c2 = left + 150, c3 = left + 300, c4 = left + 650;
+    text(img, "sheets", {c1, y}, 0.5, k_black, 2);
+    text(img, "verdict", {c2, y}, 0.5, k_black, 2);
+    text(img, "disposition (tick one)", {c3, y}, 0.5, k_black, 2);
+    text(img, "reason", {c4, y}, 0.5, k_black, 2);
+    cv::line(img, {left, y + 8}, {left + pw, y + 8}, k_black);
+    for (const run &r : runs) {
+        y += 28;
+        const std::string range = r.first == r.last ? std::to_string(sheets[r.first].index)
+                                                    : std::to_string(sheets[r.first].index) + "-" +
+                                                          std::to_string(sheets[r.last].index);
+        text(img, range, {c1, y});
+        const char *word = r.verdict < 0 ? "none" : verdict_word(r.verdict);
+        text(img, word, {c2, y}, 0.5,
+             r.verdict == FLT_VERDICT_FAIL   ? red
+             : r.verdict == FLT_VERDICT_PASS ? green
+                                             : k_black);
+        int bx = c3;
+        for (const char *choice : {"accept", "downgrade", "reject"}) {
+            cv::rectangle(img, cv::Rect(bx, y - 12, 13, 13), k_black);
+            text(img, choice, {bx + 19, y});
+            bx += 40 + text_width(choice);
+        }
+        cv::line(img, {c4, y + 3}, {left + pw, y + 3}, k_grey);
+    }
+    y += 60;
+    text(img, "Quality engineer (name, signature):", {left, y});
+    cv::line(img, {left + 300, y + 3}, {left + 640, y + 3}, k_black);
+    text(img, "Date:", {left + 680, y});
+    cv::line(img, {left + 730, y + 3}, {left + pw, y + 3}, k_black);
+    if (!cv::imwrite(path, img))
+        std::fprintf(stderr, "could not write %s\n", path.c_str());
+}
+
 // ---------------------------------------------------------------- the line
 
 bool parse(int argc, char **argv, settings &st) {
@@ -404,8 +642,13 @@ bool parse(int argc, char **argv, settings &st) {
         char *end = nullptr;
         const double d = std::strtod(v, &end);
         const bool number = end && *end == '\0' && std::isfinite(d);
-        if (a == "--out") {
-            st.out = v;
+        if (a == "--out" || a == "--coil" || a == "--rules" || a == "--record" ||
+            a == "--archive") {
+            (a == "--out"      ? st.out
+             : a == "--coil"   ? st.coil
+             : a == "--rules"  ? st.rules
+             : a == "--record" ? st.record
+                               : st.archive) = v;
             continue;
         }
         if (!number)
@@ -438,12 +681,15 @@ bool parse(int argc, char **argv, settings &st) {
             st.peak_noise = d;
         else if (a == "--seed")
             st.seed = unsigned(d);
+        else if (a == "--thickness")
+            st.thickness = d;
         else
             return false;
     }
     return st.sheets >= 1 && st.sheet_length >= 600 && st.width >= 100 && st.width <= 2000 &&
            st.pitch > 0 && st.width / st.pitch <= 4000 && st.speed > 0 && st.period > 0 &&
-           st.vibration >= 0 && st.eccentricity >= 0 && st.shear >= 0 && st.peak_noise >= 0;
+           st.vibration >= 0 && st.eccentricity >= 0 && st.shear >= 0 && st.peak_noise >= 0 &&
+           st.thickness > 0 && !st.coil.empty();
 }
 
 flt_options *make_options(std::initializer_list<std::pair<flt_option, double>> kv) {
@@ -452,6 +698,69 @@ flt_options *make_options(std::initializer_list<std::pair<flt_option, double>> k
     for (auto &p : kv)
         CHECK(flt_options_set(o, p.first, p.second));
     return o;
+}
+
+// Everything a sheet says that a replay must give again: its values (but
+// when it was finished) and its zone profile.
+std::vector<double> sheet_fingerprint(const flt_sheet *sh, size_t zones) {
+    std::vector<double> v(FLT_SHEET_FINISHED_TIME + zones);
+    for (int k = 0; k < FLT_SHEET_FINISHED_TIME; ++k)
+        CHECK(flt_sheet_get(sh, flt_sheet_value(k), &v[size_t(k)]));
+    CHECK(
+        flt_sheet_get_array(sh, FLT_SHEET_ZONE_I_UNITS, zones, v.data() + FLT_SHEET_FINISHED_TIME));
+    return v;
+}
+
+// The recording through a second gauge with the recording's options (and
+// the same rules): the same sheets, compared bit for bit with the live ones.
+std::string replay(const std::string &path, const std::string &rules_path, double thickness,
+                   double width, size_t zones, const std::vector<std::vector<double>> &live) {
+    flt_recording *recording = nullptr;
+    flt_options *options = nullptr;
+    flt_calib *calib = nullptr;
+    CHECK(flt_recording_open(path.c_str(), &recording));
+    CHECK(flt_recording_options(recording, &options));
+    CHECK(flt_recording_calib(recording, &calib));
+    flt_recording_destroy(recording);
+    flt_gauge *gauge = nullptr;
+    CHECK(flt_gauge_create(calib, options, &gauge));
+    flt_rules *rules = nullptr;
+    if (!rules_path.empty()) {
+        CHECK(flt_rules_load(rules_path.c_str(), &rules));
+        CHECK(flt_gauge_set_rules(gauge, rules, thickness, width));
+    }
+    flt_source *source = nullptr;
+    CHECK(flt_source_open_recording(path.c_str(), nullptr, &source));
+    CHECK(flt_gauge_attach_source(gauge, source));
+    const double t0 = process_cpu_s();
+    CHECK(flt_gauge_start(gauge));
+    CHECK(flt_gauge_wait(gauge, FLT_GAUGE_WAIT_FOREVER));
+    const double cpu = process_cpu_s() - t0;
+    size_t sheets = 0, differ = 0;
+    for (;;) {
+        flt_sheet *sh = nullptr;
+        CHECK(flt_gauge_next_sheet(gauge, 0, &sh));
+        if (!sh)
+            break;
+        const std::vector<double> v = sheet_fingerprint(sh, zones);
+        flt_sheet_destroy(sh);
+        if (sheets >= live.size() ||
+            std::memcmp(v.data(), live[sheets].data(), v.size() * sizeof(double)) != 0)
+            ++differ;
+        ++sheets;
+    }
+    CHECK(flt_gauge_attach_source(gauge, nullptr));
+    flt_source_destroy(source);
+    flt_gauge_destroy(gauge);
+    flt_rules_destroy(rules);
+    flt_calib_destroy(calib);
+    flt_options_destroy(options);
+    char line[300];
+    std::snprintf(
+        line, sizeof line, "  replayed              %zu sheets in %.1f s of CPU: %s\n", sheets, cpu,
+        differ == 0 && sheets == live.size() ? "every value identical to the live ones, bit for bit"
+                                             : "SOME SHEETS DIFFER from the live ones");
+    return line;
 }
 
 }  // namespace
@@ -515,6 +824,32 @@ int main(int argc, char **argv) {
     for (int i = 1; i < st.sheets; ++i)
         CHECK(flt_gauge_cut(gauge, st.sheet_length * i));
 
+    // The quality record: the coil's identity (its nominal thickness and
+    // width choose the rule bands), the rules, a recorder and an archive,
+    // all before the first frame.
+    flt_coil_info *coil = nullptr;
+    CHECK(flt_coil_info_create(st.coil.c_str(), &coil));
+    CHECK(flt_coil_info_set_text(coil, FLT_COIL_FIELD_GRADE, "S355MC"));
+    CHECK(flt_coil_info_set_text(coil, FLT_COIL_FIELD_CUSTOMER, "simulated line"));
+    CHECK(flt_coil_info_set_nominal(coil, st.thickness, st.width));
+    CHECK(flt_gauge_set_coil(gauge, coil));
+    flt_coil_info_destroy(coil);
+    flt_rules *rules = nullptr;
+    if (!st.rules.empty()) {
+        CHECK(flt_rules_load(st.rules.c_str(), &rules));
+        CHECK(flt_gauge_set_rules(gauge, rules, st.thickness, st.width));
+    }
+    flt_recorder *recorder = nullptr;
+    if (!st.record.empty()) {
+        CHECK(flt_recorder_create(st.record.c_str(), calib, nullptr, &recorder));
+        CHECK(flt_gauge_attach_recorder(gauge, recorder));
+    }
+    flt_archive *archive = nullptr;
+    if (!st.archive.empty()) {
+        CHECK(flt_archive_open(st.archive.c_str(), "demo line", nullptr, &archive));
+        CHECK(flt_gauge_attach_archive(gauge, archive));
+    }
+
     // The report compares each sheet with the ground truth, evaluated by a
     // flatness handle of its own.
     flt_options *flat_opt = make_options({{FLT_OPT_FLAT_WINDOW_LENGTH, 0}});
@@ -543,6 +878,9 @@ int main(int argc, char **argv) {
     std::vector<uint8_t> frame(frame_bytes);
     std::vector<double> truth;  // every frame's true heights, [frame * fibers]
     std::vector<sheet_result> results;
+    std::vector<std::string> rule_names;           // the gauge's rules, from its first verdict
+    std::vector<flt_measure> rule_measures;        // ... and what each measures
+    std::vector<std::vector<double>> live_values;  // each sheet's values and zone I-Units
     std::vector<double> fiber_plot_raw, fiber_plot_z, fiber_plot_truth, fiber_plot_s;
     const size_t plot_fiber = fibers / 2;  // the centre, where the buckle is
     double render = 0.0, report_time = 0.0;
@@ -569,10 +907,42 @@ int main(int argc, char **argv) {
         r.components = unsigned(value(FLT_SHEET_COMPONENTS));
         r.bow = value(FLT_SHEET_BOW);
         r.crossbow = value(FLT_SHEET_CROSSBOW);
+        r.verdict = int(value(FLT_SHEET_VERDICT));
+        r.rules_failed = int(value(FLT_SHEET_RULES_FAILED));
+        const flt_rules *sheet_rules = nullptr;
+        const flt_verdict *sheet_verdict = nullptr;
+        // FLT_ERR_STATE: the gauge has no rules (no --rules): nothing judged.
+        if (flt_sheet_verdict(sh, &sheet_rules, &sheet_verdict) == FLT_OK) {
+            size_t n = 0;
+            CHECK(flt_rules_count(sheet_rules, &n));
+            for (size_t i = 0; i < n; ++i) {
+                double worst = NAN, limit = NAN;
+                CHECK(flt_verdict_get(sheet_verdict, i, FLT_VERDICT_WORST, &worst));
+                CHECK(flt_verdict_get(sheet_verdict, i, FLT_VERDICT_LIMIT, &limit));
+                r.rule_worst.push_back(worst);
+                r.rule_limit.push_back(limit);
+                if (rule_names.size() < n) {
+                    const char *name = nullptr;
+                    flt_measure measure = FLT_MEASURE_STRAIGHTEDGE_ALONG;
+                    CHECK(flt_rules_rule(sheet_rules, i, &name, &measure, nullptr));
+                    rule_names.push_back(name ? name : "");
+                    rule_measures.push_back(measure);
+                }
+            }
+        }
+        const flt_coil_info *sheet_coil = nullptr;
+        const char *coil_id = nullptr;
+        // FLT_ERR_NOT_FOUND: a sheet of a coil without identity (not here:
+        // the demo names its coil before the first frame).
+        if (flt_sheet_coil(sh, &sheet_coil) == FLT_OK) {
+            CHECK(flt_coil_info_get_text(sheet_coil, FLT_COIL_FIELD_ID, &coil_id));
+            r.coil_id = coil_id ? coil_id : "";
+        }
         r.zone_i.resize(zones);
         r.zone_true.resize(zones);
         CHECK(flt_sheet_get_array(sh, FLT_SHEET_ZONE_I_UNITS, zones, r.zone_i.data()));
         invalid_samples += value(FLT_SHEET_INVALID);
+        live_values.push_back(sheet_fingerprint(sh, zones));
         // The sheet's rows: reconstructed and measured heights, and the
         // truth of the frames they came from (a frame every 3 mm from 0).
         const size_t rows = size_t(value(FLT_SHEET_ROWS));
@@ -693,6 +1063,39 @@ int main(int argc, char **argv) {
     // report's, which a real line does not have.
     const double busy = process_cpu_s() - cpu0 - render - report_time;
     std::fprintf(stderr, "\r%78s\r", "");
+    CHECK(flt_gauge_attach_recorder(gauge, nullptr));
+    CHECK(flt_gauge_attach_archive(gauge, nullptr));
+    std::string record_summary;
+    if (recorder) {
+        uint64_t rows = 0, lost = 0, bytes = 0, samples = 0;
+        CHECK(flt_recorder_sync(recorder, 60000));
+        CHECK(flt_recorder_count(recorder, FLT_RECORDER_COUNT_ROWS_STORED, &rows));
+        CHECK(flt_recorder_count(recorder, FLT_RECORDER_COUNT_ROWS_LOST, &lost));
+        CHECK(flt_recorder_count(recorder, FLT_RECORDER_COUNT_BYTES, &bytes));
+        CHECK(flt_recorder_count(recorder, FLT_RECORDER_COUNT_SAMPLES, &samples));
+        flt_recorder_destroy(recorder);
+        char line[300];
+        std::snprintf(
+            line, sizeof line,
+            "  recorded              %llu rows (%llu lost) in %s, %.2f bytes per sample\n",
+            (unsigned long long)rows, (unsigned long long)lost, st.record.c_str(),
+            samples ? double(bytes) / double(samples) : 0.0);
+        record_summary += line;
+        record_summary += replay(st.record, st.rules, st.thickness, st.width, zones, live_values);
+    }
+    if (archive) {
+        uint64_t stored = 0, lost = 0;
+        const flt_status flushed = flt_archive_flush(archive, 60000);
+        CHECK(flt_archive_count(archive, FLT_ARCHIVE_COUNT_STORED, &stored));
+        CHECK(flt_archive_count(archive, FLT_ARCHIVE_COUNT_LOST, &lost));
+        char line[400];
+        std::snprintf(
+            line, sizeof line, "  archived              %llu sheets (%llu lost) in %s%s%s\n",
+            (unsigned long long)stored, (unsigned long long)lost, st.archive.c_str(),
+            flushed == FLT_OK ? "" : ": ", flushed == FLT_OK ? "" : flt_last_error_message());
+        record_summary += line;
+        flt_archive_destroy(archive);
+    }
 
     // ---------------------------------------------------------- summary
     const double strip_s = total_length / 1000.0 / (st.speed / 60.0);
@@ -706,6 +1109,7 @@ int main(int argc, char **argv) {
                 strip_s / busy, st.speed, busy, strip_s, render);
     std::printf("  shape accuracy        rms %.3f mm, max %.3f mm against the true surface\n",
                 std::sqrt(sq_all / double(std::max<size_t>(1, n_all))), max_error_all);
+    std::printf("%s", record_summary.c_str());
     for (const sheet_result &r : results) {
         std::printf("  sheet %d: %s%s (confidence %.2f)  bow %+.2f mm  crossbow %+.2f mm  "
                     "zones within %.2f I-Units of the truth\n    I-Units:",
@@ -719,6 +1123,9 @@ int main(int argc, char **argv) {
 
     // ---------------------------------------------------------- report
     zone_chart_png(st.out + "/zones.png", results, zone_x, zone_width, flat_limit);
+    coil_chart_png(st.out + "/coil.png",
+                   {st.coil, "S355MC", "simulated line", st.thickness, st.width}, !st.rules.empty(),
+                   results, rule_names, rule_measures, flat_limit);
     {
         char title[160];
         std::snprintf(title, sizeof title,
@@ -740,27 +1147,38 @@ int main(int argc, char **argv) {
         return 1;
     }
     std::fprintf(csv, "sheet,s_first_mm,s_last_mm,shape,confidence,bow_mm,crossbow_mm,"
-                      "rms_error_mm,max_error_mm,max_zone_error_iu\n");
+                      "rms_error_mm,max_error_mm,max_zone_error_iu,coil_id,verdict,"
+                      "rules_failed\n");
     std::fprintf(zcsv, "sheet,zone,x_centre_mm,i_units,true_i_units\n");
     std::fprintf(json,
                  "{\n  \"version\": \"%s\",\n  \"fibers\": %zu,\n  \"pitch_mm\": %g,\n"
                  "  \"zone_width_mm\": %g,\n  \"real_time_factor\": %.3f,\n"
                  "  \"line_speed_m_per_min\": %g,\n  \"rms_error_mm\": %.4f,\n"
-                 "  \"max_error_mm\": %.4f,\n  \"sheets\": [\n",
+                 "  \"max_error_mm\": %.4f,\n"
+                 "  \"coil\": {\"id\": \"%s\", \"grade\": \"S355MC\", "
+                 "\"nominal_thickness_mm\": %g, \"nominal_width_mm\": %g},\n"
+                 "  \"rules\": %s,\n  \"sheets\": [\n",
                  flt_version_string(), fibers, st.pitch, zone_width, strip_s / busy, st.speed,
-                 std::sqrt(sq_all / double(std::max<size_t>(1, n_all))), max_error_all);
+                 std::sqrt(sq_all / double(std::max<size_t>(1, n_all))), max_error_all,
+                 json_escaped(st.coil).c_str(), st.thickness, st.width,
+                 st.rules.empty() ? "null" : ("\"" + json_escaped(st.rules) + "\"").c_str());
     for (size_t p = 0; p < results.size(); ++p) {
         const sheet_result &r = results[p];
-        std::fprintf(csv, "%d,%.1f,%.1f,%s,%.3f,%.3f,%.3f,%.4f,%.4f,%.3f\n", r.index, r.s_first,
-                     r.s_last, flt_shape_string(r.shape), r.confidence, r.bow, r.crossbow,
-                     r.rms_error, r.max_error, r.zone_error);
+        // Without a rule file the gauge judges nothing: "none", as the archive.
+        const char *verdict = st.rules.empty() ? "none" : verdict_word(r.verdict);
+        std::fprintf(csv, "%d,%.1f,%.1f,%s,%.3f,%.3f,%.3f,%.4f,%.4f,%.3f,%s,%s,%d\n", r.index,
+                     r.s_first, r.s_last, flt_shape_string(r.shape), r.confidence, r.bow,
+                     r.crossbow, r.rms_error, r.max_error, r.zone_error,
+                     csv_quoted(r.coil_id).c_str(), verdict, r.rules_failed);
         std::fprintf(json,
                      "    {\"sheet\": %d, \"s_first_mm\": %.1f, \"s_last_mm\": %.1f, "
                      "\"shape\": \"%s\", \"confidence\": %.3f, \"bow_mm\": %.3f, "
                      "\"crossbow_mm\": %.3f, \"rms_error_mm\": %.4f, \"max_error_mm\": %.4f,\n"
+                     "     \"coil_id\": \"%s\", \"verdict\": \"%s\", \"rules_failed\": %d,\n"
                      "     \"zones\": [",
                      r.index, r.s_first, r.s_last, flt_shape_string(r.shape), r.confidence, r.bow,
-                     r.crossbow, r.rms_error, r.max_error);
+                     r.crossbow, r.rms_error, r.max_error, json_escaped(r.coil_id).c_str(), verdict,
+                     r.rules_failed);
         for (size_t j = 0; j < zones; ++j) {
             // JSON has no NaN: a zone without data is null.
             if (std::isfinite(r.zone_i[j]))
@@ -779,12 +1197,14 @@ int main(int argc, char **argv) {
     std::fclose(csv);
     std::fclose(zcsv);
     std::fclose(json);
-    std::printf("\nreport written to %s/: sheet<N>_raw.png, sheet<N>_reconstructed.png, "
-                "sheet<N>_true.png,\n  fiber_profile.png, zones.png, sheets.csv, zones.csv, "
-                "report.json\n",
-                st.out.c_str());
+    std::printf(
+        "\nreport written to %s/: sheet<N>_raw.png, sheet<N>_reconstructed.png, "
+        "sheet<N>_true.png,\n  fiber_profile.png, zones.png, coil.png, sheets.csv, zones.csv, "
+        "report.json\n",
+        st.out.c_str());
 
     flt_gauge_destroy(gauge);
+    flt_rules_destroy(rules);
     flt_flatness_destroy(truth_flatness);
     flt_sim_destroy(sim);
     flt_calib_destroy(calib);

@@ -691,6 +691,66 @@ typedef enum flt_option {
      * effect by up to a factor 1 + 1/gain = 3, and does not overshoot when
      * G overstates it (docs/advisor.md). */
     FLT_OPT_ADVISOR_GAIN = 901,
+    /* ---- the quality record: recordings and the archive (flatline/record.h) ---- */
+    /** "record_quantum": the height quantum of a recording, mm: each laser's
+     * height at each fiber is rounded to it (a power of two from 2^-12 to
+     * 2^-4). Default 2^-8 = 0.00390625 (an error of at most 0.002 mm, 2 %
+     * of the reference sensor's noise; docs/record.md has the bytes per
+     * sample it costs). */
+    FLT_OPT_RECORD_QUANTUM = 1000,
+    /** "record_commit_interval": the longest a row waits before the writer
+     * commits it, ms (integer 20..1000). A killed process or a power cut
+     * loses at most about twice this. Default 250. */
+    FLT_OPT_RECORD_COMMIT_INTERVAL = 1001,
+    /** "record_sync": 1 makes every commit reach the disk before the next
+     * (safe against a power cut), 0 leaves it to the operating system (safe
+     * against a killed process only); integer. Default 1. */
+    FLT_OPT_RECORD_SYNC = 1002,
+    /** "record_queue_blocks": blocks of rows waiting for the writer thread
+     * before rows are not recorded and counted lost (integer 2..1024).
+     * Default 16 (2 s at the default block size and 2000 rows/s). */
+    FLT_OPT_RECORD_QUEUE_BLOCKS = 1003,
+    /** "record_block_rows": the most rows in one block (integer 16..4096);
+     * a block also closes after record_commit_interval. Default 256 (0.13 s
+     * at 2000 rows/s). */
+    FLT_OPT_RECORD_BLOCK_ROWS = 1004,
+    /** "record_frames": raw camera frames kept (flt_record_frames: "none",
+     * "all", "ring"). Default 0 (none). */
+    FLT_OPT_RECORD_FRAMES = 1005,
+    /** "record_frame_seconds": how much the ring keeps, s of frames
+     * (0.1..3600). Default 10. */
+    FLT_OPT_RECORD_FRAME_SECONDS = 1006,
+    /** "record_frame_mb": the most memory the ring (or, for "all", the
+     * frames waiting for the writer) may take, MiB (integer 1..65536).
+     * Default 512. */
+    FLT_OPT_RECORD_FRAME_MB = 1007,
+    /** "record_frames_on_fail": 1 saves the ring when a sheet fails a rule
+     * (integer 0..1). Default 1. */
+    FLT_OPT_RECORD_FRAMES_ON_FAIL = 1008,
+    /** "archive_retention_days": sheets older than this are removed, days
+     * (0..36500; 0 keeps them for ever). Default 0. */
+    FLT_OPT_ARCHIVE_RETENTION_DAYS = 1050,
+    /** "archive_retention_mb": the oldest sheets are removed while the
+     * archive's sheet data exceed this, MiB (0..1e9; 0: no limit).
+     * Default 0. */
+    FLT_OPT_ARCHIVE_RETENTION_MB = 1051,
+    /** "archive_buffer_mb": sheets kept in memory while the database is
+     * away (a server restart), MiB (integer 1..65536); beyond it a sheet
+     * is counted lost and logged. Default 256 (about 300 sheets of 3 m). */
+    FLT_OPT_ARCHIVE_BUFFER_MB = 1052,
+    /** "archive_retry_interval": wait between attempts to reach the
+     * database again, ms (integer 10..600000). Default 1000. */
+    FLT_OPT_ARCHIVE_RETRY_INTERVAL = 1053,
+    /** "archive_close_timeout": how long flt_archive_destroy() keeps trying
+     * to store pending sheets, ms (integer 0..600000). Default 10000. */
+    FLT_OPT_ARCHIVE_CLOSE_TIMEOUT = 1054,
+    /** "archive_map_quantum": the resolution of the archived height maps,
+     * mm (1e-6..1). Default 0.001. */
+    FLT_OPT_ARCHIVE_MAP_QUANTUM = 1055,
+    /** "archive_maps": 1 stores each sheet's reconstructed height map
+     * (the gauge keeps it for the archive), 0 only its results (integer).
+     * Default 1. */
+    FLT_OPT_ARCHIVE_MAPS = 1056,
     /** Not an option: keeps the type int-sized whatever is added. Any int
      * can be passed as a key (the library reads an enum argument as the int
      * it is) and an unknown one is refused with a message. New keys go

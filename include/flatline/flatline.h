@@ -19,5 +19,7 @@
 #include "flatline/verdict.h"
 #include "flatline/advisor.h"
 #include "flatline/log.h"
+#include "flatline/coil.h"
+#include "flatline/record.h"
 
 #endif /* FLATLINE_FLATLINE_H */

@@ -185,6 +185,21 @@
  *   tests/c/test_gauge.c calls each of them from the callback with 0, 1
  *   and 2 workers.
  *
+ * Coils, recordings and the archive
+ *   flt_gauge_set_coil() names the coil a strip is (flatline/coil.h): its
+ *   sheets, statistics and verdicts carry it, and its nominal thickness
+ *   and width choose the rule bands. flt_gauge_note() marks a moment on
+ *   the line (a leveler change). flt_gauge_attach_recorder() records the
+ *   gauge's input (flatline/record.h); a recording replays through a
+ *   gauge as a source (flt_source_open_recording, flt_gauge_attach_source,
+ *   flt_gauge_start, flt_gauge_wait): with the recording's options
+ *   (flt_recording_options) the sheets are the live ones bit for bit
+ *   (tests/c/test_replay.c), with others they answer "what if". The
+ *   replay takes each recorded row with what the live gauge counted
+ *   before it (frames skipped, dropped, missing) and applies the recorded
+ *   cuts, coils, notes and flushes where they were given.
+ *   flt_gauge_attach_archive() archives every finished sheet.
+ *
  * Memory
  *   Everything is allocated by flt_gauge_create() (and flt_gauge_set_rules()
  *   for the verdicts), except, once, the
@@ -229,6 +244,7 @@
 #include "flatline/extractor.h"
 #include "flatline/flatness.h" /* FLT_WINDOW_*, FLT_FIBER_*, FLT_ZONE_*, flt_shape */
 #include "flatline/recon.h"    /* FLT_FLAG_* of the height maps */
+#include "flatline/record.h"   /* flt_recorder, flt_archive */
 #include "flatline/source.h"
 #include "flatline/verdict.h" /* flt_rules, flt_verdict */
 
@@ -349,6 +365,9 @@ typedef enum flt_sheet_value {
     /** Laser peaks found on the strip over the sheet's rows (both lasers;
      * 0 for pushed rows): FLT_SHEET_SATURATED's denominator. */
     FLT_SHEET_PEAKS = 44,
+    /** When the sheet was finished (its evaluation), host UTC, s since
+     * 1970-01-01. */
+    FLT_SHEET_FINISHED_TIME = 45,
     /** Not a key: keeps the type int-sized whatever is added. */
     FLT_SHEET_VALUE_MAX_ENUM_ = 0x7FFFFFFF
 } flt_sheet_value;
@@ -795,6 +814,9 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_count(const flt_gauge *gauge
  *        FLT_GAUGE_WIDTH_MEASURED (0) for each sheet's measured strip width
  *        (FLT_SHEET_STRIP_WIDTH; a sheet without it is NOT_MEASURED by every
  *        rule).
+ * The sheets of a coil whose identity gives a nominal thickness or width
+ * (flt_gauge_set_coil) are judged with the coil's value in place of the
+ * one given here; a value the coil does not give (0) is taken from here.
  * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL gauge, rules that are
  *         not a live handle, or a thickness or width out of range (the
  *         rules in force stay).
@@ -901,6 +923,136 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sheet_measured_map(const flt_sheet
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sheet_verdict(const flt_sheet *sheet,
                                                             const flt_rules **rules_out,
                                                             const flt_verdict **verdict_out);
+
+/* ---------------------------------------------------------------------- */
+/* The quality record (flatline/record.h)                                  */
+/* ---------------------------------------------------------------------- */
+
+/** The coil the next strip is (see "Coils, recordings and the archive"):
+ * its identity is copied and given to every sheet of that coil
+ * (flt_sheet_coil), its statistics (flt_gauge_coil_info) and, when rules
+ * are set, its verdicts: the coil's nominal thickness and width, where
+ * given (non-zero), choose the rule bands of its sheets in place of those
+ * given to flt_gauge_set_rules. It takes effect with the next frame pushed
+ * (as a cut does): for the strip under the sensor when that strip has no
+ * identity yet (given at its head; its sheets already cut off keep none),
+ * else for the next strip. NULL: the next strip has no identity. Any
+ * thread, the callback too.
+ * @param gauge the gauge.
+ * @param coil  the identity (copied), or NULL.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL gauge or a coil that
+ *         is not a live handle.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_set_coil(flt_gauge *gauge,
+                                                             const flt_coil_info *coil);
+
+/** The identity of the coil whose statistics flt_gauge_coil_stats() reads
+ * (FLT_COIL_CURRENT or FLT_COIL_LAST), as a new handle.
+ * @param gauge the gauge.
+ * @param which FLT_COIL_CURRENT or FLT_COIL_LAST.
+ * @param out   receives a copy (flt_coil_info_destroy).
+ * @return FLT_OK; FLT_ERR_NOT_FOUND when that coil has no identity (or no
+ *         statistics); FLT_ERR_INVALID_ARGUMENT for a NULL argument or an
+ *         unknown `which`.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_coil_info(const flt_gauge *gauge,
+                                                              flt_coil which, flt_coil_info **out);
+
+/** A note about the line from now on (a leveler setting changed, an
+ * operator's remark): it takes effect with the next frame pushed (as a cut
+ * does) and is given to the sheet whose rows begin there (flt_sheet_note),
+ * recorded and archived. The coil report marks notes of kind "leveler" on
+ * its run chart. Any thread, the callback too.
+ * @param gauge the gauge.
+ * @param kind  what it is: 1..64 ASCII letters, digits, '_', '-', '.'
+ *              ("leveler").
+ * @param text  what it says: UTF-8 text as in flatline/coil.h.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL or malformed
+ *         argument; FLT_ERR_BUFFER_FULL when 256 notes wait for a frame.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_note(flt_gauge *gauge, const char *kind,
+                                                         const char *text);
+
+/** Records the gauge's input into a recorder from the next frame on (or
+ * stops recording, with NULL). The gauge writes its options and any cuts
+ * and coil waiting into the recording, then every row it takes, with its
+ * cuts, coils, notes, flushes and (record_frames) camera frames; the rows
+ * it measures are the recording's quantized ones (flatline/record.h,
+ * "Quantization"). Borrowed: the recorder must outlive the gauge or be
+ * detached first. Only while the gauge is idle: no frame in its queue and
+ * no acquisition (attach before the first frame, or after flt_gauge_flush).
+ * @param gauge    the gauge.
+ * @param recorder the recorder, or NULL to detach.
+ * @return FLT_OK; FLT_ERR_STATE while frames are queued, while acquiring,
+ *         from inside the callback, or when another gauge records through
+ *         the recorder; FLT_ERR_INVALID_ARGUMENT for a NULL gauge, a dead
+ *         recorder or one of another fiber count.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_attach_recorder(flt_gauge *gauge,
+                                                                    flt_recorder *recorder);
+
+/** Archives every sheet the gauge finishes from now on (or no more, with
+ * NULL): its values, verdict, coil identity and statistics, notes and (with
+ * archive_maps) its height map, which the gauge has whatever
+ * gauge_keep_maps says. The map is encoded on the gauge's evaluation
+ * thread; the archive's writer stores it. Borrowed: the archive must
+ * outlive the gauge or be detached first. Only while the gauge is idle (as
+ * flt_gauge_attach_recorder).
+ * @param gauge   the gauge.
+ * @param archive the archive, or NULL to detach.
+ * @return FLT_OK; FLT_ERR_STATE as flt_gauge_attach_recorder();
+ *         FLT_ERR_INVALID_ARGUMENT for a NULL gauge or a dead archive.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_gauge_attach_archive(flt_gauge *gauge,
+                                                                   flt_archive *archive);
+
+/** The identity of a sheet's coil, lent by the sheet (valid while it lives;
+ * read-only).
+ * @param sheet the sheet.
+ * @param out   receives the identity.
+ * @return FLT_OK; FLT_ERR_NOT_FOUND when its coil had none
+ *         (flt_gauge_set_coil); FLT_ERR_INVALID_ARGUMENT for a NULL
+ *         argument.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sheet_coil(const flt_sheet *sheet,
+                                                         const flt_coil_info **out);
+
+/** The number of notes a sheet carries (flt_gauge_note).
+ * @param sheet the sheet.
+ * @param out   receives the count.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL argument.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sheet_note_count(const flt_sheet *sheet, size_t *out);
+
+/** Note `index` of a sheet. Any output may be NULL.
+ * @param sheet     the sheet.
+ * @param index     0 .. flt_sheet_note_count() - 1.
+ * @param kind_out  receives its kind, owned by the sheet.
+ * @param text_out  receives its text, owned by the sheet.
+ * @param s_mm_out  receives where it took effect along the strip, s in mm.
+ * @return FLT_OK; FLT_ERR_NOT_FOUND past the last note;
+ *         FLT_ERR_INVALID_ARGUMENT for a NULL sheet.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_sheet_note(const flt_sheet *sheet, size_t index,
+                                                         const char **kind_out,
+                                                         const char **text_out, double *s_mm_out);
+
+/** Queues a copy of a sheet for the archive (its values, arrays, verdict
+ * and, when the archive keeps maps, its height map; a sheet of a gauge
+ * with gauge_keep_maps = 0 has none and is stored without, map_codec 0 in
+ * docs/record.md). The map is encoded on the calling thread (about 30 ms
+ * for a 3 m sheet of 1,150 fibers); the archive's writer stores the copy.
+ * A sheet added twice is one row in the archive (both adds count as
+ * stored: FLT_ARCHIVE_COUNT_SHEETS = stored + pending + lost).
+ * @param archive the archive (flatline/record.h).
+ * @param sheet   the sheet (one the caller holds, or the callback's).
+ * @return FLT_OK; FLT_ERR_BUFFER_FULL when archive_buffer_mb is taken by
+ *         sheets the database has not taken yet (the sheet is counted
+ *         lost, FLT_ARCHIVE_COUNT_LOST); FLT_ERR_INVALID_ARGUMENT for a
+ *         NULL or dead handle.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_archive_add_sheet(flt_archive *archive,
+                                                                const flt_sheet *sheet);
 
 #ifdef __cplusplus
 }

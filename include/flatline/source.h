@@ -161,6 +161,7 @@
 #ifndef FLATLINE_SOURCE_H
 #define FLATLINE_SOURCE_H
 
+#include "flatline/coil.h"
 #include "flatline/common.h"
 #include "flatline/extractor.h"
 #include "flatline/sim.h"
@@ -210,6 +211,7 @@ typedef enum flt_source_kind {
     FLT_SOURCE_IMAGES = 2,    /**< recorded images */
     FLT_SOURCE_U3V = 3,       /**< a USB3 Vision camera */
     FLT_SOURCE_GIGE = 4,      /**< a GigE Vision camera */
+    FLT_SOURCE_RECORDING = 5, /**< a recording (flatline/record.h) */
     FLT_SOURCE_KIND_MAX_ENUM_ = 0x7FFFFFFF
 } flt_source_kind;
 
@@ -690,6 +692,110 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_write_memory(flt_source *so
                                                                   const void *bytes_in,
                                                                   size_t bytes);
 /** @} */
+
+/* ---------------------------------------------------------------------- */
+/* Recordings (flatline/record.h)                                          */
+/* ---------------------------------------------------------------------- */
+/*
+ * A recording replays as a source: one frame per recorded row, in order,
+ * with the row's encoder position (encoder mode auto only), its host time
+ * (UTC, ns) as the timestamp and its number as the block id. A frame
+ * carries its profile row (flt_frame_row), the events recorded before it
+ * (flt_frame_event: cuts, coils, flushes, gaps of lost rows) and, where the
+ * recorder kept the camera frame, its pixels; otherwise flt_frame_info()
+ * gives NULL pixels and a size of 0. Events recorded after the last row
+ * come with one more frame that has no row. The end is FLT_OK with a NULL
+ * frame, as for images; flt_source_start() starts again from the first
+ * row. A gauge attached to a recording (flt_gauge_attach_source) replays
+ * it: the same options give the same sheets bit for bit (flatline/gauge.h,
+ * "Recordings").
+ */
+
+/** What a recorded event is (flt_frame_event). */
+typedef enum flt_recorded_event {
+    /** The shear cut at the event's encoder_mm (flt_gauge_cut). */
+    FLT_RECORDED_CUT = 0,
+    /** A coil's identity was given (flt_gauge_set_coil): see coil_out. */
+    FLT_RECORDED_COIL = 1,
+    /** The input was flushed (flt_gauge_flush) before this frame. */
+    FLT_RECORDED_FLUSH = 2,
+    /** Rows were lost before this frame (the recorder's writer was behind):
+     * count_out says how many. */
+    FLT_RECORDED_GAP = 3,
+    /** A note (flt_gauge_note): see flt_frame_event_note(). */
+    FLT_RECORDED_NOTE = 4,
+    FLT_RECORDED_EVENT_MAX_ENUM_ = 0x7FFFFFFF
+} flt_recorded_event;
+
+/** A source that replays a recording (flatline/record.h).
+ * @param path    the recording (UTF-8).
+ * @param options NULL, or the source_* keys (source_encoder_mode must be
+ *                "auto": positions are the recorded ones).
+ * @param out     receives the source.
+ * @return FLT_OK; FLT_ERR_IO or FLT_ERR_FORMAT as flt_recording_open();
+ *         FLT_ERR_INVALID_ARGUMENT for a NULL argument or another encoder
+ *         mode.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_source_open_recording(const char *path,
+                                                                    const flt_options *options,
+                                                                    flt_source **out);
+
+/** The profile row of a recording's frame, as the gauge measured it: the
+ * heights each laser saw, quantized (flatline/record.h). Any output may be
+ * NULL.
+ * @param frame      a frame of a recording source.
+ * @param fibers     must equal the recording's fiber count.
+ * @param height_out [fibers] mm, NaN where the sample is not valid.
+ * @param slope_out  [fibers] mm/mm, NaN likewise.
+ * @param flags_out  [fibers] 0 for a valid sample, else
+ *                   FLT_FLAG_INVALID_INPUT or FLT_FLAG_OFF_STRIP.
+ * @return FLT_OK; FLT_ERR_NOT_FOUND for a frame without a row (not of a
+ *         recording, or the one after the last row);
+ *         FLT_ERR_INVALID_ARGUMENT for a NULL frame or a wrong count.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_frame_row(const flt_frame *frame, size_t fibers,
+                                                        double *height_out, double *slope_out,
+                                                        uint8_t *flags_out);
+
+/** The number of events recorded before a frame (0 for a frame that is
+ * not of a recording).
+ * @param frame the frame.
+ * @param out   receives the count.
+ * @return FLT_OK; FLT_ERR_INVALID_ARGUMENT for a NULL argument.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_frame_event_count(const flt_frame *frame,
+                                                                size_t *out);
+
+/** Event `index` before a frame, in the order they were recorded. Any
+ * output may be NULL.
+ * @param frame          the frame.
+ * @param index          0 .. flt_frame_event_count() - 1.
+ * @param kind_out       receives what it is.
+ * @param encoder_mm_out receives a cut's position, mm (NaN otherwise).
+ * @param count_out      receives a gap's lost rows (0 otherwise).
+ * @param coil_out       receives a coil's identity (NULL otherwise),
+ *                       lent: valid while the source lives.
+ * @return FLT_OK; FLT_ERR_NOT_FOUND past the last event;
+ *         FLT_ERR_INVALID_ARGUMENT for a NULL frame.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_frame_event(const flt_frame *frame, size_t index,
+                                                          flt_recorded_event *kind_out,
+                                                          double *encoder_mm_out,
+                                                          uint64_t *count_out,
+                                                          const flt_coil_info **coil_out);
+
+/** The kind and text of a note event (FLT_RECORDED_NOTE) before a frame.
+ * Either output may be NULL.
+ * @param frame    the frame.
+ * @param index    the event, 0 .. flt_frame_event_count() - 1.
+ * @param kind_out receives the note's kind, owned by the source.
+ * @param text_out receives its text, owned by the source.
+ * @return FLT_OK; FLT_ERR_NOT_FOUND past the last event or for an event
+ *         that is no note; FLT_ERR_INVALID_ARGUMENT for a NULL frame.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_frame_event_note(const flt_frame *frame, size_t index,
+                                                               const char **kind_out,
+                                                               const char **text_out);
 
 #ifdef __cplusplus
 }

@@ -10,6 +10,7 @@
 #include "flatline/flatness.h"
 #include "flatline/gauge.h"
 #include "flatline/recon.h"
+#include "flatline/record.h"
 #include "flatline/sim.h"
 #include "flatline/source.h"
 
@@ -151,6 +152,23 @@ const option_spec k_options[] = {
     {FLT_OPT_ADVISOR_GAIN, "advisor_gain", 0.01, 1.0, 0.5, false},
     // reconstructor, later additions
     {FLT_OPT_LATENCY_MM, "latency_mm", 1.0, 1.0e9, 2000.0, false},
+    // the quality record: recordings and the archive
+    {FLT_OPT_RECORD_QUANTUM, "record_quantum", 0.000244140625, 0.0625, 0.00390625, false},
+    {FLT_OPT_RECORD_COMMIT_INTERVAL, "record_commit_interval", 20.0, 1000.0, 250.0, true},
+    {FLT_OPT_RECORD_SYNC, "record_sync", 0.0, 1.0, 1.0, true},
+    {FLT_OPT_RECORD_QUEUE_BLOCKS, "record_queue_blocks", 2.0, 1024.0, 16.0, true},
+    {FLT_OPT_RECORD_BLOCK_ROWS, "record_block_rows", 16.0, 4096.0, 256.0, true},
+    {FLT_OPT_RECORD_FRAMES, "record_frames", 0.0, 2.0, 0.0, true},
+    {FLT_OPT_RECORD_FRAME_SECONDS, "record_frame_seconds", 0.1, 3600.0, 10.0, false},
+    {FLT_OPT_RECORD_FRAME_MB, "record_frame_mb", 1.0, 65536.0, 512.0, true},
+    {FLT_OPT_RECORD_FRAMES_ON_FAIL, "record_frames_on_fail", 0.0, 1.0, 1.0, true},
+    {FLT_OPT_ARCHIVE_RETENTION_DAYS, "archive_retention_days", 0.0, 36500.0, 0.0, false},
+    {FLT_OPT_ARCHIVE_RETENTION_MB, "archive_retention_mb", 0.0, 1.0e9, 0.0, false},
+    {FLT_OPT_ARCHIVE_BUFFER_MB, "archive_buffer_mb", 1.0, 65536.0, 256.0, true},
+    {FLT_OPT_ARCHIVE_RETRY_INTERVAL, "archive_retry_interval", 10.0, 600000.0, 1000.0, true},
+    {FLT_OPT_ARCHIVE_CLOSE_TIMEOUT, "archive_close_timeout", 0.0, 600000.0, 10000.0, true},
+    {FLT_OPT_ARCHIVE_MAP_QUANTUM, "archive_map_quantum", 1.0e-6, 1.0, 0.001, false},
+    {FLT_OPT_ARCHIVE_MAPS, "archive_maps", 0.0, 1.0, 1.0, true},
 };
 constexpr std::size_t k_option_count = sizeof k_options / sizeof k_options[0];
 
@@ -176,12 +194,17 @@ const option_choice k_choices[] = {
     {FLT_OPT_GAUGE_OVERFLOW, "drop", FLT_GAUGE_OVERFLOW_DROP},
     {FLT_OPT_GAUGE_OVERFLOW, "wait", FLT_GAUGE_OVERFLOW_WAIT},
     {FLT_OPT_GAUGE_OVERFLOW, "auto", FLT_GAUGE_OVERFLOW_AUTO},
+    {FLT_OPT_RECORD_FRAMES, "none", FLT_RECORD_FRAMES_NONE},
+    {FLT_OPT_RECORD_FRAMES, "all", FLT_RECORD_FRAMES_ALL},
+    {FLT_OPT_RECORD_FRAMES, "ring", FLT_RECORD_FRAMES_RING},
 };
 
 // The components by the hundreds of their keys (common.h).
 const char *const k_components[] = {
-    nullptr,    "the reconstructor", "calibration", "the simulator",    "the extractor",
-    "flatness", "frame sources",     "the gauge",   "quality verdicts", "the advisor",
+    nullptr,         "the reconstructor",  "calibration",
+    "the simulator", "the extractor",      "flatness",
+    "frame sources", "the gauge",          "quality verdicts",
+    "the advisor",   "the quality record",
 };
 static_assert(k_option_count <= flt_options::max_keys,
               "grow flt_options::max_keys (it is internal, not ABI)");

@@ -63,7 +63,7 @@ struct option_choice {
 
 // Exposed only so option_value() can read it; callers see an opaque type.
 struct flt_options {
-    static constexpr std::size_t max_keys = 128;
+    static constexpr std::size_t max_keys = 192;
     double value[max_keys];
     bool is_set[max_keys];  // set by flt_options_set, not a default
 };

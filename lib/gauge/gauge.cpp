@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstring>
 #include <limits>
+#include <random>
 
 #include "core/error.hpp"
 #include "core/log.hpp"
@@ -17,6 +18,7 @@
 #include "flatline/extractor.h"
 #include "flatline/source.h"
 #include "reconstruction/recon_internal.hpp"
+#include "sources/source_handle.hpp"
 
 namespace flt {
 namespace {
@@ -351,6 +353,17 @@ void gauge::init(const flt_calib *calib, const flt_options *options) {
 
     // Sheet slots.
     pool_ = std::make_shared<sheet_pool>();
+    {
+        // The session names this gauge's sheets and coils in an archive:
+        // random, so that two gauges (two lines, or a restart) never share
+        // one.
+        std::random_device entropy;
+        char session[40];
+        std::snprintf(session, sizeof session, "%08x%08x-%llx", unsigned(entropy()),
+                      unsigned(entropy()),
+                      static_cast<unsigned long long>(record::utc_now_ns() / 1000000000));
+        pool_->session = session;
+    }
     pool_->free.reserve(cfg_.sheet_slots);
     ready_.assign(cfg_.sheet_slots, nullptr);
     for (std::size_t i = 0; i < cfg_.sheet_slots; ++i) {
@@ -406,6 +419,10 @@ void gauge::touch_thread_locals() {
 }
 
 gauge::~gauge() {
+    if (recorder_handle_)
+        recorder_->owner.store(nullptr);
+    if (archive_handle_)
+        archive_->owner.store(nullptr);
     {
         std::unique_lock<std::mutex> lock(m_);
         acquisition_stop_ = true;
@@ -541,6 +558,7 @@ void gauge::extract(frame_slot &slot, const void *pixels, flt_pixel_format forma
 void gauge::resolve_band(frame_slot &slot) {
     bool error = false;
     extract(slot, slot.pixels.get(), slot.format, slot.stride, band_extractor_, &error);
+    slot.extract_error = error;
     if (error) {
         std::lock_guard<std::mutex> lock(m_);
         ++n_extract_errors_;
@@ -570,6 +588,22 @@ void gauge::resolve_band(frame_slot &slot) {
 
 void gauge::fill_slot(frame_slot &slot, const gauge_input &in) const {
     slot.encoder_mm = in.encoder_mm;
+    if (in.recorded != nullptr) {
+        // A recorded row: what the live gauge had for this frame, edges,
+        // validity and flags included (the heights are the recorded,
+        // quantized ones).
+        const sources::recorded_frame &r = *in.recorded;
+        const record::row_block &b = *r.block;
+        slot.s = in.encoder_mm - mean_offset_;
+        r.row_values(K_, slot.height.data(), slot.slope.data(), slot.flags.data(),
+                     slot.valid.data());
+        slot.left = b.left_mm[r.index];
+        slot.right = b.right_mm[r.index];
+        slot.strip_flags = b.strip_flags[r.index];
+        slot.saturated = b.saturated[r.index];
+        slot.peaks = b.peaks[r.index];
+        return;
+    }
     if (in.pixels == nullptr) {
         // A profile row: what the extractor would give for this frame.
         slot.s = in.encoder_mm - mean_offset_;
@@ -665,13 +699,34 @@ void gauge::take(const gauge_input &in, bool from_acquisition) {
         throw error(FLT_ERR_BUFFER_FULL, why);
     }
     ++n_frames_;
+    std::uint8_t recorded_flags = 0;
+    if (in.recorded != nullptr) {
+        // What the live gauge counted before this row, as it counted it:
+        // frames skipped and dropped (their positions are not recorded),
+        // frames missing by the encoder.
+        const record::row_block &b = *in.recorded->block;
+        const std::size_t i = in.recorded->index;
+        const std::uint32_t stop = b.skipped_stop[i], rev = b.skipped_reversal[i];
+        n_frames_ += std::uint64_t(stop) + rev + b.dropped[i];
+        n_skipped_stop_ += stop;
+        n_skipped_rev_ += rev;
+        pending_skipped_ += stop + rev;
+        pending_skipped_stop_ += stop;
+        pending_skipped_rev_ += rev;
+        n_dropped_ += b.dropped[i];
+        pending_dropped_ += b.dropped[i];
+        pending_missing_ += b.missing[i];
+        recorded_flags = b.row_flags[i];
+    }
     // Line stops and reversals, from the encoder alone (in frame order).
     const double e = in.encoder_mm;
     if (has_furthest_) {
         const double advance = e - furthest_;
         if (advance < cfg_.frame_spacing) {
             if (-advance <= cfg_.reversal_length) {
-                ++(advance < -cfg_.frame_spacing ? n_skipped_rev_ : n_skipped_stop_);
+                const bool reversal = advance < -cfg_.frame_spacing;
+                ++(reversal ? n_skipped_rev_ : n_skipped_stop_);
+                ++(reversal ? pending_skipped_rev_ : pending_skipped_stop_);
                 ++pending_skipped_;
                 return;
             }
@@ -681,7 +736,8 @@ void gauge::take(const gauge_input &in, bool from_acquisition) {
             has_cut_floor_ = false;
         }
     }
-    if (has_furthest_ && !pending_new_strip_)
+    // (A recorded row carries the missing frames the live gauge counted.)
+    if (has_furthest_ && !pending_new_strip_ && in.recorded == nullptr)
         pending_missing_ += frames_missing(e - furthest_);
     has_furthest_ = true;
     furthest_ = e;
@@ -723,14 +779,33 @@ void gauge::take(const gauge_input &in, bool from_acquisition) {
     slot.skipped_before = pending_skipped_;
     slot.dropped_before = pending_dropped_;
     slot.missing_before = pending_missing_;
+    slot.skipped_stop_before = pending_skipped_stop_;
+    slot.skipped_rev_before = pending_skipped_rev_;
+    slot.time_ns =
+        in.recorded ? in.recorded->block->time_ns[in.recorded->index] : record::utc_now_ns();
+    slot.from_frame = in.pixels != nullptr || (recorded_flags & record::k_row_from_frame);
+    slot.extract_error = (recorded_flags & record::k_row_extract_error) != 0;
     pending_new_strip_ = false;
     pending_skipped_ = pending_dropped_ = pending_missing_ = 0;
+    pending_skipped_stop_ = pending_skipped_rev_ = 0;
+    record::recorder *const rec = recorder_;
+    const std::int64_t row = recorded_row(slot.seq);
+    if (in.recorded != nullptr) {
+        if (slot.from_frame)
+            ++n_extracted_;
+        if (slot.extract_error)
+            ++n_extract_errors_;
+    }
     lock.unlock();
 
+    // The camera frame, when the recorder keeps frames (copied there).
+    if (rec && in.pixels != nullptr && rec->wants_frames() && row >= 0)
+        rec->add_frame(in.pixels, in.format, width_, height_, in.stride, e, std::uint64_t(row));
     fill_slot(slot, in);
     bool ready = in.pixels == nullptr, extract_error = false;
     if (!ready && cfg_.workers == 0) {
         extract(slot, in.pixels, in.format, in.stride, extractors_[0], &extract_error);
+        slot.extract_error = extract_error;
         ready = true;
     } else if (!ready && !band_known_) {
         resolve_band(slot);
@@ -872,6 +947,7 @@ bool gauge::run_one(std::unique_lock<std::mutex> &lock, unsigned index) {
         lock.unlock();
         bool error = false;
         extract(slot, slot.pixels.get(), slot.format, slot.stride, extractors_[index], &error);
+        slot.extract_error = error;
         lock.lock();
         slot.state = slot_extracted;
         ++n_extracted_;
@@ -941,6 +1017,9 @@ void gauge::sequence(frame_slot &slot) {
         drop_active_cuts(0.0, true);
     }
     activate_cuts(slot.seq);
+    apply_pending(slot.seq, slot.s);
+    if (recorder_ != nullptr && slot.seq >= rec_seq0_)
+        record_row(slot);  // before the row is used: it becomes the recorded one
     pending_row_skipped_ += slot.skipped_before;
     pending_row_dropped_ += slot.dropped_before;
     pending_row_missing_ += slot.missing_before;
@@ -1009,6 +1088,11 @@ void gauge::sequence(frame_slot &slot) {
 }
 
 void gauge::begin_strip(double s) {
+    // The identity given for the next coil is this strip's; without one
+    // the strip has none.
+    strip_coil_ = next_coil_given_ ? std::move(next_coil_) : nullptr;
+    next_coil_.reset();
+    next_coil_given_ = false;
     in_strip_ = true;
     pushed_ = false;
     has_output_ = false;
@@ -1134,6 +1218,16 @@ void gauge::split(double s_at, unsigned end_flags, bool all_rows, const row_meta
     job.index = ++sheet_in_coil_;
     job.id = ++sheet_ids_;
     job.lookahead = std::max(0.0, last_pushed_s_ - s_at);
+    job.coil_info = strip_coil_;
+    // The notes given before s_at go with this sheet; later ones wait.
+    for (auto it = open_notes_.begin(); it != open_notes_.end();) {
+        if (all_rows || it->s < s_at) {
+            job.notes.push_back(std::move(*it));
+            it = open_notes_.erase(it);
+        } else {
+            ++it;
+        }
+    }
     if (i < old.rows) {
         job.has_after = true;
         job.after = old.meta[i];
@@ -1226,6 +1320,7 @@ void gauge::end_strip(unsigned flag) {
     pushed_ = false;
     in_strip_ = false;
     has_output_ = false;
+    strip_coil_.reset();
     pending_row_skipped_ = pending_row_dropped_ = pending_row_missing_ = 0;
 }
 
@@ -1327,6 +1422,9 @@ void gauge::evaluate(const sheet_job &job) {
     v[FLT_SHEET_LOOKAHEAD] = job.lookahead;
     v[FLT_SHEET_FIBERS] = double(K_);
     v[FLT_SHEET_ZONES] = double(zones_);
+    v[FLT_SHEET_FINISHED_TIME] = 1e-9 * double(record::utc_now_ns());
+    sh->coil = job.coil_info;  // a reference more: no allocation
+    sh->notes = job.notes;     // allocates only when there are notes
     // Frames lost before a row lie between it and the frame before, spread
     // evenly: a sheet counts those in [s_start, s_end), its first row's and
     // the next sheet's first row's included.
@@ -1546,6 +1644,11 @@ void gauge::evaluate(const sheet_job &job) {
     if (cfg_.keep_maps >= 2)
         std::memcpy(sh->map_measured.data(), b.measured.data(), n * K_ * sizeof(double));
     sh->magic = k_sheet_magic;
+    if (archive_ != nullptr)
+        archive_sheet(*sh, b, n);
+    if (recorder_ != nullptr && recorder_->frames_on_fail() &&
+        sh->value[FLT_SHEET_VERDICT] == FLT_VERDICT_FAIL)
+        recorder_->save_frames();  // the frames that showed the failure
     deliver(sh);
 }
 
@@ -1602,7 +1705,12 @@ void gauge::judge(flt_sheet *sh, const sheet_buffer &b, std::size_t n) {
     give(FLT_MEASURE_WAVE_HEIGHT, v[FLT_SHEET_WAVE_HEIGHT], v[FLT_SHEET_WAVE_X]);
     give(FLT_MEASURE_BOW, v[FLT_SHEET_BOW], x_centre);
     give(FLT_MEASURE_CROSSBOW, v[FLT_SHEET_CROSSBOW], x_centre);
-    const double width = vc->width > 0 ? vc->width : v[FLT_SHEET_STRIP_WIDTH];
+    // The coil's nominal thickness and width, where given, choose the bands.
+    const double thickness =
+        sh->coil && sh->coil->thickness_mm > 0 ? sh->coil->thickness_mm : vc->thickness;
+    const double width = sh->coil && sh->coil->width_mm > 0 ? sh->coil->width_mm
+                         : vc->width > 0                    ? vc->width
+                                                            : v[FLT_SHEET_STRIP_WIDTH];
     verdict::map_view map;
     if (n > 0 && vc->needs_map) {
         map.rows = n;
@@ -1622,13 +1730,13 @@ void gauge::judge(flt_sheet *sh, const sheet_buffer &b, std::size_t n) {
             out[FLT_VERDICT_STATE] = FLT_VERDICT_NOT_JUDGED;
             out[FLT_VERDICT_MEASURE] = double(r.measure);
             out[FLT_VERDICT_LENGTH] = r.length;
-            const int band = width > 0 ? r.band_of(vc->thickness, width) : -1;
+            const int band = width > 0 ? r.band_of(thickness, width) : -1;
             out[FLT_VERDICT_BAND] = band;
             if (band >= 0)
                 out[FLT_VERDICT_LIMIT] = r.bands[std::size_t(band)].limit;
         }
     } else {
-        verdict::judge(vd.set, vd.given, vc->scratch, vc->thickness, width, map, vd.results.data(),
+        verdict::judge(vd.set, vd.given, vc->scratch, thickness, width, map, vd.results.data(),
                        vd.gaps.data());
         // A band that changes within a coil (a measured width crossing a
         // band's edge) changes the limit: worth telling.
@@ -1640,7 +1748,7 @@ void gauge::judge(flt_sheet *sh, const sheet_buffer &b, std::size_t n) {
                         "sheet %.0f: rule '%s' is judged by band %d, was %d (thickness %g mm, "
                         "width %.0f mm)",
                         v[FLT_SHEET_ID], vd.set.rules[i].name.c_str(), band, vc->last_band[i],
-                        vc->thickness, width);
+                        thickness, width);
             vc->last_band[i] = band;
         }
         vc->last_coil = coil;
@@ -1666,6 +1774,7 @@ void coil_stats::reset(std::uint64_t gen, std::size_t n_rules) {
     generation = gen;
     coil = sheets = passed = failed = not_judged = 0;
     finished = false;
+    coil_info.reset();
     per_rule zero{};
     zero.min = zero.max = zero.worst_sheet = zero.worst_x = zero.worst_s = k_nan;
     rules.assign(n_rules, zero);  // within the capacity set_rules reserved
@@ -1688,6 +1797,8 @@ void gauge::count_in_coil(const verdict_config &vc, const flt_sheet &sh) {
         finish();  // the previous coil's last sheet was not judged (lost)
     c.coil = coil;
     c.sheets += 1;
+    if (c.sheets == 1)
+        c.coil_info = sh.coil;  // a reference more: no allocation
     // By the sheet's verdict: a sheet no rule could judge is not passed.
     const double verdict = v[FLT_SHEET_VERDICT];
     (verdict == FLT_VERDICT_FAIL   ? c.failed
@@ -1856,6 +1967,8 @@ flt_status gauge::cut(const char *fn, double encoder_mm) {
                         "come that far (check the cut positions against the encoder)",
                         fn, cut_count_ + active_count_);
         cuts_[(cut_head_ + cut_count_) % k_cut_capacity] = cut_entry{head_, c};
+        if (recorder_ != nullptr)
+            recorder_->add_cut(encoder_mm, std::max<std::int64_t>(0, recorded_row(head_)));
         ++cut_count_;
         has_cut_floor_ = true;
         cut_floor_ = c;
@@ -1902,6 +2015,8 @@ flt_status gauge::flush(const char *fn) {
     if (acquiring_)
         return fail(FLT_ERR_STATE,
                     "%s: the attached source is acquiring; call flt_gauge_stop first", fn);
+    if (recorder_ != nullptr)
+        recorder_->add_flush(std::max<std::int64_t>(0, recorded_row(head_)));
     // Every frame pushed so far through the sequencer, then this thread
     // takes the sequencing role to end the strip.
     idle_cv_.wait(lock, [&] { return failed_ || (tail_ == head_ && !sequencing_); });
@@ -2003,6 +2118,36 @@ void gauge::acquisition_main() {
         }
         if (frame == nullptr)
             break;  // the end of an image sequence
+        const sources::recorded_frame *recorded = frame->recorded;
+        if (recorded != nullptr) {
+            // A recording: its events before the row, then the row with what
+            // the live gauge knew of it (its pixels, if kept, are not
+            // extracted again: the recorded row is the measurement).
+            try {
+                if (recorded->has_row && recorded->block->fibers != K_)
+                    throw error(FLT_ERR_INVALID_ARGUMENT,
+                                "the recording's rows have another fiber count than the "
+                                "gauge's calibration (flt_recording_calib gives its own)");
+                replay_events(*recorded);
+                if (recorded->has_row) {
+                    gauge_input in;
+                    in.recorded = recorded;
+                    in.encoder_mm = frame->encoder_mm;
+                    if (flt_status cst = check_encoder("flt_gauge_start (replay)", in.encoder_mm))
+                        throw error(cst, flt_last_error_message());
+                    take(in, true);
+                }
+            } catch (const error &e) {
+                status = e.status;
+                message = e.what();
+                break;
+            } catch (const std::exception &e) {
+                status = FLT_ERR_INTERNAL;
+                message = e.what();
+                break;
+            }
+            continue;
+        }
         gauge_input in;
         std::uint32_t w = 0, h = 0;
         st = flt_frame_info(frame, &in.pixels, &w, &h, &in.stride, &in.format, nullptr, nullptr,
@@ -2244,6 +2389,304 @@ flt_status gauge::check_encoder(const char *fn, double encoder_mm) {
         return fail(FLT_ERR_INVALID_ARGUMENT,
                     "%s: argument 'encoder_mm' = %g is not a position (finite, at most 1e12 mm)",
                     fn, encoder_mm);
+    return FLT_OK;
+}
+
+}  // namespace flt
+
+namespace flt {
+
+// ---------------------------------------------------------------- the record
+
+std::unique_ptr<record::sheet_record>
+archive_record_of(const flt_sheet &sh, const record::archive &ar, const std::string &session,
+                  std::size_t rows, const double *s, const double *z, const std::uint8_t *flags);
+
+void gauge::apply_pending(std::uint64_t up_to_seq, double s) {
+    std::lock_guard<std::mutex> lock(m_);
+    while (!coils_pending_.empty() && coils_pending_.front().seq <= up_to_seq) {
+        coil_entry &c = coils_pending_.front();
+        if (in_strip_ && !strip_coil_) {
+            strip_coil_ = std::move(c.info);  // at its head: this strip's
+        } else {
+            next_coil_ = std::move(c.info);
+            next_coil_given_ = true;
+        }
+        coils_pending_.pop_front();
+    }
+    while (!notes_pending_.empty() && notes_pending_.front().seq <= up_to_seq) {
+        sheet_note n = std::move(notes_pending_.front().note);
+        n.s = s;
+        notes_pending_.pop_front();
+        open_notes_.push_back(std::move(n));  // allocates only for notes
+    }
+}
+
+void gauge::record_row(frame_slot &slot) {
+    record::row_in row;
+    row.encoder_mm = slot.encoder_mm;
+    row.time_ns = slot.time_ns;
+    row.left_mm = slot.left;
+    row.right_mm = slot.right;
+    row.saturated = slot.saturated;
+    row.peaks = slot.peaks;
+    row.skipped_stop = slot.skipped_stop_before;
+    row.skipped_reversal = slot.skipped_rev_before;
+    row.dropped = slot.dropped_before;
+    row.missing = slot.missing_before;
+    row.row_flags = std::uint8_t((slot.new_strip ? record::k_row_new_strip : 0) |
+                                 (slot.from_frame ? record::k_row_from_frame : 0) |
+                                 (slot.extract_error ? record::k_row_extract_error : 0));
+    row.strip_flags = std::uint8_t(slot.strip_flags);
+    // The row becomes the recorded one (each laser's height quantized): the
+    // gauge measures what a replay will give it.
+    recorder_->add_row(row, slot.height.data(), slot.slope.data(), slot.flags.data(),
+                       slot.valid.data(), slot.height.data(), slot.slope.data(), slot.flags.data());
+}
+
+void gauge::archive_sheet(const flt_sheet &sh, const sheet_buffer &b, std::size_t n) {
+    std::unique_ptr<record::sheet_record> r =
+        archive_record_of(sh, *archive_, pool_->session, n, b.s.data(), b.z.data(), b.flags.data());
+    const unsigned flags = unsigned(sh.value[FLT_SHEET_FLAGS]);
+    if (flags & (FLT_SHEET_FLAG_TAIL | FLT_SHEET_FLAG_NEW_STRIP | FLT_SHEET_FLAG_FLUSHED)) {
+        // The coil's last sheet: its statistics go with it.
+        r->ends_coil = true;
+        std::lock_guard<std::mutex> lock(stats_m_);
+        const coil_stats &c = coil_last_;
+        if (c.generation != 0 && c.coil == sh.value[FLT_SHEET_COIL] && sh.verdict) {
+            for (std::size_t i = 0; i < c.rules.size(); ++i) {
+                record::coil_rule_stats st;
+                const char *name = "";
+                if (flt_rules_rule(&sh.verdict->rules, i, &name, nullptr, nullptr) == FLT_OK)
+                    st.name = name;
+                st.values.resize(FLT_COIL_VALUES);
+                const coil_stats::per_rule &p = c.rules[i];
+                double *a = st.values.data();
+                a[FLT_COIL_NUMBER] = c.coil;
+                a[FLT_COIL_SHEETS] = c.sheets;
+                a[FLT_COIL_SHEETS_PASSED] = c.passed;
+                a[FLT_COIL_SHEETS_FAILED] = c.failed;
+                a[FLT_COIL_FINISHED] = c.finished ? 1.0 : 0.0;
+                a[FLT_COIL_RULES] = double(c.rules.size());
+                a[FLT_COIL_RULE_PASSED] = p.count[FLT_VERDICT_PASS];
+                a[FLT_COIL_RULE_FAILED] = p.count[FLT_VERDICT_FAIL];
+                a[FLT_COIL_RULE_NO_BAND] = p.count[FLT_VERDICT_NO_BAND];
+                a[FLT_COIL_RULE_NOT_MEASURED] = p.count[FLT_VERDICT_NOT_MEASURED];
+                a[FLT_COIL_RULE_NOT_JUDGED] = p.count[FLT_VERDICT_NOT_JUDGED];
+                a[FLT_COIL_SHEETS_NOT_JUDGED] = c.not_judged;
+                a[FLT_COIL_SHEETS_JUDGED] = c.passed + c.failed;
+                a[FLT_COIL_WORST_MIN] = p.min;
+                a[FLT_COIL_WORST_MAX] = p.max;
+                a[FLT_COIL_WORST_MEAN] = p.measured > 0 ? p.sum / p.measured : k_nan;
+                a[FLT_COIL_WORST_SHEET] = p.worst_sheet;
+                a[FLT_COIL_WORST_X] = p.worst_x;
+                a[FLT_COIL_WORST_S] = p.worst_s;
+                for (int h = 0; h < FLT_COIL_HISTOGRAM_BINS; ++h)
+                    a[FLT_COIL_HISTOGRAM + h] = p.histogram[h];
+                r->coil_stats.push_back(std::move(st));
+            }
+            clear_error();
+        }
+    }
+    if (!archive_->add(std::move(r)))
+        FLT_LOG(FLT_LOG_ERROR, "archive",
+                "sheet %.0f (coil %.0f) is not archived: archive_buffer_mb is full of sheets the "
+                "database has not taken (%s)",
+                sh.value[FLT_SHEET_ID], sh.value[FLT_SHEET_COIL], archive_->last_error().c_str());
+}
+
+void gauge::flush_from_producer() {
+    // A flush recorded in a recording: as flt_gauge_flush, from the
+    // acquisition thread (the producer) while it acquires.
+    std::unique_lock<std::mutex> lock(m_);
+    if (recorder_ != nullptr)
+        recorder_->add_flush(std::max<std::int64_t>(0, recorded_row(head_)));
+    idle_cv_.wait(lock, [&] { return failed_ || stopping_ || (tail_ == head_ && !sequencing_); });
+    if (failed_)
+        throw error(failure_status_, failure_message_.c_str());
+    if (stopping_)
+        return;
+    sequencing_ = true;
+    lock.unlock();
+    const bool ok = gauge_guarded(
+        this,
+        [&] {
+            activate_cuts(std::numeric_limits<std::uint64_t>::max());
+            end_strip(FLT_SHEET_FLAG_FLUSHED);
+            if (cfg_.workers == 0)
+                run_jobs_inline();
+        },
+        &gauge::record_failure);
+    lock.lock();
+    sequencing_ = false;
+    work_cv_.notify_all();
+    idle_cv_.notify_all();
+    if (!ok)
+        throw error(failure_status_, failure_message_.c_str());
+}
+
+void gauge::replay_events(const sources::recorded_frame &r) {
+    for (std::size_t i = 0; i < r.event_count; ++i) {
+        const record::recorded_event &e = r.events[i];
+        switch (e.kind) {
+            case record::recorded_event::cut:
+                if (cut("flt_gauge_start (replay)", e.encoder_mm) != FLT_OK) {
+                    FLT_LOG(FLT_LOG_WARNING, "gauge", "a recorded cut is refused: %s",
+                            flt_last_error_message());
+                    clear_error();
+                }
+                break;
+            case record::recorded_event::coil:
+                if (set_coil("flt_gauge_start (replay)", e.coil_info.get()) != FLT_OK)
+                    throw error(flt_last_error_status(), flt_last_error_message());
+                break;
+            case record::recorded_event::note:
+                if (note("flt_gauge_start (replay)", e.label.c_str(), e.text.c_str()) != FLT_OK)
+                    throw error(flt_last_error_status(), flt_last_error_message());
+                break;
+            case record::recorded_event::flush:
+                flush_from_producer();
+                break;
+            case record::recorded_event::gap:
+                FLT_LOG(FLT_LOG_WARNING, "gauge",
+                        "the recording lost %llu rows before this one (its writer was behind): the "
+                        "replay sees the gap the encoder shows",
+                        (unsigned long long)e.count);
+                break;
+            default:
+                break;
+        }
+    }
+}
+
+flt_status gauge::set_coil(const char *fn, const flt_coil_info *coil) {
+    std::shared_ptr<flt_coil_info> copy;
+    if (coil != nullptr) {
+        copy = std::make_shared<flt_coil_info>(*coil);
+        copy->lent = true;  // read-only for whoever gets it from a sheet
+    }
+    std::lock_guard<std::mutex> lock(m_);
+    if (failed_)
+        return fail(failure_status_, "%s: the gauge stopped processing: %s", fn,
+                    failure_message_.c_str());
+    if (coils_pending_.size() >= k_cut_capacity)
+        return fail(FLT_ERR_BUFFER_FULL, "%s: %zu coil identities wait for a frame", fn,
+                    coils_pending_.size());
+    if (recorder_ != nullptr && copy)
+        recorder_->add_coil(*copy, std::max<std::int64_t>(0, recorded_row(head_)));
+    coils_pending_.push_back(coil_entry{head_, std::move(copy)});
+    return FLT_OK;
+}
+
+flt_status gauge::coil_info_of(const char *fn, flt_coil which, flt_coil_info **out) const {
+    std::shared_ptr<flt_coil_info> info;
+    {
+        std::lock_guard<std::mutex> lock(stats_m_);
+        info = which == FLT_COIL_LAST ? coil_last_.coil_info : coil_current_.coil_info;
+    }
+    if (!info)
+        return fail(FLT_ERR_NOT_FOUND, "%s: the %s coil has no identity (flt_gauge_set_coil)", fn,
+                    which == FLT_COIL_LAST ? "last" : "current");
+    auto copy = std::make_unique<flt_coil_info>(*info);
+    copy->lent = false;
+    *out = copy.release();
+    return FLT_OK;
+}
+
+flt_status gauge::note(const char *fn, const char *kind, const char *text) {
+    sheet_note n;
+    n.kind = kind;
+    n.text = text;
+    n.utc_ns = record::utc_now_ns();
+    std::lock_guard<std::mutex> lock(m_);
+    if (notes_pending_.size() >= k_cut_capacity)
+        return fail(FLT_ERR_BUFFER_FULL, "%s: %zu notes wait for a frame", fn,
+                    notes_pending_.size());
+    if (recorder_ != nullptr)
+        recorder_->add_note(n.kind, n.text, std::max<std::int64_t>(0, recorded_row(head_)));
+    notes_pending_.push_back(note_entry{head_, std::move(n)});
+    return FLT_OK;
+}
+
+namespace {
+
+// Idle: no frame in flight, no role taken, no sheet waiting to be evaluated,
+// no acquisition (under m_).
+const char *busy_reason(bool acquiring, bool queued, bool roles) {
+    if (acquiring)
+        return "the attached source is acquiring (flt_gauge_stop first)";
+    if (queued)
+        return "frames are in the gauge's queue (flt_gauge_flush first)";
+    if (roles)
+        return "a sheet is being built or evaluated (flt_gauge_flush first)";
+    return nullptr;
+}
+
+}  // namespace
+
+flt_status gauge::attach_recorder(const char *fn, flt_recorder *recorder) {
+    if (in_gauge_callback(this))
+        return fail(FLT_ERR_STATE, "%s: called from inside the gauge's callback", fn);
+    const std::lock_guard<std::mutex> producer(produce_m_);
+    std::lock_guard<std::mutex> lock(m_);
+    if (const char *why =
+            busy_reason(acquiring_, head_ != tail_, sequencing_ || evaluating_ || !jobs_.empty()))
+        return fail(FLT_ERR_STATE, "%s: %s", fn, why);
+    if (recorder_handle_ != nullptr) {
+        recorder_->owner.store(nullptr);
+        recorder_handle_ = nullptr;
+        recorder_ = nullptr;
+    }
+    if (recorder == nullptr)
+        return FLT_OK;
+    record::recorder &rec = *recorder->impl;
+    if (rec.fibers() != K_)
+        return fail(FLT_ERR_INVALID_ARGUMENT,
+                    "%s: the recorder's calibration has %zu fibers, the gauge's %zu", fn,
+                    rec.fibers(), K_);
+    const void *expected = nullptr;
+    if (!rec.owner.compare_exchange_strong(expected, this))
+        return fail(FLT_ERR_STATE, "%s: another gauge records through this recorder", fn);
+    rec_seq0_ = head_;
+    rec.set_gauge_options(effective_);
+    // What waits for the strip belongs to the recording: the cuts given
+    // (announced or active) and the coil identities not applied yet.
+    for (std::size_t i = 0; i < active_count_; ++i)
+        rec.add_cut(active_[(active_head_ + i) % k_cut_capacity] + mean_offset_, 0);
+    for (std::size_t i = 0; i < cut_count_; ++i)
+        rec.add_cut(cuts_[(cut_head_ + i) % k_cut_capacity].s + mean_offset_, 0);
+    if (next_coil_given_ && next_coil_)
+        rec.add_coil(*next_coil_, 0);
+    for (const coil_entry &c : coils_pending_)
+        if (c.info)
+            rec.add_coil(*c.info, 0);
+    for (const note_entry &n : notes_pending_)
+        rec.add_note(n.note.kind, n.note.text, 0);
+    recorder_ = &rec;
+    recorder_handle_ = recorder;
+    return FLT_OK;
+}
+
+flt_status gauge::attach_archive(const char *fn, flt_archive *archive) {
+    if (in_gauge_callback(this))
+        return fail(FLT_ERR_STATE, "%s: called from inside the gauge's callback", fn);
+    const std::lock_guard<std::mutex> producer(produce_m_);
+    std::lock_guard<std::mutex> lock(m_);
+    if (const char *why =
+            busy_reason(acquiring_, head_ != tail_, sequencing_ || evaluating_ || !jobs_.empty()))
+        return fail(FLT_ERR_STATE, "%s: %s", fn, why);
+    if (archive_handle_ != nullptr) {
+        archive_->owner.store(nullptr);
+        archive_handle_ = nullptr;
+        archive_ = nullptr;
+    }
+    if (archive == nullptr)
+        return FLT_OK;
+    const void *expected = nullptr;
+    if (!archive->impl->owner.compare_exchange_strong(expected, this))
+        return fail(FLT_ERR_STATE, "%s: another gauge archives into this archive", fn);
+    archive_ = archive->impl.get();
+    archive_handle_ = archive;
     return FLT_OK;
 }
 

@@ -6,26 +6,39 @@
 #include <atomic>
 #include <condition_variable>
 #include <cstdint>
+#include <deque>
 #include <memory>
 #include <mutex>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "core/coil.hpp"
 #include "core/options.hpp"
 #include "flatline/flatness.h"
 #include "flatline/gauge.h"
 #include "flatline/recon.h"
+#include "record/archive.hpp"
+#include "record/recorder.hpp"
+#include "sources/recording/recording_source.hpp"
 #include "verdict/verdict.hpp"
 
 namespace flt {
 
 constexpr std::uint32_t k_sheet_magic = 0x464c5453u;  // "FLTS"
-constexpr int k_sheet_values = 45;                    // flt_sheet_value keys 0..44
+constexpr int k_sheet_values = 46;                    // flt_sheet_value keys 0..45
 constexpr int k_sheet_arrays = 12;                    // flt_sheet_array keys 0..11
 
 struct sheet_pool;
 struct verdict_config;
+
+// A note given with flt_gauge_note (a leveler change, an operator's
+// remark): where it applies along the strip.
+struct sheet_note {
+    std::string kind, text;
+    double s = 0.0;           // mm, the row it was given before
+    std::int64_t utc_ns = 0;  // when it was given
+};
 
 // Whether a flt_sheet_array has a value per fiber (else per zone).
 inline bool is_fiber_array(int key) {
@@ -57,6 +70,10 @@ struct flt_sheet {
 
     // Its verdict handle (flt_sheet_verdict), or null without rules.
     const flt_verdict *verdict_handle() const;
+    // Its coil's identity (flt_sheet_coil; lent, read-only), or null.
+    std::shared_ptr<flt_coil_info> coil;
+    // The notes given while its rows were taken (flt_sheet_note).
+    std::vector<flt::sheet_note> notes;
 };
 
 namespace flt {
@@ -68,6 +85,9 @@ struct sheet_pool {
     // Sheets out of the pool: being filled, waiting or held by the caller
     // (gauge_sheet_backlog bounds the ones beyond the slots).
     std::atomic<std::size_t> out{0};
+    // The gauge's session (random, per gauge): archived sheets and coils
+    // are named by it and their numbers, so a sheet is stored once.
+    std::string session;
     ~sheet_pool();
     // A sheet the gauge is done with or the caller gave back: into the
     // pool, or freed when it was made beyond the slots or the gauge is gone.
@@ -102,7 +122,8 @@ struct coil_stats {
     std::uint64_t generation = 0;  // the verdict_config's (0: no rules)
     double coil = 0, sheets = 0, passed = 0, failed = 0, not_judged = 0;
     bool finished = false;
-    std::vector<per_rule> rules;  // capacity reserved at set_rules
+    std::vector<per_rule> rules;               // capacity reserved at set_rules
+    std::shared_ptr<flt_coil_info> coil_info;  // the coil's identity, or null
 
     void reset(std::uint64_t gen, std::size_t n_rules);
 };
@@ -128,6 +149,8 @@ struct gauge_input {
     const double *height = nullptr, *slope = nullptr;  // row
     const std::uint8_t *valid = nullptr;
     double encoder_mm = 0.0;
+    // A row replayed from a recording, with what the live gauge knew of it.
+    const sources::recorded_frame *recorded = nullptr;
 };
 
 // Per row on its way through the reconstructor: what its sheet counts.
@@ -169,6 +192,12 @@ class gauge {
     flt_status cut(const char *fn, double encoder_mm);
     flt_status flush(const char *fn);
     flt_status attach(const char *fn, flt_source *source);
+    // The quality record (flatline/record.h).
+    flt_status set_coil(const char *fn, const flt_coil_info *coil);
+    flt_status coil_info_of(const char *fn, flt_coil which, flt_coil_info **out) const;
+    flt_status note(const char *fn, const char *kind, const char *text);
+    flt_status attach_recorder(const char *fn, flt_recorder *recorder);
+    flt_status attach_archive(const char *fn, flt_archive *archive);
     flt_status start(const char *fn);
     flt_status stop(const char *fn);
     flt_status wait(const char *fn, std::uint32_t timeout_ms);
@@ -198,6 +227,11 @@ class gauge {
         slot_state state = slot_free;
         bool new_strip = false;  // a long reversal before this frame
         std::uint32_t skipped_before = 0, dropped_before = 0, missing_before = 0;
+        // For a recording: the skipped ones by kind, when it was taken
+        // (host UTC, ns), whether it came as a frame, and an extractor error.
+        std::uint32_t skipped_stop_before = 0, skipped_rev_before = 0;
+        std::int64_t time_ns = 0;
+        bool from_frame = false, extract_error = false;
         double s = 0.0;  // the profile row
         std::vector<double> height, slope;
         std::vector<std::uint8_t> valid;
@@ -226,6 +260,8 @@ class gauge {
         // lost frames may lie before the end.
         bool has_after = false;
         row_meta after;
+        std::shared_ptr<flt_coil_info> coil_info;  // its strip's identity, or null
+        std::vector<sheet_note> notes;
     };
 
     // Producer side.
@@ -332,6 +368,7 @@ class gauge {
     bool has_furthest_ = false;
     double furthest_ = 0.0;
     std::uint32_t pending_skipped_ = 0, pending_dropped_ = 0, pending_missing_ = 0;
+    std::uint32_t pending_skipped_stop_ = 0, pending_skipped_rev_ = 0;
     bool pending_new_strip_ = false;
     // The last advances between frames taken (mm), for the frame pitch.
     static constexpr std::size_t k_pitch_window = 9;
@@ -385,6 +422,37 @@ class gauge {
     std::mutex deliver_m_;
     flt_sheet_callback callback_ = nullptr;
     void *callback_user_ = nullptr;
+
+    // ---- the quality record. Coils and notes given wait (with the seq of
+    // the next frame, as cuts do) until the sequencer reaches them; the
+    // recorder and the archive are attached while the gauge is idle and
+    // read by the roles (under m_ when they take them).
+    struct coil_entry {
+        std::uint64_t seq;
+        std::shared_ptr<flt_coil_info> info;  // null: no identity
+    };
+    struct note_entry {
+        std::uint64_t seq;
+        sheet_note note;
+    };
+    std::deque<coil_entry> coils_pending_;                   // under m_
+    std::deque<note_entry> notes_pending_;                   // under m_
+    std::shared_ptr<flt_coil_info> strip_coil_, next_coil_;  // sequencer
+    bool next_coil_given_ = false;                           // sequencer
+    std::vector<sheet_note> open_notes_;                     // sequencer
+    record::recorder *recorder_ = nullptr;
+    flt_recorder *recorder_handle_ = nullptr;
+    std::uint64_t rec_seq0_ = 0;  // the seq of the recording's row 0
+    record::archive *archive_ = nullptr;
+    flt_archive *archive_handle_ = nullptr;
+    void apply_pending(std::uint64_t up_to_seq, double s);
+    void record_row(frame_slot &slot);
+    void archive_sheet(const flt_sheet &sh, const sheet_buffer &b, std::size_t n);
+    void flush_from_producer();
+    void replay_events(const sources::recorded_frame &r);
+    std::int64_t recorded_row(std::uint64_t seq) const {
+        return std::int64_t(seq) - std::int64_t(rec_seq0_);
+    }
 
     // ---- acquisition
     flt_source *source_ = nullptr;

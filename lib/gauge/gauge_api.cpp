@@ -5,6 +5,7 @@
 #include <cstring>
 #include <memory>
 
+#include "core/coil.hpp"
 #include "core/error.hpp"
 #include "core/options.hpp"
 #include "flatline/gauge.h"
@@ -409,6 +410,124 @@ FLT_API flt_status FLT_CALL flt_sheet_verdict(const flt_sheet *sheet, const flt_
             *rules_out = &sheet->verdict->rules;
         if (verdict_out)
             *verdict_out = sheet->verdict_handle();
+        return FLT_OK;
+    });
+}
+
+// ---------------------------------------------------------------- the record
+
+FLT_API flt_status FLT_CALL flt_gauge_set_coil(flt_gauge *gauge, const flt_coil_info *coil) {
+    const char *fn = "flt_gauge_set_coil";
+    return guard(fn, [&] {
+        if (flt_status st = check_handle(fn, gauge))
+            return st;
+        if (coil != nullptr && !is_coil_info(coil))
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'coil' is not a coil identity", fn);
+        if (flt_status st = gauge->impl->set_coil(fn, coil))
+            return st;
+        return ok();
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_gauge_coil_info(const flt_gauge *gauge, flt_coil which,
+                                                flt_coil_info **out) {
+    const char *fn = "flt_gauge_coil_info";
+    if (out)
+        *out = nullptr;
+    return guard(fn, [&] {
+        if (flt_status st = check_handle(fn, gauge))
+            return st;
+        FLT_CHECK_NOT_NULL(fn, out);
+        const int w = enum_arg(which);
+        if (w != FLT_COIL_CURRENT && w != FLT_COIL_LAST)
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'which' is %d (0 current, 1 last)",
+                        fn, w);
+        return gauge->impl->coil_info_of(fn, flt_coil(w), out);
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_gauge_note(flt_gauge *gauge, const char *kind, const char *text) {
+    const char *fn = "flt_gauge_note";
+    return guard(fn, [&] {
+        if (flt_status st = check_handle(fn, gauge))
+            return st;
+        FLT_CHECK_NOT_NULL(fn, kind);
+        FLT_CHECK_NOT_NULL(fn, text);
+        std::string why = coil_key_problem(kind);
+        if (!why.empty())
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'kind' %s", fn, why.c_str());
+        why = coil_text_problem(text);
+        if (!why.empty())
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'text' %s", fn, why.c_str());
+        return gauge->impl->note(fn, kind, text);
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_gauge_attach_recorder(flt_gauge *gauge, flt_recorder *recorder) {
+    const char *fn = "flt_gauge_attach_recorder";
+    return guard(fn, [&] {
+        if (flt_status st = check_handle(fn, gauge))
+            return st;
+        if (recorder != nullptr && (recorder->magic != 0x52454352u || !recorder->impl))
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'recorder' is not a live recorder",
+                        fn);
+        return gauge->impl->attach_recorder(fn, recorder);
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_gauge_attach_archive(flt_gauge *gauge, flt_archive *archive) {
+    const char *fn = "flt_gauge_attach_archive";
+    return guard(fn, [&] {
+        if (flt_status st = check_handle(fn, gauge))
+            return st;
+        if (archive != nullptr && (archive->magic != 0x41524348u || !archive->impl))
+            return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'archive' is not an open archive",
+                        fn);
+        return gauge->impl->attach_archive(fn, archive);
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_sheet_coil(const flt_sheet *sheet, const flt_coil_info **out) {
+    const char *fn = "flt_sheet_coil";
+    return guard(fn, [&] {
+        if (flt_status st = check_sheet(fn, sheet))
+            return st;
+        FLT_CHECK_NOT_NULL(fn, out);
+        *out = sheet->coil.get();
+        if (!sheet->coil)
+            return fail(FLT_ERR_NOT_FOUND, "%s: the sheet's coil has no identity", fn);
+        return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_sheet_note_count(const flt_sheet *sheet, size_t *out) {
+    const char *fn = "flt_sheet_note_count";
+    return guard(fn, [&] {
+        if (flt_status st = check_sheet(fn, sheet))
+            return st;
+        FLT_CHECK_NOT_NULL(fn, out);
+        *out = sheet->notes.size();
+        return FLT_OK;
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_sheet_note(const flt_sheet *sheet, size_t index,
+                                           const char **kind_out, const char **text_out,
+                                           double *s_mm_out) {
+    const char *fn = "flt_sheet_note";
+    return guard(fn, [&] {
+        if (flt_status st = check_sheet(fn, sheet))
+            return st;
+        if (index >= sheet->notes.size())
+            return fail(FLT_ERR_NOT_FOUND, "%s: argument 'index' is %zu (the sheet has %zu notes)",
+                        fn, index, sheet->notes.size());
+        const sheet_note &n = sheet->notes[index];
+        if (kind_out)
+            *kind_out = n.kind.c_str();
+        if (text_out)
+            *text_out = n.text.c_str();
+        if (s_mm_out)
+            *s_mm_out = n.s;
         return FLT_OK;
     });
 }

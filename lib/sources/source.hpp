@@ -26,6 +26,8 @@ namespace flt::sources {
 // Throws flt::error(status) with a printf-style message (at most 400 bytes).
 [[noreturn]] void raise(flt_status status, const char *format, ...) FLT_PRINTF_FORMAT(2, 3);
 
+struct recorded_frame;  // recording/recording_source.hpp
+
 // One frame as a source kind delivers it; the pixels are borrowed until
 // the kind's next call of next(), stop() or its destruction.
 struct raw_frame {
@@ -43,6 +45,8 @@ struct raw_frame {
     bool has_chunk_counter = false;
     std::uint64_t chunk_counter = 0;
     unsigned chunk_counter_bytes = 0;  // 4 (wraps) or 8
+    // A recording's frame: its profile row and the events before it.
+    const recorded_frame *recorded = nullptr;
 };
 
 class camera_device;

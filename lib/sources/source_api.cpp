@@ -21,6 +21,7 @@
 #include "sources/images/image_source.hpp"
 #include "sources/sim/sim_source.hpp"
 #include "sources/source.hpp"
+#include "sources/source_handle.hpp"
 #include "sources/u3v/discovery.hpp"
 #include "sources/u3v/transport_handle.hpp"
 #include "sources/u3v/u3v_source.hpp"
@@ -28,21 +29,8 @@
 using namespace flt;
 
 namespace {
-constexpr std::uint32_t k_source_magic = 0x464c5443u;  // "FLTC"
-constexpr std::uint32_t k_frame_magic = 0x464c5446u;   // "FLTF"
-constexpr std::uint32_t k_list_magic = 0x464c544cu;    // "FLTL"
-constexpr double k_nan = std::numeric_limits<double>::quiet_NaN();
+constexpr std::uint32_t k_list_magic = 0x464c544cu;  // "FLTL"
 }  // namespace
-
-struct flt_frame {
-    std::uint32_t magic = k_frame_magic;
-    const void *pixels = nullptr;
-    std::uint32_t width = 0, height = 0;
-    std::size_t stride = 0;
-    flt_pixel_format format = FLT_PIXEL_MONO8;
-    std::uint64_t block_id = 0, timestamp_ns = 0;
-    double encoder_mm = k_nan;
-};
 
 struct flt_camera_list {
     struct entry {
@@ -51,14 +39,6 @@ struct flt_camera_list {
     };
     std::uint32_t magic = k_list_magic;
     std::vector<entry> cameras;
-};
-
-struct flt_source {
-    std::uint32_t magic = k_source_magic;
-    std::unique_ptr<sources::source_impl> impl;
-    sources::encoder_positions encoder;
-    bool started = false;
-    flt_frame frame;
 };
 
 namespace {
@@ -457,7 +437,11 @@ FLT_API flt_status FLT_CALL flt_source_next(flt_source *source, uint32_t timeout
         // Every kind checks what it delivers; this is the promise of
         // flt_frame_info() kept in one place: `height` rows of
         // `stride_bytes` (the last one `width` pixels) lie in the buffer.
-        if (!frame_fits(raw))
+        // A recording's row whose camera frame was not kept has no pixels
+        // and a size of 0 (flt_frame_info says so); pixels a frame has fit.
+        const bool row_only =
+            raw.recorded != nullptr && raw.pixels == nullptr && raw.width == 0 && raw.height == 0;
+        if (!row_only && !frame_fits(raw))
             return fail(FLT_ERR_INTERNAL,
                         "%s: a %u x %u px frame of stride %zu does not fit its %zu-byte buffer "
                         "(not delivered)",
@@ -471,6 +455,7 @@ FLT_API flt_status FLT_CALL flt_source_next(flt_source *source, uint32_t timeout
         f.block_id = raw.block_id;
         f.timestamp_ns = raw.timestamp_ns;
         f.encoder_mm = source->encoder.position_of(raw);
+        f.recorded = raw.recorded;
         *out = &f;
         return FLT_OK;
     });
@@ -483,7 +468,8 @@ FLT_API flt_status FLT_CALL flt_frame_info(const flt_frame *frame, const void **
     const char *fn = "flt_frame_info";
     return guard(fn, [&] {
         FLT_CHECK_NOT_NULL(fn, frame);
-        if (frame->magic != k_frame_magic || !frame->pixels)
+        // A recording's frame may have no pixels (only its profile row).
+        if (frame->magic != k_frame_magic || (!frame->pixels && !frame->recorded))
             return fail(FLT_ERR_INVALID_ARGUMENT,
                         "%s: argument 'frame' is not a live frame "
                         "(its source was destroyed or stopped?)",

@@ -3547,7 +3547,7 @@ static void row_sheet_get(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'sheet'", flt_sheet_get(NULL, FLT_SHEET_ID, &v));
     BAD(FLT_ERR_INVALID_ARGUMENT, "not a live", flt_sheet_get((flt_sheet *)junk, FLT_SHEET_ID, &v));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_sheet_get(sh, FLT_SHEET_ID, NULL));
-    BAD(FLT_ERR_NOT_FOUND, "'key' = 45", flt_sheet_get(sh, (flt_sheet_value)45, &v));
+    BAD(FLT_ERR_NOT_FOUND, "'key' = 46", flt_sheet_get(sh, (flt_sheet_value)46, &v));
     ENUM_UB_BAD(FLT_ERR_NOT_FOUND, "'key' = -1", flt_sheet_get(sh, (flt_sheet_value)-1, &v));
     GOOD(flt_sheet_get(sh, FLT_SHEET_ROWS, &v));
     ++g_checks;
@@ -4708,6 +4708,911 @@ static void row_genicam_execute(void) {
 }
 
 /* ---------------------------------------------------------------------- */
+/* coil.h, record.h and the record's functions of gauge.h and source.h     */
+/* ---------------------------------------------------------------------- */
+
+static flt_coil_info *new_coil(const char *id) {
+    flt_coil_info *c = NULL;
+    if (flt_coil_info_create(id, &c) || flt_coil_info_set_nominal(c, 4.0, 1500.0) ||
+        flt_coil_info_set_extra(c, "line", "CTL 2")) {
+        fprintf(stderr, "fixture: %s\n", flt_last_error_message());
+        exit(2);
+    }
+    return c;
+}
+
+/* A sheet of a gauge that was told its coil (and a note) before its rows:
+ * the sheet lends the identity, read-only. */
+static flt_sheet *new_coil_sheet(flt_gauge *g) {
+    flt_coil_info *c = new_coil("C-1");
+    if (flt_gauge_set_coil(g, c) || flt_gauge_note(g, "leveler", "roll gap 1 -> 2")) {
+        fprintf(stderr, "fixture: %s\n", flt_last_error_message());
+        exit(2);
+    }
+    flt_coil_info_destroy(c);
+    return new_sheet(g);
+}
+
+static void row_coil_info_create(void) {
+    flt_coil_info *c = (flt_coil_info *)1;
+    char long_id[300];
+    memset(long_id, 'x', sizeof long_id - 1);
+    long_id[sizeof long_id - 1] = 0;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'coil_id'", flt_coil_info_create(NULL, &c));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_coil_info_create("C-1", NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'coil_id' is empty", flt_coil_info_create("", &c));
+    ++g_checks;
+    if (c != NULL)
+        ERR("a failed create left *out = %p", (void *)c);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'coil_id'", flt_coil_info_create(long_id, &c));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'coil_id'", flt_coil_info_create("a\nb", &c));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'coil_id'", flt_coil_info_create("\xff\xfe", &c));
+    GOOD(flt_coil_info_create("C-1 Süd", &c));
+    flt_coil_info_destroy(c);
+}
+
+static void row_coil_info_destroy(void) {
+    uint64_t junk[8] = {0};
+    flt_coil_info_destroy(NULL);
+    flt_coil_info_destroy((flt_coil_info *)junk); /* not a coil: left alone */
+    /* A lent identity (the sheet's) is not freed by it. */
+    flt_gauge *g = new_gauge(0);
+    flt_sheet *sh = new_coil_sheet(g);
+    const flt_coil_info *lent = NULL;
+    GOOD(flt_sheet_coil(sh, &lent));
+    flt_coil_info_destroy((flt_coil_info *)lent);
+    const char *id = NULL;
+    GOOD(flt_coil_info_get_text(lent, FLT_COIL_FIELD_ID, &id));
+    ++g_checks;
+    if (strcmp(id, "C-1") != 0)
+        ERR("the sheet's coil reads \"%s\" after a destroy of the lent handle", id);
+    flt_sheet_destroy(sh);
+    flt_gauge_destroy(g);
+    g_checks += 2;
+}
+
+static void row_coil_info_copy(void) {
+    flt_coil_info *c = new_coil("C-1"), *copy = (flt_coil_info *)1;
+    uint64_t junk[8] = {0};
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'info'", flt_coil_info_copy(NULL, &copy));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "not a coil",
+        flt_coil_info_copy((const flt_coil_info *)junk, &copy));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_coil_info_copy(c, NULL));
+    GOOD(flt_coil_info_copy(c, &copy));
+    /* A copy of a lent identity can be changed. */
+    flt_gauge *g = new_gauge(0);
+    flt_sheet *sh = new_coil_sheet(g);
+    const flt_coil_info *lent = NULL;
+    flt_coil_info *mine = NULL;
+    GOOD(flt_sheet_coil(sh, &lent));
+    GOOD(flt_coil_info_copy(lent, &mine));
+    GOOD(flt_coil_info_set_text(mine, FLT_COIL_FIELD_GRADE, "S355MC"));
+    flt_coil_info_destroy(mine);
+    flt_sheet_destroy(sh);
+    flt_gauge_destroy(g);
+    flt_coil_info_destroy(copy);
+    flt_coil_info_destroy(c);
+}
+
+static void row_coil_info_set_text(void) {
+    flt_coil_info *c = new_coil("C-1");
+    uint64_t junk[8] = {0};
+    char long_text[300];
+    memset(long_text, 'y', sizeof long_text - 1);
+    long_text[sizeof long_text - 1] = 0;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'info'", flt_coil_info_set_text(NULL, FLT_COIL_FIELD_HEAT, "h"));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "not a coil",
+        flt_coil_info_set_text((flt_coil_info *)junk, FLT_COIL_FIELD_HEAT, "h"));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'field' is 5",
+        flt_coil_info_set_text(c, (flt_coil_field)5, "h"));
+    ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "'field' is -1",
+                flt_coil_info_set_text(c, (flt_coil_field)-1, "h"));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'value'", flt_coil_info_set_text(c, FLT_COIL_FIELD_HEAT, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'value'",
+        flt_coil_info_set_text(c, FLT_COIL_FIELD_HEAT, long_text));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'value'",
+        flt_coil_info_set_text(c, FLT_COIL_FIELD_GRADE, "a\tb"));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "empty", flt_coil_info_set_text(c, FLT_COIL_FIELD_ID, ""));
+    GOOD(flt_coil_info_set_text(c, FLT_COIL_FIELD_HEAT, "H 88"));
+    GOOD(flt_coil_info_set_text(c, FLT_COIL_FIELD_HEAT, "")); /* cleared */
+    /* Wrong state: a lent identity is read-only. */
+    flt_gauge *g = new_gauge(0);
+    flt_sheet *sh = new_coil_sheet(g);
+    const flt_coil_info *lent = NULL;
+    GOOD(flt_sheet_coil(sh, &lent));
+    BAD(FLT_ERR_STATE, "read-only",
+        flt_coil_info_set_text((flt_coil_info *)lent, FLT_COIL_FIELD_HEAT, "h"));
+    flt_sheet_destroy(sh);
+    flt_gauge_destroy(g);
+    flt_coil_info_destroy(c);
+}
+
+static void row_coil_info_get_text(void) {
+    flt_coil_info *c = new_coil("C-1");
+    const char *t = NULL;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'info'", flt_coil_info_get_text(NULL, FLT_COIL_FIELD_ID, &t));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'field'", flt_coil_info_get_text(c, (flt_coil_field)99, &t));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_coil_info_get_text(c, FLT_COIL_FIELD_ID, NULL));
+    GOOD(flt_coil_info_get_text(c, FLT_COIL_FIELD_CUSTOMER, &t));
+    ++g_checks;
+    if (strcmp(t, "") != 0)
+        ERR("an unset field reads \"%s\"", t);
+    flt_coil_info_destroy(c);
+}
+
+static void row_coil_info_set_nominal(void) {
+    flt_coil_info *c = new_coil("C-1");
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'info'", flt_coil_info_set_nominal(NULL, 4.0, 1500.0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'thickness_mm'", flt_coil_info_set_nominal(c, NaN_, 1500.0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'thickness_mm'", flt_coil_info_set_nominal(c, -4.0, 1500.0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'thickness_mm'", flt_coil_info_set_nominal(c, 1e9, 1500.0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'width_mm'", flt_coil_info_set_nominal(c, 4.0, Inf_));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'width_mm'", flt_coil_info_set_nominal(c, 4.0, -0.5));
+    GOOD(flt_coil_info_set_nominal(c, 0.0, 0.0)); /* not given */
+    GOOD(flt_coil_info_set_nominal(c, 12.5, 2000.0));
+    flt_coil_info_destroy(c);
+}
+
+static void row_coil_info_get_nominal(void) {
+    flt_coil_info *c = new_coil("C-1");
+    double t = 0, w = 0;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'info'", flt_coil_info_get_nominal(NULL, &t, &w));
+    GOOD(flt_coil_info_get_nominal(c, NULL, NULL));
+    GOOD(flt_coil_info_get_nominal(c, &t, &w));
+    ++g_checks;
+    if (t != 4.0 || w != 1500.0)
+        ERR("nominal reads %g x %g, not 4 x 1500", t, w);
+    flt_coil_info_destroy(c);
+}
+
+static void row_coil_info_set_extra(void) {
+    flt_coil_info *c = new_coil("C-1");
+    char key[16];
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'info'", flt_coil_info_set_extra(NULL, "k", "v"));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'key'", flt_coil_info_set_extra(c, NULL, "v"));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'key'", flt_coil_info_set_extra(c, "", "v"));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'key'", flt_coil_info_set_extra(c, "bad key", "v"));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'value'", flt_coil_info_set_extra(c, "k", "x\x01y"));
+    GOOD(flt_coil_info_set_extra(c, "k", NULL)); /* removing a key not there */
+    /* Full: FLT_COIL_EXTRA_MAX keys (one is set by new_coil). */
+    for (int i = 1; i < FLT_COIL_EXTRA_MAX; ++i) {
+        snprintf(key, sizeof key, "k%d", i);
+        GOOD(flt_coil_info_set_extra(c, key, "v"));
+    }
+    BAD(FLT_ERR_BUFFER_FULL, "extras", flt_coil_info_set_extra(c, "one_more", "v"));
+    GOOD(flt_coil_info_set_extra(c, "k1", "replaced")); /* replacing still works */
+    GOOD(flt_coil_info_set_extra(c, "k1", NULL));
+    GOOD(flt_coil_info_set_extra(c, "one_more", "v"));
+    flt_coil_info_destroy(c);
+}
+
+static void row_coil_info_extra_count(void) {
+    flt_coil_info *c = new_coil("C-1");
+    size_t n = 0;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'info'", flt_coil_info_extra_count(NULL, &n));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_coil_info_extra_count(c, NULL));
+    GOOD(flt_coil_info_extra_count(c, &n));
+    ++g_checks;
+    if (n != 1)
+        ERR("%zu extras, not 1", n);
+    flt_coil_info_destroy(c);
+}
+
+static void row_coil_info_extra(void) {
+    flt_coil_info *c = new_coil("C-1");
+    const char *k = NULL, *v = NULL;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'info'", flt_coil_info_extra(NULL, 0, &k, &v));
+    BAD(FLT_ERR_NOT_FOUND, "'index' is 1", flt_coil_info_extra(c, 1, &k, &v));
+    BAD(FLT_ERR_NOT_FOUND, "'index'", flt_coil_info_extra(c, NEG, &k, &v));
+    GOOD(flt_coil_info_extra(c, 0, NULL, NULL));
+    GOOD(flt_coil_info_extra(c, 0, &k, &v));
+    ++g_checks;
+    if (strcmp(k, "line") != 0 || strcmp(v, "CTL 2") != 0)
+        ERR("extra 0 is %s = %s", k, v);
+    flt_coil_info_destroy(c);
+}
+
+static void row_coil_info_find_extra(void) {
+    flt_coil_info *c = new_coil("C-1");
+    const char *v = NULL;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'info'", flt_coil_info_find_extra(NULL, "line", &v));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'key'", flt_coil_info_find_extra(c, NULL, &v));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_coil_info_find_extra(c, "line", NULL));
+    BAD(FLT_ERR_NOT_FOUND, "'nope'", flt_coil_info_find_extra(c, "nope", &v));
+    GOOD(flt_coil_info_find_extra(c, "line", &v));
+    flt_coil_info_destroy(c);
+}
+
+/* A recording of 40 simulated rows (a cut after row 20, the coil at the
+ * start), written with flt_recorder_push_row. */
+static void make_recording(const char *path) {
+    flt_recorder *r = NULL;
+    flt_coil_info *c = new_coil("R-1");
+    make_rows(40);
+    tf_remove(path);
+    if (flt_recorder_create(path, g_calib, NULL, &r) || flt_recorder_set_coil(r, c)) {
+        fprintf(stderr, "fixture: %s\n", flt_last_error_message());
+        exit(2);
+    }
+    for (size_t i = 0; i < 40; ++i)
+        if (flt_recorder_push_row(r, g_rows.s[i], FIBERS, g_rows.h + i * FIBERS,
+                                  g_rows.k + i * FIBERS, NULL) ||
+            (i == 20 && flt_recorder_cut(r, g_rows.s[i]))) {
+            fprintf(stderr, "fixture: %s\n", flt_last_error_message());
+            exit(2);
+        }
+    flt_recorder_destroy(r);
+    flt_coil_info_destroy(c);
+}
+
+static flt_recorder *new_recorder(const char *name) {
+    char path[300];
+    flt_recorder *r = NULL;
+    path_in_dir(path, sizeof path, name);
+    tf_remove(path);
+    if (flt_recorder_create(path, g_calib, NULL, &r)) {
+        fprintf(stderr, "fixture: %s\n", flt_last_error_message());
+        exit(2);
+    }
+    return r;
+}
+
+static flt_recording *new_recording(void) {
+    char path[300];
+    flt_recording *r = NULL;
+    path_in_dir(path, sizeof path, "fixture.flrec");
+    if (!tf_exists(path))
+        make_recording(path);
+    if (flt_recording_open(path, &r)) {
+        fprintf(stderr, "fixture: %s\n", flt_last_error_message());
+        exit(2);
+    }
+    return r;
+}
+
+static void row_recorder_create(void) {
+    char path[300], dir_path[300];
+    flt_recorder *r = (flt_recorder *)1;
+    flt_calib *unfinished = NULL;
+    flt_options *o = options_with(FLT_OPT_RECORD_QUANTUM, 0.003); /* not a power of two */
+    flt_options *other = options_with(FLT_OPT_MAX_GAP, 10.0);     /* the reconstructor's */
+    path_in_dir(path, sizeof path, "create.flrec");
+    snprintf(dir_path, sizeof dir_path, "%s/no_such_dir/x.flrec", g_dir);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'path'", flt_recorder_create(NULL, g_calib, NULL, &r));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'calib'", flt_recorder_create(path, NULL, NULL, &r));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_recorder_create(path, g_calib, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'path' is empty", flt_recorder_create("", g_calib, NULL, &r));
+    ++g_checks;
+    if (r != NULL)
+        ERR("a failed create left *out = %p", (void *)r);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "record_quantum", flt_recorder_create(path, g_calib, o, &r));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "max_gap", flt_recorder_create(path, g_calib, other, &r));
+    BAD(FLT_ERR_IO, NULL, flt_recorder_create(dir_path, g_calib, NULL, &r));
+    /* Wrong state: an unfinished calibration. */
+    GOOD(flt_calib_create(&unfinished));
+    BAD(FLT_ERR_STATE, NULL, flt_recorder_create(path, unfinished, NULL, &r));
+    GOOD(flt_recorder_create(path, g_calib, NULL, &r));
+    flt_recorder *again = NULL;
+    BAD(FLT_ERR_IO, "exists", flt_recorder_create(path, g_calib, NULL, &again));
+    flt_recorder_destroy(r);
+    flt_calib_destroy(unfinished);
+    flt_options_destroy(other);
+    flt_options_destroy(o);
+}
+
+static void row_recorder_destroy(void) {
+    uint64_t junk[8] = {0};
+    flt_recorder_destroy(NULL);
+    flt_recorder_destroy((flt_recorder *)junk); /* not a recorder: left alone */
+    flt_recorder_destroy(new_recorder("destroy.flrec"));
+    g_checks += 3;
+}
+
+static void row_recorder_push_row(void) {
+    flt_recorder *r = new_recorder("push.flrec");
+    uint64_t junk[8] = {0};
+    make_rows(2);
+    const double *h = g_rows.h, *k = g_rows.k;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'recorder'",
+        flt_recorder_push_row(NULL, 0.0, FIBERS, h, k, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "not a live",
+        flt_recorder_push_row((flt_recorder *)junk, 0.0, FIBERS, h, k, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'encoder_mm'",
+        flt_recorder_push_row(r, NaN_, FIBERS, h, k, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'encoder_mm'",
+        flt_recorder_push_row(r, 1e15, FIBERS, h, k, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'height'", flt_recorder_push_row(r, 0.0, FIBERS, NULL, k, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'slope'", flt_recorder_push_row(r, 0.0, FIBERS, h, NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'",
+        flt_recorder_push_row(r, 0.0, FIBERS - 1, h, k, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'", flt_recorder_push_row(r, 0.0, NEG, h, k, NULL));
+    GOOD(flt_recorder_push_row(r, 0.0, FIBERS, h, k, NULL));
+    /* Wrong state: a gauge records through it. */
+    flt_gauge *g = new_gauge(0);
+    GOOD(flt_gauge_attach_recorder(g, r));
+    BAD(FLT_ERR_STATE, "detach", flt_recorder_push_row(r, 1.0, FIBERS, h, k, NULL));
+    GOOD(flt_gauge_attach_recorder(g, NULL));
+    GOOD(flt_recorder_push_row(r, 1.0, FIBERS, h, k, NULL));
+    flt_gauge_destroy(g);
+    flt_recorder_destroy(r);
+}
+
+static void row_recorder_cut(void) {
+    flt_recorder *r = new_recorder("cut.flrec");
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'recorder'", flt_recorder_cut(NULL, 1.0));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'encoder_mm'", flt_recorder_cut(r, Inf_));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'encoder_mm'", flt_recorder_cut(r, -2e12));
+    GOOD(flt_recorder_cut(r, 1.0));
+    flt_gauge *g = new_gauge(0);
+    GOOD(flt_gauge_attach_recorder(g, r));
+    BAD(FLT_ERR_STATE, "detach", flt_recorder_cut(r, 2.0));
+    GOOD(flt_gauge_attach_recorder(g, NULL));
+    flt_gauge_destroy(g);
+    flt_recorder_destroy(r);
+}
+
+static void row_recorder_set_coil(void) {
+    flt_recorder *r = new_recorder("coil.flrec");
+    flt_coil_info *c = new_coil("C-1");
+    uint64_t junk[8] = {0};
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'recorder'", flt_recorder_set_coil(NULL, c));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'coil'", flt_recorder_set_coil(r, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'coil'", flt_recorder_set_coil(r, (flt_coil_info *)junk));
+    GOOD(flt_recorder_set_coil(r, c));
+    flt_gauge *g = new_gauge(0);
+    GOOD(flt_gauge_attach_recorder(g, r));
+    BAD(FLT_ERR_STATE, "detach", flt_recorder_set_coil(r, c));
+    GOOD(flt_gauge_attach_recorder(g, NULL));
+    flt_gauge_destroy(g);
+    flt_coil_info_destroy(c);
+    flt_recorder_destroy(r);
+}
+
+static void row_recorder_sync(void) {
+    flt_recorder *r = new_recorder("sync.flrec");
+    make_rows(1);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'recorder'", flt_recorder_sync(NULL, 1000));
+    GOOD(flt_recorder_push_row(r, 0.0, FIBERS, g_rows.h, g_rows.k, NULL));
+    GOOD(flt_recorder_sync(r, 10000));
+    uint64_t stored = 0;
+    GOOD(flt_recorder_count(r, FLT_RECORDER_COUNT_ROWS_STORED, &stored));
+    ++g_checks;
+    if (stored != 1)
+        ERR("%llu rows stored after a sync, not 1", (unsigned long long)stored);
+    flt_recorder_destroy(r);
+}
+
+static void row_recorder_save_frames(void) {
+    flt_recorder *r = new_recorder("frames.flrec");
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'recorder'", flt_recorder_save_frames(NULL));
+    GOOD(flt_recorder_save_frames(r)); /* no ring: nothing to do */
+    flt_recorder_destroy(r);
+}
+
+static void row_recorder_count(void) {
+    flt_recorder *r = new_recorder("count.flrec");
+    uint64_t v;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'recorder'",
+        flt_recorder_count(NULL, FLT_RECORDER_COUNT_ROWS, &v));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_recorder_count(r, FLT_RECORDER_COUNT_ROWS, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'counter'", flt_recorder_count(r, (flt_recorder_counter)11, &v));
+    ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "'counter'",
+                flt_recorder_count(r, (flt_recorder_counter)-1, &v));
+    GOOD(flt_recorder_count(r, FLT_RECORDER_COUNT_WRITER_NS, &v));
+    flt_recorder_destroy(r);
+}
+
+static void row_recording_open(void) {
+    char path[300], bad[300], not_sqlite[300];
+    flt_recording *r = (flt_recording *)1;
+    path_in_dir(path, sizeof path, "fixture.flrec");
+    if (!tf_exists(path))
+        make_recording(path);
+    path_in_dir(bad, sizeof bad, "no_such.flrec");
+    path_in_dir(not_sqlite, sizeof not_sqlite, "garbage.flrec");
+    write_file(not_sqlite, "not a database at all, just text padded out to a page....", 58);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'path'", flt_recording_open(NULL, &r));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_recording_open(path, NULL));
+    BAD(FLT_ERR_IO, NULL, flt_recording_open(bad, &r));
+    ++g_checks;
+    if (r != NULL)
+        ERR("a failed open left *out = %p", (void *)r);
+    BAD(FLT_ERR_FORMAT, NULL, flt_recording_open(not_sqlite, &r));
+    GOOD(flt_recording_open(path, &r));
+    flt_recording_destroy(r);
+}
+
+static void row_recording_destroy(void) {
+    uint64_t junk[8] = {0};
+    flt_recording_destroy(NULL);
+    flt_recording_destroy((flt_recording *)junk);
+    flt_recording_destroy(new_recording());
+    g_checks += 3;
+}
+
+static void row_recording_info(void) {
+    flt_recording *r = new_recording();
+    double v = 0;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'recording'", flt_recording_info(NULL, FLT_RECORDING_ROWS, &v));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_recording_info(r, FLT_RECORDING_ROWS, NULL));
+    BAD(FLT_ERR_NOT_FOUND, "'key'", flt_recording_info(r, (flt_recording_value)14, &v));
+    ENUM_UB_BAD(FLT_ERR_NOT_FOUND, "'key'", flt_recording_info(r, (flt_recording_value)-1, &v));
+    GOOD(flt_recording_info(r, FLT_RECORDING_ROWS, &v));
+    ++g_checks;
+    if (v != 40.0)
+        ERR("the fixture recording has %g rows, not 40", v);
+    flt_recording_destroy(r);
+}
+
+static void row_recording_calib(void) {
+    flt_recording *r = new_recording();
+    flt_calib *c = NULL;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'recording'", flt_recording_calib(NULL, &c));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_recording_calib(r, NULL));
+    GOOD(flt_recording_calib(r, &c));
+    flt_calib_destroy(c);
+    flt_recording_destroy(r);
+}
+
+static void row_recording_options(void) {
+    flt_recording *r = new_recording();
+    flt_options *o = NULL;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'recording'", flt_recording_options(NULL, &o));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_recording_options(r, NULL));
+    GOOD(flt_recording_options(r, &o));
+    flt_options_destroy(o);
+    flt_recording_destroy(r);
+}
+
+static void row_recording_verify(void) {
+    flt_recording *r = new_recording();
+    uint64_t bad = 99;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'recording'", flt_recording_verify(NULL, &bad));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'bad_blocks_out'", flt_recording_verify(r, NULL));
+    GOOD(flt_recording_verify(r, &bad));
+    ++g_checks;
+    if (bad != 0)
+        ERR("%llu bad blocks in a good recording", (unsigned long long)bad);
+    flt_recording_destroy(r);
+}
+
+static void row_recording_read_rows(void) {
+    flt_recording *r = new_recording();
+    static double e[40], t[40], h[40 * FIBERS], k[40 * FIBERS];
+    static uint8_t f[40 * FIBERS];
+    size_t n = 99;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'recording'",
+        flt_recording_read_rows(NULL, 0, 40, FIBERS, e, t, h, k, f, &n));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'rows_out'",
+        flt_recording_read_rows(r, 0, 40, FIBERS, e, t, h, k, f, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'",
+        flt_recording_read_rows(r, 0, 40, FIBERS + 1, e, t, h, k, f, &n));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'count'",
+        flt_recording_read_rows(r, 0, overflow_rows(FIBERS), FIBERS, e, t, h, k, f, &n));
+    GOOD(flt_recording_read_rows(r, 1000, 40, FIBERS, e, t, h, k, f, &n)); /* past the end */
+    ++g_checks;
+    if (n != 0)
+        ERR("%zu rows read past the end", n);
+    GOOD(flt_recording_read_rows(r, 30, 40, FIBERS, NULL, NULL, NULL, NULL, NULL, &n));
+    ++g_checks;
+    if (n != 10)
+        ERR("%zu rows read from row 30 of 40, not 10 (clipped)", n);
+    GOOD(flt_recording_read_rows(r, 0, 40, FIBERS, e, t, h, k, f, &n));
+    flt_recording_destroy(r);
+}
+
+static flt_archive *new_archive(const char *name) {
+    char path[300];
+    flt_archive *a = NULL;
+    path_in_dir(path, sizeof path, name);
+    if (flt_archive_open(path, "line 1", NULL, &a)) {
+        fprintf(stderr, "fixture: %s\n", flt_last_error_message());
+        exit(2);
+    }
+    return a;
+}
+
+static void row_archive_open(void) {
+    char path[300], dir_path[300], not_sqlite[300];
+    flt_archive *a = (flt_archive *)1;
+    flt_options *other = options_with(FLT_OPT_MAX_GAP, 10.0);
+    path_in_dir(path, sizeof path, "open.db");
+    snprintf(dir_path, sizeof dir_path, "%s/no_such_dir/a.db", g_dir);
+    path_in_dir(not_sqlite, sizeof not_sqlite, "garbage.db");
+    write_file(not_sqlite, "not a database at all, just text padded out to a page....", 58);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'location'", flt_archive_open(NULL, "", NULL, &a));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'line'", flt_archive_open(path, NULL, NULL, &a));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_archive_open(path, "", NULL, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'location' is empty", flt_archive_open("", "", NULL, &a));
+    ++g_checks;
+    if (a != NULL)
+        ERR("a failed open left *out = %p", (void *)a);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'line'", flt_archive_open(path, "a\nb", NULL, &a));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "max_gap", flt_archive_open(path, "", other, &a));
+    BAD(FLT_ERR_IO, NULL, flt_archive_open(dir_path, "", NULL, &a));
+    BAD(FLT_ERR_FORMAT, "not a database", flt_archive_open(not_sqlite, "", NULL, &a));
+    GOOD(flt_archive_open(path, "line 1", NULL, &a));
+    flt_archive_destroy(a);
+    flt_options_destroy(other);
+}
+
+static void row_archive_destroy(void) {
+    uint64_t junk[8] = {0};
+    flt_archive_destroy(NULL);
+    flt_archive_destroy((flt_archive *)junk);
+    flt_archive_destroy(new_archive("destroy.db"));
+    g_checks += 3;
+}
+
+static void row_archive_flush(void) {
+    flt_archive *a = new_archive("flush.db");
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'archive'", flt_archive_flush(NULL, 100));
+    GOOD(flt_archive_flush(a, 0)); /* nothing pending */
+    flt_archive_destroy(a);
+}
+
+static void row_archive_prune(void) {
+    flt_archive *a = new_archive("prune.db");
+    uint64_t removed = 99;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'archive'", flt_archive_prune(NULL, &removed));
+    GOOD(flt_archive_prune(a, NULL));
+    GOOD(flt_archive_prune(a, &removed));
+    ++g_checks;
+    if (removed != 0)
+        ERR("%llu sheets pruned without limits", (unsigned long long)removed);
+    flt_archive_destroy(a);
+}
+
+static void row_archive_count(void) {
+    flt_archive *a = new_archive("count.db");
+    uint64_t v;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'archive'",
+        flt_archive_count(NULL, FLT_ARCHIVE_COUNT_SHEETS, &v));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_archive_count(a, FLT_ARCHIVE_COUNT_SHEETS, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'counter'", flt_archive_count(a, (flt_archive_counter)9, &v));
+    ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "'counter'",
+                flt_archive_count(a, (flt_archive_counter)-1, &v));
+    GOOD(flt_archive_count(a, FLT_ARCHIVE_COUNT_PENDING_BYTES, &v));
+    flt_archive_destroy(a);
+}
+
+static void row_archive_backend(void) {
+    flt_archive *a = new_archive("backend.db");
+    int b = 9;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'archive'", flt_archive_backend(NULL, &b));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_archive_backend(a, NULL));
+    GOOD(flt_archive_backend(a, &b));
+    ++g_checks;
+    if (b != 0)
+        ERR("an SQLite file reports backend %d", b);
+    flt_archive_destroy(a);
+}
+
+static void row_archive_add_sheet(void) {
+    flt_archive *a = new_archive("add.db");
+    flt_gauge *g = new_gauge(1);
+    flt_sheet *sh = new_coil_sheet(g);
+    uint64_t junk[64] = {0};
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'archive'", flt_archive_add_sheet(NULL, sh));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'sheet'", flt_archive_add_sheet(a, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "not an open archive",
+        flt_archive_add_sheet((flt_archive *)junk, sh));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "not a live", flt_archive_add_sheet(a, (flt_sheet *)junk));
+    GOOD(flt_archive_add_sheet(a, sh));
+    GOOD(flt_archive_add_sheet(a, sh)); /* twice: one row (tests/c/test_archive.c) */
+    GOOD(flt_archive_flush(a, 10000));
+    /* Each add is accounted for: sheets = stored + pending + lost. */
+    uint64_t given = 0, stored = 0;
+    GOOD(flt_archive_count(a, FLT_ARCHIVE_COUNT_SHEETS, &given));
+    GOOD(flt_archive_count(a, FLT_ARCHIVE_COUNT_STORED, &stored));
+    ++g_checks;
+    if (given != 2 || stored != 2)
+        ERR("2 adds: %llu given, %llu stored", (unsigned long long)given,
+            (unsigned long long)stored);
+    flt_sheet_destroy(sh);
+    flt_gauge_destroy(g);
+    flt_archive_destroy(a);
+}
+
+static void row_gauge_set_coil(void) {
+    flt_gauge *g = new_gauge(0);
+    flt_coil_info *c = new_coil("C-1");
+    uint64_t junk[8] = {0};
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'gauge'", flt_gauge_set_coil(NULL, c));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'coil'", flt_gauge_set_coil(g, (flt_coil_info *)junk));
+    GOOD(flt_gauge_set_coil(g, c));
+    GOOD(flt_gauge_set_coil(g, NULL)); /* the next strip has none */
+    flt_coil_info_destroy(c);
+    flt_gauge_destroy(g);
+}
+
+static void row_gauge_coil_info(void) {
+    flt_gauge *g = new_gauge(0);
+    flt_coil_info *c = (flt_coil_info *)1;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'gauge'", flt_gauge_coil_info(NULL, FLT_COIL_CURRENT, &c));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_gauge_coil_info(g, FLT_COIL_CURRENT, NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'which'", flt_gauge_coil_info(g, (flt_coil)2, &c));
+    ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "'which'", flt_gauge_coil_info(g, (flt_coil)-1, &c));
+    /* No coil named yet. */
+    BAD(FLT_ERR_NOT_FOUND, "identity", flt_gauge_coil_info(g, FLT_COIL_CURRENT, &c));
+    ++g_checks;
+    if (c != NULL)
+        ERR("a failed call left *out = %p", (void *)c);
+    /* Judged (statistics are kept with rules): the coil has its identity. */
+    flt_rules *rules = new_rules();
+    GOOD(flt_gauge_set_rules(g, rules, 4.0, 0.0));
+    flt_sheet *sh = new_coil_sheet(g); /* flushed: the coil ended, the last one */
+    GOOD(flt_gauge_coil_info(g, FLT_COIL_LAST, &c));
+    const char *id = NULL;
+    GOOD(flt_coil_info_get_text(c, FLT_COIL_FIELD_ID, &id));
+    ++g_checks;
+    if (strcmp(id, "C-1") != 0)
+        ERR("the last coil is \"%s\", not C-1", id);
+    flt_coil_info_destroy(c);
+    flt_sheet_destroy(sh);
+    flt_rules_destroy(rules);
+    flt_gauge_destroy(g);
+}
+
+static void row_gauge_note(void) {
+    flt_gauge *g = new_gauge(0);
+    char long_text[300];
+    memset(long_text, 'n', sizeof long_text - 1);
+    long_text[sizeof long_text - 1] = 0;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'gauge'", flt_gauge_note(NULL, "leveler", "x"));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'kind'", flt_gauge_note(g, NULL, "x"));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'text'", flt_gauge_note(g, "leveler", NULL));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'kind'", flt_gauge_note(g, "", "x"));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'kind'", flt_gauge_note(g, "two words", "x"));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'text'", flt_gauge_note(g, "leveler", long_text));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'text'", flt_gauge_note(g, "leveler", "a\x7f"));
+    /* Full: 256 notes waiting for a frame. */
+    for (int i = 0; i < 256; ++i)
+        if (flt_gauge_note(g, "operator", "x") != FLT_OK)
+            ERR("note %d refused: %s", i, flt_last_error_message());
+    BAD(FLT_ERR_BUFFER_FULL, "256", flt_gauge_note(g, "operator", "one more"));
+    flt_gauge_destroy(g);
+    g = new_gauge(0);
+    GOOD(flt_gauge_note(g, "leveler", "roll gap 2.1 mm"));
+    flt_gauge_destroy(g);
+}
+
+static void row_gauge_attach_recorder(void) {
+    flt_gauge *g = new_gauge(0), *other = new_gauge(0);
+    flt_recorder *r = new_recorder("attach.flrec");
+    uint64_t junk[8] = {0};
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'gauge'", flt_gauge_attach_recorder(NULL, r));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'recorder'", flt_gauge_attach_recorder(g, (flt_recorder *)junk));
+    GOOD(flt_gauge_attach_recorder(g, r));
+    /* Wrong state: another gauge records through it already. */
+    BAD(FLT_ERR_STATE, NULL, flt_gauge_attach_recorder(other, r));
+    /* Wrong state: while acquiring. */
+    flt_source *s = new_sim_source();
+    GOOD(flt_gauge_attach_source(g, s));
+    GOOD(flt_gauge_start(g));
+    BAD(FLT_ERR_STATE, NULL, flt_gauge_attach_recorder(g, NULL));
+    GOOD(flt_gauge_stop(g));
+    GOOD(flt_gauge_attach_source(g, NULL));
+    flt_source_destroy(s);
+    GOOD(flt_gauge_flush(g));
+    GOOD(flt_gauge_attach_recorder(g, NULL));
+    GOOD(flt_gauge_attach_recorder(other, r));
+    GOOD(flt_gauge_attach_recorder(other, NULL));
+    flt_recorder_destroy(r);
+    flt_gauge_destroy(other);
+    flt_gauge_destroy(g);
+}
+
+static void row_gauge_attach_archive(void) {
+    flt_gauge *g = new_gauge(0);
+    flt_archive *a = new_archive("attach.db");
+    uint64_t junk[8] = {0};
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'gauge'", flt_gauge_attach_archive(NULL, a));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'archive'", flt_gauge_attach_archive(g, (flt_archive *)junk));
+    GOOD(flt_gauge_attach_archive(g, a));
+    flt_source *s = new_sim_source();
+    GOOD(flt_gauge_attach_source(g, s));
+    GOOD(flt_gauge_start(g));
+    BAD(FLT_ERR_STATE, NULL, flt_gauge_attach_archive(g, NULL));
+    GOOD(flt_gauge_stop(g));
+    GOOD(flt_gauge_attach_source(g, NULL));
+    flt_source_destroy(s);
+    GOOD(flt_gauge_flush(g));
+    GOOD(flt_gauge_attach_archive(g, NULL));
+    flt_archive_destroy(a);
+    flt_gauge_destroy(g);
+}
+
+static void row_sheet_coil(void) {
+    flt_gauge *g = new_gauge(0);
+    flt_sheet *plain = new_sheet(g);
+    flt_sheet *sh = new_coil_sheet(g);
+    const flt_coil_info *c = NULL;
+    uint64_t junk[64] = {0};
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'sheet'", flt_sheet_coil(NULL, &c));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "not a live", flt_sheet_coil((flt_sheet *)junk, &c));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_sheet_coil(sh, NULL));
+    BAD(FLT_ERR_NOT_FOUND, "no identity", flt_sheet_coil(plain, &c));
+    GOOD(flt_sheet_coil(sh, &c));
+    flt_sheet_destroy(sh);
+    flt_sheet_destroy(plain);
+    flt_gauge_destroy(g);
+}
+
+static void row_sheet_note_count(void) {
+    flt_gauge *g = new_gauge(0);
+    flt_sheet *sh = new_coil_sheet(g);
+    size_t n = 0;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'sheet'", flt_sheet_note_count(NULL, &n));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_sheet_note_count(sh, NULL));
+    GOOD(flt_sheet_note_count(sh, &n));
+    ++g_checks;
+    if (n != 1)
+        ERR("the sheet carries %zu notes, not 1", n);
+    flt_sheet_destroy(sh);
+    flt_gauge_destroy(g);
+}
+
+static void row_sheet_note(void) {
+    flt_gauge *g = new_gauge(0);
+    flt_sheet *sh = new_coil_sheet(g);
+    const char *kind = NULL, *text = NULL;
+    double s = NaN_;
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'sheet'", flt_sheet_note(NULL, 0, &kind, &text, &s));
+    BAD(FLT_ERR_NOT_FOUND, "'index' is 1", flt_sheet_note(sh, 1, &kind, &text, &s));
+    BAD(FLT_ERR_NOT_FOUND, "'index'", flt_sheet_note(sh, NEG, &kind, &text, &s));
+    GOOD(flt_sheet_note(sh, 0, NULL, NULL, NULL));
+    GOOD(flt_sheet_note(sh, 0, &kind, &text, &s));
+    ++g_checks;
+    if (strcmp(kind, "leveler") != 0 || !isfinite(s))
+        ERR("note 0 is %s at s = %g", kind, s);
+    flt_sheet_destroy(sh);
+    flt_gauge_destroy(g);
+}
+
+static flt_source *new_recording_source(void) {
+    char path[300];
+    flt_source *s = NULL;
+    path_in_dir(path, sizeof path, "fixture.flrec");
+    if (!tf_exists(path))
+        make_recording(path);
+    if (flt_source_open_recording(path, NULL, &s)) {
+        fprintf(stderr, "fixture: %s\n", flt_last_error_message());
+        exit(2);
+    }
+    return s;
+}
+
+static void row_source_open_recording(void) {
+    char path[300], bad[300];
+    flt_source *s = (flt_source *)1;
+    flt_options *fixed = options_with(FLT_OPT_SOURCE_ENCODER_MODE, 1);
+    path_in_dir(path, sizeof path, "fixture.flrec");
+    if (!tf_exists(path))
+        make_recording(path);
+    path_in_dir(bad, sizeof bad, "no_such.flrec");
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'path'", flt_source_open_recording(NULL, NULL, &s));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_source_open_recording(path, NULL, NULL));
+    BAD(FLT_ERR_IO, NULL, flt_source_open_recording(bad, NULL, &s));
+    ++g_checks;
+    if (s != NULL)
+        ERR("a failed open left *out = %p", (void *)s);
+    BAD(FLT_ERR_INVALID_ARGUMENT, "source_encoder_mode",
+        flt_source_open_recording(path, fixed, &s));
+    GOOD(flt_source_open_recording(path, NULL, &s));
+    flt_source_destroy(s);
+    flt_options_destroy(fixed);
+}
+
+static void row_frame_row(void) {
+    flt_source *s = new_recording_source(), *sim = new_sim_source();
+    const flt_frame *f = NULL, *sim_frame = NULL;
+    double h[FIBERS], k[FIBERS];
+    uint8_t fl[FIBERS];
+    GOOD(flt_source_start(s));
+    GOOD(flt_source_next(s, 0, &f));
+    GOOD(flt_source_start(sim));
+    GOOD(flt_source_next(sim, 0, &sim_frame));
+    g_fn = "flt_frame_row";
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'frame'", flt_frame_row(NULL, FIBERS, h, k, fl));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'", flt_frame_row(f, FIBERS - 1, h, k, fl));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'fibers'", flt_frame_row(f, NEG, h, k, fl));
+    BAD(FLT_ERR_NOT_FOUND, NULL, flt_frame_row(sim_frame, FIBERS, h, k, fl));
+    GOOD(flt_frame_row(f, FIBERS, NULL, NULL, NULL));
+    GOOD(flt_frame_row(f, FIBERS, h, k, fl));
+    flt_source_destroy(sim);
+    flt_source_destroy(s);
+}
+
+static void row_frame_event_count(void) {
+    flt_source *s = new_recording_source();
+    const flt_frame *f = NULL;
+    size_t n = 99;
+    GOOD(flt_source_start(s));
+    GOOD(flt_source_next(s, 0, &f));
+    g_fn = "flt_frame_event_count";
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'frame'", flt_frame_event_count(NULL, &n));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_frame_event_count(f, NULL));
+    GOOD(flt_frame_event_count(f, &n));
+    ++g_checks;
+    if (n != 1)
+        ERR("the first recorded frame carries %zu events, not 1 (its coil)", n);
+    flt_source_destroy(s);
+}
+
+static void row_frame_event(void) {
+    flt_source *s = new_recording_source();
+    const flt_frame *f = NULL;
+    flt_recorded_event kind = FLT_RECORDED_CUT;
+    double e = 0;
+    uint64_t count = 9;
+    const flt_coil_info *coil = NULL;
+    GOOD(flt_source_start(s));
+    GOOD(flt_source_next(s, 0, &f));
+    g_fn = "flt_frame_event";
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'frame'", flt_frame_event(NULL, 0, &kind, &e, &count, &coil));
+    BAD(FLT_ERR_NOT_FOUND, "'index'", flt_frame_event(f, 1, &kind, &e, &count, &coil));
+    BAD(FLT_ERR_NOT_FOUND, "'index'", flt_frame_event(f, NEG, &kind, &e, &count, &coil));
+    GOOD(flt_frame_event(f, 0, NULL, NULL, NULL, NULL));
+    GOOD(flt_frame_event(f, 0, &kind, &e, &count, &coil));
+    ++g_checks;
+    if (kind != FLT_RECORDED_COIL || coil == NULL || !isnan(e) || count != 0)
+        ERR("event 0 is kind %d, coil %p, e %g, count %llu", (int)kind, (const void *)coil, e,
+            (unsigned long long)count);
+    flt_source_destroy(s);
+}
+
+static void row_frame_event_note(void) {
+    flt_source *s = new_recording_source();
+    const flt_frame *f = NULL;
+    const char *kind = NULL, *text = NULL;
+    GOOD(flt_source_start(s));
+    GOOD(flt_source_next(s, 0, &f));
+    g_fn = "flt_frame_event_note";
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'frame'", flt_frame_event_note(NULL, 0, &kind, &text));
+    BAD(FLT_ERR_NOT_FOUND, "'index'", flt_frame_event_note(f, 1, &kind, &text));
+    BAD(FLT_ERR_NOT_FOUND, "no note", flt_frame_event_note(f, 0, &kind, &text)); /* a coil */
+    flt_source_destroy(s);
+    /* A recording with a note: the gauge records its own. */
+    char path[300];
+    path_in_dir(path, sizeof path, "note.flrec");
+    tf_remove(path);
+    flt_recorder *r = NULL;
+    flt_gauge *g = new_gauge(0);
+    GOOD(flt_recorder_create(path, g_calib, NULL, &r));
+    GOOD(flt_gauge_attach_recorder(g, r));
+    GOOD(flt_gauge_note(g, "leveler", "entry gap 3.2"));
+    make_waiting_sheet(g, 0.0);
+    GOOD(flt_gauge_attach_recorder(g, NULL));
+    flt_recorder_destroy(r);
+    flt_gauge_destroy(g);
+    GOOD(flt_source_open_recording(path, NULL, &s));
+    GOOD(flt_source_start(s));
+    GOOD(flt_source_next(s, 0, &f));
+    g_fn = "flt_frame_event_note";
+    size_t n = 0;
+    GOOD(flt_frame_event_count(f, &n));
+    size_t note = n;
+    for (size_t i = 0; i < n && note == n; ++i) {
+        flt_recorded_event k = FLT_RECORDED_CUT;
+        GOOD(flt_frame_event(f, i, &k, NULL, NULL, NULL));
+        if (k == FLT_RECORDED_NOTE)
+            note = i;
+    }
+    ++g_checks;
+    if (note == n) {
+        ERR("the recorded note is not on the first frame's events");
+    } else {
+        GOOD(flt_frame_event_note(f, note, NULL, NULL));
+        GOOD(flt_frame_event_note(f, note, &kind, &text));
+        ++g_checks;
+        if (strcmp(kind, "leveler") != 0 || strcmp(text, "entry gap 3.2") != 0)
+            ERR("the recorded note reads %s: %s", kind, text);
+    }
+    flt_source_destroy(s);
+}
+
+/* ---------------------------------------------------------------------- */
 /* The table                                                               */
 /* ---------------------------------------------------------------------- */
 
@@ -4946,6 +5851,55 @@ static const row k_rows[] = {
     ROW(advisor_identify),
     ROW(advisor_fit),
     ROW(advisor_advise),
+    /* coil.h */
+    ROW(coil_info_create),
+    ROW(coil_info_destroy),
+    ROW(coil_info_copy),
+    ROW(coil_info_set_text),
+    ROW(coil_info_get_text),
+    ROW(coil_info_set_nominal),
+    ROW(coil_info_get_nominal),
+    ROW(coil_info_set_extra),
+    ROW(coil_info_extra_count),
+    ROW(coil_info_extra),
+    ROW(coil_info_find_extra),
+    /* record.h */
+    ROW(recorder_create),
+    ROW(recorder_destroy),
+    ROW(recorder_push_row),
+    ROW(recorder_cut),
+    ROW(recorder_set_coil),
+    ROW(recorder_sync),
+    ROW(recorder_save_frames),
+    ROW(recorder_count),
+    ROW(recording_open),
+    ROW(recording_destroy),
+    ROW(recording_info),
+    ROW(recording_calib),
+    ROW(recording_options),
+    ROW(recording_verify),
+    ROW(recording_read_rows),
+    ROW(archive_open),
+    ROW(archive_destroy),
+    ROW(archive_flush),
+    ROW(archive_prune),
+    ROW(archive_count),
+    ROW(archive_backend),
+    /* the record's functions of gauge.h and source.h */
+    ROW(archive_add_sheet),
+    ROW(gauge_set_coil),
+    ROW(gauge_coil_info),
+    ROW(gauge_note),
+    ROW(gauge_attach_recorder),
+    ROW(gauge_attach_archive),
+    ROW(sheet_coil),
+    ROW(sheet_note_count),
+    ROW(sheet_note),
+    ROW(source_open_recording),
+    ROW(frame_row),
+    ROW(frame_event_count),
+    ROW(frame_event),
+    ROW(frame_event_note),
     /* testing.h (libflatline_testing): the hidden leveler */
     ROW(leveler_sim_create),
     ROW(leveler_sim_destroy),

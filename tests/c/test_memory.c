@@ -27,6 +27,7 @@
 
 #include "alloc_count.h"
 #include "flatline/flatline.h"
+#include "test_files.h"
 
 #ifdef __linux__
 #  include <malloc.h>
@@ -438,6 +439,40 @@ static void test_advisor_follows_its_formula(void **state) {
     }
 }
 
+/* record.h, "Memory": (record_queue_blocks + 2) blocks of
+ * record_block_rows rows, (9 K + 58) bytes a row, and 1.5 MB for SQLite's
+ * connection and page cache (64 KiB pages) when the file is made. */
+static void test_recorder_follows_its_formula(void **state) {
+    (void)state;
+    /* fibers, rows a block, blocks queued: the smallest, the defaults at
+     * two widths (the README's line is the second), long blocks. */
+    const double cases[][3] = {{10, 16, 2}, {150, 256, 16}, {1150, 256, 16}, {10, 4096, 64}};
+    char dir[256], path[300];
+    assert_int_equal(tf_temp_dir(dir, sizeof dir, "memory"), 0);
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; ++c) {
+        const double K = cases[c][0], B = cases[c][1], Q = cases[c][2];
+        flt_calib *calib = NULL;
+        assert_int_equal(
+            flt_calib_create_reference(900, 240, -1150.0, 2300.0 / K, (size_t)K, &calib), FLT_OK);
+        flt_options *options = bag();
+        set(options, FLT_OPT_RECORD_QUEUE_BLOCKS, Q);
+        set(options, FLT_OPT_RECORD_BLOCK_ROWS, B);
+        snprintf(path, sizeof path, "%s/r%zu.flrec", dir, c);
+        flt_recorder *recorder = NULL;
+        start();
+        assert_int_equal(flt_recorder_create(path, calib, options, &recorder), FLT_OK);
+        const double measured = peak_bytes();
+        char what[96];
+        snprintf(what, sizeof what, "recorder: %.0f fibers, %.0f rows a block, %.0f queued", K, B,
+                 Q);
+        within(what, measured, (Q + 2) * B * (9 * K + 58) + 1.5e6);
+        flt_recorder_destroy(recorder);
+        flt_options_destroy(options);
+        flt_calib_destroy(calib);
+    }
+    assert_int_equal(tf_remove_tree(dir), 0);
+}
+
 static void test_the_count_sees_allocations(void **state) {
     (void)state;
     /* The control: a hook that saw nothing would pass every formula's
@@ -465,6 +500,7 @@ int main(void) {
         cmocka_unit_test(test_advisor_follows_its_formula),
         cmocka_unit_test(test_gauge_follows_its_formula),
         cmocka_unit_test(test_gauge_refuses_on_its_formula),
+        cmocka_unit_test(test_recorder_follows_its_formula),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 #endif

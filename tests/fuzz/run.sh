@@ -6,7 +6,7 @@
 # the C tests run in under the sanitizers, so CI compiles it once); fails on
 # any crash, sanitizer report, leak, timeout (10 s per input) or
 # out-of-memory (2 GB). See tests/fuzz/README.md.
-#   tests/fuzz/run.sh [harness...]     (default: all eleven)
+#   tests/fuzz/run.sh [harness...]     (default: all twelve)
 #   FUZZ_SECONDS=20   seconds per harness
 #   FUZZ_SEED=1       libFuzzer's seed: fixed, so CI explores the same inputs
 #                     each run (a red CI is reproducible); 0 = random, for
@@ -23,7 +23,7 @@ seed=${FUZZ_SEED:-1}
 build=build/asan
 jobs=${FUZZ_JOBS:-2}
 harnesses=("$@")
-((${#harnesses[@]})) || harnesses=(calib_load extractor recon genicam u3v gauge chain source_faults gvsp gvcp json)
+((${#harnesses[@]})) || harnesses=(calib_load extractor recon genicam u3v gauge chain source_faults gvsp gvcp json record)
 
 command -v clang >/dev/null || { echo "fuzz: clang not found (apt-get install clang libclang-rt-14-dev)"; exit 1; }
 cmake --preset asan >/dev/null

@@ -220,6 +220,9 @@ namespace Flatline
             handle.Track(0);
         }
 
+        /// <summary>A calibration over a handle the library made (a recording's).</summary>
+        internal static Calibration FromHandle(CalibHandle handle) => new Calibration(handle);
+
         /// <summary>Reads a calibration file (UTF-8 JSON, calib.h "File
         /// format"); the model is finished. <see cref="FlatlineIOException"/>
         /// if the file cannot be read, <see cref="FlatlineFormatException"/>

@@ -57,6 +57,13 @@ namespace Flatline
             handle.Track(0);
         }
 
+        /// <summary>A bag the library made (a recording's options).</summary>
+        internal FlatlineOptions(OptionsHandle made)
+        {
+            handle = made;
+            handle.Track(0);
+        }
+
         /// <summary>Every option key the native library knows, in its order.</summary>
         public static IReadOnlyList<OptionInfo> Available
         {

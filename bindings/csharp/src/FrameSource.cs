@@ -13,6 +13,8 @@ namespace Flatline
         Images = NativeSourceKind.FLT_SOURCE_IMAGES,
         U3V = NativeSourceKind.FLT_SOURCE_U3V,
         GigE = NativeSourceKind.FLT_SOURCE_GIGE,
+        /// <summary>A recording (<see cref="FrameSource.OpenRecording"/>).</summary>
+        Recording = NativeSourceKind.FLT_SOURCE_RECORDING,
     }
 
     /// <summary>Where a frame's encoder position comes from (the option
@@ -271,6 +273,23 @@ namespace Flatline
                 foreach (var pin in pins)
                     if (pin.IsAllocated)
                         pin.Free();
+            }
+            return new FrameSource(handle, null);
+        }
+
+        /// <summary>A recording (<see cref="Recorder"/>) replayed: one frame per
+        /// recorded row, in order, with its recorded encoder position. Give it
+        /// to <see cref="Gauge.RunAsync"/>: a gauge made with the recording's
+        /// own calibration and options gives the live sheets bit for bit.</summary>
+        public static FrameSource OpenRecording(string path, FlatlineOptions? options = null)
+        {
+            if (path == null)
+                throw new ArgumentNullException(nameof(path));
+            NativeLoader.EnsureLoaded();
+            SourceHandle handle;
+            using (var scope = FlatlineOptions.Borrow(options))
+            {
+                FlatlineNative.flt_source_open_recording(path, scope.Handle, out handle);
             }
             return new FrameSource(handle, null);
         }

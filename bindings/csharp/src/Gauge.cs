@@ -293,6 +293,14 @@ namespace Flatline
         public IReadOnlyList<RuleResult>? Verdict { get; private set; }
         /// <summary>The number of rules it failed (0 without rules).</summary>
         public int FailedRules => (int)Value(SheetValue.RulesFailed);
+        /// <summary>Its coil's identity (<see cref="Gauge.SetCoil"/>); null
+        /// when the coil had none.</summary>
+        public CoilInfo? CoilInfo { get; private set; }
+        /// <summary>The notes given while its rows were taken (<see cref="Gauge.Note"/>).</summary>
+        public IReadOnlyList<SheetNote> Notes { get; private set; } = Array.Empty<SheetNote>();
+        /// <summary>When it was finished: host UTC.</summary>
+        public DateTime FinishedTime =>
+            new DateTime(1970, 1, 1, 0, 0, 0, DateTimeKind.Utc).AddTicks((long)(Value(SheetValue.FinishedTime) * TimeSpan.TicksPerSecond));
 
         internal static unsafe Sheet Read(IntPtr sheet, int maps)
         {
@@ -375,6 +383,22 @@ namespace Flatline
                 }
                 result.Verdict = verdict.AsReadOnly();
             }
+            if (FlatlineNative.flt_cs_sheet_has_coil(sheet) != 0)
+            {
+                FlatlineNative.flt_cs_sheet_coil_copy(sheet, out CoilInfoHandle coil);
+                using (coil)
+                    result.CoilInfo = Flatline.CoilInfo.FromNative(coil);
+            }
+            FlatlineNative.flt_cs_sheet_note_count(sheet, out UIntPtr notes);
+            var list = new List<SheetNote>();
+            for (ulong i = 0; i < notes.ToUInt64(); ++i)
+            {
+                IntPtr kind, text;
+                double at;
+                FlatlineNative.flt_cs_sheet_note(sheet, i, &kind, &text, &at);
+                list.Add(new SheetNote(Utf8.Decode(kind), Utf8.Decode(text), at));
+            }
+            result.Notes = list.AsReadOnly();
             return result;
         }
 
@@ -382,6 +406,25 @@ namespace Flatline
         public override string ToString() =>
             FormattableString.Invariant(
                 $"sheet {Id} (coil {Coil}): {SStartMm:F0} .. {SEndMm:F0} mm, {Rows} rows, {ShapeName}, {MaxIUnits:F1} I-Units");
+    }
+
+    /// <summary>A note given with <see cref="Gauge.Note"/> (a leveler change, a remark).</summary>
+    public sealed class SheetNote
+    {
+        internal SheetNote(string kind, string text, double sMm)
+        {
+            Kind = kind;
+            Text = text;
+            SMm = sMm;
+        }
+
+        /// <summary>What it is ("leveler").</summary>
+        public string Kind { get; }
+        /// <summary>What it says.</summary>
+        public string Text { get; }
+        /// <summary>Where it took effect along the strip, mm.</summary>
+        public double SMm { get; }
+        public override string ToString() => $"{Kind}: {Text}";
     }
 
     /// <summary>The sheet of a <see cref="Gauge.SheetFinished"/> event.</summary>
@@ -429,6 +472,8 @@ namespace Flatline
         private bool callbackSet;
         private Exception? handlerError;
         private SourceHandle? attached;  // referenced (DangerousAddRef) while attached
+        private RecorderHandle? attachedRecorder;  // likewise
+        private ArchiveHandle? attachedArchive;    // likewise
 
         static Gauge() => NativeLoader.EnsureLoaded();
 
@@ -590,6 +635,111 @@ namespace Flatline
                 }
                 attached?.DangerousRelease();
                 attached = added ? next : null;
+            }
+        }
+
+        // ---- the quality record ---------------------------------------------
+
+        /// <summary>The coil the next strip is (or the strip under the sensor,
+        /// when it has no identity yet): its sheets, statistics and verdicts
+        /// carry it, and its nominal thickness and width, where given, choose
+        /// the rule bands. Takes effect with the next frame; null: no identity.</summary>
+        public void SetCoil(CoilInfo? coil)
+        {
+            var live = LiveHandle;
+            if (coil == null)
+            {
+                FlatlineNative.flt_cs_gauge_clear_coil(live);
+                return;
+            }
+            using (var h = coil.ToHandle())
+                FlatlineNative.flt_gauge_set_coil(live, h);
+        }
+
+        /// <summary>The identity of the coil being measured (or, with
+        /// <paramref name="last"/>, of the last finished one); null when it has none.</summary>
+        public CoilInfo? CoilInfo(bool last = false)
+        {
+            var live = LiveHandle;
+            try
+            {
+                FlatlineNative.flt_gauge_coil_info(live, last ? (int)NativeCoil.FLT_COIL_LAST
+                                                              : (int)NativeCoil.FLT_COIL_CURRENT,
+                                                   out CoilInfoHandle h);
+                using (h)
+                    return Flatline.CoilInfo.FromNative(h);
+            }
+            catch (NotFoundException)
+            {
+                return null;
+            }
+        }
+
+        /// <summary>A note from the next frame on (a leveler change: kind
+        /// "leveler"), given to the sheet whose rows begin there, recorded and archived.</summary>
+        public void Note(string kind, string text)
+        {
+            if (kind == null)
+                throw new ArgumentNullException(nameof(kind));
+            if (text == null)
+                throw new ArgumentNullException(nameof(text));
+            FlatlineNative.flt_gauge_note(LiveHandle, kind, text);
+        }
+
+        /// <summary>Records the gauge's input from the next frame on (the
+        /// recorder is kept alive while attached); null stops. Only while the
+        /// gauge is idle (before the first frame, or after <see cref="Flush"/>).</summary>
+        public void AttachRecorder(Recorder? recorder)
+        {
+            var live = LiveHandle;
+            lock (push)
+            {
+                RecorderHandle? next = recorder?.LiveHandle;
+                bool added = false;
+                next?.DangerousAddRef(ref added);
+                try
+                {
+                    if (next != null)
+                        FlatlineNative.flt_gauge_attach_recorder(live, next);
+                    else
+                        FlatlineNative.flt_cs_gauge_detach_recorder(live);
+                }
+                catch
+                {
+                    if (added)
+                        next!.DangerousRelease();
+                    throw;
+                }
+                attachedRecorder?.DangerousRelease();
+                attachedRecorder = added ? next : null;
+            }
+        }
+
+        /// <summary>Archives every sheet finished from now on (the archive is
+        /// kept alive while attached); null stops. Only while the gauge is idle.</summary>
+        public void AttachArchive(Archive? archive)
+        {
+            var live = LiveHandle;
+            lock (push)
+            {
+                ArchiveHandle? next = archive?.LiveHandle;
+                bool added = false;
+                next?.DangerousAddRef(ref added);
+                try
+                {
+                    if (next != null)
+                        FlatlineNative.flt_gauge_attach_archive(live, next);
+                    else
+                        FlatlineNative.flt_cs_gauge_detach_archive(live);
+                }
+                catch
+                {
+                    if (added)
+                        next!.DangerousRelease();
+                    throw;
+                }
+                attachedArchive?.DangerousRelease();
+                attachedArchive = added ? next : null;
             }
         }
 
@@ -869,6 +1019,10 @@ namespace Flatline
             {
                 attached?.DangerousRelease();
                 attached = null;
+                attachedRecorder?.DangerousRelease();
+                attachedRecorder = null;
+                attachedArchive?.DangerousRelease();
+                attachedArchive = null;
             }
             SheetChannel[] open;
             lock (sync)

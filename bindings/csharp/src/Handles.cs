@@ -222,4 +222,40 @@ namespace Flatline
         protected override void Destroy(IntPtr native) => FlatlineNative.flt_advisor_destroy_handle(native);
         protected override void OnLive(int delta) => Interlocked.Add(ref live, delta);
     }
+
+    internal sealed class CoilInfoHandle : FlatlineHandle
+    {
+        private static long live;
+        internal static long Live => Interlocked.Read(ref live);
+        public CoilInfoHandle() { }
+        protected override void Destroy(IntPtr native) => FlatlineNative.flt_coil_info_destroy_handle(native);
+        protected override void OnLive(int delta) => Interlocked.Add(ref live, delta);
+    }
+
+    internal sealed class RecorderHandle : FlatlineHandle
+    {
+        private static long live;
+        internal static long Live => Interlocked.Read(ref live);
+        public RecorderHandle() { }
+        protected override void Destroy(IntPtr native) => FlatlineNative.flt_recorder_destroy_handle(native);
+        protected override void OnLive(int delta) => Interlocked.Add(ref live, delta);
+    }
+
+    internal sealed class RecordingHandle : FlatlineHandle
+    {
+        private static long live;
+        internal static long Live => Interlocked.Read(ref live);
+        public RecordingHandle() { }
+        protected override void Destroy(IntPtr native) => FlatlineNative.flt_recording_destroy_handle(native);
+        protected override void OnLive(int delta) => Interlocked.Add(ref live, delta);
+    }
+
+    internal sealed class ArchiveHandle : FlatlineHandle
+    {
+        private static long live;
+        internal static long Live => Interlocked.Read(ref live);
+        public ArchiveHandle() { }
+        protected override void Destroy(IntPtr native) => FlatlineNative.flt_archive_destroy_handle(native);
+        protected override void OnLive(int delta) => Interlocked.Add(ref live, delta);
+    }
 }

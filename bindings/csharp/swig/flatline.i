@@ -34,6 +34,7 @@
 %include "flatness.i"
 %include "source.i"
 %include "verdict.i"  /* before the gauge: its sheets have verdicts */
+%include "record.i"   /* before the gauge: it archives into an flt_archive */
 %include "gauge.i"
 %include "genicam.i"
 %include "advisor.i"

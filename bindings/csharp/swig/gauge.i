@@ -18,6 +18,13 @@ FLT_CS_INT_ENUM(flt_gauge_overflow, NativeGaugeOverflow)
 %ignore FLT_COIL_VALUE_MAX_ENUM_;
 /* A sheet's verdict and a coil's statistics through the helpers below. */
 %ignore flt_sheet_verdict;
+/* A sheet's coil and notes through the helpers below (a lent identity is
+ * copied into one the SafeHandle owns). */
+%ignore flt_sheet_coil;
+%ignore flt_sheet_note_count;
+%ignore flt_sheet_note;
+FLT_CS_OUT_POINTER(void, global::System.IntPtr, const char **kind_out, const char **text_out)
+FLT_CS_OUT_POINTER(double, double, double *s_mm_out)
 %ignore flt_gauge_coil_stats;
 %ignore FLT_SHEET_VALUE_MAX_ENUM_;
 %ignore FLT_SHEET_ARRAY_MAX_ENUM_;
@@ -83,6 +90,35 @@ flt_status flt_cs_gauge_coil_stats(const flt_gauge *gauge, int which, size_t rul
  * RunAsync, which waits in short steps to notice a cancellation. */
 int flt_cs_gauge_wait(flt_gauge *gauge, uint32_t timeout_ms) {
     return (int)flt_gauge_wait(gauge, timeout_ms);
+}
+/* The sheet's coil, copied (0 with FLT_ERR_NOT_FOUND's status when none). */
+int flt_cs_sheet_has_coil(void *sheet) {
+    const flt_coil_info *c = NULL;
+    const int has = flt_sheet_coil((const flt_sheet *)sheet, &c) == FLT_OK;
+    return has;
+}
+flt_status flt_cs_sheet_coil_copy(void *sheet, flt_coil_info **out) {
+    const flt_coil_info *c = NULL;
+    flt_status st = flt_sheet_coil((const flt_sheet *)sheet, &c);
+    *out = NULL;
+    return st != FLT_OK ? st : flt_coil_info_copy(c, out);
+}
+flt_status flt_cs_sheet_note_count(void *sheet, size_t *count_out) {
+    return flt_sheet_note_count((const flt_sheet *)sheet, count_out);
+}
+flt_status flt_cs_sheet_note(void *sheet, size_t index, const char **kind_out,
+                             const char **text_out, double *s_mm_out) {
+    return flt_sheet_note((const flt_sheet *)sheet, index, kind_out, text_out, s_mm_out);
+}
+/* No more recorder or archive (a null SafeHandle cannot be passed). */
+flt_status flt_cs_gauge_detach_recorder(flt_gauge *gauge) {
+    return flt_gauge_attach_recorder(gauge, NULL);
+}
+flt_status flt_cs_gauge_detach_archive(flt_gauge *gauge) {
+    return flt_gauge_attach_archive(gauge, NULL);
+}
+flt_status flt_cs_gauge_clear_coil(flt_gauge *gauge) {
+    return flt_gauge_set_coil(gauge, NULL);
 }
 /* No more rules (a null SafeHandle cannot be passed). */
 flt_status flt_cs_gauge_clear_rules(flt_gauge *gauge) {

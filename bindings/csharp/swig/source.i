@@ -27,6 +27,14 @@ FLT_CS_HANDLE(flt_camera_list, CameraListHandle)
 %typemap(csin) CTYPE "$csinput"
 %enddef
 FLT_CS_INT_ENUM(flt_source_kind, NativeSourceKind)
+FLT_CS_INT_ENUM(flt_recorded_event, NativeRecordedEvent)
+%ignore FLT_RECORDED_EVENT_MAX_ENUM_;
+/* A recording's rows and events: read by Recording (Record.cs) and the
+ * gauge's replay, not through a borrowed frame. */
+%ignore flt_frame_row;
+%ignore flt_frame_event_count;
+%ignore flt_frame_event;
+%ignore flt_frame_event_note;
 FLT_CS_INT_ENUM(flt_source_counter, NativeCounter)
 FLT_CS_INT_ENUM(flt_camera_string, NativeCameraString)
 FLT_CS_INT_ENUM(flt_camera_value, NativeCameraValue)

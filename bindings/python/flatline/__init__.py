@@ -109,8 +109,18 @@ from ._extractor import (
 from ._flatness import FIBER_OFF_STRIP, WINDOW_ON_STRIP, ZONE_OFF_STRIP, StripWindow
 
 from . import _log
-from ._gauge import CoilStats, Gauge, RuleStats, Sheet, SheetFlag, SheetZones, gauge_options
+from ._gauge import (CoilStats, Gauge, RuleStats, Sheet, SheetFlag, SheetNote, SheetZones,
+                     gauge_options)
 from ._advisor import Actuator, Advice, Advisor, AdvisorFit, advisor_options
+from ._record import (
+    Archive,
+    CoilInfo,
+    RecordedRows,
+    Recorder,
+    Recording,
+    archive_options,
+    record_options,
+)
 from ._verdict import (
     Measure,
     RuleResult,
@@ -147,6 +157,14 @@ if (_abi(_capi.flt_version()) != _abi(_capi.FLT_HEADER_VERSION_NUMBER)
 
 __all__ = [
     "__version__",
+    "CoilInfo",
+    "SheetNote",
+    "Recorder",
+    "Recording",
+    "RecordedRows",
+    "Archive",
+    "record_options",
+    "archive_options",
     "version",
     "FlatlineError",
     "InvalidArgumentError",

@@ -5,6 +5,7 @@
 from __future__ import annotations
 
 import enum
+import math
 from dataclasses import dataclass, field
 from typing import Any, Dict, Iterator, Optional, Tuple, Union
 
@@ -15,14 +16,16 @@ from . import capi as _capi
 from ._arrays import as_float64, as_mask, as_real
 from . import _log
 from ._calib import Calibration
-from ._errors import FlatlineError, StateError, TimeoutError
+from ._errors import FlatlineError, NotFoundError, StateError, TimeoutError
 from ._flatness import FiberResults, Shape, ShapeComponent
 from ._options import OptionValue, make_options, options_doc, prefixed_options
 from ._pixels import PixelFormat, check_one_channel
+from ._record import Archive, CoilInfo, Recorder
 from ._source import Source
 from ._verdict import RuleResult, ToleranceRules, VerdictState, _results, _rule_list
 
 __all__ = [
+    "SheetNote",
     "SheetFlag",
     "SheetZones",
     "Sheet",
@@ -59,7 +62,9 @@ class SheetFlag(enum.IntFlag):
 
 # flt_sheet_value keys by the names Sheet.values uses (in key order), and
 # the counters: generated from gauge.h (bindings/gen_tables.py).
-_VALUES = _tables.SHEET_VALUES
+# FLT_SHEET_FINISHED_TIME, a wall-clock time, is Sheet.finished_time: not
+# among the values two runs of the same input share.
+_VALUES = {name: key for name, key in _tables.SHEET_VALUES.items() if name != "finished_time"}
 
 _COUNTERS = _tables.GAUGE_COUNTERS
 
@@ -125,6 +130,13 @@ class Sheet:
     #: Its verdict, one result per rule of the rules it was judged by
     #: (Gauge.set_rules); None when the gauge had none.
     verdict: Optional[Tuple[RuleResult, ...]] = None
+    #: Its coil's identity (Gauge.set_coil); None when the coil had none.
+    coil_info: Optional[CoilInfo] = None
+    #: The notes given while its rows were taken (Gauge.note).
+    notes: Tuple["SheetNote", ...] = ()
+    #: When it was finished, host UTC, s since 1970 (not compared: two runs
+    #: of the same input finish at other times).
+    finished_time: float = field(default=math.nan, compare=False)
 
     @property
     def failed_rules(self) -> int:
@@ -212,6 +224,15 @@ class CoilStats:
         return self.passed + self.failed
 
 
+@dataclass(frozen=True)
+class SheetNote:
+    """A note given with Gauge.note (a leveler change, a remark)."""
+
+    kind: str  #: what it is ("leveler")
+    text: str  #: what it says
+    s_mm: float  #: where it took effect along the strip, mm
+
+
 def _read_sheet(handle: Any, maps: int) -> Sheet:
     v = {name: float(_capi.flt_sheet_get(handle, key)) for name, key in _VALUES.items()}
     fibers, zones, rows = int(v["fibers"]), int(v["zones"]), int(v["rows"])
@@ -251,6 +272,12 @@ def _read_sheet(handle: Any, maps: int) -> Sheet:
     if maps >= 2:
         measured = np.empty((rows, fibers))
         handle.measured_map_into(measured)
+    try:
+        coil_info: Optional[CoilInfo] = CoilInfo._from_handle(_capi.flt_sheet_coil(handle))
+    except NotFoundError:
+        coil_info = None
+    notes = tuple(SheetNote(*_capi.flt_sheet_note(handle, i))
+                  for i in range(int(_capi.flt_sheet_note_count(handle))))
     return Sheet(
         int(v["id"]), int(v["coil"]), int(v["index"]), v["s_start"], v["s_end"], rows,
         v["s_first"], v["s_last"], v["strip_left"], v["strip_right"], v["strip_width"],
@@ -262,7 +289,8 @@ def _read_sheet(handle: Any, maps: int) -> Sheet:
         v["lookahead"], fiber_results, zone_results,
         array(_capi.FLT_SHEET_FIBER_STRIP_X, fibers),
         (v["strip_width_min"], v["strip_width_max"]),
-        (v["strip_centre_min"], v["strip_centre_max"]), s, z, z_flags, measured, v, verdict)
+        (v["strip_centre_min"], v["strip_centre_max"]), s, z, z_flags, measured, v, verdict,
+        coil_info, notes, float(_capi.flt_sheet_get(handle, _capi.FLT_SHEET_FINISHED_TIME)))
 
 
 def gauge_options() -> Dict[str, float]:
@@ -328,6 +356,10 @@ class Gauge:
             handle = _capi.flt_gauge_create(calib._live(), bag)
         self._handle: Optional[_capi.flt_gauge] = handle
         self._source: Optional[Source] = None
+        # The recorder's and the archive's C handles the gauge borrows: held
+        # here, so that closing the Python object first cannot free them.
+        self._recorder_handle: Any = None
+        self._archive_handle: Any = None
         self._maps = int(_capi.flt_gauge_get_option(handle, _capi.FLT_OPT_GAUGE_KEEP_MAPS))
         self._rules: Optional[ToleranceRules] = None
         self._fibers = int(calib.fiber_grid.count)
@@ -340,8 +372,10 @@ class Gauge:
         """Stops the acquisition and the workers and frees everything now
         (unfinished sheets are dropped). Idempotent; later calls raise
         StateError."""
-        self._handle = None
+        self._handle = None  # the C gauge first: it borrows what follows
         self._source = None
+        self._recorder_handle = None
+        self._archive_handle = None
 
     @property
     def closed(self) -> bool:
@@ -454,6 +488,53 @@ class Gauge:
         handle = None if source is None else source._live()
         _capi.flt_gauge_attach_source(self._live(), handle)
         self._source = source
+
+    # -- the quality record ---------------------------------------------------------
+
+    def set_coil(self, coil: Optional[CoilInfo]) -> None:
+        """The coil the next strip is (or the strip under the sensor, when it
+        has no identity yet): its sheets, statistics and verdicts carry it,
+        and its nominal thickness and width, where given, choose the rule
+        bands. Takes effect with the next frame; None: no identity."""
+        if coil is not None and not isinstance(coil, CoilInfo):
+            raise TypeError(f"set_coil() argument 'coil' must be a CoilInfo or None, not "
+                            f"{type(coil).__name__}")
+        _capi.flt_gauge_set_coil(self._live(), None if coil is None else coil._handle())
+
+    def coil_info(self, last: bool = False) -> Optional[CoilInfo]:
+        """The identity of the coil being measured (or, with last=True, of
+        the last finished one), None when it has none."""
+        which = _capi.FLT_COIL_LAST if last else _capi.FLT_COIL_CURRENT
+        try:
+            return CoilInfo._from_handle(_capi.flt_gauge_coil_info(self._live(), which))
+        except NotFoundError:
+            return None
+
+    def note(self, kind: str, text: str) -> None:
+        """A note from the next frame on (a leveler change: kind "leveler"),
+        given to the sheet whose rows begin there, recorded and archived."""
+        _capi.flt_gauge_note(self._live(), kind, text)
+
+    def attach_recorder(self, recorder: Optional[Recorder]) -> None:
+        """Records the gauge's input from the next frame on (kept alive by
+        the gauge); None stops. Only while idle (before the first frame, or
+        after flush); the rows are measured as recorded (quantized)."""
+        if recorder is not None and not isinstance(recorder, Recorder):
+            raise TypeError(f"attach_recorder() argument 'recorder' must be a Recorder or "
+                            f"None, not {type(recorder).__name__}")
+        handle = None if recorder is None else recorder._live()
+        _capi.flt_gauge_attach_recorder(self._live(), handle)
+        self._recorder_handle = handle
+
+    def attach_archive(self, archive: Optional[Archive]) -> None:
+        """Archives every sheet finished from now on (kept alive by the
+        gauge); None stops. Only while idle, as attach_recorder."""
+        if archive is not None and not isinstance(archive, Archive):
+            raise TypeError(f"attach_archive() argument 'archive' must be an Archive or "
+                            f"None, not {type(archive).__name__}")
+        handle = None if archive is None else archive._live()
+        _capi.flt_gauge_attach_archive(self._live(), handle)
+        self._archive_handle = handle
 
     def start(self) -> None:
         """Starts the attached source and the gauge's acquisition thread."""

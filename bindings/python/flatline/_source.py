@@ -17,6 +17,7 @@ import numpy as np
 from . import _tables
 from . import capi as _capi
 from ._arrays import as_index, as_real
+from ._calib import _path
 from ._errors import StateError
 from ._options import OptionValue, make_options, options_doc, prefixed_options
 from ._pixels import PixelFormat
@@ -42,6 +43,7 @@ class SourceKind(enum.IntEnum):
     IMAGES = _capi.FLT_SOURCE_IMAGES
     U3V = _capi.FLT_SOURCE_U3V
     GIGE = _capi.FLT_SOURCE_GIGE
+    RECORDING = _capi.FLT_SOURCE_RECORDING
 
 
 class Frame(NamedTuple):
@@ -179,6 +181,19 @@ class Source:
         self._bus = bus  # its simulators render frames in next(): locked too
         self._kind = SourceKind(int(_capi.flt_source_kind_of(handle)))
         return self
+
+    @classmethod
+    def open_recording(cls, path: Union[str, "os.PathLike[str]"],
+                       **options: OptionValue) -> "Source":
+        """A recording (flatline.Recorder) replayed: one frame per recorded
+        row, in order, with its recorded encoder position. Give it to
+        Gauge.run: a gauge made with the recording's own calibration and
+        options (Recording.calibration(), Recording.options()) gives the
+        live sheets bit for bit; other options answer "what if"."""
+        fn = "Source.open_recording"
+        bag = make_options(fn, options, prefixes=("source_",))
+        handle = _capi.flt_source_open_recording(_path(fn, path), bag)
+        return cls._wrap(handle, (), ())
 
     @classmethod
     def simulator(cls, sim: SimulatedLine, **options: OptionValue) -> "Source":

@@ -48,6 +48,7 @@
 %include "flatness.i"
 %include "source.i"
 %include "verdict.i"  /* before the gauge: its sheets have verdicts */
+%include "record.i"   /* before the gauge: it records, archives and names coils */
 %include "gauge.i"
 %include "genicam.i"
 %include "advisor.i"

@@ -192,4 +192,22 @@ struct flt_sheet {};
   }
 }
 
+/* The sheet's coil (borrowed, read-only) and its notes. */
+%typemap(in, numinputs=0) const flt_coil_info **out (const flt_coil_info *temp = NULL) {
+  $1 = ($1_ltype)&temp;
+}
+%typemap(argout) const flt_coil_info **out {
+  %append_output(SWIG_NewPointerObj((void *)*$1, $descriptor(flt_coil_info *), 0));
+}
+%typemap(in, numinputs=0) const char **kind_out (const char *temp = NULL),
+                          const char **text_out (const char *temp = NULL) {
+  $1 = ($1_ltype)&temp;
+}
+%typemap(argout) const char **kind_out, const char **text_out {
+  %append_output(PyUnicode_DecodeUTF8(*$1 ? *$1 : "", (Py_ssize_t)strlen(*$1 ? *$1 : ""),
+                                      "replace"));
+}
+%typemap(in, numinputs=0) double *s_mm_out (double temp = 0.0) { $1 = &temp; }
+%typemap(argout) double *s_mm_out { %append_output(PyFloat_FromDouble(*$1)); }
+
 %include "flatline/gauge.h"

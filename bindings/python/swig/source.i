@@ -19,6 +19,10 @@
 %ignore flt_source_create_images;
 %ignore flt_source_next;
 %ignore flt_frame_info;
+%ignore flt_frame_row;          /* a recording source's rows: flatline.Recording reads them */
+%ignore flt_frame_event_count;
+%ignore flt_frame_event;
+%ignore flt_frame_event_note;
 %ignore flt_source_read_memory;
 %ignore flt_source_write_memory;
 

@@ -170,7 +170,8 @@ def test_enums_are_the_c_values():
     assert flatline.LASERS == 2
     assert [int(s) for s in flatline.Shape] == list(range(9))
     assert int(flatline.ShapeComponent.CROSSBOW) == 32
-    assert [int(k) for k in flatline.SourceKind] == [1, 2, 3, 4]
+    assert [int(k) for k in flatline.SourceKind] == [1, 2, 3, 4, 5]
+    assert flatline.SourceKind.RECORDING == flatline.capi.FLT_SOURCE_RECORDING
     from flatline.testing import U3VFault, U3VSimParam
     assert U3VFault.LATE_ACK == 13 and U3VSimParam.OPEN == 25
     assert (flatline.FIBER_NO_DATA, flatline.FIBER_NO_WAVE, flatline.FIBER_PARTIAL) == (1, 2, 4)

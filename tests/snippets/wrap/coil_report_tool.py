@@ -1,21 +1,22 @@
 # SPDX-License-Identifier: Apache-2.0
-# The coil report from the source tree's tools/coil_report (the snippet's
-# relative sys.path), the example rules as my_rules.json, the reference
-# sensor and 300 frames of the simulated line (one sheet, ended by the flush).
+# The coil report from the source tree's tools/coil_report (importable as
+# coil_report), and archive.sqlite holding coil 4711: two 1.5 m sheets of
+# the simulated line, judged by the example rules. Afterwards the report's
+# page is there.
 import os
-import shutil
-
-import flatline
+import sys
 
 source = os.environ["FLT_SOURCE_DIR"]
-os.makedirs("tools", exist_ok=True)
-if not os.path.exists("tools/coil_report"):
-    os.symlink(os.path.join(source, "tools", "coil_report"), "tools/coil_report")
-shutil.copy(os.path.join(source, "tools", "coil_report", "example_rules.json"), "my_rules.json")
-calib = flatline.Calibration.reference()
-with flatline.SimulatedLine(calib, sim_seed=1) as sim:
-    sim.add_defect("centre_buckle", 6.0, 1800.0)
-    frames = [sim.next_frame() for _ in range(300)]
+sys.path.insert(0, os.path.join(source, "tools", "coil_report"))
+import flatline  # noqa: E402
+import coil_report as _made  # noqa: E402
+
+_made.simulate_line(
+    "archive.sqlite",
+    coils=[_made.SimCoil(flatline.CoilInfo("4711", grade="S355MC", thickness_mm=3.0,
+                                           width_mm=1500.0), 2,
+                         (("centre_buckle", 1.6, 1800.0),))],
+    sheet_length_mm=1500.0, progress=None)
 # SNIPPET
-assert sheets, "the gauge gave no sheet"
-assert os.listdir("coil-report"), "the report folder is empty"
+assert coil.coil_id == "4711" and len(coil.sheets) == 2, coil
+assert os.path.exists(os.path.join("report", "index.html")), "no report page"
