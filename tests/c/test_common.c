@@ -168,8 +168,8 @@ static void choices_name_every_value_of_a_choice_option(void **state) {
         }
     }
     /* robust, flat_reference, source_encoder_mode, sim_surround, flat_drive_side,
-     * flat_zones_on, gauge_overflow */
-    assert_int_equal(with_choices, 7);
+     * flat_zones_on, gauge_overflow, record_frames */
+    assert_int_equal(with_choices, 8);
     const char *name;
     int value;
     assert_int_equal(flt_option_choice_at(FLT_OPT_ROBUST, FLT_ROBUST_TUKEY, &name, &value), FLT_OK);
