@@ -109,7 +109,7 @@ flt_status check_writable(const char *fn, const flt_coil_info *info) {
     return FLT_OK;
 }
 
-flt_status check_field(const char *fn, flt_coil_field field, int *out) {
+flt_status check_field(const char *fn, const flt_coil_field &field, int *out) {
     const int f = flt::enum_arg(field);
     if (f < 0 || f >= flt::k_coil_fields)
         return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'field' is %d (0..%d)", fn, f,
