@@ -112,6 +112,33 @@ int bytes_per_pixel(flt_pixel_format format) {
     return format == FLT_PIXEL_MONO8 ? 1 : 2;
 }
 
+// One rule's coil statistics as the FLT_COIL_* values (gauge.h), for
+// flt_gauge_coil_rule and for the archive's copy at a coil's end: one
+// place, so both always carry the same values.
+void coil_rule_values(const coil_stats &c, const coil_stats::per_rule &p, double *a) {
+    a[FLT_COIL_NUMBER] = c.coil;
+    a[FLT_COIL_SHEETS] = c.sheets;
+    a[FLT_COIL_SHEETS_PASSED] = c.passed;
+    a[FLT_COIL_SHEETS_FAILED] = c.failed;
+    a[FLT_COIL_FINISHED] = c.finished ? 1.0 : 0.0;
+    a[FLT_COIL_RULES] = double(c.rules.size());
+    a[FLT_COIL_RULE_PASSED] = p.count[FLT_VERDICT_PASS];
+    a[FLT_COIL_RULE_FAILED] = p.count[FLT_VERDICT_FAIL];
+    a[FLT_COIL_RULE_NO_BAND] = p.count[FLT_VERDICT_NO_BAND];
+    a[FLT_COIL_RULE_NOT_MEASURED] = p.count[FLT_VERDICT_NOT_MEASURED];
+    a[FLT_COIL_RULE_NOT_JUDGED] = p.count[FLT_VERDICT_NOT_JUDGED];
+    a[FLT_COIL_SHEETS_NOT_JUDGED] = c.not_judged;
+    a[FLT_COIL_SHEETS_JUDGED] = c.passed + c.failed;
+    a[FLT_COIL_WORST_MIN] = p.min;
+    a[FLT_COIL_WORST_MAX] = p.max;
+    a[FLT_COIL_WORST_MEAN] = p.measured > 0 ? p.sum / p.measured : k_nan;
+    a[FLT_COIL_WORST_SHEET] = p.worst_sheet;
+    a[FLT_COIL_WORST_X] = p.worst_x;
+    a[FLT_COIL_WORST_S] = p.worst_s;
+    for (int h = 0; h < FLT_COIL_HISTOGRAM_BINS; ++h)
+        a[FLT_COIL_HISTOGRAM + h] = p.histogram[h];
+}
+
 }  // namespace
 
 bool in_gauge_callback(const gauge *g) {
@@ -1896,27 +1923,7 @@ flt_status gauge::coil_stats_of(const char *fn, flt_coil which, std::size_t rule
                     fn, rule, c.rules.size());
     const coil_stats::per_rule &p = c.rules[rule];
     double all[FLT_COIL_VALUES];
-    all[FLT_COIL_NUMBER] = c.coil;
-    all[FLT_COIL_SHEETS] = c.sheets;
-    all[FLT_COIL_SHEETS_PASSED] = c.passed;
-    all[FLT_COIL_SHEETS_FAILED] = c.failed;
-    all[FLT_COIL_FINISHED] = c.finished ? 1.0 : 0.0;
-    all[FLT_COIL_RULES] = double(c.rules.size());
-    all[FLT_COIL_RULE_PASSED] = p.count[FLT_VERDICT_PASS];
-    all[FLT_COIL_RULE_FAILED] = p.count[FLT_VERDICT_FAIL];
-    all[FLT_COIL_RULE_NO_BAND] = p.count[FLT_VERDICT_NO_BAND];
-    all[FLT_COIL_RULE_NOT_MEASURED] = p.count[FLT_VERDICT_NOT_MEASURED];
-    all[FLT_COIL_RULE_NOT_JUDGED] = p.count[FLT_VERDICT_NOT_JUDGED];
-    all[FLT_COIL_SHEETS_NOT_JUDGED] = c.not_judged;
-    all[FLT_COIL_SHEETS_JUDGED] = c.passed + c.failed;
-    all[FLT_COIL_WORST_MIN] = p.min;
-    all[FLT_COIL_WORST_MAX] = p.max;
-    all[FLT_COIL_WORST_MEAN] = p.measured > 0 ? p.sum / p.measured : k_nan;
-    all[FLT_COIL_WORST_SHEET] = p.worst_sheet;
-    all[FLT_COIL_WORST_X] = p.worst_x;
-    all[FLT_COIL_WORST_S] = p.worst_s;
-    for (int i = 0; i < FLT_COIL_HISTOGRAM_BINS; ++i)
-        all[FLT_COIL_HISTOGRAM + i] = p.histogram[i];
+    coil_rule_values(c, p, all);
     std::copy(all, all + count, out);
     return FLT_OK;
 }
@@ -2461,28 +2468,7 @@ void gauge::archive_sheet(const flt_sheet &sh, const sheet_buffer &b, std::size_
                     st.name = name;
                 st.values.resize(FLT_COIL_VALUES);
                 const coil_stats::per_rule &p = c.rules[i];
-                double *a = st.values.data();
-                a[FLT_COIL_NUMBER] = c.coil;
-                a[FLT_COIL_SHEETS] = c.sheets;
-                a[FLT_COIL_SHEETS_PASSED] = c.passed;
-                a[FLT_COIL_SHEETS_FAILED] = c.failed;
-                a[FLT_COIL_FINISHED] = c.finished ? 1.0 : 0.0;
-                a[FLT_COIL_RULES] = double(c.rules.size());
-                a[FLT_COIL_RULE_PASSED] = p.count[FLT_VERDICT_PASS];
-                a[FLT_COIL_RULE_FAILED] = p.count[FLT_VERDICT_FAIL];
-                a[FLT_COIL_RULE_NO_BAND] = p.count[FLT_VERDICT_NO_BAND];
-                a[FLT_COIL_RULE_NOT_MEASURED] = p.count[FLT_VERDICT_NOT_MEASURED];
-                a[FLT_COIL_RULE_NOT_JUDGED] = p.count[FLT_VERDICT_NOT_JUDGED];
-                a[FLT_COIL_SHEETS_NOT_JUDGED] = c.not_judged;
-                a[FLT_COIL_SHEETS_JUDGED] = c.passed + c.failed;
-                a[FLT_COIL_WORST_MIN] = p.min;
-                a[FLT_COIL_WORST_MAX] = p.max;
-                a[FLT_COIL_WORST_MEAN] = p.measured > 0 ? p.sum / p.measured : k_nan;
-                a[FLT_COIL_WORST_SHEET] = p.worst_sheet;
-                a[FLT_COIL_WORST_X] = p.worst_x;
-                a[FLT_COIL_WORST_S] = p.worst_s;
-                for (int h = 0; h < FLT_COIL_HISTOGRAM_BINS; ++h)
-                    a[FLT_COIL_HISTOGRAM + h] = p.histogram[h];
+                coil_rule_values(c, p, st.values.data());
                 r->coil_stats.push_back(std::move(st));
             }
             clear_error();
