@@ -78,8 +78,9 @@
  *   with s before the cut, the next sheet those at or after it. The
  *   reconstructor runs on across cuts, so a sheet's rows are finished only
  *   once the reconstructor has seen as much strip beyond the cut as inside
- *   a sheet (its latency, FLT_SHEET_LOOKAHEAD): a join is as accurate as
- *   the inside of a sheet. (flt_recon_end_sheet() instead finishes at once
+ *   a sheet (its latency: FLT_SHEET_LOOKAHEAD in mm, FLT_SHEET_LATENCY in
+ *   seconds; the reconstructor's latency_mm sets it): a join is as
+ *   accurate as the inside of a sheet. (flt_recon_end_sheet() instead finishes at once
  *   without that look-ahead; tests/c/test_gauge.c measures the difference.)
  *   Cuts are given in increasing order; after a long reversal (an encoder
  *   reset) the order starts again. A cut at or before the start of the
@@ -365,9 +366,22 @@ typedef enum flt_sheet_value {
     /** Laser peaks found on the strip over the sheet's rows (both lasers;
      * 0 for pushed rows): FLT_SHEET_SATURATED's denominator. */
     FLT_SHEET_PEAKS = 44,
-    /** When the sheet was finished (its evaluation), host UTC, s since
-     * 1970-01-01. */
+    /** When the sheet was finished (evaluated and judged, as it is handed
+     * out), host UTC, s since 1970-01-01. */
     FLT_SHEET_FINISHED_TIME = 45,
+    /** The sheet's latency in seconds: FLT_SHEET_LOOKAHEAD at the measured
+     * line speed, i.e. the time between the strip at S_END passing the
+     * sensor and the newest frame the reconstructor had taken when it
+     * finished the sheet's last row, by the frames' times (host UTC when
+     * pushed, or the recording's on a replay). 0 when the lookahead is 0.
+     * The verdict comes this much after the cut, plus the sheet's
+     * evaluation: FLT_SHEET_FINISHED_TIME less FLT_SHEET_CUT_TIME is the
+     * whole wait on a live line. */
+    FLT_SHEET_LATENCY = 46,
+    /** When the strip at S_END passed the sensor (interpolated between the
+     * frames on either side), host UTC, s since 1970-01-01; on a replay the
+     * recording's time. */
+    FLT_SHEET_CUT_TIME = 47,
     /** Not a key: keeps the type int-sized whatever is added. */
     FLT_SHEET_VALUE_MAX_ENUM_ = 0x7FFFFFFF
 } flt_sheet_value;

@@ -1095,6 +1095,7 @@ void gauge::sequence(frame_slot &slot) {
     meta.right = slot.right;
     meta.saturated = slot.saturated;
     meta.peaks = slot.peaks;
+    meta.time_ns = slot.time_ns;
     meta.measured = present;
     pending_row_skipped_ = pending_row_dropped_ = pending_row_missing_ = 0;
     if (present) {
@@ -1158,6 +1159,7 @@ void gauge::push_row(double s, const double *height, const double *slope, const 
     ++meta_count_;
     pushed_ = true;
     last_pushed_s_ = s;
+    last_pushed_time_ns_ = meta.time_ns;
     pull_all();
 }
 
@@ -1228,6 +1230,25 @@ void gauge::apply_cuts(double s_limit, const row_meta *incoming) {
     }
 }
 
+std::int64_t gauge::cut_time_ns(const sheet_buffer &b, std::size_t i, double s_at,
+                                const row_meta *incoming) const {
+    // The rows on either side of the cut: the last of the sheet and the
+    // first after it (in the buffer, or the row arriving now).
+    const row_meta *before = i > 0 ? &b.meta[i - 1] : nullptr;
+    const row_meta *after = i < b.rows ? &b.meta[i] : incoming;
+    if (before && after && after->s > before->s) {
+        // The strip moves at a steady speed between two frames (1 mm apart
+        // on a typical line): interpolate, clamped to the two frames.
+        const double f = std::clamp((s_at - before->s) / (after->s - before->s), 0.0, 1.0);
+        return before->time_ns + std::int64_t(f * double(after->time_ns - before->time_ns));
+    }
+    if (before)
+        return before->time_ns;
+    if (after)
+        return after->time_ns;
+    return last_pushed_time_ns_;  // an empty sheet: the newest frame's time
+}
+
 void gauge::split(double s_at, unsigned end_flags, bool all_rows, const row_meta *incoming) {
     sheet_buffer &old = buffers_[current_];
     const std::size_t i =
@@ -1245,6 +1266,12 @@ void gauge::split(double s_at, unsigned end_flags, bool all_rows, const row_meta
     job.index = ++sheet_in_coil_;
     job.id = ++sheet_ids_;
     job.lookahead = std::max(0.0, last_pushed_s_ - s_at);
+    job.cut_time_ns = cut_time_ns(old, i, s_at, incoming);
+    // The clocks are the host's UTC (or a recording's): one set back must
+    // not give a negative latency.
+    job.latency_s = job.lookahead > 0.0
+                        ? std::max(0.0, 1e-9 * double(last_pushed_time_ns_ - job.cut_time_ns))
+                        : 0.0;
     job.coil_info = strip_coil_;
     // The notes given before s_at go with this sheet; later ones wait.
     for (auto it = open_notes_.begin(); it != open_notes_.end();) {
@@ -1447,9 +1474,10 @@ void gauge::evaluate(const sheet_job &job) {
     v[FLT_SHEET_S_END] = job.s_end;
     v[FLT_SHEET_ROWS] = double(n);
     v[FLT_SHEET_LOOKAHEAD] = job.lookahead;
+    v[FLT_SHEET_LATENCY] = job.latency_s;
+    v[FLT_SHEET_CUT_TIME] = 1e-9 * double(job.cut_time_ns);
     v[FLT_SHEET_FIBERS] = double(K_);
     v[FLT_SHEET_ZONES] = double(zones_);
-    v[FLT_SHEET_FINISHED_TIME] = 1e-9 * double(record::utc_now_ns());
     sh->coil = job.coil_info;  // a reference more: no allocation
     sh->notes = job.notes;     // allocates only when there are notes
     // Frames lost before a row lie between it and the frame before, spread
@@ -1661,6 +1689,9 @@ void gauge::evaluate(const sheet_job &job) {
     // The verdict, from the sheet buffer's map (kept whatever
     // gauge_keep_maps says) and the values above.
     judge(sh, b, n);
+    // Evaluated and judged: the time it is handed out (FINISHED_TIME less
+    // CUT_TIME is then the whole wait for a verdict).
+    v[FLT_SHEET_FINISHED_TIME] = 1e-9 * double(record::utc_now_ns());
 
     sh->rows = n;
     if (cfg_.keep_maps >= 1) {

@@ -26,7 +26,7 @@
 namespace flt {
 
 constexpr std::uint32_t k_sheet_magic = 0x464c5453u;  // "FLTS"
-constexpr int k_sheet_values = 46;                    // flt_sheet_value keys 0..45
+constexpr int k_sheet_values = 48;                    // flt_sheet_value keys 0..47
 constexpr int k_sheet_arrays = 12;                    // flt_sheet_array keys 0..11
 
 struct sheet_pool;
@@ -162,6 +162,8 @@ struct row_meta {
     // The strip's edges in the row, sensor x mm (the extractor's, both
     // lasers' mean; NaN where not seen).
     double left = 0.0, right = 0.0;
+    // When the frame was taken: host UTC ns at push, or the recording's.
+    std::int64_t time_ns = 0;
     std::uint32_t skipped = 0, dropped = 0, missing = 0, saturated = 0, peaks = 0, invalid = 0;
     bool measured = true;  // the frame showed the strip (else a lost line)
 };
@@ -254,6 +256,10 @@ class gauge {
         int buffer = 0;
         std::size_t rows = 0;
         double s_start = 0, s_end = 0, lookahead = 0;
+        // When the strip at s_end passed the sensor (UTC ns, the frames'
+        // clock) and the strip taken beyond it in seconds of that clock.
+        std::int64_t cut_time_ns = 0;
+        double latency_s = 0;
         unsigned flags = 0;
         std::uint64_t id = 0, coil = 0, index = 0;
         // The row after the sheet's end (the next sheet's first), whose
@@ -297,6 +303,10 @@ class gauge {
     // Ends the open sheet at s_at: the rows before it (all rows with
     // all_rows), the rest begin the next sheet. `incoming` as above.
     void split(double s_at, unsigned end_flags, bool all_rows, const row_meta *incoming);
+    // When the strip at s_at passed the sensor, by the frame times of the
+    // rows beside it (i: the first row of b at or after s_at).
+    std::int64_t cut_time_ns(const sheet_buffer &b, std::size_t i, double s_at,
+                             const row_meta *incoming) const;
     // Frames the encoder says are missing before a frame that advanced by
     // `advance` mm past the furthest (0 while the pitch is unknown).
     std::uint32_t frames_missing(double advance);
@@ -385,6 +395,7 @@ class gauge {
     // ---- sequencer state (the thread holding the sequencing role)
     bool in_strip_ = false, pushed_ = false, has_output_ = false;
     double last_pushed_s_ = 0.0, last_output_s_ = 0.0;
+    std::int64_t last_pushed_time_ns_ = 0;  // the frame time of that row
     std::uint64_t coil_ = 0, sheet_in_coil_ = 0, sheet_ids_ = 0;
     double sheet_start_ = 0.0;
     unsigned sheet_flags_ = 0;

@@ -60,7 +60,10 @@ static void sleep_ms(int ms) {
 /* A sheet copied out of its handle, to compare runs                       */
 /* ---------------------------------------------------------------------- */
 
-enum { N_VALUES = 45, N_ARRAYS = 12 };
+/* Every value is copied; the values from FLT_SHEET_FINISHED_TIME on are
+ * times (of the host's clock when a row was pushed or a sheet finished),
+ * which two runs of the same rows do not share: not compared. */
+enum { N_VALUES = FLT_SHEET_CUT_TIME + 1, N_COMPARED = FLT_SHEET_FINISHED_TIME, N_ARRAYS = 12 };
 
 /* Whether a sheet array has a value per fiber (else per zone). */
 static int fiber_array(int a) {
@@ -138,7 +141,7 @@ static void assert_same_doubles(const double *a, const double *b, size_t n, cons
 }
 
 static void assert_same_sheet(const copied_sheet *a, const copied_sheet *b, int maps) {
-    assert_same_doubles(a->value, b->value, N_VALUES, "value");
+    assert_same_doubles(a->value, b->value, N_COMPARED, "value");
     for (int k = 0; k < N_ARRAYS; ++k) {
         assert_int_equal(a->n_array[k], b->n_array[k]);
         assert_same_doubles(a->array[k], b->array[k], a->n_array[k], "array");
@@ -628,6 +631,78 @@ static void join_as_accurate_as_inside(void **state) {
     flt_gauge_destroy(g);
     flt_recon_destroy(recon);
     free(z_end), free(z_batch), free(z_gauge), free(s_out);
+    flt_calib_destroy(calib);
+    test_sheet_free(t);
+}
+
+/* The host's UTC, the clock the gauge stamps pushed frames and rows with
+ * (std::chrono::system_clock; on Windows winpthreads reads the same system
+ * time). */
+static int64_t utc_ns(void) {
+    struct timespec t;
+    clock_gettime(CLOCK_REALTIME, &t);
+    return (int64_t)t.tv_sec * 1000000000 + t.tv_nsec;
+}
+
+/* A sheet's latency in seconds is its look-ahead at the speed the rows
+ * came: rows pushed 3 mm apart every ~0.5 ms (6 m/s), each push's time
+ * bracketed by the test's own clock, must give a latency and a cut time
+ * inside the brackets of the rows that decide them. */
+static void latency_in_seconds(void **state) {
+    (void)state;
+    enum { R = 2000, K = 51 }; /* 6 m at 3 mm */
+    test_sheet *t = row_sheet(R, K, 3.0);
+    flt_calib *calib = row_calib(K);
+    flt_options *o = bag();
+    set(o, FLT_OPT_LATENCY_MM, 1000.0);
+    flt_gauge *g = row_gauge(calib, 2, o);
+    flt_options_destroy(o);
+    OK(flt_gauge_cut(g, 2000.0));
+    OK(flt_gauge_cut(g, 4000.0));
+    int64_t *before = malloc(R * sizeof(int64_t)), *after = malloc(R * sizeof(int64_t));
+    for (size_t r = 0; r < R; ++r) {
+        struct timespec d = {0, 500000L};
+        nanosleep(&d, NULL);
+        before[r] = utc_ns();
+        push_rows(g, t, r, r + 1);
+        after[r] = utc_ns();
+    }
+    OK(flt_gauge_flush(g));
+    sheet_list l = {0};
+    drain(g, &l, 0);
+    assert_int_equal(l.n, 3);
+    /* Windows' coarse system time may lag a precise reading by one tick
+     * (15.6 ms): the brackets are widened by 20 ms, against latencies of
+     * ~0.15 s at least (300 rows of look-ahead at >= 0.5 ms each). */
+    const double slack = 0.020;
+    for (size_t k = 0; k < l.n; ++k) {
+        const double latency = l.sheet[k].value[FLT_SHEET_LATENCY];
+        const double cut_time = l.sheet[k].value[FLT_SHEET_CUT_TIME];
+        const double finished = l.sheet[k].value[FLT_SHEET_FINISHED_TIME];
+        const double end = l.sheet[k].value[FLT_SHEET_S_END];
+        const double ahead = l.sheet[k].value[FLT_SHEET_LOOKAHEAD];
+        if (k == 2) { /* ended by the flush: it waited for nothing */
+            assert_true(ahead == 0.0 && latency == 0.0);
+            continue;
+        }
+        /* The row at the cut (s = 3 r exactly) and the newest row taken. */
+        const size_t i = (size_t)ceil(end / 3.0), j = (size_t)llround((end + ahead) / 3.0);
+        assert_true(i >= 1 && j > i && j < R);
+        assert_true(fabs(t->s[j] - (end + ahead)) < 1e-9);
+        const double lo = 1e-9 * (double)(before[j] - after[i]) - slack;
+        const double hi = 1e-9 * (double)(after[j] - before[i - 1]) + slack;
+        print_message("sheet %zu: look-ahead %.0f mm, latency %.3f s (rows bracket %.3f..%.3f "
+                      "s); finished %.3f s after the cut\n",
+                      k + 1, ahead, latency, lo + slack, hi - slack, finished - cut_time);
+        assert_true(ahead >= 900.0);
+        assert_true(latency >= lo && latency <= hi);
+        assert_true(cut_time >= 1e-9 * (double)before[i - 1] - slack &&
+                    cut_time <= 1e-9 * (double)after[i] + slack);
+        assert_true(finished >= cut_time + latency - slack);
+    }
+    free_list(&l);
+    free(before), free(after);
+    flt_gauge_destroy(g);
     flt_calib_destroy(calib);
     test_sheet_free(t);
 }
@@ -2036,6 +2111,7 @@ int main(void) {
         cmocka_unit_test(frames_against_hand_chain),
         cmocka_unit_test(join_as_accurate_as_inside),
         cmocka_unit_test(cuts_given_early_and_late),
+        cmocka_unit_test(latency_in_seconds),
         cmocka_unit_test(line_stop_and_reversals),
         cmocka_unit_test(head_and_tail),
         cmocka_unit_test(queue_overflow_is_counted),

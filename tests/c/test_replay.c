@@ -29,7 +29,7 @@
 
 enum { ROI_FIRST = 900, ROI_ROWS = 240, WIDTH = 2048, FK = 151, SHEETS = 10, MAX_SHEETS = 16 };
 static const double PITCH = 10.0, FIRST_X = -750.0, STEP = 10.0, SHEET_MM = 500.0;
-enum { N_VALUES = FLT_SHEET_FINISHED_TIME + 1, N_ARRAYS = 12, RULES = 2 };
+enum { N_VALUES = FLT_SHEET_CUT_TIME + 1, N_ARRAYS = 12, RULES = 2 };
 
 static const char k_rules[] =
     "{ \"format\": \"flatline-tolerances\", \"version\": 1, \"name\": \"replay\", \"rules\": [\n"

@@ -238,6 +238,14 @@ namespace Flatline
         /// <summary>Strip the reconstructor had taken beyond <see cref="SEndMm"/>
         /// when the sheet was finished, mm.</summary>
         public double LookaheadMm => Value(SheetValue.Lookahead);
+        /// <summary><see cref="LookaheadMm"/> in seconds, at the line speed
+        /// the frames' times show (0 when the sheet waited for no strip).</summary>
+        public double LatencySeconds => Value(SheetValue.Latency);
+        /// <summary>When the strip at <see cref="SEndMm"/> passed the sensor:
+        /// UTC (the recording's time on a replay). <see cref="FinishedTime"/>
+        /// less this is the whole wait on a live line.</summary>
+        public DateTime CutTime =>
+            new DateTime(1970, 1, 1, 0, 0, 0, DateTimeKind.Utc).AddTicks((long)(Value(SheetValue.CutTime) * TimeSpan.TicksPerSecond));
         /// <summary>Rows measured over the rows its length should hold, 0..1;
         /// below GaugeMinCoverage the sheet is <see cref="Incomplete"/>.</summary>
         public double Coverage => Value(SheetValue.Coverage);

@@ -96,6 +96,52 @@ namespace Flatline.Tests
         }
 
         [Fact]
+        public void LatencyInSecondsIsTheLookaheadAtTheRowsPace()
+        {
+            // Rows 3 mm apart pushed every millisecond or two: a sheet's latency
+            // in seconds is its look-ahead at that pace, inside the push times
+            // of the rows beside the cut and of the newest row taken (the
+            // host's UTC, the gauge's clock), widened by 20 ms for a coarse
+            // Windows clock tick.
+            using var calibration = Sensor();
+            using var options = Options();
+            options.LatencyMm = 1000;
+            using var gauge = new Gauge(calibration, options);
+            gauge.Cut(1500);
+            const int rows = 1400;  // 4.2 m
+            var before = new DateTime[rows];
+            var after = new DateTime[rows];
+            var height = new double[Fibers];
+            var slope = new double[Fibers];
+            for (int r = 0; r < rows; ++r)
+            {
+                Row(r, height, slope);
+                Thread.Sleep(1);
+                before[r] = DateTime.UtcNow;
+                gauge.PushRow(Step * r, height, slope);
+                after[r] = DateTime.UtcNow;
+            }
+            gauge.Flush();
+            var sheets = Drain(gauge);
+            Assert.Equal(2, sheets.Count);
+            var first = sheets[0];
+            int i = (int)Math.Ceiling(first.SEndMm / Step);  // the first row at or after the cut
+            int j = (int)Math.Round((first.SEndMm + first.LookaheadMm) / Step);  // the newest row taken
+            Assert.Equal(first.SEndMm + first.LookaheadMm, Step * j, 9);
+            Assert.True(first.LookaheadMm >= 900, $"look-ahead {first.LookaheadMm} mm");
+            var slack = TimeSpan.FromMilliseconds(20);
+            double lo = (before[j] - after[i] - slack).TotalSeconds;
+            double hi = (after[j] - before[i - 1] + slack).TotalSeconds;
+            output.WriteLine($"look-ahead {first.LookaheadMm} mm, latency {first.LatencySeconds:F3} s (bound {lo:F3}..{hi:F3} s)");
+            Assert.InRange(first.LatencySeconds, lo, hi);
+            Assert.InRange(first.CutTime, before[i - 1] - slack, after[i] + slack);
+            Assert.True(first.FinishedTime >= first.CutTime.AddSeconds(first.LatencySeconds) - slack);
+            // The last sheet ended with the strip: it waited for nothing.
+            Assert.Equal(0.0, sheets[1].LookaheadMm);
+            Assert.Equal(0.0, sheets[1].LatencySeconds);
+        }
+
+        [Fact]
         public void WorkersGiveTheSameSheetsBitForBit()
         {
             using var calibration = Sensor();

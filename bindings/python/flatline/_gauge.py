@@ -62,9 +62,11 @@ class SheetFlag(enum.IntFlag):
 
 # flt_sheet_value keys by the names Sheet.values uses (in key order), and
 # the counters: generated from gauge.h (bindings/gen_tables.py).
-# FLT_SHEET_FINISHED_TIME, a wall-clock time, is Sheet.finished_time: not
+# FLT_SHEET_FINISHED_TIME, FLT_SHEET_LATENCY and FLT_SHEET_CUT_TIME, times
+# of the host's clock, are Sheet.finished_time, latency_s and cut_time: not
 # among the values two runs of the same input share.
-_VALUES = {name: key for name, key in _tables.SHEET_VALUES.items() if name != "finished_time"}
+_TIMES = ("finished_time", "latency", "cut_time")
+_VALUES = {name: key for name, key in _tables.SHEET_VALUES.items() if name not in _TIMES}
 
 _COUNTERS = _tables.GAUGE_COUNTERS
 
@@ -137,6 +139,14 @@ class Sheet:
     #: When it was finished, host UTC, s since 1970 (not compared: two runs
     #: of the same input finish at other times).
     finished_time: float = field(default=math.nan, compare=False)
+    #: lookahead_mm in seconds, at the line speed the frames' times show:
+    #: from the strip at s_end passing the sensor to the newest frame taken
+    #: when the sheet's last row was finished (0 when it waited for none).
+    latency_s: float = field(default=0.0, compare=False)
+    #: When the strip at s_end passed the sensor, UTC, s since 1970 (the
+    #: recording's time on a replay); finished_time - cut_time is the whole
+    #: wait on a live line.
+    cut_time: float = field(default=math.nan, compare=False)
 
     @property
     def failed_rules(self) -> int:
@@ -290,7 +300,9 @@ def _read_sheet(handle: Any, maps: int) -> Sheet:
         array(_capi.FLT_SHEET_FIBER_STRIP_X, fibers),
         (v["strip_width_min"], v["strip_width_max"]),
         (v["strip_centre_min"], v["strip_centre_max"]), s, z, z_flags, measured, v, verdict,
-        coil_info, notes, float(_capi.flt_sheet_get(handle, _capi.FLT_SHEET_FINISHED_TIME)))
+        coil_info, notes, float(_capi.flt_sheet_get(handle, _capi.FLT_SHEET_FINISHED_TIME)),
+        float(_capi.flt_sheet_get(handle, _capi.FLT_SHEET_LATENCY)),
+        float(_capi.flt_sheet_get(handle, _capi.FLT_SHEET_CUT_TIME)))
 
 
 def gauge_options() -> Dict[str, float]:

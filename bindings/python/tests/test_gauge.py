@@ -5,6 +5,7 @@ counters, the iterators, a source on the gauge's thread, bad input."""
 import logging
 import math
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -111,6 +112,36 @@ def test_late_cut_gives_the_early_cut_sheets(calib):
     for a, b in zip(early, late):
         assert np.array_equal(a.z, b.z) and a.rows == b.rows and a.s_end == b.s_end
     assert late[0].lookahead_mm > early[0].lookahead_mm
+
+
+def test_latency_in_seconds_is_the_lookahead_at_the_rows_pace(calib):
+    # Rows 3 mm apart pushed every ~1 ms: a sheet's latency in seconds is
+    # its look-ahead at that pace. The bound is the push times of the rows
+    # beside the cut and of the newest row taken, by the host's clock
+    # (time.time, the clock the gauge stamps rows with), widened by 20 ms
+    # for Windows' clock tick.
+    s, h, g, _ = reference_sheet(1400)  # 4.2 m
+    gauge = flatline.Gauge(calib, gauge_overflow=1, gauge_frame_spacing=2.0, latency_mm=1000.0)
+    gauge.cut(1500.0)
+    before, after = [], []
+    for r in range(len(s)):
+        time.sleep(0.001)
+        before.append(time.time())
+        gauge.push_row(s[r], h[r], g[r])
+        after.append(time.time())
+    gauge.flush()
+    sheets = list(gauge)
+    assert len(sheets) == 2
+    first, last = sheets
+    i = int(np.searchsorted(s, first.s_end))  # the first row at or after the cut
+    j = int(np.searchsorted(s, first.s_end + first.lookahead_mm - 1e-6))  # the newest row taken
+    assert s[j] == pytest.approx(first.s_end + first.lookahead_mm, abs=1e-9)
+    assert first.lookahead_mm >= 900.0
+    assert after[j] - before[i - 1] + 0.02 >= first.latency_s >= before[j] - after[i] - 0.02
+    assert before[i - 1] - 0.02 <= first.cut_time <= after[i] + 0.02
+    assert first.finished_time >= first.cut_time + first.latency_s - 0.02
+    # The last sheet ended with the strip: it waited for nothing.
+    assert last.lookahead_mm == 0.0 and last.latency_s == 0.0
 
 
 def test_line_stop_and_reversal_are_skipped_and_counted(calib):
