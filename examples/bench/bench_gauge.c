@@ -90,21 +90,29 @@ static double load_average(void) {
 /* Per cut: when the strip reached it and when its sheet came. */
 typedef struct timing {
     double reached[MAX_CUTS], arrived[MAX_CUTS], lookahead[MAX_CUTS];
+    /* The sheet's own account: its latency in seconds (the look-ahead at
+     * the frames' pace) and from the cut's time to its evaluation. */
+    double latency[MAX_CUTS], waited[MAX_CUTS];
     int sheets;
 } timing;
 
 static void on_sheet(const flt_sheet *sheet, void *user) {
     timing *t = user;
-    double end = 0, flags = 0, lookahead = 0;
+    double end = 0, flags = 0, lookahead = 0, latency = 0, cut_time = 0, finished = 0;
     CHECK(flt_sheet_get(sheet, FLT_SHEET_S_END, &end));
     CHECK(flt_sheet_get(sheet, FLT_SHEET_FLAGS, &flags));
     CHECK(flt_sheet_get(sheet, FLT_SHEET_LOOKAHEAD, &lookahead));
+    CHECK(flt_sheet_get(sheet, FLT_SHEET_LATENCY, &latency));
+    CHECK(flt_sheet_get(sheet, FLT_SHEET_CUT_TIME, &cut_time));
+    CHECK(flt_sheet_get(sheet, FLT_SHEET_FINISHED_TIME, &finished));
     ++t->sheets;
     const int cut = (int)(end / SHEET + 0.5) - 1;
     if (((int)flags & FLT_SHEET_FLAG_FLUSHED) || cut < 0 || cut >= MAX_CUTS)
         return;
     t->arrived[cut] = now();
     t->lookahead[cut] = lookahead;
+    t->latency[cut] = latency;
+    t->waited[cut] = finished - cut_time;
 }
 
 /* One run over `frames` frames; paced at RATE frames/s when `paced`. */
@@ -164,7 +172,7 @@ static void run(const flt_calib *calib, const uint8_t *pixels, size_t frames, in
                (double)frames / (pushed - t0), row_capacity * STEP / 1000 / 1.25,
                1e6 * (c1 - c0) / (double)frames, 2.0 * (double)frames / (c1 - c0));
     } else {
-        double sum = 0, max = 0, ahead = 0;
+        double sum = 0, max = 0, ahead = 0, latency = 0, latency_max = 0, waited = 0;
         int n = 0;
         for (int c = 0; c < MAX_CUTS; ++c)
             if (t.reached[c] > 0 && t.arrived[c] > 0) {
@@ -172,6 +180,9 @@ static void run(const flt_calib *calib, const uint8_t *pixels, size_t frames, in
                 sum += d;
                 max = d > max ? d : max;
                 ahead += t.lookahead[c];
+                latency += t.latency[c];
+                latency_max = t.latency[c] > latency_max ? t.latency[c] : latency_max;
+                waited += t.waited[c];
                 ++n;
             }
         printf("real time at %.0f frames/s (120 m/min): %zu frames, %llu dropped at the full "
@@ -183,6 +194,10 @@ static void run(const flt_calib *calib, const uint8_t *pixels, size_t frames, in
                    "cuts\n  (the reconstructor had taken %.1f m of strip beyond the cut: "
                    "%.2f s at 2 m/s; the rest is the queue and the sheet's evaluation)\n",
                    sum / n, max, n, ahead / n / 1000, ahead / n / 1000 / 2.0);
+        if (n > 0)
+            printf("  the sheets' own account: FLT_SHEET_LATENCY mean %.2f s, max %.2f s; "
+                   "FLT_SHEET_FINISHED_TIME - FLT_SHEET_CUT_TIME mean %.2f s\n",
+                   latency / n, latency_max, waited / n);
         else
             printf("  no sheet finished before the end of the strip: run a longer strip\n");
     }
