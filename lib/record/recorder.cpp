@@ -486,18 +486,13 @@ std::uint64_t recorder::count(flt_recorder_counter which) const {
     }
 }
 
-void recorder::record_failure(flt_status st, const char *message) {
-    {
-        std::lock_guard<std::mutex> lock(m_);
-        if (failed_)
-            return;
-        failed_ = true;
-        failure_status_ = st;
-        failure_message_ = message;
-        done_cv_.notify_all();
-    }
-    FLT_LOG(FLT_LOG_ERROR, "record", "the recording stopped: %s (later rows are counted lost)",
-            message);
+bool recorder::record_failure_locked(flt_status st, const char *message) {
+    if (failed_)
+        return false;
+    failed_ = true;
+    failure_status_ = st;
+    failure_message_ = message;
+    return true;
 }
 
 void recorder::writer_main() {
@@ -567,16 +562,25 @@ void recorder::writer_main() {
         const auto t0 = std::chrono::steady_clock::now();
         last_commit_ = t0;
         bool ok = true;
+        // The failure is made known (sync returns, counters are read) only
+        // once every row it loses is counted, under the same lock below.
+        flt_status fail_status = FLT_OK;
+        const char *fail_message = "out of memory";
+        std::string fail_text;  // (allocates only on failure)
         try {
             write_round(blocks, events, frames);
         } catch (const error &e) {
-            record_failure(e.status, e.what());
+            fail_status = e.status;
+            fail_text = e.what();
+            fail_message = fail_text.c_str();
             ok = false;
         } catch (const std::bad_alloc &) {
-            record_failure(FLT_ERR_OUT_OF_MEMORY, "out of memory");
+            fail_status = FLT_ERR_OUT_OF_MEMORY;
             ok = false;
         } catch (const std::exception &e) {
-            record_failure(FLT_ERR_INTERNAL, e.what());
+            fail_status = FLT_ERR_INTERNAL;
+            fail_text = e.what();
+            fail_message = fail_text.c_str();
             ok = false;
         }
         writer_ns_ += std::uint64_t(std::chrono::duration_cast<std::chrono::nanoseconds>(
@@ -584,6 +588,7 @@ void recorder::writer_main() {
                                         .count());
         events.clear();
         lock.lock();
+        const bool newly_failed = !ok && record_failure_locked(fail_status, fail_message);
         for (row_block *b : blocks) {
             if (!ok)
                 rows_lost_ += b->rows;
@@ -621,6 +626,12 @@ void recorder::writer_main() {
         if (ok)
             committed_generation_ = std::max(committed_generation_, generation);
         done_cv_.notify_all();
+        if (newly_failed) {  // logged without the lock: a log callback may call us
+            lock.unlock();
+            FLT_LOG(FLT_LOG_ERROR, "record",
+                    "the recording stopped: %s (later rows are counted lost)", fail_message);
+            lock.lock();
+        }
         if (stopping && closed_.empty() && (!open_ || open_->rows == 0) && events_.empty())
             break;
     }

@@ -106,7 +106,9 @@ class recorder {
     void writer_main();
     void write_round(std::vector<row_block *> &blocks, std::vector<event> &events,
                      std::vector<frame_entry *> &frames);
-    void record_failure(flt_status st, const char *message);
+    // With m_ held: the first failure's status and message (false when the
+    // recorder had failed already).
+    bool record_failure_locked(flt_status st, const char *message);
     void push_event(event &&e);
     row_block *open_block_locked();
 
