@@ -677,6 +677,17 @@ typedef enum flt_option {
      * overexposed (0..1). Default 0.05: beyond a few percent the
      * plateaus' middles, not the lines' centres, carry the heights. */
     FLT_OPT_GAUGE_SATURATION_LIMIT = 712,
+    /** "gauge_provisional_mm": an early answer, for a line whose gates are
+     * closer to the shear than the reconstructor's latency_mm: once the
+     * strip is this far past a cut (mm, 0..1e6), the gauge hands out the
+     * open sheet's provisional result (FLT_SHEET_FLAG_PROVISIONAL), its
+     * last rows as the reconstructor estimates them then (flt_recon_peek);
+     * its final result follows when the rows are final, with the same id.
+     * Provisional sheets are not counted in FLT_GAUGE_COUNT_SHEETS, the
+     * coil's statistics or the archive. Default 0: none. A value at or
+     * above the latency gives none either (the final comes first).
+     * docs/gauge.md, "Early answers", tables what it costs in accuracy. */
+    FLT_OPT_GAUGE_PROVISIONAL_MM = 713,
 
     /* ---- leveler advisor (flatline/advisor.h) ---- */
     /** "advisor_damping": lambda of the advice, |P G d + gain r|^2 +

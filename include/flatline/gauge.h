@@ -80,7 +80,10 @@
  *   once the reconstructor has seen as much strip beyond the cut as inside
  *   a sheet (its latency: FLT_SHEET_LOOKAHEAD in mm, FLT_SHEET_LATENCY in
  *   seconds; the reconstructor's latency_mm sets it): a join is as
- *   accurate as the inside of a sheet. (flt_recon_end_sheet() instead finishes at once
+ *   accurate as the inside of a sheet. Where that is too late (stacker
+ *   gates close to the shear), gauge_provisional_mm hands out an early,
+ *   provisional result first (FLT_SHEET_FLAG_PROVISIONAL), its final one
+ *   later with the same id. (flt_recon_end_sheet() instead finishes at once
  *   without that look-ahead; tests/c/test_gauge.c measures the difference.)
  *   Cuts are given in increasing order; after a long reversal (an encoder
  *   reset) the order starts again. A cut at or before the start of the
@@ -213,7 +216,8 @@
  *   the reconstructor's latency at gauge_frame_spacing, a quarter more and
  *   256 rows), S = gauge_max_sheet_length / gauge_frame_spacing + 2 rows
  *   of a sheet, Q = gauge_queue_frames (0 without workers), P =
- *   gauge_sheet_slots (0 with gauge_keep_maps 0) and E extractors (1 at
+ *   gauge_sheet_slots (0 with gauge_keep_maps 0), B = 2 sheet buffers (3
+ *   with gauge_provisional_mm) and E extractors (1 at
  *   create with automatic bands or no workers, else one per worker),
  *   create takes about
  *     the reconstructor at R rows (recon.h, "Memory")
@@ -222,8 +226,8 @@
  *   + E x the extractor (extractor.h)
  *   + Q x 2 W H                         the frame queue
  *   + 64 R                              the row ring
- *   + 2 S (88 + 9 K) + P S (8 + 9 K)    two sheet buffers, the slots' maps
- *   + 8 K (R + 2 S + P S)               with gauge_keep_maps 2 (measured)
+ *   + B S (88 + 9 K) + P S (8 + 9 K)    B sheet buffers, the slots' maps
+ *   + 8 K (R + B S + P S)               with gauge_keep_maps 2 (measured)
  *   + K (100 P + 20 Q + 400) + 30 kB    per-fiber arrays
  *   bytes: 1,150 fibers, a 2048 x 256 frame and the defaults take about
  *   160 MB, 320 MB with rigid_motion, robust and gauge_keep_maps 1.
@@ -445,7 +449,12 @@ enum {
     FLT_SHEET_FLAG_INCOMPLETE = 256,
     /** It lost rows: frames dropped at a full queue, missing by the
      * encoder, or lost lines (FLT_SHEET_DROPPED, _MISSING, _LOST_LINES). */
-    FLT_SHEET_FLAG_LOST_ROWS = 512
+    FLT_SHEET_FLAG_LOST_ROWS = 512,
+    /** An early answer (gauge_provisional_mm): its last rows are the
+     * reconstructor's estimate before they were final, and its values and
+     * verdict may still change; the final sheet with the same id follows.
+     * Not counted, not archived, not in the coil's statistics. */
+    FLT_SHEET_FLAG_PROVISIONAL = 1024
 };
 
 /** What a full frame queue does (option gauge_overflow). */
@@ -576,6 +585,9 @@ typedef enum flt_gauge_counter {
     /** Frames and rows push_frame / push_row refused because
      * gauge_sheet_slots + gauge_sheet_backlog sheets existed. */
     FLT_GAUGE_COUNT_REFUSED = 20,
+    /** Provisional sheets handed out (gauge_provisional_mm); the other
+     * counters count final sheets only. */
+    FLT_GAUGE_COUNT_PROVISIONAL = 21,
     FLT_GAUGE_COUNT_MAX_ENUM_ = 0x7FFFFFFF
 } flt_gauge_counter;
 

@@ -169,6 +169,8 @@ const option_spec k_options[] = {
     {FLT_OPT_ARCHIVE_CLOSE_TIMEOUT, "archive_close_timeout", 0.0, 600000.0, 10000.0, true},
     {FLT_OPT_ARCHIVE_MAP_QUANTUM, "archive_map_quantum", 1.0e-6, 1.0, 0.001, false},
     {FLT_OPT_ARCHIVE_MAPS, "archive_maps", 0.0, 1.0, 1.0, true},
+    // the gauge, later additions
+    {FLT_OPT_GAUGE_PROVISIONAL_MM, "gauge_provisional_mm", 0.0, 1.0e6, 0.0, false},
 };
 constexpr std::size_t k_option_count = sizeof k_options / sizeof k_options[0];
 

@@ -201,6 +201,7 @@ void gauge::init(const flt_calib *calib, const flt_options *options) {
     cfg_.max_sheet_length = option_value(&eff, FLT_OPT_GAUGE_MAX_SHEET_LENGTH);
     cfg_.keep_maps = int(option_value(&eff, FLT_OPT_GAUGE_KEEP_MAPS));
     cfg_.sheet_slots = std::size_t(option_value(&eff, FLT_OPT_GAUGE_SHEET_SLOTS));
+    cfg_.provisional_mm = option_value(&eff, FLT_OPT_GAUGE_PROVISIONAL_MM);
 
     // Geometry: the calibration's, never a default.
     check(flt_calib_get_frame_size(calib, &width_, &height_));
@@ -259,11 +260,12 @@ void gauge::init(const flt_calib *calib, const flt_options *options) {
         // reconstructor and the flatness metrics refuse on their own).
         const double K = double(K_), rows = double(row_capacity_);
         const double slots = cfg_.keep_maps >= 1 ? double(cfg_.sheet_slots) : 0.0;
-        double bytes = 64.0 * rows;                     // the row ring
-        bytes += 2.0 * sheet_rows * (88.0 + 9.0 * K);   // two sheet buffers
-        bytes += slots * sheet_rows * (8.0 + 9.0 * K);  // the slots' maps
+        const double buffers = cfg_.provisional_mm > 0.0 ? 3.0 : 2.0;
+        double bytes = 64.0 * rows;                        // the row ring
+        bytes += buffers * sheet_rows * (88.0 + 9.0 * K);  // the sheet buffers
+        bytes += slots * sheet_rows * (8.0 + 9.0 * K);     // the slots' maps
         if (cfg_.keep_maps >= 2)
-            bytes += 8.0 * K * (rows + 2.0 * sheet_rows + slots * sheet_rows);
+            bytes += 8.0 * K * (rows + buffers * sheet_rows + slots * sheet_rows);
         if (cfg_.workers > 0)
             bytes += double(cfg_.queue_frames) * double(width_) * double(height_) * 2.0;
         constexpr double limit = 8.0 * 1024 * 1024 * 1024;
@@ -365,7 +367,8 @@ void gauge::init(const flt_calib *calib, const flt_options *options) {
     pull_s_.assign(k_pull_rows, 0.0);
     pull_z_.assign(k_pull_rows * K_, 0.0);
     pull_flags_.assign(k_pull_rows * K_, 0);
-    for (sheet_buffer &b : buffers_) {
+    for (int i = 0; i < (cfg_.provisional_mm > 0.0 ? 3 : 2); ++i) {
+        sheet_buffer &b = buffers_[i];
         b.s.assign(sheet_capacity_, 0.0);
         b.z.assign(sheet_capacity_ * K_, 0.0);
         b.flags.assign(sheet_capacity_ * K_, 0);
@@ -1128,6 +1131,7 @@ void gauge::begin_strip(double s) {
     sheet_in_coil_ = 0;
     sheet_start_ = s;
     sheet_flags_ = FLT_SHEET_FLAG_HEAD;
+    has_provisional_cut_ = false;
     buffers_[current_].rows = 0;
     {
         std::lock_guard<std::mutex> lock(m_);
@@ -1161,6 +1165,8 @@ void gauge::push_row(double s, const double *height, const double *slope, const 
     last_pushed_s_ = s;
     last_pushed_time_ns_ = meta.time_ns;
     pull_all();
+    if (cfg_.provisional_mm > 0.0)
+        publish_provisional();
 }
 
 void gauge::pull_all() {
@@ -1312,6 +1318,90 @@ void gauge::split(double s_at, unsigned end_flags, bool all_rows, const row_meta
     sheet_flags_ = 0;
 }
 
+void gauge::publish_provisional() {
+    double c = 0.0;
+    {
+        std::lock_guard<std::mutex> lock(m_);
+        if (active_count_ == 0 || buffer_busy_[2])
+            return;  // no cut ahead, or the last early answer is still being made
+        c = active_[active_head_];
+    }
+    // Once per cut; a cut inside the open sheet (the final split has not
+    // come: it would have taken the cut from the ring), passed by
+    // gauge_provisional_mm of strip.
+    if ((has_provisional_cut_ && c == provisional_cut_) || !(c > sheet_start_) ||
+        !(last_pushed_s_ - c >= cfg_.provisional_mm))
+        return;
+    has_provisional_cut_ = true;
+    provisional_cut_ = c;
+    const sheet_buffer &cur = buffers_[current_];
+    sheet_buffer &pb = buffers_[2];
+    // The open sheet's final rows (all before the cut: it is not applied
+    // yet), then the rows not final yet as the reconstructor estimates
+    // them now (flt_recon_peek changes nothing it will emit).
+    const std::size_t r0 = cur.rows;
+    std::memcpy(pb.s.data(), cur.s.data(), r0 * sizeof(double));
+    std::memcpy(pb.z.data(), cur.z.data(), r0 * K_ * sizeof(double));
+    std::memcpy(pb.flags.data(), cur.flags.data(), r0 * K_);
+    std::copy(cur.meta.begin(), cur.meta.begin() + long(r0), pb.meta.begin());
+    std::memcpy(pb.left.data(), cur.left.data(), r0 * sizeof(double));
+    std::memcpy(pb.right.data(), cur.right.data(), r0 * sizeof(double));
+    if (cfg_.keep_maps >= 2)
+        std::memcpy(pb.measured.data(), cur.measured.data(), r0 * K_ * sizeof(double));
+    std::size_t got = 0;
+    check(flt_recon_peek(recon_, sheet_capacity_ - r0, K_, pb.s.data() + r0, pb.z.data() + r0 * K_,
+                         pb.flags.data() + r0 * K_, &got));
+    std::size_t rows = r0;
+    bool has_after = false;
+    row_meta after;
+    for (std::size_t j = 0; j < got; ++j) {
+        // The pending rows' metadata wait in the ring in the same order.
+        if (j >= meta_count_ || meta_ring_[(meta_head_ + j) % row_capacity_].s != pb.s[r0 + j])
+            throw error(FLT_ERR_INTERNAL,
+                        "the reconstructor's pending rows and the gauge's disagree");
+        const std::size_t at = (meta_head_ + j) % row_capacity_;
+        if (!(pb.s[r0 + j] < c)) {
+            has_after = true;
+            after = meta_ring_[at];
+            break;
+        }
+        pb.meta[rows] = meta_ring_[at];
+        pb.left[rows] = meta_ring_[at].left;
+        pb.right[rows] = meta_ring_[at].right;
+        if (cfg_.keep_maps >= 2)
+            std::memcpy(&pb.measured[rows * K_], &measured_ring_[at * K_], K_ * sizeof(double));
+        ++rows;
+    }
+    pb.rows = rows;
+    sheet_job job;
+    job.buffer = 2;
+    job.rows = rows;
+    job.provisional = true;
+    job.s_start = sheet_start_;
+    job.s_end = c;
+    job.flags = sheet_flags_ | FLT_SHEET_FLAG_PROVISIONAL;
+    job.coil = coil_;
+    // The final sheet will have these numbers (unless the strip ends or the
+    // sheet is split before the cut: then its final has other ends).
+    job.index = sheet_in_coil_ + 1;
+    job.id = sheet_ids_ + 1;
+    job.lookahead = last_pushed_s_ - c;
+    job.cut_time_ns = cut_time_ns(pb, rows, c, has_after ? &after : nullptr);
+    job.latency_s = std::max(0.0, 1e-9 * double(last_pushed_time_ns_ - job.cut_time_ns));
+    job.coil_info = strip_coil_;
+    for (const sheet_note &n : open_notes_)
+        if (n.s < c)
+            job.notes.push_back(n);  // allocates only for notes
+    job.has_after = has_after;
+    job.after = after;
+    {
+        std::lock_guard<std::mutex> lock(m_);
+        buffer_busy_[2] = 1;
+        jobs_.push_back(job);
+    }
+    work_cv_.notify_all();
+}
+
 int gauge::free_buffer_or_wait() {
     const int other = 1 - current_;
     std::unique_lock<std::mutex> lock(m_);
@@ -1458,7 +1548,7 @@ double lost_between(std::uint32_t lost, double prev_s, double s, double a, doubl
 void gauge::evaluate(const sheet_job &job) {
     {
         std::lock_guard<std::mutex> lock(m_);
-        ++n_sheets_;
+        ++(job.provisional ? n_provisional_ : n_sheets_);
     }
     flt_sheet *sh = take_slot(job.rows);
     if (sh == nullptr)
@@ -1525,24 +1615,29 @@ void gauge::evaluate(const sheet_job &job) {
     const bool incomplete = !(coverage >= cfg_.min_coverage) || n == 0;
     if (incomplete)
         flags |= FLT_SHEET_FLAG_INCOMPLETE;
-    {
+    if (!job.provisional) {
+        // (an early answer's rows are counted with its final sheet)
         std::lock_guard<std::mutex> lock(m_);
         n_missing_ += std::uint64_t(missing);
         n_lost_lines_ += std::uint64_t(lost_lines);
         n_incomplete_ += incomplete ? 1 : 0;
     }
     const auto id = (unsigned long long)job.id, coil = (unsigned long long)job.coil;
-    if (dropped + missing + lost_lines > 0)
+    if (job.provisional)
+        FLT_LOG(FLT_LOG_DEBUG, "gauge",
+                "sheet %llu (coil %llu): provisional result %.0f mm past its cut", id, coil,
+                job.lookahead);
+    else if (dropped + missing + lost_lines > 0)
         FLT_LOG(FLT_LOG_WARNING, "gauge",
                 "sheet %llu (coil %llu) lost rows: %.0f dropped at a full queue, %.0f missing by "
                 "the encoder, %.0f lost lines; %.0f of %.0f rows measured (coverage %.1f %%)",
                 id, coil, dropped, missing, lost_lines, measured, expected, 100.0 * coverage);
-    if (incomplete)
+    if (incomplete && !job.provisional)
         FLT_LOG(FLT_LOG_WARNING, "gauge",
                 "sheet %llu (coil %llu) is incomplete: coverage %.1f %% is below "
                 "gauge_min_coverage %.1f %%; its shape and verdict are \"not judged\"",
                 id, coil, 100.0 * coverage, 100.0 * cfg_.min_coverage);
-    if (peaks > 0 && saturated > cfg_.saturation_limit * peaks)
+    if (!job.provisional && peaks > 0 && saturated > cfg_.saturation_limit * peaks)
         FLT_LOG(FLT_LOG_WARNING, "gauge",
                 "sheet %llu (coil %llu): %.1f %% of the laser peaks on the strip are saturated "
                 "(gauge_saturation_limit %.1f %%): lower the exposure or the laser power",
@@ -1702,9 +1797,10 @@ void gauge::evaluate(const sheet_job &job) {
     if (cfg_.keep_maps >= 2)
         std::memcpy(sh->map_measured.data(), b.measured.data(), n * K_ * sizeof(double));
     sh->magic = k_sheet_magic;
-    if (archive_ != nullptr)
+    // The record keeps final sheets only (the early answer's final follows).
+    if (archive_ != nullptr && !job.provisional)
         archive_sheet(*sh, b, n);
-    if (recorder_ != nullptr && recorder_->frames_on_fail() &&
+    if (recorder_ != nullptr && !job.provisional && recorder_->frames_on_fail() &&
         sh->value[FLT_SHEET_VERDICT] == FLT_VERDICT_FAIL)
         recorder_->save_frames();  // the frames that showed the failure
     deliver(sh);
@@ -1796,6 +1892,9 @@ void gauge::judge(flt_sheet *sh, const sheet_buffer &b, std::size_t n) {
     } else {
         verdict::judge(vd.set, vd.given, vc->scratch, thickness, width, map, vd.results.data(),
                        vd.gaps.data());
+    }
+    const bool provisional = unsigned(v[FLT_SHEET_FLAGS]) & FLT_SHEET_FLAG_PROVISIONAL;
+    if (!(unsigned(v[FLT_SHEET_FLAGS]) & FLT_SHEET_FLAG_INCOMPLETE) && !provisional) {
         // A band that changes within a coil (a measured width crossing a
         // band's edge) changes the limit: worth telling.
         const double coil = v[FLT_SHEET_COIL];
@@ -1825,7 +1924,8 @@ void gauge::judge(flt_sheet *sh, const sheet_buffer &b, std::size_t n) {
     v[FLT_SHEET_VERDICT] = failed > 0                           ? FLT_VERDICT_FAIL
                            : unjudged > 0 || vd.results.empty() ? FLT_VERDICT_NOT_JUDGED
                                                                 : FLT_VERDICT_PASS;
-    count_in_coil(*vc, *sh);
+    if (!provisional)  // the coil's statistics count final verdicts only
+        count_in_coil(*vc, *sh);
 }
 
 void coil_stats::reset(std::uint64_t gen, std::size_t n_rules) {
@@ -2381,6 +2481,8 @@ std::uint64_t gauge::count(flt_gauge_counter counter) const {
             return n_lost_lines_;
         case FLT_GAUGE_COUNT_REFUSED:
             return n_refused_;
+        case FLT_GAUGE_COUNT_PROVISIONAL:
+            return n_provisional_;
         default:
             return 0;
     }

@@ -138,6 +138,7 @@ struct gauge_config {
     double tail_length = 300.0, max_sheet_length = 6000.0;
     int keep_maps = 0;
     std::size_t sheet_slots = 4;
+    double provisional_mm = 0.0;  // 0: no provisional sheets
 };
 
 // What the producer hands to the gauge: a frame or a profile row.
@@ -262,6 +263,9 @@ class gauge {
         double latency_s = 0;
         unsigned flags = 0;
         std::uint64_t id = 0, coil = 0, index = 0;
+        // An early answer (FLT_SHEET_FLAG_PROVISIONAL): not counted, not
+        // archived, not in the coil's statistics.
+        bool provisional = false;
         // The row after the sheet's end (the next sheet's first), whose
         // lost frames may lie before the end.
         bool has_after = false;
@@ -303,6 +307,9 @@ class gauge {
     // Ends the open sheet at s_at: the rows before it (all rows with
     // all_rows), the rest begin the next sheet. `incoming` as above.
     void split(double s_at, unsigned end_flags, bool all_rows, const row_meta *incoming);
+    // The open sheet's early answer, when the strip is gauge_provisional_mm
+    // past its cut and its last rows are not final yet.
+    void publish_provisional();
     // When the strip at s_at passed the sensor, by the frame times of the
     // rows beside it (i: the first row of b at or after s_at).
     std::int64_t cut_time_ns(const sheet_buffer &b, std::size_t i, double s_at,
@@ -357,8 +364,10 @@ class gauge {
     bool failed_ = false;
     flt_status failure_status_ = FLT_OK;
     std::string failure_message_;
-    std::vector<sheet_job> jobs_;     // FIFO, at most 2
-    int buffer_busy_[2] = {0, 0};     // 1 while filled, queued or evaluated
+    std::vector<sheet_job> jobs_;  // FIFO, at most 2
+    // 1 while filled, queued or evaluated; buffer 2 holds a provisional
+    // sheet (only with gauge_provisional_mm).
+    int buffer_busy_[3] = {0, 0, 0};
     std::vector<flt_sheet *> ready_;  // ring of sheets for next_sheet
     std::size_t ready_head_ = 0, ready_count_ = 0;
     // Cuts announced (with the seq of the next frame when given), then
@@ -390,7 +399,7 @@ class gauge {
                   n_dropped_ = 0, n_no_strip_ = 0, n_strips_ = 0, n_sheets_ = 0,
                   n_sheets_dropped_ = 0, n_cuts_ = 0, n_cuts_ignored_ = 0, n_reversals_ = 0,
                   n_extract_errors_ = 0, n_sheets_grown_ = 0, n_incomplete_ = 0, n_missing_ = 0,
-                  n_lost_lines_ = 0, n_refused_ = 0;
+                  n_lost_lines_ = 0, n_refused_ = 0, n_provisional_ = 0;
 
     // ---- sequencer state (the thread holding the sequencing role)
     bool in_strip_ = false, pushed_ = false, has_output_ = false;
@@ -399,8 +408,10 @@ class gauge {
     std::uint64_t coil_ = 0, sheet_in_coil_ = 0, sheet_ids_ = 0;
     double sheet_start_ = 0.0;
     unsigned sheet_flags_ = 0;
-    int current_ = 0;  // the sheet buffer being filled
-    sheet_buffer buffers_[2];
+    int current_ = 0;               // the sheet buffer being filled
+    sheet_buffer buffers_[3];       // two for final sheets, one for a provisional
+    double provisional_cut_ = 0.0;  // the cut the last provisional sheet ended at
+    bool has_provisional_cut_ = false;
     // Rows inside the reconstructor, oldest first (ring of row_capacity_).
     std::vector<row_meta> meta_ring_;
     std::vector<double> measured_ring_;  // [row_capacity_ * K_], keep_maps 2

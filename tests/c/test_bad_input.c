@@ -3525,7 +3525,7 @@ static void row_gauge_count(void) {
     uint64_t v;
     BAD(FLT_ERR_INVALID_ARGUMENT, "'gauge'", flt_gauge_count(NULL, FLT_GAUGE_COUNT_FRAMES, &v));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_gauge_count(g, FLT_GAUGE_COUNT_FRAMES, NULL));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'counter' = 21", flt_gauge_count(g, (flt_gauge_counter)21, &v));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'counter' = 22", flt_gauge_count(g, (flt_gauge_counter)22, &v));
     ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "'counter' = -1",
                 flt_gauge_count(g, (flt_gauge_counter)-1, &v));
     GOOD(flt_gauge_count(g, FLT_GAUGE_COUNT_SHEETS_WAITING, &v));
@@ -3547,7 +3547,7 @@ static void row_sheet_get(void) {
     BAD(FLT_ERR_INVALID_ARGUMENT, "'sheet'", flt_sheet_get(NULL, FLT_SHEET_ID, &v));
     BAD(FLT_ERR_INVALID_ARGUMENT, "not a live", flt_sheet_get((flt_sheet *)junk, FLT_SHEET_ID, &v));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_sheet_get(sh, FLT_SHEET_ID, NULL));
-    BAD(FLT_ERR_NOT_FOUND, "'key' = 46", flt_sheet_get(sh, (flt_sheet_value)46, &v));
+    BAD(FLT_ERR_NOT_FOUND, "'key' = 48", flt_sheet_get(sh, (flt_sheet_value)48, &v));
     ENUM_UB_BAD(FLT_ERR_NOT_FOUND, "'key' = -1", flt_sheet_get(sh, (flt_sheet_value)-1, &v));
     GOOD(flt_sheet_get(sh, FLT_SHEET_ROWS, &v));
     ++g_checks;

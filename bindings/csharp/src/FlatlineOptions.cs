@@ -380,6 +380,10 @@ namespace Flatline
         /// <summary>A sheet whose share of saturated laser peaks exceeds this
         /// is logged as overexposed (0..1).</summary>
         public double GaugeSaturationLimit { get => Get("gauge_saturation_limit"); set => Set("gauge_saturation_limit", value); }
+        /// <summary>Once the strip is this far past a cut (mm), the open
+        /// sheet's provisional result (<see cref="SheetFlags.Provisional"/>);
+        /// its final follows. 0 (the default): none.</summary>
+        public double GaugeProvisionalMm { get => Get("gauge_provisional_mm"); set => Set("gauge_provisional_mm", value); }
 
         // ---- the leveler advisor (Advisor); flatline/advisor.h
         /// <summary>Lambda of the advice relative to the mean squared effect of

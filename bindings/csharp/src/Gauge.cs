@@ -37,6 +37,11 @@ namespace Flatline
         /// <summary>It lost rows: frames dropped, missing by the encoder, or
         /// lost lines.</summary>
         LostRows = FlatlineNative.FLT_SHEET_FLAG_LOST_ROWS,
+        /// <summary>An early answer (GaugeProvisionalMm): its last rows are
+        /// estimates made before they were final; the final sheet with the
+        /// same id follows. Not counted, not archived, not in the coil's
+        /// statistics.</summary>
+        Provisional = FlatlineNative.FLT_SHEET_FLAG_PROVISIONAL,
     }
 
     /// <summary>What a full frame queue does (the option gauge_overflow).</summary>
@@ -253,6 +258,9 @@ namespace Flatline
         /// <see cref="Shape"/> is <see cref="ShapeClass.NotJudged"/> and its
         /// <see cref="VerdictState"/> <see cref="Flatline.VerdictState.NotJudged"/>.</summary>
         public bool Incomplete => (Flags & SheetFlags.Incomplete) != 0;
+        /// <summary>An early answer: its values and verdict may still change,
+        /// and the final sheet with the same <see cref="Id"/> follows.</summary>
+        public bool Provisional => (Flags & SheetFlags.Provisional) != 0;
         /// <summary>The rows its length should hold (rows + dropped + missing),
         /// those that measured the strip, lost lines (rows inside the strip
         /// whose frame did not show it), and frames missing by the encoder.</summary>

@@ -142,6 +142,61 @@ namespace Flatline.Tests
         }
 
         [Fact]
+        public void ProvisionalSheetsComeEarlyAndCountNowhere()
+        {
+            // With GaugeProvisionalMm 300 each cut's sheet comes first as an
+            // early answer 300 mm past the cut, then final with the same id;
+            // the finals equal a gauge's without early answers, and only they
+            // are counted (counters, coil statistics).
+            using var calibration = Sensor();
+            var runs = new List<List<Flatline.Sheet>>();
+            var counted = new List<(ulong Sheets, ulong Provisional, long CoilSheets)>();
+            foreach (double provisional in new[] { 0.0, 300.0 })
+            {
+                using var options = Options();
+                options.GaugeProvisionalMm = provisional;
+                using var gauge = new Gauge(calibration, options);
+                using (var rules = ToleranceRules.Parse(VerdictRules))
+                    gauge.SetRules(rules, thicknessMm: 4.0, SheetWidth.Measured);
+                gauge.Cut(3000);
+                gauge.Cut(6000);
+                PushRows(gauge, 0, 4000);  // 12 m
+                gauge.Flush();
+                runs.Add(Drain(gauge));
+                counted.Add((gauge.Count(GaugeCounter.Sheets), gauge.Count(GaugeCounter.Provisional),
+                             gauge.LastCoilStatistics()!.Sheets));
+            }
+            var early = runs[1];
+            Assert.Equal(new[] { true, false, true, false, false }, early.Select(s => s.Provisional));
+            Assert.Equal(new long[] { 1, 1, 2, 2, 3 }, early.Select(s => s.Id));
+            var finals = early.Where(s => !s.Provisional).ToList();
+            Assert.Equal(runs[0].Count, finals.Count);
+            for (int i = 0; i < finals.Count; ++i)
+            {
+                Assert.Equal(runs[0][i].Z, finals[i].Z);  // bit for bit
+                Assert.Equal(runs[0][i].ZoneIUnits, finals[i].ZoneIUnits);
+                Assert.Equal(runs[0][i].VerdictState, finals[i].VerdictState);
+            }
+            foreach (int i in new[] { 0, 2 })
+            {
+                var p = early[i];
+                var f = early[i + 1];
+                Assert.True(p.Flags.HasFlag(SheetFlags.Provisional));
+                Assert.Equal((f.SStartMm, f.SEndMm, f.Rows), (p.SStartMm, p.SEndMm, p.Rows));
+                Assert.InRange(p.LookaheadMm, 300.0, 302.999);
+                Assert.True(f.LookaheadMm > 1500);
+                // Noise-free rows: the estimate is within 1 um of the final.
+                double worst = 0;
+                for (int r = 0; r < p.Rows; ++r)
+                    for (int k = 0; k < Fibers; ++k)
+                        worst = Math.Max(worst, Math.Abs(p.Z![r, k] - f.Z![r, k]));
+                Assert.True(worst < 1e-3, $"provisional differs by {worst} mm");
+            }
+            Assert.Equal((3UL, 0UL, 3L), counted[0]);
+            Assert.Equal((3UL, 2UL, 3L), counted[1]);
+        }
+
+        [Fact]
         public void WorkersGiveTheSameSheetsBitForBit()
         {
             using var calibration = Sensor();

@@ -58,6 +58,9 @@ class SheetFlag(enum.IntFlag):
     INCOMPLETE = _capi.FLT_SHEET_FLAG_INCOMPLETE
     #: rows lost: frames dropped, missing by the encoder, or lost lines
     LOST_ROWS = _capi.FLT_SHEET_FLAG_LOST_ROWS
+    #: an early answer (gauge_provisional_mm): its last rows are estimates
+    #: made before they were final; the final sheet with the same id follows
+    PROVISIONAL = _capi.FLT_SHEET_FLAG_PROVISIONAL
 
 
 # flt_sheet_value keys by the names Sheet.values uses (in key order), and
@@ -147,6 +150,13 @@ class Sheet:
     #: recording's time on a replay); finished_time - cut_time is the whole
     #: wait on a live line.
     cut_time: float = field(default=math.nan, compare=False)
+
+    @property
+    def provisional(self) -> bool:
+        """An early answer (gauge_provisional_mm): its values and verdict may
+        still change; the final sheet with the same id follows. Not counted,
+        not archived, not in the coil's statistics."""
+        return SheetFlag.PROVISIONAL in self.flags
 
     @property
     def failed_rules(self) -> int:

@@ -144,6 +144,49 @@ def test_latency_in_seconds_is_the_lookahead_at_the_rows_pace(calib):
     assert last.lookahead_mm == 0.0 and last.latency_s == 0.0
 
 
+def test_provisional_sheets_come_early_and_count_nowhere(calib):
+    # With gauge_provisional_mm 300 each cut's sheet comes first as an early
+    # answer 300 mm past its cut, then final with the same id; the finals
+    # are the sheets of a gauge without early answers, and only they are
+    # counted (counters, coil statistics).
+    s, h, g, _ = reference_sheet(4000)  # 12 m
+    rules = flatline.ToleranceRules.loads(VERDICT_RULES)
+    runs = []
+    for provisional in (0.0, 300.0):
+        gauge = flatline.Gauge(calib, gauge_workers=2, gauge_overflow=1, gauge_keep_maps=1,
+                               gauge_sheet_slots=32, gauge_frame_spacing=2.0,
+                               gauge_provisional_mm=provisional)
+        gauge.set_rules(rules, thickness_mm=4.0, width_mm="measured")
+        gauge.cut(3000.0)
+        gauge.cut(6000.0)
+        for r in range(len(s)):
+            gauge.push_row(s[r], h[r], g[r])
+        gauge.flush()
+        runs.append((list(gauge), gauge.counters(), gauge.coil_stats(last=True)))
+        gauge.close()
+    (plain, plain_counters, plain_stats), (early, counters, stats) = runs
+    assert [sh.provisional for sh in early] == [True, False, True, False, False]
+    assert [sh.id for sh in early] == [1, 1, 2, 2, 3]
+    finals = [sh for sh in early if not sh.provisional]
+    assert len(finals) == len(plain) == 3
+    for a, b in zip(finals, plain):  # every value and map (times apart), bit for bit
+        assert a.values.keys() == b.values.keys()
+        assert all(a.values[k] == b.values[k] or (math.isnan(a.values[k]) and
+                                                  math.isnan(b.values[k])) for k in a.values)
+        assert np.array_equal(a.z, b.z) and np.array_equal(a.s, b.s)
+        assert [r.worst for r in a.verdict] == [r.worst for r in b.verdict]
+    for p, f in ((early[0], early[1]), (early[2], early[3])):
+        assert flatline.SheetFlag.PROVISIONAL in p.flags
+        assert (p.s_start, p.s_end, p.rows) == (f.s_start, f.s_end, f.rows)
+        assert 300.0 <= p.lookahead_mm < 303.0 < 1500.0 < f.lookahead_mm
+        # Noise-free rows: the estimate is within 1 um of the final.
+        assert np.max(np.abs(p.z - f.z)) < 1e-3
+        assert [r.state for r in p.verdict] == [r.state for r in f.verdict]
+    assert counters["sheets"] == plain_counters["sheets"] == 3
+    assert counters["provisional"] == 2 and plain_counters["provisional"] == 0
+    assert (stats.sheets, stats.failed) == (plain_stats.sheets, plain_stats.failed) == (3, 3)
+
+
 def test_line_stop_and_reversal_are_skipped_and_counted(calib):
     s, h, g, _ = reference_sheet(1000)
     gauge = flatline.Gauge(calib, gauge_overflow=1, gauge_frame_spacing=2.0)
@@ -252,7 +295,7 @@ def test_bad_input_raises_with_the_library_message(calib):
 def test_gauge_options_table():
     table = flatline.gauge_options()
     assert table["gauge_workers"] == 2.0 and table["gauge_frame_spacing"] == 1.0
-    assert all(name.startswith("gauge_") for name in table) and len(table) == 13
+    assert all(name.startswith("gauge_") for name in table) and len(table) == 14
     assert "gauge_workers (int): default 2" in flatline.Gauge.__doc__
 
 
