@@ -39,6 +39,11 @@
  * Errors are taken over the sheets finished by the lag (the last 3 m sheet,
  * which end_sheet finishes, is left out).
  *
+ * A second table gives the gauge's early answers (gauge_provisional_mm) at
+ * the first latency given: each 3 m sheet as known when the strip is 300,
+ * 600, 1000 or 1500 mm past its cut (its final rows and the pending ones
+ * as flt_recon_peek estimates them), with the same error columns.
+ *
  * Usage: bench_latency [--fibers N] [--seeds N] [--plain] [--lag-knots]
  *                      [latency_mm ...]
  *   latency in mm (default: 1000 1500 2000 3000 6000); with --lag-knots the
@@ -316,6 +321,51 @@ static void errors_from(const strip *t, const double *z, size_t first, double *m
     sheet_errors(&part, z + first * per, SHEETS - 1 - first, max_out, std_out);
 }
 
+/* The gauge's early answers (gauge_provisional_mm): streams the strip as
+ * stream() does and, when the newest row first lies `ahead` mm past a cut,
+ * takes that sheet as known then: its rows final so far and the pending
+ * ones as flt_recon_peek estimates them. zp receives every sheet but the
+ * last so (the last has no cut). */
+static void provisional(const strip *t, const setting *set, double ahead, double *zp) {
+    size_t K = t->fibers, per = (size_t)(SHEET_MM / DX);
+    flt_options *o = make_options(set);
+    flt_recon *rc = NULL;
+    check(flt_recon_create(K, o, &rc), "flt_recon_create");
+    flt_options_destroy(o);
+    double *s_out = alloc(t->rows * sizeof(double));
+    double *zf = alloc(t->rows * K * sizeof(double)), *zq = alloc(t->rows * K * sizeof(double));
+    size_t pulled = 0, got = 0, next_cut = 1;
+    for (size_t r = 0; r < t->rows && next_cut < SHEETS; ++r) {
+        check(flt_recon_push(rc, 1, K, &t->s[r], t->height + r * K, t->slope + r * K, NULL),
+              "flt_recon_push");
+        check(flt_recon_pull(rc, t->rows - pulled, K, s_out, zf + pulled * K, NULL, &got),
+              "flt_recon_pull");
+        pulled += got;
+        while (next_cut < SHEETS && t->s[r] >= (double)next_cut * SHEET_MM + ahead) {
+            size_t lo = (next_cut - 1) * per, hi = next_cut * per;
+            size_t final_end = pulled < hi ? pulled : hi;
+            if (final_end > lo)
+                memcpy(zp + lo * K, zf + lo * K, (final_end - lo) * K * sizeof(double));
+            if (pulled < hi) {
+                check(flt_recon_peek(rc, t->rows - pulled, K, s_out, zq, NULL, &got),
+                      "flt_recon_peek");
+                if (pulled + got < hi) {
+                    fprintf(stderr, "bench_latency: %zu rows pending, %zu wanted\n", got,
+                            hi - pulled);
+                    exit(1);
+                }
+                size_t from = pulled > lo ? pulled : lo;
+                memcpy(zp + from * K, zq + (from - pulled) * K, (hi - from) * K * sizeof(double));
+            }
+            ++next_cut;
+        }
+    }
+    flt_recon_destroy(rc);
+    free(s_out);
+    free(zf);
+    free(zq);
+}
+
 int main(int argc, char **argv) {
     size_t fibers = 751;
     unsigned seeds = 5;
@@ -436,6 +486,49 @@ int main(int argc, char **argv) {
     printf("\nthe whole strip at once (flt_reconstruct, the same options), experiment 3: "
            "MaxAE %.3f / %.3f mm, STD %.4f mm\n",
            whole_max, whole_rest, whole_std);
+
+    /* Early answers at the first setting's latency: each sheet as known
+     * when the strip is gauge_provisional_mm past its cut. */
+    setting set = base;
+    set.value = values[0];
+    printf("\nearly answers (the gauge's gauge_provisional_mm) at %s %g: each sheet as known "
+           "that far past its cut\n\n",
+           base.lag_knots ? "lag_knots" : "latency_mm", set.value);
+    printf("| gauge_provisional_mm | noise-free max, um | exp. 3 MaxAE, mm | exp. 3 STD, mm "
+           "| 1%% peaks MaxAE, mm |\n| --- | --- | --- | --- | --- |\n");
+    const double aheads[] = {300, 600, 1000, 1500};
+    for (size_t a = 0; a < sizeof aheads / sizeof aheads[0]; ++a) {
+        measure_clean(&t);
+        provisional(&t, &set, aheads[a], z);
+        double clean_max = 0;
+        for (size_t i = 0; i < (SHEETS - 1) * (size_t)(SHEET_MM / DX) * fibers; ++i)
+            clean_max = fmax(clean_max, fabs(z[i] - t.truth[i]));
+        double e3_max = 0, e3_rest = 0, e3_std = 0, e3_std_rest = 0, pk_max = 0, pk_rest = 0;
+        for (unsigned seed = 1; seed <= seeds; ++seed) {
+            fprintf(stderr, "\rearly %g: seed %u/%u   ", aheads[a], seed, seeds);
+            double mx, sd;
+            measure_clean(&t);
+            add_experiment3(&t, 300 + seed, 1);
+            provisional(&t, &set, aheads[a], z);
+            errors_from(&t, z, 0, &mx, &sd);
+            e3_max = fmax(e3_max, mx);
+            e3_std = fmax(e3_std, sd);
+            errors_from(&t, z, 1, &mx, &sd);
+            e3_rest = fmax(e3_rest, mx);
+            e3_std_rest = fmax(e3_std_rest, sd);
+            measure_clean(&t);
+            add_spurious_peaks(&t, 40 + seed);
+            provisional(&t, &set, aheads[a], z);
+            errors_from(&t, z, 0, &mx, &sd);
+            pk_max = fmax(pk_max, mx);
+            errors_from(&t, z, 1, &mx, &sd);
+            pk_rest = fmax(pk_rest, mx);
+        }
+        fprintf(stderr, "\r%60s\r", "");
+        printf("| %g | %.3f | %.3f / %.3f | %.4f / %.4f | %.3f / %.3f |\n", aheads[a],
+               clean_max * 1e3, e3_max, e3_rest, e3_std, e3_std_rest, pk_max, pk_rest);
+        fflush(stdout);
+    }
     free(z);
     free(zb);
     free_strip(&t);
