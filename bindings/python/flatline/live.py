@@ -239,6 +239,7 @@ def _sheet_summary(sheet: flatline.Sheet, scale: Tuple[float, float]) -> Dict[st
         "max_i_units": _finite(sheet.max_i_units), "shape": sheet.shape.name.lower(),
         "strip_width_mm": _finite(sheet.strip_width),
         "rules": len(verdict), "failed": sheet.failed_rules, "verdict": verdict,
+        "state": sheet.verdict_state.name.lower(), "provisional": sheet.provisional,
         "zones": zones, "scale_mm": [_finite(scale[0]), _finite(scale[1])],
     }
 
@@ -453,6 +454,12 @@ class LiveView:
             picture, lo, hi = png_bytes(np.full((1, 1), 128, np.uint8)), math.nan, math.nan
         summary = _sheet_summary(sheet, (lo, hi))
         with self._lock:
+            # A final sheet replaces its early answer (gauge_provisional_mm).
+            for i, shown in enumerate(self._sheets):
+                if shown["id"] == sheet.id:
+                    self._sheets[i] = summary
+                    self._sheet_png[sheet.id] = picture
+                    return
             if len(self._sheets) == self._sheets.maxlen:
                 self._sheet_png.pop(self._sheets[0]["id"], None)
             self._sheets.append(summary)
@@ -581,9 +588,13 @@ function zoneBars(zones) {
   return s;
 }
 function sheetCard(s) {
-  const verdict = s.rules === 0 ? '<span class="muted">no rules</span>'
-    : s.failed === 0 ? '<span class="pass">PASS</span>'
-    : `<span class="fail">FAIL (${s.failed} of ${s.rules} rules)</span>`;
+  // The sheet's own verdict: a sheet no rule could judge is never shown
+  // as passed; an early answer says so until its final replaces it.
+  const early = s.provisional ? ' <span class="muted">(provisional)</span>' : "";
+  const verdict = (s.rules === 0 ? '<span class="muted">no rules</span>'
+    : s.state === "fail" ? `<span class="fail">FAIL (${s.failed} of ${s.rules} rules)</span>`
+    : s.state === "pass" ? '<span class="pass">PASS</span>'
+    : '<span class="muted">NOT JUDGED</span>') + early;
   const rules = s.verdict.map((r) => `<tr><td class="l">${esc(r.rule)}</td>`
     + `<td class="${r.state === "fail" ? "fail" : ""}">${esc(r.state.replace("_", " "))}</td>`
     + `<td>${r.worst == null ? "&ndash;" : r.worst.toFixed(2)}</td>`
