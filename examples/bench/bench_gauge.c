@@ -26,6 +26,9 @@
  *      frame whose row reaches the cut to the callback with the sheet that
  *      ends there, and how much strip the reconstructor had taken beyond
  *      the cut (its look-ahead: the latency is that strip at line speed).
+ * Each run also prints where the time went (the gauge's stage counters:
+ * extraction, sequencing, evaluation per frame), how busy the workers were
+ * and the frame queue's high-water mark.
  * Both figures depend on the machine being otherwise idle: the bench prints
  * the load average so a reader can tell.
  *
@@ -160,8 +163,16 @@ static void run(const flt_calib *calib, const uint8_t *pixels, size_t frames, in
     CHECK(flt_gauge_count(g, FLT_GAUGE_COUNT_DROPPED, &dropped));
     CHECK(flt_gauge_count(g, FLT_GAUGE_COUNT_SKIPPED_STOP, &skipped));
     CHECK(flt_gauge_count(g, FLT_GAUGE_COUNT_SHEETS, &sheets));
-    double row_capacity = 0;
+    double row_capacity = 0, queue_frames = 0;
     CHECK(flt_gauge_get_option(g, FLT_OPT_ROW_CAPACITY, &row_capacity));
+    CHECK(flt_gauge_get_option(g, FLT_OPT_GAUGE_QUEUE_FRAMES, &queue_frames));
+    /* Where the time went, on every thread together. */
+    uint64_t ns[3] = {0, 0, 0}, high = 0;
+    CHECK(flt_gauge_count(g, FLT_GAUGE_COUNT_EXTRACT_NS, &ns[0]));
+    CHECK(flt_gauge_count(g, FLT_GAUGE_COUNT_SEQUENCE_NS, &ns[1]));
+    CHECK(flt_gauge_count(g, FLT_GAUGE_COUNT_EVALUATE_NS, &ns[2]));
+    CHECK(flt_gauge_count(g, FLT_GAUGE_COUNT_QUEUE_HIGH_WATER, &high));
+    const double busy = 1e-9 * (double)(ns[0] + ns[1] + ns[2]);
     if (!paced) {
         const double fps = (double)frames / (t1 - t0);
         printf("throughput: %zu frames (%.0f m) in %.2f s = %.0f frames/s, real-time factor "
@@ -171,6 +182,13 @@ static void run(const flt_calib *calib, const uint8_t *pixels, size_t frames, in
                frames, (double)frames * STEP / 1000, t1 - t0, fps, fps / RATE, pushed - t0,
                (double)frames / (pushed - t0), row_capacity * STEP / 1000 / 1.25,
                1e6 * (c1 - c0) / (double)frames, 2.0 * (double)frames / (c1 - c0));
+        printf("  per frame by stage (wall time on the threads that ran it; a loaded machine "
+               "adds waits for a core): extraction %.0f us, sequencing (reconstruction, sheets) "
+               "%.0f us, evaluation (flatness, verdicts) %.0f us; the 2 workers busy %.0f %% of "
+               "the run; queue high-water %llu of %.0f frames\n",
+               1e-3 * (double)ns[0] / (double)frames, 1e-3 * (double)ns[1] / (double)frames,
+               1e-3 * (double)ns[2] / (double)frames, 100.0 * busy / (2.0 * (t1 - t0)),
+               (unsigned long long)high, queue_frames);
     } else {
         double sum = 0, max = 0, ahead = 0, latency = 0, latency_max = 0, waited = 0;
         int n = 0;
@@ -189,6 +207,8 @@ static void run(const flt_calib *calib, const uint8_t *pixels, size_t frames, in
                "queue (%.3f%%), %llu skipped\n",
                RATE, frames, (unsigned long long)dropped, 100.0 * (double)dropped / (double)frames,
                (unsigned long long)skipped);
+        printf("  the 2 workers busy %.0f %% of the run; queue high-water %llu of %.0f frames\n",
+               100.0 * busy / (2.0 * (t1 - t0)), (unsigned long long)high, queue_frames);
         if (n > 0)
             printf("  latency from a cut to its sheet's result: mean %.2f s, max %.2f s over %d "
                    "cuts\n  (the reconstructor had taken %.1f m of strip beyond the cut: "

@@ -588,6 +588,21 @@ typedef enum flt_gauge_counter {
     /** Provisional sheets handed out (gauge_provisional_mm); the other
      * counters count final sheets only. */
     FLT_GAUGE_COUNT_PROVISIONAL = 21,
+    /** Where the time goes: nanoseconds spent so far (wall time on the
+     * threads that ran the stage, every thread together: on a machine with
+     * more busy threads than cores, waiting for a core counts too),
+     * extracting frames (the workers, or the pushing thread with
+     * 0 workers), sequencing rows (the reconstructor and the sheets, in
+     * frame order) and evaluating sheets (flatness, verdicts). A stage run
+     * inside another counts for itself only. Over a run's wall time and
+     * gauge_workers they give the workers' utilisation
+     * (examples/bench/bench_gauge prints it). */
+    FLT_GAUGE_COUNT_EXTRACT_NS = 22,
+    FLT_GAUGE_COUNT_SEQUENCE_NS = 23, /**< ns sequencing rows */
+    FLT_GAUGE_COUNT_EVALUATE_NS = 24, /**< ns evaluating sheets */
+    /** The most frames that waited in the queue at once (of
+     * gauge_queue_frames): near it, frames are about to be dropped. */
+    FLT_GAUGE_COUNT_QUEUE_HIGH_WATER = 25,
     FLT_GAUGE_COUNT_MAX_ENUM_ = 0x7FFFFFFF
 } flt_gauge_counter;
 

@@ -30,6 +30,44 @@ constexpr double k_recon_max_jump_mm = 1.0e6, k_recon_max_jump_knots = 1000.0;
 
 thread_local const void *t_in_callback = nullptr;  // the gauge whose callback runs
 
+// Time spent in a stage (extraction, sequencing, evaluation), added to its
+// counter when the stage returns, by the monotonic clock (a vDSO read, not
+// a system call: cheap per frame). A stage run inside another (a sheet
+// evaluated by the sequencer while both buffers are busy) counts for
+// itself only: the outer one leaves its time out.
+class stage_timer {
+  public:
+    explicit stage_timer(std::atomic<std::uint64_t> &total)
+        : total_(total), outer_(current_), t0_(std::chrono::steady_clock::now()) {
+        current_ = this;
+    }
+    ~stage_timer() {
+        const auto ns = std::uint64_t(std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                          std::chrono::steady_clock::now() - t0_)
+                                          .count());
+        total_.fetch_add(ns - std::min(ns, nested_), std::memory_order_relaxed);
+        if (outer_)
+            outer_->nested_ += ns;
+        current_ = outer_;
+    }
+    stage_timer(const stage_timer &) = delete;
+    stage_timer &operator=(const stage_timer &) = delete;
+    // Touches the thread-local (with MinGW's emulated TLS its first use on
+    // a thread allocates: at thread start, not per frame).
+    static void touch() {
+        stage_timer *volatile current = current_;
+        (void)current;
+    }
+
+  private:
+    static thread_local stage_timer *current_;
+    std::atomic<std::uint64_t> &total_;
+    stage_timer *outer_;
+    std::chrono::steady_clock::time_point t0_;
+    std::uint64_t nested_ = 0;
+};
+thread_local stage_timer *stage_timer::current_ = nullptr;
+
 // A failed call of another component: its status and message, as an
 // exception the gauge's guards turn back into them.
 void check(flt_status st) {
@@ -446,6 +484,7 @@ void gauge::touch_thread_locals() {
     const void *volatile callback = t_in_callback;  // volatile: the read is kept
     (void)callback;
     (void)flt_last_error_message();  // the thread's error state (core/error.cpp)
+    stage_timer::touch();
 }
 
 gauge::~gauge() {
@@ -552,6 +591,7 @@ bool gauge_guarded(gauge *g, Body &&body, void (gauge::*rec)(flt_status, const c
 
 void gauge::extract(frame_slot &slot, const void *pixels, flt_pixel_format format,
                     std::size_t stride, flt_extractor *extractor, bool *error_out) const {
+    const stage_timer timer(ns_extract_);
     const flt_status st = flt_extractor_process(extractor, pixels, format, width_, height_, stride,
                                                 slot.encoder_mm, K_, &slot.s, slot.height.data(),
                                                 slot.slope.data(), slot.valid.data());
@@ -849,6 +889,7 @@ void gauge::take(const gauge_input &in, bool from_acquisition) {
         ++n_extract_errors_;
     slot.state = ready ? slot_extracted : slot_filled;
     ++head_;
+    queue_high_ = std::max(queue_high_, head_ - tail_);
     if (cfg_.workers > 0) {
         work_cv_.notify_all();
         return;
@@ -1040,6 +1081,7 @@ void gauge::drop_active_cuts(double up_to, bool all) {
 }
 
 void gauge::sequence(frame_slot &slot) {
+    const stage_timer timer(ns_sequence_);
     if (slot.new_strip) {
         // The encoder went back by more than gauge_reversal_length: what was
         // measured is finished, and cuts given in the old numbering go.
@@ -1546,6 +1588,7 @@ double lost_between(std::uint32_t lost, double prev_s, double s, double a, doubl
 }  // namespace
 
 void gauge::evaluate(const sheet_job &job) {
+    const stage_timer timer(ns_evaluate_);
     {
         std::lock_guard<std::mutex> lock(m_);
         ++(job.provisional ? n_provisional_ : n_sheets_);
@@ -2483,6 +2526,14 @@ std::uint64_t gauge::count(flt_gauge_counter counter) const {
             return n_refused_;
         case FLT_GAUGE_COUNT_PROVISIONAL:
             return n_provisional_;
+        case FLT_GAUGE_COUNT_EXTRACT_NS:
+            return ns_extract_.load(std::memory_order_relaxed);
+        case FLT_GAUGE_COUNT_SEQUENCE_NS:
+            return ns_sequence_.load(std::memory_order_relaxed);
+        case FLT_GAUGE_COUNT_EVALUATE_NS:
+            return ns_evaluate_.load(std::memory_order_relaxed);
+        case FLT_GAUGE_COUNT_QUEUE_HIGH_WATER:
+            return queue_high_;
         default:
             return 0;
     }

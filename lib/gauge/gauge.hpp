@@ -400,6 +400,10 @@ class gauge {
                   n_sheets_dropped_ = 0, n_cuts_ = 0, n_cuts_ignored_ = 0, n_reversals_ = 0,
                   n_extract_errors_ = 0, n_sheets_grown_ = 0, n_incomplete_ = 0, n_missing_ = 0,
                   n_lost_lines_ = 0, n_refused_ = 0, n_provisional_ = 0;
+    std::uint64_t queue_high_ = 0;  // the most frames queued at once
+    // Time spent in each stage on every thread, ns (stage_timer).
+    mutable std::atomic<std::uint64_t> ns_extract_{0};
+    std::atomic<std::uint64_t> ns_sequence_{0}, ns_evaluate_{0};
 
     // ---- sequencer state (the thread holding the sequencing role)
     bool in_strip_ = false, pushed_ = false, has_output_ = false;

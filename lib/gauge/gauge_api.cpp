@@ -251,7 +251,7 @@ FLT_API flt_status FLT_CALL flt_gauge_count(const flt_gauge *gauge, flt_gauge_co
             return st;
         FLT_CHECK_NOT_NULL(fn, out);
         const int raw = enum_arg(counter);
-        if (raw < 0 || raw > FLT_GAUGE_COUNT_PROVISIONAL)
+        if (raw < 0 || raw > FLT_GAUGE_COUNT_QUEUE_HIGH_WATER)
             return fail(FLT_ERR_INVALID_ARGUMENT,
                         "%s: argument 'counter' = %d is not a flt_gauge_counter", fn, raw);
         *out = gauge->impl->count(counter);

@@ -3525,7 +3525,7 @@ static void row_gauge_count(void) {
     uint64_t v;
     BAD(FLT_ERR_INVALID_ARGUMENT, "'gauge'", flt_gauge_count(NULL, FLT_GAUGE_COUNT_FRAMES, &v));
     BAD(FLT_ERR_INVALID_ARGUMENT, "'out'", flt_gauge_count(g, FLT_GAUGE_COUNT_FRAMES, NULL));
-    BAD(FLT_ERR_INVALID_ARGUMENT, "'counter' = 22", flt_gauge_count(g, (flt_gauge_counter)22, &v));
+    BAD(FLT_ERR_INVALID_ARGUMENT, "'counter' = 26", flt_gauge_count(g, (flt_gauge_counter)26, &v));
     ENUM_UB_BAD(FLT_ERR_INVALID_ARGUMENT, "'counter' = -1",
                 flt_gauge_count(g, (flt_gauge_counter)-1, &v));
     GOOD(flt_gauge_count(g, FLT_GAUGE_COUNT_SHEETS_WAITING, &v));

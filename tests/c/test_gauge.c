@@ -457,6 +457,20 @@ static void frames_against_hand_chain(void **state) {
     assert_int_equal(count(g[2], FLT_GAUGE_COUNT_EXTRACTED), n_frames);
     assert_int_equal(count(g[2], FLT_GAUGE_COUNT_DROPPED), 0);
     assert_int_equal(count(g[2], FLT_GAUGE_COUNT_CUTS_IGNORED), 0);
+    /* Where the time went: every stage took some (340 frames of 2048 x 240
+     * take milliseconds to extract), and no more than the run's wall time
+     * on each of the threads (a generous bound: seconds); the queue of 8
+     * held at least one frame and never more than it holds. */
+    const double stage_s[3] = {1e-9 * (double)count(g[2], FLT_GAUGE_COUNT_EXTRACT_NS),
+                               1e-9 * (double)count(g[2], FLT_GAUGE_COUNT_SEQUENCE_NS),
+                               1e-9 * (double)count(g[2], FLT_GAUGE_COUNT_EVALUATE_NS)};
+    for (int i = 0; i < 3; ++i)
+        assert_true(stage_s[i] > 1e-4 && stage_s[i] < 120.0);
+    const uint64_t high = count(g[2], FLT_GAUGE_COUNT_QUEUE_HIGH_WATER);
+    assert_true(high >= 1 && high <= 8);
+    print_message("stages, 2 workers: extraction %.3f s, sequencing %.3f s, evaluation %.3f s; "
+                  "queue high-water %llu frames\n",
+                  stage_s[0], stage_s[1], stage_s[2], (unsigned long long)high);
     /* The first sheet finished while the strip streamed, once the
      * reconstructor had seen its latency of strip beyond the cut: more than
      * its lag of 8 knots (800 mm). The last ended with the strip. */
