@@ -183,7 +183,11 @@ namespace Flatline.Tests
                 var f = early[i + 1];
                 Assert.True(p.Flags.HasFlag(SheetFlags.Provisional));
                 Assert.Equal((f.SStartMm, f.SEndMm, f.Rows), (p.SStartMm, p.SEndMm, p.Rows));
-                Assert.InRange(p.LookaheadMm, 300.0, 302.999);
+                // At least 300 mm past the cut (later only while the previous
+                // early answer is still being evaluated: under wine that can
+                // take seconds), and before the final.
+                Assert.True(p.LookaheadMm >= 300.0 && p.LookaheadMm < f.LookaheadMm,
+                            $"early answer {p.LookaheadMm} mm past the cut, final {f.LookaheadMm} mm");
                 Assert.True(f.LookaheadMm > 1500);
                 // Noise-free rows: the estimate is within 1 um of the final.
                 double worst = 0;
