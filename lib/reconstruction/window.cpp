@@ -134,21 +134,21 @@ FLT_WINDOW_KERNEL void predict6(std::size_t K, const double *a, const double *b,
 
 // and a sample's share of the block's right-hand sides (weigh_values and
 // add_rhs for the six unknowns at once). Returns the fibers that take any
-// weight back (their complements in dmh, dmg).
-FLT_WINDOW_KERNEL std::size_t accumulate6(std::size_t K, double D, const double *a, const double *b,
-                                          const double *__restrict yh, const double *__restrict yg,
-                                          const double *__restrict mh, const double *__restrict mg,
-                                          double *rh_out, double *rg_out, double *__restrict dmh,
-                                          double *__restrict dmg) {
-    double *__restrict rh0 = rh_out, *__restrict rh1 = rh_out + K, *__restrict rh2 = rh_out + 2 * K;
-    double *__restrict rh3 = rh_out + 3 * K, *__restrict rh4 = rh_out + 4 * K;
-    double *__restrict rh5 = rh_out + 5 * K;
-    double *__restrict rg0 = rg_out, *__restrict rg1 = rg_out + K, *__restrict rg2 = rg_out + 2 * K;
-    double *__restrict rg3 = rg_out + 3 * K, *__restrict rg4 = rg_out + 4 * K;
-    double *__restrict rg5 = rg_out + 5 * K;
+// weight back (their complements in dmh, dmg). The twelve right-hand sides
+// are restrict parameters and the count an integer: GCC vectorises the
+// loop only so (restrict locals, or a floating-point count, leave it
+// scalar).
+FLT_WINDOW_KERNEL std::size_t
+accumulate6(std::size_t K, double D, const double *__restrict a, const double *__restrict b,
+            const double *__restrict yh, const double *__restrict yg, const double *__restrict mh,
+            const double *__restrict mg, double *__restrict rh0, double *__restrict rh1,
+            double *__restrict rh2, double *__restrict rh3, double *__restrict rh4,
+            double *__restrict rh5, double *__restrict rg0, double *__restrict rg1,
+            double *__restrict rg2, double *__restrict rg3, double *__restrict rg4,
+            double *__restrict rg5, double *__restrict dmh, double *__restrict dmg) {
     const double a0 = a[0], a1 = a[1], a2 = a[2], a3 = a[3], a4 = a[4], a5 = a[5];
     const double b0 = b[0], b1 = b[1], b2 = b[2], b3 = b[3], b4 = b[4], b5 = b[5];
-    double affected = 0.0;
+    std::size_t affected = 0;
     for (std::size_t k = 0; k < K; ++k) {
         const double hv = mh[k] != 0.0 ? mh[k] * yh[k] : 0.0;
         const double gv = mg[k] != 0.0 ? mg[k] * (D * yg[k]) : 0.0;
@@ -166,9 +166,9 @@ FLT_WINDOW_KERNEL std::size_t accumulate6(std::size_t K, double D, const double 
         rg5[k] += b5 * gv;
         dmh[k] = 1.0 - mh[k];
         dmg[k] = 1.0 - mg[k];
-        affected += mh[k] * mg[k] != 1.0 ? 1.0 : 0.0;
+        affected += std::size_t(mh[k] * mg[k] != 1.0);
     }
-    return std::size_t(affected);
+    return affected;
 }
 
 inline void sub_product(std::size_t C, double *__restrict out, const double *__restrict a,
@@ -429,7 +429,9 @@ void robust_window::add_row(long b, std::size_t /*r*/, const double *ch, const d
     double *bh = rh(b), *bg = rg(b);
     std::size_t affected = 0;
     if (n_ == 6) {
-        affected = accumulate6(K_, D_, ch, cg, yh, yg, mh, mg, bh, bg, dmh, dmg);
+        affected = accumulate6(K_, D_, ch, cg, yh, yg, mh, mg, bh, bh + K_, bh + 2 * K_,
+                               bh + 3 * K_, bh + 4 * K_, bh + 5 * K_, bg, bg + K_, bg + 2 * K_,
+                               bg + 3 * K_, bg + 4 * K_, bg + 5 * K_, dmh, dmg);
     } else {
         affected = weigh_values(K_, D_, yh, yg, mh, mg, hv, gv, dmh, dmg);
         for (int u = 0; u < n_; ++u)
