@@ -276,6 +276,7 @@ double robust_window::bytes_needed(std::size_t fibers, const recon_params &param
         recon_engine::bytes_needed(fibers, frozen_params(params), std::size_t(S) + 4, true, false);
     bytes += 8 * K * (2 * double(robust.scale_blocks) + 16) * 2;   // scales
     bytes += 8 * ring * (2 * n * n + (2 * n + 2 * ntri + 2) * K);  // blocks, knot states
+    bytes += ring * (K + 4 * (K / 8 + 1));                         // downdate lists
     bytes += 8 * knots * 2 * K;                                    // peek's solution
     bytes += double(params.row_capacity) * (8 + 2 * 4 * K);        // raw rows, in float
     bytes += 8 * (2 * knots) * n * (2 + chunk) + 8 * (2 * knots) * chunk;
@@ -324,6 +325,11 @@ robust_window::robust_window(std::size_t fibers, const recon_params &params,
     dh_.assign(ring_ * ntri_ * K_, 0.0);
     dg_.assign(ring_ * ntri_ * K_, 0.0);
     x_.assign(ring_ * 2 * K_, 0.0);
+    // Listed up to the point where the dense subtraction costs less (as
+    // add_row's own choice for a row).
+    down_cap_ = K_ / 8 + 1;
+    down_fibers_.assign(ring_ * down_cap_, 0);
+    down_marks_.assign(ring_ * K_, 0);
     peek_x_.assign(std::size_t(max_knots_) * 2 * K_, 0.0);
     row_cap_ = params.row_capacity;
     row_s_.assign(row_cap_, 0.0);
@@ -377,11 +383,25 @@ void robust_window::open_block(long b) {
     bl.rows = 0;
     bl.judged = 0;
     bl.has_down = false;
+    clear_down(bl, b);
     const std::size_t nn = std::size_t(n_) * n_;
     std::fill_n(gh(b), nn, 0.0);
     std::fill_n(gg(b), nn, 0.0);
     std::fill_n(rh(b), std::size_t(n_) * K_, 0.0);
     std::fill_n(rg(b), std::size_t(n_) * K_, 0.0);
+}
+
+void robust_window::clear_down(block &bl, long b) {
+    std::uint8_t *marks = down_marks(b);
+    if (bl.dense_down) {
+        std::fill_n(marks, K_, std::uint8_t(0));
+    } else {
+        const std::uint32_t *list = down_fibers(b);
+        for (std::size_t i = 0; i < bl.down_count; ++i)
+            marks[list[i]] = 0;
+    }
+    bl.down_count = 0;
+    bl.dense_down = false;
 }
 
 void robust_window::push_row(double s, const double *height, const double *slope,
@@ -447,6 +467,7 @@ void robust_window::add_row(long b, std::size_t /*r*/, const double *ch, const d
         bl.has_down = true;
     }
     if (affected * 8 > K_) {
+        bl.dense_down = true;
         for (int u = 0; u < n_; ++u)
             for (int v = u; v < n_; ++v) {
                 const std::size_t e = packed(n_, u, v);
@@ -457,6 +478,7 @@ void robust_window::add_row(long b, std::size_t /*r*/, const double *ch, const d
     for (std::size_t k = 0; k < K_; ++k) {
         if (dmh[k] == 0.0 && dmg[k] == 0.0)
             continue;
+        mark_down(bl, b, k);
         for (int u = 0; u < n_; ++u)
             for (int v = u; v < n_; ++v) {
                 const std::size_t e = packed(n_, u, v);
@@ -544,6 +566,7 @@ void robust_window::judge(long b, bool feed) {
     std::fill_n(rh(b), std::size_t(n_) * K_, 0.0);
     std::fill_n(rg(b), std::size_t(n_) * K_, 0.0);
     bl.has_down = false;
+    clear_down(bl, b);
     const double *xs[2 * 66];
     for (int u = 0; u < n_; ++u)
         xs[u] = state(b + u / 2) + std::size_t(u % 2) * K_;
@@ -683,18 +706,36 @@ void robust_window::solve_chunk(long w0, int knots, std::size_t k0, std::size_t 
             continue;
         const int base = 2 * int(b - w0);
         const double *bh = rh(b), *bg = rg(b), *dh_b = dh(b), *dg_b = dg(b);
+        const bool dense = bl.has_down && bl.dense_down;
         for (int u = 0; u < n_; ++u) {
             const int iu = base + u;
             if (iu < 0)
                 continue;
             add_weighted(C, 1.0, wh, wg, bh + std::size_t(u) * K_ + k0,
                          bg + std::size_t(u) * K_ + k0, y + std::size_t(iu) * C);
-            if (bl.has_down)
+            if (dense)
                 for (int v = u; v < n_; ++v) {
                     const std::size_t e = packed(n_, u, v);
                     add_weighted(C, -1.0, wh, wg, dh_b + e * K_ + k0, dg_b + e * K_ + k0,
                                  at(iu, v - u));
                 }
+        }
+        if (bl.has_down && !dense) {
+            // The listed fibers only (block::down_count): the same
+            // subtraction, entry by entry, as add_weighted's.
+            const std::uint32_t *list = down_fibers_.data() + slot(b) * down_cap_;
+            for (std::size_t l = 0; l < bl.down_count; ++l) {
+                const std::size_t k = list[l];
+                if (k < k0 || k >= k1)
+                    continue;
+                const std::size_t c = k - k0;
+                for (int u = std::max(0, -base); u < n_; ++u)
+                    for (int v = u; v < n_; ++v) {
+                        const std::size_t e = packed(n_, u, v);
+                        at(base + u, v - u)[c] +=
+                            -1.0 * (wh[c] * dh_b[e * K_ + k] + wg[c] * dg_b[e * K_ + k]);
+                    }
+            }
         }
         if (base >= 0)
             continue;
