@@ -270,6 +270,38 @@ FLT_ROW_KERNEL void evaluate_row_plus(std::size_t K, const double *__restrict w,
         z[k] = (w[0] * z0[k] + w[1] * m0[k] + w[2] * z1[k] + w[3] * m1[k]) + c;
 }
 
+// One eliminated knot's back-substitution in the default geometry (six
+// unknowns: the knot's z, m given the next two knots' states x2..x5), in
+// one pass over the fibers: the same operations, in the same order, as
+// the general loop in solve_all, which takes a pass per unknown (this
+// one streams the knot's factor from memory once).
+FLT_ROW_KERNEL void back_substitute6(std::size_t K, const double *__restrict il00,
+                                     const double *__restrict l10, const double *__restrict il11,
+                                     const double *__restrict y0, const double *__restrict y1,
+                                     const double *__restrict L0, const double *__restrict L1,
+                                     const double *__restrict x2, const double *__restrict x3,
+                                     const double *__restrict x4, const double *__restrict x5,
+                                     double *__restrict xz, double *__restrict xm) {
+    const double *__restrict l02 = L0, *__restrict l03 = L0 + K, *__restrict l04 = L0 + 2 * K,
+                             *__restrict l05 = L0 + 3 * K;
+    const double *__restrict l12 = L1, *__restrict l13 = L1 + K, *__restrict l14 = L1 + 2 * K,
+                             *__restrict l15 = L1 + 3 * K;
+    for (std::size_t k = 0; k < K; ++k) {
+        double z = y0[k], m = y1[k];
+        z -= l02[k] * x2[k];
+        m -= l12[k] * x2[k];
+        z -= l03[k] * x3[k];
+        m -= l13[k] * x3[k];
+        z -= l04[k] * x4[k];
+        m -= l14[k] * x4[k];
+        z -= l05[k] * x5[k];
+        m -= l15[k] * x5[k];
+        m *= il11[k];
+        xm[k] = m;
+        xz[k] = (z - l10[k] * m) * il00[k];
+    }
+}
+
 // Cubic Hermite basis at t in [0, 1] of a knot interval: the weights of
 // (z_i, m_i, z_i+1, m_i+1), m = L z'.
 void hermite_weights(double t, double w[4]) {
@@ -439,7 +471,10 @@ void recon_engine::apply_pending_weights() {
 
 // One entry of every fiber's window matrix:
 //   W = schur + wh * (Rh + Rp) + wg * Rg - down.
-void recon_engine::assemble_entry(int r, int c) {
+// Its loops over the fibers, and close_knot's and solve_all's, are built
+// as the row kernels are (AVX2 without FMA next to the baseline: the same
+// bits, twice the vector width).
+FLT_ROW_KERNEL void recon_engine::assemble_entry(int r, int c) {
     const std::size_t e = tri(r, c), rc = std::size_t(r) * n_ + c;
     const double hp = Rh_[rc] + Rp_[rc], g = Rg_[rc];
     double *__restrict w = work_.data() + e * K_;
@@ -577,7 +612,7 @@ void recon_engine::pivot_floors() {
 // Eliminates the two unknowns of knot w0_ from W = schur + R - down, per fiber
 // (one step of a banded Cholesky), keeps the factor for back-substitution,
 // and shifts the window by one knot.
-void recon_engine::close_knot() {
+FLT_ROW_KERNEL void recon_engine::close_knot() {
     if (std::size_t(w0_ - next_emit_) >= factor_cap_)
         throw error(FLT_ERR_INTERNAL, "factor ring overflow");
     double *f = factor_.data() + (std::size_t(w0_) % factor_cap_) * nf_ * K_;
@@ -674,7 +709,7 @@ void recon_engine::emit_upto(long last) {
 // Every knot from next_emit_ to the end of the window, given all rows so
 // far, into hist_ (emitted or not: the states of knots not emitted yet are
 // provisional, overwritten by the next solve).
-void recon_engine::solve_all() {
+FLT_ROW_KERNEL void recon_engine::solve_all() {
     // 1. The open window: W x = rhs, per fiber, dense Cholesky W = U^T U
     //    on the packed upper triangle.
     for (int r = 0; r < n_; ++r)
@@ -746,6 +781,11 @@ void recon_engine::solve_all() {
         const double *L1 = L0 + std::size_t(n_ - 2) * K_;
         double *out = hist_at(j);
         double *xz = out, *xm = out + K_;
+        if (n_ == 6) {
+            const double *xa = hist_at(j + 1), *xb = hist_at(j + 2);
+            back_substitute6(K_, il00, l10, il11, y0, y1, L0, L1, xa, xa + K_, xb, xb + K_, xz, xm);
+            continue;
+        }
         std::copy_n(y0, K_, xz);
         std::copy_n(y1, K_, xm);
         for (int c = 2; c < n_; ++c) {
