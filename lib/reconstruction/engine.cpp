@@ -302,6 +302,13 @@ FLT_ROW_KERNEL void back_substitute6(std::size_t K, const double *__restrict il0
     }
 }
 
+// out = z + c over the fibers (NaN stays NaN).
+FLT_ROW_KERNEL void add_constant(std::size_t K, const double *__restrict z, double c,
+                                 double *__restrict out) {
+    for (std::size_t k = 0; k < K; ++k)
+        out[k] = z[k] + c;
+}
+
 // Cubic Hermite basis at t in [0, 1] of a knot interval: the weights of
 // (z_i, m_i, z_i+1, m_i+1), m = L z'.
 void hermite_weights(double t, double w[4]) {
@@ -1116,13 +1123,16 @@ void recon_engine::mark_gap(std::size_t k, double from) {
 }
 
 std::size_t recon_engine::pull(std::size_t max_rows, double *s_out, double *z_out,
-                               std::uint8_t *flags_out) {
+                               std::uint8_t *flags_out, const double *add) {
     const std::size_t cap = p_.row_capacity;
     const std::size_t n = std::min(max_rows, ready_ - head_);
     for (std::size_t i = 0; i < n; ++i) {
         const std::size_t r = (head_ + i) % cap;
         s_out[i] = ring_s_[r];
-        std::copy_n(ring_z_ + r * K_, K_, z_out + i * K_);
+        if (add)
+            add_constant(K_, ring_z_ + r * K_, *add, z_out + i * K_);
+        else
+            std::copy_n(ring_z_ + r * K_, K_, z_out + i * K_);
         if (flags_out)
             std::copy_n(ring_flags_ + r * K_, K_, flags_out + i * K_);
     }

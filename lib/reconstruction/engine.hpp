@@ -162,8 +162,11 @@ class recon_engine {
     void set_fiber_weights(const double *wh, const double *wg);
     double default_height_weight() const { return w_h_; }
     double default_slope_weight() const { return w_g_; }
-    // Copies up to max_rows ready rows out; returns how many.
-    std::size_t pull(std::size_t max_rows, double *s_out, double *z_out, std::uint8_t *flags_out);
+    // Copies up to max_rows ready rows out; returns how many. add: a
+    // constant (mm) added to every height as it is copied (the bits of
+    // copying, then adding it), or nullptr for none.
+    std::size_t pull(std::size_t max_rows, double *s_out, double *z_out, std::uint8_t *flags_out,
+                     const double *add = nullptr);
     void end_sheet();
     void reset();
     // The carried boundary knot.

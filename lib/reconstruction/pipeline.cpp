@@ -526,7 +526,11 @@ std::size_t recon_pipeline::ready_rows() const {
 
 std::size_t recon_pipeline::pull(std::size_t max_rows, double *s_out, double *z_out,
                                  std::uint8_t *flags_out) {
-    const std::size_t n = main_->pull(std::min(max_rows, ready_rows()), s_out, z_out, flags_out);
+    // Without rigid_motion the level is added as the rows are copied out
+    // (one pass over them, not two).
+    const bool plain_level = !config_.rigid_motion && has_level_;
+    const std::size_t n = main_->pull(std::min(max_rows, ready_rows()), s_out, z_out, flags_out,
+                                      plain_level ? &level_ : nullptr);
     if (config_.rigid_motion && n > 0) {
         // The line engines have finished these rows too (ready_rows).
         if (offset_->pull(n, line_s_.data(), line_a_.data(), nullptr) != n ||
@@ -534,9 +538,6 @@ std::size_t recon_pipeline::pull(std::size_t max_rows, double *s_out, double *z_
             throw error(FLT_ERR_INTERNAL, "line channels out of step with the fibers");
         // With the level, in one pass (NaN stays NaN).
         add_lines(n, line_a_.data(), line_b_.data(), has_level_ ? level_ : 0.0, z_out);
-    } else if (has_level_) {
-        for (std::size_t i = 0; i < n * K_; ++i)
-            z_out[i] += level_;  // NaN stays NaN
     }
     return n;
 }

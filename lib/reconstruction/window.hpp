@@ -65,8 +65,9 @@ class robust_window {
     long latency_knots() const { return p_.latency_knots() + S_ - 2; }
 
     void push_row(double s, const double *height, const double *slope, const std::uint8_t *valid);
-    std::size_t pull(std::size_t max_rows, double *s_out, double *z_out, std::uint8_t *flags_out) {
-        return out_.pull(max_rows, s_out, z_out, flags_out);
+    std::size_t pull(std::size_t max_rows, double *s_out, double *z_out, std::uint8_t *flags_out,
+                     const double *add = nullptr) {
+        return out_.pull(max_rows, s_out, z_out, flags_out, add);
     }
     // Rows held, skipping `offset`: finished ones as pull() gives them,
     // pending ones from a solve of the window now (provisional). Changes no
