@@ -336,7 +336,7 @@ double recon_engine::bytes_needed(std::size_t fibers, const recon_params &params
     if (role == engine_role::solve)
         doubles_per_fiber += double(knot_capacity) * nf  // factor ring
                              + 3 * ntri + 2 * n;         // window, Schur, rhs
-    double bytes = 8 * K * doubles_per_fiber + 9 * rows + 24 * n * n;
+    double bytes = 8 * K * doubles_per_fiber + 10 * rows + 24 * n * n;
     if (owns_rows)
         bytes += 9 * rows * K;  // z and flags of the row ring
     return bytes;
@@ -361,9 +361,11 @@ recon_engine::recon_engine(std::size_t fibers, const recon_params &params,
     } else {
         own_flags_.assign(p_.row_capacity * K_, 0);
         ring_flags_ = own_flags_.data();
+        lazy_flags_ = true;
     }
     ring_s_.assign(p_.row_capacity, 0.0);
     ring_any_invalid_.assign(p_.row_capacity, 0);
+    ring_zero_flags_.assign(p_.row_capacity, 0);
     L_ = p_.knot_spacing;
     D_ = p_.laser_spacing;
     // A row touches the knots around s-D/2 and s+D/2: ceil(D/L) intervals
@@ -834,6 +836,10 @@ void recon_engine::finish_rows() {
             evaluate_row(K_, w, a, a + K_, b, b + K_, z);
         std::uint8_t *fl = ring_flags_ + r * K_;
         if (ring_any_invalid_[r] || no_height_fibers_ > 0) {
+            if (ring_zero_flags_[r]) {
+                std::memset(fl, 0, K_);
+                ring_zero_flags_[r] = 0;
+            }
             for (std::size_t k = 0; k < K_; ++k) {
                 const double last = std::max(last_valid_s_[k], all_valid_s_);
                 if ((fl[k] & FLT_FLAG_INVALID_INPUT) && last < s && last_s_ - last > p_.max_gap)
@@ -871,15 +877,18 @@ void recon_engine::finish_row(double s, std::size_t nbad, HeightOk h_ok, SlopeOk
     const std::size_t r = tail_ % cap;
     ring_s_[r] = s;
     std::uint8_t *fl = ring_flags_ + r * K_;
-    std::memset(fl, 0, K_);
     bool any_invalid = false;
-    if (nbad > 0)
-        for (std::size_t k = 0; k < K_; ++k)
-            if (!h_ok(k) && !g_ok(k)) {
-                fl[k] = FLT_FLAG_INVALID_INPUT;
-                any_invalid = true;
-            }
+    if (nbad > 0 || !lazy_flags_) {
+        std::memset(fl, 0, K_);
+        if (nbad > 0)
+            for (std::size_t k = 0; k < K_; ++k)
+                if (!h_ok(k) && !g_ok(k)) {
+                    fl[k] = FLT_FLAG_INVALID_INPUT;
+                    any_invalid = true;
+                }
+    }
     ring_any_invalid_[r] = any_invalid;
+    ring_zero_flags_[r] = lazy_flags_ && nbad == 0;
 
     // Gap and level bookkeeping. last valid position of fiber k is
     // max(last_valid_s_[k], all_valid_s_): a fully valid row only moves the
@@ -1116,6 +1125,8 @@ void recon_engine::mark_gap(std::size_t k, double from) {
         const std::size_t r = (i - 1) % cap;
         if (ring_s_[r] <= from)
             break;
+        if (ring_zero_flags_[r])
+            continue;  // no invalid sample in that row
         std::uint8_t &f = ring_flags_[r * K_ + k];
         if (f & FLT_FLAG_INVALID_INPUT)
             f |= FLT_FLAG_GAP;
@@ -1133,7 +1144,9 @@ std::size_t recon_engine::pull(std::size_t max_rows, double *s_out, double *z_ou
             add_constant(K_, ring_z_ + r * K_, *add, z_out + i * K_);
         else
             std::copy_n(ring_z_ + r * K_, K_, z_out + i * K_);
-        if (flags_out)
+        if (flags_out && ring_zero_flags_[r])
+            std::memset(flags_out + i * K_, 0, K_);
+        else if (flags_out)
             std::copy_n(ring_flags_ + r * K_, K_, flags_out + i * K_);
     }
     head_ += n;
@@ -1233,6 +1246,7 @@ void recon_engine::rebind_rows(double *z_store, std::uint8_t *flags_store) {
     reset();  // the rows held were the previous storage's
     ring_z_ = z_store;
     ring_flags_ = flags_store ? flags_store : own_flags_.data();
+    lazy_flags_ = flags_store == nullptr;
 }
 
 void recon_engine::boundary(double *s_out, double *height_out, double *slope_out) const {
@@ -1267,7 +1281,9 @@ std::size_t recon_engine::peek(std::size_t offset, std::size_t max_rows, double 
         std::uint8_t *fl = flags_out ? flags_out + i * K_ : nullptr;
         if (at < ready_) {  // finished: as pull() will give it
             std::copy_n(ring_z_ + r * K_, K_, z);
-            if (fl)
+            if (fl && ring_zero_flags_[r])
+                std::memset(fl, 0, K_);
+            else if (fl)
                 std::copy_n(ring_flags_ + r * K_, K_, fl);
             continue;
         }
@@ -1285,8 +1301,9 @@ std::size_t recon_engine::peek(std::size_t offset, std::size_t max_rows, double 
             evaluate_row(K_, w, a, a + K_, b, b + K_, z);
         // The flags as finish_rows() would set them now.
         const std::uint8_t *own = ring_flags_ + r * K_;
+        const bool zero = ring_zero_flags_[r] != 0;
         for (std::size_t k = 0; k < K_; ++k) {
-            std::uint8_t f = own[k];
+            std::uint8_t f = zero ? std::uint8_t(0) : own[k];
             const double last = std::max(last_valid_s_[k], all_valid_s_);
             if ((f & FLT_FLAG_INVALID_INPUT) && last < s && last_s_ - last > p_.max_gap)
                 f |= FLT_FLAG_GAP;

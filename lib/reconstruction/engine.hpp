@@ -393,6 +393,13 @@ class recon_engine {
     // ---- row ring ----
     std::vector<double> ring_s_;
     std::vector<std::uint8_t> ring_any_invalid_;
+    // Rows whose flags are all 0 and were not written to the ring (a row
+    // with every sample valid, the common one): pull and peek give zeros
+    // for them, and the ring's bytes are written only if a flag is set
+    // later. Only with the engine's own flag ring (lazy_flags_): a
+    // caller's storage (batch) is written as rows finish.
+    std::vector<std::uint8_t> ring_zero_flags_;
+    bool lazy_flags_ = false;
     std::vector<double> own_z_;
     std::vector<std::uint8_t> own_flags_;
     double *ring_z_;
