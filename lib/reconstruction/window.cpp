@@ -15,6 +15,9 @@ constexpr double k_nan = std::numeric_limits<double>::quiet_NaN();
 // Fibers solved together: their window band (about 44 unknowns x 6
 // entries for the default lag) stays in the core's cache.
 constexpr std::size_t k_chunk_fibers = 64;
+// The widest band of the window matrix, unknowns (2 S - 1 for the most
+// knots a row may span, engine.cpp's k_max_unknowns).
+constexpr int k_max_band = 2 * 66;
 
 // Built for baseline x86-64 and AVX2 (no FMA: the same roundings on every
 // machine), as engine.cpp's kernels.
@@ -177,6 +180,69 @@ inline void sub_product(std::size_t C, double *__restrict out, const double *__r
         out[c] -= a[c] * b[c];
 }
 
+// out = (out - a[0] * b[0] - a[1] * b[1] - ... - a[n-1] * b[n-1]) * scale
+// over C fibers (scale nullptr: 1), subtracting in the order given: the
+// bits of n sub_product passes and a multiplying pass, in one pass over
+// out (the banded solve's entries gather up to bw products each, and
+// their passes were its cost). Up to five products per pass, the rest in
+// further passes, in order. Inlined into band_solve, so that it is built
+// for each of band_solve's targets.
+#if defined(__GNUC__)
+#  define FLT_ALWAYS_INLINE __attribute__((always_inline)) inline
+#else
+#  define FLT_ALWAYS_INLINE inline
+#endif
+FLT_ALWAYS_INLINE void sub_products(std::size_t C, double *out, int n, const double *const *a,
+                                    const double *const *b, const double *scale) {
+    int i = 0;
+    for (; n - i > 5; i += 5)
+        for (int j = i; j < i + 5; ++j)
+            sub_product(C, out, a[j], b[j]);
+    const int m = n - i;
+    double *__restrict o = out;
+    const double *__restrict a0 = m > 0 ? a[i] : nullptr, *__restrict b0 = m > 0 ? b[i] : nullptr;
+    const double *__restrict a1 = m > 1 ? a[i + 1] : nullptr, *__restrict b1 =
+                                                                  m > 1 ? b[i + 1] : nullptr;
+    const double *__restrict a2 = m > 2 ? a[i + 2] : nullptr, *__restrict b2 =
+                                                                  m > 2 ? b[i + 2] : nullptr;
+    const double *__restrict a3 = m > 3 ? a[i + 3] : nullptr, *__restrict b3 =
+                                                                  m > 3 ? b[i + 3] : nullptr;
+    const double *__restrict a4 = m > 4 ? a[i + 4] : nullptr, *__restrict b4 =
+                                                                  m > 4 ? b[i + 4] : nullptr;
+    const double *__restrict sc = scale;
+#define FLT_SUB_TERMS(expr)             \
+  if (sc)                               \
+    for (std::size_t c = 0; c < C; ++c) \
+      o[c] = (expr)*sc[c];              \
+  else                                  \
+    for (std::size_t c = 0; c < C; ++c) \
+      o[c] = (expr);
+    switch (m) {
+        case 0:
+            if (sc)
+                for (std::size_t c = 0; c < C; ++c)
+                    o[c] *= sc[c];
+            break;
+        case 1:
+            FLT_SUB_TERMS(o[c] - a0[c] * b0[c])
+            break;
+        case 2:
+            FLT_SUB_TERMS(o[c] - a0[c] * b0[c] - a1[c] * b1[c])
+            break;
+        case 3:
+            FLT_SUB_TERMS(o[c] - a0[c] * b0[c] - a1[c] * b1[c] - a2[c] * b2[c])
+            break;
+        case 4:
+            FLT_SUB_TERMS(o[c] - a0[c] * b0[c] - a1[c] * b1[c] - a2[c] * b2[c] - a3[c] * b3[c])
+            break;
+        default:
+            FLT_SUB_TERMS(o[c] - a0[c] * b0[c] - a1[c] * b1[c] - a2[c] * b2[c] - a3[c] * b3[c] -
+                          a4[c] * b4[c])
+            break;
+    }
+#undef FLT_SUB_TERMS
+}
+
 // The window band of a chunk of C fibers, [unknown][0..bw][C] (entry (i,
 // i + d) of the symmetric matrix), factored in place as U^T U with U upper
 // (keeping 1/U_ii on the diagonal), then U^T U x = y solved in place. A
@@ -187,40 +253,44 @@ FLT_WINDOW_KERNEL void band_solve(int N, int bw, std::size_t C, double *__restri
     auto at = [&](int i, int d) {
         return A + (std::size_t(i) * P + std::size_t(d)) * C;
     };
+    // Each entry gathers its products (in the order of the plain loops:
+    // m, or d, ascending) and is written once (sub_products).
+    const double *ta[k_max_band], *tb[k_max_band];
     for (int i = 0; i < N; ++i) {
         double *aii = at(i, 0);
-        for (int m = std::max(0, i - bw); m < i; ++m) {
-            const double *u = at(m, i - m);
-            sub_product(C, aii, u, u);
-        }
+        int t = 0;
+        for (int m = std::max(0, i - bw); m < i; ++m, ++t)
+            ta[t] = tb[t] = at(m, i - m);
+        sub_products(C, aii, t, ta, tb, nullptr);
         for (std::size_t c = 0; c < C; ++c)
             aii[c] = 1.0 / std::sqrt(std::max(aii[c], floor[c]));
         for (int d = 1; d <= bw && i + d < N; ++d) {
             const int j = i + d;
-            double *aij = at(i, d);
-            for (int m = std::max(0, j - bw); m < i; ++m)
-                sub_product(C, aij, at(m, i - m), at(m, j - m));
-            for (std::size_t c = 0; c < C; ++c)
-                aij[c] *= aii[c];
+            t = 0;
+            for (int m = std::max(0, j - bw); m < i; ++m, ++t) {
+                ta[t] = at(m, i - m);
+                tb[t] = at(m, j - m);
+            }
+            sub_products(C, at(i, d), t, ta, tb, aii);
         }
     }
     // U^T z = y
     for (int i = 0; i < N; ++i) {
-        double *yi = y + std::size_t(i) * C;
-        for (int m = std::max(0, i - bw); m < i; ++m)
-            sub_product(C, yi, at(m, i - m), y + std::size_t(m) * C);
-        const double *inv = at(i, 0);
-        for (std::size_t c = 0; c < C; ++c)
-            yi[c] *= inv[c];
+        int t = 0;
+        for (int m = std::max(0, i - bw); m < i; ++m, ++t) {
+            ta[t] = at(m, i - m);
+            tb[t] = y + std::size_t(m) * C;
+        }
+        sub_products(C, y + std::size_t(i) * C, t, ta, tb, at(i, 0));
     }
     // U x = z
     for (int i = N - 1; i >= 0; --i) {
-        double *yi = y + std::size_t(i) * C;
-        for (int d = 1; d <= bw && i + d < N; ++d)
-            sub_product(C, yi, at(i, d), y + std::size_t(i + d) * C);
-        const double *inv = at(i, 0);
-        for (std::size_t c = 0; c < C; ++c)
-            yi[c] *= inv[c];
+        int t = 0;
+        for (int d = 1; d <= bw && i + d < N; ++d, ++t) {
+            ta[t] = at(i, d);
+            tb[t] = y + std::size_t(i + d) * C;
+        }
+        sub_products(C, y + std::size_t(i) * C, t, ta, tb, at(i, 0));
     }
 }
 
