@@ -141,38 +141,50 @@ FLT_WINDOW_KERNEL void predict6(std::size_t K, const double *a, const double *b,
 // are restrict parameters and the count an integer: GCC vectorises the
 // loop only so (restrict locals, or a floating-point count, leave it
 // scalar).
-FLT_WINDOW_KERNEL std::size_t
-accumulate6(std::size_t K, double D, const double *__restrict a, const double *__restrict b,
-            const double *__restrict yh, const double *__restrict yg, const double *__restrict mh,
-            const double *__restrict mg, double *__restrict rh0, double *__restrict rh1,
-            double *__restrict rh2, double *__restrict rh3, double *__restrict rh4,
-            double *__restrict rh5, double *__restrict rg0, double *__restrict rg1,
-            double *__restrict rg2, double *__restrict rg3, double *__restrict rg4,
-            double *__restrict rg5, double *__restrict dmh, double *__restrict dmg) {
-    const double a0 = a[0], a1 = a[1], a2 = a[2], a3 = a[3], a4 = a[4], a5 = a[5];
-    const double b0 = b[0], b1 = b[1], b2 = b[2], b3 = b[3], b4 = b[4], b5 = b[5];
-    std::size_t affected = 0;
-    for (std::size_t k = 0; k < K; ++k) {
-        const double hv = mh[k] != 0.0 ? mh[k] * yh[k] : 0.0;
-        const double gv = mg[k] != 0.0 ? mg[k] * (D * yg[k]) : 0.0;
-        rh0[k] += a0 * hv;
-        rh1[k] += a1 * hv;
-        rh2[k] += a2 * hv;
-        rh3[k] += a3 * hv;
-        rh4[k] += a4 * hv;
-        rh5[k] += a5 * hv;
-        rg0[k] += b0 * gv;
-        rg1[k] += b1 * gv;
-        rg2[k] += b2 * gv;
-        rg3[k] += b3 * gv;
-        rg4[k] += b4 * gv;
-        rg5[k] += b5 * gv;
-        dmh[k] = 1.0 - mh[k];
-        dmg[k] = 1.0 - mg[k];
-        affected += std::size_t(mh[k] * mg[k] != 1.0);
-    }
-    return affected;
+#define FLT_ACCUMULATE6_PARAMS                                                               \
+  std::size_t K, double D, const double *__restrict a, const double *__restrict b,           \
+      const double *__restrict yh, const double *__restrict yg, const double *__restrict mh, \
+      const double *__restrict mg, double *__restrict rh0, double *__restrict rh1,           \
+      double *__restrict rh2, double *__restrict rh3, double *__restrict rh4,                \
+      double *__restrict rh5, double *__restrict rg0, double *__restrict rg1,                \
+      double *__restrict rg2, double *__restrict rg3, double *__restrict rg4,                \
+      double *__restrict rg5, double *__restrict dmh, double *__restrict dmg
+// RH(r) is the right-hand side an entry adds to: the entry itself, or for
+// a block's first row 0.0 (accumulate6_first: the bits of adding to a
+// cleared block, without clearing it first or reading it back).
+#define FLT_ACCUMULATE6_BODY(RH)                                                 \
+  const double a0 = a[0], a1 = a[1], a2 = a[2], a3 = a[3], a4 = a[4], a5 = a[5]; \
+  const double b0 = b[0], b1 = b[1], b2 = b[2], b3 = b[3], b4 = b[4], b5 = b[5]; \
+  std::size_t affected = 0;                                                      \
+  for (std::size_t k = 0; k < K; ++k) {                                          \
+    const double hv = mh[k] != 0.0 ? mh[k] * yh[k] : 0.0;                        \
+    const double gv = mg[k] != 0.0 ? mg[k] * (D * yg[k]) : 0.0;                  \
+    rh0[k] = RH(rh0[k]) + a0 * hv;                                               \
+    rh1[k] = RH(rh1[k]) + a1 * hv;                                               \
+    rh2[k] = RH(rh2[k]) + a2 * hv;                                               \
+    rh3[k] = RH(rh3[k]) + a3 * hv;                                               \
+    rh4[k] = RH(rh4[k]) + a4 * hv;                                               \
+    rh5[k] = RH(rh5[k]) + a5 * hv;                                               \
+    rg0[k] = RH(rg0[k]) + b0 * gv;                                               \
+    rg1[k] = RH(rg1[k]) + b1 * gv;                                               \
+    rg2[k] = RH(rg2[k]) + b2 * gv;                                               \
+    rg3[k] = RH(rg3[k]) + b3 * gv;                                               \
+    rg4[k] = RH(rg4[k]) + b4 * gv;                                               \
+    rg5[k] = RH(rg5[k]) + b5 * gv;                                               \
+    dmh[k] = 1.0 - mh[k];                                                        \
+    dmg[k] = 1.0 - mg[k];                                                        \
+    affected += std::size_t(mh[k] * mg[k] != 1.0);                               \
+  }                                                                              \
+  return affected;
+#define FLT_RH_ADD(x)   (x)
+#define FLT_RH_FIRST(x) 0.0
+FLT_WINDOW_KERNEL std::size_t accumulate6(FLT_ACCUMULATE6_PARAMS){
+    FLT_ACCUMULATE6_BODY(FLT_RH_ADD)} FLT_WINDOW_KERNEL std::size_t
+    accumulate6_first(FLT_ACCUMULATE6_PARAMS) {
+    FLT_ACCUMULATE6_BODY(FLT_RH_FIRST)
 }
+#undef FLT_RH_ADD
+#undef FLT_RH_FIRST
 
 inline void sub_product(std::size_t C, double *__restrict out, const double *__restrict a,
                         const double *__restrict b) {
@@ -457,6 +469,14 @@ void robust_window::open_block(long b) {
     const std::size_t nn = std::size_t(n_) * n_;
     std::fill_n(gh(b), nn, 0.0);
     std::fill_n(gg(b), nn, 0.0);
+    // In the default geometry the block's first row sets the right-hand
+    // sides (accumulate6_first); a block that gets no row is cleared when
+    // it is frozen.
+    if (n_ != 6)
+        clear_rhs(b);
+}
+
+void robust_window::clear_rhs(long b) {
     std::fill_n(rh(b), std::size_t(n_) * K_, 0.0);
     std::fill_n(rg(b), std::size_t(n_) * K_, 0.0);
 }
@@ -505,23 +525,23 @@ void robust_window::push_row(double s, const double *height, const double *slope
             bgg[u * nn + v] += cg[u] * cg[v];
         }
     sample_multipliers(K_, h, g, mult_h_.data(), mult_g_.data());
-    add_row(i1, r, ch, cg, h, g, mult_h_.data(), mult_g_.data());
+    add_row(i1, r, ch, cg, h, g, mult_h_.data(), mult_g_.data(), bl.rows == 1);
     out_.push_row(s, height, slope, valid);
 }
 
 // One row of block b into the block's right-hand sides and downdates:
 // values yh (mm), yg (mm/mm) with multipliers mh, mg.
 void robust_window::add_row(long b, std::size_t /*r*/, const double *ch, const double *cg,
-                            const double *yh, const double *yg, const double *mh,
-                            const double *mg) {
+                            const double *yh, const double *yg, const double *mh, const double *mg,
+                            bool first) {
     double *hv = pred_h_.data(), *gv = pred_g_.data();  // free after the prediction
     double *dmh = down_h_.data(), *dmg = down_g_.data();
     double *bh = rh(b), *bg = rg(b);
     std::size_t affected = 0;
     if (n_ == 6) {
-        affected = accumulate6(K_, D_, ch, cg, yh, yg, mh, mg, bh, bh + K_, bh + 2 * K_,
-                               bh + 3 * K_, bh + 4 * K_, bh + 5 * K_, bg, bg + K_, bg + 2 * K_,
-                               bg + 3 * K_, bg + 4 * K_, bg + 5 * K_, dmh, dmg);
+        affected = (first ? accumulate6_first : accumulate6)(
+            K_, D_, ch, cg, yh, yg, mh, mg, bh, bh + K_, bh + 2 * K_, bh + 3 * K_, bh + 4 * K_,
+            bh + 5 * K_, bg, bg + K_, bg + 2 * K_, bg + 3 * K_, bg + 4 * K_, bg + 5 * K_, dmh, dmg);
     } else {
         affected = weigh_values(K_, D_, yh, yg, mh, mg, hv, gv, dmh, dmg);
         for (int u = 0; u < n_; ++u)
@@ -633,8 +653,8 @@ void robust_window::emit_states(long last) {
 
 void robust_window::judge(long b, bool feed) {
     block &bl = block_at(b);
-    std::fill_n(rh(b), std::size_t(n_) * K_, 0.0);
-    std::fill_n(rg(b), std::size_t(n_) * K_, 0.0);
+    if (n_ != 6 || bl.rows == 0)
+        clear_rhs(b);  // else the first row sets them
     bl.has_down = false;
     clear_down(bl, b);
     const double *xs[2 * 66];
@@ -667,7 +687,7 @@ void robust_window::judge(long b, bool feed) {
             if (new_h || new_g)
                 update_weights();
         }
-        add_row(b, r, ch, cg, out_h_.data(), out_g_.data(), mult_h_.data(), mult_g_.data());
+        add_row(b, r, ch, cg, out_h_.data(), out_g_.data(), mult_h_.data(), mult_g_.data(), i == 0);
     }
     ++bl.judged;
 }
@@ -681,6 +701,8 @@ void robust_window::freeze_upto(long last) {
     for (; first_block_ <= last; ++first_block_) {
         const long b = first_block_;
         const block &bl = block_at(b);
+        if (bl.rows == 0 && n_ == 6)
+            clear_rhs(b);  // no first row set them (open_block)
         frozen_.add_block(b, gh(b), gg(b), rh(b), rg(b), bl.has_down ? dh(b) : nullptr,
                           bl.has_down ? dg(b) : nullptr);
         frozen_.forget_upto(frozen_.first_open_knot() - 1);

@@ -131,8 +131,12 @@ class robust_window {
     void emit_states(long last);    // knots up to last are final
     bool due(long b) const;         // block b is due for a judgment
     void judge(long b, bool feed);  // recompute block b's sums from its rows
+    // first: the block's first row, which in the default geometry sets
+    // the right-hand sides instead of adding to them (they are not cleared
+    // for it: open_block, judge).
     void add_row(long b, std::size_t r, const double *ch, const double *cg, const double *yh,
-                 const double *yg, const double *mh, const double *mg);
+                 const double *yg, const double *mh, const double *mg, bool first);
+    void clear_rhs(long b);       // the block's right-hand sides to 0
     void freeze_upto(long last);  // blocks up to last leave the window
     // The window, every fiber; provisional: into peek_x_ (peek), leaving
     // the solution (x_, solved_*) as it was.
