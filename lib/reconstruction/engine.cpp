@@ -355,6 +355,7 @@ recon_engine::recon_engine(std::size_t fibers, const recon_params &params,
     } else {
         own_z_.assign(p_.row_capacity * K_, 0.0);
         ring_z_ = own_z_.data();
+        lazy_rows_ = true;
     }
     if (flags_store) {
         ring_flags_ = flags_store;
@@ -719,6 +720,7 @@ void recon_engine::emit_upto(long last) {
 // far, into hist_ (emitted or not: the states of knots not emitted yet are
 // provisional, overwritten by the next solve).
 FLT_ROW_KERNEL void recon_engine::solve_all() {
+    keep_lazy_rows(w0_ + S_ - 1);  // the newest knot state it writes
     // 1. The open window: W x = rhs, per fiber, dense Cholesky W = U^T U
     //    on the packed upper triangle.
     for (int r = 0; r < n_; ++r)
@@ -816,6 +818,25 @@ FLT_ROW_KERNEL void recon_engine::solve_all() {
 }
 
 // Evaluates every pending row whose knot interval is fully emitted.
+void recon_engine::evaluate_into(double s, double *z, const double *c) const {
+    const long i = interval_of(s);
+    double w[4];
+    basis(s, i, w);
+    const double *a = hist_at(i), *b = hist_at(i + 1);
+    if (c)
+        evaluate_row_plus(K_, w, a, a + K_, b, b + K_, *c, z);
+    else
+        evaluate_row(K_, w, a, a + K_, b, b + K_, z);
+}
+
+void recon_engine::materialise_rows() {
+    const std::size_t cap = p_.row_capacity;
+    for (; evaluated_ < ready_; ++evaluated_) {
+        const std::size_t r = evaluated_ % cap;
+        evaluate_into(ring_s_[r], ring_z_ + r * K_, nullptr);
+    }
+}
+
 void recon_engine::finish_rows() {
     if (!keep_rows_)
         return;
@@ -826,16 +847,16 @@ void recon_engine::finish_rows() {
         const long i = interval_of(s);
         if (i + 1 > last_emitted_)
             break;
-        double w[4];
-        basis(s, i, w);
-        const double *a = hist_at(i), *b = hist_at(i + 1);
+        const bool flagged = ring_any_invalid_[r] || no_height_fibers_ > 0;
+        if (lazy_rows_ && !flagged && output_offset_ == 0.0) {
+            ++ready_;  // pull() evaluates it (materialise_rows)
+            continue;
+        }
+        materialise_rows();  // the rows before it, in order
         double *z = ring_z_ + r * K_;
-        if (output_offset_ != 0.0)
-            evaluate_row_plus(K_, w, a, a + K_, b, b + K_, output_offset_, z);
-        else
-            evaluate_row(K_, w, a, a + K_, b, b + K_, z);
+        evaluate_into(s, z, output_offset_ != 0.0 ? &output_offset_ : nullptr);
         std::uint8_t *fl = ring_flags_ + r * K_;
-        if (ring_any_invalid_[r] || no_height_fibers_ > 0) {
+        if (flagged) {
             if (ring_zero_flags_[r]) {
                 std::memset(fl, 0, K_);
                 ring_zero_flags_[r] = 0;
@@ -851,6 +872,7 @@ void recon_engine::finish_rows() {
             }
         }
         ++ready_;
+        evaluated_ = ready_;
     }
 }
 
@@ -934,6 +956,7 @@ void recon_engine::finish_row(double s, std::size_t nbad, HeightOk h_ok, SlopeOk
 
 void recon_engine::begin_strip(double s) {
     // A new strip: the knot grid starts at the first row's rear laser.
+    materialise_rows();  // on the grid of the strip before
     have_t0_ = true;
     t0_ = s - 0.5 * D_;
     fixed_upto_ = -1;
@@ -1140,7 +1163,9 @@ std::size_t recon_engine::pull(std::size_t max_rows, double *s_out, double *z_ou
     for (std::size_t i = 0; i < n; ++i) {
         const std::size_t r = (head_ + i) % cap;
         s_out[i] = ring_s_[r];
-        if (add)
+        if (head_ + i >= evaluated_)
+            evaluate_into(ring_s_[r], z_out + i * K_, add);  // the bits of evaluating, adding
+        else if (add)
             add_constant(K_, ring_z_ + r * K_, *add, z_out + i * K_);
         else
             std::copy_n(ring_z_ + r * K_, K_, z_out + i * K_);
@@ -1150,6 +1175,7 @@ std::size_t recon_engine::pull(std::size_t max_rows, double *s_out, double *z_ou
             std::copy_n(ring_flags_ + r * K_, K_, flags_out + i * K_);
     }
     head_ += n;
+    evaluated_ = std::max(evaluated_, head_);
     return n;
 }
 
@@ -1182,7 +1208,7 @@ void recon_engine::end_sheet_common(long e_end) {
 
 void recon_engine::reset() {
     have_t0_ = false;
-    head_ = ready_ = tail_ = 0;
+    head_ = ready_ = tail_ = evaluated_ = 0;
     rows_in_sheet_ = 0;
     fixed_upto_ = -1;
     anchored_ = false;
@@ -1245,6 +1271,7 @@ void recon_engine::rebind_rows(double *z_store, std::uint8_t *flags_store) {
         throw error(FLT_ERR_INTERNAL, "rebind_rows needs row storage");
     reset();  // the rows held were the previous storage's
     ring_z_ = z_store;
+    lazy_rows_ = false;
     ring_flags_ = flags_store ? flags_store : own_flags_.data();
     lazy_flags_ = flags_store == nullptr;
 }
@@ -1280,7 +1307,10 @@ std::size_t recon_engine::peek(std::size_t offset, std::size_t max_rows, double 
         double *z = z_out + i * K_;
         std::uint8_t *fl = flags_out ? flags_out + i * K_ : nullptr;
         if (at < ready_) {  // finished: as pull() will give it
-            std::copy_n(ring_z_ + r * K_, K_, z);
+            if (at >= evaluated_)
+                evaluate_into(s, z, nullptr);
+            else
+                std::copy_n(ring_z_ + r * K_, K_, z);
             if (fl && ring_zero_flags_[r])
                 std::memset(fl, 0, K_);
             else if (fl)
@@ -1324,6 +1354,7 @@ std::size_t recon_engine::peek(std::size_t offset, std::size_t max_rows, double 
 
 void recon_engine::set_knot_state(long j, const double *z, const double *m, std::size_t k0,
                                   std::size_t k1) {
+    keep_lazy_rows(j);
     double *h = hist_at(j);
     std::copy(z + k0, z + k1, h + k0);
     std::copy(m + k0, m + k1, h + K_ + k0);

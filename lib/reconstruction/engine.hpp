@@ -326,6 +326,23 @@ class recon_engine {
     long emit_group() const { return p_.emit_group(); }
     void emit_upto(long last);  // solve and emit knots <= last
     void finish_rows();         // evaluate rows now determined
+    // Finished rows [evaluated_, ready_) are not evaluated into the ring
+    // yet: pull() evaluates them from the knot states straight into the
+    // caller's rows (the ring's row is memory untouched for row_capacity
+    // rows; writing it, then copying it out, cost more than the
+    // evaluation). Only rows finished without a flag or NaN to set, with
+    // the engine's own row ring and no output offset; they are evaluated
+    // into the ring (materialise_rows) before a knot state they need can
+    // be overwritten (its ring slot reused by knot j_max: keep_lazy_rows)
+    // or the grid moves (a new strip).
+    void materialise_rows();
+    void keep_lazy_rows(long j_max) {
+        if (evaluated_ < ready_ &&
+            j_max >= interval_of(ring_s_[evaluated_ % p_.row_capacity]) + long(hist_cap_))
+            materialise_rows();
+    }
+    // Row at (ring index r, position s) from the knot states into z (+ c).
+    void evaluate_into(double s, double *z, const double *c) const;
     void mark_gap(std::size_t k, double from);
     double *hist_at(long j);  // state (z, m) of knot j, [2][K]
     const double *hist_at(long j) const;
@@ -405,6 +422,8 @@ class recon_engine {
     double *ring_z_;
     std::uint8_t *ring_flags_;
     std::size_t head_ = 0, ready_ = 0, tail_ = 0;  // monotonic counters
+    std::size_t evaluated_ = 0;                    // see materialise_rows
+    bool lazy_rows_ = false;                       // own row ring (z)
     bool keep_rows_ = true;
     double output_offset_ = 0.0;  // set_output_offset
     bool has_row_ring_ = true;    // constructed with keep_rows
