@@ -227,7 +227,7 @@ int main(int argc, char **argv) {
 
     /* Streaming: a 5-sheet strip (30 m), one row per push, pulled as it goes,
      * end_sheet every 2000 rows. Row data is prepared up front. Default
-     * options on the noise-free strip (goal: <= 10 us per row), then
+     * options on the noise-free strip (goal: <= 5 us per row), then
      * rigid_motion + robust on the strip with experiment 3's noise. */
     double *s_out = malloc(ROWS * sizeof(double));
     for (int mode = 0; mode < 2; ++mode) {

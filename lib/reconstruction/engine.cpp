@@ -270,6 +270,45 @@ FLT_ROW_KERNEL void evaluate_row_plus(std::size_t K, const double *__restrict w,
         z[k] = (w[0] * z0[k] + w[1] * m0[k] + w[2] * z1[k] + w[3] * m1[k]) + c;
 }
 
+// One eliminated knot's back-substitution in the default geometry (six
+// unknowns: the knot's z, m given the next two knots' states x2..x5), in
+// one pass over the fibers: the same operations, in the same order, as
+// the general loop in solve_all, which takes a pass per unknown (this
+// one streams the knot's factor from memory once).
+FLT_ROW_KERNEL void back_substitute6(std::size_t K, const double *__restrict il00,
+                                     const double *__restrict l10, const double *__restrict il11,
+                                     const double *__restrict y0, const double *__restrict y1,
+                                     const double *__restrict L0, const double *__restrict L1,
+                                     const double *__restrict x2, const double *__restrict x3,
+                                     const double *__restrict x4, const double *__restrict x5,
+                                     double *__restrict xz, double *__restrict xm) {
+    const double *__restrict l02 = L0, *__restrict l03 = L0 + K, *__restrict l04 = L0 + 2 * K,
+                             *__restrict l05 = L0 + 3 * K;
+    const double *__restrict l12 = L1, *__restrict l13 = L1 + K, *__restrict l14 = L1 + 2 * K,
+                             *__restrict l15 = L1 + 3 * K;
+    for (std::size_t k = 0; k < K; ++k) {
+        double z = y0[k], m = y1[k];
+        z -= l02[k] * x2[k];
+        m -= l12[k] * x2[k];
+        z -= l03[k] * x3[k];
+        m -= l13[k] * x3[k];
+        z -= l04[k] * x4[k];
+        m -= l14[k] * x4[k];
+        z -= l05[k] * x5[k];
+        m -= l15[k] * x5[k];
+        m *= il11[k];
+        xm[k] = m;
+        xz[k] = (z - l10[k] * m) * il00[k];
+    }
+}
+
+// out = z + c over the fibers (NaN stays NaN).
+FLT_ROW_KERNEL void add_constant(std::size_t K, const double *__restrict z, double c,
+                                 double *__restrict out) {
+    for (std::size_t k = 0; k < K; ++k)
+        out[k] = z[k] + c;
+}
+
 // Cubic Hermite basis at t in [0, 1] of a knot interval: the weights of
 // (z_i, m_i, z_i+1, m_i+1), m = L z'.
 void hermite_weights(double t, double w[4]) {
@@ -297,7 +336,7 @@ double recon_engine::bytes_needed(std::size_t fibers, const recon_params &params
     if (role == engine_role::solve)
         doubles_per_fiber += double(knot_capacity) * nf  // factor ring
                              + 3 * ntri + 2 * n;         // window, Schur, rhs
-    double bytes = 8 * K * doubles_per_fiber + 9 * rows + 24 * n * n;
+    double bytes = 8 * K * doubles_per_fiber + 10 * rows + 24 * n * n;
     if (owns_rows)
         bytes += 9 * rows * K;  // z and flags of the row ring
     return bytes;
@@ -316,15 +355,18 @@ recon_engine::recon_engine(std::size_t fibers, const recon_params &params,
     } else {
         own_z_.assign(p_.row_capacity * K_, 0.0);
         ring_z_ = own_z_.data();
+        lazy_rows_ = true;
     }
     if (flags_store) {
         ring_flags_ = flags_store;
     } else {
         own_flags_.assign(p_.row_capacity * K_, 0);
         ring_flags_ = own_flags_.data();
+        lazy_flags_ = true;
     }
     ring_s_.assign(p_.row_capacity, 0.0);
     ring_any_invalid_.assign(p_.row_capacity, 0);
+    ring_zero_flags_.assign(p_.row_capacity, 0);
     L_ = p_.knot_spacing;
     D_ = p_.laser_spacing;
     // A row touches the knots around s-D/2 and s+D/2: ceil(D/L) intervals
@@ -439,7 +481,10 @@ void recon_engine::apply_pending_weights() {
 
 // One entry of every fiber's window matrix:
 //   W = schur + wh * (Rh + Rp) + wg * Rg - down.
-void recon_engine::assemble_entry(int r, int c) {
+// Its loops over the fibers, and close_knot's and solve_all's, are built
+// as the row kernels are (AVX2 without FMA next to the baseline: the same
+// bits, twice the vector width).
+FLT_ROW_KERNEL void recon_engine::assemble_entry(int r, int c) {
     const std::size_t e = tri(r, c), rc = std::size_t(r) * n_ + c;
     const double hp = Rh_[rc] + Rp_[rc], g = Rg_[rc];
     double *__restrict w = work_.data() + e * K_;
@@ -577,7 +622,7 @@ void recon_engine::pivot_floors() {
 // Eliminates the two unknowns of knot w0_ from W = schur + R - down, per fiber
 // (one step of a banded Cholesky), keeps the factor for back-substitution,
 // and shifts the window by one knot.
-void recon_engine::close_knot() {
+FLT_ROW_KERNEL void recon_engine::close_knot() {
     if (std::size_t(w0_ - next_emit_) >= factor_cap_)
         throw error(FLT_ERR_INTERNAL, "factor ring overflow");
     double *f = factor_.data() + (std::size_t(w0_) % factor_cap_) * nf_ * K_;
@@ -674,7 +719,8 @@ void recon_engine::emit_upto(long last) {
 // Every knot from next_emit_ to the end of the window, given all rows so
 // far, into hist_ (emitted or not: the states of knots not emitted yet are
 // provisional, overwritten by the next solve).
-void recon_engine::solve_all() {
+FLT_ROW_KERNEL void recon_engine::solve_all() {
+    keep_lazy_rows(w0_ + S_ - 1);  // the newest knot state it writes
     // 1. The open window: W x = rhs, per fiber, dense Cholesky W = U^T U
     //    on the packed upper triangle.
     for (int r = 0; r < n_; ++r)
@@ -746,6 +792,11 @@ void recon_engine::solve_all() {
         const double *L1 = L0 + std::size_t(n_ - 2) * K_;
         double *out = hist_at(j);
         double *xz = out, *xm = out + K_;
+        if (n_ == 6) {
+            const double *xa = hist_at(j + 1), *xb = hist_at(j + 2);
+            back_substitute6(K_, il00, l10, il11, y0, y1, L0, L1, xa, xa + K_, xb, xb + K_, xz, xm);
+            continue;
+        }
         std::copy_n(y0, K_, xz);
         std::copy_n(y1, K_, xm);
         for (int c = 2; c < n_; ++c) {
@@ -767,6 +818,25 @@ void recon_engine::solve_all() {
 }
 
 // Evaluates every pending row whose knot interval is fully emitted.
+void recon_engine::evaluate_into(double s, double *z, const double *c) const {
+    const long i = interval_of(s);
+    double w[4];
+    basis(s, i, w);
+    const double *a = hist_at(i), *b = hist_at(i + 1);
+    if (c)
+        evaluate_row_plus(K_, w, a, a + K_, b, b + K_, *c, z);
+    else
+        evaluate_row(K_, w, a, a + K_, b, b + K_, z);
+}
+
+void recon_engine::materialise_rows() {
+    const std::size_t cap = p_.row_capacity;
+    for (; evaluated_ < ready_; ++evaluated_) {
+        const std::size_t r = evaluated_ % cap;
+        evaluate_into(ring_s_[r], ring_z_ + r * K_, nullptr);
+    }
+}
+
 void recon_engine::finish_rows() {
     if (!keep_rows_)
         return;
@@ -777,16 +847,20 @@ void recon_engine::finish_rows() {
         const long i = interval_of(s);
         if (i + 1 > last_emitted_)
             break;
-        double w[4];
-        basis(s, i, w);
-        const double *a = hist_at(i), *b = hist_at(i + 1);
+        const bool flagged = ring_any_invalid_[r] || no_height_fibers_ > 0;
+        if (lazy_rows_ && !flagged && output_offset_ == 0.0) {
+            ++ready_;  // pull() evaluates it (materialise_rows)
+            continue;
+        }
+        materialise_rows();  // the rows before it, in order
         double *z = ring_z_ + r * K_;
-        if (output_offset_ != 0.0)
-            evaluate_row_plus(K_, w, a, a + K_, b, b + K_, output_offset_, z);
-        else
-            evaluate_row(K_, w, a, a + K_, b, b + K_, z);
+        evaluate_into(s, z, output_offset_ != 0.0 ? &output_offset_ : nullptr);
         std::uint8_t *fl = ring_flags_ + r * K_;
-        if (ring_any_invalid_[r] || no_height_fibers_ > 0) {
+        if (flagged) {
+            if (ring_zero_flags_[r]) {
+                std::memset(fl, 0, K_);
+                ring_zero_flags_[r] = 0;
+            }
             for (std::size_t k = 0; k < K_; ++k) {
                 const double last = std::max(last_valid_s_[k], all_valid_s_);
                 if ((fl[k] & FLT_FLAG_INVALID_INPUT) && last < s && last_s_ - last > p_.max_gap)
@@ -798,6 +872,7 @@ void recon_engine::finish_rows() {
             }
         }
         ++ready_;
+        evaluated_ = ready_;
     }
 }
 
@@ -824,15 +899,18 @@ void recon_engine::finish_row(double s, std::size_t nbad, HeightOk h_ok, SlopeOk
     const std::size_t r = tail_ % cap;
     ring_s_[r] = s;
     std::uint8_t *fl = ring_flags_ + r * K_;
-    std::memset(fl, 0, K_);
     bool any_invalid = false;
-    if (nbad > 0)
-        for (std::size_t k = 0; k < K_; ++k)
-            if (!h_ok(k) && !g_ok(k)) {
-                fl[k] = FLT_FLAG_INVALID_INPUT;
-                any_invalid = true;
-            }
+    if (nbad > 0 || !lazy_flags_) {
+        std::memset(fl, 0, K_);
+        if (nbad > 0)
+            for (std::size_t k = 0; k < K_; ++k)
+                if (!h_ok(k) && !g_ok(k)) {
+                    fl[k] = FLT_FLAG_INVALID_INPUT;
+                    any_invalid = true;
+                }
+    }
     ring_any_invalid_[r] = any_invalid;
+    ring_zero_flags_[r] = lazy_flags_ && nbad == 0;
 
     // Gap and level bookkeeping. last valid position of fiber k is
     // max(last_valid_s_[k], all_valid_s_): a fully valid row only moves the
@@ -878,6 +956,7 @@ void recon_engine::finish_row(double s, std::size_t nbad, HeightOk h_ok, SlopeOk
 
 void recon_engine::begin_strip(double s) {
     // A new strip: the knot grid starts at the first row's rear laser.
+    materialise_rows();  // on the grid of the strip before
     have_t0_ = true;
     t0_ = s - 0.5 * D_;
     fixed_upto_ = -1;
@@ -1069,6 +1148,8 @@ void recon_engine::mark_gap(std::size_t k, double from) {
         const std::size_t r = (i - 1) % cap;
         if (ring_s_[r] <= from)
             break;
+        if (ring_zero_flags_[r])
+            continue;  // no invalid sample in that row
         std::uint8_t &f = ring_flags_[r * K_ + k];
         if (f & FLT_FLAG_INVALID_INPUT)
             f |= FLT_FLAG_GAP;
@@ -1076,17 +1157,25 @@ void recon_engine::mark_gap(std::size_t k, double from) {
 }
 
 std::size_t recon_engine::pull(std::size_t max_rows, double *s_out, double *z_out,
-                               std::uint8_t *flags_out) {
+                               std::uint8_t *flags_out, const double *add) {
     const std::size_t cap = p_.row_capacity;
     const std::size_t n = std::min(max_rows, ready_ - head_);
     for (std::size_t i = 0; i < n; ++i) {
         const std::size_t r = (head_ + i) % cap;
         s_out[i] = ring_s_[r];
-        std::copy_n(ring_z_ + r * K_, K_, z_out + i * K_);
-        if (flags_out)
+        if (head_ + i >= evaluated_)
+            evaluate_into(ring_s_[r], z_out + i * K_, add);  // the bits of evaluating, adding
+        else if (add)
+            add_constant(K_, ring_z_ + r * K_, *add, z_out + i * K_);
+        else
+            std::copy_n(ring_z_ + r * K_, K_, z_out + i * K_);
+        if (flags_out && ring_zero_flags_[r])
+            std::memset(flags_out + i * K_, 0, K_);
+        else if (flags_out)
             std::copy_n(ring_flags_ + r * K_, K_, flags_out + i * K_);
     }
     head_ += n;
+    evaluated_ = std::max(evaluated_, head_);
     return n;
 }
 
@@ -1119,7 +1208,7 @@ void recon_engine::end_sheet_common(long e_end) {
 
 void recon_engine::reset() {
     have_t0_ = false;
-    head_ = ready_ = tail_ = 0;
+    head_ = ready_ = tail_ = evaluated_ = 0;
     rows_in_sheet_ = 0;
     fixed_upto_ = -1;
     anchored_ = false;
@@ -1182,7 +1271,9 @@ void recon_engine::rebind_rows(double *z_store, std::uint8_t *flags_store) {
         throw error(FLT_ERR_INTERNAL, "rebind_rows needs row storage");
     reset();  // the rows held were the previous storage's
     ring_z_ = z_store;
+    lazy_rows_ = false;
     ring_flags_ = flags_store ? flags_store : own_flags_.data();
+    lazy_flags_ = flags_store == nullptr;
 }
 
 void recon_engine::boundary(double *s_out, double *height_out, double *slope_out) const {
@@ -1216,8 +1307,13 @@ std::size_t recon_engine::peek(std::size_t offset, std::size_t max_rows, double 
         double *z = z_out + i * K_;
         std::uint8_t *fl = flags_out ? flags_out + i * K_ : nullptr;
         if (at < ready_) {  // finished: as pull() will give it
-            std::copy_n(ring_z_ + r * K_, K_, z);
-            if (fl)
+            if (at >= evaluated_)
+                evaluate_into(s, z, nullptr);
+            else
+                std::copy_n(ring_z_ + r * K_, K_, z);
+            if (fl && ring_zero_flags_[r])
+                std::memset(fl, 0, K_);
+            else if (fl)
                 std::copy_n(ring_flags_ + r * K_, K_, fl);
             continue;
         }
@@ -1235,8 +1331,9 @@ std::size_t recon_engine::peek(std::size_t offset, std::size_t max_rows, double 
             evaluate_row(K_, w, a, a + K_, b, b + K_, z);
         // The flags as finish_rows() would set them now.
         const std::uint8_t *own = ring_flags_ + r * K_;
+        const bool zero = ring_zero_flags_[r] != 0;
         for (std::size_t k = 0; k < K_; ++k) {
-            std::uint8_t f = own[k];
+            std::uint8_t f = zero ? std::uint8_t(0) : own[k];
             const double last = std::max(last_valid_s_[k], all_valid_s_);
             if ((f & FLT_FLAG_INVALID_INPUT) && last < s && last_s_ - last > p_.max_gap)
                 f |= FLT_FLAG_GAP;
@@ -1257,6 +1354,7 @@ std::size_t recon_engine::peek(std::size_t offset, std::size_t max_rows, double 
 
 void recon_engine::set_knot_state(long j, const double *z, const double *m, std::size_t k0,
                                   std::size_t k1) {
+    keep_lazy_rows(j);
     double *h = hist_at(j);
     std::copy(z + k0, z + k1, h + k0);
     std::copy(m + k0, m + k1, h + K_ + k0);

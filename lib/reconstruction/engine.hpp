@@ -162,8 +162,11 @@ class recon_engine {
     void set_fiber_weights(const double *wh, const double *wg);
     double default_height_weight() const { return w_h_; }
     double default_slope_weight() const { return w_g_; }
-    // Copies up to max_rows ready rows out; returns how many.
-    std::size_t pull(std::size_t max_rows, double *s_out, double *z_out, std::uint8_t *flags_out);
+    // Copies up to max_rows ready rows out; returns how many. add: a
+    // constant (mm) added to every height as it is copied (the bits of
+    // copying, then adding it), or nullptr for none.
+    std::size_t pull(std::size_t max_rows, double *s_out, double *z_out, std::uint8_t *flags_out,
+                     const double *add = nullptr);
     void end_sheet();
     void reset();
     // The carried boundary knot.
@@ -323,6 +326,23 @@ class recon_engine {
     long emit_group() const { return p_.emit_group(); }
     void emit_upto(long last);  // solve and emit knots <= last
     void finish_rows();         // evaluate rows now determined
+    // Finished rows [evaluated_, ready_) are not evaluated into the ring
+    // yet: pull() evaluates them from the knot states straight into the
+    // caller's rows (the ring's row is memory untouched for row_capacity
+    // rows; writing it, then copying it out, cost more than the
+    // evaluation). Only rows finished without a flag or NaN to set, with
+    // the engine's own row ring and no output offset; they are evaluated
+    // into the ring (materialise_rows) before a knot state they need can
+    // be overwritten (its ring slot reused by knot j_max: keep_lazy_rows)
+    // or the grid moves (a new strip).
+    void materialise_rows();
+    void keep_lazy_rows(long j_max) {
+        if (evaluated_ < ready_ &&
+            j_max >= interval_of(ring_s_[evaluated_ % p_.row_capacity]) + long(hist_cap_))
+            materialise_rows();
+    }
+    // Row at (ring index r, position s) from the knot states into z (+ c).
+    void evaluate_into(double s, double *z, const double *c) const;
     void mark_gap(std::size_t k, double from);
     double *hist_at(long j);  // state (z, m) of knot j, [2][K]
     const double *hist_at(long j) const;
@@ -390,11 +410,20 @@ class recon_engine {
     // ---- row ring ----
     std::vector<double> ring_s_;
     std::vector<std::uint8_t> ring_any_invalid_;
+    // Rows whose flags are all 0 and were not written to the ring (a row
+    // with every sample valid, the common one): pull and peek give zeros
+    // for them, and the ring's bytes are written only if a flag is set
+    // later. Only with the engine's own flag ring (lazy_flags_): a
+    // caller's storage (batch) is written as rows finish.
+    std::vector<std::uint8_t> ring_zero_flags_;
+    bool lazy_flags_ = false;
     std::vector<double> own_z_;
     std::vector<std::uint8_t> own_flags_;
     double *ring_z_;
     std::uint8_t *ring_flags_;
     std::size_t head_ = 0, ready_ = 0, tail_ = 0;  // monotonic counters
+    std::size_t evaluated_ = 0;                    // see materialise_rows
+    bool lazy_rows_ = false;                       // own row ring (z)
     bool keep_rows_ = true;
     double output_offset_ = 0.0;  // set_output_offset
     bool has_row_ring_ = true;    // constructed with keep_rows

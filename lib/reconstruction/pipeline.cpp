@@ -338,6 +338,11 @@ void recon_pipeline::split(double s, const double *value, const std::uint8_t *va
 
 void recon_pipeline::push_row(double s, const double *raw_height, const double *slope,
                               const std::uint8_t *valid) {
+    // The slopes are read right after the heights: asked for now, they
+    // come from memory while the heights are made relative (a caller's
+    // row that is not in the cache costs a microsecond per pass that
+    // waits for it).
+    prefetch_row(slope, K_);
     find_level(raw_height, valid);
     relative_heights(raw_height, rel_h_.data());
     const double *height = rel_h_.data();
@@ -521,7 +526,11 @@ std::size_t recon_pipeline::ready_rows() const {
 
 std::size_t recon_pipeline::pull(std::size_t max_rows, double *s_out, double *z_out,
                                  std::uint8_t *flags_out) {
-    const std::size_t n = main_->pull(std::min(max_rows, ready_rows()), s_out, z_out, flags_out);
+    // Without rigid_motion the level is added as the rows are copied out
+    // (one pass over them, not two).
+    const bool plain_level = !config_.rigid_motion && has_level_;
+    const std::size_t n = main_->pull(std::min(max_rows, ready_rows()), s_out, z_out, flags_out,
+                                      plain_level ? &level_ : nullptr);
     if (config_.rigid_motion && n > 0) {
         // The line engines have finished these rows too (ready_rows).
         if (offset_->pull(n, line_s_.data(), line_a_.data(), nullptr) != n ||
@@ -529,9 +538,6 @@ std::size_t recon_pipeline::pull(std::size_t max_rows, double *s_out, double *z_
             throw error(FLT_ERR_INTERNAL, "line channels out of step with the fibers");
         // With the level, in one pass (NaN stays NaN).
         add_lines(n, line_a_.data(), line_b_.data(), has_level_ ? level_ : 0.0, z_out);
-    } else if (has_level_) {
-        for (std::size_t i = 0; i < n * K_; ++i)
-            z_out[i] += level_;  // NaN stays NaN
     }
     return n;
 }

@@ -417,9 +417,9 @@ void recon_chain::push_row(double s, const double *height, const double *slope,
 }
 
 std::size_t recon_chain::pull(std::size_t max_rows, double *s_out, double *z_out,
-                              std::uint8_t *flags_out) {
-    return window_ ? window_->pull(max_rows, s_out, z_out, flags_out)
-                   : engine_->pull(max_rows, s_out, z_out, flags_out);
+                              std::uint8_t *flags_out, const double *add) {
+    return window_ ? window_->pull(max_rows, s_out, z_out, flags_out, add)
+                   : engine_->pull(max_rows, s_out, z_out, flags_out, add);
 }
 
 std::size_t recon_chain::peek(std::size_t offset, std::size_t max_rows, double *s_out,

@@ -149,7 +149,9 @@ class recon_chain {
     long latency_knots() const;
 
     void push_row(double s, const double *height, const double *slope, const std::uint8_t *valid);
-    std::size_t pull(std::size_t max_rows, double *s_out, double *z_out, std::uint8_t *flags_out);
+    // add: as recon_engine::pull.
+    std::size_t pull(std::size_t max_rows, double *s_out, double *z_out, std::uint8_t *flags_out,
+                     const double *add = nullptr);
     // Rows held, skipping `offset`: finished ones as pull() gives them,
     // pending ones provisional (recon_engine::peek).
     std::size_t peek(std::size_t offset, std::size_t max_rows, double *s_out, double *z_out,

@@ -15,6 +15,9 @@ constexpr double k_nan = std::numeric_limits<double>::quiet_NaN();
 // Fibers solved together: their window band (about 44 unknowns x 6
 // entries for the default lag) stays in the core's cache.
 constexpr std::size_t k_chunk_fibers = 64;
+// The widest band of the window matrix, unknowns (2 S - 1 for the most
+// knots a row may span, engine.cpp's k_max_unknowns).
+constexpr int k_max_band = 2 * 66;
 
 // Built for baseline x86-64 and AVX2 (no FMA: the same roundings on every
 // machine), as engine.cpp's kernels.
@@ -134,47 +137,122 @@ FLT_WINDOW_KERNEL void predict6(std::size_t K, const double *a, const double *b,
 
 // and a sample's share of the block's right-hand sides (weigh_values and
 // add_rhs for the six unknowns at once). Returns the fibers that take any
-// weight back (their complements in dmh, dmg).
-FLT_WINDOW_KERNEL std::size_t accumulate6(std::size_t K, double D, const double *a, const double *b,
-                                          const double *__restrict yh, const double *__restrict yg,
-                                          const double *__restrict mh, const double *__restrict mg,
-                                          double *rh_out, double *rg_out, double *__restrict dmh,
-                                          double *__restrict dmg) {
-    double *__restrict rh0 = rh_out, *__restrict rh1 = rh_out + K, *__restrict rh2 = rh_out + 2 * K;
-    double *__restrict rh3 = rh_out + 3 * K, *__restrict rh4 = rh_out + 4 * K;
-    double *__restrict rh5 = rh_out + 5 * K;
-    double *__restrict rg0 = rg_out, *__restrict rg1 = rg_out + K, *__restrict rg2 = rg_out + 2 * K;
-    double *__restrict rg3 = rg_out + 3 * K, *__restrict rg4 = rg_out + 4 * K;
-    double *__restrict rg5 = rg_out + 5 * K;
-    const double a0 = a[0], a1 = a[1], a2 = a[2], a3 = a[3], a4 = a[4], a5 = a[5];
-    const double b0 = b[0], b1 = b[1], b2 = b[2], b3 = b[3], b4 = b[4], b5 = b[5];
-    double affected = 0.0;
-    for (std::size_t k = 0; k < K; ++k) {
-        const double hv = mh[k] != 0.0 ? mh[k] * yh[k] : 0.0;
-        const double gv = mg[k] != 0.0 ? mg[k] * (D * yg[k]) : 0.0;
-        rh0[k] += a0 * hv;
-        rh1[k] += a1 * hv;
-        rh2[k] += a2 * hv;
-        rh3[k] += a3 * hv;
-        rh4[k] += a4 * hv;
-        rh5[k] += a5 * hv;
-        rg0[k] += b0 * gv;
-        rg1[k] += b1 * gv;
-        rg2[k] += b2 * gv;
-        rg3[k] += b3 * gv;
-        rg4[k] += b4 * gv;
-        rg5[k] += b5 * gv;
-        dmh[k] = 1.0 - mh[k];
-        dmg[k] = 1.0 - mg[k];
-        affected += mh[k] * mg[k] != 1.0 ? 1.0 : 0.0;
-    }
-    return std::size_t(affected);
+// weight back (their complements in dmh, dmg). The twelve right-hand sides
+// are restrict parameters and the count an integer: GCC vectorises the
+// loop only so (restrict locals, or a floating-point count, leave it
+// scalar).
+#define FLT_ACCUMULATE6_PARAMS                                                               \
+  std::size_t K, double D, const double *__restrict a, const double *__restrict b,           \
+      const double *__restrict yh, const double *__restrict yg, const double *__restrict mh, \
+      const double *__restrict mg, double *__restrict rh0, double *__restrict rh1,           \
+      double *__restrict rh2, double *__restrict rh3, double *__restrict rh4,                \
+      double *__restrict rh5, double *__restrict rg0, double *__restrict rg1,                \
+      double *__restrict rg2, double *__restrict rg3, double *__restrict rg4,                \
+      double *__restrict rg5, double *__restrict dmh, double *__restrict dmg
+// RH(r) is the right-hand side an entry adds to: the entry itself, or for
+// a block's first row 0.0 (accumulate6_first: the bits of adding to a
+// cleared block, without clearing it first or reading it back).
+#define FLT_ACCUMULATE6_BODY(RH)                                                 \
+  const double a0 = a[0], a1 = a[1], a2 = a[2], a3 = a[3], a4 = a[4], a5 = a[5]; \
+  const double b0 = b[0], b1 = b[1], b2 = b[2], b3 = b[3], b4 = b[4], b5 = b[5]; \
+  std::size_t affected = 0;                                                      \
+  for (std::size_t k = 0; k < K; ++k) {                                          \
+    const double hv = mh[k] != 0.0 ? mh[k] * yh[k] : 0.0;                        \
+    const double gv = mg[k] != 0.0 ? mg[k] * (D * yg[k]) : 0.0;                  \
+    rh0[k] = RH(rh0[k]) + a0 * hv;                                               \
+    rh1[k] = RH(rh1[k]) + a1 * hv;                                               \
+    rh2[k] = RH(rh2[k]) + a2 * hv;                                               \
+    rh3[k] = RH(rh3[k]) + a3 * hv;                                               \
+    rh4[k] = RH(rh4[k]) + a4 * hv;                                               \
+    rh5[k] = RH(rh5[k]) + a5 * hv;                                               \
+    rg0[k] = RH(rg0[k]) + b0 * gv;                                               \
+    rg1[k] = RH(rg1[k]) + b1 * gv;                                               \
+    rg2[k] = RH(rg2[k]) + b2 * gv;                                               \
+    rg3[k] = RH(rg3[k]) + b3 * gv;                                               \
+    rg4[k] = RH(rg4[k]) + b4 * gv;                                               \
+    rg5[k] = RH(rg5[k]) + b5 * gv;                                               \
+    dmh[k] = 1.0 - mh[k];                                                        \
+    dmg[k] = 1.0 - mg[k];                                                        \
+    affected += std::size_t(mh[k] * mg[k] != 1.0);                               \
+  }                                                                              \
+  return affected;
+#define FLT_RH_ADD(x)   (x)
+#define FLT_RH_FIRST(x) 0.0
+FLT_WINDOW_KERNEL std::size_t accumulate6(FLT_ACCUMULATE6_PARAMS){
+    FLT_ACCUMULATE6_BODY(FLT_RH_ADD)} FLT_WINDOW_KERNEL std::size_t
+    accumulate6_first(FLT_ACCUMULATE6_PARAMS) {
+    FLT_ACCUMULATE6_BODY(FLT_RH_FIRST)
 }
+#undef FLT_RH_ADD
+#undef FLT_RH_FIRST
 
 inline void sub_product(std::size_t C, double *__restrict out, const double *__restrict a,
                         const double *__restrict b) {
     for (std::size_t c = 0; c < C; ++c)
         out[c] -= a[c] * b[c];
+}
+
+// out = (out - a[0] * b[0] - a[1] * b[1] - ... - a[n-1] * b[n-1]) * scale
+// over C fibers (scale nullptr: 1), subtracting in the order given: the
+// bits of n sub_product passes and a multiplying pass, in one pass over
+// out (the banded solve's entries gather up to bw products each, and
+// their passes were its cost). Up to five products per pass, the rest in
+// further passes, in order. Inlined into band_solve, so that it is built
+// for each of band_solve's targets.
+#if defined(__GNUC__)
+#  define FLT_ALWAYS_INLINE __attribute__((always_inline)) inline
+#else
+#  define FLT_ALWAYS_INLINE inline
+#endif
+FLT_ALWAYS_INLINE void sub_products(std::size_t C, double *out, int n, const double *const *a,
+                                    const double *const *b, const double *scale) {
+    int i = 0;
+    for (; n - i > 5; i += 5)
+        for (int j = i; j < i + 5; ++j)
+            sub_product(C, out, a[j], b[j]);
+    const int m = n - i;
+    double *__restrict o = out;
+    const double *__restrict a0 = m > 0 ? a[i] : nullptr, *__restrict b0 = m > 0 ? b[i] : nullptr;
+    const double *__restrict a1 = m > 1 ? a[i + 1] : nullptr, *__restrict b1 =
+                                                                  m > 1 ? b[i + 1] : nullptr;
+    const double *__restrict a2 = m > 2 ? a[i + 2] : nullptr, *__restrict b2 =
+                                                                  m > 2 ? b[i + 2] : nullptr;
+    const double *__restrict a3 = m > 3 ? a[i + 3] : nullptr, *__restrict b3 =
+                                                                  m > 3 ? b[i + 3] : nullptr;
+    const double *__restrict a4 = m > 4 ? a[i + 4] : nullptr, *__restrict b4 =
+                                                                  m > 4 ? b[i + 4] : nullptr;
+    const double *__restrict sc = scale;
+#define FLT_SUB_TERMS(expr)             \
+  if (sc)                               \
+    for (std::size_t c = 0; c < C; ++c) \
+      o[c] = (expr)*sc[c];              \
+  else                                  \
+    for (std::size_t c = 0; c < C; ++c) \
+      o[c] = (expr);
+    switch (m) {
+        case 0:
+            if (sc)
+                for (std::size_t c = 0; c < C; ++c)
+                    o[c] *= sc[c];
+            break;
+        case 1:
+            FLT_SUB_TERMS(o[c] - a0[c] * b0[c])
+            break;
+        case 2:
+            FLT_SUB_TERMS(o[c] - a0[c] * b0[c] - a1[c] * b1[c])
+            break;
+        case 3:
+            FLT_SUB_TERMS(o[c] - a0[c] * b0[c] - a1[c] * b1[c] - a2[c] * b2[c])
+            break;
+        case 4:
+            FLT_SUB_TERMS(o[c] - a0[c] * b0[c] - a1[c] * b1[c] - a2[c] * b2[c] - a3[c] * b3[c])
+            break;
+        default:
+            FLT_SUB_TERMS(o[c] - a0[c] * b0[c] - a1[c] * b1[c] - a2[c] * b2[c] - a3[c] * b3[c] -
+                          a4[c] * b4[c])
+            break;
+    }
+#undef FLT_SUB_TERMS
 }
 
 // The window band of a chunk of C fibers, [unknown][0..bw][C] (entry (i,
@@ -187,40 +265,44 @@ FLT_WINDOW_KERNEL void band_solve(int N, int bw, std::size_t C, double *__restri
     auto at = [&](int i, int d) {
         return A + (std::size_t(i) * P + std::size_t(d)) * C;
     };
+    // Each entry gathers its products (in the order of the plain loops:
+    // m, or d, ascending) and is written once (sub_products).
+    const double *ta[k_max_band], *tb[k_max_band];
     for (int i = 0; i < N; ++i) {
         double *aii = at(i, 0);
-        for (int m = std::max(0, i - bw); m < i; ++m) {
-            const double *u = at(m, i - m);
-            sub_product(C, aii, u, u);
-        }
+        int t = 0;
+        for (int m = std::max(0, i - bw); m < i; ++m, ++t)
+            ta[t] = tb[t] = at(m, i - m);
+        sub_products(C, aii, t, ta, tb, nullptr);
         for (std::size_t c = 0; c < C; ++c)
             aii[c] = 1.0 / std::sqrt(std::max(aii[c], floor[c]));
         for (int d = 1; d <= bw && i + d < N; ++d) {
             const int j = i + d;
-            double *aij = at(i, d);
-            for (int m = std::max(0, j - bw); m < i; ++m)
-                sub_product(C, aij, at(m, i - m), at(m, j - m));
-            for (std::size_t c = 0; c < C; ++c)
-                aij[c] *= aii[c];
+            t = 0;
+            for (int m = std::max(0, j - bw); m < i; ++m, ++t) {
+                ta[t] = at(m, i - m);
+                tb[t] = at(m, j - m);
+            }
+            sub_products(C, at(i, d), t, ta, tb, aii);
         }
     }
     // U^T z = y
     for (int i = 0; i < N; ++i) {
-        double *yi = y + std::size_t(i) * C;
-        for (int m = std::max(0, i - bw); m < i; ++m)
-            sub_product(C, yi, at(m, i - m), y + std::size_t(m) * C);
-        const double *inv = at(i, 0);
-        for (std::size_t c = 0; c < C; ++c)
-            yi[c] *= inv[c];
+        int t = 0;
+        for (int m = std::max(0, i - bw); m < i; ++m, ++t) {
+            ta[t] = at(m, i - m);
+            tb[t] = y + std::size_t(m) * C;
+        }
+        sub_products(C, y + std::size_t(i) * C, t, ta, tb, at(i, 0));
     }
     // U x = z
     for (int i = N - 1; i >= 0; --i) {
-        double *yi = y + std::size_t(i) * C;
-        for (int d = 1; d <= bw && i + d < N; ++d)
-            sub_product(C, yi, at(i, d), y + std::size_t(i + d) * C);
-        const double *inv = at(i, 0);
-        for (std::size_t c = 0; c < C; ++c)
-            yi[c] *= inv[c];
+        int t = 0;
+        for (int d = 1; d <= bw && i + d < N; ++d, ++t) {
+            ta[t] = at(i, d);
+            tb[t] = y + std::size_t(i + d) * C;
+        }
+        sub_products(C, y + std::size_t(i) * C, t, ta, tb, at(i, 0));
     }
 }
 
@@ -276,6 +358,7 @@ double robust_window::bytes_needed(std::size_t fibers, const recon_params &param
         recon_engine::bytes_needed(fibers, frozen_params(params), std::size_t(S) + 4, true, false);
     bytes += 8 * K * (2 * double(robust.scale_blocks) + 16) * 2;   // scales
     bytes += 8 * ring * (2 * n * n + (2 * n + 2 * ntri + 2) * K);  // blocks, knot states
+    bytes += ring * (K + 4 * (K / 8 + 1));                         // downdate lists
     bytes += 8 * knots * 2 * K;                                    // peek's solution
     bytes += double(params.row_capacity) * (8 + 2 * 4 * K);        // raw rows, in float
     bytes += 8 * (2 * knots) * n * (2 + chunk) + 8 * (2 * knots) * chunk;
@@ -324,6 +407,11 @@ robust_window::robust_window(std::size_t fibers, const recon_params &params,
     dh_.assign(ring_ * ntri_ * K_, 0.0);
     dg_.assign(ring_ * ntri_ * K_, 0.0);
     x_.assign(ring_ * 2 * K_, 0.0);
+    // Listed up to the point where the dense subtraction costs less (as
+    // add_row's own choice for a row).
+    down_cap_ = K_ / 8 + 1;
+    down_fibers_.assign(ring_ * down_cap_, 0);
+    down_marks_.assign(ring_ * K_, 0);
     peek_x_.assign(std::size_t(max_knots_) * 2 * K_, 0.0);
     row_cap_ = params.row_capacity;
     row_s_.assign(row_cap_, 0.0);
@@ -377,11 +465,33 @@ void robust_window::open_block(long b) {
     bl.rows = 0;
     bl.judged = 0;
     bl.has_down = false;
+    clear_down(bl, b);
     const std::size_t nn = std::size_t(n_) * n_;
     std::fill_n(gh(b), nn, 0.0);
     std::fill_n(gg(b), nn, 0.0);
+    // In the default geometry the block's first row sets the right-hand
+    // sides (accumulate6_first); a block that gets no row is cleared when
+    // it is frozen.
+    if (n_ != 6)
+        clear_rhs(b);
+}
+
+void robust_window::clear_rhs(long b) {
     std::fill_n(rh(b), std::size_t(n_) * K_, 0.0);
     std::fill_n(rg(b), std::size_t(n_) * K_, 0.0);
+}
+
+void robust_window::clear_down(block &bl, long b) {
+    std::uint8_t *marks = down_marks(b);
+    if (bl.dense_down) {
+        std::fill_n(marks, K_, std::uint8_t(0));
+    } else {
+        const std::uint32_t *list = down_fibers(b);
+        for (std::size_t i = 0; i < bl.down_count; ++i)
+            marks[list[i]] = 0;
+    }
+    bl.down_count = 0;
+    bl.dense_down = false;
 }
 
 void robust_window::push_row(double s, const double *height, const double *slope,
@@ -415,21 +525,23 @@ void robust_window::push_row(double s, const double *height, const double *slope
             bgg[u * nn + v] += cg[u] * cg[v];
         }
     sample_multipliers(K_, h, g, mult_h_.data(), mult_g_.data());
-    add_row(i1, r, ch, cg, h, g, mult_h_.data(), mult_g_.data());
+    add_row(i1, r, ch, cg, h, g, mult_h_.data(), mult_g_.data(), bl.rows == 1);
     out_.push_row(s, height, slope, valid);
 }
 
 // One row of block b into the block's right-hand sides and downdates:
 // values yh (mm), yg (mm/mm) with multipliers mh, mg.
 void robust_window::add_row(long b, std::size_t /*r*/, const double *ch, const double *cg,
-                            const double *yh, const double *yg, const double *mh,
-                            const double *mg) {
+                            const double *yh, const double *yg, const double *mh, const double *mg,
+                            bool first) {
     double *hv = pred_h_.data(), *gv = pred_g_.data();  // free after the prediction
     double *dmh = down_h_.data(), *dmg = down_g_.data();
     double *bh = rh(b), *bg = rg(b);
     std::size_t affected = 0;
     if (n_ == 6) {
-        affected = accumulate6(K_, D_, ch, cg, yh, yg, mh, mg, bh, bg, dmh, dmg);
+        affected = (first ? accumulate6_first : accumulate6)(
+            K_, D_, ch, cg, yh, yg, mh, mg, bh, bh + K_, bh + 2 * K_, bh + 3 * K_, bh + 4 * K_,
+            bh + 5 * K_, bg, bg + K_, bg + 2 * K_, bg + 3 * K_, bg + 4 * K_, bg + 5 * K_, dmh, dmg);
     } else {
         affected = weigh_values(K_, D_, yh, yg, mh, mg, hv, gv, dmh, dmg);
         for (int u = 0; u < n_; ++u)
@@ -445,6 +557,7 @@ void robust_window::add_row(long b, std::size_t /*r*/, const double *ch, const d
         bl.has_down = true;
     }
     if (affected * 8 > K_) {
+        bl.dense_down = true;
         for (int u = 0; u < n_; ++u)
             for (int v = u; v < n_; ++v) {
                 const std::size_t e = packed(n_, u, v);
@@ -455,6 +568,7 @@ void robust_window::add_row(long b, std::size_t /*r*/, const double *ch, const d
     for (std::size_t k = 0; k < K_; ++k) {
         if (dmh[k] == 0.0 && dmg[k] == 0.0)
             continue;
+        mark_down(bl, b, k);
         for (int u = 0; u < n_; ++u)
             for (int v = u; v < n_; ++v) {
                 const std::size_t e = packed(n_, u, v);
@@ -539,9 +653,10 @@ void robust_window::emit_states(long last) {
 
 void robust_window::judge(long b, bool feed) {
     block &bl = block_at(b);
-    std::fill_n(rh(b), std::size_t(n_) * K_, 0.0);
-    std::fill_n(rg(b), std::size_t(n_) * K_, 0.0);
+    if (n_ != 6 || bl.rows == 0)
+        clear_rhs(b);  // else the first row sets them
     bl.has_down = false;
+    clear_down(bl, b);
     const double *xs[2 * 66];
     for (int u = 0; u < n_; ++u)
         xs[u] = state(b + u / 2) + std::size_t(u % 2) * K_;
@@ -572,7 +687,7 @@ void robust_window::judge(long b, bool feed) {
             if (new_h || new_g)
                 update_weights();
         }
-        add_row(b, r, ch, cg, out_h_.data(), out_g_.data(), mult_h_.data(), mult_g_.data());
+        add_row(b, r, ch, cg, out_h_.data(), out_g_.data(), mult_h_.data(), mult_g_.data(), i == 0);
     }
     ++bl.judged;
 }
@@ -586,6 +701,8 @@ void robust_window::freeze_upto(long last) {
     for (; first_block_ <= last; ++first_block_) {
         const long b = first_block_;
         const block &bl = block_at(b);
+        if (bl.rows == 0 && n_ == 6)
+            clear_rhs(b);  // no first row set them (open_block)
         frozen_.add_block(b, gh(b), gg(b), rh(b), rg(b), bl.has_down ? dh(b) : nullptr,
                           bl.has_down ? dg(b) : nullptr);
         frozen_.forget_upto(frozen_.first_open_knot() - 1);
@@ -681,18 +798,36 @@ void robust_window::solve_chunk(long w0, int knots, std::size_t k0, std::size_t 
             continue;
         const int base = 2 * int(b - w0);
         const double *bh = rh(b), *bg = rg(b), *dh_b = dh(b), *dg_b = dg(b);
+        const bool dense = bl.has_down && bl.dense_down;
         for (int u = 0; u < n_; ++u) {
             const int iu = base + u;
             if (iu < 0)
                 continue;
             add_weighted(C, 1.0, wh, wg, bh + std::size_t(u) * K_ + k0,
                          bg + std::size_t(u) * K_ + k0, y + std::size_t(iu) * C);
-            if (bl.has_down)
+            if (dense)
                 for (int v = u; v < n_; ++v) {
                     const std::size_t e = packed(n_, u, v);
                     add_weighted(C, -1.0, wh, wg, dh_b + e * K_ + k0, dg_b + e * K_ + k0,
                                  at(iu, v - u));
                 }
+        }
+        if (bl.has_down && !dense) {
+            // The listed fibers only (block::down_count): the same
+            // subtraction, entry by entry, as add_weighted's.
+            const std::uint32_t *list = down_fibers_.data() + slot(b) * down_cap_;
+            for (std::size_t l = 0; l < bl.down_count; ++l) {
+                const std::size_t k = list[l];
+                if (k < k0 || k >= k1)
+                    continue;
+                const std::size_t c = k - k0;
+                for (int u = std::max(0, -base); u < n_; ++u)
+                    for (int v = u; v < n_; ++v) {
+                        const std::size_t e = packed(n_, u, v);
+                        at(base + u, v - u)[c] +=
+                            -1.0 * (wh[c] * dh_b[e * K_ + k] + wg[c] * dg_b[e * K_ + k]);
+                    }
+            }
         }
         if (base >= 0)
             continue;

@@ -65,8 +65,9 @@ class robust_window {
     long latency_knots() const { return p_.latency_knots() + S_ - 2; }
 
     void push_row(double s, const double *height, const double *slope, const std::uint8_t *valid);
-    std::size_t pull(std::size_t max_rows, double *s_out, double *z_out, std::uint8_t *flags_out) {
-        return out_.pull(max_rows, s_out, z_out, flags_out);
+    std::size_t pull(std::size_t max_rows, double *s_out, double *z_out, std::uint8_t *flags_out,
+                     const double *add = nullptr) {
+        return out_.pull(max_rows, s_out, z_out, flags_out, add);
     }
     // Rows held, skipping `offset`: finished ones as pull() gives them,
     // pending ones from a solve of the window now (provisional). Changes no
@@ -84,6 +85,14 @@ class robust_window {
         std::size_t first_row = 0, rows = 0;  // in the row store (monotonic)
         int judged = 0;                       // judgments so far
         bool has_down = false;                // dh / dg are not all zero
+        // The fibers whose dh / dg entries are non-zero, when they are few
+        // (down_fibers(b), down_count of them); dense_down: too many to
+        // list, every fiber counts. A solve subtracts the downdates of the
+        // listed fibers only: the others' entries are exactly 0, so the
+        // result is the same to the bit, and a Huber block's downdates
+        // (its gross samples) are typically a few fibers of a thousand.
+        std::size_t down_count = 0;
+        bool dense_down = false;
     };
 
     std::size_t slot(long j) const { return std::size_t(j) % ring_; }
@@ -94,6 +103,22 @@ class robust_window {
     double *rg(long b) { return rg_.data() + slot(b) * std::size_t(n_) * K_; }
     double *dh(long b) { return dh_.data() + slot(b) * std::size_t(ntri_) * K_; }
     double *dg(long b) { return dg_.data() + slot(b) * std::size_t(ntri_) * K_; }
+    std::uint32_t *down_fibers(long b) { return down_fibers_.data() + slot(b) * down_cap_; }
+    std::uint8_t *down_marks(long b) { return down_marks_.data() + slot(b) * K_; }
+    // Fiber k of block b has a non-zero downdate (block::down_count).
+    void mark_down(block &bl, long b, std::size_t k) {
+        if (bl.dense_down)
+            return;
+        std::uint8_t &m = down_marks(b)[k];
+        if (m)
+            return;
+        m = 1;
+        if (bl.down_count == down_cap_)
+            bl.dense_down = true;
+        else
+            down_fibers(b)[bl.down_count++] = std::uint32_t(k);
+    }
+    void clear_down(block &bl, long b);  // no downdates in block b
     // The window solution's state of knot j (z then m, [2][K]); a carried
     // knot's before the window.
     const double *state(long j) const;
@@ -106,8 +131,12 @@ class robust_window {
     void emit_states(long last);    // knots up to last are final
     bool due(long b) const;         // block b is due for a judgment
     void judge(long b, bool feed);  // recompute block b's sums from its rows
+    // first: the block's first row, which in the default geometry sets
+    // the right-hand sides instead of adding to them (they are not cleared
+    // for it: open_block, judge).
     void add_row(long b, std::size_t r, const double *ch, const double *cg, const double *yh,
-                 const double *yg, const double *mh, const double *mg);
+                 const double *yg, const double *mh, const double *mg, bool first);
+    void clear_rhs(long b);       // the block's right-hand sides to 0
     void freeze_upto(long last);  // blocks up to last leave the window
     // The window, every fiber; provisional: into peek_x_ (peek), leaving
     // the solution (x_, solved_*) as it was.
@@ -139,6 +168,11 @@ class robust_window {
     std::size_t ring_;      // blocks and knot states held
     std::vector<block> blocks_;
     std::vector<double> gh_, gg_, rh_, rg_, dh_, dg_;
+    // Per block: the listed fibers with downdates ([ring][down_cap]) and a
+    // mark per fiber ([ring][K]) so that each is listed once.
+    std::size_t down_cap_;
+    std::vector<std::uint32_t> down_fibers_;
+    std::vector<std::uint8_t> down_marks_;
     // The raw rows of the window's blocks: [row_cap][K] each, invalid NaN.
     // In float: they are only read again to be judged (their residual
     // against the window's solution), and heights relative to the strip's
