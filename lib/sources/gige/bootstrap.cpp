@@ -38,10 +38,13 @@ bootstrap_info read_bootstrap(control_channel &control) {
 }
 
 device_description read_description(sources::register_port &port, const std::string &url) {
-    std::string scheme = url.substr(0, std::min<std::size_t>(url.find(':'), url.size()));
+    // The camera's register text, untrusted: "local" alone (no ':') is no
+    // URL either (substr past its end would throw out_of_range).
+    const std::size_t colon = url.find(':');
+    std::string scheme = url.substr(0, std::min<std::size_t>(colon, url.size()));
     std::transform(scheme.begin(), scheme.end(), scheme.begin(),
                    [](unsigned char ch) { return char(std::tolower(ch)); });
-    if (scheme != "local")
+    if (scheme != "local" || colon == std::string::npos)
         raise(FLT_ERR_FORMAT,
               "the camera's description is at '%.200s': only a description in the camera's "
               "memory (a Local: URL) is read",
