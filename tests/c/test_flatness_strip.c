@@ -53,6 +53,16 @@ static flt_options *options_with(int n, const flt_option *keys, const double *va
     return o;
 }
 
+/* Flatness options: the keys given, and room for one sheet. The default
+ * flat_row_capacity (4096 rows) would be nearly four times a sheet here,
+ * and each create writes all of it (flatness.h, "Memory"): the room a
+ * sheet needs is what this file tests, and the rest was most of its time. */
+static flt_options *flat_options(int n, const flt_option *keys, const double *values) {
+    flt_options *o = options_with(n, keys, values);
+    assert_int_equal(flt_options_set(o, FLT_OPT_FLAT_ROW_CAPACITY, ROWS), FLT_OK);
+    return o;
+}
+
 /* A sensor grid of `fibers` at `pitch` centred on x = 0. */
 typedef struct grid {
     size_t fibers;
@@ -326,7 +336,7 @@ static void zones_on_wandering_strips_match_the_truth(void **state) {
             for (int reference = 0; reference < 2; ++reference) {
                 const flt_option key = FLT_OPT_FLAT_REFERENCE;
                 const double value = reference;
-                flt_options *o = options_with(1, &key, &value);
+                flt_options *o = flat_options(1, &key, &value);
                 flt_flatness *f = NULL;
                 assert_int_equal(flt_flatness_create(g.fibers, g.x, o, &f), FLT_OK);
                 assert_int_equal(flt_flatness_evaluate_strip(f, sh.rows, g.fibers, sh.s, sh.z,
@@ -376,7 +386,9 @@ static int classify(const grid *g, int w, int c, int i, unsigned seed, int still
     strip_sheet sh =
         make_sheet(g, k_widths[w], still ? 0 : k_offsets[w], still, seed, add_defects, c, i);
     flt_flatness *f = NULL;
-    assert_int_equal(flt_flatness_create(g->fibers, g->x, NULL, &f), FLT_OK);
+    flt_options *o = flat_options(0, NULL, NULL);
+    assert_int_equal(flt_flatness_create(g->fibers, g->x, o, &f), FLT_OK);
+    flt_options_destroy(o);
     assert_int_equal(
         flt_flatness_evaluate_strip(f, sh.rows, g->fibers, sh.s, sh.z, sh.flags, sh.left, sh.right),
         FLT_OK);
@@ -430,8 +442,9 @@ static void streaming_flags_and_drive_side(void **state) {
     grid g = make_grid(251, 10.0);
     strip_sheet sh = make_sheet(&g, 1500, -211, 0, 4242u, add_defects, C_MIX, 2);
     flt_flatness *stream = NULL, *whole = NULL;
-    assert_int_equal(flt_flatness_create(g.fibers, g.x, NULL, &stream), FLT_OK);
-    assert_int_equal(flt_flatness_create(g.fibers, g.x, NULL, &whole), FLT_OK);
+    flt_options *room = flat_options(0, NULL, NULL);
+    assert_int_equal(flt_flatness_create(g.fibers, g.x, room, &stream), FLT_OK);
+    assert_int_equal(flt_flatness_create(g.fibers, g.x, room, &whole), FLT_OK);
     size_t zones = 0;
     assert_int_equal(flt_flatness_zones(stream, &zones), FLT_OK);
     double *a = malloc(zones * sizeof(double)), *b = malloc(zones * sizeof(double));
@@ -486,7 +499,8 @@ static void streaming_flags_and_drive_side(void **state) {
                      FLT_OK);
     assert_int_equal(flt_flatness_zone_results(whole, zones, a, NULL), FLT_OK);
     flt_flatness *from_flags = NULL, *mirrored = NULL;
-    assert_int_equal(flt_flatness_create(g.fibers, g.x, NULL, &from_flags), FLT_OK);
+    assert_int_equal(flt_flatness_create(g.fibers, g.x, room, &from_flags), FLT_OK);
+    flt_options_destroy(room);
     assert_int_equal(flt_flatness_evaluate(from_flags, sh.rows, g.fibers, sh.s, sh.z, sh.flags),
                      FLT_OK);
     unsigned wf = 0;
@@ -507,7 +521,7 @@ static void streaming_flags_and_drive_side(void **state) {
                   diff);
     const flt_option key = FLT_OPT_FLAT_DRIVE_SIDE;
     const double high = FLT_SIDE_HIGH_X;
-    flt_options *o = options_with(1, &key, &high);
+    flt_options *o = flat_options(1, &key, &high);
     assert_int_equal(flt_flatness_create(g.fibers, g.x, o, &mirrored), FLT_OK);
     flt_options_destroy(o);
     assert_int_equal(flt_flatness_evaluate_strip(mirrored, sh.rows, g.fibers, sh.s, sh.z, sh.flags,
@@ -562,7 +576,7 @@ static void an_off_centre_strip_reads_as_the_centred_one(void **state) {
             for (int on_grid = 0; on_grid < 2; ++on_grid) {
                 const flt_option key = FLT_OPT_FLAT_ZONES_ON;
                 const double value = on_grid;
-                flt_options *o = options_with(1, &key, &value);
+                flt_options *o = flat_options(1, &key, &value);
                 flt_flatness *f = NULL;
                 assert_int_equal(flt_flatness_create(g.fibers, g.x, o, &f), FLT_OK);
                 flt_options_destroy(o);
