@@ -106,14 +106,21 @@ static void inverse3(const double m[9], double out[9]) {
 /* A board's grey level at board point (X, Y) mm. */
 typedef double (*board_level)(const void *pattern, double X, double Y);
 
+/* 1 with *level set when the pattern has one grey level over the whole box
+ * [x0, x1] x [y0, y1] mm (inside the board), else 0. It must be sure: a
+ * pixel whose sub-samples all fall in such a box is that level exactly,
+ * as their mean would be, so the image is the same byte for byte. */
+typedef int (*board_uniform)(const void *pattern, double x0, double y0, double x1, double y1,
+                             double *level);
+
 /* Renders a planar board spanning [0, w] x [0, h] mm in its own frame, with a
  * white margin of `margin` mm around it (grey 210) and background (100)
  * beyond, whose pattern is level(); the board's centre at t_mm after the
  * rotation (rx, ry, rz). Returns 0 if a corner of the margin falls outside
  * the image or behind the camera. */
 static int render_board(const double *ray_map, double w, double hgt, double margin,
-                        board_level level, const void *pattern, double rx, double ry, double rz,
-                        const double t_mm[3], uint8_t *image) {
+                        board_level level, board_uniform uniform, const void *pattern, double rx,
+                        double ry, double rz, const double t_mm[3], uint8_t *image) {
     double r[9], g[9], ginv[9];
     rotation(rx, ry, rz, r);
     /* Board (X, Y, 1) -> camera ray: G = [r1 r2 t]. */
@@ -168,6 +175,30 @@ static int render_board(const double *ray_map, double w, double hgt, double marg
         const double su = u + 1 < SYNTH_WIDTH ? 1 : -1, sv = v + 1 < SYNTH_HEIGHT ? 1 : -1;
         const double dxu = (bx[1] - bx[0]) * su, dyu = (by[1] - by[0]) * su;
         const double dxv = (bx[2] - bx[0]) * sv, dyv = (by[2] - by[0]) * sv;
+        /* Most pixels lie inside one square, circle or the margin: their 64
+         * sub-samples (each an affine function of its offsets, so inside the
+         * box of the four outermost, widened by far more than rounding) all
+         * have one level, which is then the pixel's. */
+        const double reach = (SUB - 1) / (2.0 * SUB), slack = 1e-9;
+        const double ex = reach * (fabs(dxu) + fabs(dxv)) + slack;
+        const double ey = reach * (fabs(dyu) + fabs(dyv)) + slack;
+        const double x0 = bx[0] - ex, x1 = bx[0] + ex, y0 = by[0] - ey, y1 = by[0] + ey;
+        double one_level;
+        if (x1 < -margin || y1 < -margin || x0 > w + margin || y0 > hgt + margin) {
+            image[i] = 100; /* background beyond the board */
+            continue;
+        }
+        if (x0 >= -margin && y0 >= -margin && x1 <= w + margin && y1 <= hgt + margin) {
+            if (x1 < 0 || y1 < 0 || x0 >= w || y0 >= hgt) {
+                image[i] = 210; /* white margin */
+                continue;
+            }
+            if (x0 >= 0 && y0 >= 0 && x1 < w && y1 < hgt &&
+                uniform(pattern, x0, y0, x1, y1, &one_level)) {
+                image[i] = (uint8_t)lround(one_level);
+                continue;
+            }
+        }
         double sum = 0;
         for (int a = 0; a < SUB; ++a)
             for (int b = 0; b < SUB; ++b) {
@@ -192,10 +223,21 @@ static double chessboard_level(const void *pattern, double X, double Y) {
     return (((int)floor(X / square_mm) + (int)floor(Y / square_mm)) & 1) ? 210 : 40;
 }
 
+/* One square holds the whole box (floor of X / square is monotonic). */
+static int chessboard_uniform(const void *pattern, double x0, double y0, double x1, double y1,
+                              double *level) {
+    const double square_mm = *(const double *)pattern;
+    if (floor(x0 / square_mm) != floor(x1 / square_mm) ||
+        floor(y0 / square_mm) != floor(y1 / square_mm))
+        return 0;
+    *level = chessboard_level(pattern, x0, y0);
+    return 1;
+}
+
 int synth_render_chessboard(const double *ray_map, int squares_x, int squares_y, double square_mm,
                             double rx, double ry, double rz, const double t_mm[3], uint8_t *image) {
     return render_board(ray_map, squares_x * square_mm, squares_y * square_mm, square_mm,
-                        chessboard_level, &square_mm, rx, ry, rz, t_mm, image);
+                        chessboard_level, chessboard_uniform, &square_mm, rx, ry, rz, t_mm, image);
 }
 
 typedef struct circle_grid {
@@ -221,6 +263,51 @@ static double circle_level(const void *pattern, double X, double Y) {
     return dx * dx + dy * dy <= c->radius_mm * c->radius_mm ? 40 : 210;
 }
 
+/* No circle touches the box (210), or one circle holds all of it (40).
+ * Only circles of the rows and columns within a radius of the box can
+ * reach it; the radius is widened (narrowed) by far more than rounding. A
+ * point inside a circle is inside its nearest row and column's (radius <
+ * pitch / 2), so circle_level() agrees. */
+static int circle_uniform(const void *pattern, double x0, double y0, double x1, double y1,
+                          double *level) {
+    const circle_grid *c = (const circle_grid *)pattern;
+    const double p = c->pitch_mm, r = c->radius_mm;
+    const double column_pitch = c->asymmetric ? 2 * p : p;
+    const double ax = x0 - c->origin_mm, bx = x1 - c->origin_mm;
+    const double ay = y0 - c->origin_mm, by = y1 - c->origin_mm;
+    int i_lo = (int)floor((ay - r) / p), i_hi = (int)ceil((by + r) / p);
+    if (i_lo < 0)
+        i_lo = 0;
+    if (i_hi > c->rows - 1)
+        i_hi = c->rows - 1;
+    for (int i = i_lo; i <= i_hi; ++i) {
+        const double shift = c->asymmetric ? (double)(i % 2) * p : 0.0;
+        int j_lo = (int)floor((ax - shift - r) / column_pitch);
+        int j_hi = (int)ceil((bx - shift + r) / column_pitch);
+        if (j_lo < 0)
+            j_lo = 0;
+        if (j_hi > c->columns - 1)
+            j_hi = c->columns - 1;
+        for (int j = j_lo; j <= j_hi; ++j) {
+            const double cx = shift + j * column_pitch, cy = i * p;
+            /* The box's nearest and farthest points from the centre. */
+            const double nx = cx < ax ? ax - cx : (cx > bx ? cx - bx : 0.0);
+            const double ny = cy < ay ? ay - cy : (cy > by ? cy - by : 0.0);
+            const double fx = fmax(fabs(ax - cx), fabs(bx - cx));
+            const double fy = fmax(fabs(ay - cy), fabs(by - cy));
+            if (nx * nx + ny * ny > r * r * (1 + 1e-9))
+                continue; /* this circle misses the box */
+            if (fx * fx + fy * fy < r * r * (1 - 1e-9)) {
+                *level = 40; /* the box lies inside this circle */
+                return 1;
+            }
+            return 0; /* an edge crosses the box */
+        }
+    }
+    *level = 210;
+    return 1;
+}
+
 int synth_render_circle_grid(const double *ray_map, int columns, int rows, double pitch_mm,
                              double radius_mm, int asymmetric, double rx, double ry, double rz,
                              const double t_mm[3], uint8_t *image) {
@@ -228,5 +315,6 @@ int synth_render_circle_grid(const double *ray_map, int columns, int rows, doubl
     /* The board reaches one pitch beyond the outermost centres. */
     const double w = ((asymmetric ? 2 * (columns - 1) + 1 : columns - 1) + 2) * pitch_mm;
     const double hgt = (rows - 1 + 2) * pitch_mm;
-    return render_board(ray_map, w, hgt, pitch_mm, circle_level, &c, rx, ry, rz, t_mm, image);
+    return render_board(ray_map, w, hgt, pitch_mm, circle_level, circle_uniform, &c, rx, ry, rz,
+                        t_mm, image);
 }
