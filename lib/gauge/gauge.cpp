@@ -1297,6 +1297,52 @@ std::int64_t gauge::cut_time_ns(const sheet_buffer &b, std::size_t i, double s_a
     return last_pushed_time_ns_;  // an empty sheet: the newest frame's time
 }
 
+void gauge::copy_rows(sheet_buffer &to, std::size_t to_row, const sheet_buffer &from,
+                      std::size_t from_row, std::size_t n) const {
+    std::memcpy(to.s.data() + to_row, from.s.data() + from_row, n * sizeof(double));
+    std::memcpy(to.z.data() + to_row * K_, from.z.data() + from_row * K_, n * K_ * sizeof(double));
+    std::memcpy(to.flags.data() + to_row * K_, from.flags.data() + from_row * K_, n * K_);
+    std::copy(from.meta.begin() + long(from_row), from.meta.begin() + long(from_row + n),
+              to.meta.begin() + long(to_row));
+    std::memcpy(to.left.data() + to_row, from.left.data() + from_row, n * sizeof(double));
+    std::memcpy(to.right.data() + to_row, from.right.data() + from_row, n * sizeof(double));
+    if (cfg_.keep_maps >= 2)
+        std::memcpy(to.measured.data() + to_row * K_, from.measured.data() + from_row * K_,
+                    n * K_ * sizeof(double));
+}
+
+gauge::sheet_job gauge::open_sheet_job(int buffer, const sheet_buffer &b, std::size_t rows,
+                                       double s_end, unsigned end_flags,
+                                       const row_meta *incoming) const {
+    sheet_job job;
+    job.buffer = buffer;
+    job.rows = rows;
+    job.s_start = sheet_start_;
+    job.s_end = s_end;
+    job.flags = sheet_flags_ | end_flags;
+    job.coil = coil_;
+    // The numbers of the next final sheet.
+    job.index = sheet_in_coil_ + 1;
+    job.id = sheet_ids_ + 1;
+    job.lookahead = std::max(0.0, last_pushed_s_ - s_end);
+    job.cut_time_ns = cut_time_ns(b, rows, s_end, incoming);
+    // The clocks are the host's UTC (or a recording's): one set back must
+    // not give a negative latency.
+    job.latency_s = job.lookahead > 0.0
+                        ? std::max(0.0, 1e-9 * double(last_pushed_time_ns_ - job.cut_time_ns))
+                        : 0.0;
+    job.coil_info = strip_coil_;
+    // The row after the sheet's end: the buffer's next, or the one arriving.
+    if (rows < b.rows) {
+        job.has_after = true;
+        job.after = b.meta[rows];
+    } else if (incoming) {
+        job.has_after = true;
+        job.after = *incoming;
+    }
+    return job;
+}
+
 void gauge::split(double s_at, unsigned end_flags, bool all_rows, const row_meta *incoming) {
     sheet_buffer &old = buffers_[current_];
     const std::size_t i =
@@ -1304,23 +1350,9 @@ void gauge::split(double s_at, unsigned end_flags, bool all_rows, const row_meta
             ? old.rows
             : std::size_t(std::lower_bound(old.s.begin(), old.s.begin() + long(old.rows), s_at) -
                           old.s.begin());
-    sheet_job job;
-    job.buffer = current_;
-    job.rows = i;
-    job.s_start = sheet_start_;
-    job.s_end = s_at;
-    job.flags = sheet_flags_ | end_flags;
-    job.coil = coil_;
-    job.index = ++sheet_in_coil_;
-    job.id = ++sheet_ids_;
-    job.lookahead = std::max(0.0, last_pushed_s_ - s_at);
-    job.cut_time_ns = cut_time_ns(old, i, s_at, incoming);
-    // The clocks are the host's UTC (or a recording's): one set back must
-    // not give a negative latency.
-    job.latency_s = job.lookahead > 0.0
-                        ? std::max(0.0, 1e-9 * double(last_pushed_time_ns_ - job.cut_time_ns))
-                        : 0.0;
-    job.coil_info = strip_coil_;
+    sheet_job job = open_sheet_job(current_, old, i, s_at, end_flags, incoming);
+    ++sheet_in_coil_;
+    ++sheet_ids_;
     // The notes given before s_at go with this sheet; later ones wait.
     for (auto it = open_notes_.begin(); it != open_notes_.end();) {
         if (all_rows || it->s < s_at) {
@@ -1330,24 +1362,10 @@ void gauge::split(double s_at, unsigned end_flags, bool all_rows, const row_meta
             ++it;
         }
     }
-    if (i < old.rows) {
-        job.has_after = true;
-        job.after = old.meta[i];
-    } else if (incoming) {
-        job.has_after = true;
-        job.after = *incoming;
-    }
     const int next = free_buffer_or_wait();
     sheet_buffer &nb = buffers_[next];
     const std::size_t rest = old.rows - i;
-    std::memcpy(nb.s.data(), old.s.data() + i, rest * sizeof(double));
-    std::memcpy(nb.z.data(), old.z.data() + i * K_, rest * K_ * sizeof(double));
-    std::memcpy(nb.flags.data(), old.flags.data() + i * K_, rest * K_);
-    std::copy(old.meta.begin() + long(i), old.meta.begin() + long(old.rows), nb.meta.begin());
-    std::memcpy(nb.left.data(), old.left.data() + i, rest * sizeof(double));
-    std::memcpy(nb.right.data(), old.right.data() + i, rest * sizeof(double));
-    if (cfg_.keep_maps >= 2)
-        std::memcpy(nb.measured.data(), old.measured.data() + i * K_, rest * K_ * sizeof(double));
+    copy_rows(nb, 0, old, i, rest);
     nb.rows = rest;
     old.rows = i;
     {
@@ -1382,14 +1400,7 @@ void gauge::publish_provisional() {
     // yet), then the rows not final yet as the reconstructor estimates
     // them now (flt_recon_peek changes nothing it will emit).
     const std::size_t r0 = cur.rows;
-    std::memcpy(pb.s.data(), cur.s.data(), r0 * sizeof(double));
-    std::memcpy(pb.z.data(), cur.z.data(), r0 * K_ * sizeof(double));
-    std::memcpy(pb.flags.data(), cur.flags.data(), r0 * K_);
-    std::copy(cur.meta.begin(), cur.meta.begin() + long(r0), pb.meta.begin());
-    std::memcpy(pb.left.data(), cur.left.data(), r0 * sizeof(double));
-    std::memcpy(pb.right.data(), cur.right.data(), r0 * sizeof(double));
-    if (cfg_.keep_maps >= 2)
-        std::memcpy(pb.measured.data(), cur.measured.data(), r0 * K_ * sizeof(double));
+    copy_rows(pb, 0, cur, 0, r0);
     std::size_t got = 0;
     check(flt_recon_peek(recon_, sheet_capacity_ - r0, K_, pb.s.data() + r0, pb.z.data() + r0 * K_,
                          pb.flags.data() + r0 * K_, &got));
@@ -1415,27 +1426,15 @@ void gauge::publish_provisional() {
         ++rows;
     }
     pb.rows = rows;
-    sheet_job job;
-    job.buffer = 2;
-    job.rows = rows;
-    job.provisional = true;
-    job.s_start = sheet_start_;
-    job.s_end = c;
-    job.flags = sheet_flags_ | FLT_SHEET_FLAG_PROVISIONAL;
-    job.coil = coil_;
     // The final sheet will have these numbers (unless the strip ends or the
-    // sheet is split before the cut: then its final has other ends).
-    job.index = sheet_in_coil_ + 1;
-    job.id = sheet_ids_ + 1;
-    job.lookahead = last_pushed_s_ - c;
-    job.cut_time_ns = cut_time_ns(pb, rows, c, has_after ? &after : nullptr);
-    job.latency_s = std::max(0.0, 1e-9 * double(last_pushed_time_ns_ - job.cut_time_ns));
-    job.coil_info = strip_coil_;
+    // sheet is split before the cut: then its final has other ends). The
+    // lookahead is at least gauge_provisional_mm here.
+    sheet_job job =
+        open_sheet_job(2, pb, rows, c, FLT_SHEET_FLAG_PROVISIONAL, has_after ? &after : nullptr);
+    job.provisional = true;
     for (const sheet_note &n : open_notes_)
         if (n.s < c)
             job.notes.push_back(n);  // allocates only for notes
-    job.has_after = has_after;
-    job.after = after;
     {
         std::lock_guard<std::mutex> lock(m_);
         buffer_busy_[2] = 1;
