@@ -75,75 +75,8 @@ void check(flt_status st) {
         throw error(st, flt_last_error_message());
 }
 
-flt_options make_defaults() {
-    flt_options *bag = nullptr;
-    check(flt_options_create(&bag));
-    flt_options copy = *bag;
-    flt_options_destroy(bag);
-    return copy;
-}
-
 void set_option(flt_options &bag, flt_option key, double value) {
     check(flt_options_set(&bag, key, value));
-}
-
-// The components whose keys the gauge reads, by the hundreds of the key
-// numbers (common.h): the reconstructor, the extractor, the flatness
-// metrics and its own.
-bool gauge_reads(int hundreds) {
-    return hundreds == 1 || hundreds == 4 || hundreds == 5 || hundreds == 7;
-}
-
-const char *component_of(int hundreds) {
-    static const char *const names[] = {"?",
-                                        "reconstructor",
-                                        "calibration",
-                                        "simulator",
-                                        "extractor",
-                                        "flatness metrics",
-                                        "frame source",
-                                        "gauge",
-                                        "tolerance verdicts",
-                                        "leveler advisor"};
-    return hundreds >= 0 && hundreds <= 9 ? names[hundreds] : "?";
-}
-
-// A key set in the gauge's bag that belongs to a component the gauge does
-// not run (the simulator's, a source's) is a mistake: it would be ignored.
-void refuse_foreign_options(const flt_options *options) {
-    if (!options)
-        return;
-    flt_option key;
-    for (std::size_t i = 0; flt_option_at(i, &key) == FLT_OK; ++i) {
-        const int hundreds = int(key) / 100;
-        if (gauge_reads(hundreds) || !option_is_set(options, key))
-            continue;
-        const char *name = "";
-        check(flt_option_info(key, &name, nullptr, nullptr, nullptr, nullptr));
-        char why[300];
-        std::snprintf(why, sizeof why,
-                      "option '%s' (key %d) belongs to the %s, which the gauge does not run; "
-                      "the gauge reads the reconstructor's, the extractor's, the flatness "
-                      "metrics' and its own keys (give the %s its own bag)",
-                      name, int(key), component_of(hundreds), component_of(hundreds));
-        throw error(FLT_ERR_INVALID_ARGUMENT, why);
-    }
-    clear_error();  // flt_option_at's FLT_ERR_NOT_FOUND past the last key
-}
-
-// One component's keys (by the hundreds of their numbers) from the
-// caller's bag, set where the caller set them; every other key at its
-// default: each part gets only what is its own.
-flt_options part_options(const flt_options *from, int hundreds) {
-    flt_options bag = make_defaults();
-    if (!from)
-        return bag;
-    flt_option key;
-    for (std::size_t i = 0; flt_option_at(i, &key) == FLT_OK; ++i)
-        if (int(key) / 100 == hundreds && option_is_set(from, key))
-            set_option(bag, key, option_value(from, key));
-    clear_error();
-    return bag;
 }
 
 int bytes_per_pixel(flt_pixel_format format) {
@@ -223,8 +156,7 @@ gauge::gauge(const flt_calib *calib, const flt_options *options) {
 }
 
 void gauge::init(const flt_calib *calib, const flt_options *options) {
-    refuse_foreign_options(options);
-    effective_ = options ? *options : make_defaults();
+    effective_ = options ? *options : default_options();
     flt_options &eff = effective_;
     cfg_.workers = unsigned(option_value(&eff, FLT_OPT_GAUGE_WORKERS));
     cfg_.queue_frames = std::size_t(option_value(&eff, FLT_OPT_GAUGE_QUEUE_FRAMES));
@@ -256,7 +188,7 @@ void gauge::init(const flt_calib *calib, const flt_options *options) {
     // must hold every row until it is finished: its latency in rows at the
     // closest frame spacing the gauge takes. A probe with the smallest
     // capacity tells the latency (it does not depend on the capacity).
-    flt_options recon_options = part_options(options, 1);
+    flt_options recon_options = component_options(options, 100);
     {
         flt_options probe_options = recon_options;
         set_option(probe_options, FLT_OPT_ROW_CAPACITY, 16);
@@ -329,7 +261,7 @@ void gauge::init(const flt_calib *calib, const flt_options *options) {
     // push + finish, which reports them flagged where evaluate refuses).
     min_length_ = option_value(&eff, FLT_OPT_FLAT_MIN_LENGTH);
     {
-        flt_options fo = part_options(options, 5);
+        flt_options fo = component_options(options, 500);
         set_option(fo, FLT_OPT_FLAT_WINDOW_LENGTH, 0.0);
         set_option(fo, FLT_OPT_FLAT_UPDATE_INTERVAL, 0.0);
         set_option(fo, FLT_OPT_FLAT_ROW_CAPACITY, 16.0);
@@ -352,7 +284,7 @@ void gauge::init(const flt_calib *calib, const flt_options *options) {
     {
         flt_options *xo = nullptr;
         check(flt_options_create(&xo));
-        *xo = part_options(options, 4);
+        *xo = component_options(options, 400);
         extract_options_ = xo;
     }
     const bool automatic = option_value(&eff, FLT_OPT_EXTRACT_LASER0_ROWS) == 0.0 &&
