@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "calibration/calib_internal.hpp"
 #include "core/error.hpp"
 #include "core/options.hpp"
 #include "extraction/peak_kernels.hpp"
@@ -60,19 +61,6 @@ constexpr double k_min_skew_scatter = 0.002;
 void check(flt_status st) {
     if (st != FLT_OK)
         throw error(st, flt_last_error_message());
-}
-
-flt_calib *copy_calib(const flt_calib *calib) {
-    std::size_t length = 0;
-    flt_status st = flt_calib_save_text(calib, nullptr, 0, &length);
-    if (st != FLT_OK && st != FLT_ERR_BUFFER_FULL)
-        check(st);
-    std::string text(length + 1, '\0');
-    check(flt_calib_save_text(calib, text.data(), text.size(), &length));
-    flt_calib *copy = nullptr;
-    check(flt_calib_load_text(text.data(), length, &copy));
-    clear_error();  // the size query above left a BUFFER_FULL message
-    return copy;
 }
 
 struct band {

@@ -12,6 +12,7 @@
 #include <limits>
 #include <random>
 
+#include "calibration/calib_internal.hpp"
 #include "core/error.hpp"
 #include "core/log.hpp"
 #include "core/number_text.hpp"
@@ -300,17 +301,8 @@ void gauge::init(const flt_calib *calib, const flt_options *options) {
     } else {
         check(flt_extractor_create(calib, extract_options_, &band_extractor_));
     }
-    {
-        // Kept (copied) for the workers' extractors made at the first frame.
-        std::size_t length = 0;
-        flt_status st = flt_calib_save_text(calib, nullptr, 0, &length);
-        if (st != FLT_OK && st != FLT_ERR_BUFFER_FULL)
-            check(st);
-        std::string text(length + 1, '\0');
-        check(flt_calib_save_text(calib, text.data(), text.size(), &length));
-        check(flt_calib_load_text(text.data(), length, &calib_for_extractors_));
-        clear_error();  // the size query left a BUFFER_FULL message
-    }
+    // Kept (copied) for the workers' extractors made at the first frame.
+    calib_for_extractors_ = copy_calib(calib);
 
     // The queue: inline, one slot for the row; else queue_frames slots with
     // room for the largest pixels (2 bytes).
