@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // The C entry points of the gauge and of its sheets: argument checks, then
-// lib/gauge/gauge.cpp.
+// the gauge's stages (gauge_internal.hpp lists their files).
 #include <cmath>
 #include <cstring>
 #include <memory>
