@@ -22,6 +22,7 @@
 #include "core/error.hpp"
 #include "core/log.hpp"
 #include "core/number_text.hpp"
+#include "extraction/extractor_internal.hpp"
 #include "flatline/extractor.h"
 #include "flatline/source.h"
 #include "reconstruction/recon_internal.hpp"

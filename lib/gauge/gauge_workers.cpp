@@ -18,16 +18,14 @@ void gauge::extract(frame_slot &slot, const void *pixels, flt_pixel_format forma
     if (st == FLT_OK) {
         *error_out = false;
         // The strip in the frame: per fiber on or off it, its edges (the
-        // profile row's: both lasers' mean) and its saturated peaks. These
-        // calls fail only before a successful process, which this was.
-        std::size_t peaks = 0, saturated = 0;
-        if (flt_extractor_fiber_flags(extractor, K_, slot.flags.data()) != FLT_OK ||
-            flt_extractor_strip(extractor, 2, &slot.left, &slot.right, nullptr, nullptr,
-                                &slot.strip_flags) != FLT_OK ||
-            flt_extractor_saturation(extractor, 2, &peaks, &saturated, nullptr) != FLT_OK)
-            throw error(FLT_ERR_INTERNAL, flt_last_error_message());
-        slot.saturated = std::uint32_t(saturated);
-        slot.peaks = std::uint32_t(peaks);
+        // profile row's: both lasers' mean) and its saturated peaks.
+        const extractor_frame_view frame = extractor_frame_of(extractor);
+        std::memcpy(slot.flags.data(), frame.fiber_flags, K_);
+        slot.left = frame.left_mm;
+        slot.right = frame.right_mm;
+        slot.strip_flags = frame.strip_flags;
+        slot.saturated = std::uint32_t(frame.saturated);
+        slot.peaks = std::uint32_t(frame.peaks);
         return;
     }
     // A frame without the two lines while the band is automatic is a frame
