@@ -270,7 +270,6 @@ void gauge::init(const flt_calib *calib, const flt_options *options) {
             sh->map_measured.assign(sheet_capacity_ * K_, 0.0);
     }
     jobs_.reserve(4);
-    flag_scratch_.assign(std::max(K_, zones_), 0);
 
     first_use_of_sync_objects();
     for (unsigned i = 0; i < cfg_.workers; ++i)

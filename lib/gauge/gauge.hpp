@@ -442,7 +442,6 @@ class gauge {
 
     // ---- evaluation state (the thread holding the evaluating role)
     std::shared_ptr<sheet_pool> pool_;
-    std::vector<std::uint8_t> flag_scratch_;  // max(fibers, zones)
 
     // ---- verdicts: the rules in force (replaced whole by set_rules) and
     // the coils' statistics, each under its own mutex (never both held by

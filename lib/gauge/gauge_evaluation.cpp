@@ -248,22 +248,28 @@ void gauge::evaluate(const sheet_job &job) {
     std::copy(fiber_x_.begin(), fiber_x_.end(), fx);
     std::copy(zone_x_.begin(), zone_x_.end(), zx);
     unsigned window_flags = 0;
-    if (f) {
-        check(flt_flatness_window(f, nullptr, nullptr, nullptr, &window_flags, nullptr));
-        check(flt_flatness_fiber_results(f, K_, farc, fiu, fwh, fwp, fst, flag_scratch_.data()));
-        for (std::size_t k = 0; k < K_; ++k)
-            ffl[k] = flag_scratch_[k];
-        check(flt_flatness_zone_results(f, zones_, ziu, flag_scratch_.data()));
-        for (std::size_t j = 0; j < zones_; ++j)
-            zfl[j] = flag_scratch_[j];
+    // The flatness window's results, read in place (null: none).
+    const window_result *res = f ? &flatness_result_of(f) : nullptr;
+    if (res) {
+        const window_result &r = *res;
+        window_flags = r.flags;
+        std::copy(r.arc_length.begin(), r.arc_length.end(), farc);
+        std::copy(r.i_units.begin(), r.i_units.end(), fiu);
+        std::copy(r.wave_height.begin(), r.wave_height.end(), fwh);
+        std::copy(r.wave_period.begin(), r.wave_period.end(), fwp);
+        std::copy(r.steepness.begin(), r.steepness.end(), fst);
+        std::copy(r.fiber_flags.begin(), r.fiber_flags.end(), ffl);
+        std::copy(r.zone_i_units.begin(), r.zone_i_units.end(), ziu);
+        std::copy(r.zone_flags.begin(), r.zone_flags.end(), zfl);
         // Where the results lie: on the strip (from its edges) or, without
         // edges, on the fiber grid; in strip and in sensor coordinates.
-        check(flt_flatness_fiber_positions(f, K_, fsx, fx));
-        check(flt_flatness_zone_positions(f, zones_, zsx, zx, nullptr, nullptr));
-        flt_shape shape = FLT_SHAPE_UNDETERMINED;
-        double confidence = 0, bow = 0, crossbow = 0;
-        unsigned components = 0;
-        check(flt_flatness_shape(f, &shape, &confidence, &components, &bow, &crossbow));
+        std::copy(r.fiber_strip_x.begin(), r.fiber_strip_x.end(), fsx);
+        std::copy(r.fiber_sensor_x.begin(), r.fiber_sensor_x.end(), fx);
+        std::copy(r.zone_strip_x.begin(), r.zone_strip_x.end(), zsx);
+        std::copy(r.zone_sensor_x.begin(), r.zone_sensor_x.end(), zx);
+        const flt_shape shape = r.shape;
+        const double confidence = r.confidence, bow = r.bow_mm, crossbow = r.crossbow_mm;
+        const unsigned components = r.components;
         // An incomplete sheet gets no class as if it were whole.
         v[FLT_SHEET_SHAPE] = double(incomplete ? FLT_SHAPE_NOT_JUDGED : shape);
         v[FLT_SHEET_CONFIDENCE] = incomplete ? 0.0 : confidence;
@@ -294,9 +300,8 @@ void gauge::evaluate(const sheet_job &job) {
     // The strip's width and lateral position: from the extractor's edges
     // where the flatness window had them (smoothed along the sheet: mean,
     // min and max over its rows); else the outer fibers with data.
-    if (f && (window_flags & FLT_WINDOW_ON_STRIP)) {
-        double width[3], centre[3];
-        check(flt_flatness_strip(f, width, centre));
+    if (res && (window_flags & FLT_WINDOW_ON_STRIP)) {
+        const double *width = res->strip_width, *centre = res->strip_centre;
         v[FLT_SHEET_STRIP_WIDTH] = width[0];
         v[FLT_SHEET_STRIP_WIDTH_MIN] = width[1];
         v[FLT_SHEET_STRIP_WIDTH_MAX] = width[2];

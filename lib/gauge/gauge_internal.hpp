@@ -24,6 +24,7 @@
 #include "core/number_text.hpp"
 #include "extraction/extractor_internal.hpp"
 #include "flatline/extractor.h"
+#include "flatness/flatness_internal.hpp"
 #include "flatline/source.h"
 #include "reconstruction/recon_internal.hpp"
 #include "sources/source_handle.hpp"
