@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "calibration/calib_internal.hpp"
 #include "calibration/calib_model.hpp"
 #include "core/error.hpp"
 #include "core/options.hpp"
@@ -109,6 +110,14 @@ flt_status check_finite(const char *fn, const char *name, double v) {
 }
 
 }  // namespace
+
+namespace flt {
+
+flt_calib *copy_calib(const flt_calib *calib) {
+    return new flt_calib(*calib);
+}
+
+}  // namespace flt
 
 extern "C" {
 

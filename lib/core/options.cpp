@@ -276,6 +276,25 @@ flt_status check_option_component(const char *fn, const flt_options *options,
     return FLT_OK;
 }
 
+flt_options default_options() {
+    flt_options bag{};
+    for (std::size_t i = 0; i < k_option_count; ++i)
+        bag.value[i] = k_options[i].default_value;
+    return bag;
+}
+
+flt_options component_options(const flt_options *from, int range) {
+    flt_options bag = default_options();
+    if (!from)
+        return bag;
+    for (std::size_t i = 0; i < k_option_count; ++i)
+        if (int(k_options[i].key) / 100 == range / 100 && from->is_set[i]) {
+            bag.value[i] = from->value[i];
+            bag.is_set[i] = true;
+        }
+    return bag;
+}
+
 const option_spec *find_option(flt_option key) {
     std::size_t i = slot_of(key);
     return i < k_option_count ? &k_options[i] : nullptr;

@@ -50,6 +50,15 @@ const char *option_component(int key);
 flt_status check_option_component(const char *fn, const flt_options *options,
                                   std::initializer_list<int> ranges);
 
+// A bag of defaults, as flt_options_create makes it (nothing set).
+flt_options default_options();
+
+// The keys of one component (its range: 100 for the reconstructor, ...)
+// as the caller set them in from, every other key at its default and not
+// set: what a component built on others hands each part (a NULL bag gives
+// the defaults).
+flt_options component_options(const flt_options *from, int range);
+
 // The named values of an option whose value is a choice (robust,
 // flat_reference, source_encoder_mode): the C enumerators in the
 // component's header, and the lower-case names the bindings accept.

@@ -13,8 +13,10 @@
 #include <string>
 #include <vector>
 
+#include "calibration/calib_internal.hpp"
 #include "core/error.hpp"
 #include "core/options.hpp"
+#include "extraction/extractor_internal.hpp"
 #include "extraction/peak_kernels.hpp"
 #include "flatline/extractor.h"
 #include "flatline/recon.h"
@@ -60,19 +62,6 @@ constexpr double k_min_skew_scatter = 0.002;
 void check(flt_status st) {
     if (st != FLT_OK)
         throw error(st, flt_last_error_message());
-}
-
-flt_calib *copy_calib(const flt_calib *calib) {
-    std::size_t length = 0;
-    flt_status st = flt_calib_save_text(calib, nullptr, 0, &length);
-    if (st != FLT_OK && st != FLT_ERR_BUFFER_FULL)
-        check(st);
-    std::string text(length + 1, '\0');
-    check(flt_calib_save_text(calib, text.data(), text.size(), &length));
-    flt_calib *copy = nullptr;
-    check(flt_calib_load_text(text.data(), length, &copy));
-    clear_error();  // the size query above left a BUFFER_FULL message
-    return copy;
 }
 
 struct band {
@@ -953,7 +942,62 @@ flt_status check_handle(const char *fn, const flt_extractor *ex) {
     return FLT_OK;
 }
 
+// The strip one laser saw in the last frame (laser 0 or 1), or the row's
+// (laser 2): its edges (NaN where open or absent) and FLT_STRIP_* flags.
+void strip_of(const flt_extractor &ex, unsigned laser, double *left, double *right,
+              unsigned *strip_flags) {
+    bool present;
+    bool open[2];
+    double edge[2];
+    if (laser < FLT_CALIB_LASERS) {
+        const strip_view &sv = ex.strip[laser];
+        present = sv.present;
+        for (int side = 0; side < 2; ++side)
+            open[side] = sv.open[side], edge[side] = sv.edge[side];
+    } else {
+        // The row's material lies between the two lasers' readings: the
+        // mean of their edges, seen only where both see that edge.
+        const strip_view &a = ex.strip[0], &b = ex.strip[1];
+        present = a.present && b.present;
+        for (int side = 0; side < 2; ++side) {
+            open[side] = a.open[side] || b.open[side];
+            edge[side] = 0.5 * (a.edge[side] + b.edge[side]);
+        }
+    }
+    unsigned flags = 0;
+    if (!present) {
+        flags = FLT_STRIP_NONE | FLT_STRIP_LEFT_OPEN | FLT_STRIP_RIGHT_OPEN;
+    } else {
+        flags |= open[0] ? unsigned(FLT_STRIP_LEFT_OPEN) : 0u;
+        flags |= open[1] ? unsigned(FLT_STRIP_RIGHT_OPEN) : 0u;
+    }
+    *left = present && !open[0] ? edge[0] : k_nan;
+    *right = present && !open[1] ? edge[1] : k_nan;
+    *strip_flags = flags;
+}
+
+// The peaks on the strip in the last frame and the saturated ones, of one
+// laser (0 or 1) or of both (2).
+void saturation_of(const flt_extractor &ex, unsigned laser, std::size_t *peaks,
+                   std::size_t *saturated) {
+    *peaks = 0;
+    *saturated = 0;
+    for (unsigned l = 0; l < FLT_CALIB_LASERS; ++l)
+        if (laser == l || laser == FLT_CALIB_LASERS) {
+            *peaks += ex.peak_count[l];
+            *saturated += ex.saturated_count[l];
+        }
+}
+
 }  // namespace
+
+extractor_frame_view flt::extractor_frame_of(const flt_extractor *extractor) {
+    extractor_frame_view v;
+    v.fiber_flags = extractor->row_flags.data();
+    strip_of(*extractor, FLT_CALIB_LASERS, &v.left_mm, &v.right_mm, &v.strip_flags);
+    saturation_of(*extractor, FLT_CALIB_LASERS, &v.peaks, &v.saturated);
+    return v;
+}
 
 extern "C" {
 
@@ -1243,33 +1287,9 @@ FLT_API flt_status FLT_CALL flt_extractor_strip(const flt_extractor *extractor, 
                         "%s: argument 'laser' = %u is not 0, 1 or 2 (the row)", fn, laser);
         if (!extractor->has_frame)
             return fail(FLT_ERR_STATE, "%s: no frame has been processed yet", fn);
-        bool present;
-        bool open[2];
-        double edge[2];
-        if (laser < FLT_CALIB_LASERS) {
-            const strip_view &sv = extractor->strip[laser];
-            present = sv.present;
-            for (int side = 0; side < 2; ++side)
-                open[side] = sv.open[side], edge[side] = sv.edge[side];
-        } else {
-            // The row's material lies between the two lasers' readings: the
-            // mean of their edges, seen only where both see that edge.
-            const strip_view &a = extractor->strip[0], &b = extractor->strip[1];
-            present = a.present && b.present;
-            for (int side = 0; side < 2; ++side) {
-                open[side] = a.open[side] || b.open[side];
-                edge[side] = 0.5 * (a.edge[side] + b.edge[side]);
-            }
-        }
+        double left = 0.0, right = 0.0;
         unsigned flags = 0;
-        if (!present) {
-            flags = FLT_STRIP_NONE | FLT_STRIP_LEFT_OPEN | FLT_STRIP_RIGHT_OPEN;
-        } else {
-            flags |= open[0] ? unsigned(FLT_STRIP_LEFT_OPEN) : 0u;
-            flags |= open[1] ? unsigned(FLT_STRIP_RIGHT_OPEN) : 0u;
-        }
-        const double left = present && !open[0] ? edge[0] : k_nan;
-        const double right = present && !open[1] ? edge[1] : k_nan;
+        strip_of(*extractor, laser, &left, &right, &flags);
         const bool both = left == left && right == right;
         if (left_mm_out)
             *left_mm_out = left;
@@ -1298,11 +1318,7 @@ FLT_API flt_status FLT_CALL flt_extractor_saturation(const flt_extractor *extrac
         if (!extractor->has_frame)
             return fail(FLT_ERR_STATE, "%s: no frame has been processed yet", fn);
         std::size_t peaks = 0, saturated = 0;
-        for (unsigned l = 0; l < FLT_CALIB_LASERS; ++l)
-            if (laser == l || laser == FLT_CALIB_LASERS) {
-                peaks += extractor->peak_count[l];
-                saturated += extractor->saturated_count[l];
-            }
+        saturation_of(*extractor, laser, &peaks, &saturated);
         if (peaks_out)
             *peaks_out = peaks;
         if (saturated_out)

@@ -12,6 +12,7 @@
 #include "core/error.hpp"
 #include "core/options.hpp"
 #include "flatline/flatness.h"
+#include "flatness/flatness_internal.hpp"
 #include "flatness/metrics.hpp"
 #include "flatness/strip.hpp"
 
@@ -428,6 +429,12 @@ flt_status push_rows(const char *fn, flt_flatness *flatness, std::size_t rows, s
 }
 
 }  // namespace
+
+const window_result &flt::flatness_result_of(const flt_flatness *flatness) {
+    if (flatness->current < 0)
+        throw error(FLT_ERR_INTERNAL, "no flatness window has been evaluated");
+    return flatness->results[flatness->current];
+}
 
 extern "C" {
 

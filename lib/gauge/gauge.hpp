@@ -307,6 +307,14 @@ class gauge {
     // Ends the open sheet at s_at: the rows before it (all rows with
     // all_rows), the rest begin the next sheet. `incoming` as above.
     void split(double s_at, unsigned end_flags, bool all_rows, const row_meta *incoming);
+    // Copies n rows (heights, flags, metadata, edges, measured) from one
+    // sheet buffer to another.
+    void copy_rows(sheet_buffer &to, std::size_t to_row, const sheet_buffer &from,
+                   std::size_t from_row, std::size_t n) const;
+    // The job of the open sheet ending at s_end after its first `rows` rows
+    // in b (the numbers of the next final sheet; notes not taken).
+    sheet_job open_sheet_job(int buffer, const sheet_buffer &b, std::size_t rows, double s_end,
+                             unsigned end_flags, const row_meta *incoming) const;
     // The open sheet's early answer, when the strip is gauge_provisional_mm
     // past its cut and its last rows are not final yet.
     void publish_provisional();
@@ -434,7 +442,6 @@ class gauge {
 
     // ---- evaluation state (the thread holding the evaluating role)
     std::shared_ptr<sheet_pool> pool_;
-    std::vector<std::uint8_t> flag_scratch_;  // max(fibers, zones)
 
     // ---- verdicts: the rules in force (replaced whole by set_rules) and
     // the coils' statistics, each under its own mutex (never both held by

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // The C entry points of the gauge and of its sheets: argument checks, then
-// lib/gauge/gauge.cpp.
+// the gauge's stages (gauge_internal.hpp lists their files).
 #include <cmath>
 #include <cstring>
 #include <memory>
@@ -71,6 +71,14 @@ FLT_API flt_status FLT_CALL flt_gauge_create(const flt_calib *calib, const flt_o
                         "%s: argument 'calib' is not a live flt_calib handle", fn);
         if (!finished)
             return fail(FLT_ERR_STATE, "%s: argument 'calib' is not finished", fn);
+        // The gauge reads its own keys, the reconstructor's, the extractor's
+        // and the flatness metrics'; a key of any other component (the
+        // simulator's, a source's) would be ignored: a mistake, refused.
+        if (flt_status st =
+                check_option_component(fn, options,
+                                       {FLT_OPT_GAUGE_WORKERS, FLT_OPT_KNOT_SPACING,
+                                        FLT_OPT_EXTRACT_SG_WINDOW, FLT_OPT_FLAT_WINDOW_LENGTH}))
+            return st;
         auto handle = std::make_unique<flt_gauge>();
         handle->impl = std::make_unique<gauge>(calib, options);
         *out = handle.release();

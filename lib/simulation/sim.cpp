@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "calibration/calib_internal.hpp"
 #include "core/error.hpp"
 #include "core/options.hpp"
 #include "flatline/recon.h"
@@ -100,21 +101,6 @@ sim_params read_params(const flt_options *o) {
 void check(flt_status st) {
     if (st != FLT_OK)
         throw error(st, flt_last_error_message());
-}
-
-// A private copy of a finished calibration (through its text form, so the
-// simulator never depends on the caller's handle staying alive).
-flt_calib *copy_calib(const flt_calib *calib) {
-    std::size_t length = 0;
-    flt_status st = flt_calib_save_text(calib, nullptr, 0, &length);
-    if (st != FLT_OK && st != FLT_ERR_BUFFER_FULL)
-        check(st);
-    std::string text(length + 1, '\0');
-    check(flt_calib_save_text(calib, text.data(), text.size(), &length));
-    flt_calib *copy = nullptr;
-    check(flt_calib_load_text(text.data(), length, &copy));
-    clear_error();  // the size query above left a BUFFER_FULL message
-    return copy;
 }
 
 // The random walk of the strip's lateral wander: knots every

@@ -523,17 +523,34 @@ static void push_rows(flt_gauge *g, const test_sheet *t, size_t r0, size_t r1) {
                               &t->slope[r * t->fibers], NULL));
 }
 
-static flt_gauge *row_gauge(const flt_calib *calib, int workers, flt_options *extra) {
-    flt_options *o = extra ? extra : bag();
+/* The row tests' gauge options, into o: `workers` threads, a full queue
+ * waits (overflow "wait": the caller pushes), maps kept, 32 slots, frames
+ * at least 2 mm apart (rows come 3 mm apart). */
+static void row_options(flt_options *o, int workers, int overflow) {
     set(o, FLT_OPT_GAUGE_WORKERS, workers);
-    set(o, FLT_OPT_GAUGE_OVERFLOW, 1);
+    set(o, FLT_OPT_GAUGE_OVERFLOW, overflow);
     set(o, FLT_OPT_GAUGE_KEEP_MAPS, 1);
     set(o, FLT_OPT_GAUGE_SHEET_SLOTS, 32);
     set(o, FLT_OPT_GAUGE_FRAME_SPACING, 2.0);
+}
+
+static flt_gauge *row_gauge(const flt_calib *calib, int workers, flt_options *extra) {
+    flt_options *o = extra ? extra : bag();
+    row_options(o, workers, FLT_GAUGE_OVERFLOW_WAIT);
     flt_gauge *g = NULL;
     OK(flt_gauge_create(calib, o, &g));
     if (!extra)
         flt_options_destroy(o);
+    return g;
+}
+
+/* row_gauge with one option more. */
+static flt_gauge *row_gauge_with(const flt_calib *calib, int workers, flt_option key,
+                                 double value) {
+    flt_options *o = bag();
+    set(o, key, value);
+    flt_gauge *g = row_gauge(calib, workers, o);
+    flt_options_destroy(o);
     return g;
 }
 
@@ -667,10 +684,7 @@ static void latency_in_seconds(void **state) {
     enum { R = 2000, K = 51 }; /* 6 m at 3 mm */
     test_sheet *t = row_sheet(R, K, 3.0);
     flt_calib *calib = row_calib(K);
-    flt_options *o = bag();
-    set(o, FLT_OPT_LATENCY_MM, 1000.0);
-    flt_gauge *g = row_gauge(calib, 2, o);
-    flt_options_destroy(o);
+    flt_gauge *g = row_gauge_with(calib, 2, FLT_OPT_LATENCY_MM, 1000.0);
     OK(flt_gauge_cut(g, 2000.0));
     OK(flt_gauge_cut(g, 4000.0));
     int64_t *before = malloc(R * sizeof(int64_t)), *after = malloc(R * sizeof(int64_t));
@@ -741,10 +755,7 @@ static void provisional_then_final(void **state) {
     flt_gauge *g[3];
     const double provisional[3] = {0.0, 300.0, 5000.0}; /* none, early, beyond the latency */
     for (int m = 0; m < 3; ++m) {
-        flt_options *o = bag();
-        set(o, FLT_OPT_GAUGE_PROVISIONAL_MM, provisional[m]);
-        g[m] = row_gauge(calib, 2, o);
-        flt_options_destroy(o);
+        g[m] = row_gauge_with(calib, 2, FLT_OPT_GAUGE_PROVISIONAL_MM, provisional[m]);
         OK(flt_gauge_set_rules(g[m], rules, 1.0, FLT_GAUGE_WIDTH_MEASURED));
         OK(flt_gauge_cut(g[m], 3000.0));
         OK(flt_gauge_cut(g[m], 6000.0));
@@ -1078,10 +1089,9 @@ static void queue_overflow_is_counted(void **state) {
     flt_options *o = bag();
     set(o, FLT_OPT_GAUGE_QUEUE_FRAMES, 4);
     set(o, FLT_OPT_LAG_KNOTS, 4); /* sheets finish soon after their cut */
-    flt_gauge *g = row_gauge(calib, 1, o);
-    /* ... overflow drops (row_gauge set it to wait: the live setting) */
-    flt_gauge_destroy(g);
-    set(o, FLT_OPT_GAUGE_OVERFLOW, 0);
+    /* ... and a full queue drops (the live setting) */
+    row_options(o, 1, FLT_GAUGE_OVERFLOW_DROP);
+    flt_gauge *g = NULL;
     OK(flt_gauge_create(calib, o, &g));
     g_first_sheet_seen = 0;
     g_callback_frames = g_callback_dropped = 0;
@@ -1123,15 +1133,10 @@ static void queue_overflow_is_counted(void **state) {
     free_list(&l);
     flt_gauge_destroy(g);
 
-    /* The default (gauge_overflow "auto") waits for room when the caller
+    /* gauge_overflow "auto" (the default) waits for room when the caller
      * pushes: the same callback, nothing dropped, every row in a sheet. */
-    flt_options *d = bag();
-    set(d, FLT_OPT_GAUGE_QUEUE_FRAMES, 4);
-    set(d, FLT_OPT_LAG_KNOTS, 4);
-    set(d, FLT_OPT_GAUGE_WORKERS, 1);
-    set(d, FLT_OPT_GAUGE_FRAME_SPACING, 2.0);
-    OK(flt_gauge_create(calib, d, &g));
-    flt_options_destroy(d);
+    row_options(o, 1, FLT_GAUGE_OVERFLOW_AUTO);
+    OK(flt_gauge_create(calib, o, &g));
     g_first_sheet_seen = 0;
     g_callback_frames = g_callback_dropped = 0;
     OK(flt_gauge_set_callback(g, slow_callback, NULL));
