@@ -759,9 +759,24 @@ static void provisional_then_final(void **state) {
         OK(flt_gauge_set_rules(g[m], rules, 1.0, FLT_GAUGE_WIDTH_MEASURED));
         OK(flt_gauge_cut(g[m], 3000.0));
         OK(flt_gauge_cut(g[m], 6000.0));
-        push_rows(g[m], t, 0, R);
-        OK(flt_gauge_flush(g[m]));
         memset(&got[m], 0, sizeof got[m]);
+        /* The rows before the second early answer is due (row 2100 is at
+         * 6300 mm), then the sheets before it (P1 and F1; F1 alone without
+         * early answers): their evaluation is over when the early answer
+         * falls due, so it comes at 300 mm on any machine. A gauge whose
+         * evaluator is still busy with an earlier early answer hands the
+         * next one out later (docs/gauge.md), as a loaded test machine
+         * (wine beside a parallel ctest) showed. */
+        push_rows(g[m], t, 0, 2100);
+        while (got[m].n < (m == 1 ? 2u : 1u)) {
+            flt_sheet *sh = NULL;
+            OK(flt_gauge_next_sheet(g[m], 60000, &sh)); /* a minute: never, but bounded */
+            assert_non_null(sh);
+            copy_sheet(sh, &got[m].sheet[got[m].n++], 1);
+            flt_sheet_destroy(sh);
+        }
+        push_rows(g[m], t, 2100, R);
+        OK(flt_gauge_flush(g[m]));
         drain(g[m], &got[m], 1);
     }
     flt_rules_destroy(rules);
