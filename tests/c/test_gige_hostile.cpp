@@ -631,9 +631,14 @@ void test_lying_leaders_are_never_delivered(void **) {
     cam.send_frames(50);
     const frame_tally t = read_frames(src, 50);
     assert_int_equal(t.genuine + t.forged + t.damaged + t.oversized, 0);
-    // Each of the 50 leaders is counted, its frame dropped.
-    assert_int_equal(count_reaching(src, FLT_COUNT_BAD_LEADERS, 50), 50);
-    assert_int_equal(count_reaching(src, FLT_COUNT_DROPPED, 50), 50);
+    // Each leader that arrived is counted, its frame dropped. Loopback
+    // loses datagrams only when this process stalls long enough for its
+    // socket buffer to fill (a loaded machine: wine beside a parallel
+    // ctest lost one of the 50), so as in stray_far: at most 10 %.
+    const std::uint64_t bad = count_reaching(src, FLT_COUNT_BAD_LEADERS, 50);
+    print_message("lying leaders: %llu of 50 counted\n", (unsigned long long)bad);
+    assert_true(bad >= 45 && bad <= 50);
+    assert_int_equal(count_reaching(src, FLT_COUNT_DROPPED, bad), bad);
     assert_int_equal(count(src, FLT_COUNT_FRAMES), 0);
     assert_non_null(std::strstr(flt_source_stream_error(src), "2147549185 x 4294836226"));
     ok(flt_source_stop(src));
