@@ -324,6 +324,19 @@ static const double k_offsets[3] = {137, -211, 31}; /* mm, the strip's mean posi
 static void zones_on_wandering_strips_match_the_truth(void **state) {
     (void)state;
     grid g = make_grid(1251, 2.0);
+    /* One flatness per reference, evaluating every sheet in turn: a handle
+     * is reused from sheet to sheet (and each create writes its whole
+     * window, flatness.h, "Memory"). */
+    flt_options *judge_options[2];
+    flt_flatness *judge[2];
+    for (int reference = 0; reference < 2; ++reference) {
+        const flt_option key = FLT_OPT_FLAT_REFERENCE;
+        const double value = reference;
+        judge_options[reference] = flat_options(1, &key, &value);
+        assert_int_equal(
+            flt_flatness_create(g.fibers, g.x, judge_options[reference], &judge[reference]),
+            FLT_OK);
+    }
     double worst[2] = {0, 0};
     for (int w = 0; w < 3; ++w) {
         double width_worst[2] = {0, 0}, span = 0;
@@ -334,11 +347,8 @@ static void zones_on_wandering_strips_match_the_truth(void **state) {
                 make_sheet(&g, k_widths[w], k_offsets[w], 0,
                            101u + 13u * (unsigned)sheet + 7u * (unsigned)w, add_defects, c, i);
             for (int reference = 0; reference < 2; ++reference) {
-                const flt_option key = FLT_OPT_FLAT_REFERENCE;
-                const double value = reference;
-                flt_options *o = flat_options(1, &key, &value);
-                flt_flatness *f = NULL;
-                assert_int_equal(flt_flatness_create(g.fibers, g.x, o, &f), FLT_OK);
+                flt_options *o = judge_options[reference];
+                flt_flatness *f = judge[reference];
                 assert_int_equal(flt_flatness_evaluate_strip(f, sh.rows, g.fibers, sh.s, sh.z,
                                                              sh.flags, sh.left, sh.right),
                                  FLT_OK);
@@ -365,8 +375,6 @@ static void zones_on_wandering_strips_match_the_truth(void **state) {
                 /* 50 mm zones on the strip: W / 50 of them. */
                 assert_int_equal(used, (size_t)ceil(k_widths[w] / 50 - 1e-9));
                 free(gz), free(tz), free(zf);
-                flt_flatness_destroy(f);
-                flt_options_destroy(o);
             }
             free_sheet(&sh);
         }
@@ -378,24 +386,24 @@ static void zones_on_wandering_strips_match_the_truth(void **state) {
             worst[reference] = fmax(worst[reference], width_worst[reference]);
     }
     assert_true(worst[0] <= 0.1 && worst[1] <= 0.1);
+    for (int reference = 0; reference < 2; ++reference) {
+        flt_flatness_destroy(judge[reference]);
+        flt_options_destroy(judge_options[reference]);
+    }
     free(g.x);
 }
 
-/* One sheet's class on the strip of width w. */
-static int classify(const grid *g, int w, int c, int i, unsigned seed, int still) {
+/* One sheet's class on the strip of width w, by the flatness f (on g's
+ * fibers, default options), reused from sheet to sheet. */
+static int classify(flt_flatness *f, const grid *g, int w, int c, int i, unsigned seed, int still) {
     strip_sheet sh =
         make_sheet(g, k_widths[w], still ? 0 : k_offsets[w], still, seed, add_defects, c, i);
-    flt_flatness *f = NULL;
-    flt_options *o = flat_options(0, NULL, NULL);
-    assert_int_equal(flt_flatness_create(g->fibers, g->x, o, &f), FLT_OK);
-    flt_options_destroy(o);
     assert_int_equal(
         flt_flatness_evaluate_strip(f, sh.rows, g->fibers, sh.s, sh.z, sh.flags, sh.left, sh.right),
         FLT_OK);
     flt_shape shape;
     unsigned components;
     assert_int_equal(flt_flatness_shape(f, &shape, NULL, &components, NULL, NULL), FLT_OK);
-    flt_flatness_destroy(f);
     free_sheet(&sh);
     return label_of(shape, components);
 }
@@ -407,13 +415,17 @@ static int classify(const grid *g, int w, int c, int i, unsigned seed, int still
 static void shape_classes_on_wandering_strips(void **state) {
     (void)state;
     grid g = make_grid(251, 10.0);
+    flt_options *o = flat_options(0, NULL, NULL);
+    flt_flatness *f = NULL;
+    assert_int_equal(flt_flatness_create(g.fibers, g.x, o, &f), FLT_OK);
+    flt_options_destroy(o);
     for (int w = 0; w < 3; ++w) {
         int confusion[C_COUNT][C_COUNT];
         memset(confusion, 0, sizeof confusion);
         for (int c = 0; c <= C_CROSSBOW; ++c)
             for (int i = 0; i < 5; ++i)
-                ++confusion[c]
-                           [classify(&g, w, c, i, 1000u * (unsigned)c + 17u * (unsigned)i + 1u, 0)];
+                ++confusion[c][classify(f, &g, w, c, i,
+                                        1000u * (unsigned)c + 17u * (unsigned)i + 1u, 0)];
         char line[256];
         int at = snprintf(line, sizeof line, "strip %4.0f  ", k_widths[w]);
         for (int p = 0; p < C_COUNT; ++p)
@@ -428,6 +440,7 @@ static void shape_classes_on_wandering_strips(void **state) {
         for (int c = 0; c <= C_CROSSBOW; ++c)
             assert_int_equal(confusion[c][c], 5);
     }
+    flt_flatness_destroy(f);
     free(g.x);
 }
 
