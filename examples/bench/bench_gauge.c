@@ -15,7 +15,9 @@
  * replayed with advancing encoder positions, so the figures measure the
  * gauge, not the renderer.
  *
- * Two runs:
+ * First the extractor alone, on one thread, over the same frames: the
+ * yardstick the gauge's threads must beat (goal: the gauge with 2 workers
+ * >= 1.8x the extractor alone). Then three runs of the gauge:
  *   1. throughput: frames pushed as fast as the gauge takes them
  *      (gauge_overflow = 1: the pushing thread waits for room), over the
  *      whole strip; frames/s from the first push to the last sheet, the
@@ -28,11 +30,14 @@
  *      the cut (its look-ahead: the latency is that strip at line speed).
  * Each run also prints where the time went (the gauge's stage counters:
  * extraction, sequencing, evaluation per frame), how busy the workers were
- * and the frame queue's high-water mark.
+ * and the frame queue's high-water mark;
+ *   3. throughput with verdicts: run 1 with a rule set judging every sheet
+ *      (default: the coil report's example, seven rules with both 1 m
+ *      straightedges; 3 mm sheets, the strip's measured width).
  * Both figures depend on the machine being otherwise idle: the bench prints
  * the load average so a reader can tell.
  *
- * Usage: bench_gauge [metres]   (strip per run, default 40)
+ * Usage: bench_gauge [metres [rules.json]]   (strip per run, default 40)
  */
 #define _POSIX_C_SOURCE 199309L
 #include <stdio.h>
@@ -97,6 +102,7 @@ typedef struct timing {
      * the frames' pace) and from the cut's time to its evaluation. */
     double latency[MAX_CUTS], waited[MAX_CUTS];
     int sheets;
+    int verdicts[FLT_VERDICT_NOT_JUDGED + 1]; /* sheets by their verdict */
 } timing;
 
 static void on_sheet(const flt_sheet *sheet, void *user) {
@@ -109,6 +115,10 @@ static void on_sheet(const flt_sheet *sheet, void *user) {
     CHECK(flt_sheet_get(sheet, FLT_SHEET_CUT_TIME, &cut_time));
     CHECK(flt_sheet_get(sheet, FLT_SHEET_FINISHED_TIME, &finished));
     ++t->sheets;
+    double verdict = FLT_VERDICT_NOT_JUDGED;
+    CHECK(flt_sheet_get(sheet, FLT_SHEET_VERDICT, &verdict));
+    if (verdict >= 0 && verdict <= FLT_VERDICT_NOT_JUDGED)
+        ++t->verdicts[(int)verdict];
     const int cut = (int)(end / SHEET + 0.5) - 1;
     if (((int)flags & FLT_SHEET_FLAG_FLUSHED) || cut < 0 || cut >= MAX_CUTS)
         return;
@@ -118,16 +128,54 @@ static void on_sheet(const flt_sheet *sheet, void *user) {
     t->waited[cut] = finished - cut_time;
 }
 
-/* One run over `frames` frames; paced at RATE frames/s when `paced`. */
-static void run(const flt_calib *calib, const uint8_t *pixels, size_t frames, int paced) {
-    flt_options *o = NULL;
-    CHECK(flt_options_create(&o));
-    CHECK(flt_options_set(o, FLT_OPT_RIGID_MOTION, 1));
-    CHECK(flt_options_set(o, FLT_OPT_ROBUST, 1));
+/* The gauge's extraction options: two 128-row bands, the upper one laser 1. */
+static void set_bands(flt_options *o) {
     CHECK(flt_options_set(o, FLT_OPT_EXTRACT_LASER1_FIRST_ROW, 0));
     CHECK(flt_options_set(o, FLT_OPT_EXTRACT_LASER1_ROWS, 128));
     CHECK(flt_options_set(o, FLT_OPT_EXTRACT_LASER0_FIRST_ROW, 128));
     CHECK(flt_options_set(o, FLT_OPT_EXTRACT_LASER0_ROWS, 128));
+}
+
+/* The extractor alone on one thread over `frames` of the rendered frames:
+ * frames/s (wall time; the pushing thread of the gauge runs the same). */
+static double extractor_alone(const flt_calib *calib, const uint8_t *pixels, size_t frames) {
+    flt_options *o = NULL;
+    CHECK(flt_options_create(&o));
+    set_bands(o);
+    flt_extractor *x = NULL;
+    CHECK(flt_extractor_create(calib, o, &x));
+    flt_options_destroy(o);
+    size_t fibers = 0;
+    CHECK(flt_extractor_fibers(x, &fibers));
+    double *h = malloc(fibers * sizeof(double)), *sl = malloc(fibers * sizeof(double));
+    uint8_t *valid = malloc(fibers);
+    if (!h || !sl || !valid)
+        exit(1);
+    double s = 0;
+    const double t0 = now(), c0 = cpu_now();
+    for (size_t f = 0; f < frames; ++f)
+        CHECK(flt_extractor_process(x, pixels + (f % FRAMES) * (size_t)W * H, FLT_PIXEL_MONO8, W, H,
+                                    W, STEP * (double)f, fibers, &s, h, sl, valid));
+    const double t1 = now(), c1 = cpu_now();
+    const double fps = (double)frames / (t1 - t0);
+    printf("extractor alone, one thread: %zu frames in %.2f s = %.0f frames/s, CPU %.0f us per "
+           "frame\n",
+           frames, t1 - t0, fps, 1e6 * (c1 - c0) / (double)frames);
+    free(h), free(sl), free(valid);
+    flt_extractor_destroy(x);
+    return fps;
+}
+
+/* One run over `frames` frames; paced at RATE frames/s when `paced`; the
+ * sheets judged by `rules` (3 mm, the measured width) unless NULL.
+ * Returns frames/s from the first push to the last sheet. */
+static double run(const flt_calib *calib, const uint8_t *pixels, size_t frames, int paced,
+                  const flt_rules *rules) {
+    flt_options *o = NULL;
+    CHECK(flt_options_create(&o));
+    CHECK(flt_options_set(o, FLT_OPT_RIGID_MOTION, 1));
+    CHECK(flt_options_set(o, FLT_OPT_ROBUST, 1));
+    set_bands(o);
     CHECK(flt_options_set(o, FLT_OPT_GAUGE_WORKERS, 2));
     CHECK(flt_options_set(o, FLT_OPT_GAUGE_FRAME_SPACING, STEP));
     CHECK(flt_options_set(o, FLT_OPT_GAUGE_OVERFLOW, paced ? 0 : 1));
@@ -137,6 +185,8 @@ static void run(const flt_calib *calib, const uint8_t *pixels, size_t frames, in
     static timing t;
     memset(&t, 0, sizeof t);
     CHECK(flt_gauge_set_callback(g, on_sheet, &t));
+    if (rules)
+        CHECK(flt_gauge_set_rules(g, rules, 3.0, FLT_GAUGE_WIDTH_MEASURED));
     const size_t cuts = (size_t)((double)frames * STEP / SHEET);
     for (size_t c = 1; c <= cuts && c <= MAX_CUTS; ++c)
         CHECK(flt_gauge_cut(g, SHEET * (double)c));
@@ -173,15 +223,16 @@ static void run(const flt_calib *calib, const uint8_t *pixels, size_t frames, in
     CHECK(flt_gauge_count(g, FLT_GAUGE_COUNT_EVALUATE_NS, &ns[2]));
     CHECK(flt_gauge_count(g, FLT_GAUGE_COUNT_QUEUE_HIGH_WATER, &high));
     const double busy = 1e-9 * (double)(ns[0] + ns[1] + ns[2]);
+    const double fps = (double)frames / (t1 - t0);
     if (!paced) {
-        const double fps = (double)frames / (t1 - t0);
-        printf("throughput: %zu frames (%.0f m) in %.2f s = %.0f frames/s, real-time factor "
+        printf("throughput%s: %zu frames (%.0f m) in %.2f s = %.0f frames/s, real-time factor "
                "%.2f at 120 m/min\n  (pushing took %.2f s, %.0f frames/s; the rest is the "
                "reconstructor's last %.0f m and the last sheet)\n"
                "  CPU %.0f us per frame on all threads: two idle cores sustain %.0f frames/s\n",
-               frames, (double)frames * STEP / 1000, t1 - t0, fps, fps / RATE, pushed - t0,
-               (double)frames / (pushed - t0), row_capacity * STEP / 1000 / 1.25,
-               1e6 * (c1 - c0) / (double)frames, 2.0 * (double)frames / (c1 - c0));
+               rules ? " with verdicts" : "", frames, (double)frames * STEP / 1000, t1 - t0, fps,
+               fps / RATE, pushed - t0, (double)frames / (pushed - t0),
+               row_capacity * STEP / 1000 / 1.25, 1e6 * (c1 - c0) / (double)frames,
+               2.0 * (double)frames / (c1 - c0));
         printf("  per frame by stage (wall time on the threads that ran it; a loaded machine "
                "adds waits for a core): extraction %.0f us, sequencing (reconstruction, sheets) "
                "%.0f us, evaluation (flatness, verdicts) %.0f us; the 2 workers busy %.0f %% of "
@@ -221,16 +272,26 @@ static void run(const flt_calib *calib, const uint8_t *pixels, size_t frames, in
         else
             printf("  no sheet finished before the end of the strip: run a longer strip\n");
     }
-    (void)sheets;
+    if (rules) /* the verdicts were given, not skipped */
+        printf("  verdicts of the %d sheets: %d PASS, %d FAIL, %d NO_BAND, %d NOT_MEASURED, %d "
+               "NOT_JUDGED\n",
+               t.sheets, t.verdicts[FLT_VERDICT_PASS], t.verdicts[FLT_VERDICT_FAIL],
+               t.verdicts[FLT_VERDICT_NO_BAND], t.verdicts[FLT_VERDICT_NOT_MEASURED],
+               t.verdicts[FLT_VERDICT_NOT_JUDGED]);
     flt_gauge_destroy(g);
+    return fps;
 }
 
 int main(int argc, char **argv) {
     const double metres = argc > 1 ? atof(argv[1]) : 40.0;
-    if (!(metres >= 4 && metres <= 1000)) {
-        fprintf(stderr, "usage: bench_gauge [metres]   (4..1000, default 40)\n");
+    if (!(metres >= 4 && metres <= 1000) || argc > 3) {
+        fprintf(stderr, "usage: bench_gauge [metres [rules.json]]   (4..1000 m, default 40; "
+                        "rules: default the coil report's example)\n");
         return 2;
     }
+    const char *rules_path = argc > 2 ? argv[2] : FLT_EXAMPLE_RULES;
+    flt_rules *rules = NULL;
+    CHECK(flt_rules_load(rules_path, &rules));
     const size_t frames = (size_t)(metres * 1000.0 / STEP);
     flt_calib *calib = NULL;
     CHECK(flt_calib_create_reference(892, H, -1000.0, 2000.0 / (FIBERS - 1), FIBERS, &calib));
@@ -261,8 +322,15 @@ int main(int argc, char **argv) {
     if (load >= 0)
         printf(" (load average %.1f)", load);
     printf("\n");
-    run(calib, pixels, frames, 0);
-    run(calib, pixels, frames, 1);
+    const double alone = extractor_alone(calib, pixels, frames < 8000 ? frames : 8000);
+    const double plain = run(calib, pixels, frames, 0, NULL);
+    printf("  the gauge with 2 workers: %.2fx the extractor alone (goal >= 1.8x)\n", plain / alone);
+    run(calib, pixels, frames, 1, NULL);
+    const double judged = run(calib, pixels, frames, 0, rules);
+    printf("  with verdicts: %.0f frames/s, %.2fx the extractor alone (goal >= 5000 frames/s, "
+           "300 m/min at 1 mm)\n  rules: %s\n",
+           judged, judged / alone, rules_path);
+    flt_rules_destroy(rules);
     free(pixels);
     flt_sim_destroy(sim);
     flt_calib_destroy(calib);
