@@ -81,17 +81,25 @@ constexpr int k_max_unknowns = 2 * 66;
 #endif
 
 // True when every height and slope of the row is a sample (finite, at
-// most k_max_sample in magnitude). Integer tests on the bits: an OR
-// reduction vectorises, where a floating-point one would be a serial chain.
-FLT_ROW_KERNEL bool row_is_finite(std::size_t K, const double *__restrict height,
+// most k_max_sample in magnitude), the heights taken relative to `level`
+// as relative_row does (a height more than k_max_sample from it is none;
+// 0 for heights that are samples already). Integer tests on the bits: an
+// OR reduction vectorises, where a floating-point one would be a serial
+// chain. A light pass that streams the caller's row into the cache for
+// the arithmetic after it, with more of it in flight than that heavier
+// loop keeps.
+FLT_ROW_KERNEL bool row_is_finite(std::size_t K, double level, const double *__restrict height,
                                   const double *__restrict slope) {
     constexpr std::uint64_t magnitude = 0x7fffffffffffffffull;
     std::uint64_t bad = 0;
     for (std::size_t k = 0; k < K; ++k) {
-        std::uint64_t h, g;
+        const double rel = height[k] - level;
+        std::uint64_t h, d, g;
         std::memcpy(&h, height + k, sizeof h);
+        std::memcpy(&d, &rel, sizeof d);
         std::memcpy(&g, slope + k, sizeof g);
         bad |= ((h & magnitude) > k_max_sample_bits ? 1u : 0u) |
+               ((d & magnitude) > k_max_sample_bits ? 1u : 0u) |
                ((g & magnitude) > k_max_sample_bits ? 1u : 0u);
     }
     return bad == 0;
@@ -99,11 +107,13 @@ FLT_ROW_KERNEL bool row_is_finite(std::size_t K, const double *__restrict height
 
 // The hot loop of the default geometry (a row spans three knots, six
 // unknowns) for a row whose samples are all valid: adds the row to the six
-// right-hand sides, fiber by fiber, each with its own weights. A free
-// function with restrict parameters so that GCC vectorises it across fibers
-// (it gives up on the aliasing checks otherwise). The slope row is D * slope,
-// as in the general path, so both give bit-identical sums.
-FLT_ROW_KERNEL void accumulate_row6(std::size_t K, const double *__restrict height,
+// right-hand sides, fiber by fiber, each with its own weights, taking each
+// height relative to `level` as it reads it (push_row_relative; 0 changes
+// no bit). A free function with restrict parameters so that GCC vectorises
+// it across fibers (it gives up on the aliasing checks otherwise). The
+// slope row is D * slope, as in the general path, so both give
+// bit-identical sums.
+FLT_ROW_KERNEL void accumulate_row6(std::size_t K, double level, const double *__restrict height,
                                     const double *__restrict slope, double D,
                                     const double *__restrict wh, const double *__restrict wg,
                                     const double *__restrict a, const double *__restrict b,
@@ -111,7 +121,7 @@ FLT_ROW_KERNEL void accumulate_row6(std::size_t K, const double *__restrict heig
                                     double *__restrict r2, double *__restrict r3,
                                     double *__restrict r4, double *__restrict r5) {
     for (std::size_t k = 0; k < K; ++k) {
-        const double h = wh[k] * height[k], g = wg[k] * (D * slope[k]);
+        const double h = wh[k] * (height[k] - level), g = wg[k] * (D * slope[k]);
         r0[k] += a[0] * h + b[0] * g;
         r1[k] += a[1] * h + b[1] * g;
         r2[k] += a[2] * h + b[2] * g;
@@ -362,6 +372,17 @@ void hermite_weights(double t, double w[4]) {
 
 }  // namespace
 
+FLT_ROW_KERNEL void relative_row(std::size_t K, double level, const double *__restrict height,
+                                 double *__restrict out) {
+    const double big = k_max_sample;
+    for (std::size_t k = 0; k < K; ++k) {
+        const double h = height[k], d = h - level;
+        out[k] = std::fabs(h) <= big && std::fabs(d) <= big
+                     ? d
+                     : std::numeric_limits<double>::quiet_NaN();
+    }
+}
+
 double recon_engine::bytes_needed(std::size_t fibers, const recon_params &params,
                                   std::size_t knot_capacity, bool owns_rows, bool keep_rows,
                                   engine_role role) {
@@ -469,6 +490,7 @@ recon_engine::recon_engine(std::size_t fibers, const recon_params &params,
         pivot_floor_.assign(K_, 0.0);
         bad_.reserve(K_);
     }
+    rel_h_.assign(K_, 0.0);
     last_valid_s_.assign(K_, 0.0);
     has_height_.assign(K_, 0);
     bc_z_.assign(K_, 0.0);
@@ -1019,9 +1041,29 @@ void recon_engine::row_coefficients(double s, long i1, double *ch, double *cg) c
 
 void recon_engine::push_row(double s, const double *height, const double *slope,
                             const std::uint8_t *valid, const double *mult_h, const double *mult_g) {
+    add_row(s, height, nullptr, slope, valid, mult_h, mult_g);
+}
+
+void recon_engine::push_row_relative(double s, const double *height, double level,
+                                     const double *slope, const std::uint8_t *valid) {
+    add_row(s, height, &level, slope, valid, nullptr, nullptr);
+}
+
+void recon_engine::add_row(double s, const double *height, const double *level, const double *slope,
+                           const std::uint8_t *valid, const double *mult_h, const double *mult_g) {
     if (!have_t0_)
         begin_strip(s);
+    // Heights given raw are made relative in a row of scratch, except in the
+    // default geometry's common row below, which takes them relative as it
+    // reads them.
+    auto make_relative = [&] {
+        if (level) {
+            relative_row(K_, *level, height, rel_h_.data());
+            height = rel_h_.data();
+        }
+    };
     if (role_ == engine_role::rows_only) {
+        make_relative();
         // Only the bookkeeping: which samples are valid (as below).
         const double big = k_max_sample;
         auto ok_h = [&](std::size_t k) {
@@ -1031,7 +1073,7 @@ void recon_engine::push_row(double s, const double *height, const double *slope,
             return (valid == nullptr || valid[k] != 0) && std::fabs(slope[k]) <= big;
         };
         std::size_t nbad = 0;
-        if (valid != nullptr || !row_is_finite(K_, height, slope))
+        if (valid != nullptr || !row_is_finite(K_, 0.0, height, slope))
             for (std::size_t k = 0; k < K_; ++k)
                 nbad += !(ok_h(k) && ok_g(k));
         finish_row(s, nbad, ok_h, ok_g);
@@ -1068,13 +1110,18 @@ void recon_engine::push_row(double s, const double *height, const double *slope,
     bool fused6 = false;
     std::size_t affected6 = 0;
     double *dh6 = hv_.data(), *dg6 = gv_.data();
-    if (off == 0 && n_ == 6 && valid == nullptr && !mult_h && !mult_g &&
-        row_is_finite(K_, height, slope)) {
-        // The common case: the default geometry (knot spacing = laser
-        // spacing, so a row spans three knots), no mask, every sample
-        // finite. Same arithmetic as the general path below.
+    // The common case (common6): the default geometry (knot spacing = laser
+    // spacing, so a row spans three knots), no mask, every sample valid,
+    // heights taken relative as they are read. Same arithmetic as the paths
+    // after it, which read a relative copy.
+    const double lvl = level ? *level : 0.0;
+    const bool common6 = off == 0 && n_ == 6 && valid == nullptr && !mult_h && !mult_g &&
+                         row_is_finite(K_, lvl, height, slope);
+    if (!common6)
+        make_relative();
+    if (common6) {
         double *r = rhs_.data();
-        accumulate_row6(K_, height, slope, D_, wh_.data(), wg_.data(), ch, cg, r, r + K_,
+        accumulate_row6(K_, lvl, height, slope, D_, wh_.data(), wg_.data(), ch, cg, r, r + K_,
                         r + 2 * K_, r + 3 * K_, r + 4 * K_, r + 5 * K_);
         add_row_geometry(ch, cg, 0);
     } else if (off == 0 && n_ == 6) {
