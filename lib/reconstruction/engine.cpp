@@ -112,15 +112,19 @@ FLT_ROW_KERNEL bool row_is_finite(std::size_t K, double level, const double *__r
 // no bit). A free function with restrict parameters so that GCC vectorises
 // it across fibers (it gives up on the aliasing checks otherwise). The
 // slope row is D * slope, as in the general path, so both give
-// bit-identical sums.
+// bit-identical sums. next_height, next_slope (or nullptr): the row that
+// comes next, asked for from memory a cache line at a time while this one
+// is added, so that its wait overlaps this row's arithmetic (asked for all
+// at once, the requests queue up and the core waits on them).
 FLT_ROW_KERNEL void accumulate_row6(std::size_t K, double level, const double *__restrict height,
                                     const double *__restrict slope, double D,
                                     const double *__restrict wh, const double *__restrict wg,
                                     const double *__restrict a, const double *__restrict b,
                                     double *__restrict r0, double *__restrict r1,
                                     double *__restrict r2, double *__restrict r3,
-                                    double *__restrict r4, double *__restrict r5) {
-    for (std::size_t k = 0; k < K; ++k) {
+                                    double *__restrict r4, double *__restrict r5,
+                                    const double *next_height, const double *next_slope) {
+    auto add = [&](std::size_t k) {
         const double h = wh[k] * (height[k] - level), g = wg[k] * (D * slope[k]);
         r0[k] += a[0] * h + b[0] * g;
         r1[k] += a[1] * h + b[1] * g;
@@ -128,7 +132,20 @@ FLT_ROW_KERNEL void accumulate_row6(std::size_t K, double level, const double *_
         r3[k] += a[3] * h + b[3] * g;
         r4[k] += a[4] * h + b[4] * g;
         r5[k] += a[5] * h + b[5] * g;
-    }
+    };
+    constexpr std::size_t line = 64 / sizeof(double);  // fibers per cache line
+    std::size_t k0 = 0;
+    if (next_height)
+        for (; k0 + line <= K; k0 += line) {
+#if defined(__GNUC__)
+            __builtin_prefetch(next_height + k0, 0, 3);
+            __builtin_prefetch(next_slope + k0, 0, 3);
+#endif
+            for (std::size_t k = k0; k < k0 + line; ++k)
+                add(k);
+        }
+    for (std::size_t k = k0; k < K; ++k)
+        add(k);
 }
 
 // The default geometry's row with a mask or multipliers (every robust
@@ -1041,16 +1058,18 @@ void recon_engine::row_coefficients(double s, long i1, double *ch, double *cg) c
 
 void recon_engine::push_row(double s, const double *height, const double *slope,
                             const std::uint8_t *valid, const double *mult_h, const double *mult_g) {
-    add_row(s, height, nullptr, slope, valid, mult_h, mult_g);
+    add_row(s, height, nullptr, slope, valid, mult_h, mult_g, nullptr, nullptr);
 }
 
 void recon_engine::push_row_relative(double s, const double *height, double level,
-                                     const double *slope, const std::uint8_t *valid) {
-    add_row(s, height, &level, slope, valid, nullptr, nullptr);
+                                     const double *slope, const std::uint8_t *valid,
+                                     const double *next_height, const double *next_slope) {
+    add_row(s, height, &level, slope, valid, nullptr, nullptr, next_height, next_slope);
 }
 
 void recon_engine::add_row(double s, const double *height, const double *level, const double *slope,
-                           const std::uint8_t *valid, const double *mult_h, const double *mult_g) {
+                           const std::uint8_t *valid, const double *mult_h, const double *mult_g,
+                           const double *next_height, const double *next_slope) {
     if (!have_t0_)
         begin_strip(s);
     // Heights given raw are made relative in a row of scratch, except in the
@@ -1122,7 +1141,7 @@ void recon_engine::add_row(double s, const double *height, const double *level, 
     if (common6) {
         double *r = rhs_.data();
         accumulate_row6(K_, lvl, height, slope, D_, wh_.data(), wg_.data(), ch, cg, r, r + K_,
-                        r + 2 * K_, r + 3 * K_, r + 4 * K_, r + 5 * K_);
+                        r + 2 * K_, r + 3 * K_, r + 4 * K_, r + 5 * K_, next_height, next_slope);
         add_row_geometry(ch, cg, 0);
     } else if (off == 0 && n_ == 6) {
         double *r = rhs_.data();

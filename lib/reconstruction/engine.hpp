@@ -167,8 +167,11 @@ class recon_engine {
     // is taken relative to `level` (mm) as relative_row does, as the row is
     // read (the pipeline's rows: one pass over the caller's row instead of
     // a relative copy and the passes over that).
+    // next_height, next_slope: the row pushed next, if known, to be fetched
+    // from memory while this one is added (batch).
     void push_row_relative(double s, const double *height, double level, const double *slope,
-                           const std::uint8_t *valid);
+                           const std::uint8_t *valid, const double *next_height = nullptr,
+                           const double *next_slope = nullptr);
     // Per-fiber weights 1/sigma^2 of heights (mm^-2) and of Delta-d * slope;
     // they take effect at the next knot elimination.
     void set_fiber_weights(const double *wh, const double *wg);
@@ -313,9 +316,10 @@ class recon_engine {
     // ---- rows ----
     void begin_strip(double s);  // the first row of a strip is at s
     // push_row and push_row_relative: level nullptr for heights that are
-    // samples already.
+    // samples already; next_height, next_slope as push_row_relative's.
     void add_row(double s, const double *height, const double *level, const double *slope,
-                 const std::uint8_t *valid, const double *mult_h, const double *mult_g);
+                 const std::uint8_t *valid, const double *mult_h, const double *mult_g,
+                 const double *next_height, const double *next_slope);
     // The row's coefficients over the window's unknowns (its knots i1 ..
     // i1+S-1): height ch and Delta-d * slope cg.
     void row_coefficients(double s, long i1, double *ch, double *cg) const;

@@ -400,13 +400,13 @@ void recon_pipeline::batch_fibers(std::size_t rows, const double *s, const doubl
             std::size_t K, rows;
             void row(int pass, std::size_t r, const double **ho, const double **go,
                      const std::uint8_t **vo, double * /*line*/) override {
-                if (r + 1 < rows) {
-                    prefetch_row(h + (r + 1) * K, K);
-                    prefetch_row(g + (r + 1) * K, K);
-                }
                 if (pass == 0) {
                     *ho = h + r * K;  // raw_first_pass
                 } else {
+                    if (r + 1 < rows) {
+                        prefetch_row(h + (r + 1) * K, K);
+                        prefetch_row(g + (r + 1) * K, K);
+                    }
                     self->relative_heights(h + r * K, rel);
                     *ho = rel;
                 }
@@ -416,6 +416,10 @@ void recon_pipeline::batch_fibers(std::size_t rows, const double *s, const doubl
             bool raw_first_pass(double *level) const override {
                 *level = self->has_level_ ? self->level_ : 0.0;
                 return true;
+            }
+            void raw_row_ahead(std::size_t r, const double **ho, const double **go) const override {
+                *ho = r < rows ? h + r * K : nullptr;
+                *go = r < rows ? g + r * K : nullptr;
             }
         } source;
         source.self = this;

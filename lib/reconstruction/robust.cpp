@@ -498,9 +498,11 @@ void recon_chain::batch(std::size_t rows, const double *s, row_source &source) {
             if (pass == 0) {
                 if (line[0] != 0 || line[1] != 0 || line[2] != 0 || line[3] != 0)
                     throw error(FLT_ERR_INTERNAL, "a first pass's row must come without a line");
-                if (raw)
-                    e.push_row_relative(s[r], h, level, g, valid);
-                else
+                if (raw) {
+                    const double *next_h, *next_g;
+                    source.raw_row_ahead(r + 1, &next_h, &next_g);
+                    e.push_row_relative(s[r], h, level, g, valid, next_h, next_g);
+                } else
                     e.push_row(s[r], h, g, valid);
                 continue;
             }

@@ -113,6 +113,12 @@ class row_source {
         (void)level;
         return false;
     }
+    // With raw_first_pass: row r of pass 0 as the caller keeps it (nullptr
+    // past the last), fetched from memory while the row before it is added.
+    virtual void raw_row_ahead(std::size_t r, const double **height, const double **slope) const {
+        (void)r;
+        *height = *slope = nullptr;
+    }
 
   protected:
     ~row_source() = default;
