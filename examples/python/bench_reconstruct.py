@@ -20,6 +20,13 @@ figure from the same build:
     PYTHONPATH=build/dev/bindings/python/package \\
         taskset -c 1 /usr/bin/python3 examples/python/bench_reconstruct.py [calls]
     taskset -c 1 build/dev/examples/bench/bench_recon 3 [calls]
+The dev preset's library is built -O2 (RelWithDebInfo), at which GCC 12
+vectorises little: its times are about five times the release build's
+(the ratio of the pairs is the same). For the release figures, copy the
+package and put the release library in it:
+    cp -r build/dev/bindings/python/package /tmp/flt-release
+    cp -L build/release/lib/libflatline.so.0.* /tmp/flt-release/flatline/
+    PYTHONPATH=/tmp/flt-release /usr/bin/python3 examples/python/bench_reconstruct.py
 """
 
 import ctypes
