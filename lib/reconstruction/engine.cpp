@@ -81,17 +81,25 @@ constexpr int k_max_unknowns = 2 * 66;
 #endif
 
 // True when every height and slope of the row is a sample (finite, at
-// most k_max_sample in magnitude). Integer tests on the bits: an OR
-// reduction vectorises, where a floating-point one would be a serial chain.
-FLT_ROW_KERNEL bool row_is_finite(std::size_t K, const double *__restrict height,
+// most k_max_sample in magnitude), the heights taken relative to `level`
+// as relative_row does (a height more than k_max_sample from it is none;
+// 0 for heights that are samples already). Integer tests on the bits: an
+// OR reduction vectorises, where a floating-point one would be a serial
+// chain. A light pass that streams the caller's row into the cache for
+// the arithmetic after it, with more of it in flight than that heavier
+// loop keeps.
+FLT_ROW_KERNEL bool row_is_finite(std::size_t K, double level, const double *__restrict height,
                                   const double *__restrict slope) {
     constexpr std::uint64_t magnitude = 0x7fffffffffffffffull;
     std::uint64_t bad = 0;
     for (std::size_t k = 0; k < K; ++k) {
-        std::uint64_t h, g;
+        const double rel = height[k] - level;
+        std::uint64_t h, d, g;
         std::memcpy(&h, height + k, sizeof h);
+        std::memcpy(&d, &rel, sizeof d);
         std::memcpy(&g, slope + k, sizeof g);
         bad |= ((h & magnitude) > k_max_sample_bits ? 1u : 0u) |
+               ((d & magnitude) > k_max_sample_bits ? 1u : 0u) |
                ((g & magnitude) > k_max_sample_bits ? 1u : 0u);
     }
     return bad == 0;
@@ -99,26 +107,45 @@ FLT_ROW_KERNEL bool row_is_finite(std::size_t K, const double *__restrict height
 
 // The hot loop of the default geometry (a row spans three knots, six
 // unknowns) for a row whose samples are all valid: adds the row to the six
-// right-hand sides, fiber by fiber, each with its own weights. A free
-// function with restrict parameters so that GCC vectorises it across fibers
-// (it gives up on the aliasing checks otherwise). The slope row is D * slope,
-// as in the general path, so both give bit-identical sums.
-FLT_ROW_KERNEL void accumulate_row6(std::size_t K, const double *__restrict height,
+// right-hand sides, fiber by fiber, each with its own weights, taking each
+// height relative to `level` as it reads it (push_row_relative; 0 changes
+// no bit). A free function with restrict parameters so that GCC vectorises
+// it across fibers (it gives up on the aliasing checks otherwise). The
+// slope row is D * slope, as in the general path, so both give
+// bit-identical sums. next_height, next_slope (or nullptr): the row that
+// comes next, asked for from memory a cache line at a time while this one
+// is added, so that its wait overlaps this row's arithmetic (asked for all
+// at once, the requests queue up and the core waits on them).
+FLT_ROW_KERNEL void accumulate_row6(std::size_t K, double level, const double *__restrict height,
                                     const double *__restrict slope, double D,
                                     const double *__restrict wh, const double *__restrict wg,
                                     const double *__restrict a, const double *__restrict b,
                                     double *__restrict r0, double *__restrict r1,
                                     double *__restrict r2, double *__restrict r3,
-                                    double *__restrict r4, double *__restrict r5) {
-    for (std::size_t k = 0; k < K; ++k) {
-        const double h = wh[k] * height[k], g = wg[k] * (D * slope[k]);
+                                    double *__restrict r4, double *__restrict r5,
+                                    const double *next_height, const double *next_slope) {
+    auto add = [&](std::size_t k) {
+        const double h = wh[k] * (height[k] - level), g = wg[k] * (D * slope[k]);
         r0[k] += a[0] * h + b[0] * g;
         r1[k] += a[1] * h + b[1] * g;
         r2[k] += a[2] * h + b[2] * g;
         r3[k] += a[3] * h + b[3] * g;
         r4[k] += a[4] * h + b[4] * g;
         r5[k] += a[5] * h + b[5] * g;
-    }
+    };
+    constexpr std::size_t line = 64 / sizeof(double);  // fibers per cache line
+    std::size_t k0 = 0;
+    if (next_height)
+        for (; k0 + line <= K; k0 += line) {
+#if defined(__GNUC__)
+            __builtin_prefetch(next_height + k0, 0, 3);
+            __builtin_prefetch(next_slope + k0, 0, 3);
+#endif
+            for (std::size_t k = k0; k < k0 + line; ++k)
+                add(k);
+        }
+    for (std::size_t k = k0; k < K; ++k)
+        add(k);
 }
 
 // The default geometry's row with a mask or multipliers (every robust
@@ -302,6 +329,46 @@ FLT_ROW_KERNEL void back_substitute6(std::size_t K, const double *__restrict il0
     }
 }
 
+// One knot's elimination in close_knot, per fiber: the pivots of its two
+// unknowns (inverted) and the forward-eliminated right-hand side, from the
+// window matrix entries a00, a01, a11 and the right-hand sides b0, b1.
+// Free functions with restrict parameters, so that these loops vectorise
+// (as members writing into the factor ring they stayed scalar: two thirds
+// of close_knot's time).
+FLT_ROW_KERNEL void factor_pivots(std::size_t K, const double *__restrict a00,
+                                  const double *__restrict a01, const double *__restrict a11,
+                                  const double *__restrict b0, const double *__restrict b1,
+                                  const double *__restrict floor, double *__restrict il00,
+                                  double *__restrict l10, double *__restrict il11,
+                                  double *__restrict y0, double *__restrict y1) {
+    for (std::size_t k = 0; k < K; ++k) {
+        const double l00 = std::sqrt(std::max(a00[k], floor[k]));
+        const double i0 = 1.0 / l00;
+        const double l = a01[k] * i0;
+        const double d11 = a11[k] - l * l;
+        const double i1 = 1.0 / std::sqrt(std::max(d11, floor[k]));
+        const double y = b0[k] * i0;
+        il00[k] = i0;
+        l10[k] = l;
+        il11[k] = i1;
+        y0[k] = y;
+        y1[k] = (b1[k] - l * y) * i1;
+    }
+}
+
+// The factor's entries of the two eliminated unknowns in the column of a
+// later one, from its window matrix entries w0c, w1c.
+FLT_ROW_KERNEL void factor_column(std::size_t K, const double *__restrict w0c,
+                                  const double *__restrict w1c, const double *__restrict il00,
+                                  const double *__restrict l10, const double *__restrict il11,
+                                  double *__restrict l0, double *__restrict l1) {
+    for (std::size_t k = 0; k < K; ++k) {
+        const double a = w0c[k] * il00[k];
+        l0[k] = a;
+        l1[k] = (w1c[k] - a * l10[k]) * il11[k];
+    }
+}
+
 // out = z + c over the fibers (NaN stays NaN).
 FLT_ROW_KERNEL void add_constant(std::size_t K, const double *__restrict z, double c,
                                  double *__restrict out) {
@@ -321,6 +388,17 @@ void hermite_weights(double t, double w[4]) {
 }
 
 }  // namespace
+
+FLT_ROW_KERNEL void relative_row(std::size_t K, double level, const double *__restrict height,
+                                 double *__restrict out) {
+    const double big = k_max_sample;
+    for (std::size_t k = 0; k < K; ++k) {
+        const double h = height[k], d = h - level;
+        out[k] = std::fabs(h) <= big && std::fabs(d) <= big
+                     ? d
+                     : std::numeric_limits<double>::quiet_NaN();
+    }
+}
 
 double recon_engine::bytes_needed(std::size_t fibers, const recon_params &params,
                                   std::size_t knot_capacity, bool owns_rows, bool keep_rows,
@@ -429,6 +507,7 @@ recon_engine::recon_engine(std::size_t fibers, const recon_params &params,
         pivot_floor_.assign(K_, 0.0);
         bad_.reserve(K_);
     }
+    rel_h_.assign(K_, 0.0);
     last_valid_s_.assign(K_, 0.0);
     has_height_.assign(K_, 0);
     bc_z_.assign(K_, 0.0);
@@ -642,24 +721,10 @@ FLT_ROW_KERNEL void recon_engine::close_knot() {
     const double *b0 = rhs_.data(), *b1 = rhs_.data() + K_;
     pivot_floors();
     const double *floor = pivot_floor_.data();
-    for (std::size_t k = 0; k < K_; ++k) {
-        const double l00 = std::sqrt(std::max(a00[k], floor[k]));
-        il00[k] = 1.0 / l00;
-        l10[k] = a01[k] * il00[k];
-        const double d11 = a11[k] - l10[k] * l10[k];
-        il11[k] = 1.0 / std::sqrt(std::max(d11, floor[k]));
-        y0[k] = b0[k] * il00[k];
-        y1[k] = (b1[k] - l10[k] * y0[k]) * il11[k];
-    }
-    for (int c = 2; c < n_; ++c) {
-        const double *w0c = work_.data() + tri(0, c) * K_;
-        const double *w1c = work_.data() + tri(1, c) * K_;
-        double *l0 = L0 + std::size_t(c - 2) * K_, *l1 = L1 + std::size_t(c - 2) * K_;
-        for (std::size_t k = 0; k < K_; ++k) {
-            l0[k] = w0c[k] * il00[k];
-            l1[k] = (w1c[k] - l0[k] * l10[k]) * il11[k];
-        }
-    }
+    factor_pivots(K_, a00, a01, a11, b0, b1, floor, il00, l10, il11, y0, y1);
+    for (int c = 2; c < n_; ++c)
+        factor_column(K_, work_.data() + tri(0, c) * K_, work_.data() + tri(1, c) * K_, il00, l10,
+                      il11, L0 + std::size_t(c - 2) * K_, L1 + std::size_t(c - 2) * K_);
     // New Schur complement, shifted by one knot; the new last knot starts
     // empty (its priors are added below).
     for (int r = 2; r < n_; ++r)
@@ -993,9 +1058,31 @@ void recon_engine::row_coefficients(double s, long i1, double *ch, double *cg) c
 
 void recon_engine::push_row(double s, const double *height, const double *slope,
                             const std::uint8_t *valid, const double *mult_h, const double *mult_g) {
+    add_row(s, height, nullptr, slope, valid, mult_h, mult_g, nullptr, nullptr);
+}
+
+void recon_engine::push_row_relative(double s, const double *height, double level,
+                                     const double *slope, const std::uint8_t *valid,
+                                     const double *next_height, const double *next_slope) {
+    add_row(s, height, &level, slope, valid, nullptr, nullptr, next_height, next_slope);
+}
+
+void recon_engine::add_row(double s, const double *height, const double *level, const double *slope,
+                           const std::uint8_t *valid, const double *mult_h, const double *mult_g,
+                           const double *next_height, const double *next_slope) {
     if (!have_t0_)
         begin_strip(s);
+    // Heights given raw are made relative in a row of scratch, except in the
+    // default geometry's common row below, which takes them relative as it
+    // reads them.
+    auto make_relative = [&] {
+        if (level) {
+            relative_row(K_, *level, height, rel_h_.data());
+            height = rel_h_.data();
+        }
+    };
     if (role_ == engine_role::rows_only) {
+        make_relative();
         // Only the bookkeeping: which samples are valid (as below).
         const double big = k_max_sample;
         auto ok_h = [&](std::size_t k) {
@@ -1005,7 +1092,7 @@ void recon_engine::push_row(double s, const double *height, const double *slope,
             return (valid == nullptr || valid[k] != 0) && std::fabs(slope[k]) <= big;
         };
         std::size_t nbad = 0;
-        if (valid != nullptr || !row_is_finite(K_, height, slope))
+        if (valid != nullptr || !row_is_finite(K_, 0.0, height, slope))
             for (std::size_t k = 0; k < K_; ++k)
                 nbad += !(ok_h(k) && ok_g(k));
         finish_row(s, nbad, ok_h, ok_g);
@@ -1042,14 +1129,19 @@ void recon_engine::push_row(double s, const double *height, const double *slope,
     bool fused6 = false;
     std::size_t affected6 = 0;
     double *dh6 = hv_.data(), *dg6 = gv_.data();
-    if (off == 0 && n_ == 6 && valid == nullptr && !mult_h && !mult_g &&
-        row_is_finite(K_, height, slope)) {
-        // The common case: the default geometry (knot spacing = laser
-        // spacing, so a row spans three knots), no mask, every sample
-        // finite. Same arithmetic as the general path below.
+    // The common case (common6): the default geometry (knot spacing = laser
+    // spacing, so a row spans three knots), no mask, every sample valid,
+    // heights taken relative as they are read. Same arithmetic as the paths
+    // after it, which read a relative copy.
+    const double lvl = level ? *level : 0.0;
+    const bool common6 = off == 0 && n_ == 6 && valid == nullptr && !mult_h && !mult_g &&
+                         row_is_finite(K_, lvl, height, slope);
+    if (!common6)
+        make_relative();
+    if (common6) {
         double *r = rhs_.data();
-        accumulate_row6(K_, height, slope, D_, wh_.data(), wg_.data(), ch, cg, r, r + K_,
-                        r + 2 * K_, r + 3 * K_, r + 4 * K_, r + 5 * K_);
+        accumulate_row6(K_, lvl, height, slope, D_, wh_.data(), wg_.data(), ch, cg, r, r + K_,
+                        r + 2 * K_, r + 3 * K_, r + 4 * K_, r + 5 * K_, next_height, next_slope);
         add_row_geometry(ch, cg, 0);
     } else if (off == 0 && n_ == 6) {
         double *r = rhs_.data();

@@ -48,6 +48,12 @@ constexpr double k_max_sample = 1.0e9;
 // are larger), a test that vectorises as integers.
 constexpr std::uint64_t k_max_sample_bits = 0x41CDCD6500000000ull;
 
+// A row of heights relative to a level (mm): height - level, NaN where the
+// height is no sample or is more than k_max_sample from the level (the
+// strip's level: recon_pipeline::find_level says why heights are solved
+// relative to it).
+void relative_row(std::size_t K, double level, const double *height, double *out);
+
 struct recon_params {
     double knot_spacing = 100.0;   // L, mm (resolved, > 0)
     double laser_spacing = 100.0;  // D, mm
@@ -157,6 +163,15 @@ class recon_engine {
     // weights in [0, 1] (robust down-weighting), or nullptr for 1.
     void push_row(double s, const double *height, const double *slope, const std::uint8_t *valid,
                   const double *mult_h = nullptr, const double *mult_g = nullptr);
+    // As push_row without multipliers, for heights given raw: each height
+    // is taken relative to `level` (mm) as relative_row does, as the row is
+    // read (the pipeline's rows: one pass over the caller's row instead of
+    // a relative copy and the passes over that).
+    // next_height, next_slope: the row pushed next, if known, to be fetched
+    // from memory while this one is added (batch).
+    void push_row_relative(double s, const double *height, double level, const double *slope,
+                           const std::uint8_t *valid, const double *next_height = nullptr,
+                           const double *next_slope = nullptr);
     // Per-fiber weights 1/sigma^2 of heights (mm^-2) and of Delta-d * slope;
     // they take effect at the next knot elimination.
     void set_fiber_weights(const double *wh, const double *wg);
@@ -300,6 +315,11 @@ class recon_engine {
 
     // ---- rows ----
     void begin_strip(double s);  // the first row of a strip is at s
+    // push_row and push_row_relative: level nullptr for heights that are
+    // samples already; next_height, next_slope as push_row_relative's.
+    void add_row(double s, const double *height, const double *level, const double *slope,
+                 const std::uint8_t *valid, const double *mult_h, const double *mult_g,
+                 const double *next_height, const double *next_slope);
     // The row's coefficients over the window's unknowns (its knots i1 ..
     // i1+S-1): height ch and Delta-d * slope cg.
     void row_coefficients(double s, long i1, double *ch, double *cg) const;
@@ -394,6 +414,7 @@ class recon_engine {
     std::vector<double> xwin_;     // [n][K]
     std::vector<double> hv_, gv_;  // per fiber masked measurements
     std::vector<double> hm_, gm_;  // per fiber effective weight multipliers
+    std::vector<double> rel_h_;    // a row of relative heights (add_row)
     std::vector<double> ones_;
     std::vector<double> pivot_floor_;  // per fiber, see pivot_floors()
     std::vector<int> bad_;             // fibers with an invalid sample this row

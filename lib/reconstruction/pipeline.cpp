@@ -133,17 +133,6 @@ inline void prefetch_row(const double *row, std::size_t K) {
 #endif
 }
 
-// A row of heights relative to the level: NaN where the height is no
-// sample or too far from the level (relative_heights).
-FLT_SPLIT_KERNEL void relative_row(std::size_t K, double level, const double *__restrict height,
-                                   double *__restrict out) {
-    const double big = k_max_sample;
-    for (std::size_t k = 0; k < K; ++k) {
-        const double h = height[k], d = h - level;
-        out[k] = std::fabs(h) <= big && std::fabs(d) <= big ? d : k_nan;
-    }
-}
-
 // Deviations of a row from the line a + b * xi, every fiber.
 FLT_SPLIT_KERNEL void line_deviations(std::size_t K, double centre, double a, double b,
                                       const double *__restrict value, double *__restrict dev) {
@@ -344,6 +333,10 @@ void recon_pipeline::push_row(double s, const double *raw_height, const double *
     // waits for it).
     prefetch_row(slope, K_);
     find_level(raw_height, valid);
+    if (!config_.rigid_motion && main_->takes_raw_rows()) {
+        main_->push_row_relative(s, raw_height, has_level_ ? level_ : 0.0, slope, valid);
+        return;
+    }
     relative_heights(raw_height, rel_h_.data());
     const double *height = rel_h_.data();
     if (!config_.rigid_motion) {
@@ -405,16 +398,28 @@ void recon_pipeline::batch_fibers(std::size_t rows, const double *s, const doubl
             const std::uint8_t *v;
             double *rel;
             std::size_t K, rows;
-            void row(int /*pass*/, std::size_t r, const double **ho, const double **go,
+            void row(int pass, std::size_t r, const double **ho, const double **go,
                      const std::uint8_t **vo, double * /*line*/) override {
-                if (r + 1 < rows) {
-                    prefetch_row(h + (r + 1) * K, K);
-                    prefetch_row(g + (r + 1) * K, K);
+                if (pass == 0) {
+                    *ho = h + r * K;  // raw_first_pass
+                } else {
+                    if (r + 1 < rows) {
+                        prefetch_row(h + (r + 1) * K, K);
+                        prefetch_row(g + (r + 1) * K, K);
+                    }
+                    self->relative_heights(h + r * K, rel);
+                    *ho = rel;
                 }
-                self->relative_heights(h + r * K, rel);
-                *ho = rel;
                 *go = g + r * K;
                 *vo = v ? v + r * K : nullptr;
+            }
+            bool raw_first_pass(double *level) const override {
+                *level = self->has_level_ ? self->level_ : 0.0;
+                return true;
+            }
+            void raw_row_ahead(std::size_t r, const double **ho, const double **go) const override {
+                *ho = r < rows ? h + r * K : nullptr;
+                *go = r < rows ? g + r * K : nullptr;
             }
         } source;
         source.self = this;

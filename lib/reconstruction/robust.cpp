@@ -416,6 +416,13 @@ void recon_chain::push_row(double s, const double *height, const double *slope,
         engine_->push_row(s, height, slope, valid);
 }
 
+void recon_chain::push_row_relative(double s, const double *height, double level,
+                                    const double *slope, const std::uint8_t *valid) {
+    if (window_)
+        throw error(FLT_ERR_INTERNAL, "raw rows pushed into a robust window");
+    engine_->push_row_relative(s, height, level, slope, valid);
+}
+
 std::size_t recon_chain::pull(std::size_t max_rows, double *s_out, double *z_out,
                               std::uint8_t *flags_out, const double *add) {
     return window_ ? window_->pull(max_rows, s_out, z_out, flags_out, add)
@@ -468,6 +475,8 @@ void recon_chain::batch(std::size_t rows, const double *s, row_source &source) {
     recon_engine &e = *engine_;
     const int passes = robust_.kind == robust_kind::none ? 1 : 1 + robust_.iterations;
     double saved_t0 = 0.0;
+    double level = 0.0;
+    const bool raw = source.raw_first_pass(&level);
     for (int pass = 0; pass < passes; ++pass) {
         // Every pass starts a strip; the first one too, as a workspace may
         // have served an earlier sheet (recon_api.cpp).
@@ -489,7 +498,12 @@ void recon_chain::batch(std::size_t rows, const double *s, row_source &source) {
             if (pass == 0) {
                 if (line[0] != 0 || line[1] != 0 || line[2] != 0 || line[3] != 0)
                     throw error(FLT_ERR_INTERNAL, "a first pass's row must come without a line");
-                e.push_row(s[r], h, g, valid);
+                if (raw) {
+                    const double *next_h, *next_g;
+                    source.raw_row_ahead(r + 1, &next_h, &next_g);
+                    e.push_row_relative(s[r], h, level, g, valid, next_h, next_g);
+                } else
+                    e.push_row(s[r], h, g, valid);
                 continue;
             }
             e.predict_saved(saved_.data(), saved_t0, s[r], pred_h_.data(), pred_g_.data());

@@ -100,10 +100,25 @@ void robust_weigh_row(robust_kind kind, std::size_t K, double D, const double *h
 // value - (a + b * (k - centre)); the first pass gets no line (all zero).
 // (With rigid_motion the fibers' deviations are the caller's rows minus the
 // row's line; recomputing them in a pass of their own costs as much again.)
+// The first pass's heights may instead come raw, to be taken relative to
+// a level as the engine reads them (recon_engine::push_row_relative): one
+// pass over each row of the caller's sheet instead of a relative copy of it
+// and the passes over that.
 class row_source {
   public:
     virtual void row(int pass, std::size_t r, const double **height, const double **slope,
                      const std::uint8_t **valid, double line[5]) = 0;
+    // True when pass 0's heights are raw, with the level (mm) in *level.
+    virtual bool raw_first_pass(double *level) const {
+        (void)level;
+        return false;
+    }
+    // With raw_first_pass: row r of pass 0 as the caller keeps it (nullptr
+    // past the last), fetched from memory while the row before it is added.
+    virtual void raw_row_ahead(std::size_t r, const double **height, const double **slope) const {
+        (void)r;
+        *height = *slope = nullptr;
+    }
 
   protected:
     ~row_source() = default;
@@ -149,6 +164,12 @@ class recon_chain {
     long latency_knots() const;
 
     void push_row(double s, const double *height, const double *slope, const std::uint8_t *valid);
+    // Streaming without robust mode (takes_raw_rows()): a row of raw
+    // heights, taken relative to `level` as the engine reads them
+    // (recon_engine::push_row_relative).
+    bool takes_raw_rows() const { return window_ == nullptr; }
+    void push_row_relative(double s, const double *height, double level, const double *slope,
+                           const std::uint8_t *valid);
     // add: as recon_engine::pull.
     std::size_t pull(std::size_t max_rows, double *s_out, double *z_out, std::uint8_t *flags_out,
                      const double *add = nullptr);

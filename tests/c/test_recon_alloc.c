@@ -112,8 +112,8 @@ static void stream_and_count(const flt_options *options) {
  * shape: the reference's production sheet (2000 rows x 1150 fibers),
  * reconstructed again and again, allocates nothing after the first call,
  * in every mode, with flags out or not, with the extractor's flags in, and
- * after a sheet of another shape in between. Control: the first call of
- * each allocates. */
+ * after a sheet of another shape in between; with no options at all too.
+ * Control: the first call of each allocates. */
 static void batch_allocates_nothing_after_the_first_call(void **state) {
     (void)state;
     const size_t R = 2000, K = 1150;
@@ -171,6 +171,18 @@ static void batch_allocates_nothing_after_the_first_call(void **state) {
         /* The sheet between is new: its own workspace's allocations only. */
         assert_true(later < first_allocations + 20);
         assert_int_equal(g_allocations, 0);
+        if (mode == 0) {
+            /* No options at all (every default: what bench_recon and the
+             * Python binding pass) is the same configuration: it solves in
+             * the workspace of the call before, allocating nothing. */
+            g_allocations = 0;
+            g_counting = 1;
+            flt_status defaults =
+                flt_reconstruct(NULL, R, K, t->s, t->height, t->slope, NULL, z, out_flags);
+            g_counting = 0;
+            assert_int_equal(defaults, FLT_OK);
+            assert_int_equal(g_allocations, 0);
+        }
 #undef CALL
         flt_options_destroy(o);
     }
