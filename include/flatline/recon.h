@@ -149,7 +149,8 @@
  *   flt_reconstruct() keeps its working memory for the next call of the
  *   same shape (fibers, rows, options): a loop of calls allocates nothing
  *   after the first. Up to 4 shapes and 256 MB are kept (a larger one is
- *   freed after its call), until the library is unloaded.
+ *   freed after its call), until flt_reconstruct_release() or until the
+ *   library is unloaded.
  *
  * Threads
  *   A flt_recon must not be used from two threads at once. Separate handles
@@ -485,6 +486,18 @@ FLT_API FLT_NODISCARD flt_status FLT_CALL flt_reconstruct(const flt_options *opt
 FLT_API FLT_NODISCARD flt_status FLT_CALL flt_reconstruct_flagged(
     const flt_options *options, size_t rows, size_t fibers, const double *s, const double *height,
     const double *slope, const uint8_t *flags, double *z_out, uint8_t *flags_out);
+
+/**
+ * Frees the working memory flt_reconstruct() and flt_reconstruct_flagged()
+ * keep for the next call of a shape (see "Memory" above): after a one-off
+ * sheet much larger than the usual ones, say, or before a long idle time.
+ * The next call of each shape allocates again. A call in progress on
+ * another thread keeps its memory and leaves it kept when it ends.
+ * @param bytes_out the bytes freed (as the "Memory" formula counts them),
+ *                  or NULL.
+ * @return FLT_OK.
+ */
+FLT_API FLT_NODISCARD flt_status FLT_CALL flt_reconstruct_release(double *bytes_out);
 
 #ifdef __cplusplus
 }

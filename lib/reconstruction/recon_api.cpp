@@ -459,6 +459,20 @@ class batch_pool {
         }
     }
 
+    // Frees every kept workspace (those of calls in progress stay theirs and
+    // are kept when their call ends); returns the bytes freed.
+    double release() {
+        std::vector<std::unique_ptr<batch_workspace>> dropped;
+        {
+            std::lock_guard<std::mutex> lock(m_);
+            dropped.swap(idle_);
+        }
+        double bytes = 0.0;
+        for (const auto &w : dropped)
+            bytes += w->bytes;
+        return bytes;  // freed as `dropped` goes, outside the lock
+    }
+
   private:
     std::mutex m_;
     std::vector<std::unique_ptr<batch_workspace>> idle_;
@@ -851,6 +865,16 @@ FLT_API flt_status FLT_CALL flt_reconstruct_flagged(const flt_options *options, 
     return guard(fn, [&] {
         return reconstruct_sheet(fn, options, rows, fibers, s, height, slope, nullptr, flags, true,
                                  z_out, flags_out);
+    });
+}
+
+FLT_API flt_status FLT_CALL flt_reconstruct_release(double *bytes_out) {
+    const char *fn = "flt_reconstruct_release";
+    return guard(fn, [&] {
+        const double bytes = workspaces().release();
+        if (bytes_out)
+            *bytes_out = bytes;
+        return FLT_OK;
     });
 }
 

@@ -916,6 +916,29 @@ static void row_reconstruct_flagged(void) {
     free(z), free(flags), free(out);
 }
 
+static void row_reconstruct_release(void) {
+    make_rows(40);
+    double *z = malloc(sizeof(double) * 40 * FIBERS);
+    /* The working memory a call keeps is freed, and counted; then none is
+     * left; NULL for the count is fine; the next call works as before. */
+    GOOD(flt_reconstruct(NULL, 40, FIBERS, g_rows.s, g_rows.h, g_rows.k, NULL, z, NULL));
+    double bytes = -1;
+    GOOD(flt_reconstruct_release(&bytes));
+    ++g_checks;
+    if (!(bytes > 40.0 * FIBERS * sizeof(double)))
+        ERR("freed %g bytes after a call of 40 x %d", bytes, FIBERS);
+    GOOD(flt_reconstruct_release(&bytes));
+    ++g_checks;
+    if (bytes != 0)
+        ERR("freed %g bytes from an empty pool", bytes);
+    GOOD(flt_reconstruct_release(NULL));
+    GOOD(flt_reconstruct(NULL, 40, FIBERS, g_rows.s, g_rows.h, g_rows.k, NULL, z, NULL));
+    ++g_checks;
+    if (!isfinite(z[0]))
+        ERR("z[0] = %g after a release", z[0]);
+    free(z);
+}
+
 /* ---------------------------------------------------------------------- */
 /* calib.h                                                                 */
 /* ---------------------------------------------------------------------- */
@@ -5656,6 +5679,7 @@ static const row k_rows[] = {
     ROW(recon_boundary),
     ROW(reconstruct),
     ROW(reconstruct_flagged),
+    ROW(reconstruct_release),
     /* calib.h */
     ROW(calib_create),
     ROW(calib_destroy),

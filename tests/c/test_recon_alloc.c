@@ -182,6 +182,23 @@ static void batch_allocates_nothing_after_the_first_call(void **state) {
             g_counting = 0;
             assert_int_equal(defaults, FLT_OK);
             assert_int_equal(g_allocations, 0);
+            /* flt_reconstruct_release frees what the calls kept: at least
+             * this sheet's workspace, which recon.h puts at about 20 doubles
+             * per fiber and knot (knots 100 mm apart over the sheet; half of
+             * that as the bound, the header's "about"), and the next call
+             * of the shape allocates it again, as the first did. */
+            double freed = 0;
+            assert_int_equal(flt_reconstruct_release(&freed), FLT_OK);
+            const double knots = (t->s[R - 1] - t->s[0] + 100.0) / 100.0 + 4;
+            print_message("flt_reconstruct_release: %.1f MB freed (%.0f knots x %zu fibers)\n",
+                          freed / 1e6, knots, K);
+            assert_true(freed >= 10.0 * 8.0 * knots * (double)K);
+            g_allocations = 0;
+            g_counting = 1;
+            flt_status after = CALL();
+            g_counting = 0;
+            assert_int_equal(after, FLT_OK);
+            assert_true(g_allocations >= 5u);
         }
 #undef CALL
         flt_options_destroy(o);

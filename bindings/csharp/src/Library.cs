@@ -47,6 +47,21 @@ namespace Flatline
         public static string StatusName(Status status) => FlatlineNative.flt_status_string((int)status);
 
         /// <summary>
+        /// Frees the working memory <see cref="Reconstruct"/> and
+        /// <c>ReconstructFlagged</c> keep for the next call of a sheet of the
+        /// same shape (a loop of calls allocates nothing after the first; up to
+        /// 4 shapes and 256 MB stay kept until this call or the end of the
+        /// process): after a one-off sheet much larger than the usual ones, or
+        /// before a long idle time. Returns the bytes freed (as recon.h's
+        /// "Memory" formula counts them).
+        /// </summary>
+        public static double ReleaseReconstructMemory()
+        {
+            FlatlineNative.flt_reconstruct_release(out double bytes);
+            return bytes;
+        }
+
+        /// <summary>
         /// Reconstructs one whole sheet in one call: the least-squares spline
         /// of all rows at once (no lag, no carry-over). Shapes as in
         /// <see cref="Reconstructor.Push(double[], double[,], double[,], bool[,])"/>:

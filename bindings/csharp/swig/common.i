@@ -81,7 +81,7 @@ FLT_CS_OUT_SIZE(size_t *out, size_t *rows_out, size_t *count_out, size_t *length
 %typemap(csin) NAMES "out $csinput"
 %enddef
 FLT_CS_OUT_SCALAR(double, double, double *out, double *min_out, double *max_out,
-                  double *default_out)
+                  double *default_out, double *bytes_out)
 FLT_CS_OUT_SCALAR(int, int, int *is_integer_out, int *out, int *value_out)
 FLT_CS_OUT_SCALAR(uint32_t, uint, uint32_t *width_out, uint32_t *height_out,
                   uint32_t *first_row_out, uint32_t *rows_out)

@@ -57,6 +57,7 @@ from ._recon import (
     reconstruct,
     reconstruct_with_flags,
     reconstructor_options,
+    release_reconstruct_memory,
 )
 from ._extractor import ExtractedRow, Extractor, extractor_options
 from ._pixels import PixelFormat
@@ -188,6 +189,7 @@ __all__ = [
     "reconstruct",
     "reconstruct_with_flags",
     "reconstructor_options",
+    "release_reconstruct_memory",
     "LASERS",
     "Target",
     "Intrinsics",

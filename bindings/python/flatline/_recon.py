@@ -108,6 +108,16 @@ def reconstruct(s: Any, height: Any, slope: Any, valid: Any = None,
     return z
 
 
+def release_reconstruct_memory() -> float:
+    """Frees the working memory :func:`reconstruct` (and its variants) keep
+    for the next call of a sheet of the same shape: a loop of calls
+    allocates nothing after the first, and up to 4 shapes and 256 MB stay
+    kept until this call or the end of the process. For after a one-off
+    sheet much larger than the usual ones, or before a long idle time.
+    Returns the bytes freed (as recon.h's "Memory" formula counts them)."""
+    return float(_capi.flt_reconstruct_release())
+
+
 def reconstruct_flagged(s: Any, height: Any, slope: Any, flags: Any,
                         **options: OptionValue) -> Tuple[np.ndarray, np.ndarray]:
     """As :func:`reconstruct_with_flags`, with the extractor's per-sample

@@ -25,6 +25,9 @@
 %ignore flt_recon_push_flagged;
 %ignore flt_reconstruct_flagged;
 
+/* flt_reconstruct_release: the bytes freed, returned. */
+%apply double *out { double *bytes_out };
+
 %typemap(in, numinputs=0) flt_recon **out (flt_recon *temp = NULL) { $1 = &temp; }
 %typemap(argout) flt_recon **out {
   %append_output(SWIG_NewPointerObj(*$1, $descriptor(flt_recon *), SWIG_POINTER_OWN));

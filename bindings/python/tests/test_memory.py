@@ -46,6 +46,21 @@ def test_10000_create_destroy_cycles_leave_rss_flat():
     assert python_growth < 64 * 1024
 
 
+def test_release_reconstruct_memory_returns_what_batch_calls_kept():
+    # 2000 rows x 300 fibers, 3 mm apart: 64 knots 100 mm apart. recon.h
+    # gives about 20 doubles per fiber and knot of kept working memory; the
+    # bound is half that. Then nothing is left.
+    s, h, sl, valid = noisy_sheet(52, rows=2000, fibers=300)
+    flatline.reconstruct(s, h, sl, valid)
+    knots = (s[-1] - s[0] + 100.0) / 100.0 + 4
+    freed = flatline.release_reconstruct_memory()
+    print(f"freed {freed / 1e6:.1f} MB")
+    assert freed >= 10 * 8 * knots * 300
+    assert flatline.release_reconstruct_memory() == 0.0
+    z = flatline.reconstruct(s, h, sl, valid)  # allocates again, as the first call did
+    assert np.isfinite(z).any()
+
+
 def test_repeated_large_calls_leave_rss_flat():
     # 2000 rows x 300 fibers: each call makes a 4.8 MB z and flags array and
     # ~100 doubles per fiber and knot of working memory inside the library
