@@ -6,6 +6,7 @@ boundaries included."""
 
 from __future__ import annotations
 
+import ctypes
 import functools
 import math
 import re
@@ -67,6 +68,24 @@ def check_refusal(what: str, error: BaseException) -> None:
 _OPENED: List[Any] = []
 
 
+def _heap_trimmer() -> Callable[[], Any]:
+    """glibc's malloc_trim, or nothing where the C library has none."""
+    try:
+        trim = ctypes.CDLL(None).malloc_trim
+    except (AttributeError, OSError):
+        return lambda: None
+    trim.argtypes = [ctypes.c_size_t]
+    return lambda: trim(0)
+
+
+# After each example (closing; the state machines' teardown) the C heap gives what was freed back to the system:
+# glibc keeps freed blocks below its mmap threshold (which rises to 32 MB as
+# large blocks are freed) in its arenas, so without it the resident set grew
+# with the number of mid-sized examples drawn (a third more at scale 3), and
+# what the suite's peak measures would not be what is still live.
+trim_heap = _heap_trimmer()
+
+
 def closing(test: Callable[..., Any]) -> Callable[..., Any]:
     """Closes every library object the example created through `call`,
     however the example ends. Put it under @given, so that it wraps each
@@ -84,6 +103,7 @@ def closing(test: Callable[..., Any]) -> Callable[..., Any]:
         finally:
             while len(_OPENED) > mark:
                 _OPENED.pop().close()
+            trim_heap()
 
     return run
 
