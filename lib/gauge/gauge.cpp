@@ -81,21 +81,19 @@ void gauge::init(const flt_calib *calib, const flt_options *options) {
 
     // The reconstructor (its fibers and laser spacing from the calibration)
     // must hold every row until it is finished: its latency in rows at the
-    // closest frame spacing the gauge takes. A probe with the smallest
-    // capacity tells the latency (it does not depend on the capacity).
+    // closest frame spacing the gauge takes. Its configuration tells the
+    // latency (it does not depend on the capacity), read with the checks
+    // and messages of flt_recon_create_from_calib, which makes it below.
     flt_options recon_options = component_options(options, 100);
+    long latency = 0;
     {
-        flt_options probe_options = recon_options;
-        set_option(probe_options, FLT_OPT_ROW_CAPACITY, 16);
-        flt_recon *probe = nullptr;
-        check(flt_recon_create_from_calib(calib, &probe_options, &probe));
-        const long latency = recon_latency_knots(probe);
-        double knot = 0.0, spacing = 0.0;
-        flt_status st = flt_recon_get_option(probe, FLT_OPT_KNOT_SPACING, &knot);
-        if (st == FLT_OK)
-            st = flt_recon_get_option(probe, FLT_OPT_LASER_SPACING, &spacing);
-        flt_recon_destroy(probe);
-        check(st);
+        const char *recon_fn = "flt_recon_create_from_calib";
+        double spacing = 0.0;
+        check(recon_calib_laser_spacing(recon_fn, calib, &recon_options, &spacing));
+        recon_config config;
+        check(recon_read_config(recon_fn, &recon_options, spacing, &config));
+        latency = recon_latency_knots(config);
+        const double knot = config.params.knot_spacing;
         // A quarter more than the latency (rows arrive unevenly), the rows of
         // one emission group, and a fixed margin.
         const double needed =
@@ -150,6 +148,9 @@ void gauge::init(const flt_calib *calib, const flt_options *options) {
     sheet_capacity_ = std::size_t(sheet_rows);
     hold_capacity_ = std::size_t(std::ceil(cfg_.tail_length / cfg_.frame_spacing)) + 2;
     check(flt_recon_create_from_calib(calib, &recon_options, &recon_));
+    if (recon_latency_knots(recon_) != latency)
+        throw error(FLT_ERR_INTERNAL, "the reconstructor's latency is not the one its "
+                                      "configuration gave: its buffers are sized wrong");
 
     // Flatness: one window per sheet. flat_ evaluates whole sheets from the
     // gauge's buffer; flat_short_ the sheets shorter than one wave (streamed
