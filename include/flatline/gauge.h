@@ -225,7 +225,7 @@
  *     flat_min_length / gauge_frame_spacing + 2 rows
  *   + E x the extractor (extractor.h)
  *   + Q x 2 W H                         the frame queue
- *   + 64 R                              the row ring
+ *   + (65 + K / 8) R                    the row ring (off-strip bits too)
  *   + B S (88 + 9 K) + P S (8 + 9 K)    B sheet buffers, the slots' maps
  *   + 8 K (R + B S + P S)               with gauge_keep_maps 2 (measured)
  *   + K (100 P + 20 Q + 400) + 30 kB    per-fiber arrays

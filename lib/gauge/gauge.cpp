@@ -81,21 +81,19 @@ void gauge::init(const flt_calib *calib, const flt_options *options) {
 
     // The reconstructor (its fibers and laser spacing from the calibration)
     // must hold every row until it is finished: its latency in rows at the
-    // closest frame spacing the gauge takes. A probe with the smallest
-    // capacity tells the latency (it does not depend on the capacity).
+    // closest frame spacing the gauge takes. Its configuration tells the
+    // latency (it does not depend on the capacity), read with the checks
+    // and messages of flt_recon_create_from_calib, which makes it below.
     flt_options recon_options = component_options(options, 100);
+    long latency = 0;
     {
-        flt_options probe_options = recon_options;
-        set_option(probe_options, FLT_OPT_ROW_CAPACITY, 16);
-        flt_recon *probe = nullptr;
-        check(flt_recon_create_from_calib(calib, &probe_options, &probe));
-        const long latency = recon_latency_knots(probe);
-        double knot = 0.0, spacing = 0.0;
-        flt_status st = flt_recon_get_option(probe, FLT_OPT_KNOT_SPACING, &knot);
-        if (st == FLT_OK)
-            st = flt_recon_get_option(probe, FLT_OPT_LASER_SPACING, &spacing);
-        flt_recon_destroy(probe);
-        check(st);
+        const char *recon_fn = "flt_recon_create_from_calib";
+        double spacing = 0.0;
+        check(recon_calib_laser_spacing(recon_fn, calib, &recon_options, &spacing));
+        recon_config config;
+        check(recon_read_config(recon_fn, &recon_options, spacing, &config));
+        latency = recon_latency_knots(config);
+        const double knot = config.params.knot_spacing;
         // A quarter more than the latency (rows arrive unevenly), the rows of
         // one emission group, and a fixed margin.
         const double needed =
@@ -126,7 +124,7 @@ void gauge::init(const flt_calib *calib, const flt_options *options) {
         const double K = double(K_), rows = double(row_capacity_);
         const double slots = cfg_.keep_maps >= 1 ? double(cfg_.sheet_slots) : 0.0;
         const double buffers = cfg_.provisional_mm > 0.0 ? 3.0 : 2.0;
-        double bytes = 64.0 * rows;                        // the row ring
+        double bytes = (65.0 + K / 8.0) * rows;            // the row ring, off-strip bits
         bytes += buffers * sheet_rows * (88.0 + 9.0 * K);  // the sheet buffers
         bytes += slots * sheet_rows * (8.0 + 9.0 * K);     // the slots' maps
         if (cfg_.keep_maps >= 2)
@@ -150,6 +148,10 @@ void gauge::init(const flt_calib *calib, const flt_options *options) {
     sheet_capacity_ = std::size_t(sheet_rows);
     hold_capacity_ = std::size_t(std::ceil(cfg_.tail_length / cfg_.frame_spacing)) + 2;
     check(flt_recon_create_from_calib(calib, &recon_options, &recon_));
+    pipeline_ = &recon_pipeline_of(recon_);
+    if (recon_latency_knots(recon_) != latency)
+        throw error(FLT_ERR_INTERNAL, "the reconstructor's latency is not the one its "
+                                      "configuration gave: its buffers are sized wrong");
 
     // Flatness: one window per sheet. flat_ evaluates whole sheets from the
     // gauge's buffer; flat_short_ the sheets shorter than one wave (streamed
@@ -215,6 +217,10 @@ void gauge::init(const flt_calib *calib, const flt_options *options) {
     meta_ring_.resize(row_capacity_);
     if (cfg_.keep_maps >= 2)
         measured_ring_.assign(row_capacity_ * K_, 0.0);
+    off_strip_stride_ = (K_ + 7) / 8;
+    off_strip_bits_.assign(row_capacity_ * off_strip_stride_, 0);
+    off_strip_any_.assign(row_capacity_, 0);
+    push_valid_.assign(K_, 0);
     held_s_.assign(hold_capacity_, 0.0);
     held_height_.assign(hold_capacity_ * K_, 0.0);
     held_slope_.assign(hold_capacity_ * K_, 0.0);
@@ -347,6 +353,7 @@ void gauge::release_parts() noexcept {
     flt_calib_destroy(calib_for_extractors_);
     flt_options_destroy(extract_options_);
     flt_recon_destroy(recon_);
+    pipeline_ = nullptr;
     flt_flatness_destroy(flat_);
     flt_flatness_destroy(flat_short_);
     band_extractor_ = nullptr;

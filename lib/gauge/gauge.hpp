@@ -31,6 +31,7 @@ constexpr int k_sheet_arrays = 12;                    // flt_sheet_array keys 0.
 
 struct sheet_pool;
 struct verdict_config;
+class recon_pipeline;
 
 // A note given with flt_gauge_note (a leveler change, an operator's
 // remark): where it applies along the strip.
@@ -299,6 +300,9 @@ class gauge {
                   const row_meta &meta);
     void release_held();
     void pull_all();
+    // A row leaving the reconstructor (pulled or peeked), at ring position
+    // `at`: its off-strip fibers NaN, flagged FLT_FLAG_OFF_STRIP.
+    void mask_off_strip(std::size_t at, double *z, std::uint8_t *flags) const;
     void output_row(double s, const double *z, const std::uint8_t *flags, const row_meta &meta,
                     const double *measured);
     // Cuts at or before s_limit end their sheets; `incoming` is the row
@@ -357,6 +361,9 @@ class gauge {
     flt_extractor *band_extractor_ = nullptr;  // automatic bands, until known
     bool band_known_ = false;                  // producer-side
     flt_recon *recon_ = nullptr;
+    // Its C++ side (recon_pipeline_of), which the sequencer calls per row
+    // without the public API's checks: the sequencer keeps its contract.
+    recon_pipeline *pipeline_ = nullptr;
     flt_flatness *flat_ = nullptr, *flat_short_ = nullptr;
 
     // ---- the producer role: held by push (tried: a second pusher is
@@ -427,6 +434,13 @@ class gauge {
     // Rows inside the reconstructor, oldest first (ring of row_capacity_).
     std::vector<row_meta> meta_ring_;
     std::vector<double> measured_ring_;  // [row_capacity_ * K_], keep_maps 2
+    // Their off-strip fibers, one bit each ([row_capacity_ * off_strip_stride_]),
+    // and whether a row has any: the engine takes them as invalid samples,
+    // and they leave it masked (mask_off_strip), as flt_recon_push_flagged
+    // and flt_recon_pull do.
+    std::vector<std::uint8_t> off_strip_bits_, off_strip_any_;
+    std::size_t off_strip_stride_ = 0;
+    std::vector<std::uint8_t> push_valid_;  // [K_] the row's mask for the engine
     std::size_t meta_head_ = 0, meta_count_ = 0;
     // Held rows: the strip may have left (always emptied whole).
     std::vector<double> held_s_, held_height_, held_slope_;

@@ -169,12 +169,49 @@ void gauge::release_held() {
     held_ = 0;
 }
 
+// The reconstructor is called through its C++ side (recon_pipeline_of),
+// without the public API's argument checks and status conversions: the
+// sequencer keeps the API's contract itself (rows in strictly increasing s
+// within a strip, bridged jumps, room in the ring; K_ fibers by
+// construction), and does what flt_recon_push_flagged and flt_recon_pull
+// add to the engine: a row's flags become the engine's valid mask (a sample
+// without any flag is valid), and its off-strip fibers leave the
+// reconstructor as NaN flagged FLT_FLAG_OFF_STRIP (mask_off_strip).
 void gauge::push_row(double s, const double *height, const double *slope, const std::uint8_t *flags,
                      const row_meta &meta) {
     if (meta_count_ == row_capacity_)
         throw error(FLT_ERR_INTERNAL, "the gauge's row ring is full");
-    check(flt_recon_push_flagged(recon_, 1, K_, &s, height, slope, flags));
+    recon_pipeline &recon = *pipeline_;
+    if (!std::isfinite(s) ||
+        (recon.has_last_s() && (!(s > recon.last_s()) || s - recon.last_s() > max_jump_))) {
+        char why[200];
+        format_c(why, sizeof why,
+                 "the reconstructor's row at s = %.17g mm does not follow the last at %.17g mm "
+                 "(s must increase, by at most %g mm)",
+                 s, recon.has_last_s() ? recon.last_s() : k_nan, max_jump_);
+        throw error(FLT_ERR_INVALID_ARGUMENT, why);
+    }
+    if (recon.free_rows() == 0) {
+        char why[200];
+        format_c(why, sizeof why,
+                 "the reconstructor's row ring is full: row_capacity = %zu, %zu finished rows "
+                 "wait to be pulled",
+                 row_capacity_, recon.ready_rows());
+        throw error(FLT_ERR_BUFFER_FULL, why);
+    }
     const std::size_t at = (meta_head_ + meta_count_) % row_capacity_;
+    std::uint8_t *bits = &off_strip_bits_[at * off_strip_stride_];
+    std::memset(bits, 0, off_strip_stride_);
+    std::uint8_t any = 0;
+    for (std::size_t k = 0; k < K_; ++k) {
+        push_valid_[k] = flags[k] == 0 ? 1 : 0;
+        if (flags[k] & FLT_FLAG_OFF_STRIP) {
+            bits[k / 8] |= std::uint8_t(1u << (k % 8));
+            any = 1;
+        }
+    }
+    off_strip_any_[at] = any;
+    recon.push_row(s, height, slope, push_valid_.data());
     meta_ring_[at] = meta;
     if (cfg_.keep_maps >= 2)
         for (std::size_t k = 0; k < K_; ++k)
@@ -192,21 +229,32 @@ void gauge::pull_all() {
     if (!pushed_)
         return;
     for (;;) {
-        std::size_t got = 0;
-        check(flt_recon_pull(recon_, k_pull_rows, K_, pull_s_.data(), pull_z_.data(),
-                             pull_flags_.data(), &got));
+        const std::size_t got =
+            pipeline_->pull(k_pull_rows, pull_s_.data(), pull_z_.data(), pull_flags_.data());
         if (got == 0)
             return;
         for (std::size_t r = 0; r < got; ++r) {
             if (meta_count_ == 0 || meta_ring_[meta_head_].s != pull_s_[r])
                 throw error(FLT_ERR_INTERNAL, "the reconstructor's rows and the gauge's disagree");
             const std::size_t at = meta_head_;
+            mask_off_strip(at, &pull_z_[r * K_], &pull_flags_[r * K_]);
             meta_head_ = (meta_head_ + 1) % row_capacity_;
             --meta_count_;
             output_row(pull_s_[r], &pull_z_[r * K_], &pull_flags_[r * K_], meta_ring_[at],
                        cfg_.keep_maps >= 2 ? &measured_ring_[at * K_] : nullptr);
         }
     }
+}
+
+void gauge::mask_off_strip(std::size_t at, double *z, std::uint8_t *flags) const {
+    if (!off_strip_any_[at])
+        return;
+    const std::uint8_t *bits = &off_strip_bits_[at * off_strip_stride_];
+    for (std::size_t k = 0; k < K_; ++k)
+        if (bits[k / 8] & (1u << (k % 8))) {
+            z[k] = k_nan;
+            flags[k] = FLT_FLAG_OFF_STRIP;
+        }
 }
 
 void gauge::output_row(double s, const double *z, const std::uint8_t *flags, const row_meta &meta,
@@ -375,21 +423,26 @@ void gauge::publish_provisional() {
     sheet_buffer &pb = buffers_[2];
     // The open sheet's final rows (all before the cut: it is not applied
     // yet), then the rows not final yet as the reconstructor estimates
-    // them now (flt_recon_peek changes nothing it will emit).
+    // them now (its peek changes nothing it will emit), after the finished
+    // ones (none: pull_all took them), as flt_recon_peek gives them.
     const std::size_t r0 = cur.rows;
     copy_rows(pb, 0, cur, 0, r0);
+    const std::size_t ready = pipeline_->ready_rows();
+    const std::size_t max_rows = sheet_capacity_ - r0;
     std::size_t got = 0;
-    check(flt_recon_peek(recon_, sheet_capacity_ - r0, K_, pb.s.data() + r0, pb.z.data() + r0 * K_,
-                         pb.flags.data() + r0 * K_, &got));
+    if (max_rows > 0 && meta_count_ > ready)
+        got = pipeline_->peek(ready, max_rows, pb.s.data() + r0, pb.z.data() + r0 * K_,
+                              pb.flags.data() + r0 * K_);
     std::size_t rows = r0;
     bool has_after = false;
     row_meta after;
     for (std::size_t j = 0; j < got; ++j) {
         // The pending rows' metadata wait in the ring in the same order.
-        if (j >= meta_count_ || meta_ring_[(meta_head_ + j) % row_capacity_].s != pb.s[r0 + j])
+        const std::size_t at = (meta_head_ + ready + j) % row_capacity_;
+        if (ready + j >= meta_count_ || meta_ring_[at].s != pb.s[r0 + j])
             throw error(FLT_ERR_INTERNAL,
                         "the reconstructor's pending rows and the gauge's disagree");
-        const std::size_t at = (meta_head_ + j) % row_capacity_;
+        mask_off_strip(at, &pb.z[(r0 + j) * K_], &pb.flags[(r0 + j) * K_]);
         if (!(pb.s[r0 + j] < c)) {
             has_after = true;
             after = meta_ring_[at];
@@ -459,7 +512,9 @@ void gauge::end_strip(unsigned flag) {
     if (pushed_) {
         // The strip ends here: nothing lies beyond, so its last rows are
         // finished with what there is.
-        check(flt_recon_end_sheet(recon_));
+        if (!pipeline_->rows_since_sheet())
+            throw error(FLT_ERR_STATE, "the reconstructor has no row to end a sheet with");
+        pipeline_->end_sheet();
         pull_all();
     }
     {
@@ -472,7 +527,7 @@ void gauge::end_strip(unsigned flag) {
         split(b.s[b.rows - 1], flag, true, nullptr);
     }
     if (pushed_)
-        check(flt_recon_reset(recon_));
+        pipeline_->reset();
     FLT_LOG(FLT_LOG_INFO, "gauge", "coil %llu: %s at s = %.1f mm, %llu sheets",
             (unsigned long long)coil_,
             flag == FLT_SHEET_FLAG_TAIL      ? "the strip's tail"

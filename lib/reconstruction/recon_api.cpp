@@ -305,6 +305,50 @@ bool same_length(double a, double b) {
     return std::fabs(a - b) <= 1e-9 * std::max(std::fabs(a), std::fabs(b));
 }
 
+// The calibration's laser spacing (mm) and fibers, as a reconstructor made
+// from it takes them: the calibration live and finished, its spacing within
+// laser_spacing's bounds, and a laser_spacing option, if set, agreeing.
+flt_status calib_geometry(const char *fn, const flt_calib *calib, const flt_options *options,
+                          double *spacing_out, std::size_t *fibers_out) {
+    FLT_CHECK_NOT_NULL(fn, calib);
+    int finished = 0;
+    if (flt_calib_is_finished(calib, &finished) != FLT_OK)
+        return fail(FLT_ERR_INVALID_ARGUMENT, "%s: argument 'calib' is not a live flt_calib handle",
+                    fn);
+    if (!finished)
+        return fail(FLT_ERR_STATE, "%s: argument 'calib' is not finished", fn);
+    // A finished calibration has both offsets, distinct, and a grid.
+    double offset[FLT_CALIB_LASERS] = {0.0, 0.0}, first = 0.0, pitch = 0.0;
+    std::size_t fibers = 0;
+    if (flt_calib_get_laser_offset(calib, 0, &offset[0]) != FLT_OK ||
+        flt_calib_get_laser_offset(calib, 1, &offset[1]) != FLT_OK ||
+        flt_calib_get_fiber_grid(calib, &first, &pitch, &fibers) != FLT_OK)
+        return fail(FLT_ERR_INTERNAL, "%s: a finished calibration lacks its geometry", fn);
+    // The distance between the lines, whichever laser leads: the
+    // extractor measures the slope over the same distance.
+    const double spacing = std::fabs(offset[1] - offset[0]);
+    const option_spec *spec = find_option(FLT_OPT_LASER_SPACING);
+    if (!(spacing >= spec->min_value && spacing <= spec->max_value))
+        return fail(FLT_ERR_INVALID_ARGUMENT,
+                    "%s: argument 'calib' has %g mm between its lasers, outside "
+                    "laser_spacing's [%g, %g] mm",
+                    fn, spacing, spec->min_value, spec->max_value);
+    // The sensor decides. A laser_spacing option the caller set must say
+    // the same: a disagreement is a mistake in one or the other, and
+    // either choice would give wrong shapes without a word.
+    if (option_is_set(options, FLT_OPT_LASER_SPACING)) {
+        const double asked = option_value(options, FLT_OPT_LASER_SPACING);
+        if (!same_length(asked, spacing))
+            return fail(FLT_ERR_INVALID_ARGUMENT,
+                        "%s: option 'laser_spacing' = %.17g mm disagrees with the %.17g mm "
+                        "between the lasers of argument 'calib'; leave the option unset",
+                        fn, asked, spacing);
+    }
+    *spacing_out = spacing;
+    *fibers_out = fibers;
+    return FLT_OK;
+}
+
 flt_status create(const char *fn, std::size_t fibers, const flt_options *options,
                   double laser_spacing, flt_recon **out) {
     if (fibers == 0)
@@ -569,40 +613,10 @@ FLT_API flt_status FLT_CALL flt_recon_create_from_calib(const flt_calib *calib,
     return guard(fn, [&] {
         FLT_CHECK_NOT_NULL(fn, out);
         *out = nullptr;
-        FLT_CHECK_NOT_NULL(fn, calib);
-        int finished = 0;
-        if (flt_calib_is_finished(calib, &finished) != FLT_OK)
-            return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'calib' is not a live flt_calib handle", fn);
-        if (!finished)
-            return fail(FLT_ERR_STATE, "%s: argument 'calib' is not finished", fn);
-        // A finished calibration has both offsets, distinct, and a grid.
-        double offset[FLT_CALIB_LASERS] = {0.0, 0.0}, first = 0.0, pitch = 0.0;
+        double spacing = 0.0;
         std::size_t fibers = 0;
-        if (flt_calib_get_laser_offset(calib, 0, &offset[0]) != FLT_OK ||
-            flt_calib_get_laser_offset(calib, 1, &offset[1]) != FLT_OK ||
-            flt_calib_get_fiber_grid(calib, &first, &pitch, &fibers) != FLT_OK)
-            return fail(FLT_ERR_INTERNAL, "%s: a finished calibration lacks its geometry", fn);
-        // The distance between the lines, whichever laser leads: the
-        // extractor measures the slope over the same distance.
-        const double spacing = std::fabs(offset[1] - offset[0]);
-        const option_spec *spec = find_option(FLT_OPT_LASER_SPACING);
-        if (!(spacing >= spec->min_value && spacing <= spec->max_value))
-            return fail(FLT_ERR_INVALID_ARGUMENT,
-                        "%s: argument 'calib' has %g mm between its lasers, outside "
-                        "laser_spacing's [%g, %g] mm",
-                        fn, spacing, spec->min_value, spec->max_value);
-        // The sensor decides. A laser_spacing option the caller set must say
-        // the same: a disagreement is a mistake in one or the other, and
-        // either choice would give wrong shapes without a word.
-        if (option_is_set(options, FLT_OPT_LASER_SPACING)) {
-            const double asked = option_value(options, FLT_OPT_LASER_SPACING);
-            if (!same_length(asked, spacing))
-                return fail(FLT_ERR_INVALID_ARGUMENT,
-                            "%s: option 'laser_spacing' = %.17g mm disagrees with the %.17g mm "
-                            "between the lasers of argument 'calib'; leave the option unset",
-                            fn, asked, spacing);
-        }
+        if (flt_status st = calib_geometry(fn, calib, options, &spacing, &fibers))
+            return st;
         return create(fn, fibers, options, spacing, out);
     });
 }
@@ -882,6 +896,20 @@ FLT_API flt_status FLT_CALL flt_reconstruct_release(double *bytes_out) {
 
 long flt::recon_latency_knots(const flt_recon *recon) {
     return recon->engine->latency_knots();
+}
+
+flt_status flt::recon_calib_laser_spacing(const char *fn, const flt_calib *calib,
+                                          const flt_options *options, double *out) {
+    std::size_t fibers = 0;
+    return calib_geometry(fn, calib, options, out, &fibers);
+}
+
+long flt::recon_latency_knots(const recon_config &config) {
+    // What recon_pipeline::latency_knots() gives for this configuration: its
+    // channels share the knot grid and the lag, and each adds to the lag
+    // the knots a row spans beyond two, ceil(D/L) + 2 (engine.cpp).
+    const recon_params &p = config.params;
+    return p.latency_knots() + long(std::ceil(p.laser_spacing / p.knot_spacing - 1e-9));
 }
 
 flt_status flt::recon_read_config(const char *fn, const flt_options *options, double laser_spacing,

@@ -13,12 +13,21 @@ namespace flt {
 // knots a row spans; at a strip's head its longer wait): the gauge sizes its
 // buffers with it.
 long recon_latency_knots(const flt_recon *recon);
+// The same for a reconstructor not made yet, from its configuration
+// (recon_read_config).
+long recon_latency_knots(const recon_config &config);
+
+// The laser spacing (mm) flt_recon_create_from_calib takes from calib, with
+// its checks and messages (fn names the caller): the calibration finished,
+// the spacing within laser_spacing's bounds, the option (if set) agreeing.
+flt_status recon_calib_laser_spacing(const char *fn, const flt_calib *calib,
+                                     const flt_options *options, double *out);
 
 // The reconstructor's configuration as flt_recon_create would read it from
 // options (and a calibration's laser spacing, or 0 for the option's), with
 // its checks and messages (fn names the caller): its latency
-// (config.params.latency_bound_mm(), head_latency_bound_mm(),
-// latency_knots()) without creating one.
+// (config.params.latency_bound_mm(), head_latency_bound_mm(); in knots
+// recon_latency_knots(config)) without creating one.
 flt_status recon_read_config(const char *fn, const flt_options *options, double laser_spacing,
                              recon_config *out);
 

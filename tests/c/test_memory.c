@@ -278,7 +278,7 @@ static double gauge_formula(double K, double Z, double W, double H, double R, do
     bytes += Q * 2 * W * H;                  /* the frame queue (with workers) */
     bytes += E * (710 * W + 60 * K + 8 * H); /* the extractors */
     bytes += flatness_formula(16, K, Z) + flatness_formula(short_rows, K, Z);
-    bytes += 64 * R;               /* the row ring */
+    bytes += (65 + K / 8) * R;     /* the row ring, its off-strip bits */
     bytes += 2 * S * (88 + 9 * K); /* two sheet buffers */
     if (keep_maps >= 1)
         bytes += P * S * (8 + 9 * K); /* the slots' maps */
