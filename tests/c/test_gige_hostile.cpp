@@ -531,6 +531,36 @@ struct frame_tally {
     int genuine = 0, forged = 0, damaged = 0, oversized = 0;
 };
 
+// The library's log while a test listens: what an integrator's log shows of
+// an attack. Each message as "<level> <component>: <text>".
+struct log_capture {
+    std::mutex mutex;
+    std::vector<std::string> lines;
+    static void FLT_CALL on_message(flt_log_level level, const char *component, const char *message,
+                                    void *user) {
+        auto *self = static_cast<log_capture *>(user);
+        std::lock_guard<std::mutex> lock(self->mutex);
+        self->lines.push_back(std::to_string(int(level)) + " " + component + ": " + message);
+    }
+    log_capture() { ok(flt_log_set_callback(&on_message, this, FLT_LOG_DEBUG)); }
+    ~log_capture() {
+        const flt_status st = flt_log_set_callback(nullptr, nullptr, FLT_LOG_DEBUG);
+        (void)st;  // a destructor has nobody to tell; it cannot fail here
+    }
+    // Messages that contain every one of the texts given.
+    int count(std::initializer_list<const char *> texts) {
+        std::lock_guard<std::mutex> lock(mutex);
+        int n = 0;
+        for (const std::string &line : lines) {
+            bool all = true;
+            for (const char *t : texts)
+                all = all && line.find(t) != std::string::npos;
+            n += all;
+        }
+        return n;
+    }
+};
+
 // Reads frames until `want` were delivered or the stream is quiet for
 // 1 s, checking each: its buffer (the declared rows fit), and each pixel
 // against the camera's pattern (genuine) or the forger's (forged). Each
@@ -704,6 +734,7 @@ void test_stray_far_leader_costs_nothing(void **) {
 /* F3: a forger on another port of the camera's address is never
  * delivered; the camera reports its source port (SCSP). */
 void test_forged_frames_are_never_delivered(void **) {
+    log_capture log;
     attacks a;
     a.forge = true;
     a.report_source_port = true;
@@ -719,6 +750,11 @@ void test_forged_frames_are_never_delivered(void **) {
     assert_int_equal(t.genuine, 100);  // paced: every genuine frame, as in stray_far
     // The forger's 4 packets of each of the 100 frames.
     assert_int_equal(count_reaching(src, FLT_COUNT_BAD_PACKETS, 400), 400);
+    // And said, as a warning naming the sender (127.0.0.1 and the forger's
+    // port), at most 5 times in 10 s (the log's rate limit).
+    const int said = log.count({"30 camera: a stream packet from 127.0.0.1:", "not the camera"});
+    print_message("forger first: %d warnings logged\n", said);
+    assert_true(said >= 1 && said <= 5);
     ok(flt_source_stop(src));
     flt_source_destroy(src);
     done(cam);
@@ -747,6 +783,7 @@ void test_forger_after_the_first_leader_is_ignored(void **) {
 /* F3 on the control channel: acknowledges from another port are counted
  * and ignored; the camera's own answer is taken. */
 void test_forged_acknowledges_are_ignored(void **) {
+    log_capture log;
     attacks a;
     a.forge_acks = true;
     hostile_camera &cam = make_camera(a);
@@ -761,12 +798,16 @@ void test_forged_acknowledges_are_ignored(void **) {
     // READMEM answers are not forged here, READREG ones are: at least the
     // one of the width (heartbeats read CCP by READREG too).
     assert_true(count(src, FLT_COUNT_BAD_PACKETS) - before >= 1);
+    // Each forged answer is a warning naming its sender (rate-limited: 5).
+    const int said = log.count({"30 camera: a control packet from 127.0.0.1:", "not the camera"});
+    assert_true(said >= 1 && said <= 5);
     flt_source_destroy(src);
     done(cam);
 }
 
 /* F4: stop never says OK while the camera streams. */
 void stop_must_not_lie(int mode) {
+    log_capture log;
     attacks a;
     hostile_camera &cam = make_camera(a);
     flt_source *src = open_camera(cam);
@@ -779,6 +820,13 @@ void stop_must_not_lie(int mode) {
     if (st == FLT_OK)
         fail_msg("stop returned FLT_OK with the camera streaming (mode %d)", mode);
     assert_int_equal(st, mode == 1 ? FLT_ERR_TIMEOUT : FLT_ERR_DEVICE);
+    // The unanswered AcquisitionStop (a write of its register, 0x10014) is
+    // sent again (gige_command_attempts: 3, in each of the halt rounds), and
+    // each retry is said. (Not asserted for the refusal: on a loaded
+    // machine a heartbeat may need a retry of its own.)
+    if (mode == 1)
+        assert_true(
+            log.count({"20 camera: WRITEMEM at 0x10014 got no answer in 100 ms: sent again"}) >= 2);
     assert_non_null(std::strstr(flt_last_error_message(), "may still be streaming"));
     if (mode == 2)
         assert_non_null(std::strstr(flt_last_error_message(), "0x8006"));

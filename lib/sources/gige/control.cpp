@@ -11,6 +11,7 @@
 #include <cstring>
 
 #include "core/error.hpp"
+#include "core/log.hpp"
 #include "sources/camera/camera.hpp"
 #include "sources/gige/protocol.hpp"
 #include "sources/source.hpp"
@@ -125,8 +126,15 @@ void control_channel::transact(std::uint16_t command, const std::uint8_t *data,
     clock::time_point pending_end;
     unsigned pending = 0;
     for (unsigned attempt = 0; attempt < config_.command_attempts; ++attempt) {
-        if (attempt > 0)
+        if (attempt > 0) {
             ++retries_;
+            // Counted (FLT_COUNT_COMMAND_RETRIES) and said: a camera that
+            // needs retries is on a lossy or overloaded link.
+            FLT_LOG(FLT_LOG_INFO, "camera",
+                    "%s at 0x%llx got no answer in %u ms: sent again (%u of %u)",
+                    command_name(command), (unsigned long long)address, config_.timeout_ms,
+                    attempt + 1, config_.command_attempts);
+        }
         const std::uint16_t id = next_id();
         std::uint8_t *c = command_.data();
         c[0] = k_gvcp_key;
@@ -152,6 +160,11 @@ void control_channel::transact(std::uint16_t command, const std::uint8_t *data,
                 continue;  // timed out (the loop ends) or an ICMP error
             if (from.address != camera_.address || from.port != camera_.port) {
                 ++strangers_;  // only the camera speaks
+                FLT_LOG(FLT_LOG_WARNING, "camera",
+                        "a control packet from %u.%u.%u.%u:%u, not the camera, ignored",
+                        unsigned(from.address >> 24), unsigned(from.address >> 16 & 0xFF),
+                        unsigned(from.address >> 8 & 0xFF), unsigned(from.address & 0xFF),
+                        unsigned(from.port));
                 continue;
             }
             const std::uint8_t *a = answer_.data();

@@ -8,6 +8,7 @@
 #include <cstring>
 
 #include "core/error.hpp"
+#include "core/log.hpp"
 #include "sources/camera/camera.hpp"
 #include "sources/gige/protocol.hpp"
 
@@ -179,6 +180,13 @@ bool stream_channel::next(unsigned timeout_ms, sources::raw_frame &out) {
             if (!from_camera(from)) {
                 // Camera fault point: a stranger on the stream socket.
                 acc_.add(FLT_COUNT_BAD_PACKETS);  // only the camera speaks
+                // Said with the sender (a forger, another camera's stream
+                // sent here): 5 such messages per 10 s at most (core/log).
+                FLT_LOG(FLT_LOG_WARNING, "camera",
+                        "a stream packet from %u.%u.%u.%u:%u, not the camera, ignored",
+                        unsigned(from.address >> 24), unsigned(from.address >> 16 & 0xFF),
+                        unsigned(from.address >> 8 & 0xFF), unsigned(from.address & 0xFF),
+                        unsigned(from.port));
                 continue;
             }
             const frame_assembler::packet_kind k =
