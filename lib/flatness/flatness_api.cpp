@@ -430,6 +430,10 @@ flt_status push_rows(const char *fn, flt_flatness *flatness, std::size_t rows, s
 
 }  // namespace
 
+void flt::flatness_use_runner(flt_flatness *flatness, block_runner *runner) {
+    flatness->engine->use_runner(runner);
+}
+
 const window_result &flt::flatness_result_of(const flt_flatness *flatness) {
     if (flatness->current < 0)
         throw error(FLT_ERR_INTERNAL, "no flatness window has been evaluated");
