@@ -214,7 +214,8 @@ void evaluate_window(flt_flatness &f, std::size_t rows, const double *s, const d
     }
     if (!on_strip)
         f.strip.locate_grid(grid, rows);  // the grid seen from the other side
-    f.strip.resample(grid, side, rows, z, flags, p.zone_width, p.zone_count, zones);
+    f.strip.resample(grid, side, rows, z, flags, p.zone_width, p.zone_count, zones,
+                     f.engine->runner());
     const fiber_layout &lay = f.strip.layout();
     f.engine->use_layout(lay);
     f.engine->evaluate(rows, s, f.strip.z(), f.strip.flags(), r);

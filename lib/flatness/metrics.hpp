@@ -103,6 +103,8 @@ class flatness_engine {
     // results are its own, so they are the same bit for bit whatever runs
     // the blocks.
     void use_runner(block_runner *runner);
+    // The runner evaluations use (the window's other blocks run on it too).
+    block_runner &runner() const { return *runner_; }
 
     // Evaluates rows [0, rows) of a row-major block (row stride = fibers).
     // flags may be null. Writes every field of `out` except `index`.
