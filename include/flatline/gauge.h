@@ -593,7 +593,9 @@ typedef enum flt_gauge_counter {
      * more busy threads than cores, waiting for a core counts too),
      * extracting frames (the workers, or the pushing thread with
      * 0 workers), sequencing rows (the reconstructor and the sheets, in
-     * frame order) and evaluating sheets (flatness, verdicts). A stage run
+     * frame order) and evaluating sheets (flatness, verdicts; with the
+     * blocks of a sheet the workers share, each thread's own part, not
+     * the evaluating thread's wait for the others). A stage run
      * inside another counts for itself only. Over a run's wall time and
      * gauge_workers they give the workers' utilisation
      * (examples/bench/bench_gauge prints it). */

@@ -214,7 +214,8 @@ void evaluate_window(flt_flatness &f, std::size_t rows, const double *s, const d
     }
     if (!on_strip)
         f.strip.locate_grid(grid, rows);  // the grid seen from the other side
-    f.strip.resample(grid, side, rows, z, flags, p.zone_width, p.zone_count, zones);
+    f.strip.resample(grid, side, rows, z, flags, p.zone_width, p.zone_count, zones,
+                     f.engine->runner());
     const fiber_layout &lay = f.strip.layout();
     f.engine->use_layout(lay);
     f.engine->evaluate(rows, s, f.strip.z(), f.strip.flags(), r);
@@ -429,6 +430,10 @@ flt_status push_rows(const char *fn, flt_flatness *flatness, std::size_t rows, s
 }
 
 }  // namespace
+
+void flt::flatness_use_runner(flt_flatness *flatness, block_runner *runner) {
+    flatness->engine->use_runner(runner);
+}
 
 const window_result &flt::flatness_result_of(const flt_flatness *flatness) {
     if (flatness->current < 0)

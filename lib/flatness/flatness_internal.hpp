@@ -14,4 +14,9 @@ namespace flt {
 // flt::error (FLT_ERR_INTERNAL) when no window has been evaluated.
 const window_result &flatness_result_of(const flt_flatness *flatness);
 
+// The threads its evaluations run the fibers on, in blocks (null: the
+// caller's alone). Allocates a column scratch per participant; the runner
+// must outlive every later evaluation. The results do not depend on it.
+void flatness_use_runner(flt_flatness *flatness, block_runner *runner);
+
 }  // namespace flt

@@ -150,15 +150,27 @@ flatness_engine::flatness_engine(const flatness_params &params, const fiber_layo
     zone_value_.resize(layout.zones());
     zone_weight_.resize(layout.zones());
     zone_band_.resize(layout.zones());
+    columns_.resize(1);
     reserve_rows(params.row_capacity);
 }
 
 void flatness_engine::reserve_rows(std::size_t rows) {
-    if (col_s_.size() >= rows)
+    if (column_rows_ >= rows)
         return;
-    col_s_.resize(rows);
-    col_z_.resize(rows);
-    col_ok_.resize(rows);
+    for (column &c : columns_) {
+        c.s.resize(rows);
+        c.z.resize(rows);
+        c.ok.resize(rows);
+    }
+    column_rows_ = rows;
+}
+
+void flatness_engine::use_runner(block_runner *runner) {
+    runner_ = runner ? runner : &inline_runner_;
+    columns_.resize(std::max(1u, runner_->participants()));
+    const std::size_t rows = column_rows_;
+    column_rows_ = 0;
+    reserve_rows(rows);
 }
 
 // Crests and troughs by hysteresis ("zigzag"): an extremum candidate is
@@ -167,10 +179,10 @@ void flatness_engine::reserve_rows(std::size_t rows) {
 // extremum of a run of usable rows must also have risen (fallen) by the
 // hysteresis from the run's start, so a window edge is never taken for a
 // crest. Each new extremum closes a triple with the two before it.
-bool flatness_engine::largest_wave(std::size_t rows, wave &best) const {
+bool flatness_engine::largest_wave(const column &c, std::size_t rows, wave &best) const {
     const double h = p_.wave_hysteresis;
-    const double *s = col_s_.data(), *z = col_z_.data();
-    const std::uint8_t *ok = col_ok_.data();
+    const double *s = c.s.data(), *z = c.z.data();
+    const std::uint8_t *ok = c.ok.data();
     bool found = false;
     best = {0.0, 0.0};
 
@@ -260,6 +272,70 @@ bool flatness_engine::largest_wave(std::size_t rows, wave &best) const {
     return found;
 }
 
+void flatness_engine::evaluate_fibers(std::size_t first, std::size_t last, column &c,
+                                      std::size_t rows, const double *s, const double *z,
+                                      const std::uint8_t *flags, window_result &out) {
+    const std::size_t fibers = layout_->fibers();
+    const double length = rows >= 2 ? s[rows - 1] - s[0] : 0.0;
+    const bool is_short = !(length >= p_.min_length);
+    const double mid = rows ? 0.5 * (s[0] + s[rows - 1]) : 0.0;
+    const double half = 0.5 * length;
+    for (std::size_t k = first; k < last; ++k) {
+        double excess = 0.0, covered = 0.0, z_sum = 0.0;
+        double S[5] = {0, 0, 0, 0, 0}, T[3] = {0, 0, 0};
+        std::size_t usable = 0;
+        for (std::size_t r = 0; r < rows; ++r) {
+            const double zk = z[r * fibers + k];
+            const bool ok = std::fabs(zk) <= k_max_height &&  // NaN: false
+                            !(flags && (flags[r * fibers + k] & k_unusable));
+            c.s[r] = s[r];
+            c.z[r] = zk;
+            c.ok[r] = ok;
+            if (!ok)
+                continue;
+            ++usable;
+            z_sum += zk;
+            if (half > 0.0) {
+                const double t = (s[r] - mid) / half, t2 = t * t;
+                S[0] += 1.0;
+                S[1] += t;
+                S[2] += t2;
+                S[3] += t2 * t;
+                S[4] += t2 * t2;
+                T[0] += zk;
+                T[1] += zk * t;
+                T[2] += zk * t2;
+            }
+            if (r > 0 && c.ok[r - 1]) {
+                const double ds = s[r] - s[r - 1], dz = zk - c.z[r - 1];
+                excess += dz * dz / (std::hypot(ds, dz) + ds);
+                covered += ds;
+            }
+        }
+        const bool fiber_ok = length > 0.0 && covered > 0.0 && covered >= p_.min_coverage * length;
+        if (!fiber_ok) {
+            out.fiber_flags[k] = FLT_FIBER_NO_DATA | FLT_FIBER_NO_WAVE;
+            stretch_[k] = nan_value;
+            continue;
+        }
+        if (usable < rows)
+            out.fiber_flags[k] |= FLT_FIBER_PARTIAL;
+        stretch_[k] = excess / covered;
+        mean_z_[k] = z_sum / double(usable);
+        // t spans [-1, 1], so the t^2 coefficient is the sagitta: the ends'
+        // height above the middle, mm.
+        bow_coef_[k] = parabola_c(S, T);
+        wave w;
+        if (!is_short && largest_wave(c, rows, w)) {
+            out.wave_height[k] = w.height;
+            out.wave_period[k] = w.period;
+            out.steepness[k] = 100.0 * w.height / w.period;
+        } else {
+            out.fiber_flags[k] |= FLT_FIBER_NO_WAVE;
+        }
+    }
+}
+
 // Arc length: the rows are samples of the reconstructed spline about
 // Delta-s = 3 mm apart, and the chord of a segment with curvature kappa is
 // shorter than its arc by Delta-s^3 kappa^2 / 24. For a wave z = (H/2)
@@ -288,66 +364,22 @@ void flatness_engine::evaluate(std::size_t rows, const double *s, const double *
     if (is_short)
         out.flags |= FLT_WINDOW_SHORT;
 
-    // Per fiber: gather the column, sum the chord excess over usable
-    // segments, fit the longitudinal parabola, find the largest wave.
-    const double mid = rows ? 0.5 * (s[0] + s[rows - 1]) : 0.0;
-    const double half = 0.5 * length;
+    // Per fiber (in blocks, on the runner's threads): gather the column,
+    // sum the chord excess over usable segments, fit the longitudinal
+    // parabola, find the largest wave. A fixed block size: the blocks do
+    // not depend on the threads (nor do the results: each fiber's are its
+    // own).
+    constexpr std::size_t k_block_fibers = 32;
+    const std::size_t blocks = (fibers + k_block_fibers - 1) / k_block_fibers;
+    auto body = [&](std::size_t b, unsigned participant) {
+        const std::size_t first = b * k_block_fibers;
+        evaluate_fibers(first, std::min(fibers, first + k_block_fibers), columns_[participant],
+                        rows, s, z, flags, out);
+    };
+    run_blocks(*runner_, blocks, body);
     std::size_t valid = 0;
-    for (std::size_t k = 0; k < fibers; ++k) {
-        double excess = 0.0, covered = 0.0, z_sum = 0.0;
-        double S[5] = {0, 0, 0, 0, 0}, T[3] = {0, 0, 0};
-        std::size_t usable = 0;
-        for (std::size_t r = 0; r < rows; ++r) {
-            const double zk = z[r * fibers + k];
-            const bool ok = std::fabs(zk) <= k_max_height &&  // NaN: false
-                            !(flags && (flags[r * fibers + k] & k_unusable));
-            col_s_[r] = s[r];
-            col_z_[r] = zk;
-            col_ok_[r] = ok;
-            if (!ok)
-                continue;
-            ++usable;
-            z_sum += zk;
-            if (half > 0.0) {
-                const double t = (s[r] - mid) / half, t2 = t * t;
-                S[0] += 1.0;
-                S[1] += t;
-                S[2] += t2;
-                S[3] += t2 * t;
-                S[4] += t2 * t2;
-                T[0] += zk;
-                T[1] += zk * t;
-                T[2] += zk * t2;
-            }
-            if (r > 0 && col_ok_[r - 1]) {
-                const double ds = s[r] - s[r - 1], dz = zk - col_z_[r - 1];
-                excess += dz * dz / (std::hypot(ds, dz) + ds);
-                covered += ds;
-            }
-        }
-        const bool fiber_ok = length > 0.0 && covered > 0.0 && covered >= p_.min_coverage * length;
-        if (!fiber_ok) {
-            out.fiber_flags[k] = FLT_FIBER_NO_DATA | FLT_FIBER_NO_WAVE;
-            stretch_[k] = nan_value;
-            continue;
-        }
-        ++valid;
-        if (usable < rows)
-            out.fiber_flags[k] |= FLT_FIBER_PARTIAL;
-        stretch_[k] = excess / covered;
-        mean_z_[k] = z_sum / double(usable);
-        // t spans [-1, 1], so the t^2 coefficient is the sagitta: the ends'
-        // height above the middle, mm.
-        bow_coef_[k] = parabola_c(S, T);
-        wave w;
-        if (!is_short && largest_wave(rows, w)) {
-            out.wave_height[k] = w.height;
-            out.wave_period[k] = w.period;
-            out.steepness[k] = 100.0 * w.height / w.period;
-        } else {
-            out.fiber_flags[k] |= FLT_FIBER_NO_WAVE;
-        }
-    }
+    for (std::size_t k = 0; k < fibers; ++k)
+        valid += (out.fiber_flags[k] & FLT_FIBER_NO_DATA) ? 0 : 1;
     if (valid == 0) {
         out.flags |= FLT_WINDOW_NO_VALID_FIBER | FLT_WINDOW_NO_BOW | FLT_WINDOW_NO_CROSSBOW;
         for (std::size_t j = 0; j < zones; ++j)

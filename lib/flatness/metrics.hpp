@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/block_runner.hpp"
 #include "flatline/flatness.h"
 
 namespace flt {
@@ -96,6 +97,15 @@ class flatness_engine {
     // never on the streaming path, whose windows are capped at row_capacity).
     void reserve_rows(std::size_t rows);
 
+    // The threads the fibers are evaluated on, in blocks (by default the
+    // caller's alone). Makes a column scratch per participant (allocates).
+    // The runner must outlive the engine's evaluations. Each fiber's
+    // results are its own, so they are the same bit for bit whatever runs
+    // the blocks.
+    void use_runner(block_runner *runner);
+    // The runner evaluations use (the window's other blocks run on it too).
+    block_runner &runner() const { return *runner_; }
+
     // Evaluates rows [0, rows) of a row-major block (row stride = fibers).
     // flags may be null. Writes every field of `out` except `index`.
     void evaluate(std::size_t rows, const double *s, const double *z, const std::uint8_t *flags,
@@ -105,15 +115,27 @@ class flatness_engine {
     struct wave {
         double height, period;
     };
+    // Column of one fiber: position, height, usable (one per participant
+    // of the runner).
+    struct column {
+        std::vector<double> s, z;
+        std::vector<std::uint8_t> ok;
+    };
     // Largest crest-trough-crest wave of the gathered column; false if none.
-    bool largest_wave(std::size_t rows, wave &best) const;
+    bool largest_wave(const column &c, std::size_t rows, wave &best) const;
+    // Fibers [first, last) of the rows: each one's stretch, bow, mean and
+    // largest wave, or its NO_DATA flag.
+    void evaluate_fibers(std::size_t first, std::size_t last, column &c, std::size_t rows,
+                         const double *s, const double *z, const std::uint8_t *flags,
+                         window_result &out);
     void classify(window_result &out);
 
     const flatness_params &p_;
     const fiber_layout *layout_;
-    // Column of one fiber: position, height, usable.
-    std::vector<double> col_s_, col_z_;
-    std::vector<std::uint8_t> col_ok_;
+    inline_block_runner inline_runner_;
+    block_runner *runner_ = &inline_runner_;
+    std::vector<column> columns_;
+    std::size_t column_rows_ = 0;
     // Per fiber: chord excess per covered mm, longitudinal parabola
     // coefficient (sagitta over the window, mm), mean height (mm).
     std::vector<double> stretch_, bow_coef_, mean_z_;

@@ -144,9 +144,9 @@ void strip_resampler::smooth(std::size_t rows, const double *s, const std::vecto
 
 void strip_resampler::resample(const fiber_layout &grid, int side, std::size_t rows,
                                const double *z, const std::uint8_t *flags, double zone_width,
-                               std::size_t zone_count, std::size_t max_zones) {
+                               std::size_t zone_count, std::size_t max_zones,
+                               block_runner &runner) {
     const std::size_t K = grid.fibers();
-    const double *gx = grid.x.data();
     // Result fiber k at x_s(k) = (k - (K - 1) / 2) p, p the grid's mean
     // pitch: slot k keeps its place on the strip.
     const double pitch = 2.0 * grid.half_width / double(K);
@@ -173,8 +173,22 @@ void strip_resampler::resample(const fiber_layout &grid, int side, std::size_t r
                                        : zone_width,
                       zones, !on_grid_);
 
+    // Rows in blocks on the runner's threads (a fixed size: the same
+    // blocks whatever the threads).
+    constexpr std::size_t k_block_rows = 128;
+    auto body = [&](std::size_t b, unsigned) {
+        const std::size_t first = b * k_block_rows;
+        resample_rows(first, std::min(rows, first + k_block_rows), grid, side, z, flags);
+    };
+    run_blocks(runner, (rows + k_block_rows - 1) / k_block_rows, body);
+}
+
+void strip_resampler::resample_rows(std::size_t first, std::size_t last, const fiber_layout &grid,
+                                    int side, const double *z, const std::uint8_t *flags) {
+    const std::size_t K = grid.fibers();
+    const double *gx = grid.x.data();
     const double half = 0.5 * width_ * (1 + 1e-12);
-    for (std::size_t r = 0; r < rows; ++r) {
+    for (std::size_t r = first; r < last; ++r) {
         const double c = centre_smooth_[r];
         const double *zr = z + r * K;
         const std::uint8_t *fr = flags ? flags + r * K : nullptr;

@@ -53,10 +53,12 @@ class strip_resampler {
     // Resamples the located window onto fibers in strip coordinates, with
     // `side` = +1 (drive side at low sensor x) or -1, and lays zones of
     // zone_width or zone_count (> 0) zones, at most max_zones. The layout
-    // and the rows are then ready for the flatness engine.
+    // and the rows are then ready for the flatness engine. The rows are
+    // resampled in blocks on `runner` (each row's result is its own: the
+    // same whatever runs them).
     void resample(const fiber_layout &grid, int side, std::size_t rows, const double *z,
                   const std::uint8_t *flags, double zone_width, std::size_t zone_count,
-                  std::size_t max_zones);
+                  std::size_t max_zones, block_runner &runner);
 
     const fiber_layout &layout() const { return layout_; }
     const double *z() const { return z_.data(); }
@@ -70,6 +72,9 @@ class strip_resampler {
   private:
     static void smooth(std::size_t rows, const double *s, const std::vector<double> &in,
                        std::vector<double> &out);
+    // Rows [first, last) of resample.
+    void resample_rows(std::size_t first, std::size_t last, const fiber_layout &grid, int side,
+                       const double *z, const std::uint8_t *flags);
 
     fiber_layout layout_;
     std::vector<double> z_;            // [rows * fibers] mm, NaN where unusable

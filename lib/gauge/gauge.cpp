@@ -163,6 +163,8 @@ void gauge::init(const flt_calib *calib, const flt_options *options) {
         set_option(fo, FLT_OPT_FLAT_UPDATE_INTERVAL, 0.0);
         set_option(fo, FLT_OPT_FLAT_ROW_CAPACITY, 16.0);
         check(flt_flatness_create(K_, fiber_x_.data(), &fo, &flat_));
+        // A sheet's fibers are evaluated in blocks on the workers.
+        flatness_use_runner(flat_, &blocks_);
         set_option(fo, FLT_OPT_FLAT_ROW_CAPACITY,
                    std::max(16.0, std::ceil(min_length_ / cfg_.frame_spacing) + 2.0));
         check(flt_flatness_create(K_, fiber_x_.data(), &fo, &flat_short_));
@@ -299,7 +301,7 @@ void gauge::first_use_of_sync_objects() {
     std::unique_lock<std::mutex> lock(m_);
     // A wait that times out at once (a wait, not a notify, makes the
     // runtime's object).
-    for (std::condition_variable *cv : {&work_cv_, &room_cv_, &idle_cv_, &sheet_cv_})
+    for (std::condition_variable *cv : {&work_cv_, &room_cv_, &idle_cv_, &sheet_cv_, &blocks_cv_})
         cv->wait_for(lock, std::chrono::nanoseconds(0));
 }
 

@@ -7,12 +7,14 @@
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
+#include <exception>
 #include <memory>
 #include <mutex>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "core/block_runner.hpp"
 #include "core/coil.hpp"
 #include "core/options.hpp"
 #include "flatline/flatness.h"
@@ -97,7 +99,8 @@ struct sheet_pool {
 
 // A rule set in force (flt_gauge_set_rules): immutable after it is made,
 // except the verdicts of the sheet slots and the straightedge's scratch,
-// which only the evaluation (one thread at a time) writes.
+// which only the evaluation (one sheet at a time, its blocks on the
+// workers) writes.
 struct verdict_config {
     std::uint64_t generation = 0;     // which set_rules made it
     flt_rules rules;                  // borrowed: flt_sheet_verdict's view
@@ -105,7 +108,16 @@ struct verdict_config {
     bool needs_map = false;
     // One verdict per sheet slot (flt_sheet::slot), borrowed.
     std::vector<std::unique_ptr<flt_verdict>> slot;
-    verdict::straightedge scratch;
+    // The straightedges' lines are measured in blocks on the workers
+    // (judge): a scratch per participant of a block_runner, and per block
+    // its rule, its lines and its partial gap (capacity for the most
+    // blocks, reserved by set_rules).
+    std::vector<verdict::straightedge> scratch;
+    struct line_block {
+        std::size_t rule, first, last;
+    };
+    std::vector<line_block> blocks;
+    std::vector<verdict::map_gap> block_gaps;
     // The band each rule chose for the last sheet judged, and its coil
     // (the log says when a band changes within a coil); evaluation only.
     std::vector<int> last_band;
@@ -337,8 +349,17 @@ class gauge {
     // The verdict of a sheet being evaluated (its values set), and the
     // coil's statistics.
     void judge(flt_sheet *sh, const sheet_buffer &b, std::size_t n);
+    // The rules' results from the measures given and the straightedges'
+    // lines, measured in blocks on the workers.
+    void judge_lines(verdict_config &vc, flt_verdict &vd, double thickness, double width,
+                     const verdict::map_view &map);
     void count_in_coil(const verdict_config &vc, const flt_sheet &sh);
     void deliver(flt_sheet *sheet);
+    // Blocks of a sheet's evaluation, run by the thread that evaluates and
+    // by the workers that are free (block_runner::run).
+    void run_block_task(std::size_t blocks, block_runner::block_fn fn, void *context);
+    // With m_ held: runs blocks of the open task until none is left.
+    void work_on_blocks(std::unique_lock<std::mutex> &lock);
     flt_sheet *take_slot(std::size_t rows);
     void acquisition_main();
 
@@ -419,6 +440,9 @@ class gauge {
     // Time spent in each stage on every thread, ns (stage_timer).
     mutable std::atomic<std::uint64_t> ns_extract_{0};
     std::atomic<std::uint64_t> ns_sequence_{0}, ns_evaluate_{0};
+    // The evaluating thread's waits for blocks on other threads (left out
+    // of ns_evaluate_; not reported).
+    std::atomic<std::uint64_t> ns_block_wait_{0};
 
     // ---- sequencer state (the thread holding the sequencing role)
     bool in_strip_ = false, pushed_ = false, has_output_ = false;
@@ -456,6 +480,33 @@ class gauge {
 
     // ---- evaluation state (the thread holding the evaluating role)
     std::shared_ptr<sheet_pool> pool_;
+    // The evaluation's blocks (flatness per fiber block, straightedge
+    // lines per block) on the workers: the runner the components are
+    // given, and the open task (under m_; one at a time: only the
+    // evaluating role opens one). Participants: the evaluating thread and
+    // every worker, so scratch is made for workers + 1.
+    class worker_blocks final : public block_runner {
+      public:
+        explicit worker_blocks(gauge &g) : g_(&g) {}
+        void run(std::size_t blocks, block_fn fn, void *context) override {
+            g_->run_block_task(blocks, fn, context);
+        }
+        unsigned participants() const override { return g_->cfg_.workers + 1; }
+
+      private:
+        gauge *g_;
+    };
+    worker_blocks blocks_{*this};
+    struct block_task {
+        block_runner::block_fn fn = nullptr;
+        void *context = nullptr;
+        std::size_t blocks = 0, next = 0, done = 0;
+        unsigned joined = 0;  // participants so far (each names its scratch)
+        bool open = false;    // workers may join
+        std::exception_ptr error;
+    };
+    block_task block_task_;
+    std::condition_variable blocks_cv_;  // the open task's last block is done
 
     // ---- verdicts: the rules in force (replaced whole by set_rules) and
     // the coils' statistics, each under its own mutex (never both held by

@@ -166,7 +166,13 @@ bool gauge::run_one(std::unique_lock<std::mutex> &lock, unsigned index) {
         idle_cv_.notify_all();
         return true;
     }
-    // 2. A finished sheet's flatness (the next sheet is being built).
+    // 2. Blocks of the sheet being evaluated (its fibers' flatness, its
+    // straightedges' lines): the evaluating thread waits for them.
+    if (block_task_.open && block_task_.next < block_task_.blocks) {
+        work_on_blocks(lock);
+        return true;
+    }
+    // 3. A finished sheet's flatness (the next sheet is being built).
     if (!evaluating_ && !jobs_.empty()) {
         evaluating_ = true;
         const sheet_job job = jobs_.front();
@@ -181,7 +187,7 @@ bool gauge::run_one(std::unique_lock<std::mutex> &lock, unsigned index) {
         idle_cv_.notify_all();
         return true;
     }
-    // 3. Extraction, oldest frame first.
+    // 4. Extraction, oldest frame first.
     while (claim_ < head_ && (claim_ < tail_ || slots_[claim_ % Q].state != slot_filled))
         ++claim_;
     if (claim_ < head_) {
@@ -201,6 +207,65 @@ bool gauge::run_one(std::unique_lock<std::mutex> &lock, unsigned index) {
         return true;
     }
     return false;
+}
+
+void gauge::run_block_task(std::size_t blocks, block_runner::block_fn fn, void *context) {
+    std::unique_lock<std::mutex> lock(m_);
+    block_task &t = block_task_;
+    t.fn = fn;
+    t.context = context;
+    t.blocks = blocks;
+    t.next = t.done = 0;
+    t.joined = 0;
+    t.error = nullptr;
+    // The workers join when they are free (run_one); this thread runs
+    // blocks too, so it never waits for a block nobody took.
+    t.open = cfg_.workers > 0 && blocks > 1;
+    if (t.open)
+        work_cv_.notify_all();
+    work_on_blocks(lock);
+    {
+        // Waiting for the blocks other threads took: their time counts on
+        // their threads, so the wait leaves the evaluation's count (a
+        // timer of its own, nested in the evaluation's).
+        const stage_timer waiting(ns_block_wait_);
+        blocks_cv_.wait(lock, [&] { return t.done == t.blocks; });
+    }
+    t.open = false;
+    if (t.error) {
+        std::exception_ptr e = t.error;
+        t.error = nullptr;
+        lock.unlock();
+        std::rethrow_exception(e);
+    }
+}
+
+void gauge::work_on_blocks(std::unique_lock<std::mutex> &lock) {
+    block_task &t = block_task_;
+    // At most every worker and the evaluating thread (workers + 1
+    // participants, the scratch the components made): each joins once,
+    // and leaves only when no block is left.
+    const unsigned participant = t.joined++;
+    const block_runner::block_fn fn = t.fn;
+    void *const context = t.context;
+    while (t.next < t.blocks) {
+        const std::size_t b = t.next++;
+        lock.unlock();
+        std::exception_ptr error;
+        try {
+            // Evaluation time, on whichever thread (inside the evaluating
+            // thread's own timer it counts once: stage_timer nests).
+            const stage_timer timer(ns_evaluate_);
+            fn(context, b, participant);
+        } catch (...) {
+            error = std::current_exception();  // rethrown by run_block_task
+        }
+        lock.lock();
+        if (error && !t.error)
+            t.error = error;
+        if (++t.done == t.blocks)
+            blocks_cv_.notify_all();
+    }
 }
 
 }  // namespace flt

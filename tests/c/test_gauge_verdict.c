@@ -106,6 +106,13 @@ typedef struct judged {
     double value[RULES][9];
     double error;    /* max |z - truth| over its map (keep_maps 1), mm */
     double truth[4]; /* the deviation of the true heights, rules 0-3 */
+    /* Every value but the times (from FLT_SHEET_FINISHED_TIME on: the
+     * host's clock, which two runs do not share), and every array (per
+     * fiber, or per zone in the first zones entries): the flatness of the
+     * fibers and the straightedges' lines are evaluated in blocks on the
+     * workers, and must not depend on how many there are. */
+    double sheet_value[FLT_SHEET_FINISHED_TIME];
+    double array[12][K];
 } judged;
 
 typedef struct run {
@@ -140,6 +147,14 @@ static void copy_sheet(const flt_sheet *sh, const line *l, const flt_rules *rule
         assert_string_equal(name, given);
         for (int k = 0; k < 9; ++k)
             OK(flt_verdict_get(v, i, (flt_verdict_value)k, &j->value[i][k]));
+    }
+    for (int k = 0; k < FLT_SHEET_FINISHED_TIME; ++k)
+        OK(flt_sheet_get(sh, (flt_sheet_value)k, &j->sheet_value[k]));
+    const size_t zones = (size_t)j->sheet_value[FLT_SHEET_ZONES];
+    assert_true(zones >= 1 && zones <= K);
+    for (int a = 0; a < 12; ++a) {
+        const int per_fiber = a < FLT_SHEET_ZONE_CENTRE_X || a == FLT_SHEET_FIBER_STRIP_X;
+        OK(flt_sheet_get_array(sh, (flt_sheet_array)a, per_fiber ? K : zones, j->array[a]));
     }
     size_t failed = 0;
     OK(flt_verdict_failed(v, &failed));
@@ -382,12 +397,17 @@ static void sine_sheets_pass_and_fail(void **state) {
     assert_true(r->coil[0][0][FLT_COIL_HISTOGRAM + 10] == 3);
     assert_true(r->coil[0][2][FLT_COIL_HISTOGRAM + 10] == 3);
 
-    /* 1 and 2 workers, without maps: the same verdicts, bit for bit. */
+    /* 1 and 2 workers, without maps: the same verdicts, values and arrays,
+     * bit for bit (unused array entries are 0 in every run: calloc). */
     for (int w = 1; w <= 2; ++w) {
         const run *o = &runs[w];
         assert_int_equal(o->sheets, r->sheets);
-        for (size_t k = 0; k < r->sheets; ++k)
+        for (size_t k = 0; k < r->sheets; ++k) {
             assert_memory_equal(o->sheet[k].value, r->sheet[k].value, sizeof r->sheet[k].value);
+            assert_memory_equal(o->sheet[k].sheet_value, r->sheet[k].sheet_value,
+                                sizeof r->sheet[k].sheet_value);
+            assert_memory_equal(o->sheet[k].array, r->sheet[k].array, sizeof r->sheet[k].array);
+        }
         assert_memory_equal(o->coil, r->coil, sizeof r->coil);
     }
     free(runs);
