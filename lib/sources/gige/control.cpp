@@ -161,10 +161,8 @@ void control_channel::transact(std::uint16_t command, const std::uint8_t *data,
             if (from.address != camera_.address || from.port != camera_.port) {
                 ++strangers_;  // only the camera speaks
                 FLT_LOG(FLT_LOG_WARNING, "camera",
-                        "a control packet from %u.%u.%u.%u:%u, not the camera, ignored",
-                        unsigned(from.address >> 24), unsigned(from.address >> 16 & 0xFF),
-                        unsigned(from.address >> 8 & 0xFF), unsigned(from.address & 0xFF),
-                        unsigned(from.port));
+                        "a control packet from %s, not the camera, ignored",
+                        format_endpoint(from).text);
                 continue;
             }
             const std::uint8_t *a = answer_.data();

@@ -4,6 +4,7 @@
 
 #include <cerrno>
 #include <charconv>
+#include <cstdio>
 #include <cstring>
 #include <mutex>
 
@@ -93,13 +94,18 @@ sockaddr_in to_native(endpoint e) {
 
 }  // namespace
 
+endpoint_text format_endpoint(endpoint e, bool with_port) {
+    endpoint_text t{};
+    const int n = std::snprintf(t.text, sizeof t.text, "%u.%u.%u.%u", unsigned(e.address >> 24),
+                                unsigned(e.address >> 16 & 0xFF), unsigned(e.address >> 8 & 0xFF),
+                                unsigned(e.address & 0xFF));
+    if (with_port && n > 0 && std::size_t(n) < sizeof t.text)
+        (void)std::snprintf(t.text + n, sizeof t.text - std::size_t(n), ":%u", unsigned(e.port));
+    return t;
+}
+
 std::string to_string(endpoint e, std::uint16_t default_port) {
-    std::string s = std::to_string((e.address >> 24) & 255) + "." +
-                    std::to_string((e.address >> 16) & 255) + "." +
-                    std::to_string((e.address >> 8) & 255) + "." + std::to_string(e.address & 255);
-    if (e.port != default_port)
-        s += ":" + std::to_string(e.port);
-    return s;
+    return format_endpoint(e, e.port != default_port).text;
 }
 
 bool parse_endpoint(const char *text, std::uint16_t default_port, endpoint &out) {

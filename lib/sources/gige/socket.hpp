@@ -20,6 +20,13 @@ struct endpoint {
 
 // "a.b.c.d" (and ":port" when the port is not `default_port`).
 std::string to_string(endpoint e, std::uint16_t default_port = 0);
+// "a.b.c.d:port" (or "a.b.c.d") in a value, without allocating: the receive
+// loops log a stranger's address with it, and a flood of strangers must not
+// cost the heap. `text` holds "255.255.255.255:65535" and its NUL.
+struct endpoint_text {
+    char text[24];
+};
+endpoint_text format_endpoint(endpoint e, bool with_port = true);
 // Parses "a.b.c.d" or "a.b.c.d:port" (port 1..65535); false for anything
 // else (no host names: a camera is named by its address).
 bool parse_endpoint(const char *text, std::uint16_t default_port, endpoint &out);

@@ -183,10 +183,8 @@ bool stream_channel::next(unsigned timeout_ms, sources::raw_frame &out) {
                 // Said with the sender (a forger, another camera's stream
                 // sent here): 5 such messages per 10 s at most (core/log).
                 FLT_LOG(FLT_LOG_WARNING, "camera",
-                        "a stream packet from %u.%u.%u.%u:%u, not the camera, ignored",
-                        unsigned(from.address >> 24), unsigned(from.address >> 16 & 0xFF),
-                        unsigned(from.address >> 8 & 0xFF), unsigned(from.address & 0xFF),
-                        unsigned(from.port));
+                        "a stream packet from %s, not the camera, ignored",
+                        format_endpoint(from).text);
                 continue;
             }
             const frame_assembler::packet_kind k =
