@@ -109,15 +109,8 @@ struct verdict_config {
     // One verdict per sheet slot (flt_sheet::slot), borrowed.
     std::vector<std::unique_ptr<flt_verdict>> slot;
     // The straightedges' lines are measured in blocks on the workers
-    // (judge): a scratch per participant of a block_runner, and per block
-    // its rule, its lines and its partial gap (capacity for the most
-    // blocks, reserved by set_rules).
-    std::vector<verdict::straightedge> scratch;
-    struct line_block {
-        std::size_t rule, first, last;
-    };
-    std::vector<line_block> blocks;
-    std::vector<verdict::map_gap> block_gaps;
+    // (judge, verdict::judge): the room for it, reserved by set_rules.
+    verdict::judge_workspace workspace;
     // The band each rule chose for the last sheet judged, and its coil
     // (the log says when a band changes within a coil); evaluation only.
     std::vector<int> last_band;
@@ -349,10 +342,6 @@ class gauge {
     // The verdict of a sheet being evaluated (its values set), and the
     // coil's statistics.
     void judge(flt_sheet *sh, const sheet_buffer &b, std::size_t n);
-    // The rules' results from the measures given and the straightedges'
-    // lines, measured in blocks on the workers.
-    void judge_lines(verdict_config &vc, flt_verdict &vd, double thickness, double width,
-                     const verdict::map_view &map);
     void count_in_coil(const verdict_config &vc, const flt_sheet &sh);
     void deliver(flt_sheet *sheet);
     // Blocks of a sheet's evaluation, run by the thread that evaluates and

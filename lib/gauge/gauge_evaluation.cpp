@@ -378,55 +378,6 @@ void gauge::evaluate(const sheet_job &job) {
     deliver(sh);
 }
 
-namespace {
-
-// The straightedges' lines per block: at least this many (a block is worth
-// handing to another thread), and at most k_max_line_blocks blocks per
-// rule (the capacity set_rules reserves). Fixed numbers, whatever the
-// workers: the blocks, and so the results bit for bit, are the same with
-// 0, 1 or 2 workers (verdict::map_gap). Few blocks: each starts without
-// the floor the lines measured before it would give (a line that cannot
-// beat the worst so far is skipped), so more blocks cost more CPU.
-constexpr std::size_t k_min_block_lines = 16, k_max_line_blocks = 8;
-
-std::size_t lines_per_block(std::size_t lines) {
-    return std::max(k_min_block_lines, (lines + k_max_line_blocks - 1) / k_max_line_blocks);
-}
-
-}  // namespace
-
-void gauge::judge_lines(verdict_config &vc, flt_verdict &vd, double thickness, double width,
-                        const verdict::map_view &map) {
-    // The pieces of verdict::judge (verdict.hpp): each straightedge rule's
-    // lines in blocks on the workers, merged in block order, then finish.
-    const verdict::rule_set &set = vd.set;
-    const bool has_map = map.rows > 0 && map.fibers > 0;
-    vc.blocks.clear();  // capacity kept
-    for (std::size_t i = 0; i < set.rules.size(); ++i) {
-        vd.gaps[i] = verdict::map_gap{};
-        if (verdict::gap_source(set, i, thickness, width, has_map) != i)
-            continue;
-        const std::size_t lines = verdict::line_count(map, verdict::is_along(set.rules[i]));
-        const std::size_t per = lines_per_block(lines);
-        for (std::size_t a = 0; a < lines; a += per)
-            vc.blocks.push_back({i, a, std::min(lines, a + per)});
-    }
-    if (vc.blocks.size() > vc.block_gaps.size())
-        throw error(FLT_ERR_INTERNAL, "more straightedge blocks than set_rules made room for");
-    auto body = [&](std::size_t b, unsigned participant) {
-        const verdict_config::line_block &lb = vc.blocks[b];
-        const verdict::rule &r = set.rules[lb.rule];
-        verdict::map_gap &part = vc.block_gaps[b];
-        part = verdict::map_gap{};
-        vc.scratch[participant].measure_lines(map, verdict::is_along(r), r.length, lb.first,
-                                              lb.last, part);
-    };
-    flt::run_blocks(blocks_, vc.blocks.size(), body);
-    for (std::size_t b = 0; b < vc.blocks.size(); ++b)
-        verdict::merge(vd.gaps[vc.blocks[b].rule], vc.block_gaps[b]);
-    verdict::finish(set, vd.given, thickness, width, has_map, vd.gaps.data(), vd.results.data());
-}
-
 void gauge::judge(flt_sheet *sh, const sheet_buffer &b, std::size_t n) {
     std::shared_ptr<verdict_config> vc;
     {
@@ -511,7 +462,9 @@ void gauge::judge(flt_sheet *sh, const sheet_buffer &b, std::size_t n) {
                 out[FLT_VERDICT_LIMIT] = r.bands[std::size_t(band)].limit;
         }
     } else {
-        judge_lines(*vc, vd, thickness, width, map);
+        // Each straightedge rule's lines in blocks on the workers.
+        verdict::judge(vd.set, vd.given, vc->workspace, blocks_, thickness, width, map,
+                       vd.results.data(), vd.gaps.data());
     }
     const bool provisional = unsigned(v[FLT_SHEET_FLAGS]) & FLT_SHEET_FLAG_PROVISIONAL;
     if (!(unsigned(v[FLT_SHEET_FLAGS]) & FLT_SHEET_FLAG_INCOMPLETE) && !provisional) {
@@ -644,11 +597,7 @@ flt_status gauge::set_rules(const char *fn, const flt_rules *rules, double thick
         if (vc->needs_map) {
             // A scratch per participant of the evaluation's blocks, each
             // for the longest line; room for the most blocks of every rule.
-            vc->scratch.resize(blocks_.participants());
-            for (verdict::straightedge &se : vc->scratch)
-                se.reserve(std::max(sheet_capacity_, K_));
-            vc->blocks.reserve(n * k_max_line_blocks);
-            vc->block_gaps.resize(n * k_max_line_blocks);
+            vc->workspace.reserve(n, std::max(sheet_capacity_, K_), blocks_.participants());
         }
     }
     {

@@ -9,6 +9,7 @@
 #include <limits>
 #include <vector>
 
+#include "core/block_runner.hpp"
 #include "flatline/verdict.h"
 #include "verdict/rules.hpp"
 #include "verdict/straightedge.hpp"
@@ -30,19 +31,8 @@ struct given_measure {
     double s = std::numeric_limits<double>::quiet_NaN();
 };
 
-// Judging a sheet in pieces (what judge() does on one thread; the pieces
-// let the lines of each straightedge rule be measured in blocks on several
-// threads):
-//   1. for every rule i with gap_source(...) == i: gaps[i] = map_gap{}, then
-//      for blocks [a, b) covering 0 .. line_count(map, is_along(rule i)),
-//      each with its own straightedge scratch and map_gap part:
-//      scratch.measure_lines(map, is_along(rule i), rule i's length, a, b,
-//      part), then merge(gaps[i], part) (in any order; map_gap says when
-//      the result is the same bit for bit);
-//   2. finish(): the rules' results from the gaps and the given measures.
-// Rules sharing a straightedge measure and length share one computation.
-
-// The rule whose map gap rule i reads: the first rule (i itself, or an
+// Rules sharing a straightedge measure and length share one computation:
+// the rule whose map gap rule i reads is the first rule (i itself, or an
 // earlier one) of the same straightedge measure and length whose band
 // applies to the sheet; k_no_line when rule i needs no map gap (not a
 // straightedge, no map, no band, width unknown).
@@ -55,19 +45,34 @@ inline bool is_along(const rule &r) {
     return r.measure == FLT_MEASURE_STRAIGHTEDGE_ALONG;
 }
 
-// The results of every rule into results[set.rules.size()] from the gaps
-// measured (gaps[gap_source(i)]) and the measures given.
-void finish(const rule_set &set, const given_measure *given, double thickness, double width,
-            bool has_map, const map_gap *gaps, rule_result *results);
+// The room judge() works in: a straightedge per participant of the block
+// runner, and per block of lines its rule, its lines [first, last) and its
+// partial gap. reserve() makes room for the longest line and the most
+// blocks; judge() then allocates nothing (it grows what is short, for a
+// caller that did not reserve: flt_verdict_evaluate).
+struct judge_workspace {
+    struct line_block {
+        std::size_t rule, first, last;
+    };
+    std::vector<straightedge> scratch;  // [participants]
+    std::vector<line_block> blocks;
+    std::vector<map_gap> block_gaps;  // [blocks]
+
+    // For `rules` rules, lines of up to `longest_line` samples, and
+    // `participants` blocks at a time.
+    void reserve(std::size_t rules, std::size_t longest_line, unsigned participants);
+};
 
 // Judges one sheet against every rule of `set` into results[set.rules.size()],
-// with gaps[set.rules.size()] as scratch: the pieces above on this thread.
-// thickness > 0; a width that is not > 0 (NaN: the sheet's strip was not
-// seen) leaves every rule NOT_MEASURED. Allocates nothing but the
-// straightedge's growth (none once it was reserved for the longest line and
-// the most lines).
-void judge(const rule_set &set, const given_measure *given, straightedge &se, double thickness,
-           double width, const map_view &map, rule_result *results, map_gap *gaps);
+// with gaps[set.rules.size()] as scratch. Each straightedge rule's lines
+// are measured in blocks through `runner` (on whatever threads it has;
+// inline_block_runner: this one), merged in block order, so the results
+// are the same bit for bit whatever the runner; then every rule's result
+// from the gaps and the measures given. thickness > 0; a width that is not
+// > 0 (NaN: the sheet's strip was not seen) leaves every rule NOT_MEASURED.
+void judge(const rule_set &set, const given_measure *given, judge_workspace &ws,
+           block_runner &runner, double thickness, double width, const map_view &map,
+           rule_result *results, map_gap *gaps);
 
 // Whether any rule of the set needs the height map.
 bool needs_map(const rule_set &set);
@@ -85,5 +90,5 @@ struct flt_verdict {
     std::vector<flt::verdict::rule_result> results, pending;  // [rules] each
     std::vector<flt::verdict::map_gap> gaps;                  // [rules]
     bool evaluated = false;
-    flt::verdict::straightedge scratch;
+    flt::verdict::judge_workspace workspace;
 };

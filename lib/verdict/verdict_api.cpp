@@ -355,8 +355,9 @@ FLT_API flt_status FLT_CALL flt_verdict_evaluate(flt_verdict *verdict, double th
         map.x = x_mm;
         map.z = z_mm;
         map.flags = flags;
-        flt::verdict::judge(verdict->set, verdict->given, verdict->scratch, thickness_mm, width_mm,
-                            map, verdict->pending.data(), verdict->gaps.data());
+        flt::inline_block_runner runner;  // the caller's thread
+        flt::verdict::judge(verdict->set, verdict->given, verdict->workspace, runner, thickness_mm,
+                            width_mm, map, verdict->pending.data(), verdict->gaps.data());
         verdict->results.swap(verdict->pending);
         verdict->evaluated = true;
         return FLT_OK;
