@@ -169,6 +169,7 @@ struct flt_sim {
     std::vector<double> table_row[2], table_cover_lo[2], table_cover_hi[2];  // [width]
     std::vector<float> spill;  // [width * height] with blooming
     std::vector<float> carry;  // [width] with blooming
+    std::vector<float> noise;  // [width]: one row's shot-noise draws (quantise)
     mutable walk_cursor walk;  // lateral wander
 
     ~flt_sim() { flt_calib_destroy(calib); }
@@ -542,7 +543,7 @@ struct flt_sim {
         }
     }
 
-    template <class Pixel> void quantise(void *frame_out, std::size_t stride, sim_rng &rng) const {
+    template <class Pixel> void quantise(void *frame_out, std::size_t stride, sim_rng &rng) {
         const double fs = full_scale();
         // Shot noise: I counts hold I * full_well / fs electrons, whose
         // Poisson sigma is sqrt of that; back in counts sqrt(I * fs / full_well).
@@ -557,25 +558,36 @@ struct flt_sim {
         const float gain =
             params.full_well > 0 ? float(std::min(fs / params.full_well, k_max_gain)) : 0.0f;
         const float top = float(fs);
-        for (std::uint32_t v = 0; v < height; ++v) {
+        // Locals: a store through a Pixel (bytes may alias anything) would
+        // otherwise make the compiler read width and the generator's state
+        // again after every pixel.
+        const std::uint32_t w = width, h = height;
+        sim_rng local = rng;
+        for (std::uint32_t v = 0; v < h; ++v) {
             Pixel *row = reinterpret_cast<Pixel *>(static_cast<unsigned char *>(frame_out) +
                                                    std::size_t(v) * stride);
-            const float *in = &intensity[std::size_t(v) * width];
-            for (std::uint32_t u = 0; u < width; ++u) {
-                float value = in[u];
-                // Drawn for every pixel, so the stream does not depend on
-                // which pixels saturate.
-                const float noise = gain > 0 ? rng.fast_gauss() : 0.0f;
-                if (value >= top) {
-                    value = top;  // a full well reads full scale, noise or not
-                } else {
-                    value += std::sqrt(std::max(value, 0.0f) * gain) * noise;
-                    value += 0.5f;
-                    value = value > 0.0f ? (value < top ? value : top) : 0.0f;  // NaN: 0
-                }
-                row[u] = Pixel(value);
+            const float *in = &intensity[std::size_t(v) * w];
+            // The row's draws first, one per pixel (so the stream does not
+            // depend on which pixels saturate), then the pixels: the
+            // generator's serial chain apart, the second loop vectorises.
+            float *draw = noise.data();
+            if (gain > 0)
+                for (std::uint32_t u = 0; u < w; ++u)
+                    draw[u] = local.fast_gauss();
+            else
+                std::fill(draw, draw + w, 0.0f);
+            // Without branches (selects), so that it vectorises
+            // (lib/CMakeLists.txt gives this file the flags it needs).
+            for (std::uint32_t u = 0; u < w; ++u) {
+                const float value = in[u];
+                float x = value + std::sqrt(std::max(value, 0.0f) * gain) * draw[u];
+                x += 0.5f;
+                x = x > 0.0f ? x : 0.0f;  // NaN: 0
+                x = x < top ? x : top;
+                row[u] = Pixel(value >= top ? top : x);  // a full well reads full scale
             }
         }
+        rng = local;
     }
 
     // The roller table's line where the strip does not cover it.
@@ -820,6 +832,7 @@ void setup_geometry(flt_sim &sim) {
     sim.plane_points.assign(2 * ns, 0);
     sim.image_points.assign(2 * ns, 0);
     sim.intensity.assign(std::size_t(sim.width) * sim.height, 0.0f);
+    sim.noise.assign(sim.width, 0.0f);
 }
 
 }  // namespace
