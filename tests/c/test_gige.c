@@ -221,6 +221,10 @@ typedef struct {
     int swapping;
     uint8_t swap_held[k_packet];
     size_t swap_held_length;
+    /* The 16-bit block ids of which the camera sent at least one packet
+     * (a bit each): a block the camera itself never sent is no loss on the
+     * way, and the library rightly counts it lost. */
+    uint8_t camera_sent[65536 / 8];
     // counts
     uint64_t stream_packets, dropped, resend_dropped, reordered, resent, resend_requests,
         unknown_resend, test_packets, swapped;
@@ -377,6 +381,10 @@ static void send_pair(proxy *p, const uint8_t *first, size_t first_n, const uint
 /* A stream packet from the camera. */
 static void from_stream(proxy *p, const uint8_t *d, size_t n) {
     ++p->stream_packets;
+    if (n >= 8) {
+        const uint16_t sent = be16(d + 2);
+        p->camera_sent[sent >> 3] |= (uint8_t)(1u << (sent & 7));
+    }
     if (n >= 8 && n <= k_packet) {
         const uint16_t block = be16(d + 2);
         const uint32_t id = be32(d + 4) & 0xFFFFFF;
@@ -751,7 +759,7 @@ static void test_thousand_frames_through_lossy_network(void **state) {
     assert_true(test_packets >= 1);
     set_small_frames(src);
     ok(flt_source_start(src));
-    uint64_t previous = 0, dropped_in_delivered = 0;
+    uint64_t previous = 0, dropped_in_delivered = 0, camera_skipped = 0;
     for (int i = 0; i < 1000; ++i) {
         const flt_frame *f = NULL;
         const flt_status st = flt_source_next(src, 3000, &f);
@@ -762,9 +770,26 @@ static void test_thousand_frames_through_lossy_network(void **state) {
         size_t stride;
         uint64_t block;
         ok(flt_frame_info(f, &pixels, &w, &h, &stride, NULL, &block, NULL, NULL));
-        if (i > 0 && block != previous + 1)
-            fail_msg("frame %d: block %llu after %llu (%s)", i, (unsigned long long)block,
-                     (unsigned long long)previous, flt_source_stream_error(src));
+        if (i > 0 && block != previous + 1) {
+            /* A gap is a failure unless the camera never sent the blocks
+             * in it: aravis's fake camera, starved of CPU on a loaded
+             * machine, skips a frame's id now and then. Those the library
+             * must count lost (asserted below). */
+            pthread_mutex_lock(&p->lock);
+            for (uint64_t b = previous + 1; b < block && block - previous < 64; ++b) {
+                const unsigned id = frame_id(b);
+                if (p->camera_sent[id >> 3] & (1u << (id & 7)))
+                    camera_skipped = UINT64_MAX; /* sent, and lost on the way */
+                else if (camera_skipped != UINT64_MAX)
+                    ++camera_skipped;
+            }
+            pthread_mutex_unlock(&p->lock);
+            if (camera_skipped == UINT64_MAX || block - previous >= 64)
+                fail_msg("frame %d: block %llu after %llu (%s)", i, (unsigned long long)block,
+                         (unsigned long long)previous, flt_source_stream_error(src));
+            print_message("the camera skipped block ids %llu..%llu (never sent)\n",
+                          (unsigned long long)previous + 1, (unsigned long long)block - 1);
+        }
         previous = block;
         const int dropped = matches_camera(p, pixels, (size_t)w * h, frame_id(block));
         if (dropped < 0)
@@ -794,7 +819,8 @@ static void test_thousand_frames_through_lossy_network(void **state) {
                   (unsigned long long)count(src, FLT_COUNT_DROPPED));
     assert_int_equal(count(src, FLT_COUNT_FRAMES), 1000);
     assert_int_equal(count(src, FLT_COUNT_DROPPED), 0);
-    assert_int_equal(count(src, FLT_COUNT_LOST), 0);
+    /* Lost: only the blocks the camera never sent (none on an idle machine). */
+    assert_int_equal(count(src, FLT_COUNT_LOST), camera_skipped);
     /* About 1 % of ~26 packets x 1000 frames were dropped on the way. */
     assert_true(dropped_in_delivered >= 100);
     /* Every loss counted: each packet the proxy dropped from a delivered
