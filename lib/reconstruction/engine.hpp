@@ -453,7 +453,6 @@ class recon_engine {
     bool solved_fresh_ = false;  // no row pushed since that solve
     double last_s_ = 0.0;
     std::size_t rows_in_sheet_ = 0;
-    double sheet_first_s_ = 0.0;
 };
 
 }  // namespace flt

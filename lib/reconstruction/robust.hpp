@@ -208,7 +208,6 @@ class recon_chain {
     std::unique_ptr<robust_window> window_;  // streaming in robust mode
     std::vector<double> saved_;              // batch: the previous pass's knots
     std::vector<double> initial_wh_, initial_wg_;
-    const double no_line_[5] = {0, 0, 0, 0, 0};
     std::unique_ptr<robust_scale> h_scale_, g_scale_;  // batch
     // Scratch, one row each.
     std::vector<double> pred_h_, pred_g_, out_h_, out_g_, mult_h_, mult_g_;

@@ -21,8 +21,6 @@
 namespace flt::record {
 namespace {
 
-constexpr double k_nan = std::numeric_limits<double>::quiet_NaN();
-
 void check(flt_status st) {
     if (st != FLT_OK)
         throw error(st, flt_last_error_message());

@@ -135,7 +135,6 @@ class recorder {
     std::vector<std::uint8_t> scratch_flags_;
     std::vector<std::int32_t> scratch_q_[2];
     std::uint64_t rows_given_ = 0, rows_lost_ = 0, lost_run_start_ = 0, lost_run_ = 0;
-    std::uint64_t rows_committed_target_ = 0;  // rows accounted for by the last commit
     bool stop_ = false, sync_requested_ = false, save_frames_requested_ = false;
     std::uint64_t sync_generation_ = 0, committed_generation_ = 0;
     bool failed_ = false;

@@ -35,7 +35,6 @@ constexpr double k_max_thickness = 1000.0;
 constexpr double k_max_width = 100000.0;
 // A straightedge longer than 10 km is a unit mistake.
 constexpr double k_max_length = 1.0e7;
-constexpr double k_nan = std::numeric_limits<double>::quiet_NaN();
 
 flt_status check_rules(const char *fn, const flt_rules *r) {
     if (r == nullptr)
