@@ -449,6 +449,24 @@ flt_status gauge::cut(const char *fn, double encoder_mm) {
     return FLT_OK;
 }
 
+bool gauge::end_strip_flushed(std::unique_lock<std::mutex> &lock) {
+    sequencing_ = true;
+    lock.unlock();
+    const bool ok = gauge_guarded(
+        this,
+        [&] {
+            activate_cuts(std::numeric_limits<std::uint64_t>::max());
+            end_strip(FLT_SHEET_FLAG_FLUSHED);
+            if (cfg_.workers == 0)
+                run_jobs_inline();
+        },
+        &gauge::record_failure);
+    lock.lock();
+    sequencing_ = false;
+    work_cv_.notify_all();
+    return ok;
+}
+
 flt_status gauge::flush(const char *fn) {
     if (in_gauge_callback(this))
         return fail(FLT_ERR_STATE, "%s: called from inside the gauge's callback", fn);
@@ -469,20 +487,7 @@ flt_status gauge::flush(const char *fn) {
         lock.unlock();
         return failure(fn);
     }
-    sequencing_ = true;
-    lock.unlock();
-    const bool ok = gauge_guarded(
-        this,
-        [&] {
-            activate_cuts(std::numeric_limits<std::uint64_t>::max());
-            end_strip(FLT_SHEET_FLAG_FLUSHED);
-            if (cfg_.workers == 0)
-                run_jobs_inline();
-        },
-        &gauge::record_failure);
-    lock.lock();
-    sequencing_ = false;
-    work_cv_.notify_all();
+    const bool ok = end_strip_flushed(lock);
     if (!ok) {
         lock.unlock();
         return failure(fn);

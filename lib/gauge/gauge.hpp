@@ -536,6 +536,11 @@ class gauge {
     void record_row(frame_slot &slot);
     void archive_sheet(const flt_sheet &sh, const sheet_buffer &b, std::size_t n);
     void flush_from_producer();
+    // With m_ held through `lock` and the queue drained: takes the
+    // sequencing role, ends the strip as a flush does (pending cuts first,
+    // the last sheet flagged FLT_SHEET_FLAG_FLUSHED) and gives the role
+    // back. False when that failed (record_failure has the reason).
+    bool end_strip_flushed(std::unique_lock<std::mutex> &lock);
     void replay_events(const sources::recorded_frame &r);
     std::int64_t recorded_row(std::uint64_t seq) const {
         return std::int64_t(seq) - std::int64_t(rec_seq0_);

@@ -255,6 +255,21 @@ void gauge::take(const gauge_input &in, bool from_acquisition) {
 void gauge::acquisition_main() {
     flt_status status = FLT_OK;
     std::string message;
+    // Runs a step of taking a frame; a step that throws ends the
+    // acquisition, its status and message kept for flt_gauge_stop.
+    const auto stops_on_failure = [&](auto &&step) {
+        try {
+            step();
+            return true;
+        } catch (const error &e) {
+            status = e.status;
+            message = e.what();
+        } catch (const std::exception &e) {
+            status = FLT_ERR_INTERNAL;
+            message = e.what();
+        }
+        return false;
+    };
     for (;;) {
         {
             std::lock_guard<std::mutex> lock(m_);
@@ -277,7 +292,7 @@ void gauge::acquisition_main() {
             // A recording: its events before the row, then the row with what
             // the live gauge knew of it (its pixels, if kept, are not
             // extracted again: the recorded row is the measurement).
-            try {
+            const bool taken = stops_on_failure([&] {
                 if (recorded->has_row && recorded->block->fibers != K_)
                     throw error(FLT_ERR_INVALID_ARGUMENT,
                                 "the recording's rows have another fiber count than the "
@@ -291,15 +306,9 @@ void gauge::acquisition_main() {
                         throw error(cst, flt_last_error_message());
                     take(in, true);
                 }
-            } catch (const error &e) {
-                status = e.status;
-                message = e.what();
+            });
+            if (!taken)
                 break;
-            } catch (const std::exception &e) {
-                status = FLT_ERR_INTERNAL;
-                message = e.what();
-                break;
-            }
             continue;
         }
         gauge_input in;
@@ -314,17 +323,8 @@ void gauge::acquisition_main() {
             message = flt_last_error_message();
             break;
         }
-        try {
-            take(in, true);
-        } catch (const error &e) {
-            status = e.status;
-            message = e.what();
+        if (!stops_on_failure([&] { take(in, true); }))
             break;
-        } catch (const std::exception &e) {
-            status = FLT_ERR_INTERNAL;
-            message = e.what();
-            break;
-        }
     }
     std::lock_guard<std::mutex> lock(m_);
     acquisition_status_ = status;
@@ -344,20 +344,7 @@ void gauge::flush_from_producer() {
         throw error(failure_status_, failure_message_.c_str());
     if (stopping_)
         return;
-    sequencing_ = true;
-    lock.unlock();
-    const bool ok = gauge_guarded(
-        this,
-        [&] {
-            activate_cuts(std::numeric_limits<std::uint64_t>::max());
-            end_strip(FLT_SHEET_FLAG_FLUSHED);
-            if (cfg_.workers == 0)
-                run_jobs_inline();
-        },
-        &gauge::record_failure);
-    lock.lock();
-    sequencing_ = false;
-    work_cv_.notify_all();
+    const bool ok = end_strip_flushed(lock);
     idle_cv_.notify_all();
     if (!ok)
         throw error(failure_status_, failure_message_.c_str());
