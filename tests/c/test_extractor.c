@@ -19,6 +19,7 @@
 #include <cmocka.h>
 
 #include "flatline/flatline.h"
+#include "sweep.h"
 #include "sheet.h"
 
 #define ROI_FIRST 892
@@ -308,6 +309,7 @@ static void spurious_reflections_are_rejected_not_measured(void **state) {
  * neither shortcut changes the physics, and they keep the run to seconds. */
 static void end_to_end_reference_sheet_within_half_a_millimetre(void **state) {
     (void)state;
+    FLT_SWEEP_NOT_UNDER_SANITIZERS();
     enum { N = 151, FRAMES = 1800 };
     flt_calib *calib = reference(N, 10.0); /* -750 .. 750 mm */
     const flt_option keys[] = {FLT_OPT_SIM_HEAVE_SIGMA,

@@ -34,6 +34,7 @@
 #include <cmocka.h>
 
 #include "flatline/flatline.h"
+#include "sweep.h"
 #include "sheet.h"
 
 #define ROWS 1100 /* 3300 mm at 3 mm */
@@ -323,6 +324,7 @@ static const double k_offsets[3] = {137, -211, 31}; /* mm, the strip's mean posi
  * fiber). */
 static void zones_on_wandering_strips_match_the_truth(void **state) {
     (void)state;
+    FLT_SWEEP_NOT_UNDER_SANITIZERS();
     grid g = make_grid(1251, 2.0);
     /* One flatness per reference, evaluating every sheet in turn: a handle
      * is reused from sheet to sheet (and each create writes its whole
@@ -414,6 +416,7 @@ static int classify(flt_flatness *f, const grid *g, int w, int c, int i, unsigne
  * more; 50 mm zones hold 5 fibers), x = -1250 .. 1250 mm. */
 static void shape_classes_on_wandering_strips(void **state) {
     (void)state;
+    FLT_SWEEP_NOT_UNDER_SANITIZERS();
     grid g = make_grid(251, 10.0);
     flt_options *o = flat_options(0, NULL, NULL);
     flt_flatness *f = NULL;
