@@ -14,6 +14,7 @@
 #include "core/options.hpp"
 #include "flatline/recon.h"
 #include "flatline/sim.h"
+#include "core/crt_math.hpp"
 #include "simulation/sim_random.hpp"
 
 using namespace flt;
@@ -190,7 +191,7 @@ struct flt_sim {
                     g = 0;
                     break;
                 case FLT_SIM_CENTRE_BUCKLE: {
-                    const double c = std::cos(k_pi * xc / strip_width);
+                    const double c = flt::crt::cos(k_pi * xc / strip_width);
                     g = c * c;
                     break;
                 }
@@ -205,7 +206,7 @@ struct flt_sim {
                     break;
                 case FLT_SIM_QUARTER_BUCKLE: {
                     const double a = (std::fabs(xc) - 0.25 * strip_width) / (0.125 * strip_width);
-                    g = std::exp(-a * a);
+                    g = flt::crt::exp(-a * a);
                     break;
                 }
                 case FLT_SIM_BOW:
@@ -218,7 +219,7 @@ struct flt_sim {
                     g = 0;
                     break;
             }
-            const double w = d.period_mm > 0 ? std::sin(2 * k_pi * s / d.period_mm) : 1.0;
+            const double w = d.period_mm > 0 ? flt::crt::sin(2 * k_pi * s / d.period_mm) : 1.0;
             z += d.amplitude_mm * g * w;
         }
         if (map_rows)
@@ -250,8 +251,8 @@ struct flt_sim {
             const double d = s - cut;
             if (d * p.shear_decay > 30)
                 break;
-            z += p.shear_amplitude * std::exp(-p.shear_decay * d) *
-                 std::sin(2 * k_pi * d / p.shear_period);
+            z += p.shear_amplitude * flt::crt::exp(-p.shear_decay * d) *
+                 flt::crt::sin(2 * k_pi * d / p.shear_period);
             if (p.shear_decay <= 0)
                 break;  // undamped: only the latest cut
             cut -= p.shear_interval;
@@ -273,7 +274,7 @@ struct flt_sim {
         m.heave = params.heave_sigma * rng.gauss();
         m.tilt = params.tilt_sigma * rng.gauss();
         m.eccentricity =
-            params.ecc_amplitude * std::sin(2 * k_pi * encoder_of(f) / params.ecc_period);
+            params.ecc_amplitude * flt::crt::sin(2 * k_pi * encoder_of(f) / params.ecc_period);
         return m;
     }
 
@@ -296,7 +297,7 @@ struct flt_sim {
     void walk_to(walk_cursor &cursor, long long n) const {
         if (n < cursor.last - 3)
             cursor = walk_cursor();
-        const double a = std::exp(-1.0 / k_walk_knots_per_length);
+        const double a = flt::crt::exp(-1.0 / k_walk_knots_per_length);
         const double step = params.wander_sigma * std::sqrt(1 - a * a);
         while (cursor.last < n) {
             ++cursor.last;
@@ -327,7 +328,7 @@ struct flt_sim {
     double centre_at(walk_cursor &cursor, double e) const {
         double c = params.strip_offset + walk_value(cursor, e);
         if (params.wander_amplitude > 0)
-            c += params.wander_amplitude * std::sin(2 * k_pi * e / params.wander_period);
+            c += params.wander_amplitude * flt::crt::sin(2 * k_pi * e / params.wander_period);
         return c;
     }
 
@@ -502,7 +503,7 @@ struct flt_sim {
             if (speckle < 0)
                 speckle = 0;
             intensity[std::size_t(v) * width + u] +=
-                float(amplitude * std::exp(d * d * inv)) * speckle;
+                float(amplitude * flt::crt::exp(d * d * inv)) * speckle;
         }
     }
 
@@ -536,7 +537,7 @@ struct flt_sim {
             const long u_last = std::min(long(width) - 1, long(std::floor(u0 + half_len)));
             for (long u = u_first; u <= u_last; ++u) {
                 const double t = (double(u) - u0) / half_len;
-                const double envelope = std::cos(0.5 * k_pi * t);
+                const double envelope = flt::crt::cos(0.5 * k_pi * t);
                 add_ridge(std::uint32_t(u), v0 + slant * (double(u) - u0), sigma,
                           amplitude * envelope * envelope, pixel_rng);
             }
@@ -640,7 +641,7 @@ struct flt_sim {
                     if (u < 0 || u >= long(width) || !(cover[u] > 0))
                         break;
                     const double t = (double(i) + 0.5) / length;  // 0..1 from the edge
-                    const double envelope = std::cos(0.5 * k_pi * std::min(1.0, t));
+                    const double envelope = flt::crt::cos(0.5 * k_pi * std::min(1.0, t));
                     const double row = centre_row[laser][u];
                     add_ridge(std::uint32_t(u), row, sigma, peak * envelope * envelope * cover[u],
                               pixel_rng);

@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstdint>
 
+#include "core/crt_math.hpp"
+
 namespace flt {
 
 inline std::uint64_t splitmix64(std::uint64_t x) {
@@ -41,7 +43,7 @@ class sim_rng {
     // N(0, 1) by Box-Muller: exact, for the few draws per frame (motion).
     double gauss() {
         const double a = uniform(), b = uniform();
-        return std::sqrt(-2.0 * std::log(1.0 - a)) * std::cos(6.283185307179586 * b);
+        return std::sqrt(-2.0 * crt::log(1.0 - a)) * crt::cos(6.283185307179586 * b);
     }
     // Approximately N(0, 1): the scaled sum of four 16-bit uniforms (Irwin-Hall,
     // tails cut at 3.46 sigma), for per-pixel noise where speed matters and
