@@ -78,7 +78,13 @@
  *       p the mean fiber pitch, so slot k keeps its place on the strip
  *       whatever the strip does; its heights in a row are interpolated
  *       linearly between the two sensor fibers around c_row -+ x_s
- *       (both must be usable); slots beyond -+W/2 are off the strip
+ *       (both must be usable); a slot between the strip's last usable
+ *       sensor fiber and the next one, when that one is off the strip
+ *       (flagged FLT_FLAG_OFF_STRIP, or outside c_row -+ W/2) or has no
+ *       height within a pitch of the edge, is extrapolated linearly from
+ *       the last two usable fibers, less than a pitch away, so the edge
+ *       zones read the same wherever the edges fall on the fiber grid;
+ *       slots beyond -+W/2 are off the strip
  *       (FLT_FIBER_OFF_STRIP with FLT_FIBER_NO_DATA);
  *     - zones: n = ceil((W - p) / flat_zone_width) zones of
  *       flat_zone_width (a strip wider than n zones by less than a pitch

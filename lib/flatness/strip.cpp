@@ -198,6 +198,28 @@ void strip_resampler::resample_rows(std::size_t first, std::size_t last, const f
             return std::fabs(zr[i]) <= 1.0e9 &&  // as metrics.cpp: larger is no height; NaN: false
                    !(fr && (fr[i] & k_unusable));
         };
+        // A slot between the strip's last usable sensor fiber and the next
+        // one, which is off the strip (flagged so, or outside the located
+        // strip) or within a pitch of the edge without a height (the
+        // extractor needs two columns of strip to fit a fiber), lies on
+        // the strip less than a pitch from the usable fiber: its height is
+        // extrapolated linearly from the last two usable fibers. Left
+        // unread, the slot next to each edge would be measured or not
+        // depending on where the edge falls on the fiber grid, and on a
+        // wavy edge it is the edge zone's longest fiber. A fiber without
+        // data further inside is a hole, not an edge: its slots stay unread.
+        auto at_edge = [&](std::size_t unusable, std::size_t usable_one, double centre) {
+            const double pitch = std::fabs(gx[unusable] - gx[usable_one]);
+            return (fr && (fr[unusable] & FLT_FLAG_OFF_STRIP)) ||
+                   std::fabs(gx[unusable] - centre) > half - pitch;
+        };
+        // Through inner fiber `in` and the next one inwards, `next`
+        // (NaN when that is not usable or not on the grid).
+        auto extrapolated = [&](std::size_t in, std::size_t next, double at) {
+            if (next >= K || !usable(next))
+                return nan_value;
+            return zr[in] + (at - gx[in]) * (zr[in] - zr[next]) / (gx[in] - gx[next]);
+        };
         // Sensor x grows with the walk: slots in order for side +1, in
         // reverse for side -1.
         std::size_t i = 0;
@@ -220,6 +242,8 @@ void strip_resampler::resample_rows(std::size_t first, std::size_t last, const f
                             value = w <= 1e-9       ? zr[i]
                                     : w >= 1 - 1e-9 ? zr[i + 1]
                                                     : zr[i] + w * (zr[i + 1] - zr[i]);
+                        else if (a != b && at_edge(a ? i + 1 : i, a ? i : i + 1, c))
+                            value = a ? extrapolated(i, i - 1, x) : extrapolated(i + 1, i + 2, x);
                     }
                 }
             }
