@@ -114,8 +114,19 @@
  *   band from the first frame processed: the two brightest rows of the
  *   frame's row sums (the two lines), assigned to the lasers in the order the
  *   calibration predicts at z = 0, each band reaching halfway to the other
- *   line on both sides. If the first frame shows no two lines, process()
- *   fails with FLT_ERR_NUMERIC and the next frame tries again.
+ *   line on both sides. A first frame with one line (one laser switched on
+ *   while commissioning, a still image) places both bands too: the line is
+ *   laser L's when L's plane puts it within -+extract_strip_min_z of the
+ *   pass line and the other laser's does not, or puts it at least twice as
+ *   far (the strip runs near the pass line; the reference sensor tells the
+ *   lasers apart up to about 33 mm from it); the other laser's line is
+ *   placed where the calibration puts it at the same height, and the bands
+ *   are laid as for two lines (logged at FLT_LOG_INFO; flt_extractor_band()
+ *   tells them). A line that could be either laser's, a frame with no line
+ *   standing out of its rows (a quarter of extract_min_peak over the width)
+ *   or one whose other line would fall outside the frame makes process()
+ *   fail with FLT_ERR_NUMERIC, saying which, and the next frame tries
+ *   again.
  *
  * Pixel formats
  *   Mono8: one byte per pixel. Mono10, Mono12, Mono16: one little-endian

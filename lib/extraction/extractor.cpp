@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <memory>
@@ -15,6 +16,7 @@
 
 #include "calibration/calib_internal.hpp"
 #include "core/error.hpp"
+#include "core/log.hpp"
 #include "core/options.hpp"
 #include "extraction/extractor_internal.hpp"
 #include "extraction/peak_kernels.hpp"
@@ -153,7 +155,8 @@ struct flt_extractor {
     ~flt_extractor() { flt_calib_destroy(calib); }
 
     void build_maps();
-    void detect_bands(const unsigned char *frame, std::size_t stride, int bytes);
+    void detect_bands(const unsigned char *frame, std::size_t stride, int bytes,
+                      std::uint32_t full_scale);
     template <class Pixel>
     void extract(const unsigned char *frame, std::size_t stride, std::uint32_t full_scale);
     void resample(unsigned laser);
@@ -273,7 +276,16 @@ void flt_extractor::build_maps() {
 // of heights within -+extract_strip_min_z of the pass line under the middle
 // of the fiber grid (the roller table's line, far lower, is brighter than
 // a narrow strip's, and a head or tail shows only the table).
-void flt_extractor::detect_bands(const unsigned char *frame, std::size_t stride, int bytes) {
+//
+// A frame with one line (one laser switched on while commissioning, a still
+// image) places both bands too, when the line can be only one laser's: the
+// other laser's line is where the calibration puts it at the same height,
+// and the bands are laid as for two lines. The row is one laser's when its
+// height through that laser's plane lies within -+extract_strip_min_z and
+// its height through the other's does not; a row that could be either is
+// refused (a wrong guess would read every height wrong, with confidence).
+void flt_extractor::detect_bands(const unsigned char *frame, std::size_t stride, int bytes,
+                                 std::uint32_t full_scale) {
     long allowed_lo = long(height), allowed_hi = -1;
     for (unsigned laser = 0; laser < 2; ++laser) {
         const double x_mid = first_x + 0.5 * pitch * double(fibers - 1);
@@ -310,22 +322,96 @@ void flt_extractor::detect_bands(const unsigned char *frame, std::size_t stride,
     for (long v = allowed_lo; v <= allowed_hi; ++v)
         if (std::labs(v - r1) > exclusion && (r2 < 0 || row_sum[v] > row_sum[r2]))
             r2 = v;
-    if (r2 < 0 || !(row_sum[r2] - floor_level > 0.25 * (row_sum[r1] - floor_level)))
-        throw error(FLT_ERR_NUMERIC,
-                    "the first frame does not show two laser lines (no second row "
-                    "brighter than a quarter of the brightest); set the bands with "
-                    "extract_laser0_first_row/_rows and extract_laser1_first_row/_rows");
-    // Which laser is the upper line: the calibration's prediction at z = 0
-    // under the middle of the fiber grid.
-    double predicted[2];
-    for (unsigned laser = 0; laser < 2; ++laser) {
-        double p[2] = {first_x + 0.5 * pitch * double(fibers - 1), 0.0}, img[2];
-        check(flt_calib_plane_to_image(calib, laser, 1, p, img));
-        predicted[laser] = img[1];
+    const double x_mid = first_x + 0.5 * pitch * double(fibers - 1);
+    long top, bottom;
+    unsigned upper;
+    if (r2 >= 0 && row_sum[r2] - floor_level > 0.25 * (row_sum[r1] - floor_level)) {
+        // Two lines. Which laser is the upper line: the calibration's
+        // prediction at z = 0 under the middle of the fiber grid.
+        double predicted[2];
+        for (unsigned laser = 0; laser < 2; ++laser) {
+            double p[2] = {x_mid, 0.0}, img[2];
+            check(flt_calib_plane_to_image(calib, laser, 1, p, img));
+            predicted[laser] = img[1];
+        }
+        top = std::min(r1, r2), bottom = std::max(r1, r2);
+        upper = predicted[0] <= predicted[1] ? 0 : 1;
+    } else {
+        // One line at most. It is one when its row stands out of the
+        // others (outside the line's exclusion) by a quarter of
+        // extract_min_peak per sampled column: a line over a quarter of
+        // the width at the weakest peak the extractor accepts.
+        double others = 0;
+        std::size_t n_others = 0;
+        for (long v = 0; v < long(height); ++v)
+            if (std::labs(v - r1) > exclusion)
+                others += row_sum[std::size_t(v)], ++n_others;
+        const std::uint32_t sampled_columns = (width + 3) / 4;  // every 4th, as summed
+        const double sampled = double(sampled_columns);
+        const double excess = n_others ? (row_sum[r1] - others / double(n_others)) / sampled : 0;
+        if (!(excess >= 0.25 * min_peak * double(full_scale)))
+            throw error(FLT_ERR_NUMERIC,
+                        "the first frame does not show two laser lines, nor one (no row "
+                        "stands out); set the bands with extract_laser0_first_row/_rows and "
+                        "extract_laser1_first_row/_rows");
+        // Its height through each laser's plane, in the column that sees
+        // the middle of the fiber grid.
+        double z_of[2];
+        for (unsigned laser = 0; laser < 2; ++laser) {
+            double p[2] = {x_mid, 0.0}, img[2];
+            check(flt_calib_plane_to_image(calib, laser, 1, p, img));
+            double point[2] = {img[0], double(r1)}, plane[2];
+            check(flt_calib_image_to_plane(calib, laser, 1, point, plane));
+            z_of[laser] = plane[1];
+        }
+        // A laser could cast it when its height lies within the rows
+        // searched; of two that could, the one that puts it nearer the
+        // pass line did when the other puts it at least twice as far (the
+        // strip runs near the pass line: the reference sensor tells the
+        // lasers apart up to about 33 mm from it). Else it is ambiguous.
+        const double reach = std::fabs(strip_min_z);
+        bool could_be[2] = {std::fabs(z_of[0]) <= reach, std::fabs(z_of[1]) <= reach};
+        if (could_be[0] && could_be[1]) {
+            const unsigned nearer = std::fabs(z_of[0]) <= std::fabs(z_of[1]) ? 0 : 1;
+            if (std::fabs(z_of[1 - nearer]) >= 2 * std::fabs(z_of[nearer]))
+                could_be[1 - nearer] = false;
+        }
+        char message[320];
+        if (could_be[0] == could_be[1]) {
+            std::snprintf(message, sizeof message,
+                          "the first frame shows one laser line, at row %ld, which would lie "
+                          "at z = %.1f mm for laser 0 and %.1f mm for laser 1: %s laser's "
+                          "(within -+extract_strip_min_z, one at most half as far from z = 0 "
+                          "as the other); set the bands with "
+                          "extract_laser0_first_row/_rows and extract_laser1_first_row/_rows",
+                          r1, z_of[0], z_of[1], could_be[0] ? "either" : "neither");
+            throw error(FLT_ERR_NUMERIC, message);
+        }
+        const unsigned seen = could_be[0] ? 0 : 1;
+        double p[2] = {x_mid, z_of[seen]}, img[2];
+        check(flt_calib_plane_to_image(calib, 1 - seen, 1, p, img));
+        const double other = img[1];
+        if (!(other >= 0 && other <= double(height) - 1) ||
+            std::fabs(other - double(r1)) <= double(exclusion)) {
+            std::snprintf(message, sizeof message,
+                          "the first frame shows one laser line, laser %u's at row %ld; laser "
+                          "%u's would lie at row %.1f, %s; set the bands with "
+                          "extract_laser0_first_row/_rows and extract_laser1_first_row/_rows",
+                          seen, r1, 1 - seen, other,
+                          std::fabs(other - double(r1)) <= double(exclusion)
+                              ? "too close to it for two bands"
+                              : "outside the frame");
+            throw error(FLT_ERR_NUMERIC, message);
+        }
+        const long r_other = long(std::lround(other));
+        top = std::min(r1, r_other), bottom = std::max(r1, r_other);
+        upper = r1 < r_other ? seen : 1 - seen;
+        FLT_LOG(FLT_LOG_INFO, "extractor",
+                "automatic bands from one line: laser %u's at row %ld (z = %.1f mm), laser "
+                "%u's placed at row %ld by the calibration",
+                seen, r1, z_of[seen], 1 - seen, r_other);
     }
-    const long top = std::min(r1, r2), bottom = std::max(r1, r2);
     const long mid = (top + bottom + 1) / 2, half = (bottom - top) / 2;
-    const unsigned upper = predicted[0] <= predicted[1] ? 0 : 1;
     band b[2];
     b[upper].first = std::uint32_t(std::max(0L, top - half));
     b[upper].rows = std::uint32_t(mid - long(b[upper].first));
@@ -1207,9 +1293,9 @@ FLT_API flt_status FLT_CALL flt_extractor_process(flt_extractor *extractor, cons
                         "%s: argument 'fibers' = %zu but the calibration has %zu", fn, fibers,
                         ex.fibers);
         const auto *pixels = static_cast<const unsigned char *>(frame);
-        if (!ex.maps_ready)
-            ex.detect_bands(pixels, stride_bytes, bytes);
         const std::uint32_t full_scale = (1u << unsigned(format)) - 1u;
+        if (!ex.maps_ready)
+            ex.detect_bands(pixels, stride_bytes, bytes, full_scale);
         if (bytes == 1)
             ex.extract<std::uint8_t>(pixels, stride_bytes, full_scale);
         else

@@ -472,6 +472,96 @@ static void expect_error(flt_status st, flt_status code, const char *needle) {
         fail_msg("message '%s' lacks '%s'", flt_last_error_message(), needle);
 }
 
+/* A frame with one line (one laser on while commissioning): the line's
+ * laser is the one whose plane puts it within -+extract_strip_min_z (of two,
+ * the one that puts it at most half as far from the pass line), and the
+ * other band goes where the calibration puts the other line at the same
+ * height. Frames of the reference ROI with one laser's band blanked (its
+ * rows replaced by the frame's first row, background and noise only): the
+ * bands found lie within 3 rows of those two lines give (the other line's
+ * row is predicted, not seen: its centre from the calibration, against the
+ * brightest row of the sums), and the extractor reads the next two-line
+ * frame as the one whose bands came from two lines: heights within 0.02 mm,
+ * the same fibers valid (the bands hold the lines far from their ends, so
+ * only the column maps' fitting interval moves). A line at a row that
+ * could be either laser's (z = 50 mm through one plane, -45 mm through the
+ * other: neither twice the other) is refused with a message saying so. */
+static void one_line_places_both_bands(void **state) {
+    (void)state;
+    enum { N = 101 };
+    flt_calib *calib = reference(N, 20.0);
+    flt_sim *sim = make_sim(calib, 0, NULL, NULL);
+    uint8_t *frame = malloc((size_t)W * ROI_ROWS), *one = malloc((size_t)W * ROI_ROWS);
+    double e, s, h[2][N], g[N];
+    uint8_t valid[2][N];
+    assert_int_equal(flt_sim_next_frame(sim, frame, (size_t)W * ROI_ROWS, W, &e, 0, NULL, NULL, 0),
+                     FLT_OK);
+    flt_extractor *two = make_extractor(calib, 0, NULL, NULL);
+    assert_int_equal(flt_extractor_process(two, frame, FLT_PIXEL_MONO8, W, ROI_ROWS, W, e, N, &s,
+                                           h[0], g, valid[0]),
+                     FLT_OK);
+    uint32_t first[2], rows[2];
+    for (unsigned laser = 0; laser < 2; ++laser)
+        assert_int_equal(flt_extractor_band(two, laser, &first[laser], &rows[laser]), FLT_OK);
+    for (unsigned lit = 0; lit < 2; ++lit) {
+        const unsigned dark = 1 - lit;
+        memcpy(one, frame, (size_t)W * ROI_ROWS);
+        for (uint32_t v = first[dark]; v < first[dark] + rows[dark]; ++v)
+            memcpy(one + (size_t)v * W, frame, W);
+        flt_extractor *ex = make_extractor(calib, 0, NULL, NULL);
+        assert_int_equal(flt_extractor_process(ex, one, FLT_PIXEL_MONO8, W, ROI_ROWS, W, e, N, &s,
+                                               h[1], g, valid[1]),
+                         FLT_OK);
+        for (unsigned laser = 0; laser < 2; ++laser) {
+            uint32_t f, r;
+            assert_int_equal(flt_extractor_band(ex, laser, &f, &r), FLT_OK);
+            print_message("laser %u alone: laser %u's band rows %u + %u (from two lines: %u + "
+                          "%u)\n",
+                          lit, laser, f, r, first[laser], rows[laser]);
+            assert_true(abs((int)f - (int)first[laser]) <= 3);
+            assert_true(abs((int)(f + r) - (int)(first[laser] + rows[laser])) <= 3);
+        }
+        /* The dark laser's band shows no line: every fiber off the strip. */
+        for (size_t k = 0; k < N; ++k)
+            assert_int_equal(valid[1][k], 0);
+        assert_int_equal(flt_extractor_process(ex, frame, FLT_PIXEL_MONO8, W, ROI_ROWS, W, e, N, &s,
+                                               h[1], g, valid[1]),
+                         FLT_OK);
+        double worst = 0;
+        size_t n_valid = 0;
+        for (size_t k = 0; k < N; ++k) {
+            assert_int_equal(valid[1][k], valid[0][k]);
+            if (valid[0][k])
+                worst = fmax(worst, fabs(h[1][k] - h[0][k])), ++n_valid;
+        }
+        print_message("  the next two-line frame: %zu fibers valid, heights within %.4f mm of "
+                      "the two-line bands'\n",
+                      n_valid, worst);
+        assert_true(n_valid >= N - 2);
+        assert_true(worst <= 0.02);
+        flt_extractor_destroy(ex);
+    }
+    /* A line either laser could cast: rows 994-1042 of the reference
+     * camera lie within -+100 mm for both planes; row 1018 is ROI row 126. */
+    memset(one, 10, (size_t)W * ROI_ROWS);
+    for (int dv = -4; dv <= 4; ++dv)
+        memset(one + (size_t)(126 + dv) * W, (int)(10 + 150 * exp(-0.5 * dv * dv / 2.25)), W);
+    flt_extractor *ex = make_extractor(calib, 0, NULL, NULL);
+    expect_error(
+        flt_extractor_process(ex, one, FLT_PIXEL_MONO8, W, ROI_ROWS, W, e, N, &s, h[1], g, NULL),
+        FLT_ERR_NUMERIC, "either laser's");
+    print_message("a line at row 1018: %s\n", flt_last_error_message());
+    /* ... and the extractor is still usable: the next frame places the bands. */
+    assert_int_equal(
+        flt_extractor_process(ex, frame, FLT_PIXEL_MONO8, W, ROI_ROWS, W, e, N, &s, h[1], g, NULL),
+        FLT_OK);
+    flt_extractor_destroy(ex);
+    flt_extractor_destroy(two);
+    flt_sim_destroy(sim);
+    flt_calib_destroy(calib);
+    free(frame), free(one);
+}
+
 /* Bad input: the status, a message naming the argument, and an extractor
  * that still works afterwards. */
 static void bad_input_is_rejected_by_name(void **state) {
@@ -568,6 +658,7 @@ int main(void) {
         cmocka_unit_test(end_to_end_reference_sheet_within_half_a_millimetre),
         cmocka_unit_test(line_beside_a_bright_patch_is_found),
         cmocka_unit_test(same_frame_same_bytes),
+        cmocka_unit_test(one_line_places_both_bands),
         cmocka_unit_test(bad_input_is_rejected_by_name),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

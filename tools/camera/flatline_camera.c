@@ -1282,10 +1282,9 @@ static int draw_overlay(const frame_copy *f, const flt_calib *calib, uint8_t *rg
                                    height, slope, NULL);
     int rc = 0;
     if (st != FLT_OK) {
-        /* e.g. an automatic band that finds no two lines: the frame is
-         * still worth seeing */
-        printf("overlay: the extractor found no lines in this frame: %s\n",
-               flt_last_error_message());
+        /* e.g. an automatic band that finds no line to place it from:
+         * the frame is still worth seeing */
+        printf("overlay: the extractor could not read this frame: %s\n", flt_last_error_message());
         for (uint32_t y = 0; y < f->height; ++y)
             for (uint32_t x = 0; x < f->width; ++x)
                 if (pixel_at(f, x, y) >= (unsigned)full_scale)

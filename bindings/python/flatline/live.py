@@ -129,8 +129,9 @@ def render_overlay(frame: np.ndarray, bits: int, extractor: flatline.Extractor,
     """The frame in grey with what the extractor found drawn in, and the
     figures per laser: band, columns with a line, saturated ones, line and
     background levels (fractions of full scale), strip edges (mm and
-    column). A frame the extractor refuses (no two lines for an automatic
-    band) is drawn with its saturated pixels only, and says why."""
+    column). A frame the extractor refuses (no line it can place an
+    automatic band from) is drawn with its saturated pixels only, and says
+    why."""
     full = (1 << bits) - 1
     grey = _grey8(frame, bits)
     rgb = np.repeat(grey[:, :, None], 3, axis=2)
