@@ -437,6 +437,19 @@ typedef enum flt_option {
      * the neighbouring rows of its column (half up, half down), 0..1.
      * Default 0: clipped at full scale. */
     FLT_OPT_SIM_BLOOMING = 334,
+    /** "sim_depth_of_field": the height (mm) from the focal plane (the pass
+     * line, z = 0) at which the line's width has grown by sqrt(2): out of
+     * focus its sigma grows as sqrt(1 + (z / dof)^2) and its peak falls as
+     * much (the same light). 0..1e4; default 0: always in focus. */
+    FLT_OPT_SIM_DEPTH_OF_FIELD = 335,
+    /** "sim_dark_patches": share of the strip's surface under dark patches
+     * (coated, oiled or scaled), 0..1: cells 60 mm across by 150 mm along,
+     * fixed to the strip, each dark with this probability and then
+     * reflecting 0.15-0.5 of the line's light. Default 0. */
+    FLT_OPT_SIM_DARK_PATCHES = 336,
+    /** "sim_gamma": the camera's response, a pixel reads full scale times
+     * (signal / full scale)^(1 / gamma), 0.2..5. Default 1: linear. */
+    FLT_OPT_SIM_GAMMA = 337,
 
     /* --- frame-to-profile extractor (flatline/extractor.h) --- */
     /** "extract_laser0_first_row", "extract_laser0_rows": laser 0's band of

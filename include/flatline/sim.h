@@ -44,6 +44,12 @@
  *   scale); with sim_blooming the charge above full scale spills into the
  *   neighbouring rows of its column, half up and half down, filling the
  *   first unsaturated pixels.
+ *   What real photos show besides: defocus (sim_depth_of_field: the line
+ *   widens as the strip leaves the focal plane at z = 0, its sigma growing
+ *   as sqrt(1 + (z / dof)^2) and its peak falling as much), dark patches of
+ *   the strip (sim_dark_patches: cells 60 mm across by 150 mm along, fixed
+ *   to the strip, reflecting 0.15-0.5 of the line's light; the line over
+ *   them is dim, its background unchanged) and a camera gamma (sim_gamma).
  *
  * Frames and lasers
  *   Frame f is taken at encoder position e_f = sim_start + f * sim_frame_spacing

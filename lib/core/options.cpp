@@ -171,6 +171,10 @@ const option_spec k_options[] = {
     {FLT_OPT_ARCHIVE_MAPS, "archive_maps", 0.0, 1.0, 1.0, true},
     // the gauge, later additions
     {FLT_OPT_GAUGE_PROVISIONAL_MM, "gauge_provisional_mm", 0.0, 1.0e6, 0.0, false},
+    // simulator: what real photos show besides (appended)
+    {FLT_OPT_SIM_DEPTH_OF_FIELD, "sim_depth_of_field", 0.0, 1.0e4, 0.0, false},
+    {FLT_OPT_SIM_DARK_PATCHES, "sim_dark_patches", 0.0, 1.0, 0.0, false},
+    {FLT_OPT_SIM_GAMMA, "sim_gamma", 0.2, 5.0, 1.0, false},
 };
 constexpr std::size_t k_option_count = sizeof k_options / sizeof k_options[0];
 

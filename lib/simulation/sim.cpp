@@ -25,6 +25,8 @@ constexpr std::uint32_t k_sim_magic = 0x464c5453u;  // "FLTS"
 constexpr std::size_t k_max_defects = 64;
 constexpr double k_pi = 3.14159265358979323846;
 constexpr double k_nan = std::numeric_limits<double>::quiet_NaN();
+// sim_dark_patches: the cells of the strip's reflectance, mm across and along.
+constexpr double k_patch_across_mm = 60.0, k_patch_along_mm = 150.0;
 
 // Random streams of one frame (see sim_random.hpp).
 enum stream : std::uint64_t {
@@ -34,7 +36,8 @@ enum stream : std::uint64_t {
     stream_pixels = 4,
     stream_reflections = 5,
     stream_wander = 6,  // seeded with the knot index, not the frame
-    stream_edge_glints = 7
+    stream_edge_glints = 7,
+    stream_patches = 8  // seeded with the patch's cell, not the frame
 };
 
 struct defect {
@@ -57,6 +60,8 @@ struct sim_params {
     double coil_length, coil_gap, second_width;
     double table_depth, roller_pitch, roller_gap, table_brightness;
     double edge_glints, blooming;
+    // What real photos show besides.
+    double depth_of_field, dark_patches, gamma;
 };
 
 sim_params read_params(const flt_options *o) {
@@ -96,6 +101,9 @@ sim_params read_params(const flt_options *o) {
     p.table_brightness = option_value(o, FLT_OPT_SIM_TABLE_BRIGHTNESS);
     p.edge_glints = option_value(o, FLT_OPT_SIM_EDGE_GLINTS);
     p.blooming = option_value(o, FLT_OPT_SIM_BLOOMING);
+    p.depth_of_field = option_value(o, FLT_OPT_SIM_DEPTH_OF_FIELD);
+    p.dark_patches = option_value(o, FLT_OPT_SIM_DARK_PATCHES);
+    p.gamma = option_value(o, FLT_OPT_SIM_GAMMA);
     return p;
 }
 
@@ -166,7 +174,10 @@ struct flt_sim {
     // of the column's centre on the strip's line (mm) and the share of the
     // column the strip covers; the table line's row and the share of the
     // column where it is lit (static: the table does not move).
-    std::vector<double> strip_x[2], strip_cover[2];                          // [width]
+    std::vector<double> strip_x[2], strip_cover[2];  // [width]
+    // The line's height (mm) and its strip reflectance, per laser and column
+    // of the current frame (sim_depth_of_field, sim_dark_patches).
+    std::vector<double> strip_z[2], strip_reflectance[2];                    // [width]
     std::vector<double> table_row[2], table_cover_lo[2], table_cover_hi[2];  // [width]
     std::vector<float> spill;  // [width * height] with blooming
     std::vector<float> carry;  // [width] with blooming
@@ -432,15 +443,20 @@ struct flt_sim {
                 return plane_points[2 * (u_increasing[laser] ? i : ns - 1 - i)];
             };
             double *column_x = strip_x[laser].data();
+            double *column_z = strip_z[laser].data();
+            auto z_at = [&](std::size_t i) {
+                return plane_points[2 * (u_increasing[laser] ? i : ns - 1 - i) + 1];
+            };
             for (std::uint32_t u = 0; u < width; ++u) {
                 while (j + 2 < ns && !(u_at(j + 1) >= double(u)))
                     ++j;
                 const double u0 = u_at(j), u1 = u_at(j + 1);
-                double v = k_nan, x = k_nan;
+                double v = k_nan, x = k_nan, z = k_nan;
                 if (u0 <= double(u) && double(u) <= u1 && u1 > u0) {
                     const double t = (double(u) - u0) / (u1 - u0);
                     v = v_at(j) + t * (v_at(j + 1) - v_at(j));
                     x = x_at(j) + t * (x_at(j + 1) - x_at(j));
+                    z = z_at(j) + t * (z_at(j + 1) - z_at(j));
                 }
                 if (params.peak_sigma_px > 0)
                     v += params.peak_sigma_px * rng.gauss();
@@ -448,6 +464,7 @@ struct flt_sim {
                     v = k_nan;
                 centre[u] = v;
                 column_x[u] = x;
+                column_z[u] = z;
             }
             // The share of each column on the strip: its interval runs
             // halfway to its neighbours' centres.
@@ -469,7 +486,33 @@ struct flt_sim {
                 if (cover[u] == 0)
                     centre[u] = k_nan;
             }
+            double *reflectance = strip_reflectance[laser].data();
+            const double s_laser = e - offset_mm[laser];
+            for (std::uint32_t u = 0; u < width; ++u)
+                reflectance[u] = params.dark_patches > 0 && cover[u] > 0
+                                     ? patch_reflectance(column_x[u] - c, s_laser)
+                                     : 1.0;
         }
+    }
+
+    // The strip's reflectance at strip coordinate xs (mm from its centre
+    // line) and material position s (sim_dark_patches): cells of
+    // k_patch_across_mm x k_patch_along_mm fixed to the strip, each dark
+    // with probability sim_dark_patches, then reflecting 0.15-0.5 of what
+    // bare steel does (a coated, oiled or scaled patch), drawn from
+    // (sim_seed, cell): the same patch in every frame that sees it.
+    double patch_reflectance(double xs, double s) const {
+        if (!(xs == xs && s == s))
+            return 1.0;
+        // Clamped while still a double: converting an absurd position to an
+        // integer would be undefined.
+        const double across = std::min(std::max(std::floor(xs / k_patch_across_mm), -1e9), 1e9);
+        const double along = std::min(std::max(std::floor(s / k_patch_along_mm), -1e15), 1e15);
+        const std::uint64_t cell =
+            (std::uint64_t(std::int64_t(across)) << 48) ^ std::uint64_t(std::int64_t(along));
+        sim_rng rng(params.seed, cell, stream_patches);
+        const double dark = rng.uniform(), level = rng.uniform();
+        return dark < params.dark_patches ? 0.15 + 0.35 * level : 1.0;
     }
 
     // The share of column u's interval [lo, hi] on the table (mm) that is
@@ -559,6 +602,7 @@ struct flt_sim {
         const float gain =
             params.full_well > 0 ? float(std::min(fs / params.full_well, k_max_gain)) : 0.0f;
         const float top = float(fs);
+        const float encode = float(1.0 / params.gamma);
         // Locals: a store through a Pixel (bytes may alias anything) would
         // otherwise make the compiler read width and the generator's state
         // again after every pixel.
@@ -577,6 +621,19 @@ struct flt_sim {
                     draw[u] = local.fast_gauss();
             else
                 std::fill(draw, draw + w, 0.0f);
+            if (encode != 1.0f) {
+                // A camera with a gamma (sim_gamma): the pixel encodes
+                // full scale times (signal / full scale)^(1 / gamma).
+                for (std::uint32_t u = 0; u < w; ++u) {
+                    const float value = in[u];
+                    const float x = value + std::sqrt(std::max(value, 0.0f) * gain) * draw[u];
+                    float level = x > 0.0f ? x / top : 0.0f;  // NaN: 0
+                    level = level < 1.0f ? level : 1.0f;
+                    const float encoded = top * std::pow(level, encode) + 0.5f;
+                    row[u] = Pixel(value >= top || !(encoded < top) ? top : encoded);
+                }
+                continue;
+            }
             // Without branches (selects), so that it vectorises
             // (lib/CMakeLists.txt gives this file the flags it needs).
             for (std::uint32_t u = 0; u < w; ++u) {
@@ -689,9 +746,24 @@ struct flt_sim {
         for (unsigned laser = 0; laser < 2; ++laser)
             for (std::uint32_t u = 0; u < width; ++u) {
                 const double cover = strip_cover[laser][u];
-                if (cover > 0)
-                    add_ridge(u, centre_row[laser][u], params.line_sigma_px, amplitude * cover,
-                              rng);
+                if (!(cover > 0))
+                    continue;
+                // Out of focus the line widens and its peak falls as it
+                // widens (the light is the same): sigma grows as
+                // sqrt(1 + (z / sim_depth_of_field)^2), focus at z = 0.
+                // Dark patches dim the line, not the background.
+                double sigma = params.line_sigma_px;
+                double peak = amplitude * cover * strip_reflectance[laser][u];
+                const double z = strip_z[laser][u];
+                if (params.depth_of_field > 0 && z == z) {
+                    // Capped: a tiny depth of field (1e-300 mm is inside the
+                    // option's range) must not make the ridge infinitely
+                    // wide; a thousand times as wide is no line either way.
+                    const double d = z / params.depth_of_field;
+                    const double grow = std::min(std::sqrt(1 + d * d), 1e3);
+                    sigma *= grow, peak /= grow;
+                }
+                add_ridge(u, centre_row[laser][u], sigma, peak, rng);
             }
         if (params.surround == FLT_SIM_SURROUND_ROLLER_TABLE)
             add_table(f, amplitude, rng);
@@ -818,6 +890,8 @@ void setup_geometry(flt_sim &sim) {
         sim.u_increasing[laser] = edges[0] < edges[2];
         sim.centre_row[laser].assign(sim.width, k_nan);
         sim.strip_x[laser].assign(sim.width, k_nan);
+        sim.strip_z[laser].assign(sim.width, k_nan);
+        sim.strip_reflectance[laser].assign(sim.width, 1.0);
         sim.strip_cover[laser].assign(sim.width, 1.0);
         sim.table_row[laser].assign(sim.width, k_nan);
         sim.table_cover_lo[laser].assign(sim.width, k_nan);

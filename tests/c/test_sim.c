@@ -345,6 +345,86 @@ static void frames_draw_the_lines_where_the_calibration_says(void **state) {
     flt_calib_destroy(calib);
 }
 
+/* What real photos show besides, rendered as sim.h says, noise-free (no
+ * speckle, no shot noise) so that every checked pixel is the formula to
+ * its rounding (0.5 counts): a line of peak 0.6 and sigma 2 px over a
+ * background of 0.03 of full scale, under a 12 mm centre buckle and a
+ * -4 mm crossbow.
+ *   depth of field 10 mm: sigma grows by g = sqrt(1 + (z / 10)^2), z the
+ *     line's height there, and the peak falls by g;
+ *   dark patches 0.5: each column's line carries a reflectance r, 1 or in
+ *     [0.15, 0.5], measured as (pixel - background) / (peak profile); the
+ *     dark share of the columns 0.5 within 0.15 (cells 60 mm across and
+ *     150 mm along: about 30 cells per line and frame, 8 lines);
+ *   gamma 2.2: a pixel reads full scale times (I / full scale)^(1 / 2.2). */
+static void field_effects_render_as_documented(void **state) {
+    (void)state;
+    flt_calib *calib = reference(101, 20, ROI_FIRST, ROI_ROWS);
+    for (int effect = 0; effect < 3; ++effect) {
+        const flt_option keys[] = {FLT_OPT_SIM_SPECKLE, FLT_OPT_SIM_FULL_WELL, FLT_OPT_SIM_START,
+                                   effect == 0   ? FLT_OPT_SIM_DEPTH_OF_FIELD
+                                   : effect == 1 ? FLT_OPT_SIM_DARK_PATCHES
+                                                 : FLT_OPT_SIM_GAMMA};
+        const double values[] = {0, 0, 321, effect == 0 ? 10 : effect == 1 ? 0.5 : 2.2};
+        flt_sim *sim = make_sim(calib, 4, keys, values);
+        assert_int_equal(flt_sim_add_defect(sim, FLT_SIM_CENTRE_BUCKLE, 12, 1800), FLT_OK);
+        assert_int_equal(flt_sim_add_defect(sim, FLT_SIM_CROSSBOW, -4, 0), FLT_OK);
+        const uint32_t w = 2048;
+        uint8_t *frame = malloc((size_t)w * ROI_ROWS);
+        double *peaks = malloc(2 * w * sizeof(double));
+        size_t checked = 0, dark = 0;
+        double widest = 1;
+        for (int f = 0; f < 4; ++f) {
+            double e;
+            assert_int_equal(flt_sim_next_frame(sim, frame, (size_t)w * ROI_ROWS, w, &e, 0, NULL,
+                                                peaks, 2 * (size_t)w),
+                             FLT_OK);
+            for (unsigned laser = 0; laser < 2; ++laser)
+                for (uint32_t u = 2; u < w - 2; u += 7) {
+                    const double v = peaks[laser * w + u];
+                    assert_true(v == v);
+                    double pt[2] = {u, v};
+                    assert_int_equal(flt_calib_image_to_plane(calib, laser, 1, pt, pt), FLT_OK);
+                    const double z = pt[1];
+                    const int row = (int)lround(v);
+                    const double d = row - v;
+                    const double pixel = frame[(size_t)row * w + u];
+                    const double bg = 0.03 * 255;
+                    if (effect == 0) {
+                        const double g = sqrt(1 + (z / 10) * (z / 10));
+                        widest = fmax(widest, g);
+                        assert_near(pixel, bg + 0.6 * 255 / g * exp(-d * d / (8 * g * g)),
+                                    0.5 + 1e-9);
+                    } else if (effect == 1) {
+                        const double line = 0.6 * 255 * exp(-d * d / 8);
+                        const double r = (pixel - bg) / line, slack = 0.5 / line + 1e-9;
+                        if (fabs(r - 1) <= slack)
+                            continue;
+                        assert_true(r >= 0.15 - slack && r <= 0.5 + slack);
+                        ++dark;
+                    } else {
+                        const double linear = bg + 0.6 * 255 * exp(-d * d / 8);
+                        assert_near(pixel, 255 * pow(linear / 255, 1 / 2.2), 0.5 + 1e-4);
+                    }
+                    ++checked;
+                }
+        }
+        if (effect == 0) {
+            print_message("depth of field 10 mm: the line up to %.2f times as wide\n", widest);
+            assert_true(widest > 1.3); /* the buckle takes the line out of focus */
+        }
+        if (effect == 1) {
+            const size_t all = 4 * 2 * ((w - 4 + 6) / 7);
+            print_message("dark patches 0.5: %zu of %zu columns dark\n", dark, all);
+            assert_near((double)dark / (double)all, 0.5, 0.15);
+        }
+        assert_true(checked > 500);
+        free(frame), free(peaks);
+        flt_sim_destroy(sim);
+    }
+    flt_calib_destroy(calib);
+}
+
 /* The same seed gives the same bytes (rows and 8- and 16-bit frames), also
  * after rewind; another seed does not. */
 static void same_seed_same_bytes(void **state) {
@@ -464,6 +544,7 @@ int main(void) {
         cmocka_unit_test(shear_transient_is_seen_at_each_lasers_material_position),
         cmocka_unit_test(peak_noise_has_the_set_sigma_per_laser),
         cmocka_unit_test(frames_draw_the_lines_where_the_calibration_says),
+        cmocka_unit_test(field_effects_render_as_documented),
         cmocka_unit_test(same_seed_same_bytes),
         cmocka_unit_test(bad_input_is_rejected_by_name),
     };

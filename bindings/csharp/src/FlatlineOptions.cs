@@ -238,6 +238,12 @@ namespace Flatline
         public double SimBlooming { get => Get("sim_blooming"); set => Set("sim_blooming", value); }
         /// <summary>Probability of a glint at each strip edge, per laser and frame.</summary>
         public double SimEdgeGlints { get => Get("sim_edge_glints"); set => Set("sim_edge_glints", value); }
+        /// <summary>Height from the focal plane (z = 0) at which the line has widened by sqrt(2), mm; 0 for always in focus.</summary>
+        public double SimDepthOfField { get => Get("sim_depth_of_field"); set => Set("sim_depth_of_field", value); }
+        /// <summary>Share of the strip's surface under dark patches (0.15-0.5 of the line's light), 0..1.</summary>
+        public double SimDarkPatches { get => Get("sim_dark_patches"); set => Set("sim_dark_patches", value); }
+        /// <summary>The camera's gamma: a pixel reads full scale times (signal / full scale)^(1 / gamma).</summary>
+        public double SimGamma { get => Get("sim_gamma"); set => Set("sim_gamma", value); }
 
         // ---- frame-to-profile extractor (Extractor); flatline/extractor.h
         /// <summary>First frame row of laser 0's band, px.</summary>
