@@ -28,6 +28,7 @@
 #include <cmocka.h>
 
 #include "flatline/flatline.h"
+#include "sweep.h"
 
 #define W           2048
 #define ROI_FIRST   892
@@ -606,6 +607,153 @@ static void the_off_strip_flag_passes_through_the_reconstructor(void **state) {
     flt_calib_destroy(calib);
 }
 
+/* ------------------------------------------------------------------ field frames */
+
+/* The extractor's peaks in one field condition: frames of a 1500 mm strip
+ * over the roller table with 6 mm wavy edges and a 4 mm centre buckle
+ * (the line stays in its band), frames 150 mm apart. A column's line is
+ * "strong" where its brightest pixel within a row of the true centre
+ * (flt_sim_next_frame) rises at least 0.2 of full scale above the column's
+ * background (the median of the 20 pixels 15-24 rows away on either side).
+ * A kept peak is "wrong" more than 1 mm of height off the truth (both rows
+ * through the calibration). A peak below extract_strip_min_z is the roller
+ * table's line in a column the strip's edge crosses: the extractor leaves
+ * it out of the strip (no fiber reads it), and so does the count. */
+typedef struct field_figures {
+    size_t strong, strong_kept, dim, dim_kept, kept, wrong;
+    double rms_px, worst_mm;
+} field_figures;
+
+static field_figures field_run(double speckle, double depth_of_field, double dark_patches,
+                               double edge_glints, double reflections, int frames) {
+    flt_calib *calib = field_calib();
+    const flt_option keys[] = {
+        FLT_OPT_SIM_SURROUND,       FLT_OPT_SIM_STRIP_WIDTH,   FLT_OPT_SIM_SPECKLE,
+        FLT_OPT_SIM_DEPTH_OF_FIELD, FLT_OPT_SIM_DARK_PATCHES,  FLT_OPT_SIM_EDGE_GLINTS,
+        FLT_OPT_SIM_REFLECTIONS,    FLT_OPT_SIM_FRAME_SPACING, FLT_OPT_SIM_SEED};
+    const double values[] = {2,           1500, speckle, depth_of_field, dark_patches, edge_glints,
+                             reflections, 150,  11};
+    flt_options *o = options_with(9, keys, values);
+    flt_sim *sim = NULL;
+    assert_int_equal(flt_sim_create(calib, o, &sim), FLT_OK);
+    flt_options_destroy(o);
+    assert_int_equal(flt_sim_add_defect(sim, FLT_SIM_WAVY_EDGE_BOTH, 6, 1500), FLT_OK);
+    assert_int_equal(flt_sim_add_defect(sim, FLT_SIM_CENTRE_BUCKLE, 4, 1800), FLT_OK);
+    flt_extractor *ex = field_extractor(calib);
+    uint8_t *frame = malloc((size_t)W * ROI_ROWS);
+    double *truth = malloc(2 * W * sizeof(double)), *peaks = malloc(2 * W * sizeof(double));
+    field_figures r = {0, 0, 0, 0, 0, 0, 0, 0};
+    double sum2 = 0;
+    size_t right = 0;
+    for (int f = 0; f < frames; ++f) {
+        double e, s, h[FIBERS], g[FIBERS];
+        assert_int_equal(flt_sim_next_frame(sim, frame, (size_t)W * ROI_ROWS, W, &e, 0, NULL, truth,
+                                            2 * (size_t)W),
+                         FLT_OK);
+        assert_int_equal(flt_extractor_process(ex, frame, FLT_PIXEL_MONO8, W, ROI_ROWS, W, e,
+                                               FIBERS, &s, h, g, NULL),
+                         FLT_OK);
+        assert_int_equal(flt_extractor_peaks(ex, W, peaks), FLT_OK);
+        for (unsigned laser = 0; laser < 2; ++laser)
+            for (long u = 0; u < W; ++u) {
+                const double t = truth[laser * W + (size_t)u], p = peaks[laser * W + (size_t)u];
+                const long c = lround(t);
+                if (!(t == t) || c - 25 < 0 || c + 25 >= ROI_ROWS)
+                    continue;
+                int top = 0;
+                for (long v = c - 1; v <= c + 1; ++v)
+                    if (frame[(size_t)v * W + (size_t)u] > top)
+                        top = frame[(size_t)v * W + (size_t)u];
+                int around[20];
+                for (int j = 0; j < 10; ++j) {
+                    around[j] = frame[(size_t)(c - 15 - j) * W + (size_t)u];
+                    around[10 + j] = frame[(size_t)(c + 15 + j) * W + (size_t)u];
+                }
+                for (int i = 1; i < 20; ++i) /* insertion sort, for the median */
+                    for (int j = i; j > 0 && around[j - 1] > around[j]; --j) {
+                        const int x = around[j];
+                        around[j] = around[j - 1], around[j - 1] = x;
+                    }
+                const int strong = (top - 0.5 * (around[9] + around[10])) / 255.0 >= 0.2;
+                double pts[4] = {(double)u, t, (double)u, p}, plane[4];
+                if (p == p) {
+                    assert_int_equal(flt_calib_image_to_plane(calib, laser, 2, pts, plane), FLT_OK);
+                    if (plane[3] < -100.0)
+                        continue; /* the roller table's line */
+                }
+                r.strong += (size_t)strong, r.dim += (size_t)!strong;
+                if (!(p == p))
+                    continue;
+                ++r.kept;
+                r.strong_kept += (size_t)strong, r.dim_kept += (size_t)!strong;
+                const double off_mm = fabs(plane[3] - plane[1]);
+                r.worst_mm = fmax(r.worst_mm, off_mm);
+                r.wrong += off_mm > 1.0;
+                if (strong && off_mm <= 1.0) /* the wrong ones are counted apart */
+                    sum2 += (p - t) * (p - t), ++right;
+            }
+    }
+    r.rms_px = sqrt(sum2 / (double)right);
+    free(frame), free(truth), free(peaks);
+    flt_extractor_destroy(ex);
+    flt_sim_destroy(sim);
+    flt_calib_destroy(calib);
+    return r;
+}
+
+/* What real photos show that the plain simulator did not (flatline/sim.h):
+ * defocus (an 8 mm depth of field: the line up to 1.3 times as wide),
+ * dark patches over 30 % of the strip (the line there at 0.15-0.5 of its
+ * light), glints at 30 % of the edges, spurious reflections (5 per frame,
+ * half of them saturating glints) and laser speckle of 15 % per pixel
+ * (5 % elsewhere). 12 frames x 2 lasers x 2048 columns per condition.
+ *
+ * The targets for field frames: strong lines' peaks within 1/16 px RMS of
+ * the truth, and at most 0.01 % of the kept peaks more than 1 mm off.
+ * Without spurious reflections they hold: asserted, with the strong lines
+ * kept >= 85 % (dark patches cost 7-8 % of the strong columns). With
+ * reflections over dark patches a reflection outshines the dim line and is
+ * taken for it (0.2-0.6 % of the kept peaks, up to 90 mm off), and 15 %
+ * speckle puts the strong lines' error at about 1/11 px (the right peaks'
+ * RMS; the wrong ones are counted apart): printed, and bounded only
+ * against getting worse (1 % wrong, 1/8 px), since those targets are not
+ * met yet (docs/sensor.md, "Field frames"). */
+static void field_frames_sub_pixel_accuracy(void **state) {
+    (void)state;
+    FLT_SWEEP_NOT_UNDER_SANITIZERS();
+    const struct {
+        const char *name;
+        double speckle, depth_of_field, dark_patches, edge_glints, reflections;
+        int meets_targets;
+    } conditions[] = {
+        {"defocus", 0.05, 8, 0, 0, 0, 1},
+        {"dark patches", 0.05, 0, 0.3, 0, 0, 1},
+        {"defocus, dark patches, edge glints", 0.05, 8, 0.3, 0.3, 0, 1},
+        {"... and reflections", 0.05, 8, 0.3, 0.3, 5, 0},
+        {"... and 15 % speckle", 0.15, 8, 0.3, 0.3, 5, 0},
+    };
+    for (size_t i = 0; i < sizeof conditions / sizeof conditions[0]; ++i) {
+        const field_figures r = field_run(conditions[i].speckle, conditions[i].depth_of_field,
+                                          conditions[i].dark_patches, conditions[i].edge_glints,
+                                          conditions[i].reflections, 12);
+        print_message("field frames, %-36s strong lines %5zu, %5.1f %% kept, RMS %.4f px "
+                      "(1/%.0f); dim %4zu, %5.1f %% kept; %3zu of %zu kept peaks > 1 mm off "
+                      "(%.3f %%, worst %.2f mm)\n",
+                      conditions[i].name, r.strong,
+                      100.0 * (double)r.strong_kept / (double)r.strong, r.rms_px, 1 / r.rms_px,
+                      r.dim, r.dim ? 100.0 * (double)r.dim_kept / (double)r.dim : 0.0, r.wrong,
+                      r.kept, 100.0 * (double)r.wrong / (double)r.kept, r.worst_mm);
+        if (conditions[i].meets_targets) {
+            assert_true(r.rms_px <= 1.0 / 16);
+            assert_true((double)r.wrong <= 1e-4 * (double)r.kept);
+            assert_true(r.strong_kept >= 0.85 * (double)r.strong);
+        } else {
+            assert_true(r.rms_px <= 0.125);
+            assert_true((double)r.wrong <= 1e-2 * (double)r.kept);
+        }
+    }
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(the_simulated_strip_has_edges_coils_and_wander),
@@ -613,6 +761,7 @@ int main(void) {
         cmocka_unit_test(saturated_lines_are_measured),
         cmocka_unit_test(heads_and_tails_never_report_strip_where_there_is_none),
         cmocka_unit_test(the_off_strip_flag_passes_through_the_reconstructor),
+        cmocka_unit_test(field_frames_sub_pixel_accuracy),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
