@@ -7,7 +7,8 @@
  * fail and pass; the worst values agree with the closed form within the
  * gauge's measured accuracy; the coil statistics equal the sheets'
  * verdicts; 0, 1 and 2 workers, with and without kept maps, give the same
- * verdicts bit for bit.
+ * verdicts bit for bit, and a sheet's kept map given to
+ * flt_verdict_evaluate gives its straightedge verdicts bit for bit.
  */
 #include <math.h>
 #include <setjmp.h>
@@ -191,6 +192,25 @@ static void copy_sheet(const flt_sheet *sh, const line *l, const flt_rules *rule
     OK(flt_verdict_evaluate(tv, 4.0, 1500.0, rows, K, s, x, t, f));
     for (size_t i = 0; i < 4; ++i)
         OK(flt_verdict_get(tv, i, FLT_VERDICT_WORST, &j->truth[i]));
+    /* The sheet's own map given to flt_verdict_evaluate, with the width the
+     * gauge judged it at (set_rules' 0: the measured strip width): its
+     * straightedge rules (every rule but the I-Units', which the gauge
+     * takes from its flatness on the strip) give the gauge's values bit for
+     * bit, all nine of each. The two share the judging code and cut the
+     * lines into the same blocks, whatever the gauge's workers. */
+    if (!((unsigned)j->flags & FLT_SHEET_FLAG_INCOMPLETE)) {
+        OK(flt_verdict_evaluate(tv, 4.0, j->sheet_value[FLT_SHEET_STRIP_WIDTH], rows, K, s, x, z,
+                                f));
+        for (size_t i = 0; i < RULES; ++i) {
+            if (i == 5) /* "I-Units": zone_i_units */
+                continue;
+            for (int k = 0; k < 9; ++k) {
+                double direct = 0;
+                OK(flt_verdict_get(tv, i, (flt_verdict_value)k, &direct));
+                assert_memory_equal(&direct, &j->value[i][k], sizeof direct);
+            }
+        }
+    }
     flt_verdict_destroy(tv);
     free(s);
     free(z);
