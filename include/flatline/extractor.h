@@ -30,8 +30,12 @@
  *        line), and, next to a saturated column or one whose brightest peak
  *        was rejected, when it is more than 0.5 px off the median of its
  *        +-12 neighbours or has fewer than 4 valid ones (a glint's fringe, a
- *        reflection away from the line). lib/extraction/README.md gives
- *        the measured rates;
+ *        reflection away from the line). Last, the line is followed across
+ *        the columns: a run of peaks that continue each other but leave the
+ *        line and come back (a reflection brighter than a dim stretch of
+ *        the line), shorter than the runs on both sides and mostly more
+ *        than 3 px off the straight line between them, is rejected.
+ *        lib/extraction/README.md gives the measured rates;
  *     2. refines its row to sub-pixel accuracy at the zero crossing of the
  *        Savitzky-Golay derivative (window extract_sg_window rows, polynomial
  *        order extract_sg_order) next to the maximum (a saturated peak: the
@@ -138,7 +142,7 @@
  * Memory and speed
  *   Everything is allocated by flt_extractor_create(); process() allocates
  *   nothing. A frame W pixels wide and H high with K fibers takes about
- *   710 W + 60 K + 8 H bytes (per column: both lasers' peaks, shapes and
+ *   722 W + 60 K + 8 H bytes (per column: both lasers' peaks, shapes and
  *   mapping polynomials; 1.5 MB for a 2048-wide camera;
  *   tests/c/test_memory.c checks it). The per-column search is a
  *   vectorised running maximum over the band; the Savitzky-Golay filter is

@@ -147,6 +147,8 @@ struct flt_extractor {
     std::vector<std::uint8_t> low_column;  // [width]
     std::size_t changed_rows = 0;          // peaks the checks rejected or replaced, this laser
     std::vector<double> edge_light;        // [width] scratch
+    // reject_detours: the segments of peaks that continue each other.
+    std::vector<std::uint32_t> segment_first, segment_last, segment_count;  // [width]
     strip_view strip[2];
     std::vector<std::uint8_t> fiber_off[2];  // [fibers]
     std::vector<std::uint8_t> row_flags;     // [fibers], FLT_FLAG_*
@@ -161,6 +163,7 @@ struct flt_extractor {
     void extract(const unsigned char *frame, std::size_t stride, std::uint32_t full_scale);
     void resample(unsigned laser);
     void reject_glint_fringes(double *rows);
+    void reject_detours(double *rows);
     void reject_misshapen(double *rows);
     template <class Pixel>
     void find_strip(const unsigned char *frame, std::size_t stride, unsigned laser,
@@ -499,6 +502,7 @@ void flt_extractor::extract(const unsigned char *frame, std::size_t stride,
         reject_misshapen(rows_out);
         if (any_suspect)
             reject_glint_fringes(rows_out);
+        reject_detours(rows_out);
         // The checks reject peaks or take the reading under a saturated
         // one (rarely): then the columns are mapped again.
         if (changed_rows)
@@ -847,6 +851,72 @@ void flt_extractor::reject_misshapen(double *rows) {
 // short saturated stretches on the line) is judged by its unsaturated
 // columns. A column keeps its peak if it continues the line, else the
 // reading without it if that does (the line under a glint), else nothing.
+// The line is one connected curve across the columns. Where a spurious
+// reflection is brighter than the line (over a dark patch of the strip the
+// line carries a fraction of its light) the column's peak is the
+// reflection's: a run of peaks that continue each other but leave the line
+// and come back to it. The peaks are cut into segments where they stop
+// continuing each other (a step of more than k_detour_step_px plus half a
+// pixel per column of gap, across gaps of up to k_detour_gap columns); a
+// segment with longer segments on both sides, each within k_detour_reach
+// columns of it, whose peaks lie mostly more than k_detour_tolerance_px from the
+// straight line between its neighbours' facing ends, is a detour and is
+// rejected (its columns lose their peak: a fiber there is invalid, never
+// measured off the line). Lines below the strip (the roller table's) take
+// no part.
+void flt_extractor::reject_detours(double *rows) {
+    constexpr double k_detour_step_px = 2.0, k_detour_tolerance_px = 3.0;
+    constexpr long k_detour_gap = 8, k_detour_reach = 32;
+    const long w = long(width);
+    // Segments as [first, last] column ranges of line peaks, in order (at
+    // most one per column: the scratch is [width], allocated at create).
+    std::uint32_t *first = segment_first.data(), *last = segment_last.data();
+    std::uint32_t *count = segment_count.data();
+    std::size_t segments = 0;
+    auto is_peak = [&](long u) {
+        return rows[u] == rows[u] && !low_column[std::size_t(u)];
+    };
+    long previous = -1;
+    for (long u = 0; u < w; ++u) {
+        if (!is_peak(u))
+            continue;
+        const long gap = previous < 0 ? 0 : u - previous - 1;
+        const bool continues =
+            previous >= 0 && gap <= k_detour_gap &&
+            std::fabs(rows[u] - rows[previous]) <= k_detour_step_px + 0.5 * double(gap);
+        if (!continues)
+            first[segments] = std::uint32_t(u), count[segments] = 0, ++segments;
+        last[segments - 1] = std::uint32_t(u), ++count[segments - 1];
+        previous = u;
+    }
+    for (std::size_t i = 1; i + 1 < segments; ++i) {
+        // Only a segment that takes over from the line and hands back to
+        // it within a gap: across a longer stretch without peaks the
+        // chord between the neighbours is no estimate of a curved line.
+        const std::uint32_t n = count[i];
+        if (!(count[i - 1] > n && count[i + 1] > n) ||
+            long(first[i]) - long(last[i - 1]) > k_detour_reach ||
+            long(first[i + 1]) - long(last[i]) > k_detour_reach)
+            continue;
+        // The line between the neighbours' facing ends.
+        const double u0 = double(last[i - 1]), v0 = rows[last[i - 1]];
+        const double u1 = double(first[i + 1]), v1 = rows[first[i + 1]];
+        std::size_t off = 0;
+        for (long u = first[i]; u <= long(last[i]); ++u)
+            if (is_peak(u)) {
+                const double expected = v0 + (double(u) - u0) * (v1 - v0) / (u1 - u0);
+                off += std::fabs(rows[u] - expected) > k_detour_tolerance_px;
+            }
+        if (2 * off <= std::size_t(n))
+            continue;
+        for (long u = first[i]; u <= long(last[i]); ++u)
+            if (is_peak(u))
+                rows[u] = k_nan, ++changed_rows;
+        // The next segment is not judged against a rejected one.
+        count[i] = 0;
+    }
+}
+
 void flt_extractor::reject_glint_fringes(double *rows) {
     constexpr long reach = 10, window = 12;
     constexpr double k_glint_tolerance_px = 0.5;
@@ -1180,6 +1250,9 @@ FLT_API flt_status FLT_CALL flt_extractor_create(const flt_calib *calib, const f
         ex->edge_light.assign(std::size_t(k_edge_reference_far - k_edge_reference_near + 1), 0);
         ex->suspect_column.assign(w, 0);
         ex->tainted_column.assign(w, 0);
+        ex->segment_first.assign(w, 0);
+        ex->segment_last.assign(w, 0);
+        ex->segment_count.assign(w, 0);
         ex->fringe_row.assign(w, 0);
         ex->shape.assign(w, peak_shape{k_nan, k_nan, k_nan});
         ex->shape_scratch.assign(w, 0);

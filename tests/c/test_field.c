@@ -713,7 +713,7 @@ static field_figures field_run(double speckle, double depth_of_field, double dar
  * Without spurious reflections they hold: asserted, with the strong lines
  * kept >= 85 % (dark patches cost 7-8 % of the strong columns). With
  * reflections over dark patches a reflection outshines the dim line and is
- * taken for it (0.2-0.6 % of the kept peaks, up to 90 mm off), and 15 %
+ * taken for it (0.1-0.6 % of the kept peaks, up to 90 mm off), and 15 %
  * speckle puts the strong lines' error at about 1/11 px (the right peaks'
  * RMS; the wrong ones are counted apart): printed, and bounded only
  * against getting worse (1 % wrong, 1/8 px), since those targets are not
