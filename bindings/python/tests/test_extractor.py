@@ -98,6 +98,45 @@ def test_bands_are_found_in_the_first_frame(calib):
         assert fixed.band(0) == (120, 60) and fixed.band(1) == (70, 50)
 
 
+def test_bands_are_found_from_one_line(calib):
+    # One laser on (a commissioning engineer aligning it): its line's laser
+    # is the one whose plane puts it near the pass line, the other band
+    # goes where the calibration puts the other line. The bands land within
+    # 3 rows of those found from both lines (the other line's row is
+    # predicted, not seen), and the next two-line frame reads the same
+    # heights within 0.02 mm (only the column maps' fitting interval moves).
+    with flatline.SimulatedLine(calib) as sim:
+        frame = sim.next_frame()
+    with flatline.Extractor(calib) as both:
+        reference = both.process(frame.image, frame.encoder_mm)
+        bands = [both.band(laser) for laser in (0, 1)]
+    for lit in (0, 1):
+        dark = 1 - lit
+        one = frame.image.copy()
+        first, rows = bands[dark]
+        one[first:first + rows, :] = frame.image[0, :]  # background and noise only
+        with flatline.Extractor(calib) as extractor:
+            row = extractor.process(one, frame.encoder_mm)
+            assert not row.valid.any()  # the dark laser sees no strip
+            for laser in (0, 1):
+                got, want = extractor.band(laser), bands[laser]
+                assert abs(got[0] - want[0]) <= 3
+                assert abs(got[0] + got[1] - want[0] - want[1]) <= 3
+            again = extractor.process(frame.image, frame.encoder_mm)
+            assert np.array_equal(again.valid, reference.valid) and reference.valid.sum() >= 99
+            assert np.max(np.abs(again.height - reference.height)[reference.valid]) <= 0.02
+    # A line either laser could cast (z = +53 mm for one, -46 mm for the
+    # other): refused, with both heights, and the next frame tries again.
+    ambiguous = np.full((256, 2048), 10, np.uint8)
+    ambiguous[122:131, :] = (10 + 150 * np.exp(-0.5 * (np.arange(-4, 5) / 1.5) ** 2)
+                             ).round().astype(np.uint8)[:, None]
+    with flatline.Extractor(calib) as extractor:
+        with pytest.raises(flatline.NumericError, match="either laser's"):
+            extractor.process(ambiguous, 0.0)
+        extractor.process(frame.image, frame.encoder_mm)
+        assert extractor.band(0)[1] > 0
+
+
 def test_frames_without_a_copy_and_layouts_that_need_one(calib):
     with flatline.SimulatedLine(calib, sim_seed=5) as sim, \
             flatline.Extractor(calib) as extractor:
