@@ -832,25 +832,6 @@ void flt_extractor::reject_misshapen(double *rows) {
     }
 }
 
-// A specular glint saturates in its core, which is rejected, but its fringe
-// columns are bright, unsaturated and narrow: there the brightest peak is the
-// glint, not the line. Likewise, where the brightest peak was rejected (a
-// glint, or the line with a reflection too wide to pass), the next candidate
-// may be a reflection away from the line. Near such a suspect column, a peak
-// more than k_glint_tolerance_px off the median of the valid peaks around it
-// is rejected (the line is continuous across columns: the reference strip's
-// steepest cross slope moves it < 0.2 px over the window).
-//
-// A saturated peak is measured (the plateau's middle), so a glint over the
-// line is the column's peak. Such a column also has the reading without it
-// (alternative_row: the line under the glint, if it shows). A saturated
-// peak vouches for its neighbours only within a run of at least a window's
-// width of saturated peaks that continue each other (a line saturated all
-// along; a glint is shorter), so a glint cannot vouch for itself, and a
-// line that just touches full scale here and there (a bright real line:
-// short saturated stretches on the line) is judged by its unsaturated
-// columns. A column keeps its peak if it continues the line, else the
-// reading without it if that does (the line under a glint), else nothing.
 // The line is one connected curve across the columns. Where a spurious
 // reflection is brighter than the line (over a dark patch of the strip the
 // line carries a fraction of its light) the column's peak is the
@@ -917,6 +898,25 @@ void flt_extractor::reject_detours(double *rows) {
     }
 }
 
+// A specular glint saturates in its core, which is rejected, but its fringe
+// columns are bright, unsaturated and narrow: there the brightest peak is the
+// glint, not the line. Likewise, where the brightest peak was rejected (a
+// glint, or the line with a reflection too wide to pass), the next candidate
+// may be a reflection away from the line. Near such a suspect column, a peak
+// more than k_glint_tolerance_px off the median of the valid peaks around it
+// is rejected (the line is continuous across columns: the reference strip's
+// steepest cross slope moves it < 0.2 px over the window).
+//
+// A saturated peak is measured (the plateau's middle), so a glint over the
+// line is the column's peak. Such a column also has the reading without it
+// (alternative_row: the line under the glint, if it shows). A saturated
+// peak vouches for its neighbours only within a run of at least a window's
+// width of saturated peaks that continue each other (a line saturated all
+// along; a glint is shorter), so a glint cannot vouch for itself, and a
+// line that just touches full scale here and there (a bright real line:
+// short saturated stretches on the line) is judged by its unsaturated
+// columns. A column keeps its peak if it continues the line, else the
+// reading without it if that does (the line under a glint), else nothing.
 void flt_extractor::reject_glint_fringes(double *rows) {
     constexpr long reach = 10, window = 12;
     constexpr double k_glint_tolerance_px = 0.5;
