@@ -289,9 +289,17 @@ void flt_extractor::build_maps() {
 // refused (a wrong guess would read every height wrong, with confidence).
 void flt_extractor::detect_bands(const unsigned char *frame, std::size_t stride, int bytes,
                                  std::uint32_t full_scale) {
+    // Each laser's line at the pass line (z = 0) under the middle of the
+    // fiber grid, (u, v) px: the lasers' order, and the column the heights
+    // of a single line are read in.
+    const double x_mid = first_x + 0.5 * pitch * double(fibers - 1);
+    double at_pass_line[2][2];
+    for (unsigned laser = 0; laser < 2; ++laser) {
+        double p[2] = {x_mid, 0.0};
+        check(flt_calib_plane_to_image(calib, laser, 1, p, at_pass_line[laser]));
+    }
     long allowed_lo = long(height), allowed_hi = -1;
     for (unsigned laser = 0; laser < 2; ++laser) {
-        const double x_mid = first_x + 0.5 * pitch * double(fibers - 1);
         double p[4] = {x_mid, strip_min_z, x_mid, -strip_min_z}, img[4];
         check(flt_calib_plane_to_image(calib, laser, 2, p, img));
         for (int i = 0; i < 2; ++i)
@@ -325,20 +333,13 @@ void flt_extractor::detect_bands(const unsigned char *frame, std::size_t stride,
     for (long v = allowed_lo; v <= allowed_hi; ++v)
         if (std::labs(v - r1) > exclusion && (r2 < 0 || row_sum[v] > row_sum[r2]))
             r2 = v;
-    const double x_mid = first_x + 0.5 * pitch * double(fibers - 1);
     long top, bottom;
     unsigned upper;
     if (r2 >= 0 && row_sum[r2] - floor_level > 0.25 * (row_sum[r1] - floor_level)) {
         // Two lines. Which laser is the upper line: the calibration's
         // prediction at z = 0 under the middle of the fiber grid.
-        double predicted[2];
-        for (unsigned laser = 0; laser < 2; ++laser) {
-            double p[2] = {x_mid, 0.0}, img[2];
-            check(flt_calib_plane_to_image(calib, laser, 1, p, img));
-            predicted[laser] = img[1];
-        }
         top = std::min(r1, r2), bottom = std::max(r1, r2);
-        upper = predicted[0] <= predicted[1] ? 0 : 1;
+        upper = at_pass_line[0][1] <= at_pass_line[1][1] ? 0 : 1;
     } else {
         // One line at most. It is one when its row stands out of the
         // others (outside the line's exclusion) by a quarter of
@@ -361,9 +362,7 @@ void flt_extractor::detect_bands(const unsigned char *frame, std::size_t stride,
         // the middle of the fiber grid.
         double z_of[2];
         for (unsigned laser = 0; laser < 2; ++laser) {
-            double p[2] = {x_mid, 0.0}, img[2];
-            check(flt_calib_plane_to_image(calib, laser, 1, p, img));
-            double point[2] = {img[0], double(r1)}, plane[2];
+            double point[2] = {at_pass_line[laser][0], double(r1)}, plane[2];
             check(flt_calib_image_to_plane(calib, laser, 1, point, plane));
             z_of[laser] = plane[1];
         }
