@@ -65,6 +65,16 @@ static flt_extractor *make_extractor(const flt_calib *calib, int n, const flt_op
     return ex;
 }
 
+/* An extractor whose laser 0 reads rows 0..127 of the frame and laser 1
+ * rows 128..255: for frames drawn by hand, a line in each half. */
+static flt_extractor *halves_extractor(const flt_calib *calib) {
+    const flt_option keys[] = {FLT_OPT_EXTRACT_LASER0_FIRST_ROW, FLT_OPT_EXTRACT_LASER0_ROWS,
+                               FLT_OPT_EXTRACT_LASER1_FIRST_ROW, FLT_OPT_EXTRACT_LASER1_ROWS};
+    const double values[] = {0, 128, 128, 128};
+    flt_extractor *ex = make_extractor(calib, 4, keys, values);
+    return ex;
+}
+
 static double sheet_at(const flt_sim *sim, double x, double s) {
     double z;
     assert_int_equal(flt_sim_surface(sim, 1, &x, &s, &z), FLT_OK);
@@ -381,11 +391,7 @@ static void line_beside_a_bright_patch_is_found(void **state) {
     (void)state;
     enum { N = 101 };
     flt_calib *calib = reference(N, 20.0);
-    /* Laser 0 reads rows 0..127 of the frame, laser 1 rows 128..255. */
-    const flt_option keys[] = {FLT_OPT_EXTRACT_LASER0_FIRST_ROW, FLT_OPT_EXTRACT_LASER0_ROWS,
-                               FLT_OPT_EXTRACT_LASER1_FIRST_ROW, FLT_OPT_EXTRACT_LASER1_ROWS};
-    const double values[] = {0, 128, 128, 128};
-    flt_extractor *ex = make_extractor(calib, 4, keys, values);
+    flt_extractor *ex = halves_extractor(calib);
     uint8_t *frame = malloc((size_t)W * ROI_ROWS);
     assert_non_null(frame);
     const double line_row = 40.3, line_sigma = 2.0;
@@ -445,10 +451,7 @@ static void a_reflection_over_a_dim_stretch_is_no_line(void **state) {
     (void)state;
     enum { N = 101 };
     flt_calib *calib = reference(N, 20.0);
-    const flt_option keys[] = {FLT_OPT_EXTRACT_LASER0_FIRST_ROW, FLT_OPT_EXTRACT_LASER0_ROWS,
-                               FLT_OPT_EXTRACT_LASER1_FIRST_ROW, FLT_OPT_EXTRACT_LASER1_ROWS};
-    const double values[] = {0, 128, 128, 128};
-    flt_extractor *ex = make_extractor(calib, 4, keys, values);
+    flt_extractor *ex = halves_extractor(calib);
     uint8_t *frame = malloc((size_t)W * ROI_ROWS);
     assert_non_null(frame);
     const double line_row = 40.3, line_sigma = 2.0, glare_row = 70.6, glare_sigma = 2.0;
