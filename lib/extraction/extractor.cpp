@@ -450,7 +450,20 @@ void flt_extractor::extract(const unsigned char *frame, std::size_t stride,
         const double *coeffs = poly[laser].data();
         const double inv_half = 1.0 / v_half[laser], mid = v_mid[laser];
         bool any_suspect = false;
+        // Eight columns at a time where the line is clean; column_peak
+        // reads the rest (the same bits either way).
+        unsigned measured = 0;
         for (std::uint32_t u = 0; u < width; ++u) {
+            if (u % k_peak_lanes == 0)
+                measured =
+                    u + k_peak_lanes <= width
+                        ? column_peaks<Pixel>(frame, stride, u, b.first, b.rows, &best_value[u],
+                                              &best_row[u], params, &rows_out[u], &shape[u])
+                        : 0;
+            if ((measured >> (u % k_peak_lanes)) & 1u) {
+                suspect_column[u] = saturated_column[u] = 0;
+                continue;
+            }
             bool suspect = false, saturated = false;
             rows_out[u] =
                 column_peak<Pixel>(frame, stride, u, b.first, b.rows, best_value[u], best_row[u],

@@ -18,6 +18,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <limits>
 
 namespace flt {
@@ -389,6 +390,201 @@ column_peak(const unsigned char *frame, std::size_t stride, std::uint32_t u, std
         value = best, row = best_row;
     }
     return nan;
+}
+
+// column_peak for k_peak_lanes adjacent columns at once, where a column shows
+// what nearly every column of a clean line shows: one unsaturated peak, clear
+// of the band's ends, that is neither faint nor too wide and whose
+// derivative crosses zero next to its maximum. The pixels around each
+// column's maximum are copied into a tile (row-major, one lane per column)
+// and the background, the width walks, the area and the seven
+// Savitzky-Golay derivatives are computed lane by lane with the same
+// operations in the same order as column_peak, so a lane it measures holds
+// the same bits column_peak gives (test_peak_kernels proves it on random
+// columns). Returns the mask of the lanes measured, with row_out[lane] and
+// shape[lane] set (neither suspect nor saturated); the caller gives every
+// other lane to column_peak.
+constexpr int k_peak_lanes = 8;
+
+typedef float peak_lanes_f __attribute__((vector_size(4 * k_peak_lanes)));
+typedef std::int32_t peak_lanes_i __attribute__((vector_size(4 * k_peak_lanes)));
+
+template <class Pixel>
+__attribute__((always_inline)) inline unsigned
+column_peaks_body(const unsigned char *frame, std::size_t stride, std::uint32_t u0,
+                  std::uint32_t first, std::uint32_t rows, const std::uint16_t *value,
+                  const std::uint16_t *row, const peak_params &p, double *row_out,
+                  peak_shape *shape) {
+    constexpr int lanes = k_peak_lanes;
+    const long reach = p.gather_reach, h = p.sg_half, r = p.shape_reach;
+    const long band_lo = long(first), band_hi = long(first + rows) - 1;
+    // Rows row - reach .. row + reach of each lane, as counts. A lane whose
+    // window touches the band's ends (where column_peak searches past the
+    // band) or whose maximum column_peak would pass over is left to it.
+    if (reach < 3 + h || reach > k_max_gather_reach)
+        return 0;  // (not with create's parameters: the derivatives need 3 + h rows)
+    alignas(32) std::int32_t tile[2 * k_max_gather_reach + 1][lanes];
+    unsigned eligible = 0;
+    for (int l = 0; l < lanes; ++l) {
+        const long rw = row[l];
+        const std::uint32_t v = value[l];
+        const bool ok = v >= p.min_value && v != 0 && v < p.full_scale && rw - reach > band_lo &&
+                        rw + reach < band_hi;
+        const Pixel *pixel = reinterpret_cast<const Pixel *>(
+                                 frame + std::size_t(ok ? rw - reach : band_lo) * stride) +
+                             (u0 + l);
+        for (long j = 0; j <= 2 * reach; ++j) {
+            // (A lane left to column_peak reads the band's first rows: in
+            // the frame, and ignored.)
+            const long at = ok ? j : 0;
+            tile[j][l] = std::int32_t(*reinterpret_cast<const Pixel *>(
+                reinterpret_cast<const unsigned char *>(pixel) + std::size_t(at) * stride));
+        }
+        eligible |= unsigned(ok) << l;
+    }
+    if (eligible == 0)
+        return 0;
+    // The tile as floats (counts below 2^24, and their sums: exact).
+    peak_lanes_f t[2 * k_max_gather_reach + 1];
+    peak_lanes_i counts;
+    for (long j = 0; j <= 2 * reach; ++j) {
+        std::memcpy(&counts, tile[j], sizeof counts);
+        t[j] = __builtin_convertvector(counts, peak_lanes_f);
+    }
+    std::memcpy(&counts, tile[reach], sizeof counts);
+    const peak_lanes_f maximum = __builtin_convertvector(counts, peak_lanes_f);
+    peak_lanes_f low_left = maximum, low_right = maximum, floor_value = maximum, sum = {};
+    for (long j = 0; j < reach; ++j)
+        low_left = t[j] < low_left ? t[j] : low_left;
+    for (long j = reach + 1; j <= 2 * reach; ++j)
+        low_right = t[j] < low_right ? t[j] : low_right;
+    for (long j = reach - r; j <= reach + r; ++j) {
+        floor_value = t[j] < floor_value ? t[j] : floor_value;
+        sum += t[j];
+    }
+    const peak_lanes_f background = low_left < low_right ? low_right : low_left;
+    const peak_lanes_f level2 = maximum + background;
+    // The width walks, as column_peak takes them: one more row while it is at
+    // or above half the maximum and the line is not yet max_width wide.
+    // A walk that would leave the tile is column_peak's.
+    peak_lanes_i go_lo = ~peak_lanes_i{}, go_hi = ~peak_lanes_i{};
+    peak_lanes_i n_lo = {}, n_hi = {};
+    for (long k = 1; k <= reach; ++k) {
+        if (k - 1 > long(p.max_width)) {
+            go_lo = go_hi = peak_lanes_i{};
+            break;
+        }
+        go_lo &= 2 * t[reach - k] >= level2;
+        go_hi &= 2 * t[reach + k] >= level2;
+        n_lo -= go_lo;
+        n_hi -= go_hi;
+    }
+    const peak_lanes_f zero = {};
+    const peak_lanes_f min_peak = zero + float(p.min_value);
+    const peak_lanes_i fits = (n_lo < int(reach)) & (n_hi < int(reach)) &
+                              (n_lo + n_hi + 1 <= p.max_width) & (maximum - background >= min_peak);
+    // The derivative at rows row - 3 .. row + 3, in column_peak's order.
+    peak_lanes_f derivative[7];
+    for (long i = -3; i <= 3; ++i) {
+        peak_lanes_f d = {};
+        for (long j = 1; j <= h; ++j)
+            d += p.sg_taps[h + j] * (t[reach + i + j] - t[reach + i - j]);
+        derivative[i + 3] = d;
+    }
+    // Its zero crossing next to the maximum (+ above, - below), both ways
+    // column_peak searches it; each lane takes the way its derivative at the
+    // maximum says.
+    peak_lanes_f up0 = derivative[3], up1 = derivative[4];
+    peak_lanes_i up_i = {};
+    {
+        const peak_lanes_i step1 = up1 > zero;
+        up0 = step1 ? up1 : up0, up1 = step1 ? derivative[5] : up1, up_i -= step1;
+        const peak_lanes_i step2 = step1 & (up1 > zero);
+        up0 = step2 ? up1 : up0, up1 = step2 ? derivative[6] : up1, up_i -= step2;
+    }
+    peak_lanes_f down0 = derivative[3], down_m = derivative[2];
+    peak_lanes_i down_i = {};
+    {
+        const peak_lanes_i step1 = down_m <= zero;
+        down0 = step1 ? down_m : down0, down_m = step1 ? derivative[1] : down_m, down_i += step1;
+        const peak_lanes_i step2 = step1 & (down_m <= zero);
+        down0 = step2 ? down_m : down0, down_m = step2 ? derivative[0] : down_m, down_i += step2;
+    }
+    const peak_lanes_i rising = derivative[3] > zero;
+    const peak_lanes_i crossed =
+        (rising & (up1 <= zero)) | (~rising & (derivative[3] <= zero) & (down_m > zero));
+    const peak_lanes_i measured = fits & crossed;
+    alignas(32) float sums[lanes], floors[lanes], levels[lanes];
+    std::memcpy(sums, &sum, sizeof sums);
+    std::memcpy(floors, &floor_value, sizeof floors);
+    std::memcpy(levels, &level2, sizeof levels);
+    const long last = long(p.frame_height) - 1;
+    unsigned done = 0;
+    for (int l = 0; l < lanes; ++l) {
+        if (!((eligible >> l) & 1u) || !measured[l])
+            continue;
+        const long rw = row[l];
+        const double v = rising[l] ? double(rw + up_i[l]) + double(up0[l]) / double(up0[l] - up1[l])
+                                   : double(rw + down_i[l] - 1) +
+                                         double(down_m[l]) / double(down_m[l] - down0[l]);
+        const long lo = rw - n_lo[l], hi = rw + n_hi[l];
+        if (!(v >= double(lo) - 1 && v <= double(hi) + 1))
+            continue;  // column_peak looks for the next candidate
+        // The half-maximum crossings: lo and hi stopped at half (inside the
+        // tile, clear of the band's ends), or at max_width (no width then).
+        auto count = [&](long v_row) {
+            return std::uint32_t(tile[v_row - (rw - reach)][l]);
+        };
+        const std::uint32_t level = std::uint32_t(levels[l]);
+        peak_shape &out = shape[l];
+        out.width = out.skew = std::numeric_limits<double>::quiet_NaN();
+        if (lo > 0 && hi < last && 2 * count(lo - 1) < level && 2 * count(hi + 1) < level) {
+            const double half = 0.5 * double(level);
+            const double in_l = double(count(lo)), out_l = double(count(lo - 1));
+            const double in_r = double(count(hi)), out_r = double(count(hi + 1));
+            const double cross_l = double(lo) - (in_l - half) / (in_l - out_l);
+            const double cross_r = double(hi) + (in_r - half) / (in_r - out_r);
+            out.width = cross_r - cross_l;
+            out.skew = 0.5 * (cross_l + cross_r) - v;
+        }
+        out.area =
+            double(std::uint32_t(sums[l])) - double(2 * r + 1) * double(std::uint32_t(floors[l]));
+        row_out[l] = v;
+        done |= 1u << l;
+    }
+    return done;
+}
+
+}  // namespace flt
+
+namespace flt {
+
+FLT_PEAK_KERNEL inline unsigned column_peaks_u8(const unsigned char *frame, std::size_t stride,
+                                                std::uint32_t u0, std::uint32_t first,
+                                                std::uint32_t rows, const std::uint16_t *value,
+                                                const std::uint16_t *row, const peak_params &p,
+                                                double *row_out, peak_shape *shape) {
+    return column_peaks_body<std::uint8_t>(frame, stride, u0, first, rows, value, row, p, row_out,
+                                           shape);
+}
+
+FLT_PEAK_KERNEL inline unsigned column_peaks_u16(const unsigned char *frame, std::size_t stride,
+                                                 std::uint32_t u0, std::uint32_t first,
+                                                 std::uint32_t rows, const std::uint16_t *value,
+                                                 const std::uint16_t *row, const peak_params &p,
+                                                 double *row_out, peak_shape *shape) {
+    return column_peaks_body<std::uint16_t>(frame, stride, u0, first, rows, value, row, p, row_out,
+                                            shape);
+}
+
+template <class Pixel>
+inline unsigned column_peaks(const unsigned char *frame, std::size_t stride, std::uint32_t u0,
+                             std::uint32_t first, std::uint32_t rows, const std::uint16_t *value,
+                             const std::uint16_t *row, const peak_params &p, double *row_out,
+                             peak_shape *shape) {
+    if (sizeof(Pixel) == 1)
+        return column_peaks_u8(frame, stride, u0, first, rows, value, row, p, row_out, shape);
+    return column_peaks_u16(frame, stride, u0, first, rows, value, row, p, row_out, shape);
 }
 
 }  // namespace flt
