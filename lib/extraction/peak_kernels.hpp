@@ -396,8 +396,8 @@ column_peak(const unsigned char *frame, std::size_t stride, std::uint32_t u, std
 // what nearly every column of a clean line shows: one unsaturated peak, clear
 // of the band's ends, that is neither faint nor too wide and whose
 // derivative crosses zero next to its maximum. The pixels around each
-// column's maximum are copied into a tile (row-major, one lane per column)
-// and the background, the width walks, the area and the seven
+// column's maximum are read into registers, one lane per column, and the
+// background, the width walks, the area and the seven
 // Savitzky-Golay derivatives are computed lane by lane with the same
 // operations in the same order as column_peak, so a lane it measures holds
 // the same bits column_peak gives (test_peak_kernels proves it on random
@@ -423,36 +423,34 @@ column_peaks_body(const unsigned char *frame, std::size_t stride, std::uint32_t 
     // band) or whose maximum column_peak would pass over is left to it.
     if (reach < 3 + h || reach > k_max_gather_reach)
         return 0;  // (not with create's parameters: the derivatives need 3 + h rows)
-    alignas(32) std::int32_t tile[2 * k_max_gather_reach + 1][lanes];
     unsigned eligible = 0;
+    const unsigned char *top[lanes];  // each lane's first row (row - reach)
     for (int l = 0; l < lanes; ++l) {
         const long rw = row[l];
         const std::uint32_t v = value[l];
         const bool ok = v >= p.min_value && v != 0 && v < p.full_scale && rw - reach > band_lo &&
                         rw + reach < band_hi;
-        const Pixel *pixel = reinterpret_cast<const Pixel *>(
-                                 frame + std::size_t(ok ? rw - reach : band_lo) * stride) +
-                             (u0 + l);
-        for (long j = 0; j <= 2 * reach; ++j) {
-            // (A lane left to column_peak reads the band's first rows: in
-            // the frame, and ignored.)
-            const long at = ok ? j : 0;
-            tile[j][l] = std::int32_t(*reinterpret_cast<const Pixel *>(
-                reinterpret_cast<const unsigned char *>(pixel) + std::size_t(at) * stride));
-        }
+        // (A lane left to column_peak reads the band's first rows: in the
+        // frame, and ignored.)
+        top[l] = frame + std::size_t(ok ? rw - reach : band_lo + reach + 1) * stride +
+                 (u0 + std::uint32_t(l)) * sizeof(Pixel);
         eligible |= unsigned(ok) << l;
     }
     if (eligible == 0)
         return 0;
-    // The tile as floats (counts below 2^24, and their sums: exact).
+    // Each lane's rows row - reach .. row + reach as floats (counts below
+    // 2^24, and their sums: exact), one row of eight lanes at a time, built
+    // in registers.
+    auto count = [&](int l, long j) {
+        return float(*reinterpret_cast<const Pixel *>(top[l] + std::size_t(j) * stride));
+    };
     peak_lanes_f t[2 * k_max_gather_reach + 1];
-    peak_lanes_i counts;
-    for (long j = 0; j <= 2 * reach; ++j) {
-        std::memcpy(&counts, tile[j], sizeof counts);
-        t[j] = __builtin_convertvector(counts, peak_lanes_f);
-    }
-    std::memcpy(&counts, tile[reach], sizeof counts);
-    const peak_lanes_f maximum = __builtin_convertvector(counts, peak_lanes_f);
+    for (long j = 0; j <= 2 * reach; ++j)
+        t[j] = peak_lanes_f{count(0, j), count(1, j), count(2, j), count(3, j),
+                            count(4, j), count(5, j), count(6, j), count(7, j)};
+    const peak_lanes_f maximum = {count(0, reach), count(1, reach), count(2, reach),
+                                  count(3, reach), count(4, reach), count(5, reach),
+                                  count(6, reach), count(7, reach)};
     peak_lanes_f low_left = maximum, low_right = maximum, floor_value = maximum, sum = {};
     for (long j = 0; j < reach; ++j)
         low_left = t[j] < low_left ? t[j] : low_left;
@@ -466,7 +464,7 @@ column_peaks_body(const unsigned char *frame, std::size_t stride, std::uint32_t 
     const peak_lanes_f level2 = maximum + background;
     // The width walks, as column_peak takes them: one more row while it is at
     // or above half the maximum and the line is not yet max_width wide.
-    // A walk that would leave the tile is column_peak's.
+    // A walk that would leave the rows read is column_peak's.
     peak_lanes_i go_lo = ~peak_lanes_i{}, go_hi = ~peak_lanes_i{};
     peak_lanes_i n_lo = {}, n_hi = {};
     for (long k = 1; k <= reach; ++k) {
@@ -531,17 +529,19 @@ column_peaks_body(const unsigned char *frame, std::size_t stride, std::uint32_t 
         if (!(v >= double(lo) - 1 && v <= double(hi) + 1))
             continue;  // column_peak looks for the next candidate
         // The half-maximum crossings: lo and hi stopped at half (inside the
-        // tile, clear of the band's ends), or at max_width (no width then).
-        auto count = [&](long v_row) {
-            return std::uint32_t(tile[v_row - (rw - reach)][l]);
+        // rows read, clear of the band's ends), or at max_width (no width
+        // then).
+        auto count_at = [&](long v_row) {
+            return std::uint32_t(*reinterpret_cast<const Pixel *>(
+                top[l] + std::size_t(v_row - (rw - reach)) * stride));
         };
         const std::uint32_t level = std::uint32_t(levels[l]);
         peak_shape &out = shape[l];
         out.width = out.skew = std::numeric_limits<double>::quiet_NaN();
-        if (lo > 0 && hi < last && 2 * count(lo - 1) < level && 2 * count(hi + 1) < level) {
+        if (lo > 0 && hi < last && 2 * count_at(lo - 1) < level && 2 * count_at(hi + 1) < level) {
             const double half = 0.5 * double(level);
-            const double in_l = double(count(lo)), out_l = double(count(lo - 1));
-            const double in_r = double(count(hi)), out_r = double(count(hi + 1));
+            const double in_l = double(count_at(lo)), out_l = double(count_at(lo - 1));
+            const double in_r = double(count_at(hi)), out_r = double(count_at(hi + 1));
             const double cross_l = double(lo) - (in_l - half) / (in_l - out_l);
             const double cross_r = double(hi) + (in_r - half) / (in_r - out_r);
             out.width = cross_r - cross_l;

@@ -7,7 +7,8 @@
 // lane column_peaks measures must hold the bits column_peak gives for that
 // column: the row and the shape. The lanes it leaves are column_peak's
 // anyway, so the extractor's results do not depend on which kernel read a
-// column. Most lanes of a clean line must be measured, or the kernel would
+// column; and the kernel built for the baseline x86-64 (as on Windows) must
+// give the bits of its AVX2 clone. Most lanes of a clean line must be measured, or the kernel would
 // buy nothing (and this test could not fail).
 #include <cmath>
 #include <cstddef>
@@ -28,7 +29,9 @@ extern "C" {
 
 namespace {
 
-bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+bool same_bits(double a, double b) {
+    return std::memcmp(&a, &b, sizeof a) == 0;
+}
 
 // An odd derivative filter of half width h (a least-squares slope, which is
 // the order-2 Savitzky-Golay derivative); the equality does not depend on
@@ -71,15 +74,32 @@ void compare_frame(std::mt19937 &rng, std::uint32_t full_scale, int h, int max_w
         double second = 0, second_at = centre + 6 + 20 * unit(rng);
         double line_at = centre;
         switch (kind) {
-        case 0: amplitude = fs * 3.0; break;                      // saturated
-        case 1: amplitude = fs * 0.02 * unit(rng); break;         // faint or none
-        case 2: sigma = 4.0 + 10.0 * unit(rng); break;            // wide
-        case 3: line_at = first + 4 * unit(rng); break;           // at the band's top end
-        case 4: line_at = first + rows - 1 - 4 * unit(rng); break;  // bottom end
-        case 5: second = amplitude * (0.5 + unit(rng)); break;    // a second peak
-        case 6: gradient = fs * 0.004 * (unit(rng) - 0.5); break;  // sloping background
-        case 7: noise = 0.05 * fs; break;                         // noisy
-        default: break;
+            case 0:
+                amplitude = fs * 3.0;
+                break;  // saturated
+            case 1:
+                amplitude = fs * 0.02 * unit(rng);
+                break;  // faint or none
+            case 2:
+                sigma = 4.0 + 10.0 * unit(rng);
+                break;  // wide
+            case 3:
+                line_at = first + 4 * unit(rng);
+                break;  // at the band's top end
+            case 4:
+                line_at = first + rows - 1 - 4 * unit(rng);
+                break;  // bottom end
+            case 5:
+                second = amplitude * (0.5 + unit(rng));
+                break;  // a second peak
+            case 6:
+                gradient = fs * 0.004 * (unit(rng) - 0.5);
+                break;  // sloping background
+            case 7:
+                noise = 0.05 * fs;
+                break;  // noisy
+            default:
+                break;
         }
         clean[u] = kind >= 8 && line_at > first + 30 && line_at < first + rows - 30;
         for (std::uint32_t v = 0; v < height; ++v) {
@@ -110,8 +130,25 @@ void compare_frame(std::mt19937 &rng, std::uint32_t full_scale, int h, int max_w
         const unsigned measured =
             flt::column_peaks<Pixel>(frame.data(), stride, u0, first, rows, &best_value[u0],
                                      &best_row[u0], p, block_rows, block_shape);
+        // The kernel as compiled here, for the baseline x86-64 (SSE2): what
+        // a build without the AVX2 clone (Windows) runs.
+        double plain_rows[flt::k_peak_lanes];
+        flt::peak_shape plain_shape[flt::k_peak_lanes];
+        const unsigned plain =
+            flt::column_peaks_body<Pixel>(frame.data(), stride, u0, first, rows, &best_value[u0],
+                                          &best_row[u0], p, plain_rows, plain_shape);
+        if (plain != measured && t->mismatches++ < 5)
+            std::fprintf(stderr, "columns %u..: lanes measured %#x, baseline build %#x\n", u0,
+                         measured, plain);
         for (int l = 0; l < flt::k_peak_lanes; ++l) {
             const std::uint32_t u = u0 + std::uint32_t(l);
+            if (((plain >> l) & 1u) &&
+                !(same_bits(plain_rows[l], block_rows[l]) &&
+                  same_bits(plain_shape[l].width, block_shape[l].width) &&
+                  same_bits(plain_shape[l].skew, block_shape[l].skew) &&
+                  same_bits(plain_shape[l].area, block_shape[l].area)) &&
+                t->mismatches++ < 5)
+                std::fprintf(stderr, "column %u: the baseline build reads it differently\n", u);
             bool suspect = false, saturated = false;
             flt::peak_shape shape{-1, -1, -1};
             const double row =
@@ -126,22 +163,20 @@ void compare_frame(std::mt19937 &rng, std::uint32_t full_scale, int h, int max_w
             const bool same = same_bits(row, block_rows[l]) &&
                               same_bits(shape.width, block_shape[l].width) &&
                               same_bits(shape.skew, block_shape[l].skew) &&
-                              same_bits(shape.area, block_shape[l].area) && !suspect &&
-                              !saturated;
+                              same_bits(shape.area, block_shape[l].area) && !suspect && !saturated;
             if (!same && t->mismatches++ < 5)
                 std::fprintf(stderr,
                              "column %u (h %d, max_width %d): column_peak %.17g width %.17g "
                              "skew %.17g area %.17g suspect %d saturated %d; column_peaks "
                              "%.17g width %.17g skew %.17g area %.17g\n",
                              u, h, max_width, row, shape.width, shape.skew, shape.area, suspect,
-                             saturated, block_rows[l], block_shape[l].width,
-                             block_shape[l].skew, block_shape[l].area);
+                             saturated, block_rows[l], block_shape[l].width, block_shape[l].skew,
+                             block_shape[l].area);
         }
     }
 }
 
-template <class Pixel>
-void compare_many(std::uint32_t full_scale) {
+template <class Pixel> void compare_many(std::uint32_t full_scale) {
     std::mt19937 rng(20261207u + full_scale);
     tally t, narrow;  // max_width at least the default's 12; narrower
     // Every window create allows (3..31 rows), the default max_width (12),
