@@ -39,7 +39,10 @@
  *     2. refines its row to sub-pixel accuracy at the zero crossing of the
  *        Savitzky-Golay derivative (window extract_sg_window rows, polynomial
  *        order extract_sg_order) next to the maximum (a saturated peak: the
- *        middle of its plateau);
+ *        middle of its plateau; a line at least 8 px wide at half maximum,
+ *        as a strip out of focus gives: Steger's detector at the line's own
+ *        scale, which then reads it with less noise; docs/sensor.md,
+ *        "Centre estimators");
  *     3. undistorts (u, v) and maps it through the laser's homography to
  *        (x, z) on the laser plane. The exact map is tabulated at create time
  *        (or at the first frame for an automatic band) as a polynomial in v
@@ -144,7 +147,8 @@
  *   nothing. A frame W pixels wide and H high with K fibers takes about
  *   722 W + 60 K + 8 H bytes (per column: both lasers' peaks, shapes and
  *   mapping polynomials; 1.5 MB for a 2048-wide camera;
- *   tests/c/test_memory.c checks it). The per-column search is a
+ *   tests/c/test_memory.c checks it), plus the wide lines' kernels: 4 KB
+ *   at the default extract_max_width, at most 63 KB. The per-column search is a
  *   vectorised running maximum over the band; the Savitzky-Golay filter is
  *   evaluated only next to the maximum.
  *   examples/bench/bench_extractor.c measures frames per second.

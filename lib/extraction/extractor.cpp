@@ -41,6 +41,20 @@ constexpr int k_map_nodes = 24;
 // the quantiles of the block's peaks give even when a reflection lies along
 // the line over half the block.
 constexpr std::uint32_t k_shape_block = 256;  // columns
+// Wide lines (a strip out of focus): a peak at least k_wide_line px wide at
+// half maximum (as the shape check measures it) is centred by Steger's
+// detector at the line's own scale instead of the Savitzky-Golay window,
+// which is then narrower than the line and reads its noise (docs/sensor.md,
+// "Centre estimators": the two are equal on lines of sigma 3.5 px, which
+// measure about 8 px; on sigma 4 and 5 px Steger's error is 12 % and 28 %
+// lower). Scales on a grid of k_wide_scale_step px from k_wide_line / 2.355
+// up to the widest line the extractor accepts (extract_max_width), at most
+// k_wide_max_scale.
+constexpr double k_wide_line = 8.0;                      // px at half maximum
+constexpr double k_wide_scale_step = 0.25;               // px
+constexpr double k_wide_max_scale = 16.0;                // px (reach 64 rows)
+constexpr double k_fwhm_per_sigma = 2.3548200450309493;  // 2 sqrt(2 ln 2)
+constexpr double k_wide_scale_factor = 1.3;              // scale per width / 2.355 (wide_centre)
 // The quantiles come from every k_shape_sampling-th column of the block (32
 // peaks: the quartiles to about a quarter of the scatter), which keeps their
 // cost small.
@@ -105,6 +119,12 @@ struct flt_extractor {
     bool maps_ready = false;
     int sg_half = 3;
     std::vector<float> sg_derivative;  // 2 * sg_half + 1 taps
+    // Steger's kernels for wide lines, per scale i (k_wide_line / 2.355 +
+    // i k_wide_scale_step px): the Gaussian's first and second derivatives
+    // integrated over each pixel, taps -reach..reach, at wide_first[i].
+    std::vector<double> wide_d1, wide_d2;
+    std::vector<std::size_t> wide_first;
+    std::vector<long> wide_reach;
     double min_peak = 0.1, max_width = 12;
     double strip_min_z = -100, edge_gap = 50, min_strip_width = 100;  // mm
 
@@ -161,6 +181,10 @@ struct flt_extractor {
                       std::uint32_t full_scale);
     template <class Pixel>
     void extract(const unsigned char *frame, std::size_t stride, std::uint32_t full_scale);
+    void build_wide_kernels();
+    template <class Pixel>
+    double wide_centre(const unsigned char *frame, std::size_t stride, std::uint32_t u, double row,
+                       double width_px) const;
     void resample(unsigned laser);
     void reject_glint_fringes(double *rows);
     void reject_detours(double *rows);
@@ -480,6 +504,17 @@ void flt_extractor::extract(const unsigned char *frame, std::size_t stride,
                     &unused_suspect, &unused_saturated, &alternative_shape[u]);
             }
         }
+        // A wide line is centred at its own scale (k_wide_line). Not one
+        // whose maximum comes near full scale: there the sensor's response
+        // flattens the top and a bright line glows, so the width measures
+        // the flattening and the glow, not defocus, and the glow's
+        // asymmetry would drag a kernel that wide (on the saturated red
+        // photos it did: 87.0 -> 86.0 % kept, 0.22 -> 0.25 px).
+        if (!wide_reach.empty())
+            for (std::uint32_t u = 0; u < width; ++u)
+                if (shape[u].width >= k_wide_line && !saturated_column[u] &&
+                    4 * std::uint32_t(best_value[u]) < 3 * full_scale && rows_out[u] == rows_out[u])
+                    rows_out[u] = wide_centre<Pixel>(frame, stride, u, rows_out[u], shape[u].width);
         // (x, z) of column u's peak at row v through the column map.
         auto map_column = [&](std::uint32_t u, double v, double *x_out, double *z_out) {
             double x = k_nan, z = k_nan;
@@ -523,6 +558,84 @@ void flt_extractor::extract(const unsigned char *frame, std::size_t stride,
         find_strip<Pixel>(frame, stride, laser, params.min_value);
         resample(laser);
     }
+}
+
+// Steger's kernels at scales s = k_wide_line / 2.355 + i k_wide_scale_step
+// up to the widest line extract_max_width lets through (at most
+// k_wide_max_scale): tap k of the first derivative is the Gaussian's
+// increase over the pixel k -+ 1/2, g(k + 1/2) - g(k - 1/2), and of the
+// second the same of its derivative; 4 s rows each side. None when no line
+// that wide is accepted.
+void flt_extractor::build_wide_kernels() {
+    wide_d1.clear(), wide_d2.clear(), wide_first.clear(), wide_reach.clear();
+    const double first_scale = k_wide_line / k_fwhm_per_sigma;
+    const double last_scale = std::min(k_wide_max_scale, max_width / k_fwhm_per_sigma);
+    for (int i = 0; first_scale + i * k_wide_scale_step <= last_scale + 1e-9; ++i) {
+        const double scale = first_scale + i * k_wide_scale_step;
+        const long reach = long(std::ceil(4 * scale));
+        wide_first.push_back(wide_d1.size());
+        wide_reach.push_back(reach);
+        auto density = [&](double x) {
+            return std::exp(-0.5 * x * x / (scale * scale)) / (scale * std::sqrt(2 * M_PI));
+        };
+        auto slope = [&](double x) {
+            return -x / (scale * scale) * density(x);
+        };
+        for (long k = -reach; k <= reach; ++k) {
+            const double a = double(k) - 0.5, b = double(k) + 0.5;
+            wide_d1.push_back(density(b) - density(a));
+            wide_d2.push_back(slope(b) - slope(a));
+        }
+    }
+}
+
+// The centre of a wide line in column u (Steger's detector in one
+// dimension): the profile r = I * g at the grid's scale nearest
+// k_wide_scale_factor width_px / 2.355,
+// its centre row v0 + t with t = -r'(v0) / r''(v0), from the row nearest the
+// Savitzky-Golay centre `row` or, when the step leaves that pixel, from its
+// neighbour (the one with the shorter step). A constant background drops
+// out (the first kernel sums to zero; the second to within e^-8 of it).
+// `row` itself where the kernel leaves the frame or the profile is not
+// concave there.
+template <class Pixel>
+double flt_extractor::wide_centre(const unsigned char *frame, std::size_t stride, std::uint32_t u,
+                                  double row, double width_px) const {
+    // The shape's width is measured against the local background within
+    // gather_reach rows, which on a wide line is still its own flank: a
+    // sigma of 4-5 px measures 1.9-2.1 sigma instead of 2.355 sigma. The
+    // factor brings the scale back to at least the line's sigma, where the
+    // centre's noise is least (of 1, 1.15 and 1.3, 1.3 read best).
+    const double scale = k_wide_scale_factor * width_px / k_fwhm_per_sigma;
+    const double first_scale = k_wide_line / k_fwhm_per_sigma;  // the grid's
+    const std::size_t i =
+        std::min(wide_reach.size() - 1,
+                 std::size_t(std::max(0.0, std::round((scale - first_scale) / k_wide_scale_step))));
+    const long reach = wide_reach[i];
+    const double *d1 = wide_d1.data() + wide_first[i] + std::size_t(reach);
+    const double *d2 = wide_d2.data() + wide_first[i] + std::size_t(reach);
+    auto step_at = [&](long v0) {
+        if (v0 - reach < 0 || v0 + reach >= long(height))
+            return k_nan;
+        double r1 = 0, r2 = 0;
+        for (long k = -reach; k <= reach; ++k) {
+            const double light =
+                double(reinterpret_cast<const Pixel *>(frame + std::size_t(v0 - k) * stride)[u]);
+            r1 += light * d1[k], r2 += light * d2[k];
+        }
+        return r2 < 0 ? -r1 / r2 : k_nan;
+    };
+    const long v0 = std::lround(row);
+    const double t0 = step_at(v0);
+    double best = t0;
+    long best_v = v0;
+    if (std::fabs(t0) > 0.5) {
+        const long v1 = v0 + (t0 > 0 ? 1 : -1);
+        const double t1 = step_at(v1);
+        if (std::fabs(t1) < std::fabs(t0))
+            best = t1, best_v = v1;
+    }
+    return std::fabs(best) <= 1.0 ? double(best_v) + best : row;
 }
 
 // x (mm) of the column map of laser L at a fractional column u and row v:
@@ -1278,6 +1391,7 @@ FLT_API flt_status FLT_CALL flt_extractor_create(const flt_calib *calib, const f
         ex->best_row.assign(w, 0);
         ex->row_sum.assign(ex->height, 0);
         ex->map_scratch.assign(2 * w * k_map_nodes, 0);
+        ex->build_wide_kernels();
         if (!ex->bands[0].automatic)
             ex->build_maps();
         *out = ex.release();
