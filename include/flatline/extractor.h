@@ -14,7 +14,7 @@
  *        maximum; "half" is half way between the local background, the
  *        higher of the lowest pixels either side of it, and the maximum);
  *        after a rejection the next brightest peak outside the rejected
- *        one is tried (at most 3 candidates per column and laser). An
+ *        one is tried (at most 8 candidates per column and laser). An
  *        unsaturated peak rejected as too wide or too weak above its
  *        background is a bright patch of background and is passed over
  *        whole (its rows at or above its half level, or within

@@ -112,6 +112,13 @@ struct peak_params {
 // Savitzky-Golay windows of the zero-crossing search (up to 3 rows away).
 constexpr long k_max_gather_reach = 31;
 
+// Candidate peaks column_peak tries per column, at most: the maximum and,
+// after each rejection, the next brightest local maximum outside the
+// rejected ones. A tall band over a board's white fields, or a lit strip
+// with bright marks, holds several patches brighter than the line, each
+// rejected whole as too wide or too faint above its background.
+constexpr int k_max_candidates = 8;
+
 // The sub-pixel row of the strongest valid peak of column u in rows
 // [first, first + rows), NaN if there is none. `value` and `row` are the
 // column's maximum from band_maximum. *suspect is set when the column's
@@ -152,10 +159,18 @@ column_peak(const unsigned char *frame, std::size_t stride, std::uint32_t u, std
             d += p.sg_taps[h + j] * (centre[j] - centre[-j]);
         return d;
     };
-    long excluded_lo[3], excluded_hi[3];
+    long excluded_lo[k_max_candidates], excluded_hi[k_max_candidates];
     int excluded = 0;
+    // The brightest local maxima outside the rejected peaks when the band
+    // was last scanned (brightest first; of equal ones the upper row
+    // first, as a scan down the rows finds them): each next candidate is
+    // the first of them not rejected since, so one strided scan serves
+    // several rejections; a new scan when all are used.
+    std::uint32_t next_value[k_max_candidates];
+    long next_row[k_max_candidates];
+    int next_count = 0;
     *saturated_out = false;
-    for (int candidate = 0; candidate < 3; ++candidate) {
+    for (int candidate = 0; candidate < k_max_candidates; ++candidate) {
         if (value < p.min_value || value == 0)
             return nan;  // the rest is weaker still
         // The column's pixels around the maximum, copied once (NaN outside
@@ -347,7 +362,7 @@ column_peak(const unsigned char *frame, std::size_t stride, std::uint32_t u, std
                 return v;
             }
         }
-        if (candidate == 2)
+        if (candidate == k_max_candidates - 1)
             break;
         // Rejected: the next brightest local maximum outside the rejected
         // peaks (a strided scan, only for the few rejected columns).
@@ -370,24 +385,38 @@ column_peak(const unsigned char *frame, std::size_t stride, std::uint32_t u, std
                 ++hi;
         }
         excluded_lo[excluded] = lo, excluded_hi[excluded] = hi, ++excluded;
-        std::uint32_t best = 0;
-        long best_row = -1;
-        for (long v = band_lo; v <= band_hi; ++v) {
-            bool skip = false;
+        auto rejected = [&](long v) {
+            bool within = false;
             for (int e = 0; e < excluded; ++e)
-                skip |= v >= excluded_lo[e] && v <= excluded_hi[e];
-            if (skip)
-                continue;
-            const std::uint32_t value_v = px(v);
-            if (value_v <= best)
-                continue;
-            if ((v > band_lo && px(v - 1) > value_v) || (v < band_hi && px(v + 1) > value_v))
-                continue;  // not a local maximum (e.g. the tail of a rejected peak)
-            best = value_v, best_row = v;
+                within |= v >= excluded_lo[e] && v <= excluded_hi[e];
+            return within;
+        };
+        int next = 0;
+        while (next < next_count && rejected(next_row[next]))
+            ++next;
+        if (next == next_count) {
+            next = next_count = 0;
+            for (long v = band_lo; v <= band_hi; ++v) {
+                if (rejected(v))
+                    continue;
+                const std::uint32_t value_v = px(v);
+                if (value_v == 0 ||
+                    (next_count == k_max_candidates && value_v <= next_value[next_count - 1]))
+                    continue;
+                if ((v > band_lo && px(v - 1) > value_v) || (v < band_hi && px(v + 1) > value_v))
+                    continue;  // not a local maximum (e.g. the tail of a rejected peak)
+                int at = std::min(next_count, k_max_candidates - 1);
+                while (at > 0 && next_value[at - 1] < value_v) {
+                    next_value[at] = next_value[at - 1], next_row[at] = next_row[at - 1];
+                    --at;
+                }
+                next_value[at] = value_v, next_row[at] = v;
+                next_count = std::min(next_count + 1, k_max_candidates);
+            }
+            if (next_count == 0)
+                break;
         }
-        if (best_row < 0)
-            break;
-        value = best, row = best_row;
+        value = next_value[next], row = next_row[next];
     }
     return nan;
 }
