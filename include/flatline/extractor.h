@@ -34,7 +34,10 @@
  *        the columns: a run of peaks that continue each other but leave the
  *        line and come back (a reflection brighter than a dim stretch of
  *        the line), shorter than the runs on both sides and mostly more
- *        than 3 px off the straight line between them, is rejected.
+ *        than 3 px off the straight line between them, is rejected; the
+ *        line under it is read where it is still a peak within 0.5 px of
+ *        that straight line, clear of the reflection and of the line's
+ *        shape.
  *        lib/extraction/README.md gives the measured rates;
  *     2. refines its row to sub-pixel accuracy at the zero crossing of the
  *        Savitzky-Golay derivative (window extract_sg_window rows, polynomial

@@ -497,13 +497,16 @@ static void line_below_four_bright_patches_is_found(void **state) {
 /* A reflection brighter than the line where the line is dim (over a dark
  * patch of the strip): its peaks continue each other, so no column alone
  * looks wrong, but as a run they leave the line and come back
- * (reject_detours, lib/extraction/README.md). Laser 0's line at row 40.3,
- * 110 counts over a background of 25, dimmed to 30 counts in columns
- * 1000..1039 where a reflection of 90 counts lies at row 70.6, as wide
- * as the line (the shape check cannot tell them apart; without the
- * continuity check those 40 columns read the reflection, 30 px off).
- * Bound: no peak more than 0.1 px off the line; the columns under the
- * reflection are rejected (NaN), the 2008 others kept. */
+ * (reject_detours, lib/extraction/README.md), and the line under it is
+ * read where it is still a peak (look_under_detours). Laser 0's line at
+ * row 40.3, 110 counts over a background of 25, dimmed to 30 counts in
+ * columns 1000..1039 and to 10 counts (below extract_min_peak, 26 counts:
+ * no peak) in columns 1500..1539, where a reflection of 90 counts lies at
+ * row 70.6, as wide as the line (the shape check cannot tell them apart;
+ * without the continuity check those columns read the reflection, 30 px
+ * off). Bound: no peak more than 0.1 px off the line; the 40 columns over
+ * the 30-count stretch are read on the line, the 40 over the 10-count one
+ * have no peak, the 1968 others are kept. */
 static void a_reflection_over_a_dim_stretch_is_no_line(void **state) {
     (void)state;
     enum { N = 101 };
@@ -514,13 +517,17 @@ static void a_reflection_over_a_dim_stretch_is_no_line(void **state) {
     const double line_row = 40.3, line_sigma = 2.0, glare_row = 70.6, glare_sigma = 2.0;
     for (uint32_t v = 0; v < ROI_ROWS; ++v)
         for (uint32_t u = 0; u < W; ++u) {
-            const int dim = u >= 1000 && u < 1040;
+            const int dim = u >= 1000 && u < 1040, dimmer = u >= 1500 && u < 1540;
             const double d0 = ((double)v - line_row) / line_sigma;
             const double d1 = ((double)v - (line_row + 128)) / line_sigma;
             const double dr = ((double)v - glare_row) / glare_sigma;
-            double g =
-                25.0 + (dim ? 30.0 : 110.0) * exp(-0.5 * d0 * d0) + 110.0 * exp(-0.5 * d1 * d1);
-            if (dim)
+            double g = 25.0 +
+                       (dim      ? 30.0
+                        : dimmer ? 10.0
+                                 : 110.0) *
+                           exp(-0.5 * d0 * d0) +
+                       110.0 * exp(-0.5 * d1 * d1);
+            if (dim || dimmer)
                 g += 90.0 * exp(-0.5 * dr * dr);
             frame[(size_t)v * W + u] = (uint8_t)lround(g);
         }
@@ -529,7 +536,7 @@ static void a_reflection_over_a_dim_stretch_is_no_line(void **state) {
         flt_extractor_process(ex, frame, FLT_PIXEL_MONO8, W, ROI_ROWS, W, e, N, &s, h, g, NULL),
         FLT_OK);
     assert_int_equal(flt_extractor_peaks(ex, W, rows), FLT_OK);
-    size_t kept = 0, under = 0;
+    size_t kept = 0, under = 0, under_dimmer = 0;
     double worst = 0;
     for (uint32_t u = 0; u < W; ++u) {
         if (!(rows[u] == rows[u]))
@@ -537,11 +544,15 @@ static void a_reflection_over_a_dim_stretch_is_no_line(void **state) {
         worst = fmax(worst, fabs(rows[u] - line_row));
         ++kept;
         under += u >= 1000 && u < 1040;
+        under_dimmer += u >= 1500 && u < 1540;
     }
     print_message("a reflection over a dim stretch: %zu of %d columns kept (%zu under the "
-                  "reflection), worst %.3f px off the line\n",
-                  kept, W, under, worst);
+                  "reflection over the 30-count line, %zu over the 10-count one), worst %.3f "
+                  "px off the line\n",
+                  kept, W, under, under_dimmer, worst);
     assert_true(worst <= 0.1);
+    assert_int_equal(under, 40);
+    assert_int_equal(under_dimmer, 0);
     assert_int_equal(kept, W - 40);
     free(frame);
     flt_extractor_destroy(ex);
