@@ -11,6 +11,9 @@
 // grow with the band. It also measures the accepted peak's shape
 // (peak_shape) for the extractor's shape check, which compares it with the
 // other columns' and so runs once the whole row is known.
+//
+// column_peaks: column_peak for eight clean columns at once, lane by lane,
+// to the same bits; the columns it cannot read so go to column_peak.
 #pragma once
 
 #include <algorithm>
