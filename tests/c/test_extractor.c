@@ -375,6 +375,23 @@ static void end_to_end_reference_sheet_within_half_a_millimetre(void **state) {
     flt_calib_destroy(calib);
 }
 
+/* Laser 0's peaks in rows[0, W): those at or below patch_row (on a patch)
+ * and the others kept (on the line); returns the farthest of these from
+ * line_row, px. */
+static double line_and_patches(const double *rows, double line_row, double patch_row,
+                               size_t *on_line, size_t *on_patch) {
+    double worst = 0;
+    for (uint32_t u = 0; u < W; ++u) {
+        if (rows[u] >= patch_row)
+            ++*on_patch;
+        else if (rows[u] == rows[u]) {
+            ++*on_line;
+            worst = fmax(worst, fabs(rows[u] - line_row));
+        }
+    }
+    return worst;
+}
+
 /* A line beside a bright, wide patch of background (a calibration target's
  * white field next to a line over one of its black marks; a lit strip):
  * the patch is brighter than the line, but it is no peak. Its brightest
@@ -417,15 +434,7 @@ static void line_beside_a_bright_patch_is_found(void **state) {
         FLT_OK);
     assert_int_equal(flt_extractor_peaks(ex, W, rows), FLT_OK);
     size_t on_line = 0, on_patch = 0;
-    double worst = 0;
-    for (uint32_t u = 0; u < W; ++u) {
-        if (rows[u] >= 50)
-            ++on_patch;
-        else if (rows[u] == rows[u]) {
-            ++on_line;
-            worst = fmax(worst, fabs(rows[u] - line_row));
-        }
-    }
+    const double worst = line_and_patches(rows, line_row, 50, &on_line, &on_patch);
     printf("line beside a bright patch: %zu of %d columns on the line (worst %.3f px), "
            "%zu on the patch\n",
            on_line, W, worst, on_patch);
@@ -474,15 +483,7 @@ static void line_below_four_bright_patches_is_found(void **state) {
         FLT_OK);
     assert_int_equal(flt_extractor_peaks(ex, W, rows), FLT_OK);
     size_t on_line = 0, on_patch = 0;
-    double worst = 0;
-    for (uint32_t u = 0; u < W; ++u) {
-        if (rows[u] >= 45)
-            ++on_patch;
-        else if (rows[u] == rows[u]) {
-            ++on_line;
-            worst = fmax(worst, fabs(rows[u] - line_row));
-        }
-    }
+    const double worst = line_and_patches(rows, line_row, 45, &on_line, &on_patch);
     printf("line below four bright patches: %zu of %d columns on the line (worst %.3f px), "
            "%zu on a patch\n",
            on_line, W, worst, on_patch);

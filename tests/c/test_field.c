@@ -609,6 +609,22 @@ static void the_off_strip_flag_passes_through_the_reconstructor(void **state) {
 
 /* ------------------------------------------------------------------ field frames */
 
+/* The background of column u around a line at row c: the median of the
+ * 20 pixels 15-24 rows away on either side (c - 24 >= 0, c + 24 < ROI_ROWS). */
+static double line_background(const uint8_t *frame, long u, long c) {
+    int around[20];
+    for (int j = 0; j < 10; ++j) {
+        around[j] = frame[(size_t)(c - 15 - j) * W + (size_t)u];
+        around[10 + j] = frame[(size_t)(c + 15 + j) * W + (size_t)u];
+    }
+    for (int i = 1; i < 20; ++i) /* insertion sort, for the median */
+        for (int j = i; j > 0 && around[j - 1] > around[j]; --j) {
+            const int x = around[j];
+            around[j] = around[j - 1], around[j - 1] = x;
+        }
+    return 0.5 * (around[9] + around[10]);
+}
+
 /* The extractor's peaks in one field condition: frames of a 1500 mm strip
  * over the roller table with 6 mm wavy edges and a 4 mm centre buckle
  * (the line stays in its band), frames 150 mm apart. A column's line is
@@ -664,17 +680,7 @@ static field_figures field_run(double speckle, double depth_of_field, double dar
                 for (long v = c - 1; v <= c + 1; ++v)
                     if (frame[(size_t)v * W + (size_t)u] > top)
                         top = frame[(size_t)v * W + (size_t)u];
-                int around[20];
-                for (int j = 0; j < 10; ++j) {
-                    around[j] = frame[(size_t)(c - 15 - j) * W + (size_t)u];
-                    around[10 + j] = frame[(size_t)(c + 15 + j) * W + (size_t)u];
-                }
-                for (int i = 1; i < 20; ++i) /* insertion sort, for the median */
-                    for (int j = i; j > 0 && around[j - 1] > around[j]; --j) {
-                        const int x = around[j];
-                        around[j] = around[j - 1], around[j - 1] = x;
-                    }
-                const int strong = (top - 0.5 * (around[9] + around[10])) / 255.0 >= 0.2;
+                const int strong = (top - line_background(frame, u, c)) / 255.0 >= 0.2;
                 double pts[4] = {(double)u, t, (double)u, p}, plane[4];
                 if (p == p) {
                     assert_int_equal(flt_calib_image_to_plane(calib, laser, 2, pts, plane), FLT_OK);
@@ -930,17 +936,7 @@ static void estimators_against_the_truth(void **state) {
                 for (long v = c - 4; v <= c + 4; ++v)
                     if (pixel(&view, v) > pixel(&view, view.top))
                         view.top = v;
-                double around[20];
-                for (int k = 0; k < 10; ++k) {
-                    around[k] = pixel(&view, c - 15 - k);
-                    around[10 + k] = pixel(&view, c + 15 + k);
-                }
-                for (int a = 1; a < 20; ++a) /* insertion sort, for the median */
-                    for (int b = a; b > 0 && around[b - 1] > around[b]; --b) {
-                        const double x = around[b];
-                        around[b] = around[b - 1], around[b - 1] = x;
-                    }
-                view.background = 0.5 * (around[9] + around[10]);
+                view.background = line_background(frame, view.u, c);
                 ++columns;
                 add_error(&err[0], p, t);
                 add_error(&err[1], centroid_centre(&view), t);
