@@ -15,23 +15,30 @@
  *       test transposes them so that the line runs along rows, as the
  *       extractor expects: it searches each column for the line's row).
  *
+ * and four further sets, found after the extractor was tuned, read from
+ * the folder FLT_FURTHER_PHOTOS names (tests/further_photos lists and
+ * fetches them; test_further_* below describe each).
+ *
  * What is measured, per set (docs/sensor.md, "Real photos", has the
  * figures):
  *   1. Kept: of the columns the line crosses (found independently of the
  *      extractor: find_line()), the share where the extractor's peak
  *      (flt_extractor_peaks) lies on the line; "wrong" where it lies off
- *      it. Bounds: kept >= 80 %, wrong <= 1 %.
+ *      it. Bounds: kept >= 80 %, wrong <= 1 % (the further sets:
+ *      check_further()).
  *   2. Straightness: the board is flat, so the line's centres lie on a
  *      straight line in the undistorted image. The RMS distance of the
  *      extractor's centres from their least-squares line, against that of
- *      a plain centroid (centroid()) on the same columns. Bound: extractor
- *      <= centroid. The green set has no intrinsics and its line bends
- *      over the frame: there the model is a cubic (test_green_exposed).
+ *      a plain centroid (centroid()) and a Gaussian 3-point fit
+ *      (gaussian3()) on the same columns. Bound: extractor <= centroid.
+ *      The green set has no intrinsics and its line bends over the frame:
+ *      there the model is a cubic (test_green_exposed).
  *
  * The frames: the extractor takes monochrome frames (Mono8..Mono16), and
  * the library's image source refuses colour files, so the test decodes the
  * JPEG files itself with libjpeg (a C library; where the build has none,
- * as in the Windows cross build, the tests skip with a message) and makes
+ * as in the Windows cross build, the tests skip with a message), and the
+ * BMP files of one further set with load_bmp(), and makes
  * one Mono8 frame of each photo: the green line's own channel (a
  * band-pass filter in front of a monochrome camera sees about that), and
  * for the saturated red line the grey image, not the red channel
@@ -145,6 +152,81 @@ static int load_channel(const char *path, int channel, int transpose, photo *out
     return 0;
 }
 #endif
+
+/* Little-endian fields of a BMP header. */
+static uint32_t le32(const uint8_t *p) {
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+static uint16_t le16(const uint8_t *p) {
+    return (uint16_t)(p[0] | p[1] << 8);
+}
+
+/* Decodes an uncompressed 8-bit palette BMP (what monochrome cameras'
+ * software writes) into a Mono8 frame, each pixel its palette entry's grey
+ * level (ITU-R BT.601), transposed when `transpose` is set. Any other kind
+ * of BMP, a header of more than 124 bytes, or sizes beyond 16384 px a
+ * side or past the file's end, is refused: -1 (nothing is allocated before
+ * the sizes are checked). 0 on success. */
+static int load_bmp(const char *path, int transpose, photo *out) {
+    memset(out, 0, sizeof *out);
+    FILE *file = fopen(path, "rb");
+    if (file == NULL)
+        return -1;
+    uint8_t head[54], palette[1024];
+    int ok = fread(head, 1, sizeof head, file) == sizeof head && head[0] == 'B' && head[1] == 'M';
+    const uint32_t offset = ok ? le32(head + 10) : 0, info = ok ? le32(head + 14) : 0;
+    const int32_t w = ok ? (int32_t)le32(head + 18) : 0,
+                  h_signed = ok ? (int32_t)le32(head + 22) : 0;
+    const uint32_t colours = ok ? le32(head + 46) : 0;
+    const uint32_t h = h_signed < 0 ? (uint32_t)(-(int64_t)h_signed) : (uint32_t)h_signed;
+    ok = ok && info >= 40 && info <= 124 && le16(head + 26) == 1 && le16(head + 28) == 8 &&
+         le32(head + 30) == 0 && w > 0 && w <= 16384 && h > 0 && h <= 16384 && colours <= 256;
+    const uint32_t entries = colours ? colours : 256;
+    ok = ok && offset >= 14 + info + 4 * entries && fseek(file, 14L + (long)info, SEEK_SET) == 0 &&
+         fread(palette, 4, entries, file) == entries;
+    const size_t stride = ((size_t)w + 3) / 4 * 4;
+    uint8_t *row = ok ? malloc(stride) : NULL;
+    uint8_t *pixels = ok ? malloc((size_t)w * h) : NULL;
+    ok = ok && row != NULL && pixels != NULL && fseek(file, (long)offset, SEEK_SET) == 0;
+    uint8_t grey[256] = {0};
+    for (size_t i = 0; ok && i < entries; ++i) /* entries are B, G, R, 0 */
+        grey[i] = (uint8_t)((299 * palette[4 * i + 2] + 587 * palette[4 * i + 1] +
+                             114 * palette[4 * i] + 500) /
+                            1000);
+    for (uint32_t k = 0; ok && k < h; ++k) {
+        ok = fread(row, 1, stride, file) == stride;
+        const uint32_t v = h_signed < 0 ? k : h - 1 - k; /* positive height: bottom row first */
+        for (uint32_t u = 0; ok && u < (uint32_t)w; ++u) {
+            if (transpose)
+                pixels[(size_t)u * h + v] = grey[row[u]];
+            else
+                pixels[(size_t)v * (uint32_t)w + u] = grey[row[u]];
+        }
+    }
+    fclose(file);
+    free(row);
+    if (!ok) {
+        free(pixels);
+        return -1;
+    }
+    out->width = transpose ? h : (uint32_t)w;
+    out->height = transpose ? (uint32_t)w : h;
+    out->pixels = pixels;
+    return 0;
+}
+
+/* A photo: BMP by its name, else JPEG. */
+static int load_photo(const char *path, int channel, int transpose, photo *out) {
+    const size_t n = strlen(path);
+    if (n > 4 && strcmp(path + n - 4, ".bmp") == 0)
+        return load_bmp(path, transpose, out);
+#ifdef FLT_HAVE_JPEG
+    return load_channel(path, channel, transpose, out);
+#else
+    (void)channel;
+    return -1;
+#endif
+}
 
 /* ---------------------------------------------------------------------- */
 /* The columns the line crosses, independently of the extractor          */
@@ -315,6 +397,7 @@ static int read_parameters(const char *path, double camera[4], double distortion
 /* The line's reference row in a column: the median brightest row of the
  * run's columns within this many columns either side. */
 #define REF_REACH        32
+#define SLOPE_SPAN       8
 /* Gaps of up to this many columns without a line column are bridged: where
  * the line crosses a black circle of the board (about 45 columns wide) it
  * may rise too little above the circle's neighbourhood. At most twice
@@ -335,8 +418,8 @@ static int read_parameters(const char *path, double camera[4], double distortion
 typedef struct set_result {
     size_t line_columns, kept, wrong; /* summed over the photos */
     /* Sums of squared residuals, px^2: [straight line, cubic][extractor,
-     * centroid], and the columns fitted. */
-    double rss[2][2];
+     * centroid, Gaussian 3-point], and the columns fitted. */
+    double rss[2][3];
     size_t fitted;
 } set_result;
 
@@ -346,6 +429,11 @@ typedef struct set_result {
  * crosses every column from the run's first to its last (the board is one
  * piece): line[u] = 1 there, and ref[u] is its reference row there
  * (REF_REACH). Returns the number of columns crossed. */
+static int compare_doubles(const void *a, const void *b) {
+    const double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
 static size_t find_line(const column_stats *st, uint32_t width, double contrast, uint8_t *line,
                         double *ref) {
     /* run[u]: 1 + the index of the run line column u belongs to, else 0.
@@ -386,24 +474,35 @@ static size_t find_line(const column_stats *st, uint32_t width, double contrast,
                 run_first = u;
             run_end = u;
         }
-    /* ref[u]: the median brightest row of the run's columns within
-     * REF_REACH columns (one column's brightest pixel may sit on the glow
-     * beside the line). */
+    /* ref[u]: the brightest rows of the run's columns within REF_REACH
+     * columns, carried to u along the line's local slope, their median
+     * (one column's brightest pixel may sit on the glow beside the line).
+     * The slope: the median of the run's row steps over SLOPE_SPAN columns
+     * in the window. Without it, a line at 35 degrees (0.7 rows per
+     * column) would be referred 10 rows off at its ends, where the window
+     * is one-sided. */
     double window[2 * REF_REACH + 1];
     for (long u = 0; u < (long)width; ++u) {
         ref[u] = NAN;
         if (run_first < 0 || u < run_first || u > run_end)
             continue;
         int n = 0;
+        for (long k = u - REF_REACH; k + SLOPE_SPAN <= u + REF_REACH; ++k)
+            if (k >= 0 && k + SLOPE_SPAN < (long)width && run[k] == best &&
+                run[k + SLOPE_SPAN] == best)
+                window[n++] = (st[k + SLOPE_SPAN].row - st[k].row) / SLOPE_SPAN;
+        double slope = 0;
+        if (n > 0) {
+            qsort(window, (size_t)n, sizeof *window, compare_doubles);
+            slope = window[n / 2];
+        }
+        n = 0;
         for (long k = u - REF_REACH; k <= u + REF_REACH; ++k)
-            if (k >= 0 && k < (long)width && run[k] == best) {
-                int j = n++;
-                for (; j > 0 && window[j - 1] > st[k].row; --j)
-                    window[j] = window[j - 1];
-                window[j] = st[k].row;
-            }
+            if (k >= 0 && k < (long)width && run[k] == best)
+                window[n++] = st[k].row + slope * (double)(u - k);
         if (n == 0)
             continue; /* a gap wider than the reach: no reference there */
+        qsort(window, (size_t)n, sizeof *window, compare_doubles);
         ref[u] = n % 2 ? window[n / 2] : 0.5 * (window[n / 2 - 1] + window[n / 2]);
         line[u] = 1;
         ++crossed;
@@ -451,6 +550,43 @@ static double centroid(const photo *p, uint32_t u, double row, uint32_t first, u
     }
 #undef PX
     return weighted / sum;
+}
+
+/* The Gaussian 3-point fit of column u: through the logarithms of the
+ * brightest pixel within CENTROID_HALF rows of `row` and its two
+ * neighbours, each less the background (as centroid(): the higher of the
+ * lowest pixels above and below, and at least one level), the parabola's
+ * vertex. Where the maximum is a saturated plateau, the brightest pixel is
+ * the plateau's middle (its neighbours are then equal, and so is the
+ * vertex). NaN where the maximum lies at the window's end. */
+static double gaussian3(const photo *p, uint32_t u, double row, uint32_t first, uint32_t rows) {
+    const long centre = lround(row);
+    const long lo = centre - CENTROID_HALF < (long)first ? (long)first : centre - CENTROID_HALF;
+    const long hi = centre + CENTROID_HALF > (long)(first + rows - 1) ? (long)(first + rows - 1)
+                                                                      : centre + CENTROID_HALF;
+#define PX(v) ((double)p->pixels[(size_t)(v)*p->width + u])
+    long at = lo;
+    for (long v = lo; v <= hi; ++v)
+        if (PX(v) > PX(at))
+            at = v;
+    long end = at;
+    while (end < hi && PX(end + 1) == PX(at))
+        ++end;
+    at = (at + end) / 2;
+    if (at <= lo || at >= hi)
+        return NAN;
+    double low_above = PX(at), low_below = PX(at);
+    for (long v = lo; v < at; ++v)
+        low_above = fmin(low_above, PX(v));
+    for (long v = at + 1; v <= hi; ++v)
+        low_below = fmin(low_below, PX(v));
+    const double background = fmax(low_above, low_below);
+    const double a = log(fmax(1.0, PX(at - 1) - background));
+    const double b = log(fmax(1.0, PX(at) - background));
+    const double c = log(fmax(1.0, PX(at + 1) - background));
+#undef PX
+    const double curvature = a - 2 * b + c;
+    return curvature < 0 ? (double)at + 0.5 * (a - c) / curvature : (double)at;
 }
 
 /* Least-squares polynomial of degree `degree` (1: a straight line, up to
@@ -505,14 +641,18 @@ static double fit_rss(const double *u, const double *v, size_t n, int degree) {
 
 typedef struct set_spec {
     const char *name;
-    const char *folder; /* under FLT_EXTERNAL_DATA */
+    const char *root;   /* the environment variable naming the folder: NULL, FLT_EXTERNAL_DATA */
+    const char *folder; /* under it */
     const char *const *files;
     size_t count;
     int channel; /* RED, GREEN or GREY */
     int transpose;
-    const char *parameters; /* intrinsics file under FLT_EXTERNAL_DATA, or NULL */
-    const char *off_folder; /* the same views with the laser off, or NULL */
-    const char *const *off_files;
+    const char *parameters;       /* intrinsics file under the root, or NULL */
+    const char *off_folder;       /* the same views with the laser off, or NULL */
+    const char *const *off_files; /* NULL entries: no laser-off view of that photo */
+    /* Only the columns [measure_first, measure_last] (after a transpose)
+     * are measured, where the line lies on the flat board (0, 0: all). */
+    uint32_t measure_first, measure_last;
     uint32_t search_first, search_rows; /* where the line is looked for */
     double contrast;                    /* a line column's least contrast, grey levels */
     double min_peak;                    /* extract_min_peak */
@@ -528,15 +668,18 @@ static void measure_set(const set_spec *set, set_result *result) {
     (void)read_parameters;
     (void)find_line;
     (void)centroid;
+    (void)gaussian3;
     (void)fit_rss;
+    (void)load_photo;
     fprintf(stderr, "skipped: this build has no libjpeg to decode the photos\n");
     skip();
 #else
+    const char *root = set->root ? set->root : "FLT_EXTERNAL_DATA";
     char path[1024];
     double camera[4] = {0}, distortion[8] = {0};
     int undistort = 0;
     if (set->parameters) {
-        if (!flt_external_path(set->parameters, path, sizeof path))
+        if (!flt_external_path_in(root, set->parameters, path, sizeof path))
             skip();
         assert_int_equal(read_parameters(path, camera, distortion), 0);
         undistort = 1;
@@ -544,11 +687,11 @@ static void measure_set(const set_spec *set, set_result *result) {
     for (size_t i = 0; i < set->count; ++i) { /* all there, or skip before any output */
         char relative[512];
         snprintf(relative, sizeof relative, "%s/%s", set->folder, set->files[i]);
-        if (!flt_external_path(relative, path, sizeof path))
+        if (!flt_external_path_in(root, relative, path, sizeof path))
             skip();
-        if (set->off_folder) {
+        if (set->off_folder && set->off_files[i]) {
             snprintf(relative, sizeof relative, "%s/%s", set->off_folder, set->off_files[i]);
-            if (!flt_external_path(relative, path, sizeof path))
+            if (!flt_external_path_in(root, relative, path, sizeof path))
                 skip();
         }
     }
@@ -557,15 +700,17 @@ static void measure_set(const set_spec *set, set_result *result) {
            : set->channel == RED ? "red channel"
                                  : "green channel",
            set->transpose ? ", transposed" : "");
-    printf("                                            RMS from a line   RMS from a cubic (px)\n");
-    printf("  photo        crossed   kept    wrong  sat.  extract centroid  extract centroid\n");
+    printf("                                        RMS from a line (px)      RMS from a cubic "
+           "(px)\n");
+    printf("  photo              crossed  kept  wrong sat.  extract centr. gauss3   extract "
+           "centr. gauss3\n");
     for (size_t i = 0; i < set->count; ++i) {
         char relative[512];
         snprintf(relative, sizeof relative, "%s/%s", set->folder, set->files[i]);
-        if (!flt_external_path(relative, path, sizeof path))
+        if (!flt_external_path_in(root, relative, path, sizeof path))
             skip();
         photo p;
-        assert_int_equal(load_channel(path, set->channel, set->transpose, &p), 0);
+        assert_int_equal(load_photo(path, set->channel, set->transpose, &p), 0);
         const uint32_t w = p.width, h = p.height;
         assert_true(set->search_first + set->search_rows <= h);
 
@@ -580,11 +725,11 @@ static void measure_set(const set_spec *set, set_result *result) {
          * is found in the difference (the board's own brightness cancels);
          * otherwise in the frame itself. */
         photo detect = p;
-        if (set->off_folder) {
+        if (set->off_folder && set->off_files[i]) {
             snprintf(relative, sizeof relative, "%s/%s", set->off_folder, set->off_files[i]);
-            if (!flt_external_path(relative, path, sizeof path))
+            if (!flt_external_path_in(root, relative, path, sizeof path))
                 skip();
-            assert_int_equal(load_channel(path, set->channel, set->transpose, &detect), 0);
+            assert_int_equal(load_photo(path, set->channel, set->transpose, &detect), 0);
             assert_true(detect.width == w && detect.height == h);
             for (size_t k = 0; k < (size_t)w * h; ++k)
                 detect.pixels[k] =
@@ -593,8 +738,15 @@ static void measure_set(const set_spec *set, set_result *result) {
         stats_of(&detect, set->search_first, set->search_rows, st);
         if (detect.pixels != p.pixels)
             free(detect.pixels);
+        /* Columns outside the measured range take no part: no contrast. */
+        if (set->measure_last > 0)
+            for (uint32_t u = 0; u < w; ++u)
+                if (u < set->measure_first || u > set->measure_last)
+                    st[u].max = st[u].median;
         const size_t line_columns = find_line(st, w, set->contrast, line, ref);
-        assert_true(line_columns > w / 4); /* the photos show a long line */
+        assert_true(
+            line_columns > w / 4 ||
+            (set->measure_last > 0 && line_columns > (set->measure_last - set->measure_first) / 4));
         double row_lo = 1e9, row_hi = -1e9;
         for (uint32_t u = 0; u < w; ++u)
             if (line[u]) {
@@ -652,12 +804,12 @@ static void measure_set(const set_spec *set, set_result *result) {
         double saturated = 0;
         assert_int_equal(flt_extractor_saturation(ex, 0, NULL, NULL, &saturated), FLT_OK);
 
-        /* Kept, and the two sets of centres on the same columns. */
+        /* Kept, and the three sets of centres on the same columns. */
         size_t kept = 0, wrong = 0, n = 0;
-        double *pts = calloc(8 * (size_t)w, sizeof *pts);
+        double *pts = calloc(12 * (size_t)w, sizeof *pts);
         assert_non_null(pts);
-        double *ex_px = pts, *ce_px = pts + 2 * (size_t)w;
-        double *ex_u = pts + 4 * (size_t)w, *ex_v = ex_u + w, *ce_u = ex_v + w, *ce_v = ce_u + w;
+        double *px[3] = {pts, pts + 2 * (size_t)w, pts + 4 * (size_t)w}; /* (u, v) pairs */
+        double *uv = pts + 6 * (size_t)w;                                /* u, v per estimator */
         for (uint32_t u = 0; u < w; ++u) {
             if (!line[u] || !isfinite(peaks[u]))
                 continue;
@@ -667,39 +819,38 @@ static void measure_set(const set_spec *set, set_result *result) {
             }
             ++kept;
             const double c = centroid(&p, u, ref[u], first, rows);
-            if (!isfinite(c))
+            const double g = gaussian3(&p, u, ref[u], first, rows);
+            if (!isfinite(c) || !isfinite(g))
                 continue;
-            ex_px[2 * n] = u;
-            ex_px[2 * n + 1] = peaks[u];
-            ce_px[2 * n] = u;
-            ce_px[2 * n + 1] = c;
+            const double v[3] = {peaks[u], c, g};
+            for (int k = 0; k < 3; ++k) {
+                px[k][2 * n] = u;
+                px[k][2 * n + 1] = v[k];
+            }
             ++n;
         }
-        if (undistort) {
-            assert_int_equal(flt_calib_undistort(calib, n, ex_px, ex_px), FLT_OK);
-            assert_int_equal(flt_calib_undistort(calib, n, ce_px, ce_px), FLT_OK);
-        }
-        for (size_t k = 0; k < n; ++k) {
-            ex_u[k] = ex_px[2 * k];
-            ex_v[k] = ex_px[2 * k + 1];
-            ce_u[k] = ce_px[2 * k];
-            ce_v[k] = ce_px[2 * k + 1];
-        }
         assert_true(n >= 2);
-        double rss[2][2]; /* [straight, cubic][extractor, centroid] */
-        for (int f = 0; f < 2; ++f) {
-            rss[f][0] = fit_rss(ex_u, ex_v, n, f ? 3 : 1);
-            rss[f][1] = fit_rss(ce_u, ce_v, n, f ? 3 : 1);
+        double rss[2][3]; /* [straight, cubic][extractor, centroid, Gaussian 3-point] */
+        for (int k = 0; k < 3; ++k) {
+            if (undistort)
+                assert_int_equal(flt_calib_undistort(calib, n, px[k], px[k]), FLT_OK);
+            for (size_t j = 0; j < n; ++j) {
+                uv[j] = px[k][2 * j];
+                uv[n + j] = px[k][2 * j + 1];
+            }
+            for (int f = 0; f < 2; ++f)
+                rss[f][k] = fit_rss(uv, uv + n, n, f ? 3 : 1);
         }
-        printf("  %-12s %7zu  %5.1f %%  %5zu  %3.0f %%  %6.3f %6.3f    %6.3f %6.3f\n",
+        printf("  %-18s %7zu %5.1f %% %5zu %3.0f %%  %6.3f %6.3f %6.3f    %6.3f %6.3f %6.3f\n",
                set->files[i], line_columns, 100.0 * (double)kept / (double)line_columns, wrong,
                100.0 * saturated, sqrt(rss[0][0] / (double)n), sqrt(rss[0][1] / (double)n),
-               sqrt(rss[1][0] / (double)n), sqrt(rss[1][1] / (double)n));
+               sqrt(rss[0][2] / (double)n), sqrt(rss[1][0] / (double)n),
+               sqrt(rss[1][1] / (double)n), sqrt(rss[1][2] / (double)n));
         result->line_columns += line_columns;
         result->kept += kept;
         result->wrong += wrong;
         for (int f = 0; f < 2; ++f)
-            for (int k = 0; k < 2; ++k)
+            for (int k = 0; k < 3; ++k)
                 result->rss[f][k] += rss[f][k];
         result->fitted += n;
 
@@ -714,12 +865,13 @@ static void measure_set(const set_spec *set, set_result *result) {
         free(st);
         free(p.pixels);
     }
-    printf("  all          %7zu  %5.1f %%  %5zu         %6.3f %6.3f    %6.3f %6.3f\n",
-           result->line_columns, 100.0 * (double)result->kept / (double)result->line_columns,
-           result->wrong, sqrt(result->rss[0][0] / (double)result->fitted),
-           sqrt(result->rss[0][1] / (double)result->fitted),
-           sqrt(result->rss[1][0] / (double)result->fitted),
-           sqrt(result->rss[1][1] / (double)result->fitted));
+    const double fitted = (double)result->fitted;
+    printf(
+        "  all                %7zu %5.1f %% %5zu        %6.3f %6.3f %6.3f    %6.3f %6.3f %6.3f\n",
+        result->line_columns, 100.0 * (double)result->kept / (double)result->line_columns,
+        result->wrong, sqrt(result->rss[0][0] / fitted), sqrt(result->rss[0][1] / fitted),
+        sqrt(result->rss[0][2] / fitted), sqrt(result->rss[1][0] / fitted),
+        sqrt(result->rss[1][1] / fitted), sqrt(result->rss[1][2] / fitted));
 #endif
 }
 
@@ -751,13 +903,39 @@ static void check_set(const set_result *r, int degree) {
     const int f = degree == 1 ? 0 : 1;
     const double rms_extractor = sqrt(r->rss[f][0] / (double)r->fitted);
     const double rms_centroid = sqrt(r->rss[f][1] / (double)r->fitted);
+    const double rms_gaussian = sqrt(r->rss[f][2] / (double)r->fitted);
     printf("  kept %.1f %% (bound 80 %%), wrong %.2f %% (bound 1 %%); RMS from a %s: extractor "
-           "%.3f px, centroid %.3f px\n",
+           "%.3f px, centroid %.3f px, Gaussian 3-point %.3f px\n",
            100 * kept, 100 * wrong, degree == 1 ? "straight line" : "cubic", rms_extractor,
-           rms_centroid);
+           rms_centroid, rms_gaussian);
     assert_true(kept >= 0.80);
     assert_true(wrong <= 0.01);
     assert_true(rms_extractor <= rms_centroid);
+}
+
+/* What the further sets must keep reaching. The issue's aims for photos
+ * the extractor was not tuned on are >= 90 % kept, no peak off the line and
+ * a residual no larger than the better of the two peers'; each line
+ * below says whether the set meets them. The asserted bounds are today's
+ * figures less a margin (kept: 2-3 points, the residual's ratio: 0.05-0.08
+ * above today's where the aim is not met), so that a change that loses
+ * ground on photos it was never shown fails here; wrong <= 0.1 % (today
+ * 0-4 columns of 5,000-10,000). */
+static void check_further(const set_result *r, int degree, double kept_bound, double ratio_bound) {
+    const double kept = (double)r->kept / (double)r->line_columns;
+    const double wrong = (double)r->wrong / (double)r->line_columns;
+    const int f = degree == 1 ? 0 : 1;
+    const double rms_extractor = sqrt(r->rss[f][0] / (double)r->fitted);
+    const double rms_peer = sqrt(fmin(r->rss[f][1], r->rss[f][2]) / (double)r->fitted);
+    printf(
+        "  kept %.1f %% (bound %.0f %%, aim 90 %%: %s), wrong %.2f %% (bound 0.1 %%); RMS from a "
+        "%s: extractor %.3f px, %.2fx the better peer's (bound %.2fx, aim 1: %s)\n",
+        100 * kept, 100 * kept_bound, kept >= 0.90 ? "met" : "NOT met", 100 * wrong,
+        degree == 1 ? "straight line" : "cubic", rms_extractor, rms_extractor / rms_peer,
+        ratio_bound, rms_extractor <= rms_peer ? "met" : "NOT met");
+    assert_true(kept >= kept_bound);
+    assert_true(wrong <= 0.001);
+    assert_true(rms_extractor <= ratio_bound * rms_peer);
 }
 
 /* The red line: 12 views of a flat circle-grid board, the line saturated
@@ -833,10 +1011,156 @@ static void test_green_exposed(void **state) {
     check_set(&r, 3);
 }
 
+/* ---------------------------------------------------------------------- */
+/* Further sets: photos found after the extractor was tuned               */
+/* ---------------------------------------------------------------------- */
+
+/* Four sets of photos from public projects, found in public repositories
+ * after the extractor's defaults were set (docs/sensor.md, "Real photos",
+ * gives their origins and licences; tests/further_photos fetches them into
+ * the folder FLT_FURTHER_PHOTOS names). None was used to choose anything in
+ * the extractor: they measure how it does on lines it was never shown.
+ * Default options throughout (extract_min_peak 0.1). */
+
+static const char *const k_stripe_files[] = {
+    "0_right.jpg", "1_right.jpg", "2_right.jpg", "3_right.jpg", "4_right.jpg", "5_right.jpg",
+};
+static const char *const k_plane_files[] = {
+    "0_.bmp",  "1_.bmp",  "2_.bmp",  "3_.bmp",  "4_.bmp",  "5_.bmp",  "6_.bmp",
+    "7_.bmp",  "8_.bmp",  "9_.bmp",  "10_.bmp", "11_.bmp", "12_.bmp", "13_.bmp",
+    "14_.bmp", "15_.bmp", "16_.bmp", "17_.bmp", "18_.bmp", "19_.bmp",
+};
+/* The same poses with the laser off; photo 8 has none (the repository's
+ * laser-off file of that number shows another pose). */
+static const char *const k_plane_off_files[] = {
+    "0_.bmp",  "1_.bmp",  "2_.bmp",  "3_.bmp",  "4_.bmp",  "5_.bmp",  "6_.bmp",
+    "7_.bmp",  NULL,      "9_.bmp",  "10_.bmp", "11_.bmp", "12_.bmp", "13_.bmp",
+    "14_.bmp", "15_.bmp", "16_.bmp", "17_.bmp", "18_.bmp", "19_.bmp",
+};
+static const char *const k_floor_files[] = {
+    "img0058.jpg", "img0062.jpg", "img0066.jpg", "img0070.jpg",
+    "img0074.jpg", "img0078.jpg", "img0082.jpg", "img0086.jpg",
+};
+static const char *const k_bed_files[] = {
+    "StillSnapshot000000.jpg", "StillSnapshot000032.jpg", "StillSnapshot000064.jpg",
+    "StillSnapshot000065.jpg", "StillSnapshot000073.jpg", "StillSnapshot000081.jpg",
+    "StillSnapshot000089.jpg", "StillSnapshot000097.jpg", "StillSnapshot000105.jpg",
+    "StillSnapshot000113.jpg", "StillSnapshot000121.jpg", "StillSnapshot000129.jpg",
+};
+
+/* A green line across a hand-held printed chessboard, near-vertical
+ * (transposed here), 640 x 480 webcam photos, not saturated. Only image
+ * rows 100-340 are measured: above them the line is on the wall behind,
+ * below on the floor, bent where it leaves the board. No usable intrinsics:
+ * the model is a cubic. */
+static void test_further_green_chessboard(void **state) {
+    (void)state;
+    const set_spec set = {
+        .name = "further: green line on a hand-held chessboard",
+        .root = "FLT_FURTHER_PHOTOS",
+        .folder = "hjamal3_Light-Stripe-Calibration",
+        .files = k_stripe_files,
+        .count = sizeof k_stripe_files / sizeof *k_stripe_files,
+        .channel = GREEN,
+        .transpose = 1,
+        .measure_first = 100,
+        .measure_last = 340,
+        .search_first = 220,
+        .search_rows = 140,
+        .contrast = 20.0,
+        .min_peak = 0.1,
+    };
+    set_result r;
+    measure_set(&set, &r);
+    check_further(&r, 3, 0.66, 1.0);
+}
+
+/* A line from a monochrome camera (1292 x 964 BMP), saturated, on a
+ * chessboard glued to a flat plate, from vertical to 35 degrees
+ * (transposed here); each view but one also with the laser off. Image
+ * rows 0-590 are measured: below them the line leaves the plate in
+ * several views. The lens's correction is in a MATLAB file: the model is
+ * a cubic. */
+static void test_further_mono_plate(void **state) {
+    (void)state;
+    const set_spec set = {
+        .name = "further: saturated line on a chessboard plate, mono camera",
+        .root = "FLT_FURTHER_PHOTOS",
+        .folder = "MozhiJiawei_Matlab_Calculate_Lightplane",
+        .files = k_plane_files,
+        .count = sizeof k_plane_files / sizeof *k_plane_files,
+        .channel = GREY,
+        .transpose = 1,
+        .off_folder = "MozhiJiawei_Matlab_Calculate_Lightplane/off",
+        .off_files = k_plane_off_files,
+        .measure_first = 0,
+        .measure_last = 590,
+        .search_first = 480,
+        .search_rows = 720,
+        .contrast = 24.0,
+        .min_peak = 0.1,
+    };
+    set_result r;
+    measure_set(&set, &r);
+    check_further(&r, 3, 0.49, 1.0);
+}
+
+/* A thin, dim red line across a concrete floor (a robot's laser, 640 x 480
+ * photos, barrel distortion bows the line by 2.5-3.5 px, no intrinsics:
+ * the model is a cubic); the laser's own channel, as a band-pass filter
+ * in front of a monochrome camera would see it. */
+static void test_further_red_floor(void **state) {
+    (void)state;
+    const set_spec set = {
+        .name = "further: dim red line on a concrete floor",
+        .root = "FLT_FURTHER_PHOTOS",
+        .folder = "NeilKhera_laser_line_striping",
+        .files = k_floor_files,
+        .count = sizeof k_floor_files / sizeof *k_floor_files,
+        .channel = RED,
+        .transpose = 0,
+        .search_first = 225,
+        .search_rows = 80,
+        .contrast = 15.0,
+        .min_peak = 0.1,
+    };
+    set_result r;
+    measure_set(&set, &r);
+    check_further(&r, 3, 0.95, 1.25);
+}
+
+/* A red line with a saturated white core on an empty, near-black scan bed,
+ * vertical (transposed here), 640 x 480; grey, for the reason the red set
+ * gives (the red glow saturates the red channel far wider than the
+ * core). The bed is flat and the lens long: a straight line. */
+static void test_further_red_bed(void **state) {
+    (void)state;
+    const set_spec set = {
+        .name = "further: saturated red line on a dark scan bed",
+        .root = "FLT_FURTHER_PHOTOS",
+        .folder = "Anugrah-T-Sebastian_3D_Scanner_Laser_Triangulation",
+        .files = k_bed_files,
+        .count = sizeof k_bed_files / sizeof *k_bed_files,
+        .channel = GREY,
+        .transpose = 1,
+        .search_first = 270,
+        .search_rows = 100,
+        .contrast = 40.0,
+        .min_peak = 0.1,
+    };
+    set_result r;
+    measure_set(&set, &r);
+    check_further(&r, 1, 0.94, 1.0);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_red_saturated),
         cmocka_unit_test(test_green_exposed),
+        cmocka_unit_test(test_further_green_chessboard),
+        cmocka_unit_test(test_further_mono_plate),
+        cmocka_unit_test(test_further_red_floor),
+        cmocka_unit_test(test_further_red_bed),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
