@@ -42,7 +42,10 @@
  *     2. refines its row to sub-pixel accuracy at the zero crossing of the
  *        Savitzky-Golay derivative (window extract_sg_window rows, polynomial
  *        order extract_sg_order) next to the maximum (a saturated peak: the
- *        middle of its plateau; a line at least 8 px wide at half maximum,
+ *        middle of its plateau; a line thinner than the window's line, by
+ *        the median width of its 256 columns' peaks: again with a window
+ *        2.34 x that width, as the default 11 rows is for sigma 2 px; a
+ *        line at least 8 px wide at half maximum,
  *        as a strip out of focus gives: Steger's detector at the line's own
  *        scale, which then reads it with less noise; docs/sensor.md,
  *        "Centre estimators");

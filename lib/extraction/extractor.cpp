@@ -58,6 +58,17 @@ constexpr double k_wide_scale_step = 0.25;               // px
 constexpr double k_wide_max_scale = 16.0;                // px (reach 64 rows)
 constexpr double k_fwhm_per_sigma = 2.3548200450309493;  // 2 sqrt(2 ln 2)
 constexpr double k_wide_scale_factor = 1.3;              // scale per width / 2.355 (wide_centre)
+// Thin lines: the Savitzky-Golay window is sized for a line of sigma 2 px
+// (extract_sg_window 11 = 2.34 x its width at half maximum). On a thinner
+// line such a window reaches past the line into its background, whose
+// texture (a floor, a board's print, a coated strip) then drags the fitted
+// parabola's vertex: on photos of a green line about 3 px wide across a
+// printed chessboard the 11-row window read the line 0.50 px RMS from its
+// course, a 7-row window 0.26 px. A peak narrower than the window's line is
+// centred again with a window k_thin_window_per_width times its width
+// (half-window at least 2 rows), the same zero-crossing search
+// (thin_centre).
+constexpr double k_thin_window_per_width = 2.34;
 // The quantiles come from every k_shape_sampling-th column of the block (32
 // peaks: the quartiles to about a quarter of the scatter), which keeps their
 // cost small.
@@ -128,6 +139,10 @@ struct flt_extractor {
     std::vector<double> wide_d1, wide_d2;
     std::vector<std::size_t> wide_first;
     std::vector<long> wide_reach;
+    // Narrower Savitzky-Golay derivative taps for thin lines: thin_taps[h]
+    // has 2 h + 1 taps (h from 2 to sg_half - 1; empty where the order does
+    // not fit in the window).
+    std::vector<std::vector<float>> thin_taps;
     double min_peak = 0.1, max_width = 12;
     double strip_min_z = -100, edge_gap = 50, min_strip_width = 100;  // mm
 
@@ -150,10 +165,12 @@ struct flt_extractor {
     // Per block of k_shape_block columns: the lower quartile of the widths
     // (px) and of the areas (counts x rows) and the relative scatters.
     std::vector<double> block_width, block_area, block_scatter;  // [blocks], [3 * blocks]
-    std::vector<double> fit_sums;                                // [5 * fibers]
-    std::vector<std::uint8_t> fit_flags;                         // [fibers]
-    double support = 1;           // half-width of a fiber's resampling window, mm
-    std::vector<double> row_sum;  // [height], auto band
+    // The median width of each block's peaks, px (NaN: not known).
+    std::vector<double> block_line_width;
+    std::vector<double> fit_sums;         // [5 * fibers]
+    std::vector<std::uint8_t> fit_flags;  // [fibers]
+    double support = 1;                   // half-width of a fiber's resampling window, mm
+    std::vector<double> row_sum;          // [height], auto band
     bool has_frame = false;
     // The line in the field, per frame: accepted saturated peaks, the
     // neighbours' median row (continuity check), the strip each laser sees,
@@ -168,7 +185,7 @@ struct flt_extractor {
     // another line below the strip), not the strip's; the shape and
     // continuity checks leave it out of their references.
     std::vector<std::uint8_t> low_column;  // [width]
-    std::size_t changed_rows = 0;          // peaks the checks rejected or replaced, this laser
+    std::size_t changed_rows = 0;          // peaks rejected, replaced or centred again, this laser
     std::vector<double> edge_light;        // [width] scratch
     // reject_detours: the segments of peaks that continue each other.
     std::vector<std::uint32_t> segment_first, segment_last, segment_count;  // [width]
@@ -194,6 +211,9 @@ struct flt_extractor {
     template <class Pixel>
     void extract(const unsigned char *frame, std::size_t stride, std::uint32_t full_scale);
     void build_wide_kernels();
+    template <class Pixel>
+    double thin_centre(const unsigned char *frame, std::size_t stride, std::uint32_t u, double row,
+                       double width_px) const;
     template <class Pixel>
     double wide_centre(const unsigned char *frame, std::size_t stride, std::uint32_t u, double row,
                        double width_px) const;
@@ -563,6 +583,21 @@ void flt_extractor::extract(const unsigned char *frame, std::size_t stride,
         // well-formed peaks.
         changed_rows = 0;
         reject_misshapen(rows_out);
+        // A thin line is centred again with a window its own size
+        // (k_thin_window_per_width), an unsaturated one only (a plateau's
+        // centre is its half-maximum crossings' midpoint). Its width: the
+        // median of its block's, which the shape check has just measured;
+        // one column's width under speckle may be a single bright grain's.
+        // (A row that moves is mapped again below.)
+        for (std::uint32_t u = 0; u < width; ++u) {
+            const double line_width = block_line_width[u / k_shape_block];
+            if (line_width * k_thin_window_per_width < double(2 * sg_half) &&
+                !saturated_column[u] && !low_column[u] && rows_out[u] == rows_out[u]) {
+                const double thin = thin_centre<Pixel>(frame, stride, u, rows_out[u], line_width);
+                changed_rows += thin != rows_out[u];
+                rows_out[u] = thin;
+            }
+        }
         if (any_suspect)
             reject_glint_fringes(rows_out);
         reject_detours(rows_out);
@@ -654,6 +689,46 @@ double flt_extractor::wide_centre(const unsigned char *frame, std::size_t stride
             best = t1, best_v = v1;
     }
     return std::fabs(best) <= 1.0 ? double(best_v) + best : row;
+}
+
+// The zero crossing of a narrower Savitzky-Golay derivative (half-window
+// h = width x k_thin_window_per_width / 2, rounded, from 2 to sg_half - 1)
+// next to `row`, the peak the full window found: the rows around it are
+// searched as column_peak does (at most 2 rows away). Where the window
+// leaves the frame, no crossing is found or it lies farther than the
+// line's width from `row` (the wide window can be dragged by more than half
+// the width, by a step in the background a few rows away), `row` stands.
+template <class Pixel>
+double flt_extractor::thin_centre(const unsigned char *frame, std::size_t stride, std::uint32_t u,
+                                  double row, double width_px) const {
+    const long h = std::clamp(std::lround(0.5 * (width_px * k_thin_window_per_width - 1)), 2L,
+                              long(sg_half) - 1);
+    const std::vector<float> &taps = thin_taps[std::size_t(h)];
+    const long i0 = long(std::floor(row));
+    if (taps.empty() || i0 - 3 - h < 0 || i0 + 3 + h >= long(height))
+        return row;
+    auto px = [&](long v) {
+        return float(reinterpret_cast<const Pixel *>(frame + std::size_t(v) * stride)[u]);
+    };
+    auto derivative = [&](long i) {
+        float d = 0;
+        for (long j = 1; j <= h; ++j)
+            d += taps[std::size_t(h + j)] * (px(i + j) - px(i - j));
+        return d;
+    };
+    // The crossing (+ above, - below) between rows i and i + 1, nearest
+    // the full window's first.
+    double best = row;
+    double nearest = width_px;
+    for (long i = i0 - 2; i <= i0 + 2; ++i) {
+        const float d0 = derivative(i), d1 = derivative(i + 1);
+        if (d0 > 0 && d1 <= 0) {
+            const double v = double(i) + double(d0) / double(d0 - d1);
+            if (std::fabs(v - row) <= nearest)
+                best = v, nearest = std::fabs(v - row);
+        }
+    }
+    return best;
 }
 
 // x (mm) of the column map of laser L at a fractional column u and row v:
@@ -872,7 +947,7 @@ void flt_extractor::reject_misshapen(double *rows) {
     for (std::size_t b = 0; b < blocks; ++b) {
         const std::uint32_t u0 = std::uint32_t(b) * k_shape_block;
         const std::uint32_t u1 = std::min(width, u0 + k_shape_block);
-        block_width[b] = block_area[b] = k_nan;
+        block_width[b] = block_area[b] = block_line_width[b] = k_nan;
         std::size_t n = 0;
         for (std::uint32_t u = u0; u < u1; u += k_shape_sampling)
             if (rows[u] == rows[u] && !saturated_column[u] && !low_column[u] &&
@@ -895,6 +970,8 @@ void flt_extractor::reject_misshapen(double *rows) {
                 const double lower = quantile(m, 0.25, quantile_place(m, 0.5));
                 median[which] = upper;
                 (which == 0 ? block_width : block_area)[b] = lower;
+                if (which == 0)
+                    block_line_width[b] = upper;
                 scatter[measured_blocks * 3 + std::size_t(which)] =
                     (upper - lower) / (0.6745 * upper);
             } else {
@@ -925,6 +1002,7 @@ void flt_extractor::reject_misshapen(double *rows) {
                 b >= step && block_width[b - step] == block_width[b - step] ? b - step : b + step;
             if (near < blocks && block_width[near] == block_width[near]) {
                 block_width[b] = block_width[near], block_area[b] = block_area[near];
+                block_line_width[b] = block_line_width[near];
                 break;
             }
         }
@@ -1421,6 +1499,10 @@ FLT_API flt_status FLT_CALL flt_extractor_create(const flt_calib *calib, const f
                         "kernel (at most %ld)",
                         fn, window, 2 * (2 * k_max_gather_reach / 3) + 1);
         ex->sg_derivative = sg_derivative_taps(ex->sg_half, order);
+        ex->thin_taps.assign(std::size_t(ex->sg_half), {});
+        for (int h = 2; h < ex->sg_half; ++h)
+            if (2 * h + 1 >= order + 2)
+                ex->thin_taps[std::size_t(h)] = sg_derivative_taps(h, order);
         ex->min_peak = option_value(options, FLT_OPT_EXTRACT_MIN_PEAK);
         ex->max_width = option_value(options, FLT_OPT_EXTRACT_MAX_WIDTH);
         ex->strip_min_z = option_value(options, FLT_OPT_EXTRACT_STRIP_MIN_Z);
@@ -1481,6 +1563,7 @@ FLT_API flt_status FLT_CALL flt_extractor_create(const flt_calib *calib, const f
         ex->shape_scratch.assign(w, 0);
         const std::size_t blocks = (w + k_shape_block - 1) / k_shape_block;
         ex->block_width.assign(blocks, k_nan);
+        ex->block_line_width.assign(blocks, k_nan);
         ex->block_area.assign(blocks, k_nan);
         ex->block_scatter.assign(3 * blocks, k_nan);
         ex->fit_sums.assign(5 * ex->fibers, 0);

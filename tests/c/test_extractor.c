@@ -446,6 +446,71 @@ static void line_beside_a_bright_patch_is_found(void **state) {
     flt_calib_destroy(calib);
 }
 
+/* A thin line (sigma 0.8 px, 120 counts, noise-free) on a background of
+ * 100 counts that drops to 30 five rows below it (the edge of a dark patch
+ * of the strip, or of a board's print), in both lasers' halves, near the
+ * rows where they see z = 0 (laser 0's line in rows 128..255 at 150.3,
+ * laser 1's in rows 0..127 at 105.3); drawn there, 0.3 rows higher and,
+ * without the drop, there again. The default 11-row window reaches the drop and reads the line
+ * 0.16-0.59 px too high (a parabola fitted over rows that hold the step);
+ * a window the line's size (5 rows) does not reach it. Bound: every
+ * column's peak within 0.02 px of its row, and the fibers' heights the
+ * same with and without the drop to 0.02 of the height of a row (the
+ * 1-row shift between the two lines gives that height; the remainder is
+ * the narrow window's pixel locking on a noise-free line, < 0.01 px). */
+static void draw_thin_line(uint8_t *frame, double shift, int drop) {
+    for (uint32_t v = 0; v < ROI_ROWS; ++v)
+        for (uint32_t u = 0; u < W; ++u) {
+            const double line_row = (v < 128 ? 105.3 : 150.3) + shift;
+            const double d = ((double)v - line_row) / 0.8;
+            const double background = drop && (double)v >= line_row + 5 ? 30.0 : 100.0;
+            frame[(size_t)v * W + u] = (uint8_t)lround(background + 120.0 * exp(-0.5 * d * d));
+        }
+}
+
+static void thin_line_is_centred_at_its_own_scale(void **state) {
+    (void)state;
+    enum { N = 101 };
+    flt_calib *calib = reference(N, 20.0);
+    const flt_option keys[] = {FLT_OPT_EXTRACT_LASER0_FIRST_ROW, FLT_OPT_EXTRACT_LASER0_ROWS,
+                               FLT_OPT_EXTRACT_LASER1_FIRST_ROW, FLT_OPT_EXTRACT_LASER1_ROWS};
+    const double values[] = {128, 128, 0, 128};
+    flt_extractor *ex = make_extractor(calib, 4, keys, values);
+    uint8_t *frame = malloc((size_t)W * ROI_ROWS);
+    assert_non_null(frame);
+    const double shift[3] = {0, -0.3, 0};
+    const int drop[3] = {1, 1, 0};
+    double h[3][N], g[N], rows[2 * W], s;
+    double worst_row = 0;
+    for (int k = 0; k < 3; ++k) {
+        draw_thin_line(frame, shift[k], drop[k]);
+        assert_int_equal(flt_extractor_process(ex, frame, FLT_PIXEL_MONO8, W, ROI_ROWS, W, 0.0, N,
+                                               &s, h[k], g, NULL),
+                         FLT_OK);
+        assert_int_equal(flt_extractor_peaks(ex, W, rows), FLT_OK);
+        for (size_t u = 0; u < 2 * (size_t)W; ++u)
+            worst_row = fmax(worst_row, fabs(rows[u] - ((u < W ? 150.3 : 105.3) + shift[k])));
+    }
+    double worst_height = 0, row_height = INFINITY;
+    size_t valid = 0;
+    for (size_t k = 0; k < N; ++k) {
+        if (!(h[0][k] == h[0][k]) || !(h[1][k] == h[1][k]) || !(h[2][k] == h[2][k]))
+            continue;
+        ++valid;
+        row_height = fmin(row_height, fabs(h[0][k] - h[1][k]) / 0.3);
+        worst_height = fmax(worst_height, fabs(h[0][k] - h[2][k]));
+    }
+    printf("thin line beside a drop: worst peak %.4f px off; heights with and without the drop "
+           "%.5f mm apart (a row: %.4f mm) over %zu fibers\n",
+           worst_row, worst_height, row_height, valid);
+    assert_true(valid >= N - 2);
+    assert_true(worst_row <= 0.02);
+    assert_true(worst_height <= 0.02 * row_height);
+    free(frame);
+    flt_extractor_destroy(ex);
+    flt_calib_destroy(calib);
+}
+
 /* Several bright patches in a band (a tall band over a board's white
  * fields, or a lit strip with bright marks), each brighter than the line:
  * each is rejected as too wide and passed over whole, and the line is the
@@ -787,6 +852,7 @@ int main(void) {
         cmocka_unit_test(end_to_end_reference_sheet_within_half_a_millimetre),
         cmocka_unit_test(line_beside_a_bright_patch_is_found),
         cmocka_unit_test(line_below_four_bright_patches_is_found),
+        cmocka_unit_test(thin_line_is_centred_at_its_own_scale),
         cmocka_unit_test(a_reflection_over_a_dim_stretch_is_no_line),
         cmocka_unit_test(same_frame_same_bytes),
         cmocka_unit_test(one_line_places_both_bands),

@@ -913,14 +913,14 @@ static void check_set(const set_result *r, int degree) {
     assert_true(rms_extractor <= rms_centroid);
 }
 
-/* What the further sets must keep reaching. The issue's aims for photos
+/* What the further sets must keep reaching. The aims for photos
  * the extractor was not tuned on are >= 90 % kept, no peak off the line and
  * a residual no larger than the better of the two peers'; each line
  * below says whether the set meets them. The asserted bounds are today's
- * figures less a margin (kept: 2-3 points, the residual's ratio: 0.05-0.08
+ * figures less a margin (kept: 2-3 points, the residual's ratio: 0.07
  * above today's where the aim is not met), so that a change that loses
  * ground on photos it was never shown fails here; wrong <= 0.1 % (today
- * 0-4 columns of 5,000-10,000). */
+ * 0-5 columns of 1,300-10,000). */
 static void check_further(const set_result *r, int degree, double kept_bound, double ratio_bound) {
     const double kept = (double)r->kept / (double)r->line_columns;
     const double wrong = (double)r->wrong / (double)r->line_columns;
@@ -1126,7 +1126,7 @@ static void test_further_red_floor(void **state) {
     };
     set_result r;
     measure_set(&set, &r);
-    check_further(&r, 3, 0.95, 1.25);
+    check_further(&r, 3, 0.95, 1.18);
 }
 
 /* A red line with a saturated white core on an empty, near-black scan bed,
