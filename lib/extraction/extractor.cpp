@@ -167,6 +167,8 @@ struct flt_extractor {
     std::vector<double> block_width, block_area, block_scatter;  // [blocks], [3 * blocks]
     // The median width of each block's peaks, px (NaN: not known).
     std::vector<double> block_line_width;
+    // The line's slope in each block, rows per column (reject_glint_fringes).
+    std::vector<double> block_slope;
     std::vector<double> fit_sums;         // [5 * fibers]
     std::vector<std::uint8_t> fit_flags;  // [fibers]
     double support = 1;                   // half-width of a fiber's resampling window, mm
@@ -1236,8 +1238,43 @@ void flt_extractor::reject_glint_fringes(double *rows) {
             last_suspect = u;
         tainted_column[u] = tainted_column[u] || last_suspect - u <= reach;
     }
+    // The line's slope per block of k_shape_block columns, rows per column:
+    // the median of its peaks' row steps over k_slope_span columns (the
+    // table's line left out; a glint's few columns do not move a median).
+    // A line across the image at 35 degrees climbs 0.7 rows per column:
+    // its saturated peaks' runs below continue each other along the
+    // slope, and the neighbours' median row is taken after carrying each
+    // to the column along it; without that the runs break wherever noise
+    // adds a third of a row to a step, and the median is off by the slope
+    // times the neighbours' imbalance between the sides. Not below
+    // k_level_slope, where the imbalance costs less (at most the 0.5 px
+    // tolerance with all of one side's neighbours missing), so a level
+    // line is judged exactly as it was.
+    constexpr long k_slope_span = 8;
+    constexpr double k_level_slope = 0.1;
+    double *steps = shape_scratch.data();
+    for (std::size_t b = 0; b < block_slope.size(); ++b) {
+        const long u0 = long(b * k_shape_block), u1 = std::min(w, u0 + long(k_shape_block));
+        std::size_t n = 0;
+        for (long u = u0; u < u1 && u + k_slope_span < w; ++u) {
+            const long v = u + k_slope_span;
+            if (rows[u] == rows[u] && rows[v] == rows[v] && !low_column[std::size_t(u)] &&
+                !low_column[std::size_t(v)])
+                steps[n++] = (rows[v] - rows[u]) / double(k_slope_span);
+        }
+        block_slope[b] = 0;
+        if (n >= k_shape_min_peaks) {
+            std::nth_element(steps, steps + n / 2, steps + n);
+            if (std::fabs(steps[n / 2]) > k_level_slope)
+                block_slope[b] = steps[n / 2];
+        }
+    }
+    auto slope_at = [&](long u) {
+        return block_slope[std::size_t(u) / k_shape_block];
+    };
     // Runs of saturated peaks that continue each other (within 1 px from
-    // column to column), their length at every column of the run.
+    // column to column, along the slope), their length at every column of
+    // the run.
     constexpr double k_run_step_px = 1.0;
     constexpr std::uint32_t k_min_saturated_run = 2 * window + 1;
     {
@@ -1245,7 +1282,7 @@ void flt_extractor::reject_glint_fringes(double *rows) {
         for (long u = 0; u <= w; ++u) {
             const bool continues = u < w && u > start && saturated_column[std::size_t(u)] &&
                                    saturated_column[std::size_t(u - 1)] &&
-                                   std::fabs(rows[u] - rows[u - 1]) <= k_run_step_px;
+                                   std::fabs(rows[u] - rows[u - 1] - slope_at(u)) <= k_run_step_px;
             if (continues)
                 continue;
             for (long j = start; j < u; ++j)
@@ -1254,6 +1291,11 @@ void flt_extractor::reject_glint_fringes(double *rows) {
             start = u;
         }
     }
+    auto vouches = [&](long j) {
+        return !(saturated_column[std::size_t(j)] &&
+                 saturated_run[std::size_t(j)] < k_min_saturated_run) &&
+               !low_column[std::size_t(j)] && rows[j] == rows[j];
+    };
     for (long u = 0; u < w; ++u) {
         if (!tainted_column[u] || !(rows[u] == rows[u]) || low_column[std::size_t(u)])
             continue;
@@ -1263,12 +1305,10 @@ void flt_extractor::reject_glint_fringes(double *rows) {
         // line or off it: it does not vouch, the line around it decides.
         double around[2 * window + 1];
         int n = 0;
-        for (long j = std::max(0L, u - window); j <= std::min(w - 1, u + window); ++j) {
-            const bool glint = saturated_column[std::size_t(j)] &&
-                               saturated_run[std::size_t(j)] < k_min_saturated_run;
-            if (!glint && !low_column[std::size_t(j)] && rows[j] == rows[j])
-                around[n++] = rows[j];
-        }
+        const double slope = slope_at(u);
+        for (long j = std::max(0L, u - window); j <= std::min(w - 1, u + window); ++j)
+            if (vouches(j))
+                around[n++] = rows[j] + slope * double(u - j);
         // Too few neighbours to confirm the peak (itself among the n): a
         // glint's fringe column amid rejected ones looks just like that.
         if (n <= k_min_neighbours) {
@@ -1564,6 +1604,7 @@ FLT_API flt_status FLT_CALL flt_extractor_create(const flt_calib *calib, const f
         const std::size_t blocks = (w + k_shape_block - 1) / k_shape_block;
         ex->block_width.assign(blocks, k_nan);
         ex->block_line_width.assign(blocks, k_nan);
+        ex->block_slope.assign(blocks, 0);
         ex->block_area.assign(blocks, k_nan);
         ex->block_scatter.assign(3 * blocks, k_nan);
         ex->fit_sums.assign(5 * ex->fibers, 0);
