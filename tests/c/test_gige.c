@@ -474,6 +474,35 @@ static void *proxy_thread(void *arg) {
     return NULL;
 }
 
+/* What a test has open, so that a test that fails half-way (cmocka leaves
+ * it by a long jump) does not leave the camera controlled or a proxy
+ * running for the tests after it: close_leftovers(), each test's teardown,
+ * closes whatever is still here. */
+enum { MAX_OPEN = 4 };
+static flt_source *open_sources[MAX_OPEN];
+static proxy *open_proxies[MAX_OPEN];
+
+static void remember(void **slots, void *item) {
+    for (int i = 0; i < MAX_OPEN; ++i)
+        if (slots[i] == NULL) {
+            slots[i] = item;
+            return;
+        }
+    fail_msg("more than %d open at once", MAX_OPEN);
+}
+
+static void forget(void **slots, const void *item) {
+    for (int i = 0; i < MAX_OPEN; ++i)
+        if (slots[i] == item)
+            slots[i] = NULL;
+}
+
+/* Closes a source a test opened (flt_source_destroy, and forgotten). */
+static void close_source(flt_source *src) {
+    forget((void **)open_sources, src);
+    flt_source_destroy(src);
+}
+
 static proxy *proxy_start_swapping(double loss, double reorder, double swap, int advertise_resend);
 static proxy *proxy_start(double loss, double reorder, int advertise_resend) {
     return proxy_start_swapping(loss, reorder, 0.0, advertise_resend);
@@ -502,10 +531,12 @@ static proxy *proxy_start_swapping(double loss, double reorder, double swap, int
     p->stream_in = udp_socket_on(0);
     pthread_mutex_init(&p->lock, NULL);
     assert_int_equal(pthread_create(&p->thread, NULL, proxy_thread, p), 0);
+    remember((void **)open_proxies, p);
     return p;
 }
 
 static void proxy_stop(proxy *p) {
+    forget((void **)open_proxies, p);
     __atomic_store_n(&p->stop, 1, __ATOMIC_RELEASE);
     pthread_join(p->thread, NULL);
     close(p->gvcp_in);
@@ -545,7 +576,20 @@ static flt_source *open_camera(proxy *p, flt_options *options) {
     const flt_status st = flt_source_open_gige(address, options, &src);
     if (st != FLT_OK)
         fail_msg("open %s: %s", address, flt_last_error_message());
+    remember((void **)open_sources, src);
     return src;
+}
+
+/* Each test's teardown: the sources first (they talk through the proxy). */
+static int close_leftovers(void **state) {
+    (void)state;
+    for (int i = 0; i < MAX_OPEN; ++i)
+        if (open_sources[i] != NULL)
+            close_source(open_sources[i]);
+    for (int i = 0; i < MAX_OPEN; ++i)
+        if (open_proxies[i] != NULL)
+            proxy_stop(open_proxies[i]);
+    return 0;
 }
 
 /* 256 x 128 px Mono8 frames at 50 frames/s: 24 packets of at most 1500
@@ -645,7 +689,7 @@ static void test_open_reads_bootstrap_and_features(void **state) {
     assert_int_equal(v, 0x12345678);
     ok(flt_source_set_int(src, "Width", 512));
     ok(flt_source_set_int(src, "Height", 512));
-    flt_source_destroy(src);
+    close_source(src);
 }
 
 static void test_heartbeat_keeps_control(void **state) {
@@ -673,9 +717,10 @@ static void test_heartbeat_keeps_control(void **state) {
     ok(flt_source_get_int(a, "Width", &v)); /* the first host still works */
     ok(flt_source_set_int(a, "Width", (int)v));
     /* Released on destroy: the second host opens at once. */
-    flt_source_destroy(a);
+    close_source(a);
     ok(flt_source_open_gige("127.0.0.1", quick, &b));
-    flt_source_destroy(b);
+    remember((void **)open_sources, b);
+    close_source(b);
     flt_options_destroy(fast);
     flt_options_destroy(quick);
 }
@@ -733,7 +778,7 @@ static void test_stream_is_aravis_ramp(void **state) {
     ok(flt_source_stop(src));
     ok(flt_source_get_int(src, "TLParamsLocked", &locked));
     assert_int_equal(locked, 0);
-    flt_source_destroy(src);
+    close_source(src);
 }
 
 /* 1,000 frames at 1 % loss and 1 % reordering, with resends. */
@@ -832,7 +877,7 @@ static void test_thousand_frames_through_lossy_network(void **state) {
     assert_true(recovered >= dropped_in_delivered);
     assert_true(missing <= proxy_dropped + reordered);
     assert_true(requests >= missing);
-    flt_source_destroy(src);
+    close_source(src);
     flt_options_destroy(options);
     proxy_stop(p);
 }
@@ -876,7 +921,7 @@ static void test_without_resends_losses_drop_frames(void **state) {
     assert_true(dropped >= 10);
     assert_int_equal(count(src, FLT_COUNT_RESEND_REQUESTS), 0);
     assert_non_null(strstr(flt_source_stream_error(src), "does not resend"));
-    flt_source_destroy(src);
+    close_source(src);
     proxy_stop(p);
 }
 
@@ -963,7 +1008,7 @@ static void test_swapped_packets_are_no_loss(void **state) {
          * packet the system dropped costs at most its frame. */
         assert_true(dropped + lost <= drops);
     }
-    flt_source_destroy(src);
+    close_source(src);
     proxy_stop(p);
 }
 
@@ -993,14 +1038,14 @@ static void test_bad_arguments(void **state) {
 
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_bad_arguments),
-        cmocka_unit_test(test_discovery_finds_the_camera),
-        cmocka_unit_test(test_open_reads_bootstrap_and_features),
-        cmocka_unit_test(test_heartbeat_keeps_control),
-        cmocka_unit_test(test_stream_is_aravis_ramp),
-        cmocka_unit_test(test_thousand_frames_through_lossy_network),
-        cmocka_unit_test(test_without_resends_losses_drop_frames),
-        cmocka_unit_test(test_swapped_packets_are_no_loss),
+        cmocka_unit_test_teardown(test_bad_arguments, close_leftovers),
+        cmocka_unit_test_teardown(test_discovery_finds_the_camera, close_leftovers),
+        cmocka_unit_test_teardown(test_open_reads_bootstrap_and_features, close_leftovers),
+        cmocka_unit_test_teardown(test_heartbeat_keeps_control, close_leftovers),
+        cmocka_unit_test_teardown(test_stream_is_aravis_ramp, close_leftovers),
+        cmocka_unit_test_teardown(test_thousand_frames_through_lossy_network, close_leftovers),
+        cmocka_unit_test_teardown(test_without_resends_losses_drop_frames, close_leftovers),
+        cmocka_unit_test_teardown(test_swapped_packets_are_no_loss, close_leftovers),
     };
     return cmocka_run_group_tests(tests, start_camera, stop_camera);
 }
