@@ -187,7 +187,7 @@ struct flt_extractor {
     // another line below the strip), not the strip's; the shape and
     // continuity checks leave it out of their references.
     std::vector<std::uint8_t> low_column;  // [width]
-    std::size_t changed_rows = 0;          // peaks rejected, replaced or centred again, this laser
+    std::size_t changed_rows = 0;          // peaks the checks rejected or replaced, this laser
     std::vector<double> edge_light;        // [width] scratch
     // reject_detours: the segments of peaks that continue each other.
     std::vector<std::uint32_t> segment_first, segment_last, segment_count;  // [width]
@@ -590,14 +590,16 @@ void flt_extractor::extract(const unsigned char *frame, std::size_t stride,
         // centre is its half-maximum crossings' midpoint). Its width: the
         // median of its block's, which the shape check has just measured;
         // one column's width under speckle may be a single bright grain's.
-        // (A row that moves is mapped again below.)
+        // A row that moves is mapped again at once (only its column).
         for (std::uint32_t u = 0; u < width; ++u) {
             const double line_width = block_line_width[u / k_shape_block];
             if (line_width * k_thin_window_per_width < double(2 * sg_half) &&
                 !saturated_column[u] && !low_column[u] && rows_out[u] == rows_out[u]) {
                 const double thin = thin_centre<Pixel>(frame, stride, u, rows_out[u], line_width);
-                changed_rows += thin != rows_out[u];
-                rows_out[u] = thin;
+                if (thin != rows_out[u]) {
+                    rows_out[u] = thin;
+                    map_column(u, thin, &xs[u], &zs[u]);
+                }
             }
         }
         if (any_suspect)
