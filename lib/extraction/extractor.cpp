@@ -695,9 +695,9 @@ double flt_extractor::wide_centre(const unsigned char *frame, std::size_t stride
     return std::fabs(best) <= 1.0 ? double(best_v) + best : row;
 }
 
-// The zero crossing of a narrower Savitzky-Golay derivative (half-window
-// h = width x k_thin_window_per_width / 2, rounded, from 2 to sg_half - 1)
-// next to `row`, the peak the full window found: the rows around it are
+// The zero crossing of a narrower Savitzky-Golay derivative (2 h + 1 rows
+// about width x k_thin_window_per_width, h from 2 to sg_half - 1) next to
+// `row`, the peak the full window found: the rows around it are
 // searched as column_peak does (at most 2 rows away). Where the window
 // leaves the frame, no crossing is found or it lies farther than the
 // line's width from `row` (the wide window can be dragged by more than half
@@ -1248,10 +1248,11 @@ void flt_extractor::reject_glint_fringes(double *rows) {
     // slope, and the neighbours' median row is taken after carrying each
     // to the column along it; without that the runs break wherever noise
     // adds a third of a row to a step, and the median is off by the slope
-    // times the neighbours' imbalance between the sides. Not below
-    // k_level_slope, where the imbalance costs less (at most the 0.5 px
-    // tolerance with all of one side's neighbours missing), so a level
-    // line is judged exactly as it was.
+    // times the neighbours' imbalance between the sides. Not up to
+    // k_level_slope, where the imbalance costs less (0.1 row per column
+    // moves the median by about the 0.5 px tolerance only when all of one
+    // side's neighbours are missing), so a level line is judged exactly as
+    // it was.
     constexpr long k_slope_span = 8;
     constexpr double k_level_slope = 0.1;
     double *steps = shape_scratch.data();
