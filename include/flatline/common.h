@@ -450,6 +450,16 @@ typedef enum flt_option {
     /** "sim_gamma": the camera's response, a pixel reads full scale times
      * (signal / full scale)^(1 / gamma), 0.2..5. Default 1: linear. */
     FLT_OPT_SIM_GAMMA = 337,
+    /** "sim_ambient": ambient light on the strip as the camera sees it: the
+     * surface around the lines reads this fraction of full scale where it
+     * is bare steel, times its reflectance (sim_dark_patches, sim_texture),
+     * 0..10. Default 0: the strip is dark but for the lasers' lines. */
+    FLT_OPT_SIM_AMBIENT = 338,
+    /** "sim_texture": contrast of the strip's fine texture, 0..1: cells
+     * 2 mm across by 2 mm along, fixed to the strip, each reflecting
+     * 1 -+ up to this share of what bare steel does (the line's light and
+     * the ambient light alike). Default 0: uniform. */
+    FLT_OPT_SIM_TEXTURE = 339,
 
     /* --- frame-to-profile extractor (flatline/extractor.h) --- */
     /** "extract_laser0_first_row", "extract_laser0_rows": laser 0's band of

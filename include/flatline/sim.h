@@ -49,7 +49,16 @@
  *   as sqrt(1 + (z / dof)^2) and its peak falling as much), dark patches of
  *   the strip (sim_dark_patches: cells 60 mm across by 150 mm along, fixed
  *   to the strip, reflecting 0.15-0.5 of the line's light; the line over
- *   them is dim, its background unchanged) and a camera gamma (sim_gamma).
+ *   them is dim), a fine texture (sim_texture: cells 2 mm square, fixed to
+ *   the strip, each reflecting 1 -+ up to sim_texture of bare steel),
+ *   ambient light (sim_ambient: the strip around the lines reads this
+ *   fraction of full scale on bare steel, times the reflectance of the
+ *   patch and cell each pixel sees, so a patch's or a cell's border is an
+ *   edge in the background, across the line as well as along it) and a
+ *   camera gamma (sim_gamma). A pixel's place on the strip: x as the
+ *   column's lines have it, s linear in the row through the two lines'
+ *   rows (laser L's line at s_L). sim_background stays a uniform offset
+ *   over the whole frame (stray light, the sensor's dark level).
  *
  * Frames and lasers
  *   Frame f is taken at encoder position e_f = sim_start + f * sim_frame_spacing

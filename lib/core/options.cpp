@@ -175,6 +175,8 @@ const option_spec k_options[] = {
     {FLT_OPT_SIM_DEPTH_OF_FIELD, "sim_depth_of_field", 0.0, 1.0e4, 0.0, false},
     {FLT_OPT_SIM_DARK_PATCHES, "sim_dark_patches", 0.0, 1.0, 0.0, false},
     {FLT_OPT_SIM_GAMMA, "sim_gamma", 0.2, 5.0, 1.0, false},
+    {FLT_OPT_SIM_AMBIENT, "sim_ambient", 0.0, 10.0, 0.0, false},
+    {FLT_OPT_SIM_TEXTURE, "sim_texture", 0.0, 1.0, 0.0, false},
 };
 constexpr std::size_t k_option_count = sizeof k_options / sizeof k_options[0];
 

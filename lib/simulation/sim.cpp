@@ -27,6 +27,9 @@ constexpr double k_pi = 3.14159265358979323846;
 constexpr double k_nan = std::numeric_limits<double>::quiet_NaN();
 // sim_dark_patches: the cells of the strip's reflectance, mm across and along.
 constexpr double k_patch_across_mm = 60.0, k_patch_along_mm = 150.0;
+// sim_texture: the cells of the strip's fine texture, mm across and along
+// (a few columns and rows of the reference geometry).
+constexpr double k_grain_mm = 2.0;
 
 // Random streams of one frame (see sim_random.hpp).
 enum stream : std::uint64_t {
@@ -37,7 +40,8 @@ enum stream : std::uint64_t {
     stream_reflections = 5,
     stream_wander = 6,  // seeded with the knot index, not the frame
     stream_edge_glints = 7,
-    stream_patches = 8  // seeded with the patch's cell, not the frame
+    stream_patches = 8,  // seeded with the patch's cell, not the frame
+    stream_texture = 9   // seeded with the texture's cell, not the frame
 };
 
 struct defect {
@@ -61,7 +65,7 @@ struct sim_params {
     double table_depth, roller_pitch, roller_gap, table_brightness;
     double edge_glints, blooming;
     // What real photos show besides.
-    double depth_of_field, dark_patches, gamma;
+    double depth_of_field, dark_patches, gamma, ambient, texture;
 };
 
 sim_params read_params(const flt_options *o) {
@@ -104,6 +108,8 @@ sim_params read_params(const flt_options *o) {
     p.depth_of_field = option_value(o, FLT_OPT_SIM_DEPTH_OF_FIELD);
     p.dark_patches = option_value(o, FLT_OPT_SIM_DARK_PATCHES);
     p.gamma = option_value(o, FLT_OPT_SIM_GAMMA);
+    p.ambient = option_value(o, FLT_OPT_SIM_AMBIENT);
+    p.texture = option_value(o, FLT_OPT_SIM_TEXTURE);
     return p;
 }
 
@@ -177,7 +183,16 @@ struct flt_sim {
     std::vector<double> strip_x[2], strip_cover[2];  // [width]
     // The line's height (mm) and its strip reflectance, per laser and column
     // of the current frame (sim_depth_of_field, sim_dark_patches).
-    std::vector<double> strip_z[2], strip_reflectance[2];                    // [width]
+    std::vector<double> strip_z[2], strip_reflectance[2];  // [width]
+    // Ambient light (sim_ambient), per column of the current frame: the
+    // strip's x there (mm from its centre line), the material position s
+    // (mm) at row ambient_v0 and its change per row, and the light on bare
+    // steel (counts, times the share of the column on the strip; 0: none).
+    std::vector<double> ambient_xs, ambient_s0, ambient_v0, ambient_ds_dv, ambient_light;
+    std::vector<double> noiseless_row[2];  // [width]: the line's row before sim_peak_sigma
+    // The reflectance cells each column is in while add_ambient walks down
+    // the rows: the cell's along index and its value, per kind.
+    std::vector<double> patch_along, patch_value, grain_along, grain_value;  // [width]
     std::vector<double> table_row[2], table_cover_lo[2], table_cover_hi[2];  // [width]
     std::vector<float> spill;  // [width * height] with blooming
     std::vector<float> carry;  // [width] with blooming
@@ -458,6 +473,7 @@ struct flt_sim {
                     x = x_at(j) + t * (x_at(j + 1) - x_at(j));
                     z = z_at(j) + t * (z_at(j + 1) - z_at(j));
                 }
+                noiseless_row[laser][u] = v;
                 if (params.peak_sigma_px > 0)
                     v += params.peak_sigma_px * rng.gauss();
                 if (!(v >= 0 && v <= double(height - 1)))
@@ -489,10 +505,94 @@ struct flt_sim {
             double *reflectance = strip_reflectance[laser].data();
             const double s_laser = e - offset_mm[laser];
             for (std::uint32_t u = 0; u < width; ++u)
-                reflectance[u] = params.dark_patches > 0 && cover[u] > 0
-                                     ? patch_reflectance(column_x[u] - c, s_laser)
+                reflectance[u] = (params.dark_patches > 0 || params.texture > 0) && cover[u] > 0
+                                     ? surface_reflectance(column_x[u] - c, s_laser)
                                      : 1.0;
         }
+        if (params.ambient > 0)
+            ambient_geometry(e, c);
+    }
+
+    // Where each column's pixels lie on the strip (sim_ambient). Along a
+    // column, the rows between the two lasers' lines see the strip between
+    // their material positions e - offset: s is taken linear in the row
+    // through both lines (and beyond them), x the mean of the two lines'.
+    // A column where either line is not on the polyline, or both share a
+    // row, gets no ambient light.
+    void ambient_geometry(double e, double c) {
+        const double fs = full_scale();
+        const double s0 = e - offset_mm[0], s1 = e - offset_mm[1];
+        for (std::uint32_t u = 0; u < width; ++u) {
+            const double r0 = noiseless_row[0][u], r1 = noiseless_row[1][u];
+            const double cover = 0.5 * (strip_cover[0][u] + strip_cover[1][u]);
+            const double x = 0.5 * (strip_x[0][u] + strip_x[1][u]);
+            ambient_light[u] = 0;
+            patch_along[u] = grain_along[u] = k_nan;  // no cell yet
+            if (!(r0 == r0 && r1 == r1 && r1 != r0 && x == x && cover > 0))
+                continue;
+            ambient_xs[u] = x - c;
+            ambient_s0[u] = s0;
+            ambient_v0[u] = r0;
+            ambient_ds_dv[u] = (s1 - s0) / (r1 - r0);
+            ambient_light[u] = params.ambient * fs * cover;
+        }
+    }
+
+    // Adds the ambient light the strip reflects: row by row (the
+    // intensity's order), each column's reflectance cell looked up only
+    // when the row enters a new one.
+    void add_ambient() {
+        for (std::uint32_t v = 0; v < height; ++v) {
+            float *row = &intensity[std::size_t(v) * width];
+            for (std::uint32_t u = 0; u < width; ++u) {
+                const double light = ambient_light[u];
+                if (!(light > 0))
+                    continue;
+                const double s = ambient_s0[u] + (double(v) - ambient_v0[u]) * ambient_ds_dv[u];
+                double r = 1.0;
+                if (params.dark_patches > 0) {
+                    const double along = clamped_cell(s / k_patch_along_mm, 1e15);
+                    if (!(along == patch_along[u])) {
+                        patch_along[u] = along;
+                        patch_value[u] = patch_of_cell(
+                            clamped_cell(ambient_xs[u] / k_patch_across_mm, 1e9), along);
+                    }
+                    r *= patch_value[u];
+                }
+                if (params.texture > 0) {
+                    const double along = clamped_cell(s / k_grain_mm, 1e15);
+                    if (!(along == grain_along[u])) {
+                        grain_along[u] = along;
+                        grain_value[u] =
+                            grain_of_cell(clamped_cell(ambient_xs[u] / k_grain_mm, 1e9), along);
+                    }
+                    r *= grain_value[u];
+                }
+                row[u] += float(light * r);
+            }
+        }
+    }
+
+    // The strip's reflectance at strip coordinate xs (mm from its centre
+    // line) and material position s: its dark patches times its texture.
+    double surface_reflectance(double xs, double s) const {
+        double r = 1.0;
+        if (params.dark_patches > 0)
+            r *= patch_reflectance(xs, s);
+        if (params.texture > 0 && xs == xs && s == s)
+            r *= grain_of_cell(clamped_cell(xs / k_grain_mm, 1e9),
+                               clamped_cell(s / k_grain_mm, 1e15));
+        return r;
+    }
+
+    // floor(x), clamped to -+limit while still a double: converting an
+    // absurd position to an integer would be undefined.
+    static double clamped_cell(double x, double limit) {
+        return std::min(std::max(std::floor(x), -limit), limit);
+    }
+
+    static std::uint64_t cell_key(double across, double along) {
+        return (std::uint64_t(std::int64_t(across)) << 48) ^ std::uint64_t(std::int64_t(along));
     }
 
     // The strip's reflectance at strip coordinate xs (mm from its centre
@@ -504,15 +604,22 @@ struct flt_sim {
     double patch_reflectance(double xs, double s) const {
         if (!(xs == xs && s == s))
             return 1.0;
-        // Clamped while still a double: converting an absurd position to an
-        // integer would be undefined.
-        const double across = std::min(std::max(std::floor(xs / k_patch_across_mm), -1e9), 1e9);
-        const double along = std::min(std::max(std::floor(s / k_patch_along_mm), -1e15), 1e15);
-        const std::uint64_t cell =
-            (std::uint64_t(std::int64_t(across)) << 48) ^ std::uint64_t(std::int64_t(along));
-        sim_rng rng(params.seed, cell, stream_patches);
+        return patch_of_cell(clamped_cell(xs / k_patch_across_mm, 1e9),
+                             clamped_cell(s / k_patch_along_mm, 1e15));
+    }
+
+    double patch_of_cell(double across, double along) const {
+        sim_rng rng(params.seed, cell_key(across, along), stream_patches);
         const double dark = rng.uniform(), level = rng.uniform();
         return dark < params.dark_patches ? 0.15 + 0.35 * level : 1.0;
+    }
+
+    // The texture (sim_texture): each k_grain_mm square cell fixed to the
+    // strip reflects 1 + texture * (2 U - 1) of bare steel, U uniform from
+    // (sim_seed, cell).
+    double grain_of_cell(double across, double along) const {
+        sim_rng rng(params.seed, cell_key(across, along), stream_texture);
+        return 1.0 + params.texture * (2.0 * rng.uniform() - 1.0);
     }
 
     // The share of column u's interval [lo, hi] on the table (mm) that is
@@ -741,6 +848,8 @@ struct flt_sim {
         line_centres(f);
         const double fs = full_scale();
         std::fill(intensity.begin(), intensity.end(), float(params.background * fs));
+        if (params.ambient > 0)
+            add_ambient();
         sim_rng rng(params.seed, f, stream_pixels);
         const double amplitude = params.line_peak * fs;
         for (unsigned laser = 0; laser < 2; ++laser)
@@ -892,6 +1001,7 @@ void setup_geometry(flt_sim &sim) {
         sim.strip_x[laser].assign(sim.width, k_nan);
         sim.strip_z[laser].assign(sim.width, k_nan);
         sim.strip_reflectance[laser].assign(sim.width, 1.0);
+        sim.noiseless_row[laser].assign(sim.width, k_nan);
         sim.strip_cover[laser].assign(sim.width, 1.0);
         sim.table_row[laser].assign(sim.width, k_nan);
         sim.table_cover_lo[laser].assign(sim.width, k_nan);
@@ -908,6 +1018,11 @@ void setup_geometry(flt_sim &sim) {
     sim.image_points.assign(2 * ns, 0);
     sim.intensity.assign(std::size_t(sim.width) * sim.height, 0.0f);
     sim.noise.assign(sim.width, 0.0f);
+    if (sim.params.ambient > 0)
+        for (auto *column : {&sim.ambient_xs, &sim.ambient_s0, &sim.ambient_v0, &sim.ambient_ds_dv,
+                             &sim.ambient_light, &sim.patch_along, &sim.patch_value,
+                             &sim.grain_along, &sim.grain_value})
+            column->assign(sim.width, 0.0);
 }
 
 }  // namespace

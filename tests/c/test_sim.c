@@ -425,6 +425,76 @@ static void field_effects_render_as_documented(void **state) {
     flt_calib_destroy(calib);
 }
 
+/* Ambient light on the strip (sim.h), noise-free as above, the strip
+ * filling the view, a background of 0.03 and ambient 0.2 of full scale.
+ * Away from the lines (12 rows: 6 line sigmas) a pixel reads background +
+ * 0.2 * r of full scale, r the strip's reflectance there:
+ *   ambient alone: r = 1 everywhere, to the pixel's rounding (0.5 counts);
+ *   texture 0.3: r uniform in [0.7, 1.3] per 2 mm cell: every r inside,
+ *     their mean 1 and standard deviation 0.3 / sqrt(3) = 0.173, each
+ *     within 0.02 (thousands of cells; a row is about 2 mm of strip);
+ *   dark patches 0.5: r = 1 or in [0.15, 0.5], the dark share of the
+ *     pixels 0.5 within 0.15 (about 30 cells 60 x 150 mm per frame). */
+static void ambient_light_renders_as_documented(void **state) {
+    (void)state;
+    flt_calib *calib = reference(101, 20, ROI_FIRST, ROI_ROWS);
+    for (int effect = 0; effect < 3; ++effect) {
+        const flt_option keys[] = {FLT_OPT_SIM_SPECKLE, FLT_OPT_SIM_FULL_WELL, FLT_OPT_SIM_START,
+                                   FLT_OPT_SIM_AMBIENT,
+                                   effect == 2 ? FLT_OPT_SIM_DARK_PATCHES : FLT_OPT_SIM_TEXTURE};
+        const double values[] = {0, 0, 321, 0.2, effect == 0 ? 0 : effect == 1 ? 0.3 : 0.5};
+        flt_sim *sim = make_sim(calib, 5, keys, values);
+        const uint32_t w = 2048;
+        uint8_t *frame = malloc((size_t)w * ROI_ROWS);
+        double *peaks = malloc(2 * w * sizeof(double));
+        size_t checked = 0, dark = 0;
+        double sum = 0, sum2 = 0;
+        const double bg = 0.03 * 255, ambient = 0.2 * 255, slack = 0.5 / ambient + 1e-9;
+        for (int f = 0; f < 4; ++f) {
+            double e;
+            assert_int_equal(flt_sim_next_frame(sim, frame, (size_t)w * ROI_ROWS, w, &e, 0, NULL,
+                                                peaks, 2 * (size_t)w),
+                             FLT_OK);
+            for (uint32_t u = 2; u < w - 2; u += 7) {
+                const double v0 = peaks[u], v1 = peaks[w + u];
+                assert_true(v0 == v0 && v1 == v1);
+                for (long v = 0; v < ROI_ROWS; v += 3) {
+                    if (fabs((double)v - v0) < 12 || fabs((double)v - v1) < 12)
+                        continue;
+                    const double r = (frame[(size_t)v * w + u] - bg) / ambient;
+                    if (effect == 0) {
+                        assert_near(r, 1.0, slack);
+                    } else if (effect == 1) {
+                        assert_true(r >= 0.7 - slack && r <= 1.3 + slack);
+                        sum += r, sum2 += r * r;
+                    } else if (fabs(r - 1) > slack) {
+                        assert_true(r >= 0.15 - slack && r <= 0.5 + slack);
+                        ++dark;
+                    }
+                    ++checked;
+                }
+            }
+        }
+        assert_true(checked > 10000);
+        if (effect == 1) {
+            const double mean = sum / (double)checked;
+            const double sd = sqrt(sum2 / (double)checked - mean * mean);
+            print_message("texture 0.3: reflectance mean %.4f, sd %.4f (uniform: 1, %.4f)\n", mean,
+                          sd, 0.3 / sqrt(3));
+            assert_near(mean, 1.0, 0.02);
+            assert_near(sd, 0.3 / sqrt(3), 0.02);
+        }
+        if (effect == 2) {
+            print_message("dark patches 0.5 under ambient light: %zu of %zu pixels dark\n", dark,
+                          checked);
+            assert_near((double)dark / (double)checked, 0.5, 0.15);
+        }
+        free(frame), free(peaks);
+        flt_sim_destroy(sim);
+    }
+    flt_calib_destroy(calib);
+}
+
 /* The same seed gives the same bytes (rows and 8- and 16-bit frames), also
  * after rewind; another seed does not. */
 static void same_seed_same_bytes(void **state) {
@@ -545,6 +615,7 @@ int main(void) {
         cmocka_unit_test(peak_noise_has_the_set_sigma_per_laser),
         cmocka_unit_test(frames_draw_the_lines_where_the_calibration_says),
         cmocka_unit_test(field_effects_render_as_documented),
+        cmocka_unit_test(ambient_light_renders_as_documented),
         cmocka_unit_test(same_seed_same_bytes),
         cmocka_unit_test(bad_input_is_rejected_by_name),
     };

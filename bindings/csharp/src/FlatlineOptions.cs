@@ -244,6 +244,10 @@ namespace Flatline
         public double SimDarkPatches { get => Get("sim_dark_patches"); set => Set("sim_dark_patches", value); }
         /// <summary>The camera's gamma: a pixel reads full scale times (signal / full scale)^(1 / gamma).</summary>
         public double SimGamma { get => Get("sim_gamma"); set => Set("sim_gamma", value); }
+        /// <summary>Ambient light on bare steel around the lines, fraction of full scale; 0 for a dark strip.</summary>
+        public double SimAmbient { get => Get("sim_ambient"); set => Set("sim_ambient", value); }
+        /// <summary>Contrast of the strip's 2 mm texture cells, 0..1 (line and ambient light alike).</summary>
+        public double SimTexture { get => Get("sim_texture"); set => Set("sim_texture", value); }
 
         // ---- frame-to-profile extractor (Extractor); flatline/extractor.h
         /// <summary>First frame row of laser 0's band, px.</summary>

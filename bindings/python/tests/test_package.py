@@ -141,7 +141,7 @@ def test_component_option_tables_are_the_c_defaults():
     sim = flatline.simulator_options()
     assert sim["sim_seed"] == 1.0 and sim["sim_frame_spacing"] == 3.0
     assert sim["sim_bit_depth"] == 8.0 and sim["sim_line_sigma"] == 2.0
-    assert all(name.startswith("sim_") for name in sim) and len(sim) == 38
+    assert all(name.startswith("sim_") for name in sim) and len(sim) == 40
     extract = flatline.extractor_options()
     assert extract["extract_sg_window"] == 11.0 and extract["extract_sg_order"] == 2.0
     assert extract["extract_laser0_rows"] == 0.0  # automatic band
