@@ -105,12 +105,22 @@
  *   hold a share of the line's light equal to the share of their width the
  *   strip covers (clamped at 1), against the median light of the line a
  *   few columns inwards. A glint on the edge brightens the partly covered
- *   column beyond its share and pushes the edge outward: with glints at
- *   30 % of the simulator's edges the edges lie 0.36-0.44 mm RMS off
- *   (worst 1.4 mm, about 0.6 mm outward where a glint is) against
- *   0.07-0.10 mm without (tests/c/test_field.c,
- *   edges_within_a_millimetre). A run that reaches the frame's border has
- *   that edge open (not seen).
+ *   column beyond its share and pushes the edge outward (about 0.6 mm on
+ *   the simulator). A glint brighter than the line (1.15 times the
+ *   median light of the line a few columns inwards, in a column within 6
+ *   of the edge) flags that laser's edge (FLT_STRIP_LEFT_GLINT,
+ *   FLT_STRIP_RIGHT_GLINT); where the other laser's edge of that side is
+ *   clean, it is taken instead (both lasers see the same edge laser
+ *   spacing apart along the strip; a shift of more than 0.3 mm between
+ *   the two lasers' clean far edges, a yawing strip, is carried over).
+ *   With glints at 30 % of the simulator's edges the edges lie
+ *   0.19-0.26 mm RMS off (before: 0.36-0.44) against 0.07-0.10 mm
+ *   without; the rest are glints on a column the strip barely covers,
+ *   which make it look covered without being brighter than the line, and
+ *   glints on both lasers. With a glint at every edge the edges lie
+ *   0.65-0.75 mm RMS off, and over 80 % of the rows' edges are flagged
+ *   (tests/c/test_field.c, edges_within_a_millimetre). A run that reaches
+ *   the frame's border has that edge open (not seen).
  *   Edges are in sensor x, mm, through the column map at the line's row.
  *   Fibers and the edges:
  *     - a fiber belongs to the strip when its x lies between the laser's
@@ -187,7 +197,16 @@ enum {
      * beyond the field of view and is NaN. */
     FLT_STRIP_LEFT_OPEN = 2,
     /** The same at high sensor x. */
-    FLT_STRIP_RIGHT_OPEN = 4
+    FLT_STRIP_RIGHT_OPEN = 4,
+    /** A glint (a specular spot, brighter than the line can be) lay on the
+     * edge at low sensor x, which pushes a measured edge outward (see "The
+     * strip's edges" below). For one laser: its own columns held it; the
+     * edge given is the other laser's where that one was clean. For the
+     * row (laser 2): both lasers' edges held one, and the edge may lie up
+     * to about 1.5 mm outward. The edge is still given. */
+    FLT_STRIP_LEFT_GLINT = 8,
+    /** The same at high sensor x. */
+    FLT_STRIP_RIGHT_GLINT = 16
 };
 
 /** Pixel formats of a frame; the value is the number of significant bits. */

@@ -103,8 +103,11 @@ struct band {
 // Sides are in sensor x: 0 the low-x edge ("left"), 1 the high-x edge.
 struct strip_view {
     bool present = false;
-    bool open[2] = {true, true};    // that edge is not seen (beyond the view)
-    double edge[2] = {0, 0};        // mm; NaN where open or absent
+    bool open[2] = {true, true};  // that edge is not seen (beyond the view)
+    double edge[2] = {0, 0};      // mm; NaN where open or absent
+    // A glint lay on that edge's columns (edge_column); its edge was then
+    // taken from the other laser where that one's was clean (cross_edges).
+    bool glint[2] = {false, false};
     long u_first = 0, u_last = -1;  // the strip's outermost line columns
 };
 
@@ -114,6 +117,18 @@ struct strip_view {
 // columns between k_edge_reference_near and k_edge_reference_far inwards.
 constexpr long k_edge_columns = 3;
 constexpr long k_edge_reference_near = 4, k_edge_reference_far = 28;
+// A glint on the edge (a sheared edge's burr, specular): one of the columns
+// from k_edge_columns beyond the last line column to k_edge_glint_reach
+// inside it holds more than k_edge_glint_light times the line's light. A
+// clean line's columns scatter by their speckle, a few % of their light;
+// the partly covered column holds less than a whole one. A glint saturates
+// (the simulator's peak at 1.5-4 times full scale over 1-6 columns).
+constexpr long k_edge_glint_reach = 6;
+constexpr double k_edge_glint_light = 1.15;
+// The two lasers' edges of one side shifted by more than this (mm, three
+// times their clean scatter: 0.07-0.10 mm RMS each) show a yaw
+// (cross_edges).
+constexpr double k_edge_shift_mm = 0.3;
 // Background rows either side of the light's window.
 constexpr long k_edge_background_rows = 3;
 
@@ -232,7 +247,8 @@ struct flt_extractor {
                     std::uint32_t min_value);
     template <class Pixel>
     double edge_column(const unsigned char *frame, std::size_t stride, unsigned laser, long end,
-                       long direction);
+                       long direction, bool *glint);
+    void cross_edges();
     double column_map_x(unsigned laser, double u, double v) const;
 };
 
@@ -613,8 +629,11 @@ void flt_extractor::extract(const unsigned char *frame, std::size_t stride,
             for (std::uint32_t u = 0; u < width; ++u)
                 map_column(u, rows_out[u], &xs[u], &zs[u]);
         find_strip<Pixel>(frame, stride, laser, params.min_value);
-        resample(laser);
     }
+    // The fibers after both lasers' edges are known (cross_edges).
+    cross_edges();
+    for (unsigned laser = 0; laser < FLT_CALIB_LASERS; ++laser)
+        resample(laser);
 }
 
 // Steger's kernels at scales s = k_wide_line / 2.355 + i k_wide_scale_step
@@ -786,11 +805,14 @@ static double line_light(const unsigned char *frame, std::size_t stride, std::ui
 // the line's light, so the strip covers sum(phi) columns of them:
 //   edge = end - direction (k_edge_columns + 1/2) + direction sum(phi)
 // (pixel u spans u -+ 1/2). The reference is the median light of the line
-// columns k_edge_reference_near..far inwards, each at its own row.
+// columns k_edge_reference_near..far inwards, each at its own row. *glint
+// says whether a glint lay on the edge (k_edge_glint_light): then the
+// columns' shares are too large and the edge lies outward.
 template <class Pixel>
 double flt_extractor::edge_column(const unsigned char *frame, std::size_t stride, unsigned laser,
-                                  long end, long direction) {
+                                  long end, long direction, bool *glint) {
     const long w = long(width);
+    *glint = false;
     if (end - direction * k_edge_columns < 0 || end - direction * k_edge_columns >= w ||
         end + direction * (k_edge_columns + 1) < 0 || end + direction * (k_edge_columns + 1) >= w)
         return k_nan;  // the strip reaches (nearly) the frame's border: not seen
@@ -820,6 +842,14 @@ double flt_extractor::edge_column(const unsigned char *frame, std::size_t stride
         if (!(light == light))
             return k_nan;
         covered += std::min(1.0, std::max(0.0, light / reference));
+        *glint = *glint || light > k_edge_glint_light * reference;
+    }
+    for (long i = k_edge_columns + 1; i <= k_edge_glint_reach; ++i) {
+        const long u = end - direction * i;
+        if (u < 0 || u >= w || !(rows[u] == rows[u]))
+            continue;
+        const double light = line_light<Pixel>(frame, stride, height, u, rows[u], reach);
+        *glint = *glint || light > k_edge_glint_light * reference;
     }
     return double(end) - double(direction) * (double(k_edge_columns) + 0.5) +
            double(direction) * covered;
@@ -898,8 +928,9 @@ void flt_extractor::find_strip(const unsigned char *frame, std::size_t stride, u
     sv.present = true;
     sv.u_first = best_first;
     sv.u_last = best_last;
-    const double u_edge[2] = {edge_column<Pixel>(frame, stride, laser, best_first, -1),
-                              edge_column<Pixel>(frame, stride, laser, best_last, +1)};
+    bool glint[2];
+    const double u_edge[2] = {edge_column<Pixel>(frame, stride, laser, best_first, -1, &glint[0]),
+                              edge_column<Pixel>(frame, stride, laser, best_last, +1, &glint[1])};
     const double x_edge[2] = {column_map_x(laser, u_edge[0], peak_row[laser][best_first]),
                               column_map_x(laser, u_edge[1], peak_row[laser][best_last])};
     // Sensor x may run either way with u.
@@ -908,6 +939,35 @@ void flt_extractor::find_strip(const unsigned char *frame, std::size_t stride, u
         const int side = increasing ? end : 1 - end;
         sv.open[side] = !(x_edge[end] == x_edge[end]);
         sv.edge[side] = x_edge[end];
+        sv.glint[side] = glint[end] && !sv.open[side];
+    }
+}
+
+// An edge with a glint on it lies outward: the glint's light makes the
+// partly covered columns look covered. The other laser sees the same edge
+// laser spacing further along the strip, and glints are specular: where
+// that laser's edge is clean, it is taken. The two edges differ by the
+// strip's yaw times the spacing (a guided strip: about 1e-3, 0.1 mm). A
+// larger shift shows on the far side when both lasers' edges there are
+// clean: beyond k_edge_shift_mm it is added. Where both lasers' edges have
+// a glint, both stay as measured, flagged.
+void flt_extractor::cross_edges() {
+    strip_view &a = strip[0], &b = strip[1];
+    if (!(a.present && b.present))
+        return;
+    const double before[2][2] = {{a.edge[0], a.edge[1]}, {b.edge[0], b.edge[1]}};
+    for (int side = 0; side < 2; ++side) {
+        if (a.open[side] || b.open[side] || a.glint[side] == b.glint[side])
+            continue;
+        const bool a_glint = a.glint[side];
+        strip_view &glinted = a_glint ? a : b;
+        const int other = 1 - side;
+        double shift = 0;  // glinted minus clean, from the far side
+        if (!a.open[other] && !b.open[other] && !a.glint[other] && !b.glint[other])
+            shift =
+                a_glint ? before[0][other] - before[1][other] : before[1][other] - before[0][other];
+        glinted.edge[side] = (a_glint ? before[1][side] : before[0][side]) +
+                             (std::fabs(shift) > k_edge_shift_mm ? shift : 0.0);
     }
 }
 
@@ -1447,21 +1507,24 @@ flt_status check_handle(const char *fn, const flt_extractor *ex) {
 void strip_of(const flt_extractor &ex, unsigned laser, double *left, double *right,
               unsigned *strip_flags) {
     bool present;
-    bool open[2];
+    bool open[2], glint[2];
     double edge[2];
     if (laser < FLT_CALIB_LASERS) {
         const strip_view &sv = ex.strip[laser];
         present = sv.present;
         for (int side = 0; side < 2; ++side)
-            open[side] = sv.open[side], edge[side] = sv.edge[side];
+            open[side] = sv.open[side], edge[side] = sv.edge[side], glint[side] = sv.glint[side];
     } else {
         // The row's material lies between the two lasers' readings: the
-        // mean of their edges, seen only where both see that edge.
+        // mean of their edges, seen only where both see that edge (after
+        // cross_edges: the clean one where one had a glint); a glint only
+        // where both had one.
         const strip_view &a = ex.strip[0], &b = ex.strip[1];
         present = a.present && b.present;
         for (int side = 0; side < 2; ++side) {
             open[side] = a.open[side] || b.open[side];
             edge[side] = 0.5 * (a.edge[side] + b.edge[side]);
+            glint[side] = a.glint[side] && b.glint[side];
         }
     }
     unsigned flags = 0;
@@ -1470,6 +1533,8 @@ void strip_of(const flt_extractor &ex, unsigned laser, double *left, double *rig
     } else {
         flags |= open[0] ? unsigned(FLT_STRIP_LEFT_OPEN) : 0u;
         flags |= open[1] ? unsigned(FLT_STRIP_RIGHT_OPEN) : 0u;
+        flags |= glint[0] && !open[0] ? unsigned(FLT_STRIP_LEFT_GLINT) : 0u;
+        flags |= glint[1] && !open[1] ? unsigned(FLT_STRIP_RIGHT_GLINT) : 0u;
     }
     *left = present && !open[0] ? edge[0] : k_nan;
     *right = present && !open[1] ? edge[1] : k_nan;

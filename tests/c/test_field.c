@@ -200,6 +200,7 @@ static void the_simulated_strip_has_edges_coils_and_wander(void **state) {
 typedef struct edge_run {
     double rms_edge, rms_width, worst_edge;
     size_t edges, wrong_flags, near_edge_flags, fibers_on;
+    size_t glint_flags, row_glint_flags; /* FLT_STRIP_*_GLINT: per laser, and the row's */
 } edge_run;
 
 /* Rendered frames of a strip `width` wide, wandering (a 40 mm sine over
@@ -231,7 +232,7 @@ static edge_run edges_of(double width, double glints, unsigned seed) {
     assert_int_equal(flt_sim_add_defect(sim, FLT_SIM_CENTRE_BUCKLE, 4, 2100), FLT_OK);
     flt_extractor *ex = field_extractor(calib);
     uint8_t *frame = malloc((size_t)W * ROI_ROWS);
-    edge_run run = {0, 0, 0, 0, 0, 0, 0};
+    edge_run run = {0, 0, 0, 0, 0, 0, 0, 0, 0};
     double sum_edge = 0, sum_width = 0;
     size_t widths = 0;
     for (int f = 0; f < 40; ++f) {
@@ -253,10 +254,13 @@ static edge_run edges_of(double width, double glints, unsigned seed) {
             assert_int_equal(
                 flt_sim_strip_edges(sim, laser, 1, &e, &tl[laser], &tr[laser], &present), FLT_OK);
             assert_int_equal(present, 1);
-            if (sf)
+            if (sf & ~(unsigned)(FLT_STRIP_LEFT_GLINT | FLT_STRIP_RIGHT_GLINT))
                 print_message("f %d laser %u sf %u left %.2f (%.2f) right %.2f (%.2f)\n", f, laser,
                               sf, left, tl[laser], right, tr[laser]);
-            assert_int_equal(sf, 0); /* both edges seen */
+            /* both edges seen */
+            assert_int_equal(sf & ~(unsigned)(FLT_STRIP_LEFT_GLINT | FLT_STRIP_RIGHT_GLINT), 0);
+            run.glint_flags += (size_t)((sf & FLT_STRIP_LEFT_GLINT) != 0) +
+                               (size_t)((sf & FLT_STRIP_RIGHT_GLINT) != 0);
             const double d[2] = {left - tl[laser], right - tr[laser]};
             for (int side = 0; side < 2; ++side) {
                 sum_edge += d[side] * d[side];
@@ -267,6 +271,13 @@ static edge_run edges_of(double width, double glints, unsigned seed) {
             sum_width += dw * dw;
             ++widths;
             assert_near(c, 0.5 * (left + right), 1e-9);
+        }
+        {
+            double left, right, w, c;
+            unsigned sf;
+            assert_int_equal(flt_extractor_strip(ex, 2, &left, &right, &w, &c, &sf), FLT_OK);
+            run.row_glint_flags += (size_t)((sf & FLT_STRIP_LEFT_GLINT) != 0) +
+                                   (size_t)((sf & FLT_STRIP_RIGHT_GLINT) != 0);
         }
         for (size_t k = 0; k < FIBERS; ++k) {
             const double x = fiber_x(k);
@@ -295,25 +306,45 @@ static edge_run edges_of(double width, double glints, unsigned seed) {
     return run;
 }
 
-/* The issue's targets: edges to RMS <= 1 mm and widths to <= 2 mm at 2 mm
- * fiber pitch, from rendered frames with the reference noise, for strips
- * 900, 1500 and 2200 mm wide wandering over the roller table. No fiber
- * more than 1 mm from the true edge gets the wrong side. With glints at
- * the edges (30 % of edges per frame) the same bounds hold. */
+/* Edges to RMS <= 1 mm and widths to <= 2 mm at 2 mm fiber pitch, from
+ * rendered frames with the reference noise, for strips 900, 1500 and
+ * 2200 mm wide wandering over the roller table. No fiber more than 1 mm
+ * from the true edge gets the wrong side. With glints at the edges the
+ * same bounds hold.
+ *   Glints at 30 % of the edges (per laser and frame): a laser's edge with
+ *   a glint takes the other laser's where that one is clean. Clean edges
+ *   lie 0.065-0.10 mm RMS off; the glinting runs 0.19-0.26 mm (0.36-0.44
+ *   before the other laser's edge was taken): bound 0.3 mm. The rest are
+ *   glints on a column the strip barely covers, which make it look well
+ *   covered without being brighter than the line: no light measure tells
+ *   them, and on both lasers (9 % of the edges) nothing replaces them.
+ *   Glints at every edge: no clean edge to take, so the edges stay
+ *   0.65-0.75 mm RMS off (about 0.6 mm outward); the row's edges say so
+ *   (FLT_STRIP_*_GLINT): at least 80 % of them flagged. */
 static void edges_within_a_millimetre(void **state) {
     (void)state;
     const double widths[] = {900, 1500, 2200};
-    for (int glinting = 0; glinting < 2; ++glinting)
+    const double glints[] = {0, 0.3, 1.0};
+    for (int g = 0; g < 3; ++g)
         for (int i = 0; i < 3; ++i) {
-            const edge_run r = edges_of(widths[i], glinting ? 0.3 : 0.0, 7u + (unsigned)i);
-            print_message("strip %4.0f mm%s: edges RMS %.3f mm (worst %.2f, %zu edges), width "
-                          "RMS %.3f mm; fibers on the wrong side of the strip: %zu beyond 1 mm "
-                          "of an edge, %zu within (of %zu on the strip)\n",
-                          widths[i], glinting ? ", edge glints" : "", r.rms_edge, r.worst_edge,
-                          r.edges, r.rms_width, r.wrong_flags, r.near_edge_flags, r.fibers_on);
+            const edge_run r = edges_of(widths[i], glints[g], 7u + (unsigned)i);
+            print_message("strip %4.0f mm, glints at %3.0f %% of the edges: edges RMS %.3f mm "
+                          "(worst %.2f, %zu edges), width RMS %.3f mm; fibers on the wrong side "
+                          "of the strip: %zu beyond 1 mm of an edge, %zu within (of %zu on the "
+                          "strip); edges flagged with a glint: %zu of the lasers', %zu of %zu of "
+                          "the rows'\n",
+                          widths[i], 100 * glints[g], r.rms_edge, r.worst_edge, r.edges,
+                          r.rms_width, r.wrong_flags, r.near_edge_flags, r.fibers_on, r.glint_flags,
+                          r.row_glint_flags, r.edges / 2);
             assert_true(r.rms_edge <= 1.0);
             assert_true(r.rms_width <= 2.0);
             assert_int_equal(r.wrong_flags, 0);
+            if (g == 0)
+                assert_int_equal(r.glint_flags, 0);
+            if (g == 1)
+                assert_true(r.rms_edge <= 0.3);
+            if (g == 2)
+                assert_true((double)r.row_glint_flags >= 0.8 * (double)(r.edges / 2));
         }
 }
 

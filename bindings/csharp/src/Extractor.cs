@@ -30,6 +30,14 @@ namespace Flatline
         LeftOpen = FlatlineNative.FLT_STRIP_LEFT_OPEN,
         /// <summary>The same at high sensor x: <see cref="StripEdges.RightMm"/> is NaN.</summary>
         RightOpen = FlatlineNative.FLT_STRIP_RIGHT_OPEN,
+        /// <summary>A glint lay on the edge at low sensor x, which pushes a
+        /// measured edge outward. One laser: its own edge had it (the value is
+        /// the other laser's where that one was clean); the row (laser 2): both
+        /// had it, and <see cref="StripEdges.LeftMm"/> may lie up to about
+        /// 1.5 mm outward.</summary>
+        LeftGlint = FlatlineNative.FLT_STRIP_LEFT_GLINT,
+        /// <summary>The same at high sensor x.</summary>
+        RightGlint = FlatlineNative.FLT_STRIP_RIGHT_GLINT,
     }
 
     /// <summary>Where the last frame shows the strip, sensor x in mm; a value

@@ -104,6 +104,8 @@ from ._extractor import (
     STRIP_LEFT_OPEN,
     STRIP_NONE,
     STRIP_RIGHT_OPEN,
+    STRIP_LEFT_GLINT,
+    STRIP_RIGHT_GLINT,
     Saturation,
     StripEdges,
 )
@@ -249,6 +251,8 @@ __all__ = [
     "STRIP_LEFT_OPEN",
     "STRIP_NONE",
     "STRIP_RIGHT_OPEN",
+    "STRIP_LEFT_GLINT",
+    "STRIP_RIGHT_GLINT",
     "Saturation",
     "StripEdges",
     "FIBER_OFF_STRIP",

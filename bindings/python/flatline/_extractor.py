@@ -17,7 +17,7 @@ from ._options import OptionValue, make_options, options_doc, prefixed_options
 from ._pixels import PixelFormat, check_one_channel
 
 __all__ = ["ExtractedRow", "Extractor", "Saturation", "StripEdges", "STRIP_LEFT_OPEN", "STRIP_NONE",
-           "STRIP_RIGHT_OPEN", "extractor_options"]
+           "STRIP_RIGHT_OPEN", "STRIP_LEFT_GLINT", "STRIP_RIGHT_GLINT", "extractor_options"]
 
 #: No strip under the laser (a head or tail between coils, or no line): both
 #: edges, the width and the centre are NaN (the open bits are set too).
@@ -26,6 +26,13 @@ STRIP_NONE: int = _capi.FLT_STRIP_NONE
 STRIP_LEFT_OPEN: int = _capi.FLT_STRIP_LEFT_OPEN
 #: The same at high sensor x: right_mm is NaN.
 STRIP_RIGHT_OPEN: int = _capi.FLT_STRIP_RIGHT_OPEN
+#: A glint lay on the edge at low sensor x, which pushes a measured edge
+#: outward. One laser: its own edge had it (the value is the other laser's
+#: where that one was clean); the row (laser 2): both had it, and left_mm may
+#: lie up to about 1.5 mm outward.
+STRIP_LEFT_GLINT: int = _capi.FLT_STRIP_LEFT_GLINT
+#: The same at high sensor x.
+STRIP_RIGHT_GLINT: int = _capi.FLT_STRIP_RIGHT_GLINT
 
 
 class ExtractedRow(NamedTuple):
