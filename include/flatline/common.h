@@ -636,8 +636,12 @@ typedef enum flt_option {
      * processes each frame on the thread that delivers it. Default 2. */
     FLT_OPT_GAUGE_WORKERS = 700,
     /** "gauge_queue_frames": frames the queue between acquisition and
-     * processing holds (integer 1..4096); it costs width x height x 2 bytes
-     * each. Default 64 (32 ms at 2000 frames/s). */
+     * processing holds (integer 0..4096); it costs width x height x 2 bytes
+     * each. Default 0: as many as fit in 256 MiB, at least 16 (256 frames
+     * of 2048 x 256 px, 128 ms at 2000 frames/s; 32 of 2048 x 2048 px);
+     * flt_gauge_get_option() reports the count. A finished sheet's
+     * evaluation holds a worker for a tenth of a second or more, and a
+     * camera's frames queue up meanwhile. */
     FLT_OPT_GAUGE_QUEUE_FRAMES = 701,
     /** "gauge_overflow" (flt_gauge_overflow, gauge.h): what a full queue
      * does with the next frame: FLT_GAUGE_OVERFLOW_DROP (0) drops it and

@@ -215,7 +215,8 @@
  *   W x H frame, R = row_capacity (as flt_gauge_get_option() reports it:
  *   the reconstructor's latency at gauge_frame_spacing, a quarter more and
  *   256 rows), S = gauge_max_sheet_length / gauge_frame_spacing + 2 rows
- *   of a sheet, Q = gauge_queue_frames (0 without workers), P =
+ *   of a sheet, Q = gauge_queue_frames as flt_gauge_get_option() reports
+ *   it (0 without workers), P =
  *   gauge_sheet_slots (0 with gauge_keep_maps 0), B = 2 sheet buffers (3
  *   with gauge_provisional_mm) and E extractors (1 at
  *   create with automatic bands or no workers, else one per worker),

@@ -101,7 +101,7 @@ const option_spec k_options[] = {
     {FLT_OPT_ROBUST_LINE_ITERATIONS, "robust_line_iterations", 1.0, 32.0, 8.0, true},
     // the gauge
     {FLT_OPT_GAUGE_WORKERS, "gauge_workers", 0.0, 64.0, 2.0, true},
-    {FLT_OPT_GAUGE_QUEUE_FRAMES, "gauge_queue_frames", 1.0, 4096.0, 64.0, true},
+    {FLT_OPT_GAUGE_QUEUE_FRAMES, "gauge_queue_frames", 0.0, 4096.0, 0.0, true},
     {FLT_OPT_GAUGE_OVERFLOW, "gauge_overflow", 0.0, 2.0, 2.0, true},
     {FLT_OPT_GAUGE_FRAME_SPACING, "gauge_frame_spacing", 1.0e-3, 1.0e4, 1.0, false},
     {FLT_OPT_GAUGE_REVERSAL_LENGTH, "gauge_reversal_length", 0.0, 1.0e9, 500.0, false},

@@ -136,7 +136,7 @@ struct coil_stats {
 
 struct gauge_config {
     unsigned workers = 2;
-    std::size_t queue_frames = 64;
+    std::size_t queue_frames = 0;  // 0: automatic (gauge.cpp, k_queue_bytes)
     int overflow = FLT_GAUGE_OVERFLOW_AUTO;
     double min_coverage = 0.95, saturation_limit = 0.05;
     std::size_t sheet_backlog = 16;

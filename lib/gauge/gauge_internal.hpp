@@ -36,6 +36,11 @@ inline constexpr double k_nan = std::numeric_limits<double>::quiet_NaN();
 // The reconstructor refuses larger jumps between rows (recon_api.cpp): it
 // would have to bridge them knot by knot.
 inline constexpr double k_recon_max_jump_mm = 1.0e6, k_recon_max_jump_knots = 1000.0;
+// gauge_queue_frames 0 (the default): as many frame slots (width x height
+// x 2 bytes each) as fit in k_queue_bytes, at least k_queue_min and at most
+// k_queue_max (the option's own limit).
+inline constexpr std::size_t k_queue_bytes = std::size_t(256) << 20;  // 256 MiB
+inline constexpr std::size_t k_queue_min = 16, k_queue_max = 4096;
 
 // The gauge whose callback runs on this thread (in_gauge_callback).
 inline thread_local const void *t_in_callback = nullptr;

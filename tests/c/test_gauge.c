@@ -1096,6 +1096,41 @@ static void slow_callback(const flt_sheet *sheet, void *user) {
     }
 }
 
+/* gauge_queue_frames 0, the default: as many frame slots (width x height
+ * x 2 bytes) as fit in 256 MiB, at least 16 and at most 4096, reported by
+ * flt_gauge_get_option; a count given is kept. 2048 x 256 px frames (the
+ * line of bench_gauge, where 64 slots dropped 2 % of a camera's frames
+ * after every sheet): 256; 2048 x 2048: 32; 2048 x 16: 4096 (the most).
+ * The least, 16, needs frames over 16 MiB, which the reference sensor
+ * (2048 rows) cannot give. */
+static void the_queue_fits_256_mib_by_default(void **state) {
+    (void)state;
+    const struct {
+        uint32_t rows;
+        double given, expected;
+    } cases[] = {{256, 0, 256}, {2048, 0, 32}, {16, 0, 4096}, {256, 8, 8}};
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+        flt_calib *calib = NULL;
+        OK(flt_calib_create_reference(0, cases[i].rows, -1000.0, 2.0, 101, &calib));
+        uint32_t w = 0, h = 0;
+        OK(flt_calib_get_frame_size(calib, &w, &h));
+        assert_int_equal(w, 2048);
+        assert_int_equal(h, cases[i].rows);
+        flt_options *o = bag();
+        set(o, FLT_OPT_GAUGE_WORKERS, 1);
+        if (cases[i].given > 0)
+            set(o, FLT_OPT_GAUGE_QUEUE_FRAMES, cases[i].given);
+        flt_gauge *g = NULL;
+        OK(flt_gauge_create(calib, o, &g));
+        double queue = 0;
+        OK(flt_gauge_get_option(g, FLT_OPT_GAUGE_QUEUE_FRAMES, &queue));
+        assert_true(queue == cases[i].expected);
+        flt_gauge_destroy(g);
+        flt_options_destroy(o);
+        flt_calib_destroy(calib);
+    }
+}
+
 static void queue_overflow_is_counted(void **state) {
     (void)state;
     enum { R = 3000, K = 51 };
@@ -2231,6 +2266,7 @@ static void narrow_strip_has_edges(void **state) {
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(frames_against_hand_chain),
+        cmocka_unit_test(the_queue_fits_256_mib_by_default),
         cmocka_unit_test(join_as_accurate_as_inside),
         cmocka_unit_test(cuts_given_early_and_late),
         cmocka_unit_test(latency_in_seconds),

@@ -356,7 +356,8 @@ namespace Flatline
         /// the thread that delivers it.</summary>
         public int GaugeWorkers { get => (int)Get("gauge_workers"); set => Set("gauge_workers", value); }
         /// <summary>Frames the queue between acquisition and processing holds
-        /// (width x height x 2 bytes each).</summary>
+        /// (width x height x 2 bytes each); 0 (the default) for as many as fit
+        /// in 256 MiB, at least 16.</summary>
         public int GaugeQueueFrames { get => (int)Get("gauge_queue_frames"); set => Set("gauge_queue_frames", value); }
         /// <summary>What a full frame queue does (<see cref="Flatline.GaugeOverflow"/>,
         /// gauge_overflow): by default the pushing thread waits for room and
