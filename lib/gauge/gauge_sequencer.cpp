@@ -299,6 +299,15 @@ void gauge::apply_cuts(double s_limit, const row_meta *incoming) {
             log_cuts_ignored(1, c, "at or before the open sheet's start");
             continue;
         }
+        // An early answer that fell due but could not be made before its
+        // final (the evaluator still busy with the previous one: a machine
+        // too slow for the line) is said, not skipped in silence.
+        if (cfg_.provisional_mm > 0.0 && !(has_provisional_cut_ && provisional_cut_ == c) &&
+            last_pushed_s_ - c >= cfg_.provisional_mm)
+            FLT_LOG(FLT_LOG_WARNING, "gauge",
+                    "sheet %llu: no early answer: the evaluator was still busy with the "
+                    "previous one until the final result at %.0f mm past the cut",
+                    static_cast<unsigned long long>(sheet_ids_ + 1), last_pushed_s_ - c);
         split(c, 0, false, incoming);
     }
 }

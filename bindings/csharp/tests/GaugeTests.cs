@@ -160,9 +160,21 @@ namespace Flatline.Tests
                     gauge.SetRules(rules, thicknessMm: 4.0, SheetWidth.Measured);
                 gauge.Cut(3000);
                 gauge.Cut(6000);
-                PushRows(gauge, 0, 4000);  // 12 m
+                // The rows before the second early answer is due (row 2100
+                // is at 6300 mm), then the sheets before it (the first early
+                // answer and its final; the final alone without early
+                // answers): the evaluator is free when the next early answer
+                // falls due, on any machine. Pushed at once, a loaded machine
+                // can still be evaluating the first early answer when the
+                // second cut's final comes: that cut then has none.
+                PushRows(gauge, 0, 2100);
+                var sheets = new List<Flatline.Sheet>();
+                while (sheets.Count < (provisional > 0 ? 2 : 1))
+                    sheets.Add(gauge.NextSheet(60000) ?? throw new TimeoutException("no sheet in a minute"));
+                PushRows(gauge, 2100, 4000);  // 12 m
                 gauge.Flush();
-                runs.Add(Drain(gauge));
+                sheets.AddRange(Drain(gauge));
+                runs.Add(sheets);
                 counted.Add((gauge.Count(GaugeCounter.Sheets), gauge.Count(GaugeCounter.Provisional),
                              gauge.LastCoilStatistics()!.Sheets));
             }

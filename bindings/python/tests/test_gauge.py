@@ -159,10 +159,24 @@ def test_provisional_sheets_come_early_and_count_nowhere(calib):
         gauge.set_rules(rules, thickness_mm=4.0, width_mm="measured")
         gauge.cut(3000.0)
         gauge.cut(6000.0)
-        for r in range(len(s)):
+        # The rows before the second early answer is due (row 2100 is at
+        # 6300 mm), then the sheets before it (the first early answer and
+        # its final; the final alone without early answers): the evaluator
+        # is free when the next early answer falls due, on any machine.
+        # Pushed at once, a loaded machine can still be evaluating the first
+        # early answer when the second cut's final comes: that cut then has
+        # none.
+        for r in range(2100):
+            gauge.push_row(s[r], h[r], g[r])
+        sheets = []
+        while len(sheets) < (2 if provisional > 0 else 1):
+            sheet = gauge.next_sheet(timeout=60.0)
+            assert sheet is not None, "no sheet in a minute"
+            sheets.append(sheet)
+        for r in range(2100, len(s)):
             gauge.push_row(s[r], h[r], g[r])
         gauge.flush()
-        runs.append((list(gauge), gauge.counters(), gauge.coil_stats(last=True)))
+        runs.append((sheets + list(gauge), gauge.counters(), gauge.coil_stats(last=True)))
         gauge.close()
     (plain, plain_counters, plain_stats), (early, counters, stats) = runs
     assert [sh.provisional for sh in early] == [True, False, True, False, False]
