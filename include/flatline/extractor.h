@@ -37,7 +37,9 @@
  *        than 3 px off the straight line between them, is rejected; the
  *        line under it is read where it is still a peak within 0.5 px of
  *        that straight line, clear of the reflection and of the line's
- *        shape.
+ *        shape. A run of at most 8 peaks that continues neither
+ *        neighbouring run within 32 columns (a speck, light on something
+ *        beside the strip) is rejected too.
  *        lib/extraction/README.md gives the measured rates;
  *     2. refines its row to sub-pixel accuracy at the zero crossing of the
  *        Savitzky-Golay derivative (window extract_sg_window rows, polynomial
@@ -84,12 +86,12 @@
  *   maximum above that background, each interpolated linearly between the
  *   pixels either side (a line that blooms into its neighbouring rows stays
  *   symmetric about its centre). Saturated peaks are checked for
- *   continuity with their neighbours, not for shape: only a run of them
- *   longer than the continuity window vouches for its neighbours (a line
- *   saturated all along); a shorter one (a glint, or a line that touches
- *   full scale here and there) is judged by the unsaturated line around
- *   it, and where it does not continue that line the column's next
- *   candidate is taken if it does (the line under a glint). The frame's
+ *   continuity with their neighbours, not for shape: a saturated peak
+ *   vouches for its neighbours only within a run of peaks (saturated or
+ *   not) that continue each other longer than the continuity window (the
+ *   line); one in a shorter run (a glint off the line) is judged by the
+ *   line around it, and where it does not continue that line the column's
+ *   next candidate is taken if it does (the line under a glint). The frame's
  *   counts are in flt_extractor_saturation(), for an exposure controller.
  *
  * The strip's edges
@@ -166,7 +168,7 @@
  * Memory and speed
  *   Everything is allocated by flt_extractor_create(); process() allocates
  *   nothing. A frame W pixels wide and H high with K fibers takes about
- *   722 W + 60 K + 8 H bytes (per column: both lasers' peaks, shapes and
+ *   730 W + 60 K + 8 H bytes (per column: both lasers' peaks, shapes and
  *   mapping polynomials; 1.5 MB for a 2048-wide camera;
  *   tests/c/test_memory.c checks it), plus the wide lines' kernels: 4 KB
  *   at the default extract_max_width, at most 63 KB. The per-column search is a

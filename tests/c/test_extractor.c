@@ -688,6 +688,62 @@ static void a_reflection_over_a_dim_stretch_is_no_line(void **state) {
     flt_calib_destroy(calib);
 }
 
+/* A speck nothing continues is no line: where the line is missing for 100
+ * columns, a line-shaped speck 3 columns wide lies 30 rows off it. The
+ * line is 30 columns away on one side and 67 on the other, too far on one
+ * side for the detour check (a chord needs the line within 32 columns on
+ * both sides), so before the stray check the speck's columns read 30 px off
+ * the line. A 6-column piece of the line within the gap, which continues
+ * the line beyond it, stays. */
+static void a_speck_nothing_continues_is_no_line(void **state) {
+    (void)state;
+    enum { N = 101 };
+    flt_calib *calib = reference(N, 20.0);
+    flt_extractor *ex = halves_extractor(calib);
+    uint8_t *frame = malloc((size_t)W * ROI_ROWS);
+    assert_non_null(frame);
+    const double line_row = 40.3, line_sigma = 2.0, speck_row = 70.6;
+    for (uint32_t v = 0; v < ROI_ROWS; ++v)
+        for (uint32_t u = 0; u < W; ++u) {
+            const int missing = u >= 1000 && u < 1100 && !(u >= 1070 && u < 1076);
+            const int speck = u >= 1030 && u < 1033;
+            const double d0 = ((double)v - line_row) / line_sigma;
+            const double d1 = ((double)v - (line_row + 128)) / line_sigma;
+            const double ds = ((double)v - speck_row) / line_sigma;
+            double g =
+                25.0 + (missing ? 0.0 : 110.0) * exp(-0.5 * d0 * d0) + 110.0 * exp(-0.5 * d1 * d1);
+            if (speck)
+                g += 90.0 * exp(-0.5 * ds * ds);
+            frame[(size_t)v * W + u] = (uint8_t)lround(g);
+        }
+    double e = 0, s, h[N], g[N], rows[2 * W];
+    assert_int_equal(
+        flt_extractor_process(ex, frame, FLT_PIXEL_MONO8, W, ROI_ROWS, W, e, N, &s, h, g, NULL),
+        FLT_OK);
+    assert_int_equal(flt_extractor_peaks(ex, W, rows), FLT_OK);
+    size_t kept = 0, speck_kept = 0, piece_kept = 0;
+    double worst = 0;
+    for (uint32_t u = 0; u < W; ++u) {
+        if (!(rows[u] == rows[u]))
+            continue;
+        ++kept;
+        speck_kept += u >= 1030 && u < 1033;
+        piece_kept += u >= 1070 && u < 1076;
+        if (!(u >= 1030 && u < 1033))
+            worst = fmax(worst, fabs(rows[u] - line_row));
+    }
+    print_message("a speck nothing continues: %zu of %d columns kept (%zu of the speck's 3, "
+                  "%zu of the line's 6-column piece in the gap), worst %.3f px off the line\n",
+                  kept, W, speck_kept, piece_kept, worst);
+    assert_true(worst <= 0.1);
+    assert_int_equal(speck_kept, 0);
+    assert_int_equal(piece_kept, 6);
+    assert_int_equal(kept, W - 100 + 6);
+    free(frame);
+    flt_extractor_destroy(ex);
+    flt_calib_destroy(calib);
+}
+
 /* The same frame gives the same bytes, in one extractor and in another. */
 static void same_frame_same_bytes(void **state) {
     (void)state;
@@ -918,6 +974,7 @@ int main(void) {
         cmocka_unit_test(thin_line_is_centred_at_its_own_scale),
         cmocka_unit_test(sloping_saturated_line_is_kept),
         cmocka_unit_test(a_reflection_over_a_dim_stretch_is_no_line),
+        cmocka_unit_test(a_speck_nothing_continues_is_no_line),
         cmocka_unit_test(same_frame_same_bytes),
         cmocka_unit_test(one_line_places_both_bands),
         cmocka_unit_test(bad_input_is_rejected_by_name),

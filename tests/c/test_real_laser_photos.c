@@ -920,7 +920,7 @@ static void check_set(const set_result *r, int degree) {
  * figures less a margin (kept: 2-3 points, the residual's ratio: 0.07
  * above today's where the aim is not met), so that a change that loses
  * ground on photos it was never shown fails here; wrong <= 0.1 % (today
- * 0-5 columns of 1,300-10,000). */
+ * 0-1 columns of 1,300-10,000). */
 static void check_further(const set_result *r, int degree, double kept_bound, double ratio_bound) {
     const double kept = (double)r->kept / (double)r->line_columns;
     const double wrong = (double)r->wrong / (double)r->line_columns;
