@@ -456,20 +456,28 @@ column_peaks_body(const unsigned char *frame, std::size_t stride, std::uint32_t 
     if (reach < 3 + h || reach > k_max_gather_reach)
         return 0;  // (not with create's parameters: the derivatives need 3 + h rows)
     unsigned eligible = 0;
-    const unsigned char *top[lanes];  // each lane's first row (row - reach)
+    long inside = -1;  // an eligible lane's first row: its window lies inside the band
     for (int l = 0; l < lanes; ++l) {
         const long rw = row[l];
         const std::uint32_t v = value[l];
         const bool ok = v >= p.min_value && v != 0 && v < p.full_scale && rw - reach > band_lo &&
                         rw + reach < band_hi;
-        // (A lane left to column_peak reads the band's first rows: in the
-        // frame, and ignored.)
-        top[l] = frame + std::size_t(ok ? rw - reach : band_lo + reach + 1) * stride +
-                 (u0 + std::uint32_t(l)) * sizeof(Pixel);
         eligible |= unsigned(ok) << l;
+        if (ok && inside < 0)
+            inside = rw - reach;
     }
     if (eligible == 0)
         return 0;
+    // Each lane's first row (row - reach). A lane left to column_peak reads
+    // the rows of an eligible lane's window in its own column: inside the
+    // band, so inside the frame, and ignored. (It once read the rows from
+    // just below the band's top, which past a short band at the frame's
+    // bottom left the frame: the fuzzer found it.)
+    const unsigned char *top[lanes];
+    for (int l = 0; l < lanes; ++l)
+        top[l] = frame +
+                 std::size_t(((eligible >> l) & 1u) ? long(row[l]) - reach : inside) * stride +
+                 (u0 + std::uint32_t(l)) * sizeof(Pixel);
     // Each lane's rows row - reach .. row + reach as floats (counts below
     // 2^24, and their sums: exact), one row of eight lanes at a time, built
     // in registers.
