@@ -1628,7 +1628,6 @@ void flt_extractor::resample(unsigned laser) {
         std::fill(off, off + fibers, std::uint8_t(1));
         return;
     }
-    std::fill(fit_sums.begin(), fit_sums.end(), 0.0);
     std::fill(fit_flags.begin(), fit_flags.end(), std::uint8_t(0));
     const double *xs = column_x[laser].data(), *zs = column_z[laser].data();
     const double inv_pitch = 1.0 / pitch, last = double(fibers - 1);
@@ -1646,8 +1645,12 @@ void flt_extractor::resample(unsigned laser) {
         if (!(b == b))
             *k1 = -1;  // NaN: no fiber
     };
+    // Across a gap in the line (columns without a peak) the fibers the gap
+    // spans are poisoned: no fiber is fitted across missing columns. And
+    // whether x runs one way along the strip's columns, as it does through
+    // any sane lens and homography.
     double previous_x = k_nan;
-    bool gap = false;
+    bool gap = false, rising = true, falling = true;
     // Only the strip's columns: beyond its ends there is no strip to miss.
     for (long u = sv.u_first; u <= sv.u_last; ++u) {
         const double x = xs[u];
@@ -1655,22 +1658,81 @@ void flt_extractor::resample(unsigned laser) {
             gap = true;
             continue;
         }
-        long k0, k1;
+        if (previous_x == previous_x) {
+            rising = rising && x >= previous_x;
+            falling = falling && x <= previous_x;
+        }
         if (gap && previous_x == previous_x) {
+            long k0, k1;
             fiber_range(std::min(previous_x, x) - half, std::max(previous_x, x) + half, &k0, &k1);
             for (long k = k0; k <= k1; ++k)
                 fit_flags[std::size_t(k)] |= poisoned;
         }
         gap = false;
         previous_x = x;
-        const double z = zs[u];
-        fiber_range(x - half, x + half, &k0, &k1);
-        for (long k = k0; k <= k1; ++k) {
-            const double dx = x - (first_x + double(k) * pitch);
-            double *sums = &fit_sums[5 * std::size_t(k)];
-            sums[0] += 1, sums[1] += dx, sums[2] += dx * dx, sums[3] += z, sums[4] += z * dx;
-            fit_flags[std::size_t(k)] |= dx <= 0 ? left : 0;
-            fit_flags[std::size_t(k)] |= dx >= 0 ? right : 0;
+    }
+    // Each fiber's window sums over the columns within +-half of it, added
+    // in column order. Column u serves fiber k when k >= ceil(lo) and
+    // k <= floor(hi), lo and hi its window's ends in fibers; for a whole k
+    // that is k >= lo and k <= hi, compared as doubles.
+    auto window_lo = [&](double x) {
+        return (x - half - first_x) * inv_pitch;
+    };
+    auto window_hi = [&](double x) {
+        return (x + half - first_x) * inv_pitch;
+    };
+    auto add = [&](double *sums, std::uint8_t *flags, double x, double z, std::size_t k) {
+        const double dx = x - (first_x + double(k) * pitch);
+        sums[0] += 1, sums[1] += dx, sums[2] += dx * dx, sums[3] += z, sums[4] += z * dx;
+        *flags |= dx <= 0 ? left : 0;
+        *flags |= dx >= 0 ? right : 0;
+    };
+    if (rising || falling) {
+        // Fiber by fiber, the sums in registers: a fiber's columns are one
+        // run, found by two pointers. Column by column (below) each column's
+        // update waited for the previous column's store to the same fiber,
+        // and that chain was most of this function's time.
+        long from = sv.u_first;
+        for (std::size_t i = 0; i < fibers; ++i) {
+            const std::size_t k = rising ? i : fibers - 1 - i;
+            const double kd = double(k);
+            // Columns whose windows end before fiber k (rising; falling:
+            // begin after it), and columns without a peak, serve no later
+            // fiber.
+            while (from <= sv.u_last &&
+                   !(rising ? window_hi(xs[from]) >= kd : window_lo(xs[from]) <= kd))
+                ++from;
+            // (add's sums, spelled out as scalars: an array here stayed on
+            // the stack, and its loads waited for its stores.)
+            const double x_k = first_x + kd * pitch;
+            double n = 0, sum_dx = 0, sum_dx2 = 0, sum_z = 0, sum_z_dx = 0;
+            std::uint8_t flags = fit_flags[k];
+            for (long u = from; u <= sv.u_last; ++u) {
+                const double x = xs[u];
+                if (!(x == x))
+                    continue;
+                if (!(rising ? window_lo(x) <= kd : window_hi(x) >= kd))
+                    break;  // this column's window, and every later one, misses fiber k
+                const double z = zs[u], dx = x - x_k;
+                n += 1, sum_dx += dx, sum_dx2 += dx * dx, sum_z += z, sum_z_dx += z * dx;
+                flags |= dx <= 0 ? left : 0;
+                flags |= dx >= 0 ? right : 0;
+            }
+            double *sums = &fit_sums[5 * k];
+            sums[0] = n, sums[1] = sum_dx, sums[2] = sum_dx2, sums[3] = sum_z, sums[4] = sum_z_dx;
+            fit_flags[k] = flags;
+        }
+    } else {
+        std::fill(fit_sums.begin(), fit_sums.end(), 0.0);
+        for (long u = sv.u_first; u <= sv.u_last; ++u) {
+            const double x = xs[u];
+            if (!(x == x))
+                continue;
+            long k0, k1;
+            fiber_range(x - half, x + half, &k0, &k1);
+            for (long k = k0; k <= k1; ++k)
+                add(&fit_sums[5 * std::size_t(k)], &fit_flags[std::size_t(k)], x, zs[u],
+                    std::size_t(k));
         }
     }
     for (std::size_t k = 0; k < fibers; ++k) {

@@ -745,6 +745,89 @@ static void a_speck_nothing_continues_is_no_line(void **state) {
 }
 
 /* The same frame gives the same bytes, in one extractor and in another. */
+/* The same camera with its image's x axis running the other way across the
+ * strip (a camera turned round on its mount, or a homography whose x
+ * points the other way): the columns' x then falls along the row, and each
+ * fiber's columns are gathered from the other end. Through a calibration
+ * whose homographies negate x and whose fiber grid is the same fibers
+ * numbered from the other side, every fiber must read what it reads
+ * through the reference calibration: the same validity and the same
+ * heights (the sums are the same numbers with dx negated, so the bound is
+ * a few units of rounding, 1e-9 mm), on frames of a buckled strip with
+ * wavy edges that fill the fiber grid and reach past it. */
+static void a_camera_turned_round_reads_the_same_fibers(void **state) {
+    (void)state;
+    enum { N = 401, FRAMES = 4 };
+    const double pitch = 5.0, first_x = -1000.0;
+    flt_calib *calib = reference(N, pitch);
+    double cam[4], dist[8], h[2][9], offset[2], scale;
+    uint32_t fw, fh;
+    assert_int_equal(flt_calib_get_intrinsics(calib, cam, FLT_CALIB_CAMERA_VALUES, dist,
+                                              FLT_CALIB_DISTORTION_COEFFS),
+                     FLT_OK);
+    assert_int_equal(flt_calib_get_frame_size(calib, &fw, &fh), FLT_OK);
+    assert_int_equal(flt_calib_get_encoder_scale(calib, &scale), FLT_OK);
+    flt_calib *turned = NULL;
+    assert_int_equal(flt_calib_create(&turned), FLT_OK);
+    assert_int_equal(flt_calib_set_frame_size(turned, fw, fh), FLT_OK);
+    assert_int_equal(flt_calib_set_intrinsics(turned, cam, FLT_CALIB_CAMERA_VALUES, dist,
+                                              FLT_CALIB_DISTORTION_COEFFS),
+                     FLT_OK);
+    for (unsigned laser = 0; laser < 2; ++laser) {
+        assert_int_equal(flt_calib_get_homography(calib, laser, h[laser], 9), FLT_OK);
+        for (int i = 0; i < 3; ++i)
+            h[laser][i] = -h[laser][i]; /* x' = -x */
+        assert_int_equal(flt_calib_set_homography(turned, laser, h[laser], 9), FLT_OK);
+        assert_int_equal(flt_calib_get_laser_offset(calib, laser, &offset[laser]), FLT_OK);
+        assert_int_equal(flt_calib_set_laser_offset(turned, laser, offset[laser]), FLT_OK);
+    }
+    assert_int_equal(flt_calib_set_encoder_scale(turned, scale), FLT_OK);
+    /* Fiber k' of the turned grid is fiber N - 1 - k' of the reference's. */
+    assert_int_equal(flt_calib_set_fiber_grid(turned, -(first_x + pitch * (N - 1)), pitch, N),
+                     FLT_OK);
+    assert_int_equal(flt_calib_finish(turned), FLT_OK);
+    flt_sim *sim = make_sim(calib, 0, NULL, NULL);
+    assert_int_equal(flt_sim_add_defect(sim, FLT_SIM_CENTRE_BUCKLE, 12, 1800), FLT_OK);
+    assert_int_equal(flt_sim_add_defect(sim, FLT_SIM_WAVY_EDGE_BOTH, 8, 900), FLT_OK);
+    flt_extractor *ex = make_extractor(calib, 0, NULL, NULL);
+    flt_extractor *ex_turned = make_extractor(turned, 0, NULL, NULL);
+    uint8_t *frame = malloc((size_t)W * ROI_ROWS);
+    size_t valid_count = 0;
+    double worst = 0;
+    for (int f = 0; f < FRAMES; ++f) {
+        double e, s, s2, hgt[N], g[N], hgt2[N], g2[N];
+        uint8_t valid[N], valid2[N];
+        assert_int_equal(
+            flt_sim_next_frame(sim, frame, (size_t)W * ROI_ROWS, W, &e, 0, NULL, NULL, 0), FLT_OK);
+        assert_int_equal(flt_extractor_process(ex, frame, FLT_PIXEL_MONO8, W, ROI_ROWS, W, e, N, &s,
+                                               hgt, g, valid),
+                         FLT_OK);
+        assert_int_equal(flt_extractor_process(ex_turned, frame, FLT_PIXEL_MONO8, W, ROI_ROWS, W, e,
+                                               N, &s2, hgt2, g2, valid2),
+                         FLT_OK);
+        for (size_t k = 0; k < N; ++k) {
+            const size_t k2 = N - 1 - k;
+            assert_int_equal(valid[k], valid2[k2]);
+            if (!valid[k])
+                continue;
+            ++valid_count;
+            worst = fmax(worst, fabs(hgt[k] - hgt2[k2]));
+            worst = fmax(worst, fabs(g[k] - g2[k2]) * 100);
+        }
+    }
+    print_message(
+        "camera turned round: %zu of %d fibers valid through both, heights within %.3g mm\n",
+        valid_count, FRAMES * N, worst);
+    assert_true(valid_count >= (size_t)(0.99 * FRAMES * N));
+    assert_true(worst <= 1e-9);
+    free(frame);
+    flt_extractor_destroy(ex_turned);
+    flt_extractor_destroy(ex);
+    flt_sim_destroy(sim);
+    flt_calib_destroy(turned);
+    flt_calib_destroy(calib);
+}
+
 static void same_frame_same_bytes(void **state) {
     (void)state;
     enum { N = 101 };
@@ -975,6 +1058,7 @@ int main(void) {
         cmocka_unit_test(sloping_saturated_line_is_kept),
         cmocka_unit_test(a_reflection_over_a_dim_stretch_is_no_line),
         cmocka_unit_test(a_speck_nothing_continues_is_no_line),
+        cmocka_unit_test(a_camera_turned_round_reads_the_same_fibers),
         cmocka_unit_test(same_frame_same_bytes),
         cmocka_unit_test(one_line_places_both_bands),
         cmocka_unit_test(bad_input_is_rejected_by_name),
