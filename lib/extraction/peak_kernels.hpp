@@ -3,7 +3,7 @@
 //
 // band_maximum: a running maximum over the band's rows, row-major, so every
 // row is one contiguous sweep across the columns that the compiler turns into
-// SIMD compares and blends (AVX2 clone where the CPU has it). This is the only
+// SIMD compares and blends (AVX2 where the CPU has it). This is the only
 // pass over every pixel of the band.
 //
 // column_peak: per column, the checks and the Savitzky-Golay derivative are
@@ -26,12 +26,26 @@
 
 namespace flt {
 
-// target_clones needs the ELF loader's ifunc (not on Windows).
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__) && \
-    !defined(__SANITIZE_ADDRESS__)
-#  define FLT_PEAK_KERNEL __attribute__((target_clones("avx2", "default")))
+// The two per-frame kernels (band_maximum, column_peaks) are built twice on
+// x86-64, for the baseline (SSE2) and for AVX2, and each call takes the AVX2
+// build where the CPU has it. The choice is made here at run time, not by
+// GCC's target_clones: those need the ELF loader's ifunc, so the Windows
+// build (two of our three users) ran the baseline on every machine. AVX2
+// without FMA rounds every float operation as the baseline does: the same
+// bits either way (tests/c/test_peak_kernels.cpp).
+#if (defined(__GNUC__) || defined(__clang__)) && defined(__x86_64__)
+#  define FLT_PEAK_AVX2   1
+#  define FLT_TARGET_AVX2 __attribute__((target("avx2")))
+// Whether this CPU runs AVX2 (asked once).
+inline bool cpu_has_avx2() {
+    static const bool has = [] {
+        __builtin_cpu_init();
+        return __builtin_cpu_supports("avx2") != 0;
+    }();
+    return has;
+}
 #else
-#  define FLT_PEAK_KERNEL
+#  define FLT_PEAK_AVX2 0
 #endif
 
 template <class Pixel>
@@ -57,28 +71,34 @@ inline void band_maximum_body(const unsigned char *frame, std::size_t stride, st
     }
 }
 
-FLT_PEAK_KERNEL inline void band_maximum_u8(const unsigned char *frame, std::size_t stride,
-                                            std::uint32_t width, std::uint32_t first,
-                                            std::uint32_t rows, std::uint16_t *best_value,
-                                            std::uint16_t *best_row) {
-    band_maximum_body<std::uint8_t>(frame, stride, width, first, rows, best_value, best_row);
+template <class Pixel>
+inline void band_maximum_base(const unsigned char *frame, std::size_t stride, std::uint32_t width,
+                              std::uint32_t first, std::uint32_t rows, std::uint16_t *best_value,
+                              std::uint16_t *best_row) {
+    band_maximum_body<Pixel>(frame, stride, width, first, rows, best_value, best_row);
 }
 
-FLT_PEAK_KERNEL inline void band_maximum_u16(const unsigned char *frame, std::size_t stride,
-                                             std::uint32_t width, std::uint32_t first,
-                                             std::uint32_t rows, std::uint16_t *best_value,
-                                             std::uint16_t *best_row) {
-    band_maximum_body<std::uint16_t>(frame, stride, width, first, rows, best_value, best_row);
+#if FLT_PEAK_AVX2
+template <class Pixel>
+FLT_TARGET_AVX2 inline void band_maximum_avx2(const unsigned char *frame, std::size_t stride,
+                                              std::uint32_t width, std::uint32_t first,
+                                              std::uint32_t rows, std::uint16_t *best_value,
+                                              std::uint16_t *best_row) {
+    band_maximum_body<Pixel>(frame, stride, width, first, rows, best_value, best_row);
 }
+#endif
 
 template <class Pixel>
 inline void band_maximum(const unsigned char *frame, std::size_t stride, std::uint32_t width,
                          std::uint32_t first, std::uint32_t rows, std::uint16_t *best_value,
                          std::uint16_t *best_row) {
-    if (sizeof(Pixel) == 1)
-        band_maximum_u8(frame, stride, width, first, rows, best_value, best_row);
-    else
-        band_maximum_u16(frame, stride, width, first, rows, best_value, best_row);
+#if FLT_PEAK_AVX2
+    if (cpu_has_avx2()) {
+        band_maximum_avx2<Pixel>(frame, stride, width, first, rows, best_value, best_row);
+        return;
+    }
+#endif
+    band_maximum_base<Pixel>(frame, stride, width, first, rows, best_value, best_row);
 }
 
 // The shape of an accepted peak, which a reflection overlapping the line
@@ -599,32 +619,36 @@ column_peaks_body(const unsigned char *frame, std::size_t stride, std::uint32_t 
 
 namespace flt {
 
-FLT_PEAK_KERNEL inline unsigned column_peaks_u8(const unsigned char *frame, std::size_t stride,
-                                                std::uint32_t u0, std::uint32_t first,
-                                                std::uint32_t rows, const std::uint16_t *value,
-                                                const std::uint16_t *row, const peak_params &p,
-                                                double *row_out, peak_shape *shape) {
-    return column_peaks_body<std::uint8_t>(frame, stride, u0, first, rows, value, row, p, row_out,
-                                           shape);
+template <class Pixel>
+inline unsigned column_peaks_base(const unsigned char *frame, std::size_t stride, std::uint32_t u0,
+                                  std::uint32_t first, std::uint32_t rows,
+                                  const std::uint16_t *value, const std::uint16_t *row,
+                                  const peak_params &p, double *row_out, peak_shape *shape) {
+    return column_peaks_body<Pixel>(frame, stride, u0, first, rows, value, row, p, row_out, shape);
 }
 
-FLT_PEAK_KERNEL inline unsigned column_peaks_u16(const unsigned char *frame, std::size_t stride,
-                                                 std::uint32_t u0, std::uint32_t first,
-                                                 std::uint32_t rows, const std::uint16_t *value,
-                                                 const std::uint16_t *row, const peak_params &p,
-                                                 double *row_out, peak_shape *shape) {
-    return column_peaks_body<std::uint16_t>(frame, stride, u0, first, rows, value, row, p, row_out,
-                                            shape);
+#if FLT_PEAK_AVX2
+template <class Pixel>
+FLT_TARGET_AVX2 inline unsigned column_peaks_avx2(const unsigned char *frame, std::size_t stride,
+                                                  std::uint32_t u0, std::uint32_t first,
+                                                  std::uint32_t rows, const std::uint16_t *value,
+                                                  const std::uint16_t *row, const peak_params &p,
+                                                  double *row_out, peak_shape *shape) {
+    return column_peaks_body<Pixel>(frame, stride, u0, first, rows, value, row, p, row_out, shape);
 }
+#endif
 
 template <class Pixel>
 inline unsigned column_peaks(const unsigned char *frame, std::size_t stride, std::uint32_t u0,
                              std::uint32_t first, std::uint32_t rows, const std::uint16_t *value,
                              const std::uint16_t *row, const peak_params &p, double *row_out,
                              peak_shape *shape) {
-    if (sizeof(Pixel) == 1)
-        return column_peaks_u8(frame, stride, u0, first, rows, value, row, p, row_out, shape);
-    return column_peaks_u16(frame, stride, u0, first, rows, value, row, p, row_out, shape);
+#if FLT_PEAK_AVX2
+    if (cpu_has_avx2())
+        return column_peaks_avx2<Pixel>(frame, stride, u0, first, rows, value, row, p, row_out,
+                                        shape);
+#endif
+    return column_peaks_base<Pixel>(frame, stride, u0, first, rows, value, row, p, row_out, shape);
 }
 
 }  // namespace flt
