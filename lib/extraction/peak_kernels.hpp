@@ -24,28 +24,17 @@
 #include <cstring>
 #include <limits>
 
+#include "core/cpu_dispatch.hpp"
+
 namespace flt {
 
 // The two per-frame kernels (band_maximum, column_peaks) are built twice on
 // x86-64, for the baseline (SSE2) and for AVX2, and each call takes the AVX2
-// build where the CPU has it. The choice is made here at run time, not by
-// GCC's target_clones: those need the ELF loader's ifunc, so the Windows
-// build (two of our three users) ran the baseline on every machine. AVX2
-// without FMA rounds every float operation as the baseline does: the same
-// bits either way (tests/c/test_peak_kernels.cpp).
-#if (defined(__GNUC__) || defined(__clang__)) && defined(__x86_64__)
-#  define FLT_PEAK_AVX2   1
+// build where the CPU has it (core/cpu_dispatch.hpp says why at run time):
+// the same bits either way (tests/c/test_peak_kernels.cpp).
+#define FLT_PEAK_AVX2 FLT_HAVE_AVX2_BUILD
+#if FLT_PEAK_AVX2
 #  define FLT_TARGET_AVX2 __attribute__((target("avx2")))
-// Whether this CPU runs AVX2 (asked once).
-inline bool cpu_has_avx2() {
-    static const bool has = [] {
-        __builtin_cpu_init();
-        return __builtin_cpu_supports("avx2") != 0;
-    }();
-    return has;
-}
-#else
-#  define FLT_PEAK_AVX2 0
 #endif
 
 template <class Pixel>

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "core/cpu_dispatch.hpp"
 #include "core/error.hpp"
 #include "flatline/recon.h"
 
@@ -70,9 +71,10 @@ constexpr double k_min_curvature_weight = 1.0 / k_max_weight_ratio;
 // D/L <= 16, recon_api.cpp; the engine itself takes up to 64).
 constexpr int k_max_unknowns = 2 * 66;
 
-// The three per-row kernels below run once per fiber and row; they are built
-// twice, for baseline x86-64 (SSE2) and for AVX2, and the loader picks one
-// per machine (GCC function multiversioning). AVX2 without FMA keeps every
+// The engine's methods that run once per fiber and knot (and relative_row)
+// are built twice on Linux, for baseline x86-64 (SSE2) and for AVX2, and
+// the loader picks one per machine (GCC function multiversioning; Windows
+// has no such loader and runs the baseline). AVX2 without FMA keeps every
 // rounding identical, so results do not depend on the machine.
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
 #  define FLT_ROW_KERNEL __attribute__((target_clones("avx2", "default")))
@@ -80,301 +82,35 @@ constexpr int k_max_unknowns = 2 * 66;
 #  define FLT_ROW_KERNEL
 #endif
 
-// True when every height and slope of the row is a sample (finite, at
-// most k_max_sample in magnitude), the heights taken relative to `level`
-// as relative_row does (a height more than k_max_sample from it is none;
-// 0 for heights that are samples already). Integer tests on the bits: an
-// OR reduction vectorises, where a floating-point one would be a serial
-// chain. A light pass that streams the caller's row into the cache for
-// the arithmetic after it, with more of it in flight than that heavier
-// loop keeps.
-FLT_ROW_KERNEL bool row_is_finite(std::size_t K, double level, const double *__restrict height,
-                                  const double *__restrict slope) {
-    constexpr std::uint64_t magnitude = 0x7fffffffffffffffull;
-    std::uint64_t bad = 0;
-    for (std::size_t k = 0; k < K; ++k) {
-        const double rel = height[k] - level;
-        std::uint64_t h, d, g;
-        std::memcpy(&h, height + k, sizeof h);
-        std::memcpy(&d, &rel, sizeof d);
-        std::memcpy(&g, slope + k, sizeof g);
-        bad |= ((h & magnitude) > k_max_sample_bits ? 1u : 0u) |
-               ((d & magnitude) > k_max_sample_bits ? 1u : 0u) |
-               ((g & magnitude) > k_max_sample_bits ? 1u : 0u);
-    }
-    return bad == 0;
-}
-
-// The hot loop of the default geometry (a row spans three knots, six
-// unknowns) for a row whose samples are all valid: adds the row to the six
-// right-hand sides, fiber by fiber, each with its own weights, taking each
-// height relative to `level` as it reads it (push_row_relative; 0 changes
-// no bit). A free function with restrict parameters so that GCC vectorises
-// it across fibers (it gives up on the aliasing checks otherwise). The
-// slope row is D * slope, as in the general path, so both give
-// bit-identical sums. next_height, next_slope (or nullptr): the row that
-// comes next, asked for from memory a cache line at a time while this one
-// is added, so that its wait overlaps this row's arithmetic (asked for all
-// at once, the requests queue up and the core waits on them).
-FLT_ROW_KERNEL void accumulate_row6(std::size_t K, double level, const double *__restrict height,
-                                    const double *__restrict slope, double D,
-                                    const double *__restrict wh, const double *__restrict wg,
-                                    const double *__restrict a, const double *__restrict b,
-                                    double *__restrict r0, double *__restrict r1,
-                                    double *__restrict r2, double *__restrict r3,
-                                    double *__restrict r4, double *__restrict r5,
-                                    const double *next_height, const double *next_slope) {
-    auto add = [&](std::size_t k) {
-        const double h = wh[k] * (height[k] - level), g = wg[k] * (D * slope[k]);
-        r0[k] += a[0] * h + b[0] * g;
-        r1[k] += a[1] * h + b[1] * g;
-        r2[k] += a[2] * h + b[2] * g;
-        r3[k] += a[3] * h + b[3] * g;
-        r4[k] += a[4] * h + b[4] * g;
-        r5[k] += a[5] * h + b[5] * g;
-    };
-    constexpr std::size_t line = 64 / sizeof(double);  // fibers per cache line
-    std::size_t k0 = 0;
-    if (next_height)
-        for (; k0 + line <= K; k0 += line) {
-#if defined(__GNUC__)
-            __builtin_prefetch(next_height + k0, 0, 3);
-            __builtin_prefetch(next_slope + k0, 0, 3);
+// The per-row kernels, built for baseline x86-64 and for AVX2 (no FMA: the
+// same roundings on every machine); each call takes the AVX2 build where
+// the CPU has it (core/cpu_dispatch.hpp).
+namespace base {
+#include "reconstruction/engine_kernels.inc"
+}  // namespace base
+#if FLT_HAVE_AVX2_BUILD
+FLT_AVX2_BEGIN
+namespace avx2 {
+#  include "reconstruction/engine_kernels.inc"  // NOLINT(readability-duplicate-include): the AVX2 build
+}  // namespace avx2
+FLT_AVX2_END
 #endif
-            for (std::size_t k = k0; k < k0 + line; ++k)
-                add(k);
-        }
-    for (std::size_t k = k0; k < K; ++k)
-        add(k);
-}
-
-// The default geometry's row with a mask or multipliers (every robust
-// stage's row), in one pass over the fibers: each sample's effective
-// multiplier (0 where invalid: not finite, or masked out by valid when
-// given; mult when given, else 1), the row added to the six right-hand
-// sides with each fiber's weights, and the weight each fiber's sample
-// loses against a full-weight one (dh, dg), which the caller takes back out
-// of the shared matrices. Returns the fibers with an invalid sample in
-// counts[0] and those that lose weight in counts[1] (integer sums, so the
-// loop vectorises). Same arithmetic as mask_row + weigh_row + add_row_rhs
-// + downdate_weights.
-#define FLT_ROW6_PARAMS                                                                           \
-  std::size_t K, double D, const double *__restrict height, const double *__restrict slope,       \
-      const std::uint8_t *__restrict valid, const double *__restrict mult_h,                      \
-      const double *__restrict mult_g, const double *__restrict wh, const double *__restrict wg,  \
-      const double *__restrict a, const double *__restrict b, double *__restrict r0,              \
-      double *__restrict r1, double *__restrict r2, double *__restrict r3, double *__restrict r4, \
-      double *__restrict r5, double *__restrict dh, double *__restrict dg, std::size_t counts[2]
-// Flags are 1.0 / 0.0 and multiply, so that the only selects are the two
-// that keep a non-finite value out of the sums.
-#define FLT_ROW6_BODY(masked)                                                         \
-  const double big = k_max_sample;                                                    \
-  std::size_t nbad = 0, affected = 0;                                                 \
-  for (std::size_t k = 0; k < K; ++k) {                                               \
-    const bool hfin = std::fabs(height[k]) <= big, gfin = std::fabs(slope[k]) <= big; \
-    double hok = hfin ? 1.0 : 0.0, gok = gfin ? 1.0 : 0.0;                            \
-    if (masked) {                                                                     \
-      const double m = valid[k] != 0 ? 1.0 : 0.0;                                     \
-      hok *= m;                                                                       \
-      gok *= m;                                                                       \
-    }                                                                                 \
-    const double hm = hok * mult_h[k], gm = gok * mult_g[k];                          \
-    const double hv = (hfin ? height[k] : 0.0) * (wh[k] * hm);                        \
-    const double gv = (gfin ? D * slope[k] : 0.0) * (wg[k] * gm);                     \
-    r0[k] += a[0] * hv + b[0] * gv;                                                   \
-    r1[k] += a[1] * hv + b[1] * gv;                                                   \
-    r2[k] += a[2] * hv + b[2] * gv;                                                   \
-    r3[k] += a[3] * hv + b[3] * gv;                                                   \
-    r4[k] += a[4] * hv + b[4] * gv;                                                   \
-    r5[k] += a[5] * hv + b[5] * gv;                                                   \
-    dh[k] = (1.0 - hm) * wh[k];                                                       \
-    dg[k] = (1.0 - gm) * wg[k];                                                       \
-    nbad += std::size_t(hok * gok == 0.0);                                            \
-    affected += std::size_t(hm * gm != 1.0); /* both in [0, 1] */                     \
-  }                                                                                   \
-  counts[0] = nbad;                                                                   \
-  counts[1] = affected;
-
-FLT_ROW_KERNEL void weighted_row6(FLT_ROW6_PARAMS){FLT_ROW6_BODY(false)} FLT_ROW_KERNEL
-    void weighted_row6_masked(FLT_ROW6_PARAMS){FLT_ROW6_BODY(true)}
-
-// Masks one row without a validity array: a non-finite height or slope is
-// invalid (multiplier 0, value 0). Returns the fibers with an invalid sample.
-FLT_ROW_KERNEL std::size_t
-    mask_row(std::size_t K, double D, const double *__restrict height,
-             const double *__restrict slope, const double *__restrict mult_h,
-             const double *__restrict mult_g, double *__restrict hm, double *__restrict gm,
-             double *__restrict hv, double *__restrict gv) {
-    const double big = k_max_sample;
-    double bad = 0.0;  // a double keeps the loop in one vector width
-    for (std::size_t k = 0; k < K; ++k) {
-        const double h = height[k], g = slope[k];
-        const double hok = std::fabs(h) <= big ? 1.0 : 0.0;
-        const double gok = std::fabs(g) <= big ? 1.0 : 0.0;
-        hm[k] = hok != 0.0 ? mult_h[k] : 0.0;
-        gm[k] = gok != 0.0 ? mult_g[k] : 0.0;
-        hv[k] = hok != 0.0 ? h : 0.0;
-        gv[k] = gok != 0.0 ? D * g : 0.0;
-        bad += 1.0 - hok * gok;
-    }
-    return std::size_t(bad);
-}
-
-// Per fiber, the weight a sample loses: (1 - multiplier) * fiber weight.
-// Returns how many fibers lose any.
-FLT_ROW_KERNEL std::size_t downdate_weights(std::size_t K, const double *__restrict hm,
-                                            const double *__restrict gm,
-                                            const double *__restrict wh,
-                                            const double *__restrict wg, double *__restrict dh,
-                                            double *__restrict dg) {
-    double n = 0.0;
-    for (std::size_t k = 0; k < K; ++k) {
-        dh[k] = (1.0 - hm[k]) * wh[k];
-        dg[k] = (1.0 - gm[k]) * wg[k];
-        n += (hm[k] != 1.0 || gm[k] != 1.0) ? 1.0 : 0.0;
-    }
-    return std::size_t(n);
-}
-
-// One packed entry of every fiber's downdate: down += dh * chh + dg * cgg.
-FLT_ROW_KERNEL void downdate_entry(std::size_t K, double chh, double cgg,
-                                   const double *__restrict dh, const double *__restrict dg,
-                                   double *__restrict down) {
-    for (std::size_t k = 0; k < K; ++k)
-        down[k] += dh[k] * chh + dg[k] * cgg;
-}
-
-// hv, gv (the masked height and Delta-d * slope) times each fiber's weight and
-// the sample's multiplier.
-FLT_ROW_KERNEL void weigh_row(std::size_t K, const double *__restrict hm,
-                              const double *__restrict gm, const double *__restrict wh,
-                              const double *__restrict wg, double *__restrict hv,
-                              double *__restrict gv) {
-    for (std::size_t k = 0; k < K; ++k) {
-        hv[k] *= wh[k] * hm[k];
-        gv[k] *= wg[k] * gm[k];
-    }
-}
-
-// One unknown's right-hand side: rhs += ch * hv + cg * gv, over the fibers.
-FLT_ROW_KERNEL void add_row_rhs(std::size_t K, double ch, double cg, const double *__restrict hv,
-                                const double *__restrict gv, double *__restrict rhs) {
-    for (std::size_t k = 0; k < K; ++k)
-        rhs[k] += ch * hv[k] + cg * gv[k];
-}
-
-// The two lasers' view of the spline at one row, per fiber: heights z1, z2
-// at s -+ Delta-d/2 from the Hermite weights b1, b2 on their intervals'
-// knot states (z, m) a1, c1 and a2, c2.
-FLT_ROW_KERNEL void predict_row(std::size_t K, const double *__restrict b1,
-                                const double *__restrict b2, const double *__restrict a1,
-                                const double *__restrict c1, const double *__restrict a2,
-                                const double *__restrict c2, double *__restrict height,
-                                double *__restrict dslope) {
-    for (std::size_t k = 0; k < K; ++k) {
-        const double z1 = b1[0] * a1[k] + b1[1] * a1[K + k] + b1[2] * c1[k] + b1[3] * c1[K + k];
-        const double z2 = b2[0] * a2[k] + b2[1] * a2[K + k] + b2[2] * c2[k] + b2[3] * c2[K + k];
-        height[k] = 0.5 * (z1 + z2);
-        dslope[k] = z2 - z1;
-    }
-}
-
-// z = Hermite combination of the emitted states of the row's two knots.
-FLT_ROW_KERNEL void evaluate_row(std::size_t K, const double *__restrict w,
-                                 const double *__restrict z0, const double *__restrict m0,
-                                 const double *__restrict z1, const double *__restrict m1,
-                                 double *__restrict z) {
-    for (std::size_t k = 0; k < K; ++k)
-        z[k] = w[0] * z0[k] + w[1] * m0[k] + w[2] * z1[k] + w[3] * m1[k];
-}
-
-// The same, plus a constant c (the bits of evaluate_row's value + c).
-FLT_ROW_KERNEL void evaluate_row_plus(std::size_t K, const double *__restrict w,
-                                      const double *__restrict z0, const double *__restrict m0,
-                                      const double *__restrict z1, const double *__restrict m1,
-                                      double c, double *__restrict z) {
-    for (std::size_t k = 0; k < K; ++k)
-        z[k] = (w[0] * z0[k] + w[1] * m0[k] + w[2] * z1[k] + w[3] * m1[k]) + c;
-}
-
-// One eliminated knot's back-substitution in the default geometry (six
-// unknowns: the knot's z, m given the next two knots' states x2..x5), in
-// one pass over the fibers: the same operations, in the same order, as
-// the general loop in solve_all, which takes a pass per unknown (this
-// one streams the knot's factor from memory once).
-FLT_ROW_KERNEL void back_substitute6(std::size_t K, const double *__restrict il00,
-                                     const double *__restrict l10, const double *__restrict il11,
-                                     const double *__restrict y0, const double *__restrict y1,
-                                     const double *__restrict L0, const double *__restrict L1,
-                                     const double *__restrict x2, const double *__restrict x3,
-                                     const double *__restrict x4, const double *__restrict x5,
-                                     double *__restrict xz, double *__restrict xm) {
-    const double *__restrict l02 = L0, *__restrict l03 = L0 + K, *__restrict l04 = L0 + 2 * K,
-                             *__restrict l05 = L0 + 3 * K;
-    const double *__restrict l12 = L1, *__restrict l13 = L1 + K, *__restrict l14 = L1 + 2 * K,
-                             *__restrict l15 = L1 + 3 * K;
-    for (std::size_t k = 0; k < K; ++k) {
-        double z = y0[k], m = y1[k];
-        z -= l02[k] * x2[k];
-        m -= l12[k] * x2[k];
-        z -= l03[k] * x3[k];
-        m -= l13[k] * x3[k];
-        z -= l04[k] * x4[k];
-        m -= l14[k] * x4[k];
-        z -= l05[k] * x5[k];
-        m -= l15[k] * x5[k];
-        m *= il11[k];
-        xm[k] = m;
-        xz[k] = (z - l10[k] * m) * il00[k];
-    }
-}
-
-// One knot's elimination in close_knot, per fiber: the pivots of its two
-// unknowns (inverted) and the forward-eliminated right-hand side, from the
-// window matrix entries a00, a01, a11 and the right-hand sides b0, b1.
-// Free functions with restrict parameters, so that these loops vectorise
-// (as members writing into the factor ring they stayed scalar: two thirds
-// of close_knot's time).
-FLT_ROW_KERNEL void factor_pivots(std::size_t K, const double *__restrict a00,
-                                  const double *__restrict a01, const double *__restrict a11,
-                                  const double *__restrict b0, const double *__restrict b1,
-                                  const double *__restrict floor, double *__restrict il00,
-                                  double *__restrict l10, double *__restrict il11,
-                                  double *__restrict y0, double *__restrict y1) {
-    for (std::size_t k = 0; k < K; ++k) {
-        const double l00 = std::sqrt(std::max(a00[k], floor[k]));
-        const double i0 = 1.0 / l00;
-        const double l = a01[k] * i0;
-        const double d11 = a11[k] - l * l;
-        const double i1 = 1.0 / std::sqrt(std::max(d11, floor[k]));
-        const double y = b0[k] * i0;
-        il00[k] = i0;
-        l10[k] = l;
-        il11[k] = i1;
-        y0[k] = y;
-        y1[k] = (b1[k] - l * y) * i1;
-    }
-}
-
-// The factor's entries of the two eliminated unknowns in the column of a
-// later one, from its window matrix entries w0c, w1c.
-FLT_ROW_KERNEL void factor_column(std::size_t K, const double *__restrict w0c,
-                                  const double *__restrict w1c, const double *__restrict il00,
-                                  const double *__restrict l10, const double *__restrict il11,
-                                  double *__restrict l0, double *__restrict l1) {
-    for (std::size_t k = 0; k < K; ++k) {
-        const double a = w0c[k] * il00[k];
-        l0[k] = a;
-        l1[k] = (w1c[k] - a * l10[k]) * il11[k];
-    }
-}
-
-// out = z + c over the fibers (NaN stays NaN).
-FLT_ROW_KERNEL void add_constant(std::size_t K, const double *__restrict z, double c,
-                                 double *__restrict out) {
-    for (std::size_t k = 0; k < K; ++k)
-        out[k] = z[k] + c;
-}
+FLT_DISPATCH(row_is_finite)
+FLT_DISPATCH(accumulate_row6)
+FLT_DISPATCH(weighted_row6)
+FLT_DISPATCH(weighted_row6_masked)
+FLT_DISPATCH(mask_row)
+FLT_DISPATCH(downdate_weights)
+FLT_DISPATCH(downdate_entry)
+FLT_DISPATCH(weigh_row)
+FLT_DISPATCH(add_row_rhs)
+FLT_DISPATCH(predict_row)
+FLT_DISPATCH(evaluate_row)
+FLT_DISPATCH(evaluate_row_plus)
+FLT_DISPATCH(back_substitute6)
+FLT_DISPATCH(factor_pivots)
+FLT_DISPATCH(factor_column)
+FLT_DISPATCH(add_constant)
 
 // Cubic Hermite basis at t in [0, 1] of a knot interval: the weights of
 // (z_i, m_i, z_i+1, m_i+1), m = L z'.
@@ -1146,10 +882,14 @@ void recon_engine::add_row(double s, const double *height, const double *level, 
     } else if (off == 0 && n_ == 6) {
         double *r = rhs_.data();
         std::size_t counts[2];
-        (valid ? weighted_row6_masked : weighted_row6)(
-            K_, D_, height, slope, valid, mult_h ? mult_h : ones_.data(),
-            mult_g ? mult_g : ones_.data(), wh_.data(), wg_.data(), ch, cg, r, r + K_, r + 2 * K_,
-            r + 3 * K_, r + 4 * K_, r + 5 * K_, dh6, dg6, counts);
+        const double *mh = mult_h ? mult_h : ones_.data(), *mg = mult_g ? mult_g : ones_.data();
+        if (valid)
+            weighted_row6_masked(K_, D_, height, slope, valid, mh, mg, wh_.data(), wg_.data(), ch,
+                                 cg, r, r + K_, r + 2 * K_, r + 3 * K_, r + 4 * K_, r + 5 * K_, dh6,
+                                 dg6, counts);
+        else
+            weighted_row6(K_, D_, height, slope, valid, mh, mg, wh_.data(), wg_.data(), ch, cg, r,
+                          r + K_, r + 2 * K_, r + 3 * K_, r + 4 * K_, r + 5 * K_, dh6, dg6, counts);
         nbad = counts[0];
         affected6 = counts[1];
         fused6 = true;

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <limits>
 
+#include "core/cpu_dispatch.hpp"
 #include "core/error.hpp"
 
 namespace flt {
@@ -26,201 +27,26 @@ inline double fiber_index(std::size_t k) {
     return double(static_cast<std::int32_t>(k));
 }
 
-// The per-row kernels of the split are built for baseline x86-64 and for
-// AVX2 (no FMA, so every rounding is the same on every machine), as in
-// engine.cpp.
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
-#  define FLT_SPLIT_KERNEL __attribute__((target_clones("avx2", "default")))
-#else
-#  define FLT_SPLIT_KERNEL
+// The per-row kernels, built for baseline x86-64 and for AVX2 (no FMA: the
+// same roundings on every machine); each call takes the AVX2 build where
+// the CPU has it (core/cpu_dispatch.hpp).
+namespace base {
+#include "reconstruction/pipeline_kernels.inc"
+}  // namespace base
+#if FLT_HAVE_AVX2_BUILD
+FLT_AVX2_BEGIN
+namespace avx2 {
+#  include "reconstruction/pipeline_kernels.inc"  // NOLINT(readability-duplicate-include): the AVX2 build
+}  // namespace avx2
+FLT_AVX2_END
 #endif
+FLT_DISPATCH(row_complete)
+FLT_DISPATCH(line_sums)
+FLT_DISPATCH(line_deviations)
+FLT_DISPATCH(fill_missing)
+FLT_DISPATCH(missing_deviations)
+using base::prefetch_row;  // a hint, the same in either build
 
-// True when every value is a sample (finite, at most k_max_sample in
-// magnitude) and (valid == nullptr or) every valid byte is set: the common
-// row, which takes the vectorised path. Integer tests on the bits so that
-// the loop vectorises.
-FLT_SPLIT_KERNEL bool row_complete(std::size_t K, const double *__restrict value,
-                                   const std::uint8_t *__restrict valid) {
-    constexpr std::uint64_t magnitude = 0x7fffffffffffffffull;
-    std::uint64_t bad = 0;
-    for (std::size_t k = 0; k < K; ++k) {
-        std::uint64_t u;
-        std::memcpy(&u, value + k, sizeof u);
-        bad |= (u & magnitude) > k_max_sample_bits ? 1u : 0u;
-    }
-    if (valid) {
-        unsigned missing = 0;
-        for (std::size_t k = 0; k < K; ++k)
-            missing |= valid[k] == 0 ? 1u : 0u;
-        bad |= missing;
-    }
-    return bad == 0;
-}
-
-// The least-squares line's sums over the fibers: n, sum xi, sum xi^2,
-// sum v, sum xi v, with xi = k - centre and weight ok[k] (0 or 1; nullptr:
-// every fiber, whose n, sum xi = 0 and sum xi^2 = K(K^2-1)/12 are exact).
-// Eight interleaved partial sums in two 4-wide vectors (fiber k in lane
-// k % 8), added in a fixed order at the end: independent chains that keep
-// the adders busy, and a result that does not depend on the vector width
-// the machine has (GCC's vector extension fixes the lanes).
-typedef double v4d __attribute__((vector_size(32)));
-
-inline void load4(v4d &v, const double *p) {
-    std::memcpy(&v, p, sizeof v);
-}
-
-FLT_SPLIT_KERNEL void line_sums(std::size_t K, double centre, const double *__restrict v,
-                                const double *__restrict ok, double out[5]) {
-    v4d sv[2] = {}, sxv[2] = {}, n[2] = {}, sx[2] = {}, sxx[2] = {};
-    const v4d step = {0.0, 1.0, 2.0, 3.0};
-    std::size_t k = 0;
-    for (; k + 8 <= K; k += 8)
-        for (int h = 0; h < 2; ++h) {
-            const std::size_t i = k + 4 * std::size_t(h);
-            const v4d x = (fiber_index(i) - centre) + step;
-            v4d val;
-            load4(val, v + i);
-            sv[h] += val;
-            sxv[h] += x * val;
-            if (ok) {
-                v4d w;
-                load4(w, ok + i);
-                n[h] += w;
-                sx[h] += w * x;
-                sxx[h] += w * x * x;
-            }
-        }
-    double tail[5] = {0, 0, 0, 0, 0};
-    for (; k < K; ++k) {
-        const double x = fiber_index(k) - centre, w = ok ? ok[k] : 1.0;
-        tail[0] += w;
-        tail[1] += w * x;
-        tail[2] += w * x * x;
-        tail[3] += v[k];
-        tail[4] += x * v[k];
-    }
-    auto reduce = [](const v4d *a) {
-        return ((a[0][0] + a[0][1]) + (a[0][2] + a[0][3])) +
-               ((a[1][0] + a[1][1]) + (a[1][2] + a[1][3]));
-    };
-    out[3] = reduce(sv) + tail[3];
-    out[4] = reduce(sxv) + tail[4];
-    if (ok) {
-        out[0] = reduce(n) + tail[0];
-        out[1] = reduce(sx) + tail[1];
-        out[2] = reduce(sxx) + tail[2];
-    } else {
-        const double Kd = double(K);
-        out[0] = Kd;
-        out[1] = 0.0;
-        out[2] = Kd * (Kd * Kd - 1.0) / 12.0;
-    }
-}
-
-// Asks for a row of the caller's sheet ahead of its use: the batch reads
-// the sheet once, row after row, and a row (9 KB at 1150 fibers) waits for
-// memory; fetched while the row before it is solved, it is in the cache
-// when its turn comes.
-inline void prefetch_row(const double *row, std::size_t K) {
-#if defined(__GNUC__)
-    const char *p = reinterpret_cast<const char *>(row);
-    for (std::size_t b = 0; b < K * sizeof(double); b += 64)
-        __builtin_prefetch(p + b, 0, 3);
-#else
-    (void)row;
-    (void)K;
-#endif
-}
-
-// Deviations of a row from the line a + b * xi, every fiber.
-FLT_SPLIT_KERNEL void line_deviations(std::size_t K, double centre, double a, double b,
-                                      const double *__restrict value, double *__restrict dev) {
-    for (std::size_t k = 0; k < K; ++k)
-        dev[k] = value[k] - (a + b * (fiber_index(k) - centre));
-}
-
-// x where c, else y, bit for bit, through integer masks: GCC turns a
-// conditional expression in a loop back into a branch (and the loop stays
-// scalar), not these.
-inline double pick(bool c, double x, double y) {
-    std::uint64_t ux, uy;
-    std::memcpy(&ux, &x, sizeof ux);
-    std::memcpy(&uy, &y, sizeof uy);
-    const std::uint64_t m = 0 - std::uint64_t(c);
-    const std::uint64_t r = (ux & m) | (uy & ~m);
-    double out;
-    std::memcpy(&out, &r, sizeof out);
-    return out;
-}
-
-// A row with missing fibers (the gauge's rows beside a narrower strip, every
-// one of them), as split() defines it: per fiber 1 where the value is a
-// sample (finite, at most k_max_sample, valid where a mask is given), and
-// the value, or a missing fiber's predicted deviation, or 0. Masks, not
-// branches, so that the loop vectorises (branches per fiber left it and
-// missing_deviations scalar: 4 of the 6.7 us a gauge row spent in split()
-// at 1150 fibers); every element's arithmetic is the branches', so the
-// bits are the same. Inlined into
-// fill_missing, once per case, so that it is built for each of
-// fill_missing's targets.
-template <bool Masked, bool Height>
-inline void fill_missing_loop(std::size_t K, double s, const double *__restrict value,
-                              const std::uint8_t *__restrict valid, const double *__restrict last,
-                              const std::uint8_t *__restrict has, const double *__restrict last_g,
-                              const std::uint8_t *__restrict has_g, const double *__restrict last_s,
-                              double *__restrict ok_out, double *__restrict fill) {
-    for (std::size_t k = 0; k < K; ++k) {
-        bool ok = std::fabs(value[k]) <= k_max_sample;  // NaN: false
-        if constexpr (Masked)
-            ok = ok & (valid[k] != 0);
-        const double ds = s - last_s[k];
-        const bool predicted = (has[k] != 0) & (ds <= k_max_prediction_mm);
-        double moved = last[k];
-        if constexpr (Height)  // moved on by its slope deviation, where one was seen
-            moved = pick(has_g[k] != 0, last[k] + last_g[k] * ds, last[k]);
-        fill[k] = pick(ok, value[k], pick(predicted, moved, 0.0));
-        ok_out[k] = pick(ok, 1.0, 0.0);
-    }
-}
-
-FLT_SPLIT_KERNEL void
-fill_missing(std::size_t K, double s, bool is_height, const double *__restrict value,
-             const std::uint8_t *__restrict valid, const double *__restrict last,
-             const std::uint8_t *__restrict has, const double *__restrict last_g,
-             const std::uint8_t *__restrict has_g, const double *__restrict last_s,
-             double *__restrict ok_out, double *__restrict fill) {
-    if (valid && is_height)
-        fill_missing_loop<true, true>(K, s, value, valid, last, has, last_g, has_g, last_s, ok_out,
-                                      fill);
-    else if (valid)
-        fill_missing_loop<true, false>(K, s, value, valid, last, has, last_g, has_g, last_s, ok_out,
-                                       fill);
-    else if (is_height)
-        fill_missing_loop<false, true>(K, s, value, valid, last, has, last_g, has_g, last_s, ok_out,
-                                       fill);
-    else
-        fill_missing_loop<false, false>(K, s, value, valid, last, has, last_g, has_g, last_s,
-                                        ok_out, fill);
-}
-
-// The deviations of a row with missing fibers from the line a + b * xi (NaN
-// where missing), and the last valid deviation of each fiber (with where
-// the height one was seen). Masks, as fill_missing.
-FLT_SPLIT_KERNEL void missing_deviations(std::size_t K, double s, bool is_height, double centre,
-                                         double a, double b, const double *__restrict value,
-                                         const double *__restrict ok_in, double *__restrict dev,
-                                         double *__restrict last, std::uint8_t *__restrict has,
-                                         double *__restrict last_s) {
-    for (std::size_t k = 0; k < K; ++k) {
-        const bool ok = ok_in[k] != 0.0;
-        const double d = value[k] - (a + b * (fiber_index(k) - centre));
-        dev[k] = pick(ok, d, k_nan);
-        last[k] = pick(ok, d, last[k]);
-        has[k] = std::uint8_t(has[k] | std::uint8_t(ok));
-        last_s[k] = pick(ok & is_height, s, last_s[k]);  // a store either way
-    }
-}
 }  // namespace
 
 double recon_pipeline::bytes_needed(std::size_t fibers, const recon_config &config,

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <limits>
 
+#include "core/cpu_dispatch.hpp"
 #include "core/error.hpp"
 #include "reconstruction/window.hpp"
 
@@ -27,186 +28,30 @@ constexpr std::size_t k_min_block_values = 5;
 // noise and must not be reweighted (nor may weights overflow).
 constexpr double k_min_sigma_fraction = 1e-3;
 
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
-#  define FLT_ROBUST_KERNEL __attribute__((target_clones("avx2", "default")))
-#else
-#  define FLT_ROBUST_KERNEL
+// The per-row kernels, built for baseline x86-64 and for AVX2 (no FMA: the
+// same roundings on every machine); each call takes the AVX2 build where
+// the CPU has it (core/cpu_dispatch.hpp).
+namespace base {
+#include "reconstruction/robust_kernels.inc"
+}  // namespace base
+#if FLT_HAVE_AVX2_BUILD
+FLT_AVX2_BEGIN
+namespace avx2 {
+#  include "reconstruction/robust_kernels.inc"  // NOLINT(readability-duplicate-include): the AVX2 build
+}  // namespace avx2
+FLT_AVX2_END
 #endif
-
-// The per-sample work of a reweighted stage, one pass over the row.
-//
-// Each sample's residual r against the previous stage's prediction (height,
-// mm, and Delta-d * slope, mm) adds its clipped magnitude to the running
-// scale's block sums, and decides how the sample enters the stage. Huber's
-// estimate solves sum psi(r_i) x_i = 0 with psi(r) = r clipped at
-// c = k_huber * scale; a reweighted stage heads for it in one of two ways
-// per sample:
-//   - a moderate residual (up to k_gross scales) becomes a
-//     pseudo-observation, prediction + psi(r), at full weight: the window
-//     matrix does not change, so the sample costs what a plain one does;
-//   - a gross residual keeps its value and takes the weight psi(r) / r =
-//     c / |r|: only those samples need their share of the window matrix
-//     taken back out (engine.cpp's downdate), and they are few except at a
-//     shear cut.
-// Pseudo-observations alone converge too slowly for a burst of gross
-// outliers (the shear station's ringing is a thousand scales tall and
-// covers its own window: 1.7 mm left after three stages), weights alone
-// cost a downdate for one sample in three on clean data (40% more time);
-// together each does what it is good at, and both lead to the same
-// estimate. Tukey's biweight takes weights on every sample (plain IRLS):
-// its objective is not convex, and its pseudo-observations let a shifted
-// level persist between shear cuts. Invalid samples (not finite, or masked
-// out by valid when given; the robust window stores them as NaN) get
-// multiplier 0.
-// Every pointer is a restrict parameter: GCC vectorises across fibers only
-// when it need not check the arrays for overlap.
-constexpr double k_gross = 4.0;
-
-// One measurement kind of one row (heights: scale 1; slopes: the residual
-// is in Delta-d * slope, scale D), fibers 0..K-1. value[k] carries the line
-// a + b * (k - centre), taken off as it is read (rigid_motion; 0 else).
-// Writes out[k] (the value the stage takes, in value's unit) and mult[k]
-// (the weight multiplier; -1 marks a gross Huber sample, whose weight the
-// caller computes: one division per gross sample instead of one per
-// sample). Returns whether there is any gross Huber sample. Branch-free and
-// without divisions (1/sigma^2 is kept with the scale), so that it
-// vectorises; one kind per loop keeps the loop's values in registers.
-#define FLT_WEIGH_KIND_PARAMS                                                             \
-  std::size_t K, double scale, double inv_scale, const double *__restrict value,          \
-      const std::uint8_t *__restrict valid, double a, double b, double centre,            \
-      const double *__restrict pred, const double *__restrict sigma,                      \
-      const double *__restrict inv_var, double *__restrict sum, double *__restrict count, \
-      double *__restrict out, double *__restrict mult
-
-// The residual and the scale's sums, common to both estimators. Compiled
-// per case (masked, with a line, heights or slopes) so that the loop keeps
-// only what it needs in registers.
-#define FLT_WEIGH_RESIDUAL(masked, lined, slopes)                           \
-  double v = value[k];                                                      \
-  if (lined)                                                                \
-    v -= a + b * (double(std::int32_t(k)) - centre); /* vectorises */       \
-  const bool fin = std::fabs(value[k]) <= big;                              \
-  double ok = fin ? 1.0 : 0.0;                                              \
-  if (masked)                                                               \
-    ok *= valid[k] != 0 ? 1.0 : 0.0;                                        \
-  const double r = (fin ? ((slopes) ? scale * v : v) - pred[k] : 0.0) * ok; \
-  const double ar = std::fabs(r), sg = sigma[k], clip = k_clip * sg;        \
-  sum[k] += ar < clip ? ar : clip;                                          \
-  count[k] += ok;
-
-// Huber: a pseudo-observation with psi(r) = r clipped at k_huber * sigma;
-// beyond k_gross * sigma the raw value with weight k_huber * sigma / |r|.
-#define FLT_WEIGH_HUBER_BODY(masked, lined, slopes)                               \
-  const double big = k_max_sample;                                                \
-  std::uint64_t bits = 0; /* OR of the multipliers: the sign bit says -1 */       \
-  for (std::size_t k = 0; k < K; ++k) {                                           \
-    FLT_WEIGH_RESIDUAL(masked, lined, slopes)                                     \
-    const double c = k_huber * sg, upper = r > c ? c : r;                         \
-    const double psi = upper < -c ? -c : upper;                                   \
-    const double gross = ar > k_gross * sg ? 1.0 : 0.0;                           \
-    const double pseudo = (slopes) ? (pred[k] + psi) * inv_scale : pred[k] + psi; \
-    out[k] = ok * (1.0 - gross) != 0.0 ? pseudo : v;                              \
-    const double m = ok * (gross != 0.0 ? -1.0 : 1.0); /* ok = 0: +0 */           \
-    mult[k] = m;                                                                  \
-    std::uint64_t u;                                                              \
-    std::memcpy(&u, &m, sizeof u);                                                \
-    bits |= u;                                                                    \
-  }                                                                               \
-  (void)inv_var;                                                                  \
-  return (bits >> 63) != 0;
-
-// Tukey: the raw value with weight (1 - u^2)^2, u = r / (k_tukey sigma),
-// 0 outside (plain IRLS).
-#define FLT_WEIGH_TUKEY_BODY(masked, lined, slopes)                     \
-  const double big = k_max_sample;                                      \
-  for (std::size_t k = 0; k < K; ++k) {                                 \
-    FLT_WEIGH_RESIDUAL(masked, lined, slopes)                           \
-    const double u2 = r * r * inv_var[k] * (1.0 / (k_tukey * k_tukey)); \
-    const double w = 1.0 - u2;                                          \
-    out[k] = v;                                                         \
-    mult[k] = ok * (u2 < 1.0 ? w * w : 0.0);                            \
-  }                                                                     \
-  (void)inv_scale;                                                      \
-  return false;
-
-#define FLT_WEIGH_VARIANTS(name, body, masked)                                             \
-  FLT_ROBUST_KERNEL bool name##_h(FLT_WEIGH_KIND_PARAMS){                                  \
-      body(masked, false, false)} FLT_ROBUST_KERNEL bool name##_g(FLT_WEIGH_KIND_PARAMS){  \
-      body(masked, false, true)} FLT_ROBUST_KERNEL bool name##_lh(FLT_WEIGH_KIND_PARAMS){  \
-      body(masked, true, false)} FLT_ROBUST_KERNEL bool name##_lg(FLT_WEIGH_KIND_PARAMS) { \
-    body(masked, true, true)                                                               \
-  }
-FLT_WEIGH_VARIANTS(weigh_huber, FLT_WEIGH_HUBER_BODY, false)
-FLT_WEIGH_VARIANTS(weigh_huber_masked, FLT_WEIGH_HUBER_BODY, true)
-FLT_WEIGH_VARIANTS(weigh_tukey, FLT_WEIGH_TUKEY_BODY, false)
-FLT_WEIGH_VARIANTS(weigh_tukey_masked, FLT_WEIGH_TUKEY_BODY, true)
-
-using weigh_kernel = bool (*)(FLT_WEIGH_KIND_PARAMS);
-// [tukey][masked][lined][slopes]
-const weigh_kernel k_weigh[2][2][2][2] = {
-    {{{weigh_huber_h, weigh_huber_g}, {weigh_huber_lh, weigh_huber_lg}},
-     {{weigh_huber_masked_h, weigh_huber_masked_g},
-      {weigh_huber_masked_lh, weigh_huber_masked_lg}}},
-    {{{weigh_tukey_h, weigh_tukey_g}, {weigh_tukey_lh, weigh_tukey_lg}},
-     {{weigh_tukey_masked_h, weigh_tukey_masked_g},
-      {weigh_tukey_masked_lh, weigh_tukey_masked_lg}}},
-};
-
-// A completed block's estimate per fiber: the clipped mean as a Gaussian
-// sigma, NaN with too few values; the block's sums restart.
-FLT_ROBUST_KERNEL void close_block(std::size_t K, double *__restrict sum, double *__restrict count,
-                                   double *__restrict estimate) {
-    for (std::size_t k = 0; k < K; ++k) {
-        estimate[k] =
-            count[k] >= double(k_min_block_values) ? k_clipped_to_sigma * sum[k] / count[k] : k_nan;
-        sum[k] = 0.0;
-        count[k] = 0.0;
-    }
+// The weigh kernels of the build this CPU runs, [tukey][masked][lined][slopes].
+using weigh_table = base::weigh_kernel const[2][2][2][2];
+const weigh_table &weigh_kernels() {
+#if FLT_HAVE_AVX2_BUILD
+    if (cpu_has_avx2())
+        return avx2::k_weigh;
+#endif
+    return base::k_weigh;
 }
-
-// The median of nine blocks per fiber, a sorting network of min/max
-// (vectorised across fibers), floored; incomplete[k] = 1 where one of the
-// nine is NaN (the network's result is then meaningless there).
-FLT_ROBUST_KERNEL void median9(std::size_t K, const double *__restrict e, double floor,
-                               double *__restrict sigma, double *__restrict incomplete) {
-    for (std::size_t k = 0; k < K; ++k) {
-        double p[9];
-        bool nan = false;
-        for (int i = 0; i < 9; ++i) {
-            p[i] = e[std::size_t(i) * K + k];
-            nan = nan | (p[i] != p[i]);
-        }
-        // Compare-exchange (a, b): afterwards p[a] <= p[b].
-        auto cx = [&p](int a, int b) {
-            const double lo = std::min(p[a], p[b]), hi = std::max(p[a], p[b]);
-            p[a] = lo;
-            p[b] = hi;
-        };
-        // A 19-exchange median-of-9 network (sorts rows of three, then
-        // columns, then the diagonal through the middle).
-        cx(1, 2);
-        cx(4, 5);
-        cx(7, 8);
-        cx(0, 1);
-        cx(3, 4);
-        cx(6, 7);
-        cx(1, 2);
-        cx(4, 5);
-        cx(7, 8);
-        cx(0, 3);
-        cx(5, 8);
-        cx(4, 7);
-        cx(3, 6);
-        cx(1, 4);
-        cx(2, 5);
-        cx(4, 7);
-        cx(4, 2);
-        cx(6, 4);
-        cx(4, 2);
-        sigma[k] = std::max(floor, p[4]);
-        incomplete[k] = nan ? 1.0 : 0.0;
-    }
-}
+FLT_DISPATCH(close_block)
+FLT_DISPATCH(median9)
 
 }  // namespace
 
@@ -307,10 +152,10 @@ void robust_weigh_row(robust_kind kind, std::size_t K, double D, const double *h
     // block (or the sink).
     const int tukey = kind == robust_kind::tukey, masked = valid != nullptr;
     const int lined = line[0] != 0 || line[1] != 0 || line[2] != 0 || line[3] != 0;
-    const bool gross_h = k_weigh[tukey][masked][lined][0](
+    const bool gross_h = weigh_kernels()[tukey][masked][lined][0](
         K, 1.0, 1.0, h, valid, line[0], line[1], line[4], pred_h, hs.sigma(), hs.inv_var(),
         feed ? hs.sum() : sink_sum, feed ? hs.count() : sink_count, out_h, mult_h);
-    const bool gross_g = k_weigh[tukey][masked][lined][1](
+    const bool gross_g = weigh_kernels()[tukey][masked][lined][1](
         K, D, 1.0 / D, g, valid, line[2], line[3], line[4], pred_g, gs.sigma(), gs.inv_var(),
         feed ? gs.sum() : sink_sum, feed ? gs.count() : sink_count, out_g, mult_g);
     // Gross Huber samples keep their value and take the weight c / |r|.

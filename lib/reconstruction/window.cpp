@@ -6,6 +6,7 @@
 #include <cstring>
 #include <limits>
 
+#include "core/cpu_dispatch.hpp"
 #include "core/error.hpp"
 
 namespace flt {
@@ -19,313 +20,32 @@ constexpr std::size_t k_chunk_fibers = 64;
 // knots a row may span, engine.cpp's k_max_unknowns).
 constexpr int k_max_band = 2 * 66;
 
-// Built for baseline x86-64 and AVX2 (no FMA: the same roundings on every
-// machine), as engine.cpp's kernels.
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
-#  define FLT_WINDOW_KERNEL __attribute__((target_clones("avx2", "default")))
-#else
-#  define FLT_WINDOW_KERNEL
+// The per-row kernels, built for baseline x86-64 and for AVX2 (no FMA: the
+// same roundings on every machine); each call takes the AVX2 build where
+// the CPU has it (core/cpu_dispatch.hpp).
+namespace base {
+#include "reconstruction/window_kernels.inc"
+}  // namespace base
+#if FLT_HAVE_AVX2_BUILD
+FLT_AVX2_BEGIN
+namespace avx2 {
+#  include "reconstruction/window_kernels.inc"  // NOLINT(readability-duplicate-include): the AVX2 build
+}  // namespace avx2
+FLT_AVX2_END
 #endif
-
-// A row as the window keeps it: the value where it is a sample (finite, at
-// most k_max_sample, valid when a mask is given), NaN elsewhere, in double
-// (out_h, out_g: this row's plain sums) and in float (keep_h, keep_g: the
-// window's store, read again when the row is judged; robust_window says
-// why float).
-FLT_WINDOW_KERNEL void store_row(std::size_t K, const double *__restrict h,
-                                 const double *__restrict g, const std::uint8_t *__restrict valid,
-                                 double *__restrict out_h, double *__restrict out_g,
-                                 float *__restrict keep_h, float *__restrict keep_g) {
-    const double big = k_max_sample;
-    for (std::size_t k = 0; k < K; ++k) {
-        const double ok = valid == nullptr || valid[k] != 0 ? 1.0 : 0.0;
-        const bool hok = ok != 0.0 && std::fabs(h[k]) <= big;
-        const bool gok = ok != 0.0 && std::fabs(g[k]) <= big;
-        out_h[k] = hok ? h[k] : k_nan;
-        out_g[k] = gok ? g[k] : k_nan;
-        keep_h[k] = float(out_h[k]);
-        keep_g[k] = float(out_g[k]);
-    }
-}
-
-// A kept row back in double.
-FLT_WINDOW_KERNEL void widen_row(std::size_t K, const float *__restrict h,
-                                 const float *__restrict g, double *__restrict out_h,
-                                 double *__restrict out_g) {
-    for (std::size_t k = 0; k < K; ++k) {
-        out_h[k] = double(h[k]);
-        out_g[k] = double(g[k]);
-    }
-}
-
-// What a sample adds to the right-hand sides (value times its multiplier,
-// 0 where the multiplier is 0: an invalid sample's value is NaN; slopes as
-// Delta-d * slope, mm) and what it takes back out of the block's shared
-// outer products (1 - multiplier). Returns the fibers that take any back.
-FLT_WINDOW_KERNEL std::size_t weigh_values(std::size_t K, double D, const double *__restrict yh,
-                                           const double *__restrict yg, const double *__restrict mh,
-                                           const double *__restrict mg, double *__restrict hv,
-                                           double *__restrict gv, double *__restrict dmh,
-                                           double *__restrict dmg) {
-    double affected = 0.0;
-    for (std::size_t k = 0; k < K; ++k) {
-        hv[k] = mh[k] != 0.0 ? mh[k] * yh[k] : 0.0;
-        gv[k] = mg[k] != 0.0 ? mg[k] * (D * yg[k]) : 0.0;
-        dmh[k] = 1.0 - mh[k];
-        dmg[k] = 1.0 - mg[k];
-        affected += mh[k] * mg[k] != 1.0 ? 1.0 : 0.0;
-    }
-    return std::size_t(affected);
-}
-
-// A plain row's multipliers: 1 for a sample, 0 for NaN.
-FLT_WINDOW_KERNEL void sample_multipliers(std::size_t K, const double *__restrict h,
-                                          const double *__restrict g, double *__restrict mh,
-                                          double *__restrict mg) {
-    for (std::size_t k = 0; k < K; ++k) {
-        mh[k] = h[k] == h[k] ? 1.0 : 0.0;
-        mg[k] = g[k] == g[k] ? 1.0 : 0.0;
-    }
-}
-
-// rh += a * hv and rg += b * gv over the fibers.
-FLT_WINDOW_KERNEL void add_rhs(std::size_t K, double a, double b, const double *__restrict hv,
-                               const double *__restrict gv, double *__restrict rh,
-                               double *__restrict rg) {
-    for (std::size_t k = 0; k < K; ++k) {
-        rh[k] += a * hv[k];
-        rg[k] += b * gv[k];
-    }
-}
-
-// One packed entry of the block's downdates: dh += a * dmh, dg += b * dmg.
-FLT_WINDOW_KERNEL void add_down(std::size_t K, double a, double b, const double *__restrict dmh,
-                                const double *__restrict dmg, double *__restrict dh,
-                                double *__restrict dg) {
-    for (std::size_t k = 0; k < K; ++k) {
-        dh[k] += a * dmh[k];
-        dg[k] += b * dmg[k];
-    }
-}
-
-// pred_h += a * x, pred_g += b * x: one unknown's share of the two lasers'
-// view of the current solution.
-FLT_WINDOW_KERNEL void add_prediction(std::size_t K, double a, double b, const double *__restrict x,
-                                      double *__restrict pred_h, double *__restrict pred_g) {
-    for (std::size_t k = 0; k < K; ++k) {
-        pred_h[k] += a * x[k];
-        pred_g[k] += b * x[k];
-    }
-}
-
-// The default geometry (knots every laser spacing: a row spans three knots,
-// six unknowns) in one pass over the fibers each, where the general loops
-// above take one pass per unknown:
-// the two lasers' view of the solution from the six unknowns' states x0..x5,
-FLT_WINDOW_KERNEL void predict6(std::size_t K, const double *a, const double *b,
-                                const double *__restrict x0, const double *__restrict x1,
-                                const double *__restrict x2, const double *__restrict x3,
-                                const double *__restrict x4, const double *__restrict x5,
-                                double *__restrict pred_h, double *__restrict pred_g) {
-    const double a0 = a[0], a1 = a[1], a2 = a[2], a3 = a[3], a4 = a[4], a5 = a[5];
-    const double b0 = b[0], b1 = b[1], b2 = b[2], b3 = b[3], b4 = b[4], b5 = b[5];
-    for (std::size_t k = 0; k < K; ++k) {
-        pred_h[k] = a0 * x0[k] + a1 * x1[k] + a2 * x2[k] + a3 * x3[k] + a4 * x4[k] + a5 * x5[k];
-        pred_g[k] = b0 * x0[k] + b1 * x1[k] + b2 * x2[k] + b3 * x3[k] + b4 * x4[k] + b5 * x5[k];
-    }
-}
-
-// and a sample's share of the block's right-hand sides (weigh_values and
-// add_rhs for the six unknowns at once). Returns the fibers that take any
-// weight back (their complements in dmh, dmg). The twelve right-hand sides
-// are restrict parameters and the count an integer: GCC vectorises the
-// loop only so (restrict locals, or a floating-point count, leave it
-// scalar).
-#define FLT_ACCUMULATE6_PARAMS                                                               \
-  std::size_t K, double D, const double *__restrict a, const double *__restrict b,           \
-      const double *__restrict yh, const double *__restrict yg, const double *__restrict mh, \
-      const double *__restrict mg, double *__restrict rh0, double *__restrict rh1,           \
-      double *__restrict rh2, double *__restrict rh3, double *__restrict rh4,                \
-      double *__restrict rh5, double *__restrict rg0, double *__restrict rg1,                \
-      double *__restrict rg2, double *__restrict rg3, double *__restrict rg4,                \
-      double *__restrict rg5, double *__restrict dmh, double *__restrict dmg
-// RH(r) is the right-hand side an entry adds to: the entry itself, or for
-// a block's first row 0.0 (accumulate6_first: the bits of adding to a
-// cleared block, without clearing it first or reading it back).
-#define FLT_ACCUMULATE6_BODY(RH)                                                 \
-  const double a0 = a[0], a1 = a[1], a2 = a[2], a3 = a[3], a4 = a[4], a5 = a[5]; \
-  const double b0 = b[0], b1 = b[1], b2 = b[2], b3 = b[3], b4 = b[4], b5 = b[5]; \
-  std::size_t affected = 0;                                                      \
-  for (std::size_t k = 0; k < K; ++k) {                                          \
-    const double hv = mh[k] != 0.0 ? mh[k] * yh[k] : 0.0;                        \
-    const double gv = mg[k] != 0.0 ? mg[k] * (D * yg[k]) : 0.0;                  \
-    rh0[k] = RH(rh0[k]) + a0 * hv;                                               \
-    rh1[k] = RH(rh1[k]) + a1 * hv;                                               \
-    rh2[k] = RH(rh2[k]) + a2 * hv;                                               \
-    rh3[k] = RH(rh3[k]) + a3 * hv;                                               \
-    rh4[k] = RH(rh4[k]) + a4 * hv;                                               \
-    rh5[k] = RH(rh5[k]) + a5 * hv;                                               \
-    rg0[k] = RH(rg0[k]) + b0 * gv;                                               \
-    rg1[k] = RH(rg1[k]) + b1 * gv;                                               \
-    rg2[k] = RH(rg2[k]) + b2 * gv;                                               \
-    rg3[k] = RH(rg3[k]) + b3 * gv;                                               \
-    rg4[k] = RH(rg4[k]) + b4 * gv;                                               \
-    rg5[k] = RH(rg5[k]) + b5 * gv;                                               \
-    dmh[k] = 1.0 - mh[k];                                                        \
-    dmg[k] = 1.0 - mg[k];                                                        \
-    affected += std::size_t(mh[k] * mg[k] != 1.0);                               \
-  }                                                                              \
-  return affected;
-#define FLT_RH_ADD(x)   (x)
-#define FLT_RH_FIRST(x) 0.0
-FLT_WINDOW_KERNEL std::size_t accumulate6(FLT_ACCUMULATE6_PARAMS){
-    FLT_ACCUMULATE6_BODY(FLT_RH_ADD)} FLT_WINDOW_KERNEL std::size_t
-    accumulate6_first(FLT_ACCUMULATE6_PARAMS) {
-    FLT_ACCUMULATE6_BODY(FLT_RH_FIRST)
-}
-#undef FLT_RH_ADD
-#undef FLT_RH_FIRST
-
-inline void sub_product(std::size_t C, double *__restrict out, const double *__restrict a,
-                        const double *__restrict b) {
-    for (std::size_t c = 0; c < C; ++c)
-        out[c] -= a[c] * b[c];
-}
-
-// out = (out - a[0] * b[0] - a[1] * b[1] - ... - a[n-1] * b[n-1]) * scale
-// over C fibers (scale nullptr: 1), subtracting in the order given: the
-// bits of n sub_product passes and a multiplying pass, in one pass over
-// out (the banded solve's entries gather up to bw products each, and
-// their passes were its cost). Up to five products per pass, the rest in
-// further passes, in order. Inlined into band_solve, so that it is built
-// for each of band_solve's targets.
-#if defined(__GNUC__)
-#  define FLT_ALWAYS_INLINE __attribute__((always_inline)) inline
-#else
-#  define FLT_ALWAYS_INLINE inline
-#endif
-FLT_ALWAYS_INLINE void sub_products(std::size_t C, double *out, int n, const double *const *a,
-                                    const double *const *b, const double *scale) {
-    int i = 0;
-    for (; n - i > 5; i += 5)
-        for (int j = i; j < i + 5; ++j)
-            sub_product(C, out, a[j], b[j]);
-    const int m = n - i;
-    double *__restrict o = out;
-    const double *__restrict a0 = m > 0 ? a[i] : nullptr, *__restrict b0 = m > 0 ? b[i] : nullptr;
-    const double *__restrict a1 = m > 1 ? a[i + 1] : nullptr, *__restrict b1 =
-                                                                  m > 1 ? b[i + 1] : nullptr;
-    const double *__restrict a2 = m > 2 ? a[i + 2] : nullptr, *__restrict b2 =
-                                                                  m > 2 ? b[i + 2] : nullptr;
-    const double *__restrict a3 = m > 3 ? a[i + 3] : nullptr, *__restrict b3 =
-                                                                  m > 3 ? b[i + 3] : nullptr;
-    const double *__restrict a4 = m > 4 ? a[i + 4] : nullptr, *__restrict b4 =
-                                                                  m > 4 ? b[i + 4] : nullptr;
-    const double *__restrict sc = scale;
-#define FLT_SUB_TERMS(expr)             \
-  if (sc)                               \
-    for (std::size_t c = 0; c < C; ++c) \
-      o[c] = (expr)*sc[c];              \
-  else                                  \
-    for (std::size_t c = 0; c < C; ++c) \
-      o[c] = (expr);
-    switch (m) {
-        case 0:
-            if (sc)
-                for (std::size_t c = 0; c < C; ++c)
-                    o[c] *= sc[c];
-            break;
-        case 1:
-            FLT_SUB_TERMS(o[c] - a0[c] * b0[c])
-            break;
-        case 2:
-            FLT_SUB_TERMS(o[c] - a0[c] * b0[c] - a1[c] * b1[c])
-            break;
-        case 3:
-            FLT_SUB_TERMS(o[c] - a0[c] * b0[c] - a1[c] * b1[c] - a2[c] * b2[c])
-            break;
-        case 4:
-            FLT_SUB_TERMS(o[c] - a0[c] * b0[c] - a1[c] * b1[c] - a2[c] * b2[c] - a3[c] * b3[c])
-            break;
-        default:
-            FLT_SUB_TERMS(o[c] - a0[c] * b0[c] - a1[c] * b1[c] - a2[c] * b2[c] - a3[c] * b3[c] -
-                          a4[c] * b4[c])
-            break;
-    }
-#undef FLT_SUB_TERMS
-}
-
-// The window band of a chunk of C fibers, [unknown][0..bw][C] (entry (i,
-// i + d) of the symmetric matrix), factored in place as U^T U with U upper
-// (keeping 1/U_ii on the diagonal), then U^T U x = y solved in place. A
-// pivot below floor[c] is taken as floor[c] (engine.cpp's pivot floor).
-FLT_WINDOW_KERNEL void band_solve(int N, int bw, std::size_t C, double *__restrict A,
-                                  double *__restrict y, const double *__restrict floor) {
-    const int P = bw + 1;
-    auto at = [&](int i, int d) {
-        return A + (std::size_t(i) * P + std::size_t(d)) * C;
-    };
-    // Each entry gathers its products (in the order of the plain loops:
-    // m, or d, ascending) and is written once (sub_products).
-    const double *ta[k_max_band], *tb[k_max_band];
-    for (int i = 0; i < N; ++i) {
-        double *aii = at(i, 0);
-        int t = 0;
-        for (int m = std::max(0, i - bw); m < i; ++m, ++t)
-            ta[t] = tb[t] = at(m, i - m);
-        sub_products(C, aii, t, ta, tb, nullptr);
-        for (std::size_t c = 0; c < C; ++c)
-            aii[c] = 1.0 / std::sqrt(std::max(aii[c], floor[c]));
-        for (int d = 1; d <= bw && i + d < N; ++d) {
-            const int j = i + d;
-            t = 0;
-            for (int m = std::max(0, j - bw); m < i; ++m, ++t) {
-                ta[t] = at(m, i - m);
-                tb[t] = at(m, j - m);
-            }
-            sub_products(C, at(i, d), t, ta, tb, aii);
-        }
-    }
-    // U^T z = y
-    for (int i = 0; i < N; ++i) {
-        int t = 0;
-        for (int m = std::max(0, i - bw); m < i; ++m, ++t) {
-            ta[t] = at(m, i - m);
-            tb[t] = y + std::size_t(m) * C;
-        }
-        sub_products(C, y + std::size_t(i) * C, t, ta, tb, at(i, 0));
-    }
-    // U x = z
-    for (int i = N - 1; i >= 0; --i) {
-        int t = 0;
-        for (int d = 1; d <= bw && i + d < N; ++d, ++t) {
-            ta[t] = at(i, d);
-            tb[t] = y + std::size_t(i + d) * C;
-        }
-        sub_products(C, y + std::size_t(i) * C, t, ta, tb, at(i, 0));
-    }
-}
-
-// The chunk's band from the shared (unweighted) bands and the fibers'
-// weights: A = wh * bh + wg * bg, entry by entry.
-FLT_WINDOW_KERNEL void weigh_band(std::size_t entries, std::size_t C, const double *__restrict bh,
-                                  const double *__restrict bg, const double *__restrict wh,
-                                  const double *__restrict wg, double *__restrict A) {
-    for (std::size_t e = 0; e < entries; ++e) {
-        const double a = bh[e], b = bg[e];
-        double *out = A + e * C;
-        for (std::size_t c = 0; c < C; ++c)
-            out[c] = wh[c] * a + wg[c] * b;
-    }
-}
-
-// out += wh * a + wg * b (sign +1) or out -= ... (sign -1).
-FLT_WINDOW_KERNEL void add_weighted(std::size_t C, double sign, const double *__restrict wh,
-                                    const double *__restrict wg, const double *__restrict a,
-                                    const double *__restrict b, double *__restrict out) {
-    for (std::size_t c = 0; c < C; ++c)
-        out[c] += sign * (wh[c] * a[c] + wg[c] * b[c]);
-}
+FLT_DISPATCH(store_row)
+FLT_DISPATCH(widen_row)
+FLT_DISPATCH(weigh_values)
+FLT_DISPATCH(sample_multipliers)
+FLT_DISPATCH(add_rhs)
+FLT_DISPATCH(add_down)
+FLT_DISPATCH(add_prediction)
+FLT_DISPATCH(predict6)
+FLT_DISPATCH(accumulate6)
+FLT_DISPATCH(accumulate6_first)
+FLT_DISPATCH(band_solve)
+FLT_DISPATCH(weigh_band)
+FLT_DISPATCH(add_weighted)
 
 // Packed index of (u, v) in an n x n upper triangle (recon_engine::tri).
 inline std::size_t packed(int n, int u, int v) {
@@ -539,9 +259,15 @@ void robust_window::add_row(long b, std::size_t /*r*/, const double *ch, const d
     double *bh = rh(b), *bg = rg(b);
     std::size_t affected = 0;
     if (n_ == 6) {
-        affected = (first ? accumulate6_first : accumulate6)(
-            K_, D_, ch, cg, yh, yg, mh, mg, bh, bh + K_, bh + 2 * K_, bh + 3 * K_, bh + 4 * K_,
-            bh + 5 * K_, bg, bg + K_, bg + 2 * K_, bg + 3 * K_, bg + 4 * K_, bg + 5 * K_, dmh, dmg);
+        if (first)
+            affected =
+                accumulate6_first(K_, D_, ch, cg, yh, yg, mh, mg, bh, bh + K_, bh + 2 * K_,
+                                  bh + 3 * K_, bh + 4 * K_, bh + 5 * K_, bg, bg + K_, bg + 2 * K_,
+                                  bg + 3 * K_, bg + 4 * K_, bg + 5 * K_, dmh, dmg);
+        else
+            affected = accumulate6(K_, D_, ch, cg, yh, yg, mh, mg, bh, bh + K_, bh + 2 * K_,
+                                   bh + 3 * K_, bh + 4 * K_, bh + 5 * K_, bg, bg + K_, bg + 2 * K_,
+                                   bg + 3 * K_, bg + 4 * K_, bg + 5 * K_, dmh, dmg);
     } else {
         affected = weigh_values(K_, D_, yh, yg, mh, mg, hv, gv, dmh, dmg);
         for (int u = 0; u < n_; ++u)
