@@ -123,11 +123,13 @@ static void rows_and_sheets_allocate_nothing(void **state) {
     print_message("%d workers: %zu + %zu sheets (%zu of them provisional), %zu allocations "
                   "while streaming\n",
                   workers, warm, sheets, early, atomic_load(&g_allocations));
-    /* Every final sheet; an early answer is skipped while the one before
-     * is still being made, which depends on the threads' timing: with one
-     * worker (sequencing and evaluation take turns) fewer come, but
-     * enough that the early answers' path was counted. */
-    assert_true(sheets - early >= 17 && early >= (workers == 2 ? 15u : 5u));
+    /* Every final sheet (17 cuts and the tail). An early answer waits
+     * while the one before is still being made, and is not made at all
+     * when its sheet's final result comes first, which depends on the
+     * threads' timing: 9-17 of 17 came in runs on an idle machine, 14
+     * with two workers under the whole test suite's load. 5 is enough to
+     * know that the early answers' path ran while counting. */
+    assert_true(sheets - early >= 17 && early >= 5u);
     assert_int_equal(atomic_load(&g_allocations), 0);
     /* ... and the coil's statistics counted the final ones. */
     double stats[FLT_COIL_VALUES];
