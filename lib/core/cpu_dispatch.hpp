@@ -10,18 +10,11 @@
 // out per lane). Without FMA (never enabled here) AVX2 rounds every
 // operation as the baseline does, so results do not depend on the machine.
 //
-// A file's kernels live in a file of their own, included twice:
+// A file's kernels live in a file of their own, built twice, in namespaces
+// base and avx2, by core/cpu_dispatch_build.inc:
 //
-//   namespace base {
-//   #include "reconstruction/window_kernels.inc"
-//   }
-//   #if FLT_HAVE_AVX2_BUILD
-//   FLT_AVX2_BEGIN
-//   namespace avx2 {
-//   #include "reconstruction/window_kernels.inc"
-//   }
-//   FLT_AVX2_END
-//   #endif
+//   #define FLT_KERNELS_FILE "reconstruction/window_kernels.inc"
+//   #include "core/cpu_dispatch_build.inc"
 //   FLT_DISPATCH(store_row)   // store_row(...) calls avx2:: or base::
 //
 // Measured with the choice forced (bench_extractor, bench_recon, one core):

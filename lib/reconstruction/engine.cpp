@@ -74,7 +74,9 @@ constexpr int k_max_unknowns = 2 * 66;
 // The engine's methods that run once per fiber and knot (and relative_row)
 // are built twice on Linux, for baseline x86-64 (SSE2) and for AVX2, and
 // the loader picks one per machine (GCC function multiversioning; Windows
-// has no such loader and runs the baseline). AVX2 without FMA keeps every
+// has no such loader and runs the baseline, 2-7 % slower in bench_recon:
+// these are a small share of the time, next to the kernels below, which
+// are dispatched on every platform). AVX2 without FMA keeps every
 // rounding identical, so results do not depend on the machine.
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
 #  define FLT_ROW_KERNEL __attribute__((target_clones("avx2", "default")))
@@ -82,19 +84,10 @@ constexpr int k_max_unknowns = 2 * 66;
 #  define FLT_ROW_KERNEL
 #endif
 
-// The per-row kernels, built for baseline x86-64 and for AVX2 (no FMA: the
-// same roundings on every machine); each call takes the AVX2 build where
-// the CPU has it (core/cpu_dispatch.hpp).
-namespace base {
-#include "reconstruction/engine_kernels.inc"
-}  // namespace base
-#if FLT_HAVE_AVX2_BUILD
-FLT_AVX2_BEGIN
-namespace avx2 {
-#  include "reconstruction/engine_kernels.inc"  // NOLINT(readability-duplicate-include): the AVX2 build
-}  // namespace avx2
-FLT_AVX2_END
-#endif
+// The per-row kernels, built for baseline x86-64 and for AVX2; each call
+// takes the AVX2 build where the CPU has it (core/cpu_dispatch.hpp).
+#define FLT_KERNELS_FILE "reconstruction/engine_kernels.inc"
+#include "core/cpu_dispatch_build.inc"
 FLT_DISPATCH(row_is_finite)
 FLT_DISPATCH(accumulate_row6)
 FLT_DISPATCH(weighted_row6)

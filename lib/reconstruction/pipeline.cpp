@@ -27,19 +27,10 @@ inline double fiber_index(std::size_t k) {
     return double(static_cast<std::int32_t>(k));
 }
 
-// The per-row kernels, built for baseline x86-64 and for AVX2 (no FMA: the
-// same roundings on every machine); each call takes the AVX2 build where
-// the CPU has it (core/cpu_dispatch.hpp).
-namespace base {
-#include "reconstruction/pipeline_kernels.inc"
-}  // namespace base
-#if FLT_HAVE_AVX2_BUILD
-FLT_AVX2_BEGIN
-namespace avx2 {
-#  include "reconstruction/pipeline_kernels.inc"  // NOLINT(readability-duplicate-include): the AVX2 build
-}  // namespace avx2
-FLT_AVX2_END
-#endif
+// The per-row kernels, built for baseline x86-64 and for AVX2; each call
+// takes the AVX2 build where the CPU has it (core/cpu_dispatch.hpp).
+#define FLT_KERNELS_FILE "reconstruction/pipeline_kernels.inc"
+#include "core/cpu_dispatch_build.inc"
 FLT_DISPATCH(row_complete)
 FLT_DISPATCH(line_sums)
 FLT_DISPATCH(line_deviations)

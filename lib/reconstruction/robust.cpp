@@ -28,19 +28,10 @@ constexpr std::size_t k_min_block_values = 5;
 // noise and must not be reweighted (nor may weights overflow).
 constexpr double k_min_sigma_fraction = 1e-3;
 
-// The per-row kernels, built for baseline x86-64 and for AVX2 (no FMA: the
-// same roundings on every machine); each call takes the AVX2 build where
-// the CPU has it (core/cpu_dispatch.hpp).
-namespace base {
-#include "reconstruction/robust_kernels.inc"
-}  // namespace base
-#if FLT_HAVE_AVX2_BUILD
-FLT_AVX2_BEGIN
-namespace avx2 {
-#  include "reconstruction/robust_kernels.inc"  // NOLINT(readability-duplicate-include): the AVX2 build
-}  // namespace avx2
-FLT_AVX2_END
-#endif
+// The per-row kernels, built for baseline x86-64 and for AVX2; each call
+// takes the AVX2 build where the CPU has it (core/cpu_dispatch.hpp).
+#define FLT_KERNELS_FILE "reconstruction/robust_kernels.inc"
+#include "core/cpu_dispatch_build.inc"
 // The weigh kernels of the build this CPU runs, [tukey][masked][lined][slopes].
 using weigh_table = base::weigh_kernel const[2][2][2][2];
 const weigh_table &weigh_kernels() {

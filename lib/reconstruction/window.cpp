@@ -20,19 +20,10 @@ constexpr std::size_t k_chunk_fibers = 64;
 // knots a row may span, engine.cpp's k_max_unknowns).
 constexpr int k_max_band = 2 * 66;
 
-// The per-row kernels, built for baseline x86-64 and for AVX2 (no FMA: the
-// same roundings on every machine); each call takes the AVX2 build where
-// the CPU has it (core/cpu_dispatch.hpp).
-namespace base {
-#include "reconstruction/window_kernels.inc"
-}  // namespace base
-#if FLT_HAVE_AVX2_BUILD
-FLT_AVX2_BEGIN
-namespace avx2 {
-#  include "reconstruction/window_kernels.inc"  // NOLINT(readability-duplicate-include): the AVX2 build
-}  // namespace avx2
-FLT_AVX2_END
-#endif
+// The per-row kernels, built for baseline x86-64 and for AVX2; each call
+// takes the AVX2 build where the CPU has it (core/cpu_dispatch.hpp).
+#define FLT_KERNELS_FILE "reconstruction/window_kernels.inc"
+#include "core/cpu_dispatch_build.inc"
 FLT_DISPATCH(store_row)
 FLT_DISPATCH(widen_row)
 FLT_DISPATCH(weigh_values)
