@@ -39,7 +39,15 @@
  *        that straight line, clear of the reflection and of the line's
  *        shape. A run of at most 8 peaks that continues neither
  *        neighbouring run within 32 columns (a speck, light on something
- *        beside the strip) is rejected too.
+ *        beside the strip) is rejected too. A stretch of up to 64
+ *        columns where no candidate was found at all (the line over a dark
+ *        patch, rising less than extract_min_peak), between pieces of the
+ *        line that agree on a straight course through it, is searched
+ *        within 1.5 px of that course: a maximum there that rises 5 times
+ *        the stretch's own background noise above its background, as
+ *        narrow as the line and not beside something brighter, is the
+ *        line, centred by a Gaussian-weighted centroid of the line's
+ *        width and kept within 0.5 px of the course.
  *        lib/extraction/README.md gives the measured rates;
  *     2. refines its row to sub-pixel accuracy at the zero crossing of the
  *        Savitzky-Golay derivative (window extract_sg_window rows, polynomial

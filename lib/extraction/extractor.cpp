@@ -243,8 +243,11 @@ struct flt_extractor {
     std::vector<double> fiber_z[2];                   // [fibers], mm
     // suspect: saturated, or a brighter peak rejected (column_peak).
     std::vector<std::uint8_t> suspect_column, tainted_column, fringe_row;  // [width]
-    std::vector<peak_shape> shape;                                         // [width]
-    std::vector<double> shape_scratch;                                     // [width]
+    // Columns the peak search found no line in at all (too faint above
+    // their background, or too wide), which bridge_dim_stretches may fill.
+    std::vector<std::uint8_t> no_peak_column;  // [width]
+    std::vector<peak_shape> shape;             // [width]
+    std::vector<double> shape_scratch;         // [width]
     // textured_block: a block's sampled background differences and heights.
     std::vector<double> texture_steps, texture_heights;
     // Per block of k_shape_block columns: the lower quartile of the widths
@@ -320,6 +323,9 @@ struct flt_extractor {
     template <class Pixel>
     void look_under_detours(const unsigned char *frame, std::size_t stride, const band &b,
                             const peak_params &params, double *rows);
+    template <class Pixel>
+    std::size_t bridge_dim_stretches(const unsigned char *frame, std::size_t stride, const band &b,
+                                     const peak_params &params, double *rows);
     template <class Pixel>
     void find_strip(const unsigned char *frame, std::size_t stride, unsigned laser,
                     std::uint32_t min_value);
@@ -647,6 +653,8 @@ void flt_extractor::extract(const unsigned char *frame, std::size_t stride,
                 if (shape[u].width >= k_wide_line && !saturated_column[u] &&
                     4 * std::uint32_t(best_value[u]) < 3 * full_scale && rows_out[u] == rows_out[u])
                     rows_out[u] = wide_centre<Pixel>(frame, stride, u, rows_out[u], shape[u].width);
+        for (std::uint32_t u = 0; u < width; ++u)
+            no_peak_column[u] = !(rows_out[u] == rows_out[u]) && best_value[u] < full_scale;
         // (x, z) of column u's peak at row v through the column map.
         auto map_column = [&](std::uint32_t u, double v, double *x_out, double *z_out) {
             double x = k_nan, z = k_nan;
@@ -722,6 +730,7 @@ void flt_extractor::extract(const unsigned char *frame, std::size_t stride,
         reject_detours(rows_out);
         if (detour_columns > 0)
             look_under_detours<Pixel>(frame, stride, b, params, rows_out);
+        changed_rows += bridge_dim_stretches<Pixel>(frame, stride, b, params, rows_out);
         // The checks reject peaks or take the reading under a saturated
         // one (rarely): then the columns are mapped again.
         if (changed_rows)
@@ -1462,6 +1471,217 @@ void flt_extractor::look_under_detours(const unsigned char *frame, std::size_t s
     }
 }
 
+// A dim stretch of the line between two confident pieces of it: where the
+// line crosses a dark patch (a black square of a board, a dark coated or
+// oiled patch of strip) it may rise only a few counts above that patch,
+// under extract_min_peak, and the peak search finds nothing there. The
+// line is one curve: the pieces on both sides say where it runs, so in
+// such a gap only the rows within k_bridge_search_px of that course are
+// searched, and a maximum there is taken when it stands out of the gap's
+// own background noise (k_bridge_min_snr standard deviations, measured on
+// the rows beside the line in the gap's columns), not out of a fixed share
+// of full scale. Only columns with no peak at all qualify: a peak the
+// checks rejected stays rejected. The course is a straight line fitted to
+// k_bridge_anchor peaks on each side, within k_bridge_anchor_reach columns
+// of the gap; it must fit them within k_bridge_anchor_rms_px (a line that
+// curves or steps there is not predicted), and a gap longer than
+// k_bridge_max_gap columns is not bridged. A maximum beside something
+// bright (its two sides' backgrounds differ by more than the line rises),
+// or wider than twice the line, is not taken. The centre is a Gaussian-
+// weighted centroid of the light above the background (a ramp between the
+// two sides), and must lie within k_bridge_tolerance_px of the course:
+// 0.5 px, as under a detour (1 mm of height on the reference sensor; with
+// 1 px, simulated field frames with texture under ambient light kept a
+// peak 1.27 mm off). Returns the columns filled.
+template <class Pixel>
+std::size_t flt_extractor::bridge_dim_stretches(const unsigned char *frame, std::size_t stride,
+                                                const band &b, const peak_params &params,
+                                                double *rows) {
+    constexpr long k_bridge_max_gap = 64;
+    constexpr int k_bridge_anchor = 8;
+    constexpr long k_bridge_anchor_reach = 24;
+    constexpr double k_bridge_anchor_rms_px = 0.5;
+    constexpr double k_bridge_search_px = 1.5;
+    constexpr double k_bridge_tolerance_px = 0.5;
+    constexpr double k_bridge_min_snr = 5.0;
+    constexpr long k_background_rows = 6;  // rows beside the line per side
+    constexpr double k_bridge_side_share = 1.0;
+    constexpr int k_bridge_passes = 4;
+    const long w = long(width);
+    const long band_lo = long(b.first), band_hi = long(b.first + b.rows) - 1;
+    auto px = [&](std::uint32_t u, long v) -> double {
+        return double(reinterpret_cast<const Pixel *>(frame + std::size_t(v) * stride)[u]);
+    };
+    auto on_line = [&](long u) {
+        return rows[u] == rows[u] && !low_column[std::size_t(u)];
+    };
+    std::size_t filled = 0;
+    long u = 0;
+    while (u < w) {
+        if (rows[u] == rows[u]) {
+            ++u;
+            continue;
+        }
+        const long g0 = u;
+        while (u < w && !(rows[u] == rows[u]))
+            ++u;
+        const long g1 = u - 1;  // the gap: columns g0..g1
+        if (g0 == 0 || u >= w || g1 - g0 + 1 > k_bridge_max_gap)
+            continue;
+        bool any = false;
+        for (long j = g0; j <= g1 && !any; ++j)
+            any = no_peak_column[std::size_t(j)] != 0;
+        if (!any)
+            continue;
+        // The anchors: the nearest valid peaks on each side (none on the
+        // table's line), least squares row = a + c (j - g0).
+        double sx = 0, sy = 0, sxx = 0, sxy = 0, syy = 0;
+        int sides[2] = {0, 0};
+        for (int side = 0; side < 2; ++side) {
+            const long step = side == 0 ? -1 : 1;
+            const long from = side == 0 ? g0 - 1 : g1 + 1;
+            for (long j = from; j >= 0 && j < w && std::labs(j - from) < k_bridge_anchor_reach &&
+                                sides[side] < k_bridge_anchor;
+                 j += step) {
+                if (low_column[std::size_t(j)])
+                    break;
+                if (!on_line(j))
+                    continue;
+                const double x = double(j - g0), y = rows[j];
+                sx += x, sy += y, sxx += x * x, sxy += x * y, syy += y * y;
+                ++sides[side];
+            }
+        }
+        if (sides[0] < k_bridge_anchor / 2 || sides[1] < k_bridge_anchor / 2)
+            continue;
+        const double n = double(sides[0] + sides[1]);
+        const double det = n * sxx - sx * sx;
+        if (!(det > 0))
+            continue;
+        const double slope = (n * sxy - sx * sy) / det, a = (sy - slope * sx) / n;
+        // Residual sum of squares of the fit, from the sums.
+        const double rss = syy - a * sy - slope * sxy;
+        if (!(rss <= n * k_bridge_anchor_rms_px * k_bridge_anchor_rms_px))
+            continue;
+        double line_width = block_line_width[std::size_t(g0) / k_shape_block];
+        if (!(line_width > 0))
+            line_width = 3.0;
+        // The line's rows: +-0.85 of its width at half maximum (+-2 sigma);
+        // its background lies beyond them.
+        const long half = std::max(1L, long(std::ceil(0.85 * line_width)));
+        // The line's Gaussian sigma (its width at half maximum / 2.355)
+        // and the rows within 3 of it.
+        const double inv_sigma = k_fwhm_per_sigma / line_width;
+        const long reach = std::max(2L, long(std::ceil(3.0 * line_width / k_fwhm_per_sigma)));
+        // The background beside the line in the gap's columns: its level
+        // per column (the mean of both sides' rows) and its noise over the
+        // gap (the mean absolute row-to-row step: 2 sigma / sqrt(pi) for
+        // Gaussian noise; texture only raises it, which makes the test
+        // stricter).
+        const long off = half + 2;
+        double step_sum = 0;
+        long steps = 0;
+        for (long j = g0; j <= g1; ++j) {
+            const long e = std::lround(a + slope * double(j - g0));
+            for (int side = 0; side < 2; ++side) {
+                const long sgn = side == 0 ? -1 : 1;
+                for (long k = off; k < off + k_background_rows; ++k) {
+                    const long v0 = e + sgn * k, v1 = v0 + sgn;
+                    if (std::min(v0, v1) < band_lo || std::max(v0, v1) > band_hi)
+                        break;
+                    step_sum += std::fabs(px(std::uint32_t(j), v1) - px(std::uint32_t(j), v0));
+                    ++steps;
+                }
+            }
+        }
+        if (steps < 8)
+            continue;
+        const double sigma = std::max(0.5, 0.886227 * step_sum / double(steps));
+        for (long j = g0; j <= g1; ++j) {
+            if (!no_peak_column[std::size_t(j)])
+                continue;
+            const double expected = a + slope * double(j - g0);
+            const long lo = std::max(band_lo + 1, long(std::ceil(expected - k_bridge_search_px)));
+            const long hi = std::min(band_hi - 1, long(std::floor(expected + k_bridge_search_px)));
+            long best_v = -1;
+            double best = -1;
+            for (long v = lo; v <= hi; ++v) {
+                const double value = px(std::uint32_t(j), v);
+                if (value > best && px(std::uint32_t(j), v - 1) <= value &&
+                    px(std::uint32_t(j), v + 1) <= value)
+                    best = value, best_v = v;
+            }
+            if (best_v < 0 || best >= double(params.full_scale))
+                continue;
+            // The background on each side of the course; a line beside
+            // something bright (a reflection, a patch's edge) is not
+            // measured here: its sides differ.
+            double side_level[2] = {0, 0};
+            bool inside = true;
+            for (int side = 0; side < 2; ++side) {
+                const long sgn = side == 0 ? -1 : 1;
+                for (long k = off; k < off + k_background_rows; ++k) {
+                    const long v = std::lround(expected) + sgn * k;
+                    inside = inside && v >= band_lo && v <= band_hi;
+                    if (inside)
+                        side_level[side] += px(std::uint32_t(j), v);
+                }
+                side_level[side] /= double(k_background_rows);
+            }
+            if (!inside)
+                continue;
+            // Level at the course and its slope across the line, counts per
+            // row (the sides' means lie off + (k_background_rows - 1) / 2
+            // rows away).
+            const double background = 0.5 * (side_level[0] + side_level[1]);
+            const double ramp = (side_level[1] - side_level[0]) /
+                                (2.0 * double(off) + double(k_background_rows - 1));
+            const double contrast = best - background;
+            if (!(contrast >= k_bridge_min_snr * sigma) ||
+                !(std::fabs(side_level[0] - side_level[1]) <= k_bridge_side_share * contrast))
+                continue;
+            // As narrow as the line: the rows at or above half the contrast.
+            long w_lo = best_v, w_hi = best_v;
+            while (w_lo > band_lo &&
+                   px(std::uint32_t(j), w_lo - 1) - background >= 0.5 * contrast &&
+                   best_v - w_lo <= 2 * half)
+                --w_lo;
+            while (w_hi < band_hi &&
+                   px(std::uint32_t(j), w_hi + 1) - background >= 0.5 * contrast &&
+                   w_hi - best_v <= 2 * half)
+                ++w_hi;
+            if (double(w_hi - w_lo + 1) > 2.0 * line_width + 1.0)
+                continue;
+            // The centre: the light above the background weighted by a
+            // Gaussian of the line's own width, centred again on each
+            // estimate (a matched filter: at a symmetric line's centre the
+            // weighted offsets cancel, and over a few rows of noise it
+            // scatters about 2/3 as much as a plain centroid).
+            double centre = double(best_v);
+            for (int pass = 0; pass < k_bridge_passes && centre == centre; ++pass) {
+                const long c = std::lround(centre);
+                double sw = 0, swv = 0;
+                for (long v = std::max(band_lo, c - reach); v <= std::min(band_hi, c + reach);
+                     ++v) {
+                    const double light =
+                        px(std::uint32_t(j), v) - background - ramp * (double(v) - expected);
+                    const double d = (double(v) - centre) * inv_sigma;
+                    const double weight = light * std::exp(-0.5 * d * d);
+                    sw += weight, swv += weight * double(v);
+                }
+                centre = sw > 0 ? swv / sw : k_nan;
+            }
+            if (centre == centre && std::fabs(centre - expected) <= k_bridge_tolerance_px) {
+                rows[j] = centre;
+                shape[std::size_t(j)] = peak_shape{k_nan, k_nan, k_nan};
+                saturated_column[std::size_t(j)] = 0;
+                ++filled;
+            }
+        }
+    }
+    return filled;
+}
+
 // The line's slope per block of k_shape_block columns, rows per column:
 // the median of its peaks' row steps over k_slope_span columns (the
 // table's line left out; a glint's few columns do not move a median).
@@ -1933,6 +2153,7 @@ FLT_API flt_status FLT_CALL flt_extractor_create(const flt_calib *calib, const f
 
         ex->edge_light.assign(std::size_t(k_edge_reference_far - k_edge_reference_near + 1), 0);
         ex->suspect_column.assign(w, 0);
+        ex->no_peak_column.assign(w, 0);
         ex->tainted_column.assign(w, 0);
         ex->segment_first.assign(w, 0);
         ex->segment_last.assign(w, 0);

@@ -668,7 +668,7 @@ static double line_background(const uint8_t *frame, long u, long c) {
  * it out of the strip (no fiber reads it), and so does the count. */
 typedef struct field_figures {
     size_t strong, strong_kept, dim, dim_kept, kept, wrong;
-    double rms_px, worst_mm;
+    double rms_px, dim_rms_px, worst_mm;
 } field_figures;
 
 static field_figures field_run(double speckle, double depth_of_field, double dark_patches,
@@ -691,9 +691,9 @@ static field_figures field_run(double speckle, double depth_of_field, double dar
     flt_extractor *ex = field_extractor(calib);
     uint8_t *frame = malloc((size_t)W * ROI_ROWS);
     double *truth = malloc(2 * W * sizeof(double)), *peaks = malloc(2 * W * sizeof(double));
-    field_figures r = {0, 0, 0, 0, 0, 0, 0, 0};
-    double sum2 = 0;
-    size_t right = 0;
+    field_figures r = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+    double sum2 = 0, dim_sum2 = 0;
+    size_t right = 0, dim_right = 0;
     for (int f = 0; f < frames; ++f) {
         double e, s, h[FIBERS], g[FIBERS];
         assert_int_equal(flt_sim_next_frame(sim, frame, (size_t)W * ROI_ROWS, W, &e, 0, NULL, truth,
@@ -730,9 +730,12 @@ static field_figures field_run(double speckle, double depth_of_field, double dar
                 r.wrong += off_mm > 1.0;
                 if (strong && off_mm <= 1.0) /* the wrong ones are counted apart */
                     sum2 += (p - t) * (p - t), ++right;
+                else if (off_mm <= 1.0)
+                    dim_sum2 += (p - t) * (p - t), ++dim_right;
             }
     }
     r.rms_px = sqrt(sum2 / (double)right);
+    r.dim_rms_px = dim_right ? sqrt(dim_sum2 / (double)dim_right) : 0.0;
     free(frame), free(truth), free(peaks);
     flt_extractor_destroy(ex);
     flt_sim_destroy(sim);
@@ -752,7 +755,13 @@ static field_figures field_run(double speckle, double depth_of_field, double dar
  * The targets for field frames: strong lines' peaks within 1/16 px RMS of
  * the truth, and at most 0.01 % of the kept peaks more than 1 mm off.
  * Without spurious reflections they hold: asserted, with the strong lines
- * kept >= 85 % (dark patches cost 7-8 % of the strong columns). With
+ * kept >= 85 % (dark patches cost 7-8 % of the strong columns), and the
+ * dim line over the dark patches (under 0.2 of full scale above them, in
+ * part under extract_min_peak) kept >= 97 % within 1/12 px RMS: 98.9-99.2 %
+ * and 0.051-0.058 px are measured, 89-94 % before the extractor bridged a
+ * dim stretch between confident pieces of the line (bridge_dim_stretches;
+ * the bridged peaks stand only 5 noise deviations out, hence the wider
+ * bound than the strong lines'). With
  * reflections over dark patches a reflection outshines the dim line and is
  * taken for it (0.1-0.6 % of the kept peaks, up to 90 mm off), and 15 %
  * speckle puts the strong lines' error at about 1/11 px (the right peaks'
@@ -788,17 +797,21 @@ static void field_frames_sub_pixel_accuracy(void **state) {
             field_run(conditions[i].speckle, conditions[i].depth_of_field,
                       conditions[i].dark_patches, conditions[i].edge_glints,
                       conditions[i].reflections, conditions[i].ambient, conditions[i].texture, 12);
-        print_message("field frames, %-36s strong lines %5zu, %5.1f %% kept, RMS %.4f px "
-                      "(1/%.0f); dim %4zu, %5.1f %% kept; %3zu of %zu kept peaks > 1 mm off "
-                      "(%.3f %%, worst %.2f mm)\n",
-                      conditions[i].name, r.strong,
-                      100.0 * (double)r.strong_kept / (double)r.strong, r.rms_px, 1 / r.rms_px,
-                      r.dim, r.dim ? 100.0 * (double)r.dim_kept / (double)r.dim : 0.0, r.wrong,
-                      r.kept, 100.0 * (double)r.wrong / (double)r.kept, r.worst_mm);
+        print_message(
+            "field frames, %-36s strong lines %5zu, %5.1f %% kept, RMS %.4f px "
+            "(1/%.0f); dim %4zu, %5.1f %% kept, RMS %.3f px; %3zu of %zu kept peaks > 1 mm off "
+            "(%.3f %%, worst %.2f mm)\n",
+            conditions[i].name, r.strong, 100.0 * (double)r.strong_kept / (double)r.strong,
+            r.rms_px, 1 / r.rms_px, r.dim, r.dim ? 100.0 * (double)r.dim_kept / (double)r.dim : 0.0,
+            r.dim_rms_px, r.wrong, r.kept, 100.0 * (double)r.wrong / (double)r.kept, r.worst_mm);
         if (conditions[i].meets_targets) {
             assert_true(r.rms_px <= 1.0 / 16);
             assert_true((double)r.wrong <= 1e-4 * (double)r.kept);
             assert_true(r.strong_kept >= 0.85 * (double)r.strong);
+            if (r.dim >= 1000) { /* the dark patches' dim line */
+                assert_true(r.dim_kept >= 0.97 * (double)r.dim);
+                assert_true(r.dim_rms_px <= 1.0 / 12);
+            }
         } else {
             assert_true(r.rms_px <= 0.125);
             assert_true((double)r.wrong <= 1e-2 * (double)r.kept);
