@@ -33,8 +33,10 @@
  *        reflection away from the line). Last, the line is followed across
  *        the columns: a run of peaks that continue each other but leave the
  *        line and come back (a reflection brighter than a dim stretch of
- *        the line), shorter than the runs on both sides and mostly more
- *        than 3 px off the straight line between them, is rejected; the
+ *        the line), with a longer run on each side (the nearest one, at
+ *        most 32 columns away, or 128 where a straight line fits both
+ *        runs' nearest peaks) and mostly more than 3 px off the straight
+ *        line between them, is rejected; the
  *        line under it is read where it is still a peak within 0.5 px of
  *        that straight line, clear of the reflection and of the line's
  *        shape. A run of at most 8 peaks that continues neither

@@ -318,6 +318,8 @@ struct flt_extractor {
     void measure_block_slopes(const double *rows);
     void reject_glint_fringes(double *rows);
     void reject_detours(double *rows);
+    bool far_course(const double *rows, long left_end, long right_end, double *u0, double *v0,
+                    double *u1, double *v1) const;
     void reject_misshapen(double *rows);
     bool well_formed(std::uint32_t u, const peak_shape &sh) const;
     template <class Pixel>
@@ -1307,7 +1309,7 @@ void flt_extractor::reject_misshapen(double *rows) {
 // no part.
 void flt_extractor::reject_detours(double *rows) {
     constexpr double k_detour_step_px = 2.0;
-    constexpr long k_detour_gap = 8, k_detour_reach = 32;
+    constexpr long k_detour_gap = 8, k_detour_reach = 32, k_detour_far_reach = 128;
     const long w = long(width);
     // Segments as [first, last] column ranges of line peaks, in order (at
     // most one per column: the scratch is [width], allocated at create).
@@ -1335,15 +1337,36 @@ void flt_extractor::reject_detours(double *rows) {
     for (std::size_t i = 1; i + 1 < segments; ++i) {
         // Only a segment that takes over from the line and hands back to
         // it within a gap: across a longer stretch without peaks the
-        // chord between the neighbours is no estimate of a curved line.
+        // chord between the neighbours' ends is no estimate of a curved
+        // line. Up to k_detour_far_reach columns the course is instead a
+        // straight line fitted to both neighbours' nearest peaks, where it
+        // fits them (far_course).
         const std::uint32_t n = count[i];
-        if (!(count[i - 1] > n && count[i + 1] > n) ||
-            long(first[i]) - long(last[i - 1]) > k_detour_reach ||
-            long(first[i + 1]) - long(last[i]) > k_detour_reach)
+        if (n == 0)
             continue;
-        // The line between the neighbours' facing ends.
-        const double u0 = double(last[i - 1]), v0 = rows[last[i - 1]];
-        const double u1 = double(first[i + 1]), v1 = rows[first[i + 1]];
+        // The neighbours: the nearest longer segment on each side (a
+        // shorter one between, a speck, is judged on its own), searched
+        // no farther than k_detour_far_reach columns, so that a frame of
+        // many short segments (noise, no line) costs O(segments x reach),
+        // not O(segments^2).
+        std::size_t left = i - 1, right = i + 1;
+        while (left > 0 && count[left] <= n &&
+               long(first[i]) - long(last[left]) <= k_detour_far_reach)
+            --left;
+        while (right + 1 < segments && count[right] <= n &&
+               long(first[right]) - long(last[i]) <= k_detour_far_reach)
+            ++right;
+        if (!(count[left] > n && count[right] > n))
+            continue;
+        const long reach =
+            std::max(long(first[i]) - long(last[left]), long(first[right]) - long(last[i]));
+        double u0 = double(last[left]), v0 = rows[last[left]];
+        double u1 = double(first[right]), v1 = rows[first[right]];
+        if (reach > k_detour_reach &&
+            !(reach <= k_detour_far_reach &&
+              far_course(rows, last[left], first[right], &u0, &v0, &u1, &v1)))
+            continue;
+        // The course between the neighbours.
         std::size_t off = 0;
         for (long u = first[i]; u <= long(last[i]); ++u)
             if (is_peak(u)) {
@@ -1398,6 +1421,47 @@ void flt_extractor::reject_detours(double *rows) {
             if (is_peak(u))
                 rows[u] = k_nan, ++changed_rows;
     }
+}
+
+// The line's course between two pieces of it far apart (a segment between
+// them judged across long gaps, reject_detours): a straight line fitted
+// to up to k_course_anchors peaks of each piece nearest the gap (at least
+// half of them, within 2 k_course_anchors columns of its end), given as
+// two points (u0, v0), (u1, v1) on it. False where the pieces do not
+// agree on one straight course within k_course_rms_px RMS (a line that
+// curves or steps there: no prediction).
+bool flt_extractor::far_course(const double *rows, long left_end, long right_end, double *u0,
+                               double *v0, double *u1, double *v1) const {
+    constexpr long k_course_anchors = 8;
+    constexpr double k_course_rms_px = 0.5;
+    const long w = long(width);
+    double sx = 0, sy = 0, sxx = 0, sxy = 0, syy = 0;
+    int sides[2] = {0, 0};
+    for (int side = 0; side < 2; ++side) {
+        const long step = side == 0 ? -1 : 1;
+        const long from = side == 0 ? left_end : right_end;
+        for (long j = from; j >= 0 && j < w && std::labs(j - from) < 2 * k_course_anchors &&
+                            sides[side] < k_course_anchors;
+             j += step) {
+            if (!(rows[j] == rows[j]) || low_column[std::size_t(j)])
+                continue;
+            const double x = double(j - left_end), y = rows[j];
+            sx += x, sy += y, sxx += x * x, sxy += x * y, syy += y * y;
+            ++sides[side];
+        }
+    }
+    if (sides[0] < k_course_anchors / 2 || sides[1] < k_course_anchors / 2)
+        return false;
+    const double n = double(sides[0] + sides[1]);
+    const double det = n * sxx - sx * sx;
+    if (!(det > 0))
+        return false;
+    const double slope = (n * sxy - sx * sy) / det, a = (sy - slope * sx) / n;
+    if (!(syy - a * sy - slope * sxy <= n * k_course_rms_px * k_course_rms_px))
+        return false;
+    *u0 = double(left_end), *v0 = a;
+    *u1 = double(right_end), *v1 = a + slope * double(right_end - left_end);
+    return true;
 }
 
 // Whether a peak found after reject_misshapen ran has the line's shape in
